@@ -1,0 +1,293 @@
+"""Ellipses and ellipsoids as homogeneous quadric matrices: THE conventions of this project.
+
+Conventions (written once here and in the README):
+
+* An ellipse is a symmetric 3x3 matrix A on homogeneous coordinates X = (x, y, 1); an ellipsoid a
+  symmetric 4x4 matrix on (x, y, z, 1). The interior is X^T A X < 0, the boundary X^T A X = 0.
+  Valid iff the quadratic block is positive definite and det A < 0. A matrix with all signs
+  flipped (positive interior) is normalised to this form, not rejected.
+* P(T) = det(T A + B), coefficients always in ascending order [a_0, ..., a_n]; a_n = det A < 0,
+  a_0 = det B < 0. T is the pencil variable; t is time, always.
+* A shape is centre c, semi-axes r and orientation R (2D: angle in radians, counter-clockwise;
+  3D: unit quaternion wxyz, viser's convention). Its matrix is
+  [[Q, -Q c], [-c^T Q, c^T Q c - 1]] with Q = R diag(1/r^2) R^T (body axes -> world).
+* Inputs may be floats (the exact binary rationals they are), ints, Fractions, fmpq, or strings
+  ("3/7", "0.1" exact decimal). See :func:`core.numbers.to_fmpq`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from flint import fmpq
+
+from .rationals import to_fmpq
+
+__all__ = [
+    "ShapeParams",
+    "quadric_from_axes",
+    "axes_from_quadric",
+    "rotation_from_quaternion",
+    "validate_quadric",
+    "as_float_matrix",
+]
+
+ExactMatrix = list[list[fmpq]]
+
+
+@dataclass(frozen=True)
+class ShapeParams:
+    """Centre, semi-axes and orientation of an ellipse (angle) or ellipsoid (wxyz), as floats."""
+
+    center: tuple[float, ...]
+    """(x, y) or (x, y, z)."""
+    semi_axes: tuple[float, ...]
+    """Semi-axis lengths along the body axes."""
+    orientation: tuple[float, ...]
+    """2D: (angle,) in radians; 3D: unit quaternion (w, x, y, z)."""
+
+
+def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: bool = False) -> Any:
+    """3x3 rotation matrix of quaternion (w, x, y, z); need not be unit (divided by |q|^2).
+
+    With ``exact=True`` a rational quaternion gives an exactly orthogonal rational matrix.
+
+    Examples:
+        >>> rotation_from_quaternion([1, 0, 0, 1], exact=True)[0]   # 90 degrees about z
+        [0, -1, 0]
+    """
+    if exact:
+        w, x, y, z = (to_fmpq(v) for v in wxyz)
+    else:
+        w, x, y, z = (float(v) for v in wxyz)
+    n = w * w + x * x + y * y + z * z
+    if n == 0:
+        raise ValueError("orientation quaternion is zero")
+    rows = [
+        [w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z],
+    ]
+    rows = [[v / n for v in r] for r in rows]
+    return rows if exact else np.array(rows, dtype=float)
+
+
+def quadric_from_axes(
+    center: Sequence[Any],
+    semi_axes: Sequence[Any],
+    orientation: Any = None,
+    *,
+    exact: bool = False,
+) -> Any:
+    """Matrix of the ellipse/ellipsoid with this centre, semi-axes and orientation.
+
+    Args:
+        center: (x, y) or (x, y, z).
+        semi_axes: positive lengths, same count as ``center``.
+        orientation: 2D: angle in radians (float), or a quaternion (w, 0, 0, z) for an exact
+            rotation about z; 3D: quaternion wxyz (need not be unit). None = axis-aligned.
+        exact: return nested lists of ``fmpq`` (then the angle must be a quaternion or None).
+
+    Returns:
+        (n+1, n+1) float ndarray, or nested lists of ``fmpq`` when ``exact``.
+
+    Examples:
+        >>> quadric_from_axes([0, 0], [1, 1], exact=True)     # unit circle
+        [[1, 0, 0], [0, 1, 0], [0, 0, -1]]
+    """
+    d = len(center)
+    if d not in (2, 3) or len(semi_axes) != d:
+        raise ValueError(f"need 2 or 3 centre coordinates and as many semi-axes, got {d} and {len(semi_axes)}")
+    if exact:
+        c = [to_fmpq(v) for v in center]
+        r = [to_fmpq(v) for v in semi_axes]
+    else:
+        c = [float(v) for v in center]
+        r = [float(v) for v in semi_axes]
+        if not all(math.isfinite(v) for v in (*c, *r)):
+            raise ValueError("centre and semi-axes must be finite numbers")
+    if any(v <= 0 for v in r):
+        raise ValueError(f"semi-axes must be positive, got {[str(v) for v in r]}")
+    R = _orientation_matrix(d, orientation, exact)
+    inv_r2 = [1 / (v * v) for v in r]
+    Q = [[sum(R[i][k] * inv_r2[k] * R[j][k] for k in range(d)) for j in range(d)] for i in range(d)]
+    Qc = [sum(Q[i][j] * c[j] for j in range(d)) for i in range(d)]
+    cQc = sum(c[i] * Qc[i] for i in range(d))
+    M = [[Q[i][j] for j in range(d)] + [-Qc[i]] for i in range(d)]
+    M.append([-v for v in Qc] + [cQc - 1])
+    return M if exact else np.array(M, dtype=float)
+
+
+def _orientation_matrix(d: int, orientation: Any, exact: bool) -> Any:
+    one, zero = (fmpq(1), fmpq(0)) if exact else (1.0, 0.0)
+    if orientation is None:
+        return [[one if i == j else zero for j in range(d)] for i in range(d)]
+    if d == 3 or (d == 2 and isinstance(orientation, Sequence) and len(orientation) == 4):
+        if len(orientation) != 4:
+            raise ValueError("a 3D orientation is a quaternion (w, x, y, z)")
+        R = rotation_from_quaternion(orientation, exact=exact)
+        if d == 2:
+            if exact and (R[0][2] != 0 or R[1][2] != 0 or R[2][0] != 0 or R[2][1] != 0):
+                raise ValueError("a 2D quaternion must rotate about z: (w, 0, 0, z)")
+            return [[R[0][0], R[0][1]], [R[1][0], R[1][1]]]
+        return R
+    if exact:
+        raise ValueError("an exact 2D orientation is a quaternion (w, 0, 0, z); an angle is a float")
+    theta = float(orientation[0] if isinstance(orientation, Sequence) else orientation)
+    if not math.isfinite(theta):
+        raise ValueError("orientation angle must be finite")
+    co, si = math.cos(theta), math.sin(theta)
+    return [[co, -si], [si, co]]
+
+
+def axes_from_quadric(M: Any) -> ShapeParams:
+    """Centre, semi-axes and orientation of a valid ellipse/ellipsoid matrix (floats, for drawing).
+
+    Examples:
+        >>> p = axes_from_quadric(quadric_from_axes([1, 2], [3, 1], 0.5))
+        >>> [round(v, 9) for v in (*p.center, *p.semi_axes, *p.orientation)]
+        [1.0, 2.0, 3.0, 1.0, 0.5]
+    """
+    A = np.array([[float(v) for v in row] for row in validate_quadric(M)], dtype=float)
+    d = A.shape[0] - 1
+    Q, m = A[:d, :d], A[:d, d]
+    c = -np.linalg.solve(Q, m)
+    k = float(c @ Q @ c - A[d, d])
+    w, V = np.linalg.eigh(Q / k)
+    # eigh sorts eigenvalues ascending, so semi-axes come out decreasing; keep det V = +1
+    r = 1.0 / np.sqrt(w)
+    if np.linalg.det(V) < 0:
+        V[:, -1] = -V[:, -1]
+    center = tuple(float(v) for v in c)
+    axes = tuple(float(v) for v in r)
+    if d == 2:
+        angle = math.atan2(V[1, 0], V[0, 0])
+        # an ellipse axis is a direction up to sign: report the angle in (-pi/2, pi/2]
+        if angle > math.pi / 2:
+            angle -= math.pi
+        elif angle <= -math.pi / 2:
+            angle += math.pi
+        return ShapeParams(center, axes, (angle,))
+    return ShapeParams(center, axes, _quaternion_from_rotation(V))
+
+
+def _quaternion_from_rotation(R: np.ndarray) -> tuple[float, float, float, float]:
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    if tr > 0:
+        s = 2.0 * math.sqrt(tr + 1.0)
+        q = (0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s)
+    elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        q = ((R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s)
+    elif R[1, 1] > R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
+        q = ((R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
+        q = ((R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s)
+    n = math.sqrt(sum(v * v for v in q))
+    sign = 1.0 if q[0] >= 0 else -1.0
+    return tuple(float(sign * v / n) for v in q)  # type: ignore[return-value]
+
+
+def _leading_minors(M: ExactMatrix, k: int) -> list[fmpq]:
+    """Leading principal minors of orders 1..k (fraction-free enough for k <= 3)."""
+    out = []
+    for order in range(1, k + 1):
+        S = [row[:order] for row in M[:order]]
+        out.append(_det(S))
+    return out
+
+
+def _det(S: ExactMatrix) -> fmpq:
+    n = len(S)
+    if n == 1:
+        return S[0][0]
+    if n == 2:
+        return S[0][0] * S[1][1] - S[0][1] * S[1][0]
+    return sum(
+        ((-1) ** j) * S[0][j] * _det([row[:j] + row[j + 1 :] for row in S[1:]]) for j in range(n)
+    )
+
+
+def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
+    """Check that M is an ellipse (3x3) or ellipsoid (4x4) and return it exactly, normalised.
+
+    Args:
+        M: nested sequence or array of numbers (see module docstring for accepted types).
+        name: what to call the matrix in error messages (e.g. "A").
+
+    Returns:
+        Nested lists of ``fmpq`` with interior X^T M X < 0 (signs flipped if needed).
+
+    Raises:
+        ValueError: wrong shape, not symmetric, NaN/inf or unreadable entry, quadratic part
+            not definite, degenerate (det = 0) or empty (no real points).
+
+    Examples:
+        >>> validate_quadric([[-1, 0, 0], [0, -1, 0], [0, 0, 1]])   # flipped unit circle
+        [[1, 0, 0], [0, 1, 0], [0, 0, -1]]
+        >>> validate_quadric([[1, 0, 0], [0, -1, 0], [0, 0, -1]])
+        Traceback (most recent call last):
+        ...
+        ValueError: matrix is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)
+    """
+    rows = _rows(M, name)
+    n = len(rows)
+    E = [[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)]
+    for i in range(n):
+        for j in range(i + 1, n):
+            if E[i][j] != E[j][i]:
+                raise ValueError(
+                    f"{name} is not symmetric: entry ({i},{j}) = {E[i][j]} but ({j},{i}) = {E[j][i]}"
+                )
+    kind = "ellipse" if n == 3 else "ellipsoid"
+    minors = _leading_minors(E, n - 1)
+    if all(m > 0 for m in minors):
+        pass
+    elif all((m < 0) if k % 2 == 0 else (m > 0) for k, m in enumerate(minors)):
+        E = [[-v for v in row] for row in E]
+    else:
+        other = "a hyperbola, parabola or degenerate conic" if n == 3 else "a hyperboloid, paraboloid, cylinder, cone or degenerate quadric"
+        raise ValueError(
+            f"{name} is not an {kind}: its quadratic part is indefinite or semidefinite ({other})"
+        )
+    d = _det(E)
+    if d == 0:
+        raise ValueError(f"{name} is a degenerate {kind} (det = 0: a single point)")
+    if d > 0:
+        raise ValueError(f"{name} has an empty interior: no real points (det > 0), not an {kind}")
+    return E
+
+
+def _rows(M: Any, name: str) -> list[list[Any]]:
+    if isinstance(M, np.ndarray):
+        if M.ndim != 2:
+            raise ValueError(f"{name} must be a square 3x3 or 4x4 matrix, got shape {M.shape}")
+        rows = M.tolist() if M.dtype != object else [list(r) for r in M]
+    else:
+        try:
+            rows = [list(r) for r in M]
+        except TypeError:
+            raise ValueError(f"{name} must be a square 3x3 or 4x4 matrix (nested lists)") from None
+    n = len(rows)
+    if n not in (3, 4) or any(len(r) != n for r in rows):
+        shape = f"{n}x{'/'.join(sorted({str(len(r)) for r in rows})) or 0}"
+        raise ValueError(f"{name} must be 3x3 (ellipse) or 4x4 (ellipsoid), got {shape}")
+    return rows
+
+
+def _entry(v: Any, name: str, i: int, j: int) -> fmpq:
+    try:
+        return to_fmpq(v)
+    except ValueError as e:
+        raise ValueError(f"{name} entry ({i},{j}): {e}") from None
+
+
+def as_float_matrix(M: Any) -> np.ndarray:
+    """Float view of an exact matrix (display only; never feeds a decision)."""
+    return np.array([[float(v) for v in row] for row in M], dtype=float)
