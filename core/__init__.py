@@ -1,0 +1,40 @@
+"""Certified interference of two ellipses or ellipsoids (Caravantes, Diaz-Toca, Fioravanti,
+Gonzalez-Vega: "Solving the interference problem for ellipses and ellipsoids: new formulae").
+
+Conventions are documented once, in :mod:`core.quadrics`. Public API::
+
+    from core import classify, Relation, explain
+    from core import quadric_from_axes, axes_from_quadric, validate_quadric
+
+``core`` imports only numpy, python-flint and the standard library (no web packages).
+"""
+
+from .classify import METHODS as METHODS
+from .classify import Method as Method
+from .classify import Stats as Stats
+from .classify import classify as classify
+from .explain import Explanation as Explanation
+from .explain import Quantity as Quantity
+from .explain import explain as explain
+from .quadrics import ShapeParams as ShapeParams
+from .quadrics import axes_from_quadric as axes_from_quadric
+from .quadrics import quadric_from_axes as quadric_from_axes
+from .quadrics import rotation_from_quaternion as rotation_from_quaternion
+from .quadrics import validate_quadric as validate_quadric
+from .relation import Relation as Relation
+
+__all__ = [
+    "METHODS",
+    "Explanation",
+    "Method",
+    "Quantity",
+    "Relation",
+    "ShapeParams",
+    "Stats",
+    "axes_from_quadric",
+    "classify",
+    "explain",
+    "quadric_from_axes",
+    "rotation_from_quaternion",
+    "validate_quadric",
+]

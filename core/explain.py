@@ -1,0 +1,114 @@
+"""``explain(A, B)``: everything behind one decision, for the scene, the API and students.
+
+Reports the coefficients a_i of P(T) = det(T A + B) (true values, not scaled), the s0, s1, s1,0
+the tree needed (exact rationals when the exact path ran, floats with a proven error bound when
+the float filter certified the answer), their signs, Var(a_n..a_0), the rule of the paper that
+decided, and which arithmetic certified it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
+
+from flint import fmpq
+
+from .decision import RULES, sign_variations
+from .exact import exact_pair
+from .relation import Relation
+from .subresultants import hat_scale
+
+__all__ = ["Quantity", "Explanation", "explain"]
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One number of the decision: name, exact value (if known), float value, bound, sign."""
+
+    name: str
+    """"a0".."a4", "s0", "s1" or "s10"."""
+    approx: float
+    """Float value (display only when ``exact`` is set)."""
+    exact: str | None = None
+    """Exact rational as "p/q" when the exact path computed it."""
+    bound: float | None = None
+    """|exact - approx| <= bound, when the value comes from the float filter."""
+    sign: int | None = None
+    """Certified sign (-1, 0, 1), or None when the bound cannot certify it."""
+
+
+@dataclass(frozen=True)
+class Explanation:
+    """Why two shapes are in the relation they are in."""
+
+    n: int
+    """3 for ellipses, 4 for ellipsoids (degree of P)."""
+    relation: Relation
+    certified_by: Literal["float", "exact"]
+    rule: str
+    """Key of :data:`core.decision.RULES` that decided."""
+    rule_text: str
+    var: int
+    """Var(a_n, ..., a_0): sign changes of the coefficients."""
+    coefficients: list[Quantity]
+    """a_0 .. a_n ascending."""
+    s0: Quantity | None = None
+    s1: Quantity | None = None
+    s10: Quantity | None = None
+    """Subresultant coefficients; None when the tree did not need them."""
+    subresultants_needed: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (relation as its lower-case name)."""
+        d = asdict(self)
+        d["relation"] = str(self.relation)
+        return d
+
+
+def _sign(x: Any) -> int:
+    return (x > 0) - (x < 0)
+
+
+def _q(name: str, v: fmpq) -> Quantity:
+    return Quantity(name, float(v.p) / float(v.q) if abs(v.p) < 2**1000 else float(v), str(v), None, _sign(v))
+
+
+def explain(A: Any, B: Any) -> Explanation:
+    """Explain the relation of one pair (see module docstring).
+
+    Examples:
+        >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
+        >>> e = explain(circle(0), circle(2))
+        >>> str(e.relation), e.rule, e.var, [q.exact for q in e.coefficients]
+        ('tangent', '2d-s0=0', 2, ['-1', '1', '1', '-1'])
+    """
+    from .filters import explain_float
+
+    fl = explain_float(A, B)
+    if fl is not None:
+        return fl
+    pair = exact_pair(A, B, scaled=False)
+    dec = pair.decide()
+    n = pair.n
+    a = pair.coefficients
+    coeffs = [_q(f"a{i}", fmpq(a[i])) for i in range(n + 1)]
+    scale = hat_scale(n)
+    subs: dict[str, Quantity | None] = {"s0": None, "s1": None, "s10": None}
+    needed = [k for k in ("s0", "s1", "s10") if k in pair._cache]
+    for k, c in zip(("s0", "s1", "s10"), scale):
+        if k in pair._cache:
+            true = -fmpq(a[n]) * fmpq(c.numerator, c.denominator) * fmpq(pair._cache[k])
+            subs[k] = _q(k, true)
+    return Explanation(
+        n=n,
+        relation=dec.relation,
+        certified_by="exact",
+        rule=dec.rule,
+        rule_text=RULES[dec.rule],
+        var=sign_variations([_sign(x) for x in reversed(a)]),
+        coefficients=coeffs,
+        s0=subs["s0"],
+        s1=subs["s1"],
+        s10=subs["s10"],
+        subresultants_needed=needed,
+    )
