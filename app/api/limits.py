@@ -1,0 +1,86 @@
+"""Request-level guards: body size limit and validation errors that never echo the input.
+
+FastAPI's default 422 handler echoes each offending input; a NaN there (Python's JSON reader
+accepts the ``NaN`` token) cannot be written back as JSON and would turn the 422 into a 500,
+and echoing a megabyte of input is waste. Our handler reports location, message and type only.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+__all__ = ["BodySizeLimit", "validation_error_handler"]
+
+
+class BodySizeLimit:
+    """ASGI middleware: 413 for a request body over ``max_bytes`` (declared or streamed)."""
+
+    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
+        self.app = app
+        self.max_bytes = max_bytes
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        declared = dict(scope.get("headers") or ()).get(b"content-length")
+        if declared is not None:
+            try:
+                too_big = int(declared) > self.max_bytes
+            except ValueError:
+                too_big = False
+            if too_big:
+                await self._reject(scope, receive, send)
+                return
+        # Read the body up front (bounded), then replay it: works for chunked uploads too.
+        chunks: list[bytes] = []
+        size = 0
+        more = True
+        while more:
+            message = await receive()
+            if message["type"] != "http.request":
+                break
+            chunk = message.get("body", b"")
+            size += len(chunk)
+            if size > self.max_bytes:
+                await self._reject(scope, receive, send)
+                return
+            chunks.append(chunk)
+            more = message.get("more_body", False)
+        body = b"".join(chunks)
+        sent = False
+
+        async def replay() -> Message:
+            nonlocal sent
+            if not sent:
+                sent = True
+                return {"type": "http.request", "body": body, "more_body": False}
+            return await receive()
+
+        await self.app(scope, replay, send)
+
+    async def _reject(self, scope: Scope, receive: Receive, send: Send) -> None:
+        response = JSONResponse(
+            status_code=413,
+            content={"detail": f"request body too large: the limit is {self.max_bytes} bytes"},
+        )
+        await response(scope, receive, send)
+
+
+def _clean(error: dict[str, Any]) -> dict[str, Any]:
+    msg = str(error.get("msg", ""))
+    ctx = error.get("ctx") or {}
+    if error.get("type") == "json_invalid" and "error" in ctx:
+        msg = f"{msg}: {ctx['error']}"
+    return {"loc": [p if isinstance(p, int) else str(p) for p in error.get("loc", ())], "msg": msg,
+            "type": str(error.get("type", ""))}
+
+
+async def validation_error_handler(request: Request, exc: RequestValidationError) -> JSONResponse:
+    """422 with ``{"detail": [{"loc", "msg", "type"}, ...]}`` (no echo of the input)."""
+    return JSONResponse(status_code=422, content={"detail": [_clean(e) for e in exc.errors()]})

@@ -1,0 +1,20 @@
+"""GET /healthz: liveness and analysis load."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from ..deps import SettingsDep, WorkersDep
+from ..schemas import HealthOut
+
+router = APIRouter(tags=["health"])
+
+
+@router.get("/healthz", response_model=HealthOut)
+async def healthz(settings: SettingsDep, workers: WorkersDep) -> HealthOut:
+    """Answers at once (runs on the event loop, never waits on a worker)."""
+    return HealthOut(
+        status="ok",
+        analyses_running=workers.running,
+        max_concurrent_analyses=settings.max_concurrent_analyses,
+    )

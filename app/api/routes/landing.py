@@ -1,0 +1,68 @@
+"""GET /: the landing page (static/index.html with links, presets and figures filled in).
+
+index.html holds markers that this route replaces: ``<!--scene-link-->`` (the scene URL from
+the settings), ``{{API}}`` (this server's base URL, so the curl examples can be copied),
+``<!--presets-->`` (one card per preset, with its screenshot ``static/img/NAME.png`` when it
+exists) and ``<!--bench-->`` (the PNGs in ``static/img/bench/``).
+"""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+from fastapi import APIRouter, HTTPException, Request
+from fastapi.responses import HTMLResponse
+
+from ..deps import SettingsDep
+from ..presets_source import preset_summaries
+
+router = APIRouter(include_in_schema=False)
+
+
+def _scene_link(scene_url: str | None) -> str:
+    if scene_url:
+        url = html.escape(scene_url, quote=True)
+        return f'<p><a id="scene-link" class="button" href="{url}">Open the 3D scene</a></p>'
+    return '<p id="scene-link" class="muted">The 3D scene is not running on this server (API only).</p>'
+
+
+def _presets(static_dir: Path) -> str:
+    cards = []
+    for name, description in preset_summaries():
+        esc = html.escape(name)
+        img = ""
+        if (static_dir / "img" / f"{name}.png").is_file():
+            img = f'<img src="/static/img/{esc}.png" alt="{esc}" loading="lazy">'
+        cards.append(
+            f'<figure class="preset" id="preset-{esc}">{img}<figcaption><b>{esc}</b>: '
+            f'{html.escape(description)} <a href="/api/presets/{esc}">JSON</a></figcaption></figure>'
+        )
+    if not cards:
+        return '<p class="muted">No presets available on this server.</p>'
+    return '<div class="grid">' + "".join(cards) + "</div>"
+
+
+def _bench(static_dir: Path) -> str:
+    figures = sorted((static_dir / "img" / "bench").glob("*.png"))
+    if not figures:
+        return '<p class="muted">Benchmark figures will appear here once the benchmark report has been generated.</p>'
+    return '<div class="grid">' + "".join(
+        f'<figure><img src="/static/img/bench/{html.escape(p.name)}" alt="{html.escape(p.stem)}">'
+        f"<figcaption>{html.escape(p.stem)}</figcaption></figure>"
+        for p in figures
+    ) + "</div>"
+
+
+@router.get("/", response_class=HTMLResponse)
+def landing(request: Request, settings: SettingsDep) -> HTMLResponse:
+    """The landing page; 404 when no static folder was found."""
+    static_dir = settings.static_dir
+    if static_dir is None or not (static_dir / "index.html").is_file():
+        raise HTTPException(404, "no landing page: static/index.html not found")
+    page = (static_dir / "index.html").read_text(encoding="utf-8")
+    page = page.replace("<!--scene-link-->", _scene_link(settings.scene_url))
+    page = page.replace("{{API}}", html.escape(str(request.base_url).rstrip("/")))
+    page = page.replace("<!--presets-->", _presets(static_dir))
+    page = page.replace("<!--bench-->", _bench(static_dir))
+    return HTMLResponse(page)

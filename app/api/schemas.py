@@ -1,0 +1,212 @@
+"""Pydantic models at the boundary of the HTTP API (requests in, responses out).
+
+Numbers: a JSON number is taken as the binary float (or integer) it is; a string is an exact
+decimal or fraction ("0.1" is 1/10, "3/7"). NaN and infinity (``NaN``/``Infinity`` tokens that
+Python's JSON reader accepts) are rejected with 422. A shape is a 3x3 / 4x4 matrix (nested
+lists) or ``{"center", "semi_axes", "orientation"}``; see :func:`app.api.convert.quadric_input`
+for when that shape is built exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    PlainValidator,
+    Tag,
+    WithJsonSchema,
+)
+
+from core.rationals import MAX_NUMBER_CHARS, to_fmpq
+
+__all__ = [
+    "Number",
+    "Matrix",
+    "ShapeIn",
+    "Quadric",
+    "PairIn",
+    "PairItem",
+    "BatchIn",
+    "ClassifyIn",
+    "ClassifyOut",
+    "QuantityOut",
+    "ExplainOut",
+    "HealthOut",
+]
+
+MAX_INT_DIGITS = MAX_NUMBER_CHARS
+"""Largest integer accepted as a JSON number, in decimal digits (as for number strings)."""
+
+
+def _number(v: Any) -> int | float | str:
+    """Check one JSON number or number string (value kept as given; core converts it exactly)."""
+    if isinstance(v, bool):
+        raise ValueError(f"a boolean is not a number: {v!r}")
+    if isinstance(v, int):
+        if v and math.log10(abs(v)) >= MAX_INT_DIGITS:
+            raise ValueError(f"integer too large (more than {MAX_INT_DIGITS} digits); send it as a string fraction")
+        return v
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            raise ValueError(f"not a finite number: {v!r} (NaN and infinity are not accepted)")
+        return v
+    if isinstance(v, str):
+        to_fmpq(v)  # raises ValueError saying what is wrong with the string
+        return v
+    raise ValueError(f"expected a number or a number string like '3/7', got {type(v).__name__}")
+
+
+Number = Annotated[
+    int | float | str,
+    PlainValidator(_number),
+    WithJsonSchema(
+        {
+            "anyOf": [
+                {"type": "number"},
+                {
+                    "type": "string",
+                    "maxLength": MAX_NUMBER_CHARS,
+                    "description": "exact decimal or fraction: '0.1', '-3/7', '1e-9'",
+                    "examples": ["3/7", "0.1"],
+                },
+            ]
+        }
+    ),
+]
+"""A finite JSON number (the binary value it is) or an exact number string."""
+
+Row = Annotated[list[Number], Field(min_length=3, max_length=4)]
+Matrix = Annotated[
+    list[Row],
+    Field(
+        min_length=3,
+        max_length=4,
+        description="symmetric 3x3 (ellipse, on (x, y, 1)) or 4x4 (ellipsoid) matrix, interior X^T A X < 0",
+        examples=[[[1, 0, 0], [0, 1, 0], [0, 0, -1]]],
+    ),
+]
+
+
+class ShapeIn(BaseModel):
+    """An ellipse or ellipsoid by centre, semi-axes and orientation."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    center: Annotated[list[Number], Field(min_length=2, max_length=3)]
+    """(x, y) or (x, y, z)."""
+    semi_axes: Annotated[list[Number], Field(min_length=2, max_length=3)]
+    """Positive lengths along the body axes, as many as centre coordinates."""
+    orientation: Number | Annotated[list[Number], Field(min_length=4, max_length=4)] | None = Field(
+        default=None,
+        description="2D: angle in radians (float) or quaternion [w, 0, 0, z]; 3D: quaternion [w, x, y, z] "
+        "(need not be unit). Omitted: axis-aligned.",
+    )
+
+
+def _quadric_kind(v: Any) -> str:
+    return "shape" if isinstance(v, dict | ShapeIn) else "matrix"
+
+
+Quadric = Annotated[
+    Annotated[Matrix, Tag("matrix")] | Annotated[ShapeIn, Tag("shape")],
+    Discriminator(_quadric_kind),
+]
+"""A matrix (nested lists) or a shape object."""
+
+MethodName = Literal["adaptive", "exact", "float"]
+
+
+class PairItem(BaseModel):
+    """One pair of a batch."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    a: Quadric
+    b: Quadric
+
+
+class PairIn(PairItem):
+    """One pair to classify."""
+
+    method: MethodName = Field(
+        default="adaptive",
+        description="adaptive: float filter, exact rationals where it abstains; exact: rationals only; "
+        "float: filter only (may answer 'undecided')",
+    )
+
+
+class BatchIn(BaseModel):
+    """Several pairs at once; the answer is a list in the same order."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    pairs: Annotated[list[PairItem], Field(min_length=1)]
+    method: MethodName = "adaptive"
+
+
+def _classify_kind(v: Any) -> str:
+    return "batch" if isinstance(v, dict) and "pairs" in v or isinstance(v, BatchIn) else "pair"
+
+
+ClassifyIn = Annotated[
+    Annotated[PairIn, Tag("pair")] | Annotated[BatchIn, Tag("batch")],
+    Discriminator(_classify_kind),
+]
+
+RelationName = Literal["separate", "tangent", "overlap", "undecided"]
+
+
+class ClassifyOut(BaseModel):
+    """The certified relation of one pair."""
+
+    relation: RelationName
+    """'undecided' only with method 'float'."""
+    certified_by: Literal["float", "exact"] | None
+    """Arithmetic that certified the relation: the float filter (with its proven error bound)
+    or exact rationals; None when undecided."""
+    kind: Literal["ellipse", "ellipsoid"]
+    method: MethodName
+
+
+class QuantityOut(BaseModel):
+    """One number of the decision (see core.explain.Quantity)."""
+
+    name: str
+    approx: float | None
+    """Float value (None if it overflows a double); display only."""
+    exact: str | None = None
+    """Exact rational 'p/q' when the exact path computed it."""
+    bound: float | None = None
+    """|exact - approx| <= bound when the float filter computed it."""
+    sign: int | None = None
+    """Certified sign -1, 0, 1 (None when not certified)."""
+
+
+class ExplainOut(BaseModel):
+    """Everything behind one decision."""
+
+    n: Literal[3, 4]
+    relation: RelationName
+    certified_by: Literal["float", "exact"]
+    rule: str
+    rule_text: str
+    var: int
+    coefficients: list[QuantityOut]
+    """a_0 .. a_n of P(T) = det(T A + B), ascending."""
+    s0: QuantityOut | None = None
+    s1: QuantityOut | None = None
+    s10: QuantityOut | None = None
+    subresultants_needed: list[str]
+
+
+class HealthOut(BaseModel):
+    """Liveness and load."""
+
+    status: Literal["ok"]
+    analyses_running: int
+    max_concurrent_analyses: int

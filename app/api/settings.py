@@ -1,0 +1,65 @@
+"""Settings of the HTTP API: limits, time budget and where the landing page lives.
+
+One frozen dataclass, built by the command line (``python -m app serve``) and injected into routes
+with ``Depends(get_settings)`` (:mod:`app.api.deps`), so tests can swap it through
+``app.dependency_overrides``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["ApiSettings", "default_static_dir"]
+
+
+def default_static_dir() -> Path | None:
+    """The ``static/`` folder of the repository, or ``./static`` (Docker's work directory).
+
+    ``pip install .`` installs the packages but not ``static/``, so the working directory is
+    searched second.
+
+    Examples:
+        >>> default_static_dir() is None or (default_static_dir() / "index.html").is_file()
+        True
+    """
+    for candidate in (Path(__file__).resolve().parents[2] / "static", Path.cwd() / "static"):
+        if (candidate / "index.html").is_file():
+            return candidate
+    return None
+
+
+@dataclass(frozen=True)
+class ApiSettings:
+    """Limits and links of one API instance (all limits are per request)."""
+
+    scene_url: str | None = None
+    """Link to the 3D scene shown on the landing page; None when serving ``--api-only``."""
+    max_body_bytes: int = 1_000_000
+    """Largest accepted request body (413 above)."""
+    max_batch: int = 1000
+    """Most pairs in one ``{"pairs": [...]}`` classify request."""
+    max_expression_chars: int = 2000
+    """Longest expression string in a motion (and longest number string)."""
+    max_degree: int = 64
+    """Highest degree in t of a motion's matrix entries (checked by the motion parser)."""
+    time_budget_s: float = 20.0
+    """Wall-clock budget of one motion analysis; the worker process is killed when exceeded."""
+    max_digits: int = 200
+    """Largest ``digits`` accepted by /api/analyse."""
+    max_concurrent_analyses: int = 2
+    """Analyses running at once (each in its own process); more get 503 with Retry-After."""
+    memory_limit_mb: int | None = 2048
+    """Address-space cap of an analysis worker process (None: no cap)."""
+    static_dir: Path | None = field(default_factory=default_static_dir)
+    """Folder with ``index.html``, ``style.css`` and ``img/`` served at ``/`` and ``/static``."""
+
+    def __post_init__(self) -> None:
+        """Reject limits that make no sense (a ValueError naming the field)."""
+        for name in ("max_body_bytes", "max_batch", "max_expression_chars", "max_degree",
+                     "max_digits", "max_concurrent_analyses"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"ApiSettings.{name} must be a positive integer, got {value!r}")
+        if not (self.time_budget_s > 0):
+            raise ValueError(f"ApiSettings.time_budget_s must be > 0, got {self.time_budget_s!r}")

@@ -1,0 +1,171 @@
+"""Run CPU-bound work (motion analysis) in a separate process with a time budget.
+
+The API shares its process with the viser scene, so a long exact computation must neither hold
+the GIL nor outlive its budget. Each job runs in a fresh child process (``forkserver``: forked
+from a clean single-threaded server, never from the threaded web process); the caller waits on
+a pipe and kills the child when the budget is spent. A semaphore bounds the jobs running at once;
+a job that finds all slots taken is refused at once (the caller answers 503) instead of queueing.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+__all__ = ["WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerFailed"]
+
+
+class WorkerBusy(RuntimeError):
+    """All worker slots are taken."""
+
+
+class WorkerTimeout(RuntimeError):
+    """The job exceeded its time budget and was killed."""
+
+
+class WorkerFailed(RuntimeError):
+    """The job died (crash, memory limit) or raised something other than ValueError."""
+
+
+def _child(conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_mb: int | None) -> None:
+    if memory_mb is not None:
+        try:
+            import resource
+
+            limit = memory_mb * 1024 * 1024
+            resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+        except (ImportError, ValueError, OSError):  # pragma: no cover - platform without rlimits
+            pass
+    try:
+        result = ("ok", fn(*args, **kwargs))
+    except ValueError as e:
+        result = ("value_error", str(e))
+    except MemoryError:
+        result = ("failed", f"the job ran out of memory (limit {memory_mb} MB)")
+    except BaseException as e:  # report everything: the parent turns it into a clean error
+        result = ("failed", f"{type(e).__name__}: {e}")
+    try:
+        conn.send(result)
+    except Exception as e:  # unpicklable result
+        conn.send(("failed", f"result could not be sent back: {type(e).__name__}: {e}"))
+    finally:
+        conn.close()
+
+
+class WorkerPool:
+    """At most ``max_jobs`` child processes at once, each killed when its budget runs out.
+
+    Args:
+        max_jobs: jobs that may run at the same time.
+        memory_mb: address-space limit of each child (None: none).
+        start_method: multiprocessing start method ("forkserver" where available).
+        preload: modules the fork server imports once, so children start warm.
+
+    Examples:
+        >>> import math
+        >>> pool = WorkerPool(1, start_method="spawn")
+        >>> pool.run(math.sqrt, 16.0, timeout=60)
+        4.0
+        >>> pool.run(math.sqrt, -1.0, timeout=60)
+        Traceback (most recent call last):
+        ...
+        ValueError: math domain error
+    """
+
+    def __init__(
+        self,
+        max_jobs: int = 2,
+        *,
+        memory_mb: int | None = None,
+        start_method: str | None = None,
+        preload: tuple[str, ...] = ("core",),
+    ) -> None:
+        if start_method is None:
+            start_method = "forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn"
+        self._ctx = mp.get_context(start_method)
+        if start_method == "forkserver" and preload:
+            self._ctx.set_forkserver_preload(list(preload))
+        self._slots = threading.BoundedSemaphore(max_jobs)
+        self._memory_mb = memory_mb
+        self._running: set[Any] = set()
+        self._lock = threading.Lock()
+        self.max_jobs = max_jobs
+
+    def run(self, fn: Callable[..., Any], /, *args: Any, timeout: float, **kwargs: Any) -> Any:
+        """Run ``fn(*args, **kwargs)`` in a child process and return its result.
+
+        ``fn``, its arguments and its result must be picklable (module-level functions).
+
+        Raises:
+            WorkerBusy: every slot is taken (nothing was started).
+            WorkerTimeout: ``timeout`` seconds passed; the child was killed.
+            ValueError: the job raised ValueError (bad input): same message.
+            WorkerFailed: the job crashed or raised another exception.
+        """
+        if not self._slots.acquire(blocking=False):
+            raise WorkerBusy(f"all {self.max_jobs} analysis workers are busy")
+        try:
+            return self._run(fn, args, kwargs, timeout)
+        finally:
+            self._slots.release()
+
+    def _run(self, fn: Callable[..., Any], args: tuple, kwargs: dict, timeout: float) -> Any:
+        recv, send = self._ctx.Pipe(duplex=False)
+        proc = self._ctx.Process(target=_child, args=(send, fn, args, kwargs, self._memory_mb), daemon=True)
+        deadline = time.monotonic() + timeout
+        with self._lock:
+            self._running.add(proc)
+        try:
+            proc.start()
+            send.close()  # the child holds the only write end: EOF when it dies
+            while True:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise WorkerTimeout(f"the job exceeded its time budget of {timeout:g} s and was stopped")
+                if recv.poll(min(left, 0.5)):
+                    try:
+                        status, payload = recv.recv()
+                    except EOFError:
+                        raise WorkerFailed(self._died(proc)) from None
+                    break
+                if not proc.is_alive() and not recv.poll(0):
+                    raise WorkerFailed(self._died(proc))
+        finally:
+            if proc.is_alive():
+                proc.kill()
+            proc.join(timeout=5)
+            recv.close()
+            with self._lock:
+                self._running.discard(proc)
+            if proc.exitcode is not None:
+                proc.close()
+        if status == "ok":
+            return payload
+        if status == "value_error":
+            raise ValueError(payload)
+        raise WorkerFailed(payload)
+
+    @staticmethod
+    def _died(proc: Any) -> str:
+        proc.join(timeout=1)
+        return f"the worker process died (exit code {proc.exitcode})"
+
+    @property
+    def running(self) -> int:
+        """Jobs running now."""
+        with self._lock:
+            return len(self._running)
+
+    def shutdown(self) -> None:
+        """Kill every running job (called when the server stops)."""
+        with self._lock:
+            procs = list(self._running)
+        for proc in procs:
+            try:
+                if proc.is_alive():
+                    proc.kill()
+            except ValueError:  # already closed
+                pass
