@@ -1,25 +1,312 @@
-"""Float filter placeholder (replaced by the certified float64 filter in the next commit)."""
+"""The certified float64 filter: paper's trees on float values whose signs are proven (Shewchuk/CGAL style).
+
+For every pair it computes a_0..a_n of P(T) = det(T A + B) straight from the matrix entries (no
+inversion), the leading principal minors that certify both matrices are ellipses/ellipsoids, and,
+only for the pairs whose Descartes count Var(a_n..a_0) is 2, the sign-equivalent ``hs0`` of s0.
+Each value comes with a proven bound ``|exact - value| <= C * permanent`` from
+:mod:`core.errorbound`; a sign is used only when ``|value| > bound``. Otherwise the pair is
+UNDECIDED and :func:`core.classify.classify` sends it to exact arithmetic.
+
+A float filter can never certify ``s0 = 0``, so TANGENT is always left to the exact path, and
+s1, s1,0 (needed only when s0 = 0) are never evaluated here for decisions; :func:`explain_float`
+reports them, with bounds, for display.
+"""
+
 from __future__ import annotations
+
+from fractions import Fraction
+from functools import cache
+from typing import Any
 
 import numpy as np
 
+from .decision import RULES, sign_variations
+from .errorbound import LEAF_EXPONENT_MIN, RADIUS_FACTOR, Kernel, build_kernel
+from .pencil import pencil_coefficients, poly_mul
 from .relation import Relation
+from .subresultants import hat_s0, hat_s1, hat_s10, hat_scale
 
-_last = 0
+__all__ = ["classify_float", "explain_float", "pencil_kernel", "subresultant_kernel", "last_escalations"]
+
+_CHUNK = 8192
+"""Pairs per numpy chunk: keeps the kernel's temporaries in cache."""
+
+_state = {"escalated": 0}
 
 
-def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False) -> np.ndarray:
-    """Abstain on every pair (exact path decides)."""
-    global _last
-    _last = a.shape[0]
-    return np.full(a.shape[0], Relation.UNDECIDED, dtype=np.int8)
+def _leaf(prefix: str, i: int, j: int) -> str:
+    i, j = min(i, j), max(i, j)
+    return f"{prefix}{i}{j}"
+
+
+def _leaf_names(n: int) -> list[str]:
+    return [_leaf(p, i, j) for p in "ab" for i in range(n) for j in range(i, n)]
+
+
+def _minor(M: list[list[Any]], k: int) -> Any:
+    """Leading k x k principal minor of the quadratic block (k = 2 or 3)."""
+    if k == 2:
+        return M[0][0] * M[1][1] - M[0][1] * M[1][0]
+    return (
+        M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1])
+        - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0])
+        + M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0])
+    )
+
+
+def _row_bound_poly(A: list[list[Any]], B: list[list[Any]]) -> list[Any]:
+    """Coefficients of prod_i (T ra_i + rb_i), ra_i = sum_j |A_ij|: >= the permanent of each a_k."""
+    poly: list[Any] = []
+    for i in range(len(A)):
+        ra = sum((abs(x) for x in A[i][1:]), abs(A[i][0]))
+        rb = sum((abs(x) for x in B[i][1:]), abs(B[i][0]))
+        poly = [rb, ra] if not poly else poly_mul(poly, [rb, ra])
+    return poly
+
+
+@cache
+def pencil_kernel(n: int) -> Kernel:
+    """Kernel: symmetric entries of A and B -> a_0..a_n and the validity minors, each with ``_M``.
+
+    ``x_M`` is an upper bound of the permanent of ``x`` (products of absolute row sums), so the
+    error of ``x`` is at most ``constant * x_M`` (see :mod:`core.errorbound`).
+    """
+
+    def formula(L: dict[str, Any]) -> dict[str, Any]:
+        A = [[L[_leaf("a", i, j)] for j in range(n)] for i in range(n)]
+        B = [[L[_leaf("b", i, j)] for j in range(n)] for i in range(n)]
+        out: dict[str, Any] = {}
+        for i, (c, m) in enumerate(zip(pencil_coefficients(A, B), _row_bound_poly(A, B))):
+            out[f"c{i}"] = c
+            out[f"c{i}_M"] = m
+        for name, M in (("A", A), ("B", B)):
+            rows = [sum((abs(x) for x in M[i][1:n - 1]), abs(M[i][0])) for i in range(n - 1)]
+            for k in range(2, n):
+                out[f"d{name}{k}"] = _minor(M, k)
+                bound = rows[0]
+                for r in rows[1:k]:
+                    bound = bound * r
+                out[f"d{name}{k}_M"] = bound
+        return out
+
+    leaf_max = {nm: Fraction(2) for nm in _leaf_names(n)}
+    return build_kernel(f"pencil{n}", _leaf_names(n), formula, style="permanent", leaf_max=leaf_max)
+
+
+@cache
+def subresultant_kernel(n: int, which: str = "s0") -> Kernel:
+    """Kernel (midpoint-radius): a_0..a_n with radii -> hs0, hs1 or hs10 with a radius."""
+    pk = pencil_kernel(n)
+    f = {"s0": hat_s0, "s1": hat_s1, "s10": hat_s10}[which]
+    names = [f"c{i}" for i in range(n + 1)]
+    leaf_max = {c: pk.output_max[pk.outputs.index(c)] for c in names}
+    return build_kernel(
+        f"hat_{which}_{n}",
+        names,
+        lambda L: {which: f([L[c] for c in names])},
+        style="radius",
+        leaf_max=leaf_max,
+    )
+
+
+HAT_DEGREE_WEIGHT: dict[tuple[int, str], tuple[int, int]] = {
+    (3, "s0"): (4, 6), (3, "s1"): (2, 4), (3, "s10"): (2, 3),
+    (4, "s0"): (6, 12), (4, "s1"): (4, 10), (4, "s10"): (4, 9),
+}
+"""(degree, weight) of each hat form: hs(mu * lambda^i a_i) = mu^deg lambda^weight hs(a)."""
 
 
 def last_escalations() -> int:
-    """Pairs left undecided by the last call."""
-    return _last
+    """Number of pairs the last :func:`classify_float` call left UNDECIDED."""
+    return _state["escalated"]
 
 
-def explain_float(A, B):  # noqa: ANN001, ANN201
-    """No float explanation yet."""
-    return None
+class _Prepared:
+    """Pairs flipped to negative interiors and scaled by 2^-ea, 2^-eb (exact), with abstentions."""
+
+    def __init__(self, a: np.ndarray, b: np.ndarray) -> None:
+        ok = np.isfinite(a).all(axis=(1, 2)) & np.isfinite(b).all(axis=(1, 2))
+        ok &= (a == np.swapaxes(a, 1, 2)).all(axis=(1, 2)) & (b == np.swapaxes(b, 1, 2)).all(axis=(1, 2))
+        scaled, exps = [], []
+        for M in (a, b):
+            M = np.where(np.isfinite(M), M, 0.0)
+            q00 = M[:, 0, 0]
+            ok &= q00 != 0
+            M = M * np.where(q00 < 0, -1.0, 1.0)[:, None, None]  # exact: normalise interior sign
+            mx = np.abs(M).max(axis=(1, 2))
+            _, e = np.frexp(np.where(mx > 0, mx, 1.0))
+            M = np.ldexp(M, (1 - e)[:, None, None])  # exact: largest |entry| now in [1, 2)
+            # abstain where a non-zero entry is so small that products could underflow harmfully
+            tiny = (M != 0) & (np.abs(M) < 2.0**-LEAF_EXPONENT_MIN)
+            ok &= ~tiny.any(axis=(1, 2))
+            scaled.append(M)
+            exps.append(1 - e)
+        self.a, self.b = scaled
+        self.ea, self.eb = exps
+        """Scaled matrix = 2^ea * A (after the sign flip)."""
+        self.ok = ok
+
+
+def _run_pencil(a: np.ndarray, b: np.ndarray) -> dict[str, tuple[Any, Any]]:
+    """name -> (value, certified error bound) of every pencil-kernel output, for arrays of pairs."""
+    n = a.shape[-1]
+    k = pencil_kernel(n)
+    args = [a[:, i, j] for i in range(n) for j in range(i, n)] + [
+        b[:, i, j] for i in range(n) for j in range(i, n)
+    ]
+    res = dict(zip(k.outputs, k.fn(*args)))
+    floor = k.underflow_floor
+    return {
+        name: (res[name], c * res[name + "_M"] + floor)
+        for name, c in zip(k.outputs, k.constants)
+        if not name.endswith("_M")
+    }
+
+
+def _run_hat(n: int, which: str, vals: list[Any], radii: list[Any]) -> tuple[Any, Any]:
+    """(value, certified error bound) of hs_which from a_i values and their error bounds."""
+    k = subresultant_kernel(n, which)
+    v, r = k.fn(*vals, *radii)
+    return v, r * RADIUS_FACTOR + k.underflow_floor
+
+
+def _certified_sign(v: np.ndarray, bound: np.ndarray) -> np.ndarray:
+    """+1 / -1 where |v| > bound, 0 where uncertain (0 never means 'zero' here)."""
+    return np.where(v > bound, 1, np.where(v < -bound, -1, 0)).astype(np.int8)
+
+
+def _classify_chunk(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    n = a.shape[-1]
+    N = a.shape[0]
+    codes = np.full(N, Relation.UNDECIDED, dtype=np.int8)
+    prep = _Prepared(a, b)
+    ok = prep.ok
+    out = _run_pencil(prep.a, prep.b)
+    for key in [k for k in out if k.startswith("d")]:
+        v, bd = out[key]
+        ok &= v > bd  # quadratic block positive definite, certified (Sylvester)
+    for key in (f"c{n}", "c0"):
+        v, bd = out[key]
+        ok &= v < -bd  # det A < 0 and det B < 0, certified
+    signs = []
+    for i in range(n - 1, 0, -1):
+        v, bd = out[f"c{i}"]
+        s = _certified_sign(v, bd)
+        ok &= s != 0
+        signs.append(s)
+    # Var(-, a_{n-1}, ..., a_1, -) with every sign certified non-zero
+    seq = [np.full(N, -1, np.int8), *signs, np.full(N, -1, np.int8)]
+    var = sum((seq[i] != seq[i + 1]).astype(np.int8) for i in range(len(seq) - 1))
+    codes[ok & (var != 2)] = Relation.OVERLAP
+    idx = np.flatnonzero(ok & (var == 2))
+    if idx.size:  # s0 only where the tree needs it
+        vals = [out[f"c{i}"][0][idx] for i in range(n + 1)]
+        radii = [out[f"c{i}"][1][idx] for i in range(n + 1)]
+        s0 = _certified_sign(*_run_hat(n, "s0", vals, radii))
+        first, second = (Relation.SEPARATE, Relation.OVERLAP) if n == 3 else (Relation.OVERLAP, Relation.SEPARATE)
+        codes[idx] = np.where(s0 > 0, first, np.where(s0 < 0, second, Relation.UNDECIDED))
+    return codes
+
+
+def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False) -> np.ndarray:
+    """Certified float64 classification of stacked pairs; UNDECIDED where no sign is proven.
+
+    Args:
+        a, b: float64 arrays of shape (N, n, n), n = 3 or 4. Not validated here: invalid or
+            non-finite pairs come back UNDECIDED so that the exact path reports the error.
+        scalar: hint that N == 1 (kept for the API; the same code runs).
+
+    Returns:
+        int8 codes of :class:`Relation`, shape (N,). Never a wrong label.
+    """
+    N = a.shape[0]
+    codes = np.empty(N, dtype=np.int8)
+    for s in range(0, N, _CHUNK):
+        codes[s : s + _CHUNK] = _classify_chunk(a[s : s + _CHUNK], b[s : s + _CHUNK])
+    _state["escalated"] = int((codes == Relation.UNDECIDED).sum())
+    return codes
+
+
+def explain_float(A: Any, B: Any) -> Any:
+    """Explanation from the float filter if it certifies the pair, else None (exact path then).
+
+    Values are computed on the power-of-two scaled matrices (where the bounds are proven) and
+    scaled back exactly (display may overflow to inf for extreme inputs; signs stay certified).
+    """
+    from .explain import Explanation, Quantity
+
+    if not (_is_plain_floats(A) and _is_plain_floats(B)):
+        return None
+    a = np.asarray(A, dtype=np.float64)
+    b = np.asarray(B, dtype=np.float64)
+    if a.ndim != 2 or a.shape != b.shape or a.shape[0] not in (3, 4) or a.shape[0] != a.shape[1]:
+        return None
+    n = a.shape[0]
+    code = classify_float(a[None], b[None])[0]
+    if code == Relation.UNDECIDED:
+        return None
+    prep = _Prepared(a[None], b[None])
+    ea, eb = int(prep.ea[0]), int(prep.eb[0])
+    out = _run_pencil(prep.a, prep.b)
+
+    def back(x: float, i: int) -> float:  # a_i(scaled) = 2^(i ea + (n - i) eb) a_i(true)
+        return float(np.ldexp(x, -(i * ea + (n - i) * eb)))
+
+    coeffs = []
+    for i in range(n + 1):
+        v, bd = (float(x[0]) for x in out[f"c{i}"])
+        s = 1 if v > bd else (-1 if v < -bd else None)
+        coeffs.append(Quantity(f"a{i}", back(v, i), None, back(bd, i), s))
+    var = sign_variations([q.sign or 0 for q in reversed(coeffs)])
+    subs: dict[str, Any] = {}
+    needed: list[str] = []
+    if var == 2:
+        needed = ["s0"]
+        vals = [float(out[f"c{i}"][0][0]) for i in range(n + 1)]
+        radii = [float(out[f"c{i}"][1][0]) for i in range(n + 1)]
+        an = coeffs[n].approx
+        for which, scale in zip(("s0", "s1", "s10"), hat_scale(n)):
+            hv, hb = _run_hat(n, which, vals, radii)
+            deg, w = HAT_DEGREE_WEIGHT[(n, which)]
+            # scaled a_i = mu lambda^i a_i with mu = 2^(n eb), lambda = 2^(ea - eb)
+            e = -(n * eb * deg + (ea - eb) * w)
+            hv, hb = float(np.ldexp(hv, e)), float(np.ldexp(hb, e))
+            # s_j = -a_n c_j hs_j; a_n < 0 is certified, so sign(s_j) = sign(hs_j)
+            factor = -an * float(scale)
+            s = 1 if hv > hb else (-1 if hv < -hb else None)
+            rel_an = coeffs[n].bound / abs(an) if an else float("inf")
+            bound = abs(factor) * (hb + abs(hv) * rel_an) * (1 + 2.0**-40)
+            subs[which] = Quantity(which, factor * hv, None, bound, s)
+    rel = Relation(int(code))
+    if var != 2:
+        rule = "var"
+    elif n == 3:
+        rule = "2d-s0>0" if rel == Relation.SEPARATE else "2d-s0<0"
+    else:
+        rule = "3d-s0<0" if rel == Relation.SEPARATE else "3d-s0>0"
+    return Explanation(
+        n=n,
+        relation=rel,
+        certified_by="float",
+        rule=rule,
+        rule_text=RULES[rule],
+        var=var,
+        coefficients=coeffs,
+        s0=subs.get("s0"),
+        s1=subs.get("s1"),
+        s10=subs.get("s10"),
+        subresultants_needed=needed,
+    )
+
+
+def _is_plain_floats(M: Any) -> bool:
+    if isinstance(M, np.ndarray):
+        return M.dtype == np.float64 or (M.dtype.kind in "iu" and np.abs(M).max() < 2**53)
+    try:
+        return all(
+            (type(v) is float or type(v) is np.float64 or (type(v) is int and abs(v) < 2**53))
+            for row in M
+            for v in row
+        )
+    except TypeError:
+        return False

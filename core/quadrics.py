@@ -114,7 +114,8 @@ def quadric_from_axes(
         raise ValueError(f"semi-axes must be positive, got {[str(v) for v in r]}")
     R = _orientation_matrix(d, orientation, exact)
     inv_r2 = [1 / (v * v) for v in r]
-    Q = [[sum(R[i][k] * inv_r2[k] * R[j][k] for k in range(d)) for j in range(d)] for i in range(d)]
+    # upper triangle, mirrored: float rounding must not make the matrix non-symmetric
+    Q = [[sum(R[min(i, j)][k] * inv_r2[k] * R[max(i, j)][k] for k in range(d)) for j in range(d)] for i in range(d)]
     Qc = [sum(Q[i][j] * c[j] for j in range(d)) for i in range(d)]
     cQc = sum(c[i] * Qc[i] for i in range(d))
     M = [[Q[i][j] for j in range(d)] + [-Qc[i]] for i in range(d)]

@@ -1,0 +1,316 @@
+"""Straight-line float kernels with proven forward error bounds, generated from the ring-generic formulas.
+
+The pencil (:mod:`core.pencil`) and subresultant (:mod:`core.subresultants`) formulas are traced once
+with a symbolic number type (:class:`_Sym`) that records every ``+ - *``; from the trace we emit Python
+source that runs unchanged on Python floats (one pair) and on numpy float64 arrays (many pairs), and
+we derive each output's error constant from the trace itself (CGAL's ``compute_epsilon`` idea).
+Two bound styles, both assuming round-to-nearest, fl(x op y) = (x op y)(1 + d), |d| <= u = 2^-53:
+
+``"permanent"`` (stage 1, matrix entries -> pencil): a node's error count K is 0 for leaves (and
+unchanged by negation and ``abs``),
+``max(Kx, Ky) + 1`` for ``+``/``-``, ``Kx + Ky + 1`` for ``*``, ``Kx + 1`` for a constant factor that is
+not a power of two. Then |fl(v) - v| <= gamma_K * M with gamma_K = K u / (1 - K u) and M the exact value
+of the expression on absolute values with every ``-`` turned into ``+`` (Higham, Lemma 3.1, monomial by
+monomial). Each output ``x`` has a companion output ``x_M``, an upper bound of M computed in the
+same kernel from ``abs`` of the leaves (for instance products of row sums); M <= fl(x_M) / (1 - u)^K_M
+since its terms are non-negative, so ``constants[x]`` = gamma_K / (1 - u)^(K_M + 1) rounded up (the
+extra rounding is that of ``C * fl(x_M)``).
+
+``"radius"`` (stage 2, uncertain a_i -> s0, s1, s1,0): midpoint-radius (running error) arithmetic;
+every node carries r >= |computed - exact|:
+``r(x +- y) = rx + ry + U|z|``, ``r(x * y) = |x| ry + rx (|y| + ry) + U|z|``, ``r(c x) = |c| rx (+ U|z|)``
+with U = 2^-52 >= u / (1 - u) and z the computed result. Inputs keep their own radii, so the
+cancellation already present in the a_i is not compounded (a permanent of a permanent would be).
+The computed radius is itself rounded: ``radius_factor`` = 1 + 2^-40 >= (1 - u)^-(#radius ops).
+
+Underflow and overflow (both styles): :mod:`core.filters` scales each matrix by a power of two so
+that its largest entry lies in [1, 2) and abstains if a non-zero entry is below 2^-LEAF_EXPONENT_MIN.
+Then no value can overflow, and an underflow adds an absolute error of at most 2^-1075 per operation;
+``underflow_floor`` bounds its effect on the output from the largest magnitude every node can reach
+(computed here exactly from the leaf bounds) -- it is below 2^-900 for our kernels, far under any
+sign we certify.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Literal
+
+__all__ = [
+    "Kernel",
+    "build_kernel",
+    "gamma_constant",
+    "round_up",
+    "UNIT_ROUNDOFF",
+    "LEAF_EXPONENT_MIN",
+    "RADIUS_FACTOR",
+]
+
+UNIT_ROUNDOFF = Fraction(1, 2**53)
+"""u for float64 round-to-nearest."""
+
+LEAF_EXPONENT_MIN = 40
+"""Non-zero scaled matrix entries must be >= 2^-40 (see module docstring)."""
+
+RADIUS_FACTOR = 1.0 + 2.0**-40
+"""Covers the rounding of a computed radius or bound (fewer than 2^12 roundings of nonneg terms)."""
+
+_UNDERFLOW_ABS = Fraction(1, 2**1074)
+"""Absolute error of one rounding in the subnormal range (half an ulp there, doubled for safety)."""
+
+
+def round_up(c: Fraction) -> float:
+    """The smallest float >= c (c >= 0)."""
+    f = float(c)
+    if Fraction(f) < c:
+        f = math.nextafter(f, math.inf)
+    return f
+
+
+def gamma_constant(K: int, K_bound: int) -> float:
+    """Float C with |fl(v) - v| <= fl(C * fl(M)).
+
+    Args:
+        K: error count of the value v.
+        K_bound: error count of the computed upper bound M of its permanent (nonneg terms, so
+            exact M <= fl(M) / (1 - u)^K_bound); one more rounding for the product C * fl(M).
+
+    Examples:
+        >>> gamma_constant(0, 0)
+        0.0
+        >>> 2.0**-53 < gamma_constant(1, 0) < 2.0**-52
+        True
+    """
+    u = UNIT_ROUNDOFF
+    if K == 0:
+        return 0.0
+    if max(K, K_bound) * u >= Fraction(1, 2**20):
+        raise ValueError(f"error count {K} too large for float64")
+    return round_up(K * u / (1 - K * u) / (1 - u) ** (K_bound + 1))
+
+
+def _is_power_of_two(c: int) -> bool:
+    c = abs(c)
+    return c > 0 and c & (c - 1) == 0
+
+
+@dataclass
+class _Node:
+    op: str  # "leaf", "+", "-", "*", "c*", "neg"
+    args: tuple[int, ...]
+    const: int = 1
+    name: str = ""
+    K: int = 0
+
+
+class _Trace:
+    def __init__(self) -> None:
+        self.nodes: list[_Node] = []
+
+    def add(self, node: _Node) -> _Sym:
+        self.nodes.append(node)
+        return _Sym(self, len(self.nodes) - 1)
+
+
+class _Sym:
+    """Symbolic float: supports exactly the operations the formulas use (+, -, *, int factors)."""
+
+    __slots__ = ("t", "i")
+
+    def __init__(self, t: _Trace, i: int) -> None:
+        self.t = t
+        self.i = i
+
+    def _bin(self, other: Any, op: str) -> _Sym:
+        t = self.t
+        if isinstance(other, int):
+            if op != "*":
+                return NotImplemented
+            if other == 0:
+                raise ValueError("multiplication by 0 in a traced formula")
+            if other == 1:
+                return self
+            K = t.nodes[self.i].K + (0 if _is_power_of_two(other) else 1)
+            return t.add(_Node("c*", (self.i,), const=other, K=K))
+        a, b = t.nodes[self.i], t.nodes[other.i]
+        K = a.K + b.K + 1 if op == "*" else max(a.K, b.K) + 1
+        return t.add(_Node(op, (self.i, other.i), K=K))
+
+    def __add__(self, o: Any) -> _Sym:
+        return self._bin(o, "+")
+
+    def __sub__(self, o: Any) -> _Sym:
+        return self._bin(o, "-")
+
+    def __mul__(self, o: Any) -> _Sym:
+        return self._bin(o, "*")
+
+    def __rmul__(self, o: Any) -> _Sym:
+        return self._bin(o, "*")
+
+    def __neg__(self) -> _Sym:
+        return self.t.add(_Node("neg", (self.i,), K=self.t.nodes[self.i].K))
+
+    def __abs__(self) -> _Sym:
+        return self.t.add(_Node("abs", (self.i,), K=self.t.nodes[self.i].K))
+
+
+@dataclass(frozen=True)
+class Kernel:
+    """A generated kernel and the constants that make its outputs certified."""
+
+    fn: Callable[..., tuple[Any, ...]]
+    """permanent style: fn(*leaves) -> values; radius style: fn(*values, *radii) -> (values, radii)."""
+    style: str
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    constants: tuple[float, ...]
+    """permanent style: C_k with |error_k| <= C_k * M_k; radius style: unused (zeros)."""
+    error_counts: tuple[int, ...]
+    underflow_floor: float
+    """Absolute error allowance for underflow (add to every bound)."""
+    output_max: tuple[Fraction, ...]
+    """Largest |value| of each output given the leaf bounds (exact)."""
+    source: str
+    n_ops: int
+
+
+def _magnitudes(nodes: list[_Node], leaf_max: dict[str, Fraction]) -> list[Fraction]:
+    """Largest |value| each node can take when every leaf x satisfies |x| <= leaf_max[x]."""
+    mag: list[Fraction] = []
+    for nd in nodes:
+        if nd.op == "leaf":
+            mag.append(leaf_max[nd.name])
+        elif nd.op in "+-":
+            mag.append(mag[nd.args[0]] + mag[nd.args[1]])
+        elif nd.op == "*":
+            mag.append(mag[nd.args[0]] * mag[nd.args[1]])
+        elif nd.op == "c*":
+            mag.append(abs(nd.const) * mag[nd.args[0]])
+        else:
+            mag.append(mag[nd.args[0]])
+    return mag
+
+
+def _underflow_floor(nodes: list[_Node], outputs: list[int], mag: list[Fraction], chains: int) -> float:
+    """Bound on the effect at any output of 2^-1074 absolute error at every rounded node."""
+    worst = Fraction(0)
+    for o in outputs:
+        F = [Fraction(0)] * len(nodes)  # propagation factor of a perturbation at each node
+        F[o] = Fraction(1)
+        for i in range(o, -1, -1):
+            nd = nodes[i]
+            if F[i] == 0 or nd.op == "leaf":
+                continue
+            if nd.op == "*":
+                x, y = nd.args
+                F[x] += F[i] * mag[y]
+                F[y] += F[i] * mag[x]
+            elif nd.op == "c*":
+                F[nd.args[0]] += F[i] * abs(nd.const)
+            else:
+                for x in nd.args:
+                    F[x] += F[i]
+        rounded = sum((F[i] for i, nd in enumerate(nodes) if nd.op not in ("leaf", "neg", "abs")), Fraction(0))
+        worst = max(worst, rounded)
+    return round_up(chains * _UNDERFLOW_ABS * (worst + 1))
+
+
+def build_kernel(
+    name: str,
+    inputs: Sequence[str],
+    formula: Callable[[dict[str, _Sym]], dict[str, _Sym]],
+    *,
+    style: Literal["permanent", "radius"],
+    leaf_max: dict[str, Fraction],
+) -> Kernel:
+    """Trace ``formula`` and emit a float kernel with its certified error constants.
+
+    Args:
+        name: function name in the generated source.
+        inputs: input variable names (the leaves).
+        formula: maps leaf symbols by name to output symbols by name (ring-generic code).
+        style: "permanent" (values only; bound = constant * permanent bound supplied by the
+            caller) or "radius" (midpoint-radius arithmetic; inputs carry radii).
+        leaf_max: an upper bound of |leaf| for every input (for the underflow floor).
+
+    Returns:
+        The compiled :class:`Kernel`.
+    """
+    t = _Trace()
+    leaves = {nm: t.add(_Node("leaf", (), name=nm)) for nm in inputs}
+    out = formula(leaves)
+    outputs = tuple(out)
+    out_idx = [out[k].i for k in outputs]
+    nodes = t.nodes
+    last_use = [-1] * len(nodes)
+    for j, nd in enumerate(nodes):
+        for o in nd.args:
+            last_use[o] = j
+    for o in out_idx:
+        last_use[o] = len(nodes)
+    radius = style == "radius"
+    U = "2.220446049250313e-16"  # 2^-52 >= u / (1 - u)
+    args = list(inputs) + ([f"{nm}_r" for nm in inputs] if radius else [])
+    body = [f"def {name}({', '.join(args)}):"]
+    for j, nd in enumerate(nodes):
+        x = nd.args[0] if nd.args else -1
+        y = nd.args[1] if len(nd.args) > 1 else -1
+        if nd.op == "leaf":
+            body.append(f"    v{j} = {nd.name}")
+            if radius:
+                body.append(f"    r{j} = {nd.name}_r")
+        elif nd.op in "+-":
+            body.append(f"    v{j} = v{x} {nd.op} v{y}")
+            if radius:
+                body.append(f"    r{j} = r{x} + r{y} + {U} * abs(v{j})")
+        elif nd.op == "*":
+            body.append(f"    v{j} = v{x} * v{y}")
+            if radius:
+                body.append(f"    r{j} = abs(v{x}) * r{y} + r{x} * (abs(v{y}) + r{y}) + {U} * abs(v{j})")
+        elif nd.op == "c*":
+            body.append(f"    v{j} = v{x} * {nd.const}")
+            if radius:
+                extra = "" if _is_power_of_two(nd.const) else f" + {U} * abs(v{j})"
+                body.append(f"    r{j} = r{x} * {abs(nd.const)}{extra}")
+        elif nd.op == "abs":
+            body.append(f"    v{j} = abs(v{x})")
+            if radius:
+                body.append(f"    r{j} = r{x}")
+        else:  # neg
+            body.append(f"    v{j} = -v{x}")
+            if radius:
+                body.append(f"    r{j} = r{x}")
+        dead = sorted({o for o in nd.args if last_use[o] == j})
+        if dead:
+            names = [f"v{o}" for o in dead] + ([f"r{o}" for o in dead] if radius else [])
+            body.append("    del " + ", ".join(names))
+    ret = [f"v{o}" for o in out_idx] + ([f"r{o}" for o in out_idx] if radius else [])
+    body.append(f"    return ({', '.join(ret)},)")
+    source = "\n".join(body) + "\n"
+    namespace: dict[str, Any] = {}
+    # exec of code generated here from our own formulas (never from user input)
+    exec(compile(source, f"<kernel {name}>", "exec"), namespace)
+    mag = _magnitudes(nodes, leaf_max)
+    floor = _underflow_floor(nodes, out_idx, mag, chains=3 if radius else 1)
+    # an output "x" is bounded by its companion output "x_M" (an upper bound of its permanent)
+    K_of = {k: nodes[out[k].i].K for k in outputs}
+    consts = tuple(
+        0.0 if radius or k.endswith("_M") else gamma_constant(K_of[k], K_of.get(k + "_M", K_of[k]))
+        for k in outputs
+    )
+    return Kernel(
+        fn=namespace[name],
+        style=style,
+        inputs=tuple(inputs),
+        outputs=outputs,
+        constants=consts,
+        error_counts=tuple(nodes[o].K for o in out_idx),
+        underflow_floor=floor,
+        output_max=tuple(mag[o] for o in out_idx),
+        source=source,
+        n_ops=sum(1 for nd in nodes if nd.op != "leaf"),
+    )
