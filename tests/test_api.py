@@ -1,0 +1,351 @@
+"""HTTP API (app.api): status codes and whole JSON bodies on hand-checkable exact cases.
+
+Golden relations are checked by hand, not by the code under test: unit circles with centres 2
+apart touch (P(T) = -(T + 1)(T - 1)^2), 2 + 1/10^9 apart they are separate, a circle of radius
+1/2 inside the unit circle overlaps it; unit spheres 2 apart give P(T) = -(T + 1)^2 (T - 1)^2.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import threading
+import time
+from fractions import Fraction
+
+import pytest
+from fastapi.testclient import TestClient
+
+from app.api import ApiSettings, create_api
+from app.api.deps import get_settings
+from app.api.workers import WorkerBusy, WorkerFailed, WorkerPool, WorkerTimeout
+from core.decision import RULES
+
+
+def circle(x, r=1):
+    """Circle of radius r centred at (x, 0), exact entries as strings."""
+    x, r = Fraction(x), Fraction(r)
+    return [[1, 0, str(-x)], [0, 1, 0], [str(-x), 0, str(x * x - r * r)]]
+
+
+def sphere(x, r=1):
+    x, r = Fraction(x), Fraction(r)
+    return [[1, 0, 0, str(-x)], [0, 1, 0, 0], [0, 0, 1, 0], [str(-x), 0, 0, str(x * x - r * r)]]
+
+
+UNIT = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]
+UNIT_AT_2 = [[1, 0, -2], [0, 1, 0], [-2, 0, 3]]
+SPHERE = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, -1]]
+
+
+def out(relation, certified_by="exact", kind="ellipse", method="adaptive"):
+    return {"relation": relation, "certified_by": certified_by, "kind": kind, "method": method}
+
+
+@pytest.fixture(scope="module")
+def client():
+    with TestClient(create_api(ApiSettings(scene_url="http://127.0.0.1:8080"))) as c:
+        yield c
+
+
+def post_raw(client, path, text):
+    return client.post(path, content=text, headers={"content-type": "application/json"})
+
+
+# --- /api/classify: golden relations -------------------------------------------------------
+
+@pytest.mark.parametrize(
+    "a, b, expected",
+    [
+        (UNIT, UNIT_AT_2, out("tangent")),  # integers: float filter cannot certify a zero
+        (circle(0), circle(2), out("tangent")),
+        (circle(0), circle(Fraction(2) + Fraction(1, 10**9)), out("separate")),
+        (circle(0), circle(Fraction(2) - Fraction(1, 10**9)), out("overlap")),
+        (circle(0), circle(0, Fraction(1, 2)), out("overlap")),  # nested
+        (circle(0), circle(0), out("overlap")),  # identical
+        ([[-v if isinstance(v, int) else v for v in row] for row in UNIT], UNIT_AT_2, out("tangent")),  # flipped signs
+        (sphere(0), sphere(2), out("tangent", kind="ellipsoid")),
+        (sphere(0), sphere(Fraction(2) + Fraction(1, 10**9)), out("separate", kind="ellipsoid")),
+        (sphere(0), sphere(0, Fraction(1, 3)), out("overlap", kind="ellipsoid")),
+    ],
+)
+def test_classify_golden(client, a, b, expected):
+    r = client.post("/api/classify", json={"a": a, "b": b})
+    assert r.status_code == 200, r.text
+    assert r.json() == expected
+
+
+def test_classify_exact_method_and_float_method_on_tangency(client):
+    r = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, -3], [0, 1, 0], [-3, 0, 8]], "method": "exact"})
+    assert (r.status_code, r.json()) == (200, out("separate", method="exact"))
+    # The float filter alone never certifies tangency: it abstains.
+    r = client.post("/api/classify", json={"a": UNIT, "b": UNIT_AT_2, "method": "float"})
+    assert (r.status_code, r.json()) == (200, out("undecided", None, method="float"))
+
+
+def test_classify_float_input_is_certified_by_someone(client):
+    """Far apart float circles: separate, whichever arithmetic certified it."""
+    r = client.post("/api/classify", json={"a": UNIT, "b": [[1.0, 0.0, -10.0], [0.0, 1.0, 0.0], [-10.0, 0.0, 99.0]]})
+    assert r.status_code == 200
+    body = r.json()
+    assert body["certified_by"] in ("float", "exact")
+    assert body == out("separate", body["certified_by"])
+
+
+def test_classify_batch_keeps_order(client):
+    pairs = [
+        {"a": circle(0), "b": circle(2)},
+        {"a": circle(0), "b": circle(3)},
+        {"a": sphere(0), "b": sphere("1/2")},
+    ]
+    r = client.post("/api/classify", json={"pairs": pairs, "method": "exact"})
+    assert r.status_code == 200
+    assert r.json() == [
+        out("tangent", method="exact"),
+        out("separate", method="exact"),
+        out("overlap", kind="ellipsoid", method="exact"),
+    ]
+
+
+def test_classify_batch_error_names_the_pair(client):
+    pairs = [{"a": circle(0), "b": circle(2)}, {"a": circle(0), "b": [[1, 0, 1], [0, 1, 0], [0, 0, -1]]}]
+    r = client.post("/api/classify", json={"pairs": pairs})
+    assert (r.status_code, r.json()) == (422, {"detail": "pairs[1]: b is not symmetric: entry (0,2) = 1 but (2,0) = 0"})
+
+
+def test_batch_limit_from_overridden_settings():
+    app = create_api()
+    app.dependency_overrides[get_settings] = lambda: ApiSettings(max_batch=2)
+    with TestClient(app) as c:
+        pairs = [{"a": circle(0), "b": circle(3)}] * 3
+        r = c.post("/api/classify", json={"pairs": pairs})
+        assert (r.status_code, r.json()) == (422, {"detail": "batch of 3 pairs is over the limit of 2"})
+        r = c.post("/api/classify", json={"pairs": pairs[:2], "method": "exact"})
+        assert (r.status_code, r.json()) == (200, [out("separate", method="exact")] * 2)
+
+
+# --- shapes given by centre / semi-axes / orientation -------------------------------------
+
+@pytest.mark.parametrize(
+    "a, b, expected",
+    [
+        ({"center": [0, 0], "semi_axes": [1, 1]}, {"center": ["2", 0], "semi_axes": [1, 1]}, out("tangent")),
+        ({"center": [0, 0], "semi_axes": [1, 1]}, {"center": ["2.000000001", 0], "semi_axes": [1, 1]}, out("separate")),
+        # ellipse 2 x 1 turned a quarter turn by the exact quaternion (1, 0, 0, 1): x-extent 1, touches x = 1
+        ({"center": [0, 0], "semi_axes": [2, 1], "orientation": [1, 0, 0, 1]}, {"center": [2, 0], "semi_axes": [1, 1]}, out("tangent")),
+        ({"center": [0, 0], "semi_axes": [2, 1]}, {"center": [2, 0], "semi_axes": [1, 1]}, out("overlap")),
+        # quarter turn about x: body y (semi-axis 2) -> world z, so the z-extent is 2: touches z = 2
+        ({"center": [0, 0, 0], "semi_axes": [1, 2, 3], "orientation": [1, 1, 0, 0]}, {"center": [0, 0, 3], "semi_axes": [1, 1, 1]}, out("tangent", kind="ellipsoid")),
+        ({"center": [0, 0, 0], "semi_axes": [1, 2, 3], "orientation": [1, 1, 0, 0]}, {"center": [0, 0, 4], "semi_axes": [1, 1, 1]}, out("separate", kind="ellipsoid")),
+        ({"center": [0, 0], "semi_axes": [1, 1]}, UNIT_AT_2, out("tangent")),  # a shape against a matrix
+    ],
+)
+def test_classify_shapes_exact(client, a, b, expected):
+    r = client.post("/api/classify", json={"a": a, "b": b})
+    assert (r.status_code, r.json()) == (200, expected)
+
+
+def test_classify_shape_with_float_angle(client):
+    # 2 x 1 ellipse turned by 0.5 rad (float path) against a unit circle 10 away: separate.
+    a = {"center": [0.0, 0.0], "semi_axes": [2, 1], "orientation": 0.5}
+    r = client.post("/api/classify", json={"a": a, "b": {"center": [10, 0], "semi_axes": [1, 1]}, "method": "exact"})
+    assert (r.status_code, r.json()) == (200, out("separate", method="exact"))
+
+
+# --- /api/explain ---------------------------------------------------------------------------
+
+def q(name, v, sign):
+    return {"name": name, "approx": float(v), "exact": str(v), "bound": None, "sign": sign}
+
+
+def test_explain_tangent_circles(client):
+    # P(T) = det(T A + B) = -(T + 1)(T - 1)^2 = -T^3 + T^2 + T - 1; double root at T = 1 > 0.
+    r = client.post("/api/explain", json={"a": UNIT, "b": UNIT_AT_2})
+    assert r.status_code == 200
+    assert r.json() == {
+        "n": 3,
+        "relation": "tangent",
+        "certified_by": "exact",
+        "rule": "2d-s0=0",
+        "rule_text": RULES["2d-s0=0"],
+        "var": 2,
+        "coefficients": [q("a0", -1, -1), q("a1", 1, 1), q("a2", 1, 1), q("a3", -1, -1)],
+        "s0": q("s0", 0, 0),
+        "s1": None,
+        "s10": None,
+        "subresultants_needed": ["s0"],
+    }
+
+
+def test_explain_tangent_spheres(client):
+    # P(T) = -(T + 1)^2 (T - 1)^2 = -T^4 + 2T^2 - 1: s0 = s1 = 0 (gcd(P, P') has degree 2), Th. 24.1.
+    r = client.post("/api/explain", json={"a": SPHERE, "b": sphere(2)})
+    assert r.status_code == 200
+    assert r.json() == {
+        "n": 4,
+        "relation": "tangent",
+        "certified_by": "exact",
+        "rule": "3d-s1=0",
+        "rule_text": RULES["3d-s1=0"],
+        "var": 2,
+        "coefficients": [q("a0", -1, -1), q("a1", 0, 0), q("a2", 2, 1), q("a3", 0, 0), q("a4", -1, -1)],
+        "s0": q("s0", 0, 0),
+        "s1": q("s1", 0, 0),
+        "s10": None,
+        "subresultants_needed": ["s0", "s1"],
+    }
+
+
+def test_explain_rejects_batch_and_bad_matrix(client):
+    r = client.post("/api/explain", json={"a": UNIT, "b": [[1, 0, 0], [0, -1, 0], [0, 0, -1]]})
+    assert (r.status_code, r.json()) == (422, {"detail": "b is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)"})
+    r = client.post("/api/explain", json={"pairs": [{"a": UNIT, "b": UNIT_AT_2}]})
+    assert r.status_code == 422
+    assert [e["loc"] for e in r.json()["detail"]] == [["body", "a"], ["body", "b"], ["body", "pairs"]]
+
+
+# --- malformed requests: 4xx with a message, never 500 ------------------------------------
+
+@pytest.mark.parametrize(
+    "b, detail",
+    [
+        ([[1, 0, 1], [0, 1, 0], [0, 0, -1]], "b is not symmetric: entry (0,2) = 1 but (2,0) = 0"),
+        ([[1, 0, 0], [0, -1, 0], [0, 0, -1]], "b is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)"),
+        ([[1, 0, 0], [0, 1, 0], [0, 0, 1]], "b has an empty interior: no real points (det > 0), not an ellipse"),
+        ([[1, 0, 0], [0, 1, 0], [0, 0, 0]], "b is a degenerate ellipse (det = 0: a single point)"),
+        ([[1, 0, 0], [0, 1, 0, 0], [0, 0, -1]], "b must be 3x3 (ellipse) or 4x4 (ellipsoid), got 3x3/4"),
+        (SPHERE, "a is 3x3 and b is 4x4: both must be ellipses (3x3) or both ellipsoids (4x4)"),
+        ({"center": [0, 0], "semi_axes": [-1, 1]}, "b: semi-axes must be positive, got ['-1', '1']"),
+        ({"center": [0, 0, 0], "semi_axes": [1, 1, 1], "orientation": 0.5}, "b: a 3D orientation is a quaternion [w, x, y, z], not an angle"),
+        ({"center": [0, 0], "semi_axes": [1, 1, 1]}, "b: need 2 or 3 centre coordinates and as many semi-axes, got 2 and 3"),
+        ({"center": [0, 0], "semi_axes": [1, 1], "orientation": [1, 1, 0, 0]}, "b: a 2D quaternion must rotate about z: (w, 0, 0, z)"),
+        ({"center": [0, 0], "semi_axes": [1, 1], "orientation": [0, 0, 0, 0]}, "b: orientation quaternion is zero"),
+        ({"center": [0.5, 0], "semi_axes": ["1e400", 1]}, "b: '1e400' is too large for a float (this shape is built in floats)"),
+    ],
+)
+def test_core_rejections_are_422_with_message(client, b, detail):
+    r = client.post("/api/classify", json={"a": UNIT, "b": b})
+    assert (r.status_code, r.json()) == (422, {"detail": detail})
+
+
+def err(loc, msg, type_="value_error"):
+    return {"loc": loc, "msg": msg, "type": type_}
+
+
+@pytest.mark.parametrize(
+    "text, detail",
+    [
+        ('{"a": [[1,0,0],[0,1,0],[0,0,-1]], "b": [[1,0,NaN],[0,1,0],[0,0,-1]]}',
+         [err(["body", "pair", "b", "matrix", 0, 2], "Value error, not a finite number: nan (NaN and infinity are not accepted)")]),
+        ('{"a": [[1,0,0],[0,1,0],[0,0,-Infinity]], "b": [[1,0,0],[0,1,0],[0,0,-1]]}',
+         [err(["body", "pair", "a", "matrix", 2, 2], "Value error, not a finite number: -inf (NaN and infinity are not accepted)")]),
+        ('{"a": [[1,0,0],[0,1,0],[0,0,true]], "b": [[1,0,0],[0,1,0],[0,0,-1]]}',
+         [err(["body", "pair", "a", "matrix", 2, 2], "Value error, a boolean is not a number: True")]),
+        ('{"a": [[1,0,0],[0,1,0],[0,0,"-1/0"]], "b": [[1,0,0],[0,1,0],[0,0,"abc"]]}',
+         [err(["body", "pair", "a", "matrix", 2, 2], "Value error, zero denominator in '-1/0'"),
+          err(["body", "pair", "b", "matrix", 2, 2], "Value error, not a number: 'abc' (expected e.g. '3', '-0.25', '1e-3' or '3/7')")]),
+        ('{"a": [[1,0],[0,1]], "b": [[1,0,0],[0,1,0],[0,0,-1]]}',
+         [err(["body", "pair", "a", "matrix", 0], "List should have at least 3 items after validation, not 2", "too_short"),
+          err(["body", "pair", "a", "matrix", 1], "List should have at least 3 items after validation, not 2", "too_short")]),
+        ('{"a": [[1,0,0],[0,1,0],[0,0,-1]], "b": [[1,0,0],[0,1,0],[0,0,-1]], "method": "fast"}',
+         [err(["body", "pair", "method"], "Input should be 'adaptive', 'exact' or 'float'", "literal_error")]),
+        ('{"a": [[1,0,0],[0,1,0],[0,0,-1]]}', [err(["body", "pair", "b"], "Field required", "missing")]),
+        ('{"pairs": []}', [err(["body", "batch", "pairs"], "List should have at least 1 item after validation, not 0", "too_short")]),
+        ('{"a": [[1,0,0],[0,1,0],[0,0,-1]], "b": ', [err(["body", 39], "JSON decode error: Expecting value", "json_invalid")]),
+        ('[1, 2]', [err(["body", "pair"], "Input should be a valid dictionary or object to extract fields from", "model_attributes_type")]),
+    ],
+)
+def test_malformed_bodies_are_422(client, text, detail):
+    r = post_raw(client, "/api/classify", text)
+    assert (r.status_code, r.json()) == (422, {"detail": detail})
+
+
+def test_huge_integer_and_long_string(client):
+    big = 10**401
+    r = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, big]]})
+    assert (r.status_code, r.json()) == (422, {"detail": [err(["body", "pair", "b", "matrix", 2, 2], "Value error, integer too large (more than 400 digits); send it as a string fraction")]})
+    r = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, "1" * 401]]})
+    assert (r.status_code, r.json()) == (422, {"detail": [err(["body", "pair", "b", "matrix", 2, 2], "Value error, number string too long (401 > 400 characters)")]})
+
+
+def test_deeply_nested_json_is_400_not_500(client):
+    r = post_raw(client, "/api/classify", "[" * 100_000 + "]" * 100_000)
+    assert (r.status_code, r.json()) == (400, {"detail": "There was an error parsing the body"})
+
+
+def test_body_size_limit_declared_and_streamed():
+    with TestClient(create_api(ApiSettings(max_body_bytes=200))) as c:
+        body = json.dumps({"a": UNIT, "b": circle("1/3", "1/7") + [] , "method": "exact"})
+        assert len(body) < 200
+        r = post_raw(c, "/api/classify", body)
+        assert (r.status_code, r.json()) == (200, out("overlap", method="exact"))
+        big = json.dumps({"pairs": [{"a": UNIT, "b": UNIT_AT_2}] * 10})
+        r = post_raw(c, "/api/classify", big)
+        assert (r.status_code, r.json()) == (413, {"detail": "request body too large: the limit is 200 bytes"})
+
+        def chunks():  # no content-length: chunked upload
+            for i in range(0, len(big), 50):
+                yield big[i:i + 50].encode()
+
+        r = c.post("/api/classify", content=chunks(), headers={"content-type": "application/json"})
+        assert (r.status_code, r.json()) == (413, {"detail": "request body too large: the limit is 200 bytes"})
+
+
+# --- health, docs, settings ------------------------------------------------------------------
+
+def test_healthz_and_docs(client):
+    r = client.get("/healthz")
+    assert (r.status_code, r.json()) == (200, {"status": "ok", "analyses_running": 0, "max_concurrent_analyses": 2})
+    assert client.get("/docs").status_code == 200
+    spec = client.get("/openapi.json").json()
+    for path in ("/api/classify", "/api/explain", "/healthz"):
+        assert path in spec["paths"]
+    for path, ops in spec["paths"].items():
+        for op in ops.values():
+            assert "200" in op["responses"], (path, op)
+
+
+@pytest.mark.parametrize("field, value", [("max_batch", 0), ("max_digits", -1), ("time_budget_s", 0.0), ("max_body_bytes", True)])
+def test_settings_reject_nonsense(field, value):
+    with pytest.raises(ValueError, match=field):
+        ApiSettings(**{field: value})
+
+
+# --- worker pool: time budget, busy, crashes ------------------------------------------------
+
+def test_worker_pool_results_errors_and_timeout():
+    pool = WorkerPool(1)
+    assert pool.run(math.sqrt, 16.0, timeout=30) == 4.0
+    with pytest.raises(ValueError, match="math domain error"):
+        pool.run(math.sqrt, -1.0, timeout=30)
+    t0 = time.monotonic()
+    with pytest.raises(WorkerTimeout, match="time budget of 0.5 s"):
+        pool.run(time.sleep, 30, timeout=0.5)
+    assert time.monotonic() - t0 < 5
+    assert pool.running == 0
+    with pytest.raises(WorkerFailed, match="exit code 3"):
+        pool.run(os._exit, 3, timeout=30)
+
+
+def test_worker_pool_refuses_when_busy():
+    pool = WorkerPool(1)
+    started = threading.Event()
+
+    def slow():
+        started.set()
+        try:
+            pool.run(time.sleep, 30, timeout=1.5)
+        except WorkerTimeout:
+            pass
+
+    th = threading.Thread(target=slow)
+    th.start()
+    started.wait()
+    deadline = time.monotonic() + 5
+    while pool.running == 0 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    with pytest.raises(WorkerBusy, match="all 1 analysis workers are busy"):
+        pool.run(math.sqrt, 4.0, timeout=5)
+    th.join()
+    assert pool.run(math.sqrt, 4.0, timeout=30) == 2.0
