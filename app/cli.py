@@ -1,0 +1,176 @@
+"""The command line: ``python -m app [serve | screenshot] ...``.
+
+* ``python -m app``: start the scene (http://127.0.0.1:8080) and the API (http://127.0.0.1:8000)
+  with defaults and print the URLs; the scene opens on Example 29 just before the first touch.
+* ``python -m app serve --host H --port SCENE_PORT --api-port P [--api-only]``: the same with
+  options; uvicorn serves the API in the main thread, viser serves the scene from its own thread.
+* ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png [--config file.json]
+  [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Sequence
+
+__all__ = ["main", "build_parser", "config_from_args"]
+
+
+def _port(text: str) -> int:
+    try:
+        p = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+    if not 0 <= p <= 65535:
+        raise argparse.ArgumentTypeError(f"port out of range 0..65535: {p}")
+    return p
+
+
+def _size(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a pixel size: {text!r}") from None
+    if not 200 <= v <= 8000:
+        raise argparse.ArgumentTypeError(f"size out of range 200..8000: {v}")
+    return v
+
+
+def _time(text: str) -> float:
+    from core.rationals import to_fmpq
+
+    try:
+        q = to_fmpq(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    t = float(q.p) / float(q.q)
+    if not math.isfinite(t):
+        raise argparse.ArgumentTypeError(f"t out of range: {text!r}")
+    return t
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser (sub-commands ``serve`` and ``screenshot``)."""
+    p = argparse.ArgumentParser(
+        prog="python -m app",
+        description="Certified ellipse/ellipsoid interference: viser scene, HTTP API, screenshots.",
+    )
+    sub = p.add_subparsers(dest="command")
+    s = sub.add_parser("serve", help="serve the scene and the API (the default command)")
+    s.add_argument("--host", default="127.0.0.1", help="interface (default 127.0.0.1; 0.0.0.0 to share on a network)")
+    s.add_argument("--port", type=_port, default=8080, help="scene (viser) port, default 8080")
+    s.add_argument("--api-port", type=_port, default=8000, help="API port, default 8000")
+    s.add_argument("--api-only", action="store_true", help="serve the API alone (no scene)")
+    s.add_argument("--preset", default=None, help="preset the scene opens on (default example-29)")
+    s.add_argument("--config", default=None, help="JSON configuration the scene opens on")
+
+    sh = sub.add_parser("screenshot", help="render a configuration to PNG with headless Chromium")
+    sh.add_argument("--preset", default=None, help="motion preset, e.g. example-29")
+    sh.add_argument("--t", type=_time, default=None, help="time to show (number or fraction)")
+    sh.add_argument("--event", type=int, default=None, help="show the K-th event (1-based) exactly")
+    sh.add_argument("--config", default=None, help="JSON configuration file (any scene)")
+    sh.add_argument("--dim", type=int, choices=(2, 3), default=None, help="2 (ellipses) or 3 (ellipsoids)")
+    sh.add_argument("--width", type=_size, default=1400, help="image width in px (default 1400)")
+    sh.add_argument("--height", type=_size, default=900, help="image height in px (default 900)")
+    sh.add_argument("--no-plots", action="store_true", help="hide the live plots")
+    sh.add_argument("--out", required=True, help="output PNG path")
+    sh.add_argument("--timeout", type=float, default=120.0, help="seconds to wait for rendering")
+    return p
+
+
+def config_from_args(args: argparse.Namespace) -> object:
+    """SceneConfig from ``--config``/``--preset``/``--t``/``--event``/``--dim`` (later override earlier).
+
+    Raises:
+        ValueError: unreadable config file or bad values.
+    """
+    from .scene.state import SceneConfig
+
+    cfg = SceneConfig.from_json_file(args.config) if getattr(args, "config", None) else SceneConfig()
+    if getattr(args, "dim", None) is not None and args.dim != cfg.dim:
+        d = cfg.to_dict()
+        d.update(dim=args.dim, A=None, B=None, preset=None)
+        cfg = SceneConfig.from_dict({k: v for k, v in d.items() if v is not None or k == "preset"})
+    if getattr(args, "preset", None) is not None:
+        cfg.preset = args.preset
+        cfg.motion = None
+    if getattr(args, "t", None) is not None:
+        cfg.t = args.t
+    if getattr(args, "event", None) is not None:
+        if args.event < 1:
+            raise ValueError("--event is 1-based")
+        cfg.event = args.event
+    if getattr(args, "no_plots", False):
+        cfg.show_plots = False
+    return cfg
+
+
+def _serve(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    scene = None
+    scene_url = None
+    if not args.api_only:
+        from .scene.server import start_scene
+
+        scene = start_scene(args.host, args.port, config_from_args(args))  # type: ignore[arg-type]
+        scene_url = scene.url
+        print(f"Scene (open in a browser): {scene_url}", flush=True)
+    try:
+        from .api import ApiSettings, create_api
+    except ImportError as e:
+        if args.api_only:
+            print(f"error: the API package is not available: {e}", file=sys.stderr)
+            return 2
+        print(f"(API not available: {e}); serving the scene only. Ctrl+C stops.", flush=True)
+        _wait_forever()
+        if scene is not None:
+            scene.stop()
+        return 0
+    api = create_api(ApiSettings(scene_url=scene_url))
+    shown = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
+    print(f"API: http://{shown}:{args.api_port}/  (docs: http://{shown}:{args.api_port}/docs)", flush=True)
+    try:
+        uvicorn.run(api, host=args.host, port=args.api_port, log_level="warning")
+    finally:
+        if scene is not None:
+            scene.stop()
+    return 0
+
+
+def _wait_forever() -> None:
+    import threading
+
+    try:
+        threading.Event().wait()
+    except KeyboardInterrupt:
+        pass
+
+
+def _screenshot(args: argparse.Namespace) -> int:
+    from .screenshot import screenshot
+
+    cfg = config_from_args(args)
+    path = screenshot(cfg, args.out, width=args.width, height=args.height, timeout=args.timeout)  # type: ignore[arg-type]
+    print(f"wrote {path}")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status (2 for bad arguments or input)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        args = parser.parse_args(["serve", *(argv or [])])
+    try:
+        if args.command == "screenshot":
+            return _screenshot(args)
+        return _serve(args)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except (RuntimeError, TimeoutError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1

@@ -1,0 +1,167 @@
+"""Text of the GUI panels: readout of one decision, sign table, event list, intervals bar.
+
+Pure functions from plain data (``core.explain(...).to_dict()``, analysis rows) to Markdown /
+HTML strings; the session assigns them to ``add_markdown``/``add_html`` handles only when the
+text changed. No maths here.
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Sequence
+from typing import Any
+
+from .shapes import RELATION_HEX
+
+__all__ = ["relation_badge", "readout_markdown", "sign_char", "intervals_bar_html", "sign_table_markdown"]
+
+_SUB = {"s0": "s<sub>0</sub>", "s1": "s<sub>1</sub>", "s10": "s<sub>1,0</sub>"}
+
+
+def sign_char(s: int | None) -> str:
+    """"+", "-", "0" or "?" (sign not certified).
+
+    Examples:
+        >>> [sign_char(s) for s in (1, -1, 0, None)]
+        ['+', '-', '0', '?']
+    """
+    return {1: "+", -1: "-", 0: "0"}.get(s, "?") if s is not None else "?"
+
+
+def relation_badge(relation: str | None) -> str:
+    """HTML badge of a relation in its colour (grey "unknown" for None)."""
+    if relation is None:
+        return '<span style="background:#999;color:#fff;padding:1px 6px;border-radius:4px">unknown</span>'
+    color = RELATION_HEX[relation]
+    fg = "#000" if relation == "tangent" else "#fff"
+    return (
+        f'<span style="background:{color};color:{fg};padding:1px 6px;border-radius:4px;'
+        f'font-weight:bold">{relation.upper()}</span>'
+    )
+
+
+def _fmt(q: dict[str, Any] | None) -> str:
+    if q is None:
+        return "not needed"
+    exact = q.get("exact")
+    if exact is not None and len(exact) <= 18:
+        val = exact
+    else:
+        val = f"{q['approx']:.6g}"
+        if q.get("bound") is not None:
+            val += f" ± {q['bound']:.1e}"
+    return f"{val} ({sign_char(q.get('sign'))})"
+
+
+def readout_markdown(expl: dict[str, Any] | None, *, where: str = "", error: str | None = None) -> str:
+    """Markdown readout: relation, certification, P(T) coefficients, signs, Var, rule.
+
+    Args:
+        expl: ``core.explain(A, B).to_dict()``, or None when no pair is classified.
+        where: what the numbers refer to (e.g. "at t = 0.7").
+        error: message shown instead when the shapes are invalid.
+
+    Examples:
+        >>> print(readout_markdown(None, error="A.semi_axes: must be positive"))
+        **Relation** <span style="background:#999;color:#fff;padding:1px 6px;border-radius:4px">unknown</span>
+        <BLANKLINE>
+        ⚠ A.semi_axes: must be positive
+    """
+    if expl is None:
+        return f"**Relation** {relation_badge(None)}\n\n⚠ {error or 'no shapes'}"
+    n = expl["n"]
+    lines = [f"**Relation** {relation_badge(expl['relation'])} {where}".rstrip()]
+    cert = "float filter (proven error bound)" if expl["certified_by"] == "float" else "exact rational arithmetic"
+    lines.append("")
+    lines.append(f"Certified by: {cert}")
+    coeffs = expl["coefficients"]
+    lines.append("")
+    lines.append(f"P(T) = det(T A + B), degree {n}:")
+    lines.append("")
+    lines.append("| | value | sign |")
+    lines.append("|---|---|---|")
+    for q in coeffs:
+        text = _fmt(q).rsplit(" (", 1)[0]
+        lines.append(f"| a<sub>{q['name'][1:]}</sub> | {text} | {sign_char(q.get('sign'))} |")
+    for key in ("s0", "s1", "s10"):
+        q = expl.get(key)
+        if q is None:
+            lines.append(f"| {_SUB[key]} | not needed | |")
+        else:
+            text = _fmt(q).rsplit(" (", 1)[0]
+            lines.append(f"| {_SUB[key]} | {text} | {sign_char(q.get('sign'))} |")
+    signs = "".join(sign_char(q.get("sign")) for q in reversed(coeffs))
+    lines.append("")
+    lines.append(f"Var({', '.join(signs)}) = **{expl['var']}**")
+    lines.append("")
+    lines.append(f"Rule: {html.escape(expl['rule_text'])}")
+    return "\n".join(lines)
+
+
+def intervals_bar_html(
+    lo: float,
+    hi: float,
+    segments: Sequence[tuple[float, float, str]],
+    events: Sequence[tuple[float, str]],
+    cursor: float | None,
+    *,
+    width: int = 300,
+) -> str:
+    """SVG bar along I = [lo, hi]: coloured segments per relation, ticks at events, a cursor.
+
+    Args:
+        lo, hi: the interval I (floats, display only).
+        segments: (a, b, relation) open intervals between events.
+        events: (t, relation) of each event.
+        cursor: current t (None: no cursor).
+        width: drawing width in px (the SVG scales to the panel).
+    """
+    span = (hi - lo) or 1.0
+    x = lambda t: 6 + (width - 12) * (min(max(t, lo), hi) - lo) / span
+    parts = [
+        f'<svg viewBox="0 0 {width} 44" width="100%" xmlns="http://www.w3.org/2000/svg" '
+        'style="font:10px sans-serif">'
+    ]
+    for a, b, rel in segments:
+        parts.append(
+            f'<rect x="{x(a):.1f}" y="6" width="{max(x(b) - x(a), 0.5):.1f}" height="14" '
+            f'fill="{RELATION_HEX.get(rel, "#999")}"/>'
+        )
+    for k, (t, rel) in enumerate(events, start=1):
+        xe = x(t)
+        parts.append(
+            f'<line x1="{xe:.1f}" y1="2" x2="{xe:.1f}" y2="24" stroke="#000" stroke-width="1.5"/>'
+            f'<circle cx="{xe:.1f}" cy="13" r="3.5" fill="{RELATION_HEX.get(rel, "#999")}" stroke="#000"/>'
+            f'<text x="{xe:.1f}" y="34" text-anchor="middle">α{k}</text>'
+        )
+    parts.append(f'<text x="6" y="43">{lo:.4g}</text>')
+    parts.append(f'<text x="{width - 6}" y="43" text-anchor="end">{hi:.4g}</text>')
+    if cursor is not None:
+        xc = x(cursor)
+        parts.append(
+            f'<path d="M{xc - 5:.1f},0 L{xc + 5:.1f},0 L{xc:.1f},6 Z" fill="#1f4e9c"/>'
+            f'<line x1="{xc:.1f}" y1="0" x2="{xc:.1f}" y2="24" stroke="#1f4e9c" stroke-width="2"/>'
+        )
+    parts.append("</svg>")
+    return "".join(parts)
+
+
+def sign_table_markdown(rows: Sequence[dict[str, Any]], degree: int) -> str:
+    """The paper's table: one row per event/interval sample, signs of a_i, s0, s1, s1,0, Var.
+
+    Args:
+        rows: dicts with "where" (label), "signs" (dict name -> sign), "var", "relation".
+        degree: n (3 or 4): which a_i columns to show.
+    """
+    names = [f"a{i}" for i in range(degree, -1, -1)] + ["s0", "s1", "s10"]
+    head = ["t"] + [f"a<sub>{n[1:]}</sub>" if n[0] == "a" else _SUB[n] for n in names] + ["Var", "relation"]
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        signs = r.get("signs", {})
+        cells = [r["where"]] + [sign_char(signs.get(n)) if n in signs else "" for n in names]
+        var = r.get("var")
+        rel = r.get("relation") or ""
+        color = RELATION_HEX.get(rel, "#999")
+        cells += ["" if var is None else str(var), f'<span style="color:{color}">■</span> {rel}']
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)

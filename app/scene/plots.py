@@ -1,0 +1,91 @@
+"""uPlot plots over I of a_i(t) and s0(t), s1(t), s1,0(t), sign-preserving asinh compression.
+
+The curves span many orders of magnitude (s0 is a degree-84 polynomial in Example 30), so each
+is drawn as asinh(y / scale) with a per-series scale (its median absolute sample): the sign and
+the zeros are kept, large values are compressed logarithmically. A cursor series marks the
+current t; event times are marked by a second series with points only at the events.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import viser.uplot as uplot
+
+__all__ = ["compress", "add_plot", "update_plot", "SERIES_COLORS"]
+
+SERIES_COLORS = ["#1f77b4", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2"]
+"""Colours of the data series (distinct from the relation colours)."""
+
+
+def compress(y: np.ndarray) -> np.ndarray:
+    """Sign-preserving compression asinh(y / s), s = median |y| over the finite nonzero samples.
+
+    Examples:
+        >>> compress(np.array([-1e6, 0.0, 1.0, 1e6])).round(2).tolist()
+        [-14.51, 0.0, 0.88, 14.51]
+    """
+    y = np.asarray(y, dtype=float)
+    nz = np.abs(y[np.isfinite(y) & (y != 0)])
+    s = float(np.median(nz)) if nz.size else 1.0
+    return np.arcsinh(y / s)
+
+
+def add_plot(gui: Any, title: str, n_series: int) -> Any:
+    """An empty uPlot with ``n_series`` data series, a cursor and event markers (hidden)."""
+    x = np.array([0.0, 1.0])
+    data = (x,) + tuple(np.zeros(2) for _ in range(n_series + 2))
+    series = (
+        uplot.Series(label="t"),
+        *(uplot.Series(label=f"y{i}", stroke=SERIES_COLORS[i % 5], width=1.5) for i in range(n_series)),
+        uplot.Series(label="t now", stroke="#1f4e9c", width=2, points={"show": False}),
+        uplot.Series(label="events", stroke="rgba(0,0,0,0)", width=0, points={"show": True, "size": 7, "fill": "#000"}),
+    )
+    return gui.add_uplot(
+        data,
+        series,
+        title=title,
+        scales={"x": {"time": False, "auto": True}, "y": {"auto": True}},
+        legend={"show": True, "live": False},
+        aspect=1.6,
+        visible=False,
+    )
+
+
+def update_plot(
+    handle: Any,
+    t: np.ndarray,
+    series: Sequence[tuple[str, np.ndarray]],
+    cursor_index: int,
+    events: Sequence[float],
+) -> None:
+    """Send the compressed series, the cursor at sample ``cursor_index`` and the event markers.
+
+    The cursor is a near-vertical segment between two adjacent samples (uPlot shares one x
+    array across series); event markers sit on y = 0 at the sample nearest each event.
+    """
+    ys = [compress(y) for _, y in series]
+    finite = np.concatenate([y[np.isfinite(y)] for y in ys]) if ys else np.zeros(1)
+    top = float(np.max(finite)) if finite.size else 1.0
+    bot = float(np.min(finite)) if finite.size else -1.0
+    n = t.shape[0]
+    cur = np.full(n, np.nan)
+    i = min(max(cursor_index, 0), n - 2)
+    cur[i], cur[i + 1] = top, bot
+    ev = np.full(n, np.nan)
+    for e in events:
+        ev[min(int(np.searchsorted(t, e)), n - 1)] = 0.0
+    names = [name for name, _ in series]
+    cfg = list(handle.series)
+    changed = False
+    for k, name in enumerate(names, start=1):
+        if cfg[k].get("label") != name:
+            cfg[k] = {**cfg[k], "label": name}
+            changed = True
+    if changed:
+        handle.series = tuple(cfg)
+    handle.data = (t, *ys, cur, ev)
+    if not handle.visible:
+        handle.visible = True

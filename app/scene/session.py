@@ -1,0 +1,686 @@
+"""One browser tab: its own shapes, GUI, motion, timeline and plots (``client.scene``/``client.gui``).
+
+A :class:`Session` owns an :class:`~app.scene.state.AppState` and the handles that show it.
+Callbacks only update the state and call one refresh; the maths is in ``core``. The two hot
+paths have cheap entry points that need no browser, for the benchmark helper:
+:meth:`Session.apply_drag` (a gizmo drag event) and :meth:`Session.set_t` (one t step);
+:func:`measure_update_costs` times both and counts the websocket messages they queue.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from concurrent.futures import Executor, Future
+from typing import Any
+
+import numpy as np
+
+from core import Relation, explain
+
+from . import plots
+from .analysis import AnalysisCache, AnalysisView, MotionError, MotionModel, list_presets, load_motion
+from .contact import contact_point
+from .panels import intervals_bar_html, readout_markdown, sign_table_markdown
+from .shapes import RELATION_COLORS, EllipsoidView
+from .state import AppState, SceneConfig, ShapeState, format_number, parse_vector
+
+__all__ = ["Session", "measure_update_costs"]
+
+STATIC = "(static shapes)"
+"""Dropdown entry for no motion."""
+
+
+class _Counter:
+    """Counts messages queued on a websocket interface (wraps ``queue_message`` of one object)."""
+
+    def __init__(self, iface: Any) -> None:
+        self.count = 0
+        orig = iface.queue_message
+
+        def counting(message: Any) -> None:
+            self.count += 1
+            orig(message)
+
+        iface.queue_message = counting
+
+
+class Session:
+    """The scene and GUI of one tab.
+
+    Args:
+        target: ``viser.ClientHandle`` (one tab) or ``viser.ViserServer`` (shared scene); anything
+            with ``.scene`` and ``.gui``.
+        config: what to open on.
+        cache: analysis cache shared by the sessions of one server (keyed by motion + interval).
+        executor: where analyses run (off the GUI thread).
+        count_messages: count queued websocket messages in :attr:`messages` (benchmarks).
+    """
+
+    def __init__(
+        self,
+        target: Any,
+        config: SceneConfig | None = None,
+        *,
+        cache: AnalysisCache | None = None,
+        executor: Executor | None = None,
+        count_messages: bool = False,
+    ) -> None:
+        self.target = target
+        self.scene = target.scene
+        self.gui = target.gui
+        self.config = config or SceneConfig()
+        self.cache = cache or AnalysisCache()
+        self.executor = executor
+        self._counter = _Counter(self.scene._websock_interface) if count_messages else None
+        self._lock = threading.RLock()
+        self._syncing = False
+        self._closed = False
+        self._play_thread: threading.Thread | None = None
+        self.model: MotionModel | None = None
+        self.analysis: AnalysisView | None = None
+        self._pending: Future[Any] | None = None
+        self.ready = threading.Event()
+        """Set when the configuration is loaded and (for a motion) analysed and drawn."""
+        a, b = self.config.shapes()
+        self.state = AppState(dim=self.config.dim, shapes={"A": a, "B": b})
+        self.views: dict[str, EllipsoidView] = {}
+        self._event_buttons: list[Any] = []
+        self._plot_index = -2
+        self._last_text: dict[int, str] = {}
+        self._build_scene()
+        self._build_gui()
+        self.timeline_folder.visible = False
+        self.load(self.config)
+
+    # ------------------------------------------------------------------ building
+    @property
+    def messages(self) -> int:
+        """Websocket messages queued so far (only with ``count_messages=True``)."""
+        return self._counter.count if self._counter else 0
+
+    def _build_scene(self) -> None:
+        self.scene.configure_environment_map(hdri=None)
+        self.scene.set_up_direction("+z")
+        self._make_views()
+        self.contact = self.scene.add_icosphere(
+            "/contact/point", radius=0.06, color=(20, 20, 20), visible=False
+        )
+        self.contact_label = self.scene.add_label("/contact/point/label", "contact", visible=False)
+        self._contact_on = False
+
+    def _make_views(self) -> None:
+        for v in self.views.values():
+            v.control.remove()
+        self.views = {
+            name: EllipsoidView(self.scene, name, self.state.dim, gizmo=self.config.gizmos) for name in ("A", "B")
+        }
+        for name, view in self.views.items():
+            view.control.on_update(lambda ev, n=name: self._on_gizmo(n, ev))
+
+    def _build_gui(self) -> None:
+        gui = self.gui
+        gui.configure_theme(control_width="large", show_share_button=False)
+        self.title = gui.add_markdown("**Ellipse / ellipsoid interference** (certified)")
+        self.readout = gui.add_markdown("")
+        with gui.add_folder("Timeline") as self.timeline_folder:
+            self.bar = gui.add_html("")
+            self.t_slider = gui.add_slider("t", min=0.0, max=1.0, step=0.001, initial_value=0.0)
+            self.t_number = gui.add_text("t (exact)", "0", hint="a number or fraction, e.g. 3/4")
+            self.t_error = gui.add_markdown("", visible=False)
+            self.play = gui.add_checkbox("Play", False)
+            self.speed = gui.add_slider("Speed (I per 10 s)", min=0.1, max=5.0, step=0.1, initial_value=1.0)
+            self.events_md = gui.add_markdown("")
+            self.events_folder = gui.add_folder("Events (jump to)")
+        with gui.add_folder("Motion") as self.motion_folder:
+            options = [STATIC, *list_presets()]
+            self.preset = gui.add_dropdown("Preset", options, initial_value=STATIC)
+            self.preset_md = gui.add_markdown("")
+            self.motion_fields: dict[str, Any] = {}
+            self.motion_errors: dict[str, Any] = {}
+            for key, label in (("A", "Motion of A"), ("B", "Motion of B"), ("interval", "Interval I")):
+                self.motion_fields[key] = gui.add_text(label, "", multiline=key != "interval")
+                self.motion_errors[key] = gui.add_markdown("", visible=False)
+            self.analyse_button = gui.add_button("Analyse motion")
+            self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
+            self.status = gui.add_markdown("")
+        self.shape_fields: dict[str, dict[str, Any]] = {}
+        self.shape_errors: dict[str, Any] = {}
+        for name in ("A", "B"):
+            with gui.add_folder(f"Shape {name}", expand_by_default=False) as folder:
+                f = {
+                    "center": gui.add_text("Centre", ""),
+                    "semi_axes": gui.add_text("Semi-axes", ""),
+                    "orientation": gui.add_text("Orientation", ""),
+                }
+                self.shape_errors[name] = gui.add_markdown("", visible=False)
+            self.shape_fields[name] = f
+            setattr(self, f"folder_{name}", folder)
+            for key, handle in f.items():
+                handle.on_update(lambda ev, n=name, k=key: self._on_shape_text(n, k, ev))
+        with gui.add_folder("Sign table", expand_by_default=False):
+            self.sign_table = gui.add_markdown("")
+        with gui.add_folder("Plots") as self.plots_folder:
+            self.plots_on = gui.add_checkbox("Live plots", self.config.show_plots)
+            self.plot_coeffs = plots.add_plot(gui, "a_i(t) (asinh)", 4)
+            self.plot_subres = plots.add_plot(gui, "s0, s1, s1,0 (asinh)", 3)
+        with gui.add_folder("View", expand_by_default=False):
+            self.dim_choice = gui.add_dropdown("Dimension", ["3D ellipsoids", "2D ellipses"], initial_value="3D ellipsoids" if self.state.dim == 3 else "2D ellipses")
+            self.show_gizmos = gui.add_checkbox("Transform gizmos", self.config.gizmos)
+            self.show_plane = gui.add_checkbox("Separating plane (when separate)", self.config.separating_plane)
+        self.t_slider.on_update(lambda ev: self._on_slider(ev))
+        self.t_number.on_update(lambda ev: self._on_t_text(ev))
+        self.play.on_update(lambda ev: self._on_play())
+        self.preset.on_update(lambda ev: self._on_preset(ev))
+        self.analyse_button.on_click(lambda ev: self._on_analyse_click())
+        self.plots_on.on_update(lambda ev: self._refresh_plots(force=True))
+        self.dim_choice.on_update(lambda ev: self._on_dim(ev))
+        self.show_gizmos.on_update(lambda ev: self._update_gizmos())
+
+    # ------------------------------------------------------------------ loading
+    def load(self, config: SceneConfig) -> None:
+        """Show a configuration: static shapes, then the motion (analysed in the background)."""
+        with self._lock:
+            self.config = config
+            self.ready.clear()
+            if config.dim != self.state.dim:
+                self.state.dim = config.dim
+                self._make_views()
+            a, b = config.shapes()
+            self.state.shapes = {"A": a, "B": b}
+            self.state.event = config.event
+            self._sync_shape_fields()
+            self._set_value(self.dim_choice, "3D ellipsoids" if config.dim == 3 else "2D ellipses")
+            name = config.preset if config.motion is None else None
+            if config.motion is not None or config.preset is not None:
+                try:
+                    self.model = load_motion(preset=name, motion=config.motion, dim=config.dim)
+                except MotionError as e:
+                    self.model = None
+                    self._show_motion_error(e)
+                    self._refresh_static()
+                    self.ready.set()
+                    return
+                if self.model.dim != self.state.dim:
+                    self.state.dim = self.model.dim
+                    self._make_views()
+                self._set_value(self.preset, name if name in list_presets() else STATIC)
+                self._show_motion_fields()
+                t = config.t if config.t is not None else self.model.default_t
+                self.state.t = float(t)
+                self._analyse()
+            else:
+                self.model = None
+                self._set_value(self.preset, STATIC)
+                self._refresh_static()
+                self.ready.set()
+
+    # ------------------------------------------------------------------ callbacks
+    def _set_value(self, handle: Any, value: Any) -> None:
+        """Assign a GUI value from Python without running our own callback logic."""
+        if handle.value == value:
+            return
+        self._syncing = True
+        try:
+            handle.value = value
+        finally:
+            self._syncing = False
+
+    def _on_gizmo(self, name: str, ev: Any) -> None:
+        if self._syncing:
+            return
+        tc = ev.target
+        self.apply_drag(name, tuple(tc.position), tuple(tc.wxyz))
+
+    def apply_drag(self, name: str, position: tuple[float, ...], wxyz: tuple[float, ...]) -> str | None:
+        """A gizmo moved shape ``name`` to this pose: update, classify, recolour (hot path).
+
+        Returns:
+            The certified relation after the drag ("separate", "tangent", "overlap"), or None.
+        """
+        with self._lock:
+            if self.model is not None:
+                self._leave_motion()
+            sh = self.state.shapes[name]
+            if self.state.dim == 2:
+                import math
+
+                angle = 2.0 * math.atan2(float(wxyz[3]), float(wxyz[0]))
+                new = ShapeState((float(position[0]), float(position[1])), sh.semi_axes, (angle,))
+            else:
+                new = ShapeState(tuple(float(v) for v in position), sh.semi_axes, tuple(float(v) for v in wxyz))
+            self.state.shapes[name] = new
+            self._sync_shape_fields(only=name)
+            return self._refresh_static(dragged=name)
+
+    def _on_shape_text(self, name: str, key: str, ev: Any) -> None:
+        if self._syncing:
+            return
+        with self._lock:
+            sh = self.state.shapes[name]
+            d = sh.to_dict()
+            d[key] = self.shape_fields[name][key].value
+            try:
+                new = ShapeState.from_dict(d, self.state.dim, name)
+                new.quadric()
+            except ValueError as e:
+                self._field_error(self.shape_errors[name], str(e))
+                return
+            self._field_error(self.shape_errors[name], None)
+            if self.model is not None:
+                self._leave_motion()
+            self.state.shapes[name] = new
+            self._refresh_static()
+
+    def set_shape(self, name: str, **fields: Any) -> str | None:
+        """Set shape parameters from text/numbers (as the GUI fields do); returns the relation.
+
+        Raises:
+            ValueError: a bad value (the same message the GUI shows next to the field).
+        """
+        with self._lock:
+            d = self.state.shapes[name].to_dict()
+            d.update(fields)
+            new = ShapeState.from_dict(d, self.state.dim, name)
+            new.quadric()
+            if self.model is not None:
+                self._leave_motion()
+            self.state.shapes[name] = new
+            self._sync_shape_fields(only=name)
+            return self._refresh_static()
+
+    def _field_error(self, md: Any, message: str | None) -> None:
+        if message is None:
+            md.visible = False
+        else:
+            md.content = f'<span style="color:#d62728">⚠ {message}</span>'
+            md.visible = True
+
+    def _sync_shape_fields(self, only: str | None = None) -> None:
+        for name, sh in self.state.shapes.items():
+            if only is not None and name != only:
+                continue
+            f = self.shape_fields[name]
+            self._set_value(f["center"], ", ".join(format_number(v) for v in sh.center))
+            self._set_value(f["semi_axes"], ", ".join(format_number(v) for v in sh.semi_axes))
+            self._set_value(f["orientation"], ", ".join(format_number(v) for v in sh.orientation))
+
+    def _on_dim(self, ev: Any) -> None:
+        if self._syncing:
+            return
+        dim = 3 if self.dim_choice.value.startswith("3") else 2
+        if dim != self.state.dim:
+            cfg = SceneConfig(dim=dim, preset=None, gizmos=self.show_gizmos.value, show_plots=self.plots_on.value)
+            self.load(cfg)
+            self._frame_camera()
+
+    def _update_gizmos(self) -> None:
+        for v in self.views.values():
+            v.set_gizmo(self.show_gizmos.value and self.model is None)
+
+    # ------------------------------------------------------------------ static refresh
+    def _refresh_static(self, dragged: str | None = None) -> str | None:
+        """Classify the static shapes, recolour, update readout and contact point."""
+        shapes = self.state.shapes
+        for name, sh in shapes.items():
+            pos, wxyz, scale = sh.float_pose()
+            self.views[name].set_pose(pos, wxyz, scale, from_drag=name == dragged)
+        try:
+            A, B = shapes["A"].quadric(), shapes["B"].quadric()
+            expl = explain(A, B).to_dict()
+        except ValueError as e:
+            self.state.explanation = None
+            self._set_relation(None)
+            self._set_md(self.readout, readout_markdown(None, error=str(e)))
+            return None
+        self.state.explanation = expl
+        self._set_relation(expl["relation"])
+        self._set_md(self.readout, readout_markdown(expl, where="(static shapes)"))
+        self._update_contact(A, B, expl)
+        self._update_gizmos()
+        return expl["relation"]
+
+    def _set_md(self, handle: Any, text: str) -> None:
+        if self._last_text.get(id(handle)) != text:
+            self._last_text[id(handle)] = text
+            handle.content = text
+
+    def _set_relation(self, relation: str | None) -> None:
+        self.state.relation = relation
+        for v in self.views.values():
+            v.set_relation(relation)
+
+    def _update_contact(self, A: Any, B: Any, expl: dict[str, Any] | None) -> None:
+        point = None
+        if expl is not None and expl["relation"] == str(Relation.TANGENT):
+            point = contact_point(A, B, [q["approx"] for q in expl["coefficients"]])
+        if point is None:
+            if self._contact_on:
+                self.contact.visible = False
+                self.contact_label.visible = False
+                self._contact_on = False
+            return
+        p = tuple(float(v) for v in point) + ((0.0,) if len(point) == 2 else ())
+        self.contact.position = p
+        if not self._contact_on:
+            self.contact.visible = True
+            self.contact_label.visible = True
+            self._contact_on = True
+
+    # ------------------------------------------------------------------ motion
+    def _show_motion_error(self, e: Exception) -> None:
+        field = getattr(e, "field", None) or "A"
+        for key, md in self.motion_errors.items():
+            self._field_error(md, str(e) if key == field else None)
+
+    def _show_motion_fields(self) -> None:
+        assert self.model is not None
+        texts = self.model.texts()
+        for key, handle in self.motion_fields.items():
+            self._set_value(handle, texts.get(key, ""))
+            self._field_error(self.motion_errors[key], None)
+        self._set_md(self.preset_md, self.model.description)
+
+    def _leave_motion(self) -> None:
+        """A drag or typed shape turns the scene static (keeps the shapes where they are)."""
+        self.model = None
+        self.timeline_folder.visible = False
+        self.analysis = None
+        self.state.motion_key = None
+        self.state.event = None
+        self._set_value(self.preset, STATIC)
+        self._set_md(self.status, "Static shapes: drag them or type their parameters.")
+        self._set_md(self.bar, "")
+        self._set_md(self.events_md, "")
+        self._set_md(self.sign_table, "")
+        for b in self._event_buttons:
+            b.remove()
+        self._event_buttons = []
+        self._set_value(self.play, False)
+        self._refresh_plots(force=True)
+
+    def _on_preset(self, ev: Any) -> None:
+        if self._syncing:
+            return
+        name = self.preset.value
+        if name == STATIC:
+            self._leave_motion()
+            self._refresh_static()
+            return
+        cfg = SceneConfig(dim=self.state.dim, preset=name, gizmos=self.show_gizmos.value, show_plots=self.plots_on.value)
+        self.load(cfg)
+        self._frame_camera()
+
+    def _on_analyse_click(self) -> None:
+        texts = {k: h.value for k, h in self.motion_fields.items()}
+        try:
+            model = load_motion(preset=None, motion=texts, dim=self.state.dim)
+        except MotionError as e:
+            self._show_motion_error(e)
+            return
+        for md in self.motion_errors.values():
+            self._field_error(md, None)
+        with self._lock:
+            self.model = model
+            if model.dim != self.state.dim:
+                self.state.dim = model.dim
+                self._make_views()
+            self._set_value(self.preset, STATIC if model.preset is None else model.preset)
+            self.state.t = model.default_t
+            self.state.event = None
+            self._analyse()
+
+    def _analyse(self) -> None:
+        """Analyse the loaded motion off the GUI thread (cached); draw t meanwhile."""
+        model = self.model
+        assert model is not None
+        self.state.motion_key = model.key
+        self.timeline_folder.visible = True
+        lo, hi = model.interval_floats
+        self.t_slider.min, self.t_slider.max = lo, hi
+        self.t_slider.step = (hi - lo) / 1000 or 1e-3
+        self._update_gizmos()
+        cached = self.cache.get(model.key)
+        if cached is not None:
+            self._analysis_done(model, cached)
+            return
+        self.analysis = None
+        self._set_md(self.status, "Analysing the motion (exact)…")
+        self.progress.visible = True
+        self.progress.value = 10.0
+        self.set_t(self.state.t)
+        fut = self.cache.submit(model, self.executor)
+        self._pending = fut
+
+        def done(f: Future[Any]) -> None:
+            if self._closed or self.model is not model:
+                return
+            try:
+                result = f.result()
+            except Exception as e:  # noqa: BLE001 - shown next to the field, never a crash
+                self.progress.visible = False
+                self._set_md(self.status, f'<span style="color:#d62728">⚠ analysis failed: {e}</span>')
+                self.ready.set()
+                return
+            self._analysis_done(model, result)
+
+        fut.add_done_callback(done)
+
+    def _analysis_done(self, model: MotionModel, result: AnalysisView) -> None:
+        with self._lock:
+            if self.model is not model:
+                return
+            self.analysis = result
+            self.progress.visible = False
+            n_ev = len(result.events)
+            self._set_md(
+                self.status,
+                f"Analysed in {result.seconds:.2f} s: {n_ev} event{'s' * (n_ev != 1)}, "
+                f"{len(result.segments)} interval{'s' * (len(result.segments) != 1)}.",
+            )
+            for b in self._event_buttons:
+                b.remove()
+            self._event_buttons = []
+            lines = []
+            for k, ev in enumerate(result.events, start=1):
+                lines.append(f"α{k} = {ev.text} ({ev.relation}, {ev.kind})")
+                with self.events_folder:
+                    btn = self.gui.add_button(f"Jump to α{k} ≈ {ev.t:.6f}")
+                btn.on_click(lambda _e, k=k: self.jump_to_event(k))
+                self._event_buttons.append(btn)
+            self._set_md(self.events_md, "<br>".join(lines) if lines else "No events: one relation on all of I.")
+            self._set_md(self.sign_table, sign_table_markdown(result.rows, result.degree))
+            self._plot_index = -2
+            self._refresh_plots(force=True)
+            if self.state.event is not None and 1 <= self.state.event <= n_ev:
+                self.jump_to_event(self.state.event)
+            else:
+                self.state.event = None
+                self.set_t(self.state.t)
+            self.ready.set()
+
+    def jump_to_event(self, k: int) -> str | None:
+        """Show the k-th event (1-based) exactly: shapes at alpha_k, relation of the event."""
+        with self._lock:
+            if self.analysis is None or not 1 <= k <= len(self.analysis.events):
+                return None
+            ev = self.analysis.events[k - 1]
+            self.set_t(ev.t, event=k)
+            return ev.relation
+
+    def set_t(self, t: float, *, event: int | None = None) -> str | None:
+        """Move the motion to time t (one timeline step: hot path, no analysis).
+
+        Args:
+            t: time (clamped to I).
+            event: show the exact event k instead of the float t (set by "jump to").
+
+        Returns:
+            The certified relation drawn at t (None while the analysis is running).
+        """
+        with self._lock:
+            model = self.model
+            if model is None:
+                return None
+            lo, hi = model.interval_floats
+            t = min(max(float(t), lo), hi)
+            self.state.t = t
+            self.state.event = event
+            a, b = model.shapes_at(t)
+            for name, sh in (("A", a), ("B", b)):
+                pos, wxyz, scale = sh.float_pose()
+                self.views[name].set_pose(pos, wxyz, scale)
+            self._set_value(self.t_slider, min(max(t, self.t_slider.min), self.t_slider.max))
+            an = self.analysis
+            if an is None:
+                self._set_relation(None)
+                self._set_md(self.readout, readout_markdown(None, error="analysing the motion…"))
+                return None
+            if event is not None:
+                ev = an.events[event - 1]
+                relation = ev.relation
+                where = f"at t = α{event} = {ev.text}"
+                self._set_value(self.t_number, ev.text)
+            else:
+                relation = an.relation_at(t)
+                where = f"at t = {t:.6g}"
+                self._set_value(self.t_number, repr(t) if len(repr(t)) < 12 else f"{t:.6g}")
+            self._set_relation(relation)
+            self._set_md(self.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t))
+            self._set_md(self.readout, an.readout(t, event, where))
+            if relation == str(Relation.TANGENT):
+                A, B = model.float_matrices(t)
+                expl = an.explanation_at(t, event)
+                self._update_contact(A, B, expl)
+            else:
+                self._update_contact(None, None, None)
+            self._refresh_plots()
+            return relation
+
+    def _on_slider(self, ev: Any) -> None:
+        if self._syncing:
+            return
+        self.set_t(self.t_slider.value)
+
+    def _on_t_text(self, ev: Any) -> None:
+        if self._syncing or self.model is None:
+            return
+        try:
+            (t,) = parse_vector(self.t_number.value, 1, "t")
+        except ValueError as e:
+            self._field_error(self.t_error, str(e))
+            return
+        self._field_error(self.t_error, None)
+        self.set_t(float(t))
+
+    def _on_play(self) -> None:
+        if self._syncing or not self.play.value:
+            return
+        if self._play_thread is not None and self._play_thread.is_alive():
+            return
+        self._play_thread = threading.Thread(target=self._play_loop, daemon=True)
+        self._play_thread.start()
+
+    def _play_loop(self) -> None:
+        dt = 0.05
+        while self.play.value and not self._closed and self.model is not None:
+            lo, hi = self.model.interval_floats
+            t = self.state.t + (hi - lo) * self.speed.value * dt / 10.0
+            if t > hi:
+                t = lo
+            self.set_t(t)
+            time.sleep(dt)
+
+    # ------------------------------------------------------------------ plots
+    def _refresh_plots(self, force: bool = False) -> None:
+        """Resample only when the analysis changed; move the cursor otherwise; skip when off."""
+        on = bool(self.plots_on.value) and self.analysis is not None
+        if not on:
+            if force:
+                self.plot_coeffs.visible = False
+                self.plot_subres.visible = False
+                self._plot_index = -2
+            return
+        an = self.analysis
+        assert an is not None
+        idx = int(np.searchsorted(an.samples_t, self.state.t))
+        if idx == self._plot_index and not force:
+            return
+        self._plot_index = idx
+        plots.update_plot(self.plot_coeffs, an.samples_t, an.coeff_series(), idx, an.events_t)
+        plots.update_plot(self.plot_subres, an.samples_t, an.subres_series(), idx, an.events_t)
+
+    # ------------------------------------------------------------------ camera / lifecycle
+    def _frame_camera(self) -> None:
+        """Point the tab's camera at the shapes (2D: from above)."""
+        cam = getattr(self.target, "camera", None)
+        if cam is None:
+            return
+        pts = [np.array(sh.float_pose()[0]) for sh in self.state.shapes.values()]
+        if self.model is not None:
+            pts = self.model.extent_points()
+        lo, hi = np.min(pts, axis=0), np.max(pts, axis=0)
+        centre = (lo + hi) / 2
+        radius = float(np.linalg.norm(hi - lo)) / 2 + 2.0
+        if self.state.dim == 2:
+            cam.up_direction = (0.0, 1.0, 0.0)
+            x = float(centre[0]) + 0.45 * radius
+            cam.position = (x, float(centre[1]) - 1e-3, 2.2 * radius + 2)
+            cam.look_at = (x, float(centre[1]), 0.0)
+        else:
+            cam.up_direction = (0.0, 0.0, 1.0)
+            # viser keeps the orientation when the position is set: position first, then look_at
+            offset = radius * np.array([0.45, -1.6, 0.9])
+            # the GUI panel covers the right of the page: aim right of the shapes so they sit left
+            right = np.cross(-offset, np.array([0.0, 0.0, 1.0]))
+            right *= 0.45 * radius / np.linalg.norm(right)
+            cam.position = tuple(float(v) for v in centre + offset + right)
+            cam.look_at = tuple(float(v) for v in centre + right)
+
+    def close(self) -> None:
+        """Stop playback and ignore pending analyses (the tab went away)."""
+        self._closed = True
+
+
+def measure_update_costs(repeats: int = 200, *, preset: str | None = "example-29") -> dict[str, float]:
+    """Server time of one drag update and one t-step, and messages each queues (no browser).
+
+    Starts a private ``ViserServer`` on a free loopback port, builds a :class:`Session` on its
+    shared scene, times :meth:`Session.apply_drag` and :meth:`Session.set_t`.
+
+    Returns:
+        {"drag_ms": median ms per drag, "drag_messages": messages per drag,
+         "t_step_ms": median ms per t-step, "t_step_messages": messages per t-step}.
+    """
+    import viser
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        out: dict[str, float] = {}
+        if preset is not None:
+            s = Session(server, SceneConfig(preset=preset), count_messages=True)
+            s.ready.wait(120)
+            lo, hi = s.model.interval_floats if s.model else (0.0, 1.0)
+            times = []
+            m0 = s.messages
+            for i in range(repeats):
+                t = lo + (hi - lo) * (i + 0.5) / repeats
+                t0 = time.perf_counter()
+                s.set_t(t)
+                times.append(time.perf_counter() - t0)
+            out["t_step_ms"] = float(np.median(times) * 1e3)
+            out["t_step_messages"] = (s.messages - m0) / repeats
+            s.close()
+        s = Session(server, SceneConfig(preset=None), count_messages=True)
+        times = []
+        m0 = s.messages
+        for i in range(repeats):
+            x = 2.0 + 2.0 * i / repeats
+            t0 = time.perf_counter()
+            s.apply_drag("B", (x, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0))
+            times.append(time.perf_counter() - t0)
+        out["drag_ms"] = float(np.median(times) * 1e3)
+        out["drag_messages"] = (s.messages - m0) / repeats
+        return out
+    finally:
+        server.stop()

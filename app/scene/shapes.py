@@ -1,0 +1,134 @@
+"""Drawing one ellipse/ellipsoid in a viser scene, updated by assignment (never rebuilt per frame).
+
+An ellipsoid is a unit icosphere (``trimesh.creation.icosphere``) scaled by its semi-axes; an
+ellipse is a unit disc in the z = 0 plane scaled by (a, b, 1). The mesh hangs under a transform
+gizmo node ``/shapes/<name>`` so that dragging moves it in the browser at once; Python only
+recolours. Every setter compares with the last value sent, so unchanged nodes are not re-sent.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+__all__ = ["RELATION_COLORS", "RELATION_HEX", "EllipsoidView", "unit_sphere", "unit_disc"]
+
+RELATION_HEX: dict[str, str] = {
+    "separate": "#2ca02c",
+    "tangent": "#ffbf00",
+    "overlap": "#d62728",
+}
+"""Relation -> colour (the one mapping used by shapes, bars and the readout)."""
+
+RELATION_COLORS: dict[str, tuple[int, int, int]] = {
+    k: (int(v[1:3], 16), int(v[3:5], 16), int(v[5:7], 16)) for k, v in RELATION_HEX.items()
+}
+"""Relation -> RGB 0..255."""
+
+NEUTRAL = (150, 150, 150)
+"""Colour while no certified relation is known (e.g. an invalid typed shape)."""
+
+
+@lru_cache(maxsize=1)
+def unit_sphere() -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) float32 and faces (F, 3) uint32 of a unit icosphere (built once)."""
+    import trimesh
+
+    m = trimesh.creation.icosphere(subdivisions=3)
+    return np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32)
+
+
+@lru_cache(maxsize=1)
+def unit_disc(segments: int = 96) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and faces of a unit disc in the z = 0 plane (both sides drawn by the material)."""
+    ang = np.linspace(0, 2 * np.pi, segments, endpoint=False)
+    v = np.zeros((segments + 1, 3), np.float32)
+    v[1:, 0], v[1:, 1] = np.cos(ang), np.sin(ang)
+    i = np.arange(segments)
+    f = np.stack([np.zeros(segments, int), 1 + i, 1 + (i + 1) % segments], axis=1).astype(np.uint32)
+    return v, f
+
+
+class EllipsoidView:
+    """One shape in the scene: gizmo node, mesh (scaled unit sphere or disc) and its label.
+
+    Args:
+        scene: a viser ``SceneApi`` (``client.scene`` for one tab, ``server.scene`` for all).
+        name: "A" or "B" (node ``/shapes/<name>``, label text).
+        dim: 2 (flat disc in z = 0, gizmo limited to the plane) or 3.
+        opacity: mesh opacity (semi-transparent so the other shape shows through).
+    """
+
+    def __init__(self, scene: Any, name: str, dim: int, *, opacity: float = 0.6, gizmo: bool = True) -> None:
+        self.name = name
+        self.dim = dim
+        root = f"/shapes/{name}"
+        if dim == 2:
+            self.control = scene.add_transform_controls(
+                root,
+                scale=1.2,
+                active_axes=(True, True, False),
+                disable_rotations=False,
+                rotation_limits=((0.0, 0.0), (0.0, 0.0), (-1000.0, 1000.0)),
+                translation_limits=((-1000.0, 1000.0), (-1000.0, 1000.0), (0.0, 0.0)),
+                depth_test=False,
+                visible=gizmo,
+            )
+            v, f = unit_disc()
+        else:
+            self.control = scene.add_transform_controls(root, scale=1.2, depth_test=False, visible=gizmo)
+            v, f = unit_sphere()
+        self.mesh = scene.add_mesh_simple(
+            f"{root}/mesh",
+            v,
+            f,
+            color=NEUTRAL,
+            opacity=opacity,
+            side="double" if dim == 2 else "front",
+            cast_shadow=False,
+            receive_shadow=False,
+        )
+        self.label = scene.add_label(f"{root}/label", name, position=(0.0, 0.0, 0.0), anchor="bottom-center")
+        self._pose: tuple[Any, ...] | None = None
+        self._scale: tuple[float, ...] | None = None
+        self._color: tuple[int, int, int] | None = NEUTRAL
+        self.sent = 0
+        """Number of property assignments sent (for the cost measurement)."""
+
+    def set_pose(
+        self,
+        position: tuple[float, float, float],
+        wxyz: tuple[float, float, float, float],
+        scale: tuple[float, float, float],
+        *,
+        from_drag: bool = False,
+    ) -> None:
+        """Move/resize the shape; after a drag the browser already shows the pose (not re-sent)."""
+        if (position, wxyz) != self._pose:
+            self._pose = (position, wxyz)
+            if not from_drag:
+                self.control.position = position
+                self.control.wxyz = wxyz
+                self.sent += 2
+        if scale != self._scale:
+            self._scale = scale
+            self.mesh.scale = scale
+            # label above the top of the shape, in the body frame of the gizmo node
+            self.label.position = (0.0, 0.0, scale[2] if self.dim == 3 else 0.0)
+            self.sent += 2
+
+    def set_relation(self, relation: str | None) -> None:
+        """Colour of the relation (grey when unknown); sent only when it changes."""
+        color = RELATION_COLORS.get(relation or "", NEUTRAL)
+        if color != self._color:
+            self._color = color
+            self.mesh.color = color
+            self.sent += 1
+
+    def set_gizmo(self, visible: bool) -> None:
+        """Show or hide the transform gizmo (hidden while a motion drives the shape)."""
+        if self.control.visible != visible:
+            self.control.visible = visible
+            self.sent += 1

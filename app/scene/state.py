@@ -1,0 +1,337 @@
+"""Scene configuration and per-tab state: the single mutable object of one browser tab.
+
+A :class:`SceneConfig` is what a user can write down (``--config file.json``, the defaults, a
+preset); :class:`AppState` is what one tab is looking at right now (the shapes, the motion, t,
+the last explanation). Numbers entered by hand stay exact: a shape parameter is a float (the
+exact binary rational it is, e.g. after a drag) or an ``fmpq`` (typed text such as "3/7").
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from flint import fmpq
+
+from core.rationals import to_fmpq
+
+__all__ = [
+    "ShapeState",
+    "SceneConfig",
+    "AppState",
+    "parse_vector",
+    "format_number",
+    "DEFAULT_PRESET",
+]
+
+Number = float | fmpq
+
+DEFAULT_PRESET = "example-29"
+"""Preset loaded when the scene opens with no configuration (two ellipsoids about to touch)."""
+
+
+def parse_vector(text: Any, count: int | tuple[int, ...], what: str) -> tuple[Number, ...]:
+    """Read ``count`` numbers from "1, 2/3, 0.5" (or a JSON list); exact for typed text.
+
+    Args:
+        text: a string of comma/space separated numbers, or a sequence of numbers/strings.
+        count: accepted number(s) of components.
+        what: field name for the error message.
+
+    Returns:
+        A tuple of floats (for float input) or ``fmpq`` (for strings and ints).
+
+    Raises:
+        ValueError: wrong count or an unreadable component (the message names the field).
+
+    Examples:
+        >>> parse_vector("1, 3/7  0.5", 3, "centre")
+        (1, 3/7, 1/2)
+        >>> parse_vector([1.5, "2"], 2, "centre")
+        (1.5, 2)
+        >>> parse_vector("1, x", 2, "centre")
+        Traceback (most recent call last):
+        ...
+        ValueError: centre: component 2: not a number: 'x' (expected e.g. '3', '-0.25', '1e-3' or '3/7')
+    """
+    counts = (count,) if isinstance(count, int) else count
+    if isinstance(text, str):
+        parts: list[Any] = [p for p in text.replace(",", " ").replace(";", " ").split() if p]
+    elif isinstance(text, int | float):
+        parts = [text]
+    else:
+        try:
+            parts = list(text)
+        except TypeError:
+            raise ValueError(f"{what}: expected numbers, got {text!r}") from None
+    if len(parts) not in counts:
+        want = " or ".join(str(c) for c in counts)
+        raise ValueError(f"{what}: expected {want} numbers, got {len(parts)}")
+    out: list[Number] = []
+    for i, p in enumerate(parts, start=1):
+        try:
+            if isinstance(p, float):
+                if not math.isfinite(p):
+                    raise ValueError(f"not finite: {p}")
+                out.append(p)
+            else:
+                out.append(to_fmpq(p))
+        except ValueError as e:
+            raise ValueError(f"{what}: component {i}: {e}") from None
+    return tuple(out)
+
+
+def format_number(v: Number, digits: int = 6) -> str:
+    """Short text of a number: exact "p/q" for small rationals, else a rounded decimal.
+
+    Examples:
+        >>> format_number(fmpq(3, 7)), format_number(0.25), format_number(1 / 3)
+        ('3/7', '0.25', '0.333333')
+    """
+    if isinstance(v, fmpq):
+        if len(str(v)) <= 24:
+            return str(v)
+        v = float(v.p) / float(v.q)
+    return f"{float(v):.{digits}g}"
+
+
+@dataclass
+class ShapeState:
+    """One shape: centre, semi-axes, orientation, as the user entered or dragged them."""
+
+    center: tuple[Number, ...]
+    """(x, y) or (x, y, z)."""
+    semi_axes: tuple[Number, ...]
+    """Positive semi-axis lengths along the body axes."""
+    orientation: tuple[Number, ...]
+    """2D: (angle,) in radians or a quaternion (w, 0, 0, z); 3D: quaternion (w, x, y, z)."""
+
+    @property
+    def dim(self) -> int:
+        """2 or 3."""
+        return len(self.center)
+
+    @property
+    def is_exact(self) -> bool:
+        """True when any parameter is an exact rational (typed text)."""
+        return any(isinstance(v, fmpq) for v in (*self.center, *self.semi_axes, *self.orientation))
+
+    def quadric(self) -> Any:
+        """Matrix of the shape (exact ``fmpq`` lists when any entry is exact, else floats)."""
+        from core import quadric_from_axes
+
+        o: Any = self.orientation
+        if len(o) == 1:
+            angle = o[0]
+            if angle == 0:
+                o = None
+            else:
+                return quadric_from_axes(
+                    [float(v) for v in self.center], [float(v) for v in self.semi_axes], float(angle)
+                )
+        exact = self.is_exact
+        if exact and o is not None and any(isinstance(v, float) for v in o):
+            o = [fmpq(*v.as_integer_ratio()) if isinstance(v, float) else v for v in o]
+        return quadric_from_axes(self.center, self.semi_axes, o, exact=exact)
+
+    def float_pose(self) -> tuple[tuple[float, float, float], tuple[float, float, float, float], tuple[float, float, float]]:
+        """(position, wxyz, scale) for drawing, in 3D (2D shapes live in z = 0, rotate about z)."""
+        c = [float(v) for v in self.center]
+        r = [float(v) for v in self.semi_axes]
+        if self.dim == 2:
+            pos = (c[0], c[1], 0.0)
+            scale = (r[0], r[1], 1.0)
+            if len(self.orientation) == 1:
+                h = float(self.orientation[0]) / 2
+                wxyz = (math.cos(h), 0.0, 0.0, math.sin(h))
+            else:
+                wxyz = _unit(tuple(float(v) for v in self.orientation))
+            return pos, wxyz, scale
+        return (c[0], c[1], c[2]), _unit(tuple(float(v) for v in self.orientation)), (r[0], r[1], r[2])
+
+    def to_dict(self) -> dict[str, list[str]]:
+        """JSON form (numbers as exact strings; floats as their shortest round-trip repr)."""
+        return {
+            "center": [_num_text(v) for v in self.center],
+            "semi_axes": [_num_text(v) for v in self.semi_axes],
+            "orientation": [_num_text(v) for v in self.orientation],
+        }
+
+    @classmethod
+    def from_dict(cls, d: Any, dim: int, name: str) -> ShapeState:
+        """Read and check a shape from its JSON form (see :meth:`to_dict`)."""
+        if not isinstance(d, dict):
+            raise ValueError(f"shape {name}: expected an object with center, semi_axes, orientation")
+        unknown = set(d) - {"center", "semi_axes", "orientation"}
+        if unknown:
+            raise ValueError(f"shape {name}: unknown keys {sorted(unknown)}")
+        center = parse_vector(d.get("center", [0] * dim), dim, f"{name}.center")
+        axes = parse_vector(d.get("semi_axes", [1] * dim), dim, f"{name}.semi_axes")
+        if any(v <= 0 for v in axes):
+            raise ValueError(f"{name}.semi_axes: must be positive")
+        default_o = [0] if dim == 2 else [1, 0, 0, 0]
+        orient = parse_vector(d.get("orientation", default_o), (1, 4) if dim == 2 else 4, f"{name}.orientation")
+        if len(orient) == 4 and all(v == 0 for v in orient):
+            raise ValueError(f"{name}.orientation: the quaternion is zero")
+        if dim == 2 and len(orient) == 4 and (orient[1] != 0 or orient[2] != 0):
+            raise ValueError(f"{name}.orientation: a 2D quaternion must rotate about z: (w, 0, 0, z)")
+        return cls(center, axes, orient)
+
+
+def _unit(q: tuple[float, ...]) -> tuple[float, float, float, float]:
+    n = math.sqrt(sum(v * v for v in q)) or 1.0
+    return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
+
+
+def _num_text(v: Number) -> str:
+    return repr(v) if isinstance(v, float) else str(v)
+
+
+def _default_shapes(dim: int) -> tuple[ShapeState, ShapeState]:
+    if dim == 2:
+        return (
+            ShapeState((fmpq(0), fmpq(0)), (fmpq(2), fmpq(1)), (0.0,)),
+            ShapeState((fmpq(3), fmpq(3, 2)), (fmpq(3, 2), fmpq(1, 2)), (0.6,)),
+        )
+    one, zero = fmpq(1), fmpq(0)
+    return (
+        ShapeState((zero, zero, zero), (fmpq(2), one, one), (one, zero, zero, zero)),
+        ShapeState((fmpq(3), fmpq(3, 2), zero), (fmpq(3, 2), one, fmpq(1, 2)), (one, zero, zero, fmpq(1, 3))),
+    )
+
+
+@dataclass
+class SceneConfig:
+    """What a tab opens on: static shapes and/or a preset/motion, t, and display options."""
+
+    dim: int = 3
+    """2 (ellipses in the z = 0 plane, camera from above) or 3."""
+    A: ShapeState | None = None
+    """Static shape A (None: the default for ``dim``)."""
+    B: ShapeState | None = None
+    preset: str | None = DEFAULT_PRESET
+    """Name of a motion preset (``core.presets``); None for a static scene."""
+    motion: dict[str, Any] | None = None
+    """Typed motion (expression strings per shape and the interval), overrides ``preset``."""
+    t: float | None = None
+    """Time to show (None: the motion's default)."""
+    event: int | None = None
+    """Show the k-th event (1-based) exactly instead of ``t``."""
+    show_plots: bool = True
+    """Live uPlot plots (skipped entirely when False)."""
+    separating_plane: bool = False
+    """Draw a separating plane when the shapes are separate."""
+    gizmos: bool = True
+    """Show the transform gizmos."""
+
+    def shapes(self) -> tuple[ShapeState, ShapeState]:
+        """The static shapes, defaults filled in."""
+        da, db = _default_shapes(self.dim)
+        return (self.A or da, self.B or db)
+
+    @classmethod
+    def from_dict(cls, d: Any) -> SceneConfig:
+        """Read and check a configuration (the JSON accepted by ``--config``).
+
+        Raises:
+            ValueError: unknown keys, wrong types or bad numbers (the message names the field).
+
+        Examples:
+            >>> SceneConfig.from_dict({"dim": 2, "preset": None}).dim
+            2
+            >>> SceneConfig.from_dict({"dimension": 2})
+            Traceback (most recent call last):
+            ...
+            ValueError: config: unknown keys ['dimension']; allowed: A, B, dim, event, gizmos, motion, preset, separating_plane, show_plots, t
+        """
+        if not isinstance(d, dict):
+            raise ValueError("config: expected a JSON object")
+        allowed = {f for f in cls.__dataclass_fields__}
+        unknown = set(d) - allowed
+        if unknown:
+            raise ValueError(f"config: unknown keys {sorted(unknown)}; allowed: {', '.join(sorted(allowed))}")
+        dim = d.get("dim", 3)
+        if dim not in (2, 3) or isinstance(dim, bool):
+            raise ValueError(f"config: dim must be 2 or 3, got {dim!r}")
+        cfg = cls(dim=dim)
+        for key in ("A", "B"):
+            if d.get(key) is not None:
+                setattr(cfg, key, ShapeState.from_dict(d[key], dim, key))
+        preset = d.get("preset", DEFAULT_PRESET if "A" not in d and "B" not in d else None)
+        if preset is not None and not isinstance(preset, str):
+            raise ValueError("config: preset must be a name (string) or null")
+        cfg.preset = preset
+        motion = d.get("motion")
+        if motion is not None and not isinstance(motion, dict):
+            raise ValueError("config: motion must be an object")
+        cfg.motion = motion
+        if d.get("t") is not None:
+            try:
+                t = float(d["t"])
+            except (TypeError, ValueError):
+                raise ValueError(f"config: t must be a number, got {d['t']!r}") from None
+            if not math.isfinite(t):
+                raise ValueError("config: t must be finite")
+            cfg.t = t
+        if d.get("event") is not None:
+            ev = d["event"]
+            if not isinstance(ev, int) or isinstance(ev, bool) or ev < 1:
+                raise ValueError(f"config: event must be a positive integer (1-based), got {ev!r}")
+            cfg.event = ev
+        for key in ("show_plots", "separating_plane", "gizmos"):
+            if key in d:
+                if not isinstance(d[key], bool):
+                    raise ValueError(f"config: {key} must be true or false")
+                setattr(cfg, key, d[key])
+        return cfg
+
+    @classmethod
+    def from_json_file(cls, path: str | Path) -> SceneConfig:
+        """Read a configuration file (see :meth:`from_dict`)."""
+        try:
+            data = json.loads(Path(path).read_text())
+        except OSError as e:
+            raise ValueError(f"cannot read config file {path}: {e.strerror}") from None
+        except json.JSONDecodeError as e:
+            raise ValueError(f"config file {path} is not valid JSON: {e}") from None
+        return cls.from_dict(data)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (round-trips through :meth:`from_dict`)."""
+        a, b = self.shapes()
+        return {
+            "dim": self.dim,
+            "A": a.to_dict(),
+            "B": b.to_dict(),
+            "preset": self.preset,
+            "motion": self.motion,
+            "t": self.t,
+            "event": self.event,
+            "show_plots": self.show_plots,
+            "separating_plane": self.separating_plane,
+            "gizmos": self.gizmos,
+        }
+
+
+@dataclass
+class AppState:
+    """Everything one tab shows; callbacks change it and call ``Session.refresh``."""
+
+    dim: int
+    shapes: dict[str, ShapeState]
+    """"A" and "B"."""
+    t: float = 0.0
+    """Current time (when a motion is loaded)."""
+    event: int | None = None
+    """1-based index of the event shown exactly, or None when showing the float ``t``."""
+    motion_key: Any = None
+    """Cache key of the loaded motion (None: static scene)."""
+    explanation: dict[str, Any] | None = None
+    """Last ``core.explain(A, B).to_dict()`` of the static shapes (or at t)."""
+    relation: str | None = None
+    """Relation currently drawn ("separate", "tangent", "overlap")."""
+    errors: dict[str, str] = field(default_factory=dict)
+    """Field name -> error message shown next to that field."""
