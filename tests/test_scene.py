@@ -1,0 +1,154 @@
+"""The viser scene without a browser: sessions on a ViserServer (no client connected).
+
+Golden relations are hand-checkable: unit spheres/circles whose centres are 2 apart touch
+(tangent), 3 apart are separate, 1 apart overlap. Colours are the issue's literal hex codes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+viser = pytest.importorskip("viser")
+
+from app.scene.panels import intervals_bar_html, readout_markdown, sign_table_markdown  # noqa: E402
+from app.scene.plots import compress  # noqa: E402
+from app.scene.session import Session, measure_update_costs  # noqa: E402
+from app.scene.state import SceneConfig, ShapeState, parse_vector  # noqa: E402
+
+GREEN, AMBER, RED = (0x2C, 0xA0, 0x2C), (0xFF, 0xBF, 0x00), (0xD6, 0x27, 0x28)
+
+
+def unit_spheres(dim: int, dx: str) -> SceneConfig:
+    z = ["0"] * dim
+    c = [dx] + ["0"] * (dim - 1)
+    o = ["0"] if dim == 2 else ["1", "0", "0", "0"]
+    return SceneConfig.from_dict(
+        {
+            "dim": dim,
+            "preset": None,
+            "A": {"center": z, "semi_axes": ["1"] * dim, "orientation": o},
+            "B": {"center": c, "semi_axes": ["1"] * dim, "orientation": o},
+        }
+    )
+
+
+@pytest.fixture(scope="module")
+def server():
+    s = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    yield s
+    s.stop()
+
+
+def colours(session: Session) -> set[tuple[int, int, int]]:
+    return {tuple(int(c) for c in v.mesh.color) for v in session.views.values()}
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize(
+    "dx, relation, colour",
+    [("2", "tangent", AMBER), ("3", "separate", GREEN), ("1", "overlap", RED), ("2.000001", "separate", GREEN)],
+)
+def test_static_relation_and_colour(server, dim, dx, relation, colour):
+    s = Session(server, unit_spheres(dim, dx))
+    assert s.state.relation == relation
+    assert colours(s) == {colour}
+    assert relation.upper() in s.readout.content
+
+
+def test_contact_point_at_tangency(server):
+    s = Session(server, unit_spheres(3, "2"))
+    assert s.contact.visible
+    np.testing.assert_allclose(s.contact.position, (1.0, 0.0, 0.0), atol=1e-6)
+    s.set_shape("B", center="3, 0, 0")
+    assert not s.contact.visible
+
+
+def test_typed_exact_centre_changes_relation(server):
+    s = Session(server, unit_spheres(2, "3"))
+    assert s.set_shape("B", center="2, 0") == "tangent"  # exact: 2 is exactly tangent
+    assert colours(s) == {AMBER}
+    assert s.set_shape("B", center="19/10, 0") == "overlap"
+    assert colours(s) == {RED}
+
+
+def test_bad_typed_value_is_shown_not_raised(server):
+    s = Session(server, unit_spheres(3, "3"))
+    before = s.state.shapes["B"]
+    s.shape_fields["B"]["semi_axes"].value = "1, -2, 1"  # runs the GUI callback synchronously
+    assert s.shape_errors["B"].visible
+    assert "positive" in s.shape_errors["B"].content
+    assert s.state.shapes["B"] == before
+    s.shape_fields["B"]["center"].value = "1, two, 3"
+    assert "not a number" in s.shape_errors["B"].content
+    with pytest.raises(ValueError, match="semi_axes"):
+        s.set_shape("B", semi_axes="1, 0, 1")
+
+
+def test_drag_recolours_and_sends_nothing_when_unchanged(server):
+    s = Session(server, unit_spheres(3, "3"), count_messages=True)
+    assert s.apply_drag("B", (1.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) == "overlap"
+    assert colours(s) == {RED}
+    m = s.messages
+    s.apply_drag("B", (1.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))  # same pose again
+    assert s.messages == m
+    # a rotated ellipsoid: semi-axes (1,1,1) -> rotation is irrelevant, distance 4 -> separate
+    assert s.apply_drag("B", (0.0, 4.0, 0.0), (0.0, 1.0, 0.0, 0.0)) == "separate"
+    assert colours(s) == {GREEN}
+
+
+def test_drag_2d_uses_rotation_about_z(server):
+    cfg = SceneConfig.from_dict(
+        {
+            "dim": 2,
+            "preset": None,
+            "A": {"center": ["0", "0"], "semi_axes": ["2", "1"], "orientation": ["0"]},
+            "B": {"center": ["0", "2.5"], "semi_axes": ["2", "1"], "orientation": ["0"]},
+        }
+    )
+    s = Session(server, cfg)
+    assert s.state.relation == "separate"  # gap 0.5 along y
+    # rotate B by 90 degrees: its long axis (2) now points along y and reaches y = 0.5 < 1
+    h = np.sqrt(0.5)
+    assert s.apply_drag("B", (0.0, 2.5, 0.0), (h, 0.0, 0.0, h)) == "overlap"
+
+
+def test_update_costs_are_small():
+    costs = measure_update_costs(50, preset=None)
+    assert costs["drag_messages"] <= 4
+    assert costs["drag_ms"] < 25  # target < 2 ms; generous bound for a loaded CI machine
+
+
+def test_config_round_trip_and_errors():
+    cfg = unit_spheres(3, "5/2")
+    again = SceneConfig.from_dict(cfg.to_dict())
+    assert again.shapes()[1].center[0] == cfg.shapes()[1].center[0]
+    assert str(again.shapes()[1].center[0]) == "5/2"
+    with pytest.raises(ValueError, match="dim must be 2 or 3"):
+        SceneConfig.from_dict({"dim": 4})
+    with pytest.raises(ValueError, match="B.center: expected 3 numbers"):
+        SceneConfig.from_dict({"B": {"center": [1, 2], "semi_axes": [1, 1, 1]}})
+    with pytest.raises(ValueError, match="event must be a positive integer"):
+        SceneConfig.from_dict({"event": 0})
+    with pytest.raises(ValueError, match="2D quaternion must rotate about z"):
+        ShapeState.from_dict({"center": [0, 0], "semi_axes": [1, 1], "orientation": [1, 1, 0, 0]}, 2, "A")
+    assert parse_vector("1 ; 2", 2, "v") == parse_vector([1, 2], 2, "v")
+
+
+def test_panels_text():
+    bar = intervals_bar_html(0.0, 1.0, [(0.0, 0.5, "separate"), (0.5, 1.0, "overlap")], [(0.5, "tangent")], 0.25)
+    assert "#2ca02c" in bar and "#d62728" in bar and "#ffbf00" in bar and "α1" in bar
+    table = sign_table_markdown(
+        [{"where": "α1", "signs": {"a3": 0, "s0": 0, "s1": 1}, "var": 2, "relation": "tangent"}], 3
+    )
+    assert table.splitlines()[2].startswith("| α1 | + |") is False  # a3 is 0, printed as "0"
+    assert "| α1 | 0 |" in table
+    assert "⚠ bad" in readout_markdown(None, error="bad")
+
+
+def test_compress_keeps_sign_and_order():
+    y = np.array([-1e30, -1.0, 0.0, 1e-3, 1e30])
+    c = compress(y)
+    assert np.all(np.sign(c) == np.sign(y))
+    assert np.all(np.diff(c) > 0)
+    assert np.max(np.abs(c)) < 100
