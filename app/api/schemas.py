@@ -37,6 +37,9 @@ __all__ = [
     "QuantityOut",
     "ExplainOut",
     "HealthOut",
+    "ErrorItem",
+    "ErrorOut",
+    "ERROR_RESPONSES",
 ]
 
 MAX_INT_DIGITS = MAX_NUMBER_CHARS
@@ -202,6 +205,28 @@ class ExplainOut(BaseModel):
     s1: QuantityOut | None = None
     s10: QuantityOut | None = None
     subresultants_needed: list[str]
+
+
+class ErrorItem(BaseModel):
+    """One validation error: where (``loc``), what (``msg``), which kind (``type``)."""
+
+    loc: list[str | int]
+    msg: str
+    type: str
+
+
+class ErrorOut(BaseModel):
+    """Every 4xx/503 body: a message saying what is wrong, or a list of located errors."""
+
+    detail: str | list[ErrorItem]
+
+
+ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
+    400: {"model": ErrorOut, "description": "Unreadable body (e.g. JSON nested too deeply)"},
+    413: {"model": ErrorOut, "description": "Body over the size limit"},
+    422: {"model": ErrorOut, "description": "Invalid input: the message says what is wrong"},
+}
+"""Error responses documented on every API route."""
 
 
 class HealthOut(BaseModel):

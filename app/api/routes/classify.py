@@ -8,9 +8,9 @@ from core import explain as core_explain
 
 from ..convert import bad_input, checked_pair, classify_pair
 from ..deps import SettingsDep
-from ..schemas import BatchIn, ClassifyIn, ClassifyOut, ExplainOut, PairItem
+from ..schemas import ERROR_RESPONSES, BatchIn, ClassifyIn, ClassifyOut, ExplainOut, PairItem
 
-router = APIRouter(prefix="/api", tags=["classify"])
+router = APIRouter(prefix="/api", tags=["classify"], responses=ERROR_RESPONSES)
 
 
 @router.post("/classify", response_model=ClassifyOut | list[ClassifyOut])
