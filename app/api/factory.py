@@ -10,7 +10,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.staticfiles import StaticFiles
 
 from .limits import BodySizeLimit, validation_error_handler
-from .routes import classify, health, landing
+from .routes import classify, health, landing, presets
 from .settings import ApiSettings
 from .workers import WorkerPool
 
@@ -51,7 +51,7 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     app.state.workers = workers
     app.add_exception_handler(RequestValidationError, validation_error_handler)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
-    for module in (classify, health, landing):
+    for module in (classify, presets, health, landing):
         app.include_router(module.router)
     if settings.static_dir is not None and settings.static_dir.is_dir():
         app.mount("/static", StaticFiles(directory=settings.static_dir), name="static")

@@ -37,6 +37,10 @@ __all__ = [
     "QuantityOut",
     "ExplainOut",
     "HealthOut",
+    "Expr",
+    "Motion",
+    "AnalyseIn",
+    "PresetOut",
     "ErrorItem",
     "ErrorOut",
     "ERROR_RESPONSES",
@@ -205,6 +209,143 @@ class ExplainOut(BaseModel):
     s1: QuantityOut | None = None
     s10: QuantityOut | None = None
     subresultants_needed: list[str]
+
+
+# --- motions (the JSON format of core.motions, shared with the scene and the presets) ---------
+
+MAX_EXPRESSION_SCHEMA_CHARS = 100_000
+"""Static cap in the schema; the real limit is ApiSettings.max_expression_chars (checked per request)."""
+
+
+def _expression(v: Any) -> int | float | str:
+    """A number (kept as given) or an expression string in t (parsed by core.expressions)."""
+    if isinstance(v, str):
+        if len(v) > MAX_EXPRESSION_SCHEMA_CHARS:
+            raise ValueError(f"expression too long ({len(v)} characters)")
+        return v
+    return _number(v)
+
+
+Expr = Annotated[
+    int | float | str,
+    PlainValidator(_expression),
+    WithJsonSchema(
+        {
+            "anyOf": [
+                {"type": "number"},
+                {
+                    "type": "string",
+                    "maxLength": MAX_EXPRESSION_SCHEMA_CHARS,
+                    "description": "expression in t: + - * / ^ ( ) numbers t sqrt(c), e.g. '(12*t - 11)/2', 'sqrt(2)*t'",
+                    "examples": ["4*t - 2", "2*(t^2 - 1)/(t^2 + 1)"],
+                },
+            ]
+        }
+    ),
+]
+"""A number or an expression string in t (exact; never evaluated by Python)."""
+
+ExprMatrix = Annotated[list[Annotated[list[Expr], Field(min_length=3, max_length=4)]], Field(min_length=3, max_length=4)]
+
+
+class MotionShapeIn(BaseModel):
+    """Body shape of a moving ellipse/ellipsoid; every number may be an expression in t."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    center: Annotated[list[Expr], Field(min_length=2, max_length=3)]
+    semi_axes: Annotated[list[Expr], Field(min_length=2, max_length=3)]
+    orientation: Expr | Annotated[list[Expr], Field(min_length=2, max_length=4)] | None = Field(
+        default=None, description="2D: angle (float radians) or [w, z]; 3D: quaternion [w, x, y, z]"
+    )
+
+
+class QuaternionRotation(BaseModel):
+    """Rotation by a quaternion of expressions (divided by |q|^2: a rational rotation)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    quaternion: Annotated[list[Expr], Field(min_length=2, max_length=4)]
+    """3D: [w, x, y, z]; 2D: [w, z]."""
+
+
+class MatrixRotation(BaseModel):
+    """Rotation by an explicit (orthogonal) matrix of expressions."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    matrix: Annotated[list[Annotated[list[Expr], Field(min_length=2, max_length=3)]], Field(min_length=2, max_length=3)]
+
+
+def _rotation_kind(v: Any) -> str:
+    return "quaternion" if isinstance(v, dict) and "quaternion" in v or isinstance(v, QuaternionRotation) else "matrix"
+
+
+Rotation = Annotated[
+    Annotated[QuaternionRotation, Tag("quaternion")] | Annotated[MatrixRotation, Tag("matrix")],
+    Discriminator(_rotation_kind),
+]
+
+
+class MotionByShape(BaseModel):
+    """x_world = R(t) diag(scale(t)) x_body + translation(t)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    shape: MotionShapeIn
+    translation: Annotated[list[Expr], Field(min_length=2, max_length=3)] | None = None
+    rotation: Rotation | None = None
+    scale: Annotated[list[Expr], Field(min_length=2, max_length=3)] | None = None
+
+
+class MotionByMatrix(BaseModel):
+    """The symmetric matrix A(t) itself, entries expressions in t."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    matrix: ExprMatrix
+
+
+def _motion_kind(v: Any) -> str:
+    if isinstance(v, list):
+        return "rows"
+    if isinstance(v, MotionByMatrix) or isinstance(v, dict) and "matrix" in v:
+        return "matrix"
+    return "shape"
+
+
+Motion = Annotated[
+    Annotated[ExprMatrix, Tag("rows")] | Annotated[MotionByMatrix, Tag("matrix")] | Annotated[MotionByShape, Tag("shape")],
+    Discriminator(_motion_kind),
+]
+"""A moving shape: a bare matrix of expressions, ``{"matrix": ...}`` or ``{"shape": ..., ...}``."""
+
+IntervalEnd = Expr | None
+
+
+class AnalyseIn(BaseModel):
+    """Two motions and the time interval to analyse (a preset can be posted as it is)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    a: Motion
+    b: Motion
+    interval: Annotated[list[IntervalEnd], Field(min_length=2, max_length=2)] = Field(
+        default=[None, None], description="[lo, hi]: numbers, exact strings, or null for an infinite end"
+    )
+    digits: Annotated[int, Field(ge=1, le=100_000)] = Field(default=20, description="decimal digits of event values")
+    name: str | None = Field(default=None, description="ignored (lets a preset be posted unchanged)")
+    description: str | None = Field(default=None, description="ignored")
+
+
+class PresetOut(BaseModel):
+    """A built-in moving pair, in the input format of /api/analyse."""
+
+    name: str
+    description: str
+    a: Motion
+    b: Motion
+    interval: list[IntervalEnd]
 
 
 class ErrorItem(BaseModel):
