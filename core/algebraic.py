@@ -329,6 +329,45 @@ def _simplest_between(lo: fmpq, hi: fmpq) -> fmpq:
     return fmpq(fl) + 1 / _simplest_between(1 / (hi - fl), 1 / (lo - fl))
 
 
+_ARB_POLY_CACHE: dict[tuple[int, int], tuple[fmpq_poly, arb_poly]] = {}
+
+
+def _arb_poly(F: fmpq_poly, prec: int) -> arb_poly:
+    """arb_poly of F at ``prec`` bits, cached (keyed by identity; the entry keeps F alive)."""
+    key = (id(F), prec)
+    hit = _ARB_POLY_CACHE.get(key)
+    if hit is not None and hit[0] is F:
+        return hit[1]
+    if len(_ARB_POLY_CACHE) > 4096:
+        _ARB_POLY_CACHE.clear()
+    with _workprec(prec):
+        ap = arb_poly(F)
+    _ARB_POLY_CACHE[key] = (F, ap)
+    return ap
+
+
+def _poly_sign_at(F: fmpq_poly, x: fmpq) -> int:
+    """Exact sign of F(x) at a rational x: ball arithmetic first, exact evaluation if unsure."""
+    for prec in (64, 256, 1024):
+        with _workprec(prec):
+            v = _arb_poly(F, prec)(arb(x))
+            if v > 0:
+                return 1
+            if v < 0:
+                return -1
+    # exact: sign of sum a_i p^i q^(n-i) (q > 0), integers only
+    num = F.numer()
+    p, q = x.p, x.q
+    cs = num.coeffs()
+    n = len(cs) - 1
+    acc = cs[n]
+    qpow = fmpz(1)
+    for i in range(n - 1, -1, -1):
+        qpow = qpow * q
+        acc = acc * p + cs[i] * qpow
+    return _sgn(acc)
+
+
 class RealAlgebraic:
     """A real algebraic number: a rational, or the unique root of F in an open interval.
 
@@ -396,10 +435,10 @@ class RealAlgebraic:
         if self.value is not None:
             return
         mid = (self.lo + self.hi) / 2
-        fm = self.poly(mid)
-        if fm == 0:
+        s = _poly_sign_at(self.poly, mid)
+        if s == 0:
             self._become(mid)
-        elif _sgn(fm) == self._slo:
+        elif s == self._slo:
             self.lo = mid
         else:
             self.hi = mid
@@ -415,9 +454,47 @@ class RealAlgebraic:
         return False
 
     def refine_to(self, width: fmpq) -> None:
-        """Bisect until the interval is narrower than ``width``."""
+        """Narrow the interval below ``width``: Newton steps certified by sign changes, else bisection."""
         while self.value is None and self.hi - self.lo >= width:
-            self.bisect()
+            if not self._newton(width):
+                for _ in range(4):
+                    self.bisect()
+
+    def _newton(self, width: fmpq) -> bool:
+        """Try Newton's method from the midpoint; adopt [x - w/4, x + w/4] if F changes sign there."""
+        lo, hi = self.lo, self.hi
+        bits = max(64, int(math.log2(float(max(self.hi - self.lo, fmpq(1, 2**1000)) / width)) + 1) if width > 0 else 64)
+        bits = min(bits + 64, 20000) + 2 * self.poly.degree()
+        with _workprec(bits):
+            F = arb_poly(self.poly)
+            dF = F.derivative()
+            x = arb((lo + hi) / 2)
+            for _ in range(40):
+                fx, dx = F(x), dF(x)
+                if dx.contains(0):
+                    return False
+                step = (fx / dx).mid()
+                x = (x - step).mid()
+                if not (arb(lo) < x < arb(hi)):
+                    return False
+                if abs(step) < arb(width) / 16:
+                    break
+            xm, _ = _arb_to_fmpq(x)
+        w = width / 4
+        a, b = max(xm - w, lo), min(xm + w, hi)
+        if not a < b:
+            return False
+        sa, sb = _poly_sign_at(self.poly, a), _poly_sign_at(self.poly, b)
+        if sa == 0:
+            self._become(a)
+            return True
+        if sb == 0:
+            self._become(b)
+            return True
+        if sa == self._slo and sb != self._slo:
+            self.lo, self.hi = a, b
+            return True
+        return False
 
     def enclosure(self, prec: int) -> arb:
         """An arb ball containing the number (computed at ``prec`` bits)."""
@@ -435,12 +512,12 @@ class RealAlgebraic:
             return 1
         if x >= self.hi:
             return -1
-        fx = self.poly(x)
-        if fx == 0:
+        sx = _poly_sign_at(self.poly, x)
+        if sx == 0:
             self._become(x)
             return 0
         # same sign as F(lo): x is left of the root
-        return 1 if _sgn(fx) == self._slo else -1
+        return 1 if sx == self._slo else -1
 
     def __float__(self) -> float:
         if self.value is not None:
@@ -469,8 +546,7 @@ class RealAlgebraic:
             ulp = _pow10(e - digits + 1)
             if self.value is not None or hi - lo < ulp / 10:
                 break
-            for _ in range(8):
-                self.bisect()
+            self.refine_to(ulp / 20)
         mid = self.value if self.value is not None else (self.lo + self.hi) / 2
         return _round_decimal(mid, digits)
 
@@ -568,28 +644,112 @@ def _exact_div(f: fmpq_poly, g: fmpq_poly) -> fmpq_poly:
     return q
 
 
+def _variations(coeffs: list[fmpz]) -> int:
+    last, count = 0, 0
+    for c in coeffs:
+        if c == 0:
+            continue
+        s = 1 if c > 0 else -1
+        if last and s != last:
+            count += 1
+        last = s
+    return count
+
+
+_X_PLUS_1 = fmpz_poly([1, 1])
+
+
+def _positive_root_boxes(f: fmpz_poly) -> list[tuple[fmpq, fmpq]]:
+    """Isolating intervals of the roots of squarefree f in (0, inf), f(0) != 0 (Descartes).
+
+    Collins-Akritas bisection: the roots in (0, B) with B = 2^k a Cauchy bound are mapped to
+    (0, 1); a box whose Descartes count (sign variations of (x+1)^n h(1/(x+1))) is 0 has no
+    root, 1 has exactly one; otherwise it is halved. Returns (lo, hi), or (r, r) for an exact
+    rational root met at a bisection point.
+    """
+    coeffs = f.coeffs()
+    n = len(coeffs) - 1
+    if n < 1 or _variations(coeffs) == 0:
+        return []
+    # Fujiwara's bound: every root has |x| < 2 max_i |a_{n-i}/a_n|^(1/i) <= 2^k (bit lengths)
+    lead_bits = int(abs(coeffs[-1]).bit_length())
+    k = 0
+    for i in range(1, n + 1):
+        c = coeffs[n - i]
+        if c != 0:
+            excess = int(abs(c).bit_length()) - lead_bits + 1 + (1 if i == n else 0)
+            k = max(k, -(-excess // i))
+    k += 1
+    B = fmpq(2) ** k if k >= 0 else fmpq(1, 2 ** (-k))
+    # h(x) = f(B x)
+    if k >= 0:
+        h = fmpz_poly([c * fmpz(2) ** (k * i) for i, c in enumerate(coeffs)])
+    else:
+        h = fmpz_poly([c * fmpz(2) ** (-k * (n - i)) for i, c in enumerate(coeffs)])
+    out: list[tuple[fmpq, fmpq]] = []
+    stack = [(h, 0, 0)]
+    while stack:
+        h, c, depth = stack.pop()
+        scale = B / fmpq(2) ** depth
+        hc = h.coeffs()
+        if hc and hc[0] == 0:  # root exactly at the left end of this box
+            r = scale * c
+            out.append((r, r))
+            h = fmpz_poly(hc[1:])
+            hc = h.coeffs()
+        m = len(hc) - 1
+        if m < 1:
+            continue
+        v = _variations(fmpz_poly(hc[::-1])(_X_PLUS_1).coeffs())
+        if v == 0:
+            continue
+        if v == 1:
+            out.append((scale * c, scale * (c + 1)))
+            continue
+        left = fmpz_poly([a * fmpz(2) ** (m - i) for i, a in enumerate(hc)])  # 2^m h(x/2)
+        right = left(_X_PLUS_1)
+        stack.append((right, 2 * c + 1, depth + 1))
+        stack.append((left, 2 * c, depth + 1))
+    return out
+
+
 def _isolate(F: fmpz_poly, lo: fmpq | None, hi: fmpq | None) -> list[RealAlgebraic]:
     """Real roots of a squarefree integer F in the closed interval [lo, hi] (None: infinite)."""
     if F.degree() < 1:
         return []
     out: list[RealAlgebraic] = []
-    Fq = fmpq_poly(F)
-    for c, _mult in F.complex_roots():
-        if not c.imag.is_zero():
-            continue
-        mid, rad = _arb_to_fmpq(c.real)
-        if rad == 0:
-            alpha = RealAlgebraic.rational(mid)
+    for f, _e in F.factor()[1]:
+        fc = f.coeffs()
+        if len(fc) == 2:  # linear factor: a rational root
+            cands = [RealAlgebraic.rational(fmpq(-fc[0], fc[1]))]
         else:
-            alpha = RealAlgebraic.isolating(Fq, mid - rad, mid + rad)
-            alpha.try_rational()
-        if lo is not None and alpha.compare(lo) < 0:
-            continue
-        if hi is not None and alpha.compare(hi) > 0:
-            continue
-        out.append(alpha)
-    out.sort(key=lambda a: a.lo)
-    return out
+            fq = fmpq_poly(f)
+            cands = []
+            neg = fmpz_poly([c if i % 2 == 0 else -c for i, c in enumerate(fc)])  # f(-x)
+            for a, b in _positive_root_boxes(neg):
+                cands.append(RealAlgebraic.rational(-a) if a == b else RealAlgebraic.isolating(fq, -b, -a))
+            for a, b in _positive_root_boxes(f):
+                cands.append(RealAlgebraic.rational(a) if a == b else RealAlgebraic.isolating(fq, a, b))
+        for alpha in cands:
+            if lo is not None and alpha.compare(lo) < 0:
+                continue
+            if hi is not None and alpha.compare(hi) > 0:
+                continue
+            out.append(alpha)
+    return _sorted_disjoint(out)
+
+
+def _sorted_disjoint(nums: list[RealAlgebraic]) -> list[RealAlgebraic]:
+    """Sort distinct algebraic numbers, refining until consecutive intervals are disjoint."""
+    while True:
+        nums.sort(key=lambda a: (a.lo, a.hi))
+        clash = False
+        for a, b in zip(nums, nums[1:]):
+            if not a.hi < b.lo and not (a.value is not None and a.value == b.value):
+                clash = True
+                (a if a.width >= b.width else b).bisect()
+        if not clash:
+            return nums
 
 
 def real_roots(s: QSqrtPoly, lo: fmpq | None = None, hi: fmpq | None = None) -> list[RealAlgebraic]:
@@ -613,9 +773,9 @@ def real_roots(s: QSqrtPoly, lo: fmpq | None = None, hi: fmpq | None = None) -> 
 
 def _arb_sign(v: QSqrtPoly, x: arb, prec: int) -> int | None:
     with _workprec(prec):
-        val = arb_poly(v.p)(x)
+        val = _arb_poly(v.p, prec)(x)
         if not v.q.is_zero():
-            val = val + arb_poly(v.q)(x) * arb(v.d).sqrt()
+            val = val + _arb_poly(v.q, prec)(x) * arb(v.d).sqrt()
         if val > 0:
             return 1
         if val < 0:
@@ -680,8 +840,7 @@ def sign_at(v: QSqrtPoly, alpha: RealAlgebraic) -> int:
             if alpha.value is not None:
                 return v.sign_at_rational(alpha.value)
         # nonzero: narrow alpha and raise the working precision until the ball excludes 0
-        for _ in range(16):
-            alpha.bisect()
+        alpha.refine_to(alpha.width / 2**32)
         if alpha.value is not None:
             return v.sign_at_rational(alpha.value)
         prec += 32

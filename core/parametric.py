@@ -185,7 +185,8 @@ class MotionAnalysis:
     sign_table: list[SignRow]
     """Rows for every candidate and for the sample of every interval between candidates."""
     a: list[QSqrtPoly]
-    """[a_0, ..., a_n] of P(t, T) for the denominator-free matrices (exact)."""
+    """[a_0, ..., a_n] of P(t, T): numerator of det(T A(t) + B(t)), common factors in t removed
+    (a positive multiple of the true coefficients on I; exact)."""
     s0: QSqrtPoly
     """ŝ0 = -s0/a_n (same sign as s0)."""
     s1: QSqrtPoly
@@ -360,8 +361,11 @@ def _fmt_t(a: RealAlgebraic) -> str:
 
 def _polynomial_matrix(
     M: list[list[RationalFunction]], lo: fmpq | None, hi: fmpq | None, name: str
-) -> list[list[QSqrtPoly]]:
-    """Clear denominators with a factor of constant sign on I and check validity on I."""
+) -> tuple[list[list[QSqrtPoly]], fmpq_poly]:
+    """Clear denominators with a factor of constant sign on I and check validity on I.
+
+    Returns (P, lam) with P = lam * M, lam in Q[t] without roots in I.
+    """
     den = fmpq_poly([1])
     for row in M:
         for e in row:
@@ -375,9 +379,11 @@ def _polynomial_matrix(
     t0 = _sample_in(lo, hi)
     sgn = _sgn(den(t0))
     P = [[e.num * (den // e.den) * sgn for e in row] for row in M]
+    lam = den * sgn
     k = len(P) - 1
     if P[0][0].sign_at_rational(t0) < 0:
         P = [[-e for e in row] for row in P]
+        lam = -lam
     shape = "ellipse" if k == 2 else "ellipsoid"
     minors = [(_det([row[:j] for row in P[:j]]), j) for j in range(1, k + 2)]
     for m, order in minors:
@@ -394,7 +400,41 @@ def _polynomial_matrix(
                 f"{name} stops being an {shape} at t ≈ {_fmt_t(roots[0])} in {where} "
                 f"(its {what} vanishes there)"
             )
-    return P
+    return P, lam
+
+
+def _canonical_pencil(a: list[QSqrtPoly], lamA: fmpq_poly, lamB: fmpq_poly, t0: fmpq) -> list[QSqrtPoly]:
+    """The numerator of det(T A(t) + B(t)) with the common factors in t removed.
+
+    ``a`` are the coefficients for lamA*A, lamB*B, so the true a_i are a_i / (lamA^i lamB^(n-i)).
+    Each is reduced, brought to the common denominator L, and the content in Q[t] of the result
+    is divided out; both factors have no root in I and are taken positive there, so every sign
+    (and the relation) is unchanged. This is the paper's P(t, T) (Examples 30, 32: degrees 14, 4).
+    """
+    n = len(a) - 1
+    parts = []
+    for i, ai in enumerate(a):
+        D = lamA**i * lamB ** (n - i)
+        if ai.is_zero():
+            parts.append((ai, fmpq_poly([1])))
+            continue
+        g = D.gcd(ai.p if ai.q.is_zero() else ai.p.gcd(ai.q))
+        parts.append((QSqrtPoly(ai.p // g, ai.q // g, ai.d), D // g))
+    L = fmpq_poly([1])
+    for _, den in parts:
+        L = L * (den // L.gcd(den))
+    out = [num * (L // den) for num, den in parts]
+    c = fmpq_poly([0])
+    for p in out:
+        c = c.gcd(p.p).gcd(p.q)
+    if c.is_zero():
+        return out
+    cs = _sgn(c(t0))
+    if _sgn(L(t0)) < 0:
+        cs = -cs
+    # divide by c (and flip by the sign of L / c on I); normalise the scale to integers
+    res = [QSqrtPoly(p.p // c, p.q // c, p.d) * cs for p in out]
+    return res
 
 
 def _interval_text(lo: fmpq | None, hi: fmpq | None) -> str:
@@ -517,9 +557,9 @@ def analyse(
     dA, dB = mA.sqrt_d(), mB.sqrt_d()
     if dA != 1 and dB != 1 and dA != dB:
         raise ValueError(f"A uses sqrt({dA}) and B uses sqrt({dB}): only one square root per motion pair")
-    PA = _polynomial_matrix(mA.matrix(), lo, hi, "A")
-    PB = _polynomial_matrix(mB.matrix(), lo, hi, "B")
-    a = pencil_coefficients(PA, PB)
+    PA, lamA = _polynomial_matrix(mA.matrix(), lo, hi, "A")
+    PB, lamB = _polynomial_matrix(mB.matrix(), lo, hi, "B")
+    a = _canonical_pencil(pencil_coefficients(PA, PB), lamA, lamB, _sample_in(lo, hi))
     n = len(a) - 1
     c0, c1, c10 = hat_scale(n)
     s0 = hat_s0(a).scale_positive(fmpq(c0.numerator, c0.denominator))
