@@ -22,6 +22,14 @@ from .quadrics import quadric_from_axes as quadric_from_axes
 from .quadrics import rotation_from_quaternion as rotation_from_quaternion
 from .quadrics import validate_quadric as validate_quadric
 from .relation import Relation as Relation
+from .expressions import parse_expression as parse_expression
+from .motions import Motion as Motion
+from .motions import motion_from_dict as motion_from_dict
+from .motions import motion_to_dict as motion_to_dict
+from .parametric import MotionAnalysis as MotionAnalysis
+from .parametric import analyse as analyse
+from .presets import preset as preset
+from .presets import preset_names as preset_names
 
 __all__ = [
     "METHODS",
@@ -37,4 +45,12 @@ __all__ = [
     "quadric_from_axes",
     "rotation_from_quaternion",
     "validate_quadric",
+    "Motion",
+    "MotionAnalysis",
+    "analyse",
+    "motion_from_dict",
+    "motion_to_dict",
+    "parse_expression",
+    "preset",
+    "preset_names",
 ]

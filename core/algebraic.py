@@ -463,8 +463,10 @@ class RealAlgebraic:
     def _newton(self, width: fmpq) -> bool:
         """Try Newton's method from the midpoint; adopt [x - w/4, x + w/4] if F changes sign there."""
         lo, hi = self.lo, self.hi
-        bits = max(64, int(math.log2(float(max(self.hi - self.lo, fmpq(1, 2**1000)) / width)) + 1) if width > 0 else 64)
-        bits = min(bits + 64, 20000) + 2 * self.poly.degree()
+        # enough bits to represent x to within width/16, plus a margin for cancellation
+        mag = max(abs(lo), abs(hi), fmpq(1))
+        ratio = mag / width if width > 0 else fmpq(2) ** 64
+        bits = min(int(ratio.p // ratio.q).bit_length() + 72, 40000) + 2 * self.poly.degree()
         with _workprec(bits):
             F = arb_poly(self.poly)
             dF = F.derivative()
