@@ -19,7 +19,7 @@ from fastapi.testclient import TestClient
 
 from app.api import ApiSettings, create_api
 from app.api.deps import get_settings
-from app.api.workers import WorkerBusy, WorkerFailed, WorkerPool, WorkerTimeout
+from app.api.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerPool, WorkerTimeout
 from core.decision import RULES
 
 
@@ -324,8 +324,10 @@ def test_worker_pool_results_errors_and_timeout():
         pool.run(time.sleep, 30, timeout=0.5)
     assert time.monotonic() - t0 < 5
     assert pool.running == 0
-    with pytest.raises(WorkerFailed, match="exit code 3"):
+    with pytest.raises(WorkerDied, match="exit code 3"):
         pool.run(os._exit, 3, timeout=30)
+    with pytest.raises(WorkerFailed, match="TypeError"):
+        pool.run(math.sqrt, "x", timeout=30)
 
 
 def test_worker_pool_refuses_when_busy():
@@ -349,3 +351,204 @@ def test_worker_pool_refuses_when_busy():
         pool.run(math.sqrt, 4.0, timeout=5)
     th.join()
     assert pool.run(math.sqrt, 4.0, timeout=30) == 2.0
+
+
+# --- /api/analyse and /api/presets ------------------------------------------------------
+
+def unit_circle_moving(x):
+    return {"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": [x, "0"]}
+
+
+def alg(v):
+    return {"value": str(v), "approx": float(v), "exact": str(v), "isolating": [str(v), str(v)]}
+
+
+def row(where, t, a, s0, s1, s10, var, relation, rule):
+    return {"where": where, "t": t, "a": list(a), "s0": s0, "s1": s1, "s10": s10, "var": var, "relation": relation, "rule": rule}
+
+
+def test_analyse_crossing_circles_whole_body(client):
+    """Unit circles at (t, 0) and (-t, 0) on [-2, 2].
+
+    By hand: P(T) = (T + 1)(-T^2 + (4t^2 - 2) T - 1) = -T^3 + (4t^2 - 3) T^2 + (4t^2 - 3) T - 1,
+    s1 = -2 a2 (a2 + 3) = -8 t^2 (4t^2 - 3), s1,0 = 9 - a2^2. Centre distance 2|t|: tangent at
+    t = -+1, overlap between (identical circles at t = 0: a root of s0, not an event).
+    """
+    body = {"a": unit_circle_moving("t"), "b": unit_circle_moving("-t"), "interval": ["-2", "2"], "polynomials": False}
+    r = client.post("/api/analyse", json=body)
+    assert r.status_code == 200, r.text
+    got = r.json()
+    # the sample point of each interval is the implementation's choice: check it lies inside
+    samples = [Fraction(iv.pop("sample")) for iv in got["intervals"]]
+    assert [-2 < samples[0] < -1, -1 < samples[1] < 1, 1 < samples[2] < 2] == [True] * 3
+    interval_rows = [rw for rw in got["sign_table"] if rw["where"] == "interval"]
+    assert [Fraction(rw.pop("t")) for rw in interval_rows[:2]] == samples[:2]
+    # the overlap interval is split at the root t = 0 in the sign table: one sample each side
+    assert -1 < Fraction(interval_rows[2]["t"]) < 1 and Fraction(interval_rows[3].pop("t")) == samples[2]
+    interval_rows[2].pop("t")
+    sep, tan, ovl = "separate", "tangent", "overlap"
+    outer = ("-", "+", "+", "-")  # 4t^2 - 3 > 0
+    inner = ("-", "-", "-", "-")
+    assert got == {
+        "dimension": 2,
+        "interval": ["-2", "2"],
+        "case": "s0",
+        "sqrt_d": 1,
+        "digits": 20,
+        "events": [
+            {**alg(-1), "relation": tan, "kind": "change", "before": sep, "after": ovl, "rule": "2d-s0=0"},
+            {**alg(1), "relation": tan, "kind": "change", "before": ovl, "after": sep, "rule": "2d-s0=0"},
+        ],
+        "roots": [{**alg(0), "relation": ovl, "kind": "root", "before": ovl, "after": ovl, "rule": "var"}],
+        "intervals": [
+            {"lo": alg(-2), "hi": alg(-1), "relation": sep},
+            {"lo": alg(-1), "hi": alg(1), "relation": ovl},
+            {"lo": alg(1), "hi": alg(2), "relation": sep},
+        ],
+        "sign_table": [
+            {k: v for k, v in row("interval", None, outer, "+", "-", "-", 2, sep, "2d-s0>0").items() if k != "t"},
+            row("point", "-1", outer, "0", "-", "+", 2, tan, "2d-s0=0"),
+            {k: v for k, v in row("interval", None, inner, "-", "+", "+", 0, ovl, "var").items() if k != "t"},
+            row("point", "0", inner, "0", "0", "0", 0, ovl, "var"),
+            {k: v for k, v in row("interval", None, inner, "-", "+", "+", 0, ovl, "var").items() if k != "t"},
+            row("point", "1", outer, "0", "-", "+", 2, tan, "2d-s0=0"),
+            {k: v for k, v in row("interval", None, outer, "+", "-", "-", 2, sep, "2d-s0>0").items() if k != "t"},
+        ],
+        "rules": {k: RULES[k] for k in ("2d-s0>0", "2d-s0=0", "var")},
+        "a": {"shape": {"center": ["0", "0"], "semi_axes": ["1", "1"], "orientation": None}, "translation": ["t", "0"], "rotation": None, "scale": None},
+        "b": {"shape": {"center": ["0", "0"], "semi_axes": ["1", "1"], "orientation": None}, "translation": ["-t", "0"], "rotation": None, "scale": None},
+        "polynomials": None,
+    }
+
+
+def _isolates(lo, hi, sign):
+    """Exactly: lo <= (12 + sign 2 sqrt 2)/17 <= hi (rational lo, hi; sign = -1 or +1).
+
+    x <= root  iff  y(x) = sign (17x - 12)/2  is <= sqrt 2 (sign +1) or >= sqrt 2 (sign -1).
+    """
+    def y(x):
+        return sign * (17 * x - 12) / 2
+
+    def le_sqrt2(v):
+        return v <= 0 or v * v <= 2
+
+    def ge_sqrt2(v):
+        return v >= 0 and v * v >= 2
+
+    if sign > 0:
+        return le_sqrt2(y(lo)) and ge_sqrt2(y(hi))
+    return ge_sqrt2(y(lo)) and le_sqrt2(y(hi))
+
+
+def test_isolates_helper_can_fail():
+    assert _isolates(Fraction(53, 100), Fraction(54, 100), -1)  # 0.5395...
+    assert not _isolates(Fraction(54, 100), Fraction(55, 100), -1)
+    assert _isolates(Fraction(87, 100), Fraction(88, 100), 1)  # 0.8722...
+    assert not _isolates(Fraction(53, 100), Fraction(54, 100), 1)
+
+
+def test_analyse_example_29_events_from_the_paper(client):
+    """Paper Example 29: tangent at t = (12 -+ 2 sqrt 2)/17, overlap between, separate outside, t in [0, 1]."""
+    p = client.get("/api/presets/example-29").json()
+    r = client.post("/api/analyse", json=p)
+    assert r.status_code == 200, r.text
+    got = r.json()
+    assert got["case"] == "s1"  # s0 vanishes identically (paper)
+    assert [(e["relation"], e["kind"], e["before"], e["after"]) for e in got["events"]] == [
+        ("tangent", "change", "separate", "overlap"),
+        ("tangent", "change", "overlap", "separate"),
+    ]
+    assert [iv["relation"] for iv in got["intervals"]] == ["separate", "overlap", "separate"]
+    from decimal import Decimal, getcontext
+
+    getcontext().prec = 60
+    root2 = Decimal(2).sqrt()
+    for e, sign in zip(got["events"], (-1, 1)):
+        lo, hi = (Fraction(x) for x in e["isolating"])
+        assert lo < hi and _isolates(lo, hi, sign)
+        true = (12 + sign * 2 * root2) / 17
+        assert len(e["value"].replace("0.", "", 1)) == 20  # 20 significant digits (first digit nonzero)
+        assert abs(Decimal(e["value"]) - true) <= Decimal("1e-20")
+    assert got["polynomials"]["a"][1] == "17*t^2 - 24*t + 8"  # a3 = a1 (paper)
+    assert got["polynomials"]["s0"] == "0"
+
+
+def test_presets_list_and_one(client):
+    r = client.get("/api/presets")
+    assert r.status_code == 200
+    names = [p["name"] for p in r.json()]
+    assert names[:5] == ["example-29", "example-30", "example-31", "example-32", "example-33"]
+    r = client.get("/api/presets/example-31")
+    assert (r.status_code, r.json()) == (200, {
+        "name": "example-31",
+        "description": r.json()["description"],
+        "a": {"shape": {"center": [0, 0, 0], "semi_axes": [2, 3, 4]}, "translation": ["0", "7", "0"]},
+        "b": {"shape": {"center": [0, 0, 0], "semi_axes": [2, 4, 2]}, "translation": ["0", "0", "(t - 4)/2"]},
+        "interval": [None, None],
+    })
+    r = client.get("/api/presets/nope")
+    assert r.status_code == 404
+    assert r.json()["detail"].startswith("unknown preset 'nope'; available: example-29, ")
+
+
+@pytest.mark.parametrize(
+    "change, status, detail",
+    [
+        ({"a": unit_circle_moving("3*t + x")}, 422, "a.translation[0]: unexpected 'x' at position 6: 3*t + x (allowed: numbers, t, + - * / ^, parentheses, sqrt(n))"),
+        ({"b": unit_circle_moving("t^17")}, 422, None),
+        ({"digits": 201}, 422, "digits = 201 is over the limit of 200"),
+        ({"interval": ["1", "1"]}, 422, "empty interval: need lo < hi, got [1, 1]"),
+        ({"b": {"matrix": [["1", "0", "t"], ["0", "1", "0"], ["0", "0", "-1"]]}}, 422, "b: matrix is not symmetric: entry (0,2) = t but (2,0) = 0"),
+        ({"b": {"shape": {"center": [0, 0, 0], "semi_axes": [1, 1, 1]}}}, 422, None),
+        ({"a": unit_circle_moving("t" * 1)}, 200, None),
+    ],
+)
+def test_analyse_bad_input(client, change, status, detail):
+    body = {"a": unit_circle_moving("t"), "b": unit_circle_moving("-t"), "interval": ["-2", "2"], "polynomials": False}
+    body.update(change)
+    r = client.post("/api/analyse", json=body)
+    assert r.status_code == status, r.text
+    if detail is not None:
+        assert r.json() == {"detail": detail}
+    elif status == 422:
+        assert isinstance(r.json()["detail"], str) and r.json()["detail"]
+
+
+def test_analyse_expression_length_limit():
+    with TestClient(create_api(ApiSettings(max_expression_chars=10))) as c:
+        body = {"a": unit_circle_moving("t + 0 + 0 + 0"), "b": unit_circle_moving("-t")}
+        r = c.post("/api/analyse", json=body)
+        assert (r.status_code, r.json()) == (422, {"detail": "a.translation[0]: expression too long (13 > 10 characters)"})
+
+
+def test_slow_analysis_is_stopped_and_healthz_stays_responsive():
+    """Example 30 (s0 of degree 84) takes seconds; a 1 s budget stops it while /healthz answers."""
+    settings = ApiSettings(time_budget_s=1.0, max_concurrent_analyses=1)
+    with TestClient(create_api(settings)) as c:
+        preset = c.get("/api/presets/example-30").json()
+        result = {}
+
+        def fire():
+            result["r"] = c.post("/api/analyse", json=preset)
+
+        th = threading.Thread(target=fire)
+        th.start()
+        latencies, seen_running = [], 0
+        while th.is_alive():
+            t0 = time.monotonic()
+            h = c.get("/healthz")
+            latencies.append(time.monotonic() - t0)
+            seen_running = max(seen_running, h.json()["analyses_running"])
+            if seen_running:  # a second analysis is refused while the slot is taken
+                busy = c.post("/api/analyse", json=preset)
+                if th.is_alive():
+                    assert busy.status_code == 503
+                    assert busy.headers["retry-after"] == "2"
+                    assert busy.json() == {"detail": "all 1 analysis workers are busy; retry in a moment"}
+            time.sleep(0.05)
+        th.join()
+        assert seen_running == 1
+        assert max(latencies) < 0.5, latencies
+        r = result["r"]
+        assert (r.status_code, r.json()) == (503, {"detail": "analysis stopped: the job exceeded its time budget of 1 s and was stopped; narrow the interval or simplify the motion"})
+        assert c.get("/healthz").json()["analyses_running"] == 0

@@ -10,7 +10,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.staticfiles import StaticFiles
 
 from .limits import BodySizeLimit, validation_error_handler
-from .routes import classify, health, landing, presets
+from .routes import classify, health, landing, motion, presets
 from .settings import ApiSettings
 from .workers import WorkerPool
 
@@ -34,7 +34,11 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
         the landing page at / and OpenAPI docs at /docs.
     """
     settings = settings or ApiSettings()
-    workers = WorkerPool(settings.max_concurrent_analyses, memory_mb=settings.memory_limit_mb)
+    workers = WorkerPool(
+        settings.max_concurrent_analyses,
+        memory_mb=settings.memory_limit_mb,
+        preload=("core", "core.parametric", "app.api.jobs"),
+    )
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -51,7 +55,7 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     app.state.workers = workers
     app.add_exception_handler(RequestValidationError, validation_error_handler)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
-    for module in (classify, presets, health, landing):
+    for module in (classify, motion, presets, health, landing):
         app.include_router(module.router)
     if settings.static_dir is not None and settings.static_dir.is_dir():
         app.mount("/static", StaticFiles(directory=settings.static_dir), name="static")

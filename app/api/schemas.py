@@ -41,6 +41,7 @@ __all__ = [
     "Motion",
     "AnalyseIn",
     "PresetOut",
+    "AnalyseOut",
     "ErrorItem",
     "ErrorOut",
     "ERROR_RESPONSES",
@@ -139,6 +140,16 @@ class PairItem(BaseModel):
 
 class PairIn(PairItem):
     """One pair to classify."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {"a": [[1, 0, 0], [0, 1, 0], [0, 0, -1]], "b": [[1, 0, -2], [0, 1, 0], [-2, 0, 3]]},
+                {"a": {"center": [0, 0], "semi_axes": [1, 1]}, "b": {"center": ["2.000000001", 0], "semi_axes": [1, 1]}},
+            ]
+        },
+    )
 
     method: MethodName = Field(
         default="adaptive",
@@ -326,7 +337,19 @@ IntervalEnd = Expr | None
 class AnalyseIn(BaseModel):
     """Two motions and the time interval to analyse (a preset can be posted as it is)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "a": {"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["t", "0"]},
+                    "b": {"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["-t", "0"]},
+                    "interval": ["-2", "2"],
+                    "digits": 20,
+                }
+            ]
+        },
+    )
 
     a: Motion
     b: Motion
@@ -334,8 +357,86 @@ class AnalyseIn(BaseModel):
         default=[None, None], description="[lo, hi]: numbers, exact strings, or null for an infinite end"
     )
     digits: Annotated[int, Field(ge=1, le=100_000)] = Field(default=20, description="decimal digits of event values")
+    polynomials: bool = Field(default=True, description="include a_i(t), s0, s1, s1,0 as strings")
     name: str | None = Field(default=None, description="ignored (lets a preset be posted unchanged)")
     description: str | None = Field(default=None, description="ignored")
+
+
+class AlgebraicOut(BaseModel):
+    """An exact real time: decimal value, isolating interval with rational ends, exact value if rational."""
+
+    value: str
+    """Decimal to the requested digits."""
+    approx: float | None
+    exact: str | None
+    """"p/q" when the time is rational, else None."""
+    isolating: list[str]
+    """[lo, hi] rational ends of an interval that holds this time and no other candidate."""
+
+
+class EventOut(AlgebraicOut):
+    """A tangency instant (or, under ``roots``, another candidate) and what happens there."""
+
+    relation: RelationName
+    kind: str
+    """change, touch or endpoint (events); root (other candidates)."""
+    before: RelationName | None
+    after: RelationName | None
+    rule: str
+
+
+class IntervalOut(BaseModel):
+    """An open interval of constant relation (lo/hi None = infinite)."""
+
+    lo: AlgebraicOut | None
+    hi: AlgebraicOut | None
+    relation: RelationName
+    sample: str
+    """Rational point where the relation was decided exactly."""
+
+
+class SignRowOut(BaseModel):
+    """One row of the sign table: at a candidate ("point") or an interval's sample."""
+
+    where: Literal["point", "interval"]
+    t: str
+    a: list[Literal["+", "0", "-"]]
+    """Signs of a_n .. a_0 (descending, as Var is written)."""
+    s0: Literal["+", "0", "-"]
+    s1: Literal["+", "0", "-"]
+    s10: Literal["+", "0", "-"]
+    var: int
+    relation: RelationName
+    rule: str
+
+
+class PolynomialsOut(BaseModel):
+    """a_i(t), ŝ0, ŝ1, ŝ1,0 (same signs as s0, s1, s1,0) as strings in t, with degrees."""
+
+    a: list[str]
+    s0: str
+    s1: str
+    s10: str
+    degrees: dict[str, int | list[int]]
+
+
+class AnalyseOut(BaseModel):
+    """Exact interference analysis of two moving shapes over the interval."""
+
+    dimension: Literal[2, 3]
+    interval: list[str | None]
+    case: Literal["s0", "s1", "none"]
+    """Which polynomial gave the candidates (paper 4.4.1 / 4.4.2 / 4.4.3)."""
+    sqrt_d: int
+    digits: int
+    events: list[EventOut]
+    roots: list[EventOut]
+    intervals: list[IntervalOut]
+    sign_table: list[SignRowOut]
+    rules: dict[str, str]
+    a: Motion
+    b: Motion
+    polynomials: PolynomialsOut | None = None
 
 
 class PresetOut(BaseModel):

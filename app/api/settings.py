@@ -41,8 +41,9 @@ class ApiSettings:
     """Most pairs in one ``{"pairs": [...]}`` classify request."""
     max_expression_chars: int = 2000
     """Longest expression string in a motion (and longest number string)."""
-    max_degree: int = 64
-    """Highest degree in t of a motion's matrix entries (checked by the motion parser)."""
+    max_degree: int = 16
+    """Highest degree in t of a numerator or denominator of one motion entry after
+    simplification (core.expressions caps it at MAX_DEGREE = 16 already; this can only lower it)."""
     time_budget_s: float = 20.0
     """Wall-clock budget of one motion analysis; the worker process is killed when exceeded."""
     max_digits: int = 200

@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerFailed"]
+__all__ = ["WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerDied", "WorkerFailed"]
 
 
 class WorkerBusy(RuntimeError):
@@ -26,8 +26,12 @@ class WorkerTimeout(RuntimeError):
     """The job exceeded its time budget and was killed."""
 
 
+class WorkerDied(RuntimeError):
+    """The worker process died or ran out of memory (e.g. FLINT aborts when its memory cap is hit)."""
+
+
 class WorkerFailed(RuntimeError):
-    """The job died (crash, memory limit) or raised something other than ValueError."""
+    """The job raised something other than ValueError or MemoryError (a bug)."""
 
 
 def _child(conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_mb: int | None) -> None:
@@ -44,7 +48,7 @@ def _child(conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_
     except ValueError as e:
         result = ("value_error", str(e))
     except MemoryError:
-        result = ("failed", f"the job ran out of memory (limit {memory_mb} MB)")
+        result = ("died", f"the job ran out of memory (limit {memory_mb} MB)")
     except BaseException as e:  # report everything: the parent turns it into a clean error
         result = ("failed", f"{type(e).__name__}: {e}")
     try:
@@ -103,7 +107,8 @@ class WorkerPool:
             WorkerBusy: every slot is taken (nothing was started).
             WorkerTimeout: ``timeout`` seconds passed; the child was killed.
             ValueError: the job raised ValueError (bad input): same message.
-            WorkerFailed: the job crashed or raised another exception.
+            WorkerDied: the child process died or ran out of memory.
+            WorkerFailed: the job raised another exception.
         """
         if not self._slots.acquire(blocking=False):
             raise WorkerBusy(f"all {self.max_jobs} analysis workers are busy")
@@ -115,11 +120,16 @@ class WorkerPool:
     def _run(self, fn: Callable[..., Any], args: tuple, kwargs: dict, timeout: float) -> Any:
         recv, send = self._ctx.Pipe(duplex=False)
         proc = self._ctx.Process(target=_child, args=(send, fn, args, kwargs, self._memory_mb), daemon=True)
-        deadline = time.monotonic() + timeout
+        try:
+            proc.start()
+        except Exception as e:
+            recv.close()
+            send.close()
+            raise WorkerFailed(f"could not start a worker process: {type(e).__name__}: {e}") from None
+        deadline = time.monotonic() + timeout  # after start: a cold fork server does not eat the budget
         with self._lock:
             self._running.add(proc)
         try:
-            proc.start()
             send.close()  # the child holds the only write end: EOF when it dies
             while True:
                 left = deadline - time.monotonic()
@@ -129,10 +139,10 @@ class WorkerPool:
                     try:
                         status, payload = recv.recv()
                     except EOFError:
-                        raise WorkerFailed(self._died(proc)) from None
+                        raise WorkerDied(self._died(proc)) from None
                     break
                 if not proc.is_alive() and not recv.poll(0):
-                    raise WorkerFailed(self._died(proc))
+                    raise WorkerDied(self._died(proc))
         finally:
             if proc.is_alive():
                 proc.kill()
@@ -146,6 +156,8 @@ class WorkerPool:
             return payload
         if status == "value_error":
             raise ValueError(payload)
+        if status == "died":
+            raise WorkerDied(payload)
         raise WorkerFailed(payload)
 
     @staticmethod
