@@ -18,7 +18,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from app.api import ApiSettings, create_api
-from app.api.deps import get_settings
+from app.api.deps import get_settings, get_workers
 from app.api.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerPool, WorkerTimeout
 from core.decision import RULES
 
@@ -521,34 +521,45 @@ def test_analyse_expression_length_limit():
         assert (r.status_code, r.json()) == (422, {"detail": "a.translation[0]: expression too long (13 > 10 characters)"})
 
 
+class SleepyPool(WorkerPool):
+    """The real pool, but every job is a 30 s sleep: a deterministic slow analysis."""
+
+    def run(self, fn, /, *args, timeout, **kwargs):
+        return super().run(time.sleep, 30, timeout=timeout)
+
+
 def test_slow_analysis_is_stopped_and_healthz_stays_responsive():
-    """Example 30 (s0 of degree 84) takes seconds; a 1 s budget stops it while /healthz answers."""
-    settings = ApiSettings(time_budget_s=1.0, max_concurrent_analyses=1)
-    with TestClient(create_api(settings)) as c:
-        preset = c.get("/api/presets/example-30").json()
+    """A 30 s job under a 1 s budget is killed at 1 s; /healthz answers at once meanwhile."""
+    app = create_api(ApiSettings(time_budget_s=1.0, max_concurrent_analyses=1))
+    pool = SleepyPool(1)
+    app.dependency_overrides[get_workers] = lambda: pool
+    body = {"a": unit_circle_moving("t"), "b": unit_circle_moving("-t")}
+    with TestClient(app) as c:
         result = {}
 
         def fire():
-            result["r"] = c.post("/api/analyse", json=preset)
+            t0 = time.monotonic()
+            result["r"] = c.post("/api/analyse", json=body)
+            result["seconds"] = time.monotonic() - t0
 
         th = threading.Thread(target=fire)
         th.start()
-        latencies, seen_running = [], 0
+        latencies, seen_running, refused = [], 0, None
         while th.is_alive():
             t0 = time.monotonic()
             h = c.get("/healthz")
             latencies.append(time.monotonic() - t0)
             seen_running = max(seen_running, h.json()["analyses_running"])
-            if seen_running:  # a second analysis is refused while the slot is taken
-                busy = c.post("/api/analyse", json=preset)
-                if th.is_alive():
-                    assert busy.status_code == 503
-                    assert busy.headers["retry-after"] == "2"
-                    assert busy.json() == {"detail": "all 1 analysis workers are busy; retry in a moment"}
+            if seen_running and refused is None:  # a second analysis is refused while the slot is taken
+                refused = c.post("/api/analyse", json=body)
             time.sleep(0.05)
         th.join()
         assert seen_running == 1
         assert max(latencies) < 0.5, latencies
+        assert refused is not None and refused.status_code == 503
+        assert refused.headers["retry-after"] == "2"
+        assert refused.json() == {"detail": "all 1 analysis workers are busy; retry in a moment"}
         r = result["r"]
         assert (r.status_code, r.json()) == (503, {"detail": "analysis stopped: the job exceeded its time budget of 1 s and was stopped; narrow the interval or simplify the motion"})
+        assert 1.0 <= result["seconds"] < 5.0
         assert c.get("/healthz").json()["analyses_running"] == 0
