@@ -12,6 +12,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .exact import classify_exact
+from .fastpath import classify_one
 from .relation import Relation
 
 __all__ = ["classify", "Method", "METHODS", "Stats"]
@@ -100,6 +101,24 @@ def classify(A: Any, B: Any, *, method: Method = "adaptive", stats: Stats | None
         [0, 0]
     """
     _check_method(method)
+    if (
+        method == "adaptive"
+        and type(A) is np.ndarray
+        and type(B) is np.ndarray
+        and A.dtype == np.float64
+        and B.dtype == np.float64
+        and A.ndim == 2
+        and A.shape == B.shape
+        and A.shape[0] in (3, 4)
+        and A.shape[0] == A.shape[1]
+    ):  # one float pair (a drag in the scene): skip the batch machinery
+        code = classify_one(A, B)
+        if stats is not None:
+            stats.pairs += 1
+            stats.escalated += code == Relation.UNDECIDED
+        if code != Relation.UNDECIDED:
+            return Relation(code)
+        return classify_exact(A, B).relation
     a = _as_array(A, "A")
     b = _as_array(B, "B")
     n = a.shape[-1]
@@ -112,8 +131,8 @@ def classify(A: Any, B: Any, *, method: Method = "adaptive", stats: Stats | None
     except ValueError:
         raise ValueError(f"batch shapes {a.shape[:-2]} and {b.shape[:-2]} do not broadcast") from None
     scalar = batch_shape == ()
-    a = np.broadcast_to(a, (*batch_shape, n, n)).reshape(-1, n, n)
-    b = np.broadcast_to(b, (*batch_shape, n, n)).reshape(-1, n, n)
+    a = _flatten(a, batch_shape, n)
+    b = _flatten(b, batch_shape, n)
     codes = _classify_flat(a, b, method, scalar)
     if stats is not None:
         stats.pairs += codes.shape[0]
@@ -125,6 +144,14 @@ def classify(A: Any, B: Any, *, method: Method = "adaptive", stats: Stats | None
     if scalar:
         return Relation(int(codes[0]))
     return codes.reshape(batch_shape)
+
+
+def _flatten(x: np.ndarray, batch_shape: tuple[int, ...], n: int) -> np.ndarray:
+    """(N, n, n) view or copy; broadcasting only when needed (a broadcast view is read-only)."""
+    if x.shape[:-2] != batch_shape:
+        x = np.broadcast_to(x, (*batch_shape, n, n))
+        return np.ascontiguousarray(x.reshape(-1, n, n))
+    return x.reshape(-1, n, n)
 
 
 def _where(i: int, scalar: bool) -> str:

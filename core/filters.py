@@ -3,111 +3,49 @@
 For every pair it computes a_0..a_n of P(T) = det(T A + B) straight from the matrix entries (no
 inversion), the leading principal minors that certify both matrices are ellipses/ellipsoids, and,
 only for the pairs whose Descartes count Var(a_n..a_0) is 2, the sign-equivalent ``hs0`` of s0.
-Each value comes with a proven bound ``|exact - value| <= C * permanent`` from
-:mod:`core.errorbound`; a sign is used only when ``|value| > bound``. Otherwise the pair is
+Each value comes with a proven error bound (:mod:`core.errorbound`, kernels generated into
+:mod:`core._kernels`); a sign is used only when ``|value| > bound``. Otherwise the pair is
 UNDECIDED and :func:`core.classify.classify` sends it to exact arithmetic.
 
 A float filter can never certify ``s0 = 0``, so TANGENT is always left to the exact path, and
-s1, s1,0 (needed only when s0 = 0) are never evaluated here for decisions; :func:`explain_float`
-reports them, with bounds, for display.
+s1, s1,0 (needed only when s0 = 0) are never used here for decisions; :func:`explain_float`
+reports them, with bounds, for display. Two implementations of the same decisions: the per-pair
+kernel of :mod:`core.fastpath` (numba) and the vectorised numpy code below (fallback without
+numba); the tests check they agree.
 """
 
 from __future__ import annotations
 
-from fractions import Fraction
-from functools import cache
 from typing import Any
 
 import numpy as np
 
+from . import _kernels as K
 from .decision import RULES, sign_variations
-from .errorbound import LEAF_EXPONENT_MIN, RADIUS_FACTOR, Kernel, build_kernel
-from .pencil import pencil_coefficients, poly_mul
+from .errorbound import RADIUS_FACTOR
+from .fastpath import HAVE_NUMBA, classify_one, classify_pairs
 from .relation import Relation
-from .subresultants import hat_s0, hat_s1, hat_s10, hat_scale
+from .subresultants import hat_scale
 
-__all__ = ["classify_float", "explain_float", "pencil_kernel", "subresultant_kernel", "last_escalations"]
+__all__ = ["classify_float", "classify_float_numpy", "explain_float", "last_escalations", "HAT_DEGREE_WEIGHT"]
 
-_CHUNK = 8192
+_CHUNK = 4096
 """Pairs per numpy chunk: keeps the kernel's temporaries in cache."""
 
 _state = {"escalated": 0}
 
-
-def _leaf(prefix: str, i: int, j: int) -> str:
-    i, j = min(i, j), max(i, j)
-    return f"{prefix}{i}{j}"
-
-
-def _leaf_names(n: int) -> list[str]:
-    return [_leaf(p, i, j) for p in "ab" for i in range(n) for j in range(i, n)]
-
-
-def _minor(M: list[list[Any]], k: int) -> Any:
-    """Leading k x k principal minor of the quadratic block (k = 2 or 3)."""
-    if k == 2:
-        return M[0][0] * M[1][1] - M[0][1] * M[1][0]
-    return (
-        M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1])
-        - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0])
-        + M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0])
-    )
-
-
-def _row_bound_poly(A: list[list[Any]], B: list[list[Any]]) -> list[Any]:
-    """Coefficients of prod_i (T ra_i + rb_i), ra_i = sum_j |A_ij|: >= the permanent of each a_k."""
-    poly: list[Any] = []
-    for i in range(len(A)):
-        ra = sum((abs(x) for x in A[i][1:]), abs(A[i][0]))
-        rb = sum((abs(x) for x in B[i][1:]), abs(B[i][0]))
-        poly = [rb, ra] if not poly else poly_mul(poly, [rb, ra])
-    return poly
-
-
-@cache
-def pencil_kernel(n: int) -> Kernel:
-    """Kernel: symmetric entries of A and B -> a_0..a_n and the validity minors, each with ``_M``.
-
-    ``x_M`` is an upper bound of the permanent of ``x`` (products of absolute row sums), so the
-    error of ``x`` is at most ``constant * x_M`` (see :mod:`core.errorbound`).
-    """
-
-    def formula(L: dict[str, Any]) -> dict[str, Any]:
-        A = [[L[_leaf("a", i, j)] for j in range(n)] for i in range(n)]
-        B = [[L[_leaf("b", i, j)] for j in range(n)] for i in range(n)]
-        out: dict[str, Any] = {}
-        for i, (c, m) in enumerate(zip(pencil_coefficients(A, B), _row_bound_poly(A, B))):
-            out[f"c{i}"] = c
-            out[f"c{i}_M"] = m
-        for name, M in (("A", A), ("B", B)):
-            rows = [sum((abs(x) for x in M[i][1:n - 1]), abs(M[i][0])) for i in range(n - 1)]
-            for k in range(2, n):
-                out[f"d{name}{k}"] = _minor(M, k)
-                bound = rows[0]
-                for r in rows[1:k]:
-                    bound = bound * r
-                out[f"d{name}{k}_M"] = bound
-        return out
-
-    leaf_max = {nm: Fraction(2) for nm in _leaf_names(n)}
-    return build_kernel(f"pencil{n}", _leaf_names(n), formula, style="permanent", leaf_max=leaf_max)
-
-
-@cache
-def subresultant_kernel(n: int, which: str = "s0") -> Kernel:
-    """Kernel (midpoint-radius): a_0..a_n with radii -> hs0, hs1 or hs10 with a radius."""
-    pk = pencil_kernel(n)
-    f = {"s0": hat_s0, "s1": hat_s1, "s10": hat_s10}[which]
-    names = [f"c{i}" for i in range(n + 1)]
-    leaf_max = {c: pk.output_max[pk.outputs.index(c)] for c in names}
-    return build_kernel(
-        f"hat_{which}_{n}",
-        names,
-        lambda L: {which: f([L[c] for c in names])},
-        style="radius",
-        leaf_max=leaf_max,
-    )
-
+_PENCIL = {
+    3: (K.pencil3, K.PENCIL3_OUTPUTS, K.PENCIL3_CONSTANTS, K.PENCIL3_FLOOR),
+    4: (K.pencil4, K.PENCIL4_OUTPUTS, K.PENCIL4_CONSTANTS, K.PENCIL4_FLOOR),
+}
+_HAT = {
+    (3, "s0"): (K.hat_s0_3, K.HAT_S0_3_FLOOR),
+    (3, "s1"): (K.hat_s1_3, K.HAT_S1_3_FLOOR),
+    (3, "s10"): (K.hat_s10_3, K.HAT_S10_3_FLOOR),
+    (4, "s0"): (K.hat_s0_4, K.HAT_S0_4_FLOOR),
+    (4, "s1"): (K.hat_s1_4, K.HAT_S1_4_FLOOR),
+    (4, "s10"): (K.hat_s10_4, K.HAT_S10_4_FLOOR),
+}
 
 HAT_DEGREE_WEIGHT: dict[tuple[int, str], tuple[int, int]] = {
     (3, "s0"): (4, 6), (3, "s1"): (2, 4), (3, "s10"): (2, 3),
@@ -136,9 +74,6 @@ class _Prepared:
             mx = np.abs(M).max(axis=(1, 2))
             _, e = np.frexp(np.where(mx > 0, mx, 1.0))
             M = np.ldexp(M, (1 - e)[:, None, None])  # exact: largest |entry| now in [1, 2)
-            # abstain where a non-zero entry is so small that products could underflow harmfully
-            tiny = (M != 0) & (np.abs(M) < 2.0**-LEAF_EXPONENT_MIN)
-            ok &= ~tiny.any(axis=(1, 2))
             scaled.append(M)
             exps.append(1 - e)
         self.a, self.b = scaled
@@ -148,26 +83,21 @@ class _Prepared:
 
 
 def _run_pencil(a: np.ndarray, b: np.ndarray) -> dict[str, tuple[Any, Any]]:
-    """name -> (value, certified error bound) of every pencil-kernel output, for arrays of pairs."""
-    n = a.shape[-1]
-    k = pencil_kernel(n)
-    args = [a[:, i, j] for i in range(n) for j in range(i, n)] + [
-        b[:, i, j] for i in range(n) for j in range(i, n)
-    ]
-    res = dict(zip(k.outputs, k.fn(*args)))
-    floor = k.underflow_floor
+    """name -> (value, certified error bound) of every pencil output, for arrays (N, n, n)."""
+    fn, outputs, consts, floor = _PENCIL[a.shape[-1]]
+    res = dict(zip(outputs, fn(np.moveaxis(a, 0, -1), np.moveaxis(b, 0, -1))))
     return {
         name: (res[name], c * res[name + "_M"] + floor)
-        for name, c in zip(k.outputs, k.constants)
+        for name, c in zip(outputs, consts)
         if not name.endswith("_M")
     }
 
 
 def _run_hat(n: int, which: str, vals: list[Any], radii: list[Any]) -> tuple[Any, Any]:
     """(value, certified error bound) of hs_which from a_i values and their error bounds."""
-    k = subresultant_kernel(n, which)
-    v, r = k.fn(*vals, *radii)
-    return v, r * RADIUS_FACTOR + k.underflow_floor
+    fn, floor = _HAT[(n, which)]
+    v, r = fn(vals, radii)
+    return v, r * RADIUS_FACTOR + floor
 
 
 def _certified_sign(v: np.ndarray, bound: np.ndarray) -> np.ndarray:
@@ -208,21 +138,32 @@ def _classify_chunk(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return codes
 
 
+def classify_float_numpy(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The vectorised numpy filter (used when numba is missing; cross-checked in the tests)."""
+    N = a.shape[0]
+    codes = np.empty(N, dtype=np.int8)
+    for s in range(0, N, _CHUNK):
+        codes[s : s + _CHUNK] = _classify_chunk(a[s : s + _CHUNK], b[s : s + _CHUNK])
+    return codes
+
+
 def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False) -> np.ndarray:
     """Certified float64 classification of stacked pairs; UNDECIDED where no sign is proven.
 
     Args:
         a, b: float64 arrays of shape (N, n, n), n = 3 or 4. Not validated here: invalid or
             non-finite pairs come back UNDECIDED so that the exact path reports the error.
-        scalar: hint that N == 1 (kept for the API; the same code runs).
+        scalar: N == 1 (a single pair takes the per-pair kernel, also without numba).
 
     Returns:
         int8 codes of :class:`Relation`, shape (N,). Never a wrong label.
     """
-    N = a.shape[0]
-    codes = np.empty(N, dtype=np.int8)
-    for s in range(0, N, _CHUNK):
-        codes[s : s + _CHUNK] = _classify_chunk(a[s : s + _CHUNK], b[s : s + _CHUNK])
+    if scalar:
+        codes = np.array([classify_one(a[0], b[0])], dtype=np.int8)
+    elif HAVE_NUMBA:
+        codes = classify_pairs(a, b)
+    else:
+        codes = classify_float_numpy(a, b)
     _state["escalated"] = int((codes == Relation.UNDECIDED).sum())
     return codes
 
@@ -242,7 +183,7 @@ def explain_float(A: Any, B: Any) -> Any:
     if a.ndim != 2 or a.shape != b.shape or a.shape[0] not in (3, 4) or a.shape[0] != a.shape[1]:
         return None
     n = a.shape[0]
-    code = classify_float(a[None], b[None])[0]
+    code = classify_float(a[None], b[None], scalar=True)[0]
     if code == Relation.UNDECIDED:
         return None
     prep = _Prepared(a[None], b[None])

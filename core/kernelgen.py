@@ -1,0 +1,184 @@
+"""Generate ``core/_kernels.py``: the float kernels of the filter, traced from the generic formulas.
+
+Run ``python -m core.kernelgen`` after changing :mod:`core.pencil`, :mod:`core.subresultants` or
+:mod:`core.errorbound`; ``tests/test_filters.py`` fails if the committed file is not what this
+module generates. Committing the generated text (instead of ``exec`` at import) lets numba cache
+its compiled code and keeps every line of the fast path readable.
+"""
+
+from __future__ import annotations
+
+import sys
+from fractions import Fraction
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+from .errorbound import LEAF_MAX, NO_SCALE_MIN, Kernel, build_kernel
+from .pencil import pencil_coefficients, poly_mul
+from .subresultants import hat_s0, hat_s1, hat_s10
+
+__all__ = ["pencil_kernel", "subresultant_kernel", "generate_module", "GENERATED_PATH", "HATS"]
+
+GENERATED_PATH = Path(__file__).with_name("_kernels.py")
+HATS = {"s0": hat_s0, "s1": hat_s1, "s10": hat_s10}
+
+
+def _leaf(prefix: str, i: int, j: int) -> str:
+    i, j = min(i, j), max(i, j)
+    return f"{prefix}{i}{j}"
+
+
+def _leaf_names(n: int) -> list[str]:
+    return [_leaf(p, i, j) for p in "ab" for i in range(n) for j in range(i, n)]
+
+
+def _minor(M: list[list[Any]], k: int) -> Any:
+    """Leading k x k principal minor (k = 2 or 3) of the quadratic block."""
+    if k == 2:
+        return M[0][0] * M[1][1] - M[0][1] * M[1][0]
+    return (
+        M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1])
+        - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0])
+        + M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0])
+    )
+
+
+def _row_bound_poly(A: list[list[Any]], B: list[list[Any]]) -> list[Any]:
+    """Coefficients of prod_i (T ra_i + rb_i), ra_i = sum_j |A_ij|: >= the permanent of each a_k."""
+    poly: list[Any] = []
+    for i in range(len(A)):
+        ra = sum((abs(x) for x in A[i][1:]), abs(A[i][0]))
+        rb = sum((abs(x) for x in B[i][1:]), abs(B[i][0]))
+        poly = [rb, ra] if not poly else poly_mul(poly, [rb, ra])
+    return poly
+
+
+@cache
+def pencil_kernel(n: int) -> Kernel:
+    """Kernel ``pencil{n}(A, B)``: a_0..a_n and the validity minors, each with a ``_M`` bound.
+
+    Outputs, in order: c0, c0_M, ..., cn, cn_M, dA2, dA2_M[, dA3, dA3_M], dB2, dB2_M[, dB3, dB3_M].
+    ``x_M`` bounds the permanent of ``x`` (products of absolute row sums), so the error of ``x``
+    is at most ``constant * x_M`` (see :mod:`core.errorbound`).
+    """
+
+    def formula(L: dict[str, Any]) -> dict[str, Any]:
+        A = [[L[_leaf("a", i, j)] for j in range(n)] for i in range(n)]
+        B = [[L[_leaf("b", i, j)] for j in range(n)] for i in range(n)]
+        out: dict[str, Any] = {}
+        for i, (c, m) in enumerate(zip(pencil_coefficients(A, B), _row_bound_poly(A, B))):
+            out[f"c{i}"] = c
+            out[f"c{i}_M"] = m
+        for name, M in (("A", A), ("B", B)):
+            rows = [sum((abs(x) for x in M[i][1 : n - 1]), abs(M[i][0])) for i in range(n - 1)]
+            for k in range(2, n):
+                out[f"d{name}{k}"] = _minor(M, k)
+                bound = rows[0]
+                for r in rows[1:k]:
+                    bound = bound * r
+                out[f"d{name}{k}_M"] = bound
+        return out
+
+    names = _leaf_names(n)
+    exprs = {nm: (f"{nm[0].upper()}[{nm[1]}, {nm[2]}]", "") for nm in names}
+    return build_kernel(
+        f"pencil{n}",
+        names,
+        formula,
+        style="permanent",
+        leaf_max={nm: Fraction(LEAF_MAX) for nm in names},
+        leaf_exprs=exprs,
+        params=["A", "B"],
+    )
+
+
+@cache
+def subresultant_kernel(n: int, which: str) -> Kernel:
+    """Kernel ``hat_{which}_{n}(c, cr)`` (midpoint-radius): a_i with radii -> hs with a radius."""
+    pk = pencil_kernel(n)
+    f = HATS[which]
+    names = [f"c{i}" for i in range(n + 1)]
+    return build_kernel(
+        f"hat_{which}_{n}",
+        names,
+        lambda L: {which: f([L[c] for c in names])},
+        style="radius",
+        leaf_max={c: pk.output_max[pk.outputs.index(c)] for c in names},
+        leaf_exprs={f"c{i}": (f"c[{i}]", f"cr[{i}]") for i in range(n + 1)},
+        params=["c", "cr"],
+    )
+
+
+def prepare_source(n: int) -> str:
+    """Unrolled ``prepare{n}(M, out)``: validate cheaply, flip to a negative interior, scale.
+
+    Writes the upper triangle of ``f * M`` into ``out`` with f = +-1 when max|M_ij| already lies
+    in [NO_SCALE_MIN, LEAF_MAX], else f = +-2^k (exact) bringing it into [1, 2), so that every
+    entry is at most LEAF_MAX as :mod:`core.errorbound`'s bounds assume; returns False (abstain)
+    for NaN/inf, asymmetry or M_00 = 0 (the exact path then reports the error).
+    """
+    idx = [(i, j) for i in range(n) for j in range(i, n)]
+    xs = [f"x{i}{j}" for i, j in idx]
+    L = [f"def prepare{n}(M, out):"]
+    L += [f"    x{i}{j} = M[{i}, {j}]" for i, j in idx]
+    checks = ["(x00 == 0.0)"] + [f"(M[{j}, {i}] != x{i}{j})" for i, j in idx if i != j]
+    checks += [f"(x{i}{j} != x{i}{j})" for i, j in idx]
+    L.append("    bad = " + " | ".join(checks))
+    L.append("    mx = max(" + ", ".join(f"abs({x})" for x in xs) + ")")
+    L.append("    if bad or not mx <= 1.7976931348623157e308:")
+    L.append("        return False")
+    L.append("    f = -1.0 if x00 < 0.0 else 1.0")
+    L.append(f"    if not ({float(NO_SCALE_MIN)!r} <= mx <= {float(LEAF_MAX)!r}):")
+    L.append("        _, e = math.frexp(mx)")
+    L.append("        f = math.ldexp(f, 1 - e)")
+    L += [f"    out[{i}, {j}] = x{i}{j} * f" for i, j in idx]
+    L.append("    return True")
+    return "\n".join(L) + "\n"
+
+
+def generate_module() -> str:
+    """Source text of ``core/_kernels.py``."""
+    parts = [
+        '"""Float kernels of the certified filter. GENERATED by ``python -m core.kernelgen``: do not edit.\n\n'
+        "Each ``pencil{n}(A, B)`` reads ``A[i, j]`` (a float, or an array of floats for many pairs) and\n"
+        "returns the outputs listed in ``PENCIL{n}_OUTPUTS``; |error of x| <= constant * x_M + floor.\n"
+        "Each ``hat_{s}_{n}(c, cr)`` takes values and error radii of a_0..a_n and returns (value, radius);\n"
+        '|error| <= radius * RADIUS_FACTOR + floor. See core/errorbound.py for the proofs.\n"""\n',
+        "# ruff: noqa",
+        "import math",
+        "",
+    ]
+    for n in (3, 4):
+        k = pencil_kernel(n)
+        parts.append(prepare_source(n))
+        parts.append(f"PENCIL{n}_OUTPUTS = {k.outputs!r}")
+        parts.append(f"PENCIL{n}_CONSTANTS = {tuple(float(c) for c in k.constants)!r}")
+        parts.append(f"PENCIL{n}_FLOOR = {k.underflow_floor!r}")
+        parts.append("")
+        parts.append(k.source)
+        for which in HATS:
+            h = subresultant_kernel(n, which)
+            parts.append(f"HAT_{which.upper()}_{n}_FLOOR = {h.underflow_floor!r}")
+            parts.append("")
+            parts.append(h.source)
+    return "\n".join(parts)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Write (default) or ``--check`` the generated module."""
+    args = sys.argv[1:] if argv is None else argv
+    text = generate_module()
+    if "--check" in args:
+        current = GENERATED_PATH.read_text() if GENERATED_PATH.exists() else ""
+        if current != text:
+            print(f"{GENERATED_PATH} is stale: run python -m core.kernelgen")
+            return 1
+        return 0
+    GENERATED_PATH.write_text(text)
+    print(f"wrote {GENERATED_PATH} ({len(text.splitlines())} lines)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
