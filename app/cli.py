@@ -63,11 +63,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--port", type=_port, default=8080, help="scene (viser) port, default 8080")
     s.add_argument("--api-port", type=_port, default=8000, help="API port, default 8000")
     s.add_argument("--api-only", action="store_true", help="serve the API alone (no scene)")
-    s.add_argument("--preset", default=None, help="preset the scene opens on (default example-29)")
+    s.add_argument("--preset", default=None, help="preset the scene opens on (default example-29; 'none' for static shapes)")
     s.add_argument("--config", default=None, help="JSON configuration the scene opens on")
 
     sh = sub.add_parser("screenshot", help="render a configuration to PNG with headless Chromium")
-    sh.add_argument("--preset", default=None, help="motion preset, e.g. example-29")
+    sh.add_argument("--preset", default=None, help="motion preset, e.g. example-29 ('none' for static shapes)")
     sh.add_argument("--t", type=_time, default=None, help="time to show (number or fraction)")
     sh.add_argument("--event", type=int, default=None, help="show the K-th event (1-based) exactly")
     sh.add_argument("--config", default=None, help="JSON configuration file (any scene)")
@@ -94,7 +94,7 @@ def config_from_args(args: argparse.Namespace) -> object:
         d.update(dim=args.dim, A=None, B=None, preset=None)
         cfg = SceneConfig.from_dict({k: v for k, v in d.items() if v is not None or k == "preset"})
     if getattr(args, "preset", None) is not None:
-        cfg.preset = args.preset
+        cfg.preset = None if args.preset.lower() in ("none", "static") else args.preset
         cfg.motion = None
     if getattr(args, "t", None) is not None:
         cfg.t = args.t

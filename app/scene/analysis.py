@@ -7,6 +7,7 @@ scene needs; it does no maths of its own beyond float evaluation for drawing.
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 from collections.abc import Hashable
@@ -36,14 +37,12 @@ class MotionError(ValueError):
 
 
 def _core_motion() -> Any:
-    """The motion API of ``core`` (None while it is not available)."""
+    """``core.presets`` when the motion API is available, else None."""
     try:
-        import core.presets as presets  # noqa: F401
-        from core import analyse  # noqa: F401
+        import core.parametric  # noqa: F401
+        import core.presets as presets
     except ImportError:
         return None
-    import core.presets as presets
-
     return presets
 
 
@@ -52,7 +51,7 @@ def list_presets() -> list[str]:
     presets = _core_motion()
     if presets is None:
         return []
-    return list(presets.list_presets())
+    return list(presets.preset_names())
 
 
 @dataclass
@@ -140,65 +139,197 @@ class AnalysisView:
         return text
 
 
-class MotionModel:
-    """A loaded motion: float evaluation for drawing, the cache key, the editor texts."""
+def _pose_from_matrix(M: np.ndarray) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
+    """(centre, semi-axes, orientation) of a float ellipse/ellipsoid matrix (drawing only).
 
-    def __init__(self, motion: Any, *, preset: str | None, description: str, texts: dict[str, str], dim: int) -> None:
-        self.motion = motion
+    2D orientation is an angle, 3D a quaternion wxyz. Raises ValueError when the float matrix
+    is not an ellipse/ellipsoid.
+    """
+    from core.quadrics import _quaternion_from_rotation
+
+    d = M.shape[0] - 1
+    Q, m = M[:d, :d], M[:d, d]
+    if np.all(np.linalg.eigvalsh(Q) < 0):
+        M, Q, m = -M, -Q, -m
+    c = -np.linalg.solve(Q, m)
+    k = float(c @ Q @ c - M[d, d])
+    if k <= 0:
+        raise ValueError("not an ellipse/ellipsoid at this t")
+    w, V = np.linalg.eigh(Q / k)
+    if np.any(w <= 0):
+        raise ValueError("not an ellipse/ellipsoid at this t")
+    r = 1.0 / np.sqrt(w)
+    if np.linalg.det(V) < 0:
+        V[:, -1] = -V[:, -1]
+    if d == 2:
+        return tuple(c.tolist()), tuple(r.tolist()), (float(np.arctan2(V[1, 0], V[0, 0])),)
+    return tuple(c.tolist()), tuple(r.tolist()), tuple(_quaternion_from_rotation(V))
+
+
+class MotionModel:
+    """A loaded motion: float evaluation for drawing, the cache key, the editor texts.
+
+    Args:
+        A, B: ``core.motions.Motion`` of each shape.
+        interval: (lo, hi) exact ends as core reads them (None = infinite).
+        preset: preset name, or None for a typed motion.
+        description: one line shown under the dropdown.
+        texts: editor texts {"A", "B", "interval"}.
+    """
+
+    def __init__(self, A: Any, B: Any, interval: tuple[Any, Any], *, preset: str | None, description: str, texts: dict[str, str]) -> None:
+        self.A, self.B = A, B
+        self.interval = interval
         self.preset = preset
         self.description = description
         self._texts = texts
-        self.dim = dim
-        lo, hi = motion.interval
-        self.interval_floats = (float(lo), float(hi))
-        self.default_t = float(getattr(motion, "default_t", None) or (self.interval_floats[0] + 0.45 * (self.interval_floats[1] - self.interval_floats[0])))
-        self.key: Hashable = (texts.get("A"), texts.get("B"), texts.get("interval"), dim)
+        self.dim = int(A.dim)
+        lo, hi = interval
+        flo = _to_float(lo)
+        fhi = _to_float(hi)
+        if flo is None and fhi is None:
+            flo, fhi = -2.0, 2.0
+        elif flo is None:
+            flo = fhi - 4.0  # type: ignore[operator]
+        elif fhi is None:
+            fhi = flo + 4.0
+        self.interval_floats: tuple[float, float] = (float(flo), float(fhi))  # type: ignore[arg-type]
+        """Window of the slider (I itself when finite; around the events once analysed)."""
+        self.key: Hashable = (json.dumps([A.source, B.source], sort_keys=True, default=str), str(lo), str(hi))
+        self._default_t: float | None = None
+
+    @property
+    def default_t(self) -> float:
+        """Where the timeline starts: just before the first event (else 45 % into the window)."""
+        if self._default_t is not None:
+            return self._default_t
+        lo, hi = self.interval_floats
+        return lo + 0.45 * (hi - lo)
 
     def texts(self) -> dict[str, str]:
-        """Editor texts: "A", "B" (motions) and "interval"."""
+        """Editor texts: "A", "B" (motions, JSON form of core.motions) and "interval"."""
         return dict(self._texts)
+
+    def float_matrices(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Float matrices A(t), B(t) (display only)."""
+        from core.motions import matrix_at
+
+        return matrix_at(self.A, t), matrix_at(self.B, t)
 
     def shapes_at(self, t: float) -> tuple[Any, Any]:
         """ShapeStates of A and B at the float t (drawing only)."""
         from .state import ShapeState
 
         out = []
-        for p in self.motion.shapes_at(t):
-            out.append(ShapeState(tuple(p.center), tuple(p.semi_axes), tuple(p.orientation)))
+        for M in self.float_matrices(t):
+            c, r, o = _pose_from_matrix(M)
+            out.append(ShapeState(c, r, o))
         return out[0], out[1]
 
-    def float_matrices(self, t: float) -> tuple[Any, Any]:
-        """Float matrices A(t), B(t) (display only)."""
-        return self.motion.matrices_at(t)
-
     def extent_points(self) -> np.ndarray:
-        """Points spanning where the shapes go over I (for framing the camera)."""
+        """Points spanning where the shapes go over the window (for framing the camera)."""
         lo, hi = self.interval_floats
         pts = []
         for t in np.linspace(lo, hi, 9):
-            for sh in self.shapes_at(float(t)):
+            try:
+                shapes = self.shapes_at(float(t))
+            except (ValueError, np.linalg.LinAlgError):
+                continue
+            for sh in shapes:
                 pos, _, scale = sh.float_pose()
-                r = max(scale[:2] if self.dim == 2 else scale)
-                pts.append(np.array(pos) + r)
-                pts.append(np.array(pos) - r)
-        return np.array(pts)
+                rad = max(scale[:2] if self.dim == 2 else scale)
+                pts.append(np.array(pos) + rad)
+                pts.append(np.array(pos) - rad)
+        return np.array(pts) if pts else np.zeros((1, 3))
+
+
+def _to_float(x: Any) -> float | None:
+    if x is None:
+        return None
+    from core.rationals import to_fmpq
+
+    q = to_fmpq(x)
+    return float(q.p) / float(q.q)
+
+
+def _interval_text(iv: Any) -> str:
+    lo, hi = iv
+    return f"{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}"
+
+
+def _read_interval(text: str) -> tuple[Any, Any]:
+    from core.rationals import to_fmpq
+
+    parts = [p.strip() for p in str(text).replace(";", ",").split(",")]
+    if len(parts) != 2 or not all(parts):
+        raise MotionError("interval: expected 'lo, hi' (use -inf / inf for an open end)", "interval")
+    out: list[Any] = []
+    for p, infs in zip(parts, (("-inf", "none"), ("inf", "+inf", "none"))):
+        if p.lower() in infs:
+            out.append(None)
+            continue
+        try:
+            to_fmpq(p)
+        except ValueError as e:
+            raise MotionError(f"interval: {e}", "interval") from None
+        out.append(p)
+    if out[0] is not None and out[1] is not None and to_fmpq(out[0]) >= to_fmpq(out[1]):
+        raise MotionError("interval: need lo < hi", "interval")
+    return out[0], out[1]
 
 
 def load_motion(*, preset: str | None, motion: dict[str, Any] | None, dim: int) -> MotionModel:
-    """Load a preset by name or a typed motion ({"A": text, "B": text, "interval": text}).
+    """Load a preset by name or a typed motion ({"A": text/dict, "B": text/dict, "interval": text}).
 
     Raises:
-        MotionError: unknown preset, or a typed expression/interval core cannot read (the
-            error names the field it belongs to).
+        MotionError: unknown preset, or a typed motion/interval core cannot read (the error
+            names the field it belongs to: "A", "B" or "interval").
     """
     presets = _core_motion()
     if presets is None:
         raise MotionError("motion analysis is not available in this version of core", "A")
-    return _load_with_core(presets, preset=preset, motion=motion, dim=dim)
+    from core.motions import motion_from_dict
 
-
-def _load_with_core(presets: Any, *, preset: str | None, motion: dict[str, Any] | None, dim: int) -> MotionModel:
-    raise MotionError("motion analysis adapter not wired yet", "A")
+    if motion is None:
+        if preset is None:
+            raise MotionError("no motion given", "A")
+        try:
+            p = presets.preset(preset)
+        except ValueError as e:
+            raise MotionError(str(e), "A") from None
+        raw: dict[str, Any] = {"A": p["A"], "B": p["B"], "interval": _interval_text(p["interval"])}
+        description = p.get("description", "")
+    else:
+        raw = dict(motion)
+        description = "Typed motion."
+    parsed: dict[str, Any] = {}
+    texts: dict[str, str] = {}
+    for key in ("A", "B"):
+        value = raw.get(key)
+        if value is None or value == "":
+            raise MotionError(f"motion of {key} is missing", key)
+        if isinstance(value, str):
+            texts[key] = value
+            try:
+                value = json.loads(value)
+            except json.JSONDecodeError as e:
+                raise MotionError(f"motion of {key} is not valid JSON: {e.msg} (line {e.lineno}, column {e.colno})", key) from None
+        else:
+            texts[key] = json.dumps(value)
+        try:
+            parsed[key] = motion_from_dict(value)
+        except ValueError as e:
+            raise MotionError(f"motion of {key}: {e}", key) from None
+    iv = raw.get("interval", "-inf, inf")
+    if not isinstance(iv, str):
+        iv = _interval_text(iv)
+    texts["interval"] = iv
+    interval = _read_interval(iv)
+    if parsed["A"].dim != parsed["B"].dim:
+        raise MotionError("A and B must both be ellipses (2D) or both ellipsoids (3D)", "B")
+    return MotionModel(
+        parsed["A"], parsed["B"], interval, preset=preset if motion is None else None, description=description, texts=texts
+    )
 
 
 class AnalysisCache:
@@ -241,5 +372,121 @@ class AnalysisCache:
                 self._running.pop(model.key, None)
 
 
+PLOT_SAMPLES = 300
+"""Samples per curve in the plots (resampled only when the analysis changes)."""
+
+
 def _analyse(model: MotionModel) -> AnalysisView:
-    raise MotionError("motion analysis adapter not wired yet", "A")
+    """Run core's exact analysis and turn it into what the timeline draws."""
+    from core.parametric import analyse
+
+    try:
+        an = analyse(model.A, model.B, model.interval, digits=20)
+    except ValueError as e:
+        raise MotionError(str(e), "interval") from None
+    samples = an.samples(PLOT_SAMPLES)
+    ts = np.asarray(samples["t"], dtype=float)
+    model.interval_floats = (float(ts[0]), float(ts[-1]))
+    n = an.n
+    series: dict[str, np.ndarray] = {f"a{i}": np.asarray(v, dtype=float) for i, v in enumerate(samples["a"])}
+    for k in ("s0", "s1", "s10"):
+        series[k] = np.asarray(samples[k], dtype=float)
+    events = [EventView(t=float(e), text=e.value, relation=str(e.relation), kind=e.kind) for e in an.events]
+    lo, hi = model.interval_floats
+    segs: list[tuple[float, float, str]] = []
+    for iv in an.intervals:
+        a = lo if iv.lo is None else max(lo, float(iv.lo))
+        b = hi if iv.hi is None else min(hi, float(iv.hi))
+        if b > a:
+            segs.append((a, b, str(iv.relation)))
+    rows = []
+    ev_by_value = {e.value: k for k, e in enumerate(an.events, start=1)}
+    for r in an.sign_table:
+        if r.where == "point":
+            k = ev_by_value.get(r.t)
+            label = f"α{k} ≈ {_short(r.t)}" if k else f"root ≈ {_short(r.t)}"
+        else:
+            label = f"t = {_short_rational(r.t)}"
+        signs = {f"a{n - i}": s for i, s in enumerate(r.a)}
+        signs.update(s0=r.s0, s1=r.s1, s10=r.s10)
+        rows.append({"where": label, "signs": signs, "var": r.var, "relation": str(r.relation)})
+    if model._default_t is None:
+        inner = [e.t for e in events if lo < e.t < hi]
+        if inner:
+            model._default_t = max(lo, inner[0] - 0.08 * (hi - lo))
+    return AnalysisView(
+        degree=n,
+        events=events,
+        segments=segs,
+        rows=rows,
+        samples_t=ts,
+        samples=series,
+        seconds=0.0,
+        relation_fn=an.relation_at,
+        explain_fn=lambda t, event: _explain_at(an, t, event),
+    )
+
+
+def _short(decimal: str) -> str:
+    return decimal if len(decimal) <= 12 else decimal[:12] + "…"
+
+
+def _short_rational(text: str) -> str:
+    if len(text) <= 10:
+        return text
+    from core.rationals import to_fmpq
+
+    q = to_fmpq(text)
+    return f"{float(q.p) / float(q.q):.6g}"
+
+
+def _explain_at(an: Any, t: float, event: int | None) -> dict[str, Any] | None:
+    """Readout data at t from the analysis polynomials (exact signs at the rational t).
+
+    At an event the signs come from the sign-table row of that instant (decided exactly at the
+    real algebraic time). Values a_i are those of the analysis: a common positive multiple of
+    the true coefficients; ŝ_j = -s_j / a_n has the sign of s_j.
+    """
+    from core.algebraic import sign_qsqrt
+    from core.decision import RULES, decide, sign_variations
+    from core.rationals import to_fmpq
+
+    n = an.n
+    if event is not None:
+        ev = an.events[event - 1]
+        row = next((r for r in an.sign_table if r.where == "point" and r.t == ev.value), None)
+        if row is None:
+            return None
+        a_signs = list(reversed(row.a))
+        coeffs = [{"name": f"a{i}", "approx": float("nan"), "exact": None, "bound": None, "sign": a_signs[i]} for i in range(n + 1)]
+        subs = {k: {"name": k, "approx": float("nan"), "exact": None, "bound": None, "sign": getattr(row, k)} for k in ("s0", "s1", "s10")}
+        rel, rule, var = str(row.relation), row.rule, row.var
+    else:
+        tq = to_fmpq(t)
+        d = an.sqrt_d
+
+        def q(name: str, p: Any) -> dict[str, Any]:
+            a, b = p.at(tq)
+            s = sign_qsqrt(a, b, d) if d != 1 else (a > 0) - (a < 0)
+            approx = float(a) + (float(b) * d**0.5 if d != 1 else 0.0)
+            exact = str(a) if (d == 1 or b == 0) else None
+            return {"name": name, "approx": approx, "exact": exact if exact and len(exact) <= 18 else None, "bound": None, "sign": s}
+
+        coeffs = [q(f"a{i}", p) for i, p in enumerate(an.a)]
+        subs = {k: q(k, getattr(an, k)) for k in ("s0", "s1", "s10")}
+        rel = str(an.relation_at(t))
+        var = sign_variations([c["sign"] for c in reversed(coeffs)])
+        middle = [c["sign"] for c in reversed(coeffs)][1:-1]
+        rule = decide(n, middle, lambda: subs["s0"]["sign"], lambda: subs["s1"]["sign"], lambda: subs["s10"]["sign"]).rule
+    return {
+        "n": n,
+        "relation": rel,
+        "certified_by": "exact",
+        "rule": rule,
+        "rule_text": RULES.get(rule, rule),
+        "var": var,
+        "coefficients": coeffs,
+        "s0": subs["s0"],
+        "s1": subs["s1"],
+        "s10": subs["s10"],
+    }

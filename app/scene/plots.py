@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import viser.uplot as uplot
 
-__all__ = ["compress", "add_plot", "update_plot", "SERIES_COLORS"]
+__all__ = ["compress", "add_plot", "update_plot", "PlotData", "SERIES_COLORS"]
 
 SERIES_COLORS = ["#1f77b4", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2"]
 """Colours of the data series (distinct from the relation colours)."""
@@ -54,38 +54,46 @@ def add_plot(gui: Any, title: str, n_series: int) -> Any:
     )
 
 
-def update_plot(
-    handle: Any,
-    t: np.ndarray,
-    series: Sequence[tuple[str, np.ndarray]],
-    cursor_index: int,
-    events: Sequence[float],
-) -> None:
-    """Send the compressed series, the cursor at sample ``cursor_index`` and the event markers.
+class PlotData:
+    """Compressed series of one plot, computed once per analysis (the cursor is all that moves)."""
+
+    def __init__(self, t: np.ndarray, series: Sequence[tuple[str, np.ndarray]], events: Sequence[float]) -> None:
+        self.t = np.asarray(t, dtype=float)
+        self.names = [name for name, _ in series]
+        self.ys = [compress(y) for _, y in series]
+        finite = np.concatenate([y[np.isfinite(y)] for y in self.ys]) if self.ys else np.zeros(1)
+        self.top = float(np.max(finite)) if finite.size else 1.0
+        self.bot = float(np.min(finite)) if finite.size else -1.0
+        n = self.t.shape[0]
+        self.ev = np.full(n, np.nan)
+        for e in events:
+            self.ev[min(int(np.searchsorted(self.t, e)), n - 1)] = 0.0
+
+    def cursor(self, index: int) -> np.ndarray:
+        """The cursor series: a near-vertical segment between samples index and index + 1."""
+        n = self.t.shape[0]
+        cur = np.full(n, np.nan)
+        i = min(max(index, 0), n - 2)
+        cur[i], cur[i + 1] = self.top, self.bot
+        return cur
+
+
+def update_plot(handle: Any, data: PlotData, cursor_index: int, *, labels: bool = False) -> None:
+    """Send the series with the cursor at sample ``cursor_index`` (labels only when asked).
 
     The cursor is a near-vertical segment between two adjacent samples (uPlot shares one x
     array across series); event markers sit on y = 0 at the sample nearest each event.
     """
-    ys = [compress(y) for _, y in series]
-    finite = np.concatenate([y[np.isfinite(y)] for y in ys]) if ys else np.zeros(1)
-    top = float(np.max(finite)) if finite.size else 1.0
-    bot = float(np.min(finite)) if finite.size else -1.0
-    n = t.shape[0]
-    cur = np.full(n, np.nan)
-    i = min(max(cursor_index, 0), n - 2)
-    cur[i], cur[i + 1] = top, bot
-    ev = np.full(n, np.nan)
-    for e in events:
-        ev[min(int(np.searchsorted(t, e)), n - 1)] = 0.0
-    names = [name for name, _ in series]
-    cfg = list(handle.series)
-    changed = False
-    for k, name in enumerate(names, start=1):
-        if cfg[k].get("label") != name:
-            cfg[k] = {**cfg[k], "label": name}
-            changed = True
-    if changed:
+    if labels:
+        cfg = list(handle.series)
+        for k, name in enumerate(data.names, start=1):
+            cfg[k] = {**cfg[k], "label": name, "show": True}
+        for k in range(len(data.names) + 1, len(cfg) - 2):
+            cfg[k] = {**cfg[k], "show": False}
         handle.series = tuple(cfg)
-    handle.data = (t, *ys, cur, ev)
+    ys = list(data.ys)
+    while len(ys) < len(handle.series) - 3:
+        ys.append(np.zeros_like(data.t))
+    handle.data = (data.t, *ys, data.cursor(cursor_index), data.ev)
     if not handle.visible:
         handle.visible = True

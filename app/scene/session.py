@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from core import Relation, explain
+from core.pencil import pencil_coefficients
 
 from . import plots
 from .analysis import AnalysisCache, AnalysisView, MotionError, MotionModel, list_presets, load_motion
@@ -87,6 +88,10 @@ class Session:
         self.views: dict[str, EllipsoidView] = {}
         self._event_buttons: list[Any] = []
         self._plot_index = -2
+        self._auto_t = False
+        self._panels_due = False
+        self._panel_timer: threading.Timer | None = None
+        self._plot_data: tuple[Any, Any, Any] | None = None
         self._last_text: dict[int, str] = {}
         self._build_scene()
         self._build_gui()
@@ -207,6 +212,7 @@ class Session:
                 self._set_value(self.preset, name if name in list_presets() else STATIC)
                 self._show_motion_fields()
                 t = config.t if config.t is not None else self.model.default_t
+                self._auto_t = config.t is None and config.event is None
                 self.state.t = float(t)
                 self._analyse()
             else:
@@ -492,6 +498,11 @@ class Session:
             self._set_md(self.sign_table, sign_table_markdown(result.rows, result.degree))
             self._plot_index = -2
             self._refresh_plots(force=True)
+            lo, hi = model.interval_floats
+            self.t_slider.min, self.t_slider.max = lo, hi
+            self.t_slider.step = (hi - lo) / 1000 or 1e-3
+            if self._auto_t:
+                self.state.t = model.default_t
             if self.state.event is not None and 1 <= self.state.event <= n_ev:
                 self.jump_to_event(self.state.event)
             else:
@@ -508,12 +519,17 @@ class Session:
             self.set_t(ev.t, event=k)
             return ev.relation
 
-    def set_t(self, t: float, *, event: int | None = None) -> str | None:
+    def set_t(self, t: float, *, event: int | None = None, defer_panels: bool = False) -> str | None:
         """Move the motion to time t (one timeline step: hot path, no analysis).
 
+        The shapes move and recolour at once. The panels (readout, intervals-bar cursor, t box,
+        plot cursor) follow immediately, or with ``defer_panels`` at most every
+        :attr:`PANEL_PERIOD` seconds (what the slider and playback do: scrubbing stays cheap).
+
         Args:
-            t: time (clamped to I).
+            t: time (clamped to the window of I).
             event: show the exact event k instead of the float t (set by "jump to").
+            defer_panels: coalesce panel updates (see above).
 
         Returns:
             The certified relation drawn at t (None while the analysis is running).
@@ -530,37 +546,63 @@ class Session:
             for name, sh in (("A", a), ("B", b)):
                 pos, wxyz, scale = sh.float_pose()
                 self.views[name].set_pose(pos, wxyz, scale)
-            self._set_value(self.t_slider, min(max(t, self.t_slider.min), self.t_slider.max))
             an = self.analysis
             if an is None:
                 self._set_relation(None)
                 self._set_md(self.readout, readout_markdown(None, error="analysing the motion…"))
                 return None
-            if event is not None:
-                ev = an.events[event - 1]
-                relation = ev.relation
-                where = f"at t = α{event} = {ev.text}"
-                self._set_value(self.t_number, ev.text)
-            else:
-                relation = an.relation_at(t)
-                where = f"at t = {t:.6g}"
-                self._set_value(self.t_number, repr(t) if len(repr(t)) < 12 else f"{t:.6g}")
+            relation = an.events[event - 1].relation if event is not None else an.relation_at(t)
             self._set_relation(relation)
-            self._set_md(self.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t))
-            self._set_md(self.readout, an.readout(t, event, where))
             if relation == str(Relation.TANGENT):
                 A, B = model.float_matrices(t)
-                expl = an.explanation_at(t, event)
-                self._update_contact(A, B, expl)
+                coeffs = [{"approx": float(v)} for v in pencil_coefficients(A, B)]
+                self._update_contact(A, B, {"relation": relation, "coefficients": coeffs})
             else:
                 self._update_contact(None, None, None)
-            self._refresh_plots()
+            if defer_panels:
+                self._panels_due = True
+                if self._panel_timer is None:
+                    self._panel_timer = threading.Timer(self.PANEL_PERIOD, self._flush_panels)
+                    self._panel_timer.daemon = True
+                    self._panel_timer.start()
+            else:
+                self._panels_now()
             return relation
+
+    PANEL_PERIOD = 0.05
+    """Seconds between panel refreshes while scrubbing or playing."""
+
+    def _flush_panels(self) -> None:
+        with self._lock:
+            self._panel_timer = None
+            if self._panels_due and not self._closed:
+                self._panels_now()
+
+    def _panels_now(self) -> None:
+        """Readout, bar, slider/t box and plot cursor for the current t (or event)."""
+        self._panels_due = False
+        model, an = self.model, self.analysis
+        if model is None or an is None:
+            return
+        t, event = self.state.t, self.state.event
+        lo, hi = model.interval_floats
+        self._set_value(self.t_slider, min(max(t, self.t_slider.min), self.t_slider.max))
+        if event is not None:
+            ev = an.events[event - 1]
+            where = f"at t = α{event} = {ev.text}"
+            self._set_value(self.t_number, ev.text)
+        else:
+            where = f"at t = {t:.6g}"
+            self._set_value(self.t_number, repr(t) if len(repr(t)) < 12 else f"{t:.6g}")
+        self._set_md(self.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t))
+        self._set_md(self.readout, an.readout(t, event, where))
+        self._refresh_plots()
 
     def _on_slider(self, ev: Any) -> None:
         if self._syncing:
             return
-        self.set_t(self.t_slider.value)
+        self._auto_t = False
+        self.set_t(self.t_slider.value, defer_panels=True)
 
     def _on_t_text(self, ev: Any) -> None:
         if self._syncing or self.model is None:
@@ -588,7 +630,7 @@ class Session:
             t = self.state.t + (hi - lo) * self.speed.value * dt / 10.0
             if t > hi:
                 t = lo
-            self.set_t(t)
+            self.set_t(t, defer_panels=True)
             time.sleep(dt)
 
     # ------------------------------------------------------------------ plots
@@ -607,8 +649,16 @@ class Session:
         if idx == self._plot_index and not force:
             return
         self._plot_index = idx
-        plots.update_plot(self.plot_coeffs, an.samples_t, an.coeff_series(), idx, an.events_t)
-        plots.update_plot(self.plot_subres, an.samples_t, an.subres_series(), idx, an.events_t)
+        fresh = self._plot_data is None or self._plot_data[0] is not an
+        if fresh:
+            self._plot_data = (
+                an,
+                plots.PlotData(an.samples_t, an.coeff_series(), an.events_t),
+                plots.PlotData(an.samples_t, an.subres_series(), an.events_t),
+            )
+        assert self._plot_data is not None
+        plots.update_plot(self.plot_coeffs, self._plot_data[1], idx, labels=fresh or force)
+        plots.update_plot(self.plot_subres, self._plot_data[2], idx, labels=fresh or force)
 
     # ------------------------------------------------------------------ camera / lifecycle
     def _frame_camera(self) -> None:
@@ -650,7 +700,9 @@ def measure_update_costs(repeats: int = 200, *, preset: str | None = "example-29
 
     Returns:
         {"drag_ms": median ms per drag, "drag_messages": messages per drag,
-         "t_step_ms": median ms per t-step, "t_step_messages": messages per t-step}.
+         "t_step_ms"/"t_step_messages": per t-step as the slider does it (panels coalesced to
+         20 Hz, their messages included when the timer fires), "t_step_full_ms"/
+         "t_step_full_messages": with every panel refreshed synchronously}.
     """
     import viser
 
@@ -661,15 +713,16 @@ def measure_update_costs(repeats: int = 200, *, preset: str | None = "example-29
             s = Session(server, SceneConfig(preset=preset), count_messages=True)
             s.ready.wait(120)
             lo, hi = s.model.interval_floats if s.model else (0.0, 1.0)
-            times = []
-            m0 = s.messages
-            for i in range(repeats):
-                t = lo + (hi - lo) * (i + 0.5) / repeats
-                t0 = time.perf_counter()
-                s.set_t(t)
-                times.append(time.perf_counter() - t0)
-            out["t_step_ms"] = float(np.median(times) * 1e3)
-            out["t_step_messages"] = (s.messages - m0) / repeats
+            for key, defer in (("t_step", True), ("t_step_full", False)):
+                times = []
+                m0 = s.messages
+                for i in range(repeats):
+                    t = lo + (hi - lo) * (i + 0.5) / repeats
+                    t0 = time.perf_counter()
+                    s.set_t(t, defer_panels=defer)
+                    times.append(time.perf_counter() - t0)
+                out[f"{key}_ms"] = float(np.median(times) * 1e3)
+                out[f"{key}_messages"] = (s.messages - m0) / repeats
             s.close()
         s = Session(server, SceneConfig(preset=None), count_messages=True)
         times = []

@@ -74,11 +74,10 @@ class EllipsoidView:
                 rotation_limits=((0.0, 0.0), (0.0, 0.0), (-1000.0, 1000.0)),
                 translation_limits=((-1000.0, 1000.0), (-1000.0, 1000.0), (0.0, 0.0)),
                 depth_test=False,
-                visible=gizmo,
             )
             v, f = unit_disc()
         else:
-            self.control = scene.add_transform_controls(root, scale=1.2, depth_test=False, visible=gizmo)
+            self.control = scene.add_transform_controls(root, scale=1.2, depth_test=False)
             v, f = unit_sphere()
         self.mesh = scene.add_mesh_simple(
             f"{root}/mesh",
@@ -96,6 +95,8 @@ class EllipsoidView:
         self._color: tuple[int, int, int] | None = NEUTRAL
         self.sent = 0
         """Number of property assignments sent (for the cost measurement)."""
+        self._gizmo = True
+        self.set_gizmo(gizmo)
 
     def set_pose(
         self,
@@ -128,7 +129,16 @@ class EllipsoidView:
             self.sent += 1
 
     def set_gizmo(self, visible: bool) -> None:
-        """Show or hide the transform gizmo (hidden while a motion drives the shape)."""
-        if self.control.visible != visible:
-            self.control.visible = visible
-            self.sent += 1
+        """Show or hide the transform gizmo (hidden while a motion drives the shape).
+
+        The gizmo node stays visible (it carries the mesh and label as children): hiding means
+        fully transparent and inert.
+        """
+        if self._gizmo != visible:
+            self._gizmo = visible
+            c = self.control
+            c.opacity = 1.0 if visible else 0.0
+            c.disable_axes = not visible
+            c.disable_sliders = not visible
+            c.disable_rotations = not visible
+            self.sent += 4

@@ -1,0 +1,147 @@
+"""Browser tests: the real scene in headless Debian Chromium (Playwright, SwiftShader WebGL).
+
+Marked ``browser``; skipped with the reason when /usr/bin/chromium is missing. Relation colours
+are checked twice: the three.js material colour of each shape (``window.__viserMutable``) and
+the hue of the rendered canvas pixels (shading changes brightness, not hue).
+"""
+
+from __future__ import annotations
+
+import colorsys
+import math
+import os
+
+import numpy as np
+import pytest
+
+from app.scene.state import SceneConfig
+
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian chromium at /usr/bin/chromium"),
+]
+
+HEX = {"separate": "#2ca02c", "tangent": "#ffbf00", "overlap": "#d62728"}
+HUE = {"separate": 120.0, "tangent": 45.0, "overlap": 359.0}  # hues of the hex codes above
+
+
+def dominant_hue_share(pixels: np.ndarray, hue: float, tol: float = 20.0) -> float:
+    """Share of opaque, saturated canvas pixels whose hue is within ``tol`` degrees of ``hue``."""
+    px = pixels.reshape(-1, 4).astype(float) / 255.0
+    px = px[px[:, 3] > 0.2]
+    out = []
+    for r, g, b, _ in px[:: max(1, len(px) // 4000)]:
+        h, s, v = colorsys.rgb_to_hsv(r, g, b)
+        if s > 0.35 and v > 0.15:
+            out.append(h * 360.0)
+    if not out:
+        return 0.0
+    d = np.abs((np.array(out) - hue + 180.0) % 360.0 - 180.0)
+    return float(np.mean(d <= tol))
+
+
+def static_config(dx: str, *, dim: int = 3) -> SceneConfig:
+    o = ["0"] if dim == 2 else ["1", "0", "0", "0"]
+    return SceneConfig.from_dict(
+        {
+            "dim": dim,
+            "preset": None,
+            "gizmos": False,
+            "A": {"center": ["0"] * dim, "semi_axes": ["2"] + ["1"] * (dim - 1), "orientation": o},
+            "B": {"center": [dx] + ["0"] * (dim - 1), "semi_axes": ["1"] * dim, "orientation": o},
+        }
+    )
+
+
+@pytest.fixture(scope="module")
+def headless():
+    from app.screenshot import HeadlessScene
+
+    return HeadlessScene
+
+
+def test_scene_loads_and_typing_a_centre_changes_colour(headless, tmp_path):
+    with headless(static_config("4"), width=1200, height=800) as hs:
+        assert hs.session.state.relation == "separate"
+        assert hs.mesh_color("A") == hs.mesh_color("B") == HEX["separate"]
+        assert dominant_hue_share(hs.canvas_pixels(), HUE["separate"]) > 0.8
+        page = hs.page
+        page.get_by_text("Shape B", exact=True).click()
+        box = page.get_by_label("Centre").nth(1)
+        box.fill("2.5, 0, 0")
+        box.press("Enter")
+        page.wait_for_function(
+            "() => { const r = window.__viserMutable.nodeRefFromName['/shapes/B/mesh']; let h = null;"
+            " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
+            f" return h === '{HEX['overlap']}'; }}"
+        )
+        assert hs.session.state.relation == "overlap"
+        hs.wait_settled()
+        assert dominant_hue_share(hs.canvas_pixels(), HUE["overlap"]) > 0.8
+        box.fill("3, 0, 0")  # exactly tangent: 2 + 1
+        box.press("Enter")
+        page.wait_for_function(
+            "() => { const r = window.__viserMutable.nodeRefFromName['/shapes/B/mesh']; let h = null;"
+            " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
+            f" return h === '{HEX['tangent']}'; }}"
+        )
+        assert "TANGENT" in hs.session.readout.content
+        hs.save(tmp_path / "typed.png")
+
+
+def test_two_tabs_have_their_own_shapes(headless):
+    with headless(static_config("4"), width=900, height=600) as hs:
+        second = hs.page.context.new_page()
+        second.goto(hs.page.url)
+        deadline = 60
+        second.wait_for_function(
+            "() => window.__viserMutable?.nodeRefFromName?.['/shapes/B/mesh'] != null", timeout=deadline * 1000
+        )
+        sessions = list(hs.scene.sessions.values())
+        assert len(sessions) == 2
+        first, other = (s for s in sessions)
+        first.set_shape("B", center="1, 0, 0")
+        assert first.state.relation == "overlap"
+        assert other.state.relation == "separate"
+        second.close()
+
+
+def _preset_available(name: str) -> bool:
+    from app.scene.analysis import list_presets
+
+    return name in list_presets()
+
+
+T_TANGENT = (12 - 2 * math.sqrt(2)) / 17
+
+
+@pytest.mark.skipif(not _preset_available("example-29"), reason="core.presets has no example-29 yet")
+@pytest.mark.parametrize("t, event, relation", [(0.3, None, "separate"), (0.7, None, "overlap"), (T_TANGENT, 1, "tangent")])
+def test_example_29_colours(headless, t, event, relation):
+    cfg = SceneConfig.from_dict({"preset": "example-29", "t": t, "event": event, "gizmos": False, "show_plots": False})
+    with headless(cfg, width=1000, height=700) as hs:
+        assert hs.session.state.relation == relation
+        assert hs.mesh_color("A") == hs.mesh_color("B") == HEX[relation]
+        assert dominant_hue_share(hs.canvas_pixels(), HUE[relation]) > 0.7
+
+
+@pytest.mark.skipif(not _preset_available("example-29"), reason="core.presets has no example-29 yet")
+def test_analysis_shows_intervals_and_jump_to_event(headless):
+    cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.2, "gizmos": False})
+    with headless(cfg, width=1200, height=900) as hs:
+        an = hs.session.analysis
+        assert [s[2] for s in an.segments] == ["separate", "overlap", "separate"]
+        assert len(an.events) == 2
+        assert abs(an.events[0].t - T_TANGENT) < 1e-9
+        assert abs(an.events[1].t - (12 + 2 * math.sqrt(2)) / 17) < 1e-9
+        bar = hs.page.locator("svg rect")
+        assert bar.count() == 3
+        fills = [bar.nth(i).get_attribute("fill") for i in range(3)]
+        assert fills == [HEX["separate"], HEX["overlap"], HEX["separate"]]
+        hs.page.get_by_role("button", name="Jump to α2", exact=False).click()
+        hs.page.wait_for_function(
+            "() => { const r = window.__viserMutable.nodeRefFromName['/shapes/A/mesh']; let h = null;"
+            " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
+            f" return h === '{HEX['tangent']}'; }}"
+        )
+        assert hs.session.state.event == 2

@@ -1,0 +1,114 @@
+"""The command line ``python -m app``: argument checking, configs, and a real ``serve`` run."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+
+from app.cli import build_parser, config_from_args, main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_screenshot_contract_parses():
+    args = build_parser().parse_args(
+        ["screenshot", "--preset", "example-29", "--t", "0.7", "--out", "shot.png", "--width", "800", "--height", "600"]
+    )
+    cfg = config_from_args(args)
+    assert (cfg.preset, cfg.t, args.width, args.height, args.out) == ("example-29", 0.7, 800, 600, "shot.png")
+
+
+def test_t_accepts_fractions():
+    args = build_parser().parse_args(["screenshot", "--t", "3/4", "--out", "x.png"])
+    assert config_from_args(args).t == 0.75
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["screenshot", "--t", "abc", "--out", "x.png"], "not a number"),
+        (["screenshot", "--width", "10", "--out", "x.png"], "size out of range"),
+        (["serve", "--port", "70000"], "port out of range"),
+        (["screenshot", "--dim", "4", "--out", "x.png"], "invalid choice"),
+    ],
+)
+def test_bad_arguments_exit_2(argv, message, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    assert e.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_bad_config_file_is_a_clear_error(tmp_path, capsys):
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    assert main(["screenshot", "--config", str(bad), "--out", str(tmp_path / "x.png")]) == 2
+    assert "not valid JSON" in capsys.readouterr().err
+    wrong = tmp_path / "wrong.json"
+    wrong.write_text(json.dumps({"dim": 3, "A": {"center": [0, 0, 0], "semi_axes": [1, -1, 1]}}))
+    assert main(["screenshot", "--config", str(wrong), "--out", str(tmp_path / "x.png")]) == 2
+    assert "A.semi_axes: must be positive" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_config_file_and_dim_override(tmp_path):
+    f = tmp_path / "c.json"
+    f.write_text(json.dumps({"dim": 3, "preset": None, "B": {"center": ["5/2", 0, 0], "semi_axes": [1, 1, 1]}}))
+    cfg = config_from_args(build_parser().parse_args(["screenshot", "--config", str(f), "--out", "x.png"]))
+    assert str(cfg.shapes()[1].center[0]) == "5/2" and cfg.preset is None
+    cfg2 = config_from_args(build_parser().parse_args(["screenshot", "--config", str(f), "--dim", "2", "--out", "x.png"]))
+    assert cfg2.dim == 2 and len(cfg2.shapes()[0].center) == 2
+
+
+def test_help_runs_as_module():
+    r = subprocess.run([sys.executable, "-m", "app", "--help"], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0
+    assert "screenshot" in r.stdout and "serve" in r.stdout
+
+
+def test_serve_starts_scene_and_api():
+    scene_port, api_port = free_port(), free_port()
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.Popen(
+        [sys.executable, "-m", "app", "serve", "--port", str(scene_port), "--api-port", str(api_port), "--preset", "none"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+    )
+    try:
+        deadline = time.monotonic() + 60
+        ok_scene = ok_api = False
+        while time.monotonic() < deadline and not (ok_scene and ok_api):
+            time.sleep(0.3)
+            assert p.poll() is None, p.stdout.read() if p.stdout else ""
+            try:
+                ok_scene = ok_scene or httpx.get(f"http://127.0.0.1:{scene_port}/", timeout=2).status_code == 200
+                ok_api = ok_api or httpx.get(f"http://127.0.0.1:{api_port}/healthz", timeout=2).status_code == 200
+            except httpx.HTTPError:
+                pass
+        assert ok_scene and ok_api
+    finally:
+        p.terminate()
+        try:
+            out, _ = p.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            out, _ = p.communicate()
+    assert f"http://127.0.0.1:{scene_port}/" in out
+    assert f"http://127.0.0.1:{api_port}/" in out
