@@ -391,15 +391,14 @@ def _polynomial_matrix(
         what = f"leading minor of order {order} of the quadratic part" if order <= k else "determinant"
         if m.is_zero():
             raise ValueError(f"{name} is not an {shape} for any t: its {what} is identically 0")
-        s = m.sign_at_rational(t0)
-        if s != want:
-            raise ValueError(f"{name} is not an {shape} at t = {t0} (its {what} has the wrong sign)")
         roots = real_roots(m, lo, hi)
         if roots:
             raise ValueError(
                 f"{name} stops being an {shape} at t ≈ {_fmt_t(roots[0])} in {where} "
                 f"(its {what} vanishes there)"
             )
+        if m.sign_at_rational(t0) != want:
+            raise ValueError(f"{name} is not an {shape} anywhere in {where} (its {what} has the wrong sign)")
     return P, lam
 
 
@@ -592,15 +591,21 @@ def analyse(
     for i in range(len(cands) + 1):
         left = cands[i - 1].hi if i > 0 else lo
         right = cands[i].lo if i < len(cands) else hi
-        if i > 0 and i < len(cands) + 1 and left is not None and right is not None and not left < right:
-            # empty segment cannot happen after _separate; guard anyway
-            raise RuntimeError("candidate isolating intervals overlap")
         if (i == 0 and cands and lo is not None and cands[0].compare(lo) == 0) or (
             i == len(cands) and cands and hi is not None and cands[-1].compare(hi) == 0
         ):
             seg_rel.append(Relation.UNDECIDED)  # empty: the candidate is the end of I
             seg_sample.append(fmpq(0))
             continue
+        if left is not None and right is not None and not left < right:
+            # I's end inside a candidate's isolating interval: narrow it (the root is inside I)
+            c = cands[0] if i == 0 else cands[-1]
+            while c.value is None and not (c.lo > left if i == 0 else c.hi < right):
+                c.bisect()
+            left = cands[i - 1].hi if i > 0 else lo
+            right = cands[i].lo if i < len(cands) else hi
+            if not left < right:
+                raise RuntimeError("candidate isolating intervals overlap")
         t = _strictly_between(left, right)
         sg = _Signs(polys, t, known_zero if case == "none" else ({"s0"} if case == "s1" else set()))
         dec = _decide_at(n, sg)

@@ -1,0 +1,416 @@
+"""analyse(): the paper's Examples 29-33, 2D cases checked by hand, bad input, and a property test.
+
+Golden values come from the paper's printed numbers (NOTES.md lists the misprinted ones) or from
+closed forms computed here with Python's decimal module, never from the code under test.
+"""
+
+from decimal import Decimal, getcontext
+from fractions import Fraction
+
+import pytest
+from flint import arb, arb_poly, ctx, fmpq, fmpq_poly
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from core import Relation, analyse, classify
+from core.motions import matrix_at_exact
+from core.pencil import pencil_coefficients
+from core.presets import preset_arguments
+
+getcontext().prec = 60
+S, T_, O = Relation.SEPARATE, Relation.TANGENT, Relation.OVERLAP
+
+
+def dec(x: str) -> Decimal:
+    return Decimal(x)
+
+
+def close(value: str, expected: Decimal, digits: int) -> bool:
+    """value agrees with expected to ``digits`` significant digits (one unit of slack)."""
+    v = Decimal(value)
+    scale = Decimal(10) ** (expected.adjusted() - digits + 1)
+    return abs(v - expected) <= scale
+
+
+def rounds_to(value: str, printed: str) -> bool:
+    """Our decimal agrees with the paper's printed decimal to its last digit, within one unit
+    there (the paper truncates some values, e.g. -0.24393036786... printed -0.2439303678)."""
+    p = Decimal(printed)
+    return abs(Decimal(value) - p) <= Decimal(1).scaleb(p.as_tuple().exponent)
+
+
+def contains(event, x: Decimal) -> bool:
+    return Decimal(int(event.lo.p)) / Decimal(int(event.lo.q)) <= x <= Decimal(int(event.hi.p)) / Decimal(int(event.hi.q))
+
+
+def has_positive_double_root(P: arb_poly, rel: float) -> bool:
+    """P (ball coefficients, high precision) has a positive root T* of P' with |P(T*)| tiny.
+
+    Starting points from numpy's float roots of P', polished by Newton's method on P' in ball
+    arithmetic at the current precision.
+    """
+    import numpy as np
+
+    dP = P.derivative()
+    ddP = dP.derivative()
+    scale = max(abs(c).upper() for c in P.coeffs())
+    for z0 in np.polynomial.polynomial.polyroots([float(c.mid()) for c in dP.coeffs()]):
+        if abs(z0.imag) > 1e-6 * max(1.0, abs(z0)) or z0.real <= 0:
+            continue
+        z = arb(float(z0.real))
+        for _ in range(60):
+            z = (z - dP(z) / ddP(z)).mid()
+        if z > 0 and abs(P(z)).upper() < scale * rel:
+            return True
+    return False
+
+
+def T(coeffs):  # polynomial in t from ascending rational coefficients
+    return fmpq_poly([fmpq(c.numerator, c.denominator) if isinstance(c, Fraction) else c for c in coeffs])
+
+
+# -------------------------------------------------------------------------------------------
+# Example 29 (paper 4.5; NOTES.md erratum 12 confirms P, s1 = s1,0 and the events)
+
+
+@pytest.fixture(scope="module")
+def ex29():
+    return analyse(**preset_arguments("example-29"))
+
+
+def test_example29_pencil_and_subresultants(ex29):
+    b = T([-34, 96, -68])  # -68 t^2 + 96 t - 34
+    q = fmpq(-1, 4)
+    expected = [T([q]), (b + 2) * q, (b * 2 + 2) * q, (b + 2) * q, T([q])]  # -1/4 (T+1)^2 (T^2 + bT + 1)
+    assert [p.p for p in ex29.a] == expected and all(p.q.is_zero() for p in ex29.a)
+    assert ex29.case == "s1" and ex29.s0.is_zero()
+    assert ex29.a[3] == ex29.a[1]
+    # true s1 = -a4 * s1hat; paper: s1 = s1,0 = -1/2 (17t^2 - 24t + 8)(17t^2 - 24t + 9)^3
+    target = T([8, -24, 17]) * T([9, -24, 17]) ** 3 * fmpq(-1, 2)
+    assert (ex29.s1 * (-ex29.a[4].p)).p == target
+    assert (ex29.s10 * (-ex29.a[4].p)).p == target
+
+
+def test_example29_events_and_intervals(ex29):
+    r2 = Decimal(2).sqrt()
+    a1, a2 = (12 - 2 * r2) / 17, (12 + 2 * r2) / 17
+    assert [str(e.relation) for e in ex29.events] == ["tangent", "tangent"]
+    assert close(ex29.events[0].value, a1, 20) and close(ex29.events[1].value, a2, 20)
+    assert rounds_to(ex29.events[0].value, "0.5395042868") and rounds_to(ex29.events[1].value, "0.8722604191")
+    assert contains(ex29.events[0], a1) and contains(ex29.events[1], a2)
+    assert [iv.relation for iv in ex29.intervals] == [S, O, S]
+    assert [e.kind for e in ex29.events] == ["change", "change"]
+    # Var(-, 0, 1/2, 0, -) = 2 at both events (sign table rows at the points)
+    rows = [r for r in ex29.sign_table if r.where == "point"]
+    assert [r.a for r in rows] == [(-1, 0, 1, 0, -1)] * 2 and all(r.var == 2 for r in rows)
+    # the paper's samples: s1 < 0 at 0 and 1, > 0 at 3/4; relations free / overlap / free
+    assert [ex29.relation_at(x) for x in (0, "3/4", 1)] == [S, O, S]
+    assert ex29.s1.sign_at_rational(fmpq(0)) < 0 < ex29.s1.sign_at_rational(fmpq(3, 4))
+
+
+# -------------------------------------------------------------------------------------------
+# Example 30 (NOTES.md erratum 11: alpha_4..alpha_6 printed values are wrong; certify our own)
+
+
+@pytest.fixture(scope="module")
+def ex30():
+    return analyse(**preset_arguments("example-30"))
+
+
+def test_example30_degrees_and_roots(ex30):
+    assert max(p.degree() for p in ex30.a) == 14
+    assert (ex30.s0.degree(), ex30.s1.degree(), ex30.s10.degree()) == (84, 56, 56)
+    assert ex30.sqrt_d == 2 and ex30.case == "s0"
+    alphas = sorted([*ex30.events, *ex30.roots], key=float)
+    assert len(alphas) == 6 and sum(float(a) < 0 for a in alphas) == 2
+    assert rounds_to(alphas[0].value, "-0.2439303678")
+    assert rounds_to(alphas[1].value, "-0.1859966702")
+    assert alphas[2].time.value == fmpq(1, 2) and alphas[2].value == "0.5"
+
+
+def test_example30_relations(ex30):
+    assert [e.value[:6] for e in ex30.events][:3] == ["-0.243", "-0.185", "0.5"]
+    assert len(ex30.events) == 4 and all(e.relation == T_ for e in ex30.events)
+    assert [iv.relation for iv in ex30.intervals] == [S, O, S, O, S]
+    # alpha_4, alpha_5: roots of s0 inside (alpha_3, alpha_6) where the shapes overlap,
+    # with s1 < 0, s1,0 < 0 and Var = 0 (the paper's qualitative statement)
+    assert [r.relation for r in ex30.roots] == [O, O]
+    assert 0.5 < float(ex30.roots[0]) < float(ex30.roots[1]) < float(ex30.events[3])
+    rows = [r for r in ex30.sign_table if r.where == "point" and r.relation == O]
+    assert len(rows) == 2 and all(r.s1 < 0 and r.s10 < 0 and r.var == 0 for r in rows)
+    # tangent points: s1 < 0, s1,0 > 0 (Theorem 24(2))
+    for r in (r for r in ex30.sign_table if r.where == "point" and r.relation == T_):
+        assert r.s1 < 0 < r.s10
+    # the paper's delta points
+    assert [ex30.relation_at(x) for x in ("-0.3", "-0.2", 0, 1)] == [S, O, S, S]
+    assert ex30.relation_at("1/2") == T_
+
+
+def test_example30_half_is_exactly_tangent_independently():
+    """At t = 1/2, P(T) has a positive double root: computed from the paper's printed data with
+    mpmath-free ball arithmetic (flint arb), without the parser, motions or analysis code."""
+    ctx.prec = 300
+    try:
+        r2 = arb(2).sqrt()
+        t = arb(1) / 2
+        # rotation and translation of A and B at t = 1/2 from the paper's formulas
+        D = 8 * t**2 - 8 * t + 3
+        RA = [[(-8 * t**2 + 8 * t - 1) / D, (-4 * t + 2) / D, (4 * t - 2) / D],
+              [(4 * t - 2) / D, 1 / D, 2 * (2 * t - 1) ** 2 / D],
+              [(-4 * t + 2) / D, 2 * (2 * t - 1) ** 2 / D, 1 / D]]
+        E = -6 * t**2 + 6 * t - 2
+        RB = [[r2 * (t - 1) * (3 * t - 1) / E, 2 * t * (2 * t - 1) / E, r2 * (t - 1) ** 2 / E],
+              [r2 * (2 * t - 1) / E, -2 * t * (t - 1) / E, r2 * (2 * t - 1) ** 2 / E],
+              [-r2 * t * (3 * t - 2) / E, 2 * (2 * t - 1) * (t - 1) / E, r2 * t**2 / E]]
+        cA = [-8 * t**3 + 24 * t**2 - 6 * t - 2, -24 * t**3 + 24 * t**2 + 6 * t - 6, -32 * t**3 + 48 * t**2 - 12 * t - 2]
+        cB = [(72 - 24 * r2) * t**3 + (-156 + 72 * r2) * t**2 + (114 - 72 * r2) * t - 27 + 24 * r2, 12 * t - 6,
+              (88 - 24 * r2) * t**3 + (-168 + 72 * r2) * t**2 + (114 - 72 * r2) * t - 26 + 24 * r2]
+
+        def world(R, c, axes):
+            Q = [[sum(R[i][k] * R[j][k] / axes[k] ** 2 for k in range(3)) for j in range(3)] for i in range(3)]
+            Qc = [sum(Q[i][j] * c[j] for j in range(3)) for i in range(3)]
+            return [[*Q[i], -Qc[i]] for i in range(3)] + [[*(-v for v in Qc), sum(c[i] * Qc[i] for i in range(3)) - 1]]
+
+        A = world(RA, cA, [2, 4, 2])
+        B = world(RB, cB, [1, 3, 4])
+        assert has_positive_double_root(arb_poly(pencil_coefficients(A, B)), 1e-40)
+    finally:
+        ctx.prec = 53
+
+
+# -------------------------------------------------------------------------------------------
+# Examples 31-33
+
+
+def test_example31_touch_and_leave():
+    r = analyse(**preset_arguments("example-31"))
+    assert [(e.value, e.relation, e.kind) for e in r.events] == [("4", T_, "touch")]
+    assert [iv.relation for iv in r.intervals] == [S, S]
+    assert r.s0.degree() == 12 and r.a[4].degree() == 0 and r.a[0].degree() == 0
+    assert [r.a[i].degree() for i in (1, 2, 3)] == [2, 2, 2] and len({str(r.a[i]) for i in (1, 2, 3)}) == 3
+    root = Decimal(336).sqrt()  # alpha_1,3 = 4 -+ sqrt(336) = -14.3303027798, 22.3303027798
+    assert close(r.roots[0].value, 4 - root, 20) and close(r.roots[1].value, 4 + root, 20)
+    assert rounds_to(r.roots[0].value, "-14.3303027798") and rounds_to(r.roots[1].value, "22.3303027798")
+    rows = [row for row in r.sign_table if row.where == "point"]
+    assert [(row.s1, row.s10) for row in rows] == [(-1, -1), (-1, 1), (-1, -1)]
+    assert [r.relation_at(x) for x in (0, 5, 4, "4.000000001")] == [S, S, T_, S]
+
+
+def test_example32():
+    r = analyse(**preset_arguments("example-32"))
+    half5 = Decimal(5).sqrt() / 2
+    assert close(r.events[0].value, -half5, 20) and close(r.events[1].value, half5, 20)
+    assert rounds_to(r.events[0].value, "-1.118033989") and rounds_to(r.events[1].value, "1.118033989")
+    assert [iv.relation for iv in r.intervals] == [O, S, O]
+    assert all(p.degree() == 4 for p in r.a)
+    # the paper's degrees are of s_j = -a4 * shat_j
+    assert r.s0.degree() + r.a[4].degree() == 26 and r.s1.degree() + 4 == 20 and r.s10.degree() + 4 == 20
+    rows = [row for row in r.sign_table if row.where == "point"]
+    assert all(row.s1 < 0 < row.s10 for row in rows)
+    assert [r.relation_at(x) for x in (-2, 0, 2)] == [O, S, O]
+
+
+def test_example33_identically_tangent():
+    r = analyse(**preset_arguments("example-33"))
+    assert r.case == "s1" and r.events == [] and [iv.relation for iv in r.intervals] == [T_]
+    # P = -(T+1)(T+4)(T-1)^2 / 576 up to a positive factor: ascending [-4, 3, 5, -3, -1]
+    target = [-4, 3, 5, -3, -1]
+    k = r.a[4].p.coeffs()[0] / target[4]
+    assert k > 0 and all(r.a[i].p == fmpq_poly([k * c]) for i, c in enumerate(target))
+    assert r.relation_at("123/7") == T_
+
+
+# -------------------------------------------------------------------------------------------
+# 2D cases verified by hand
+
+
+def circle(x: str, y: str = "0") -> list[list[str]]:
+    """Unit circle centred at (x(t), y(t)) as a matrix of expressions."""
+    return [["1", "0", f"-({x})"], ["0", "1", f"-({y})"], [f"-({x})", f"-({y})", f"({x})^2 + ({y})^2 - 1"]]
+
+
+def test_circles_crossing_on_a_line():
+    r = analyse(circle("t"), circle("-t"), (-2, 2))  # centres 2|t| apart: tangent iff |t| = 1
+    assert [(e.time.value, e.kind) for e in r.events] == [(-1, "change"), (1, "change")]
+    assert [iv.relation for iv in r.intervals] == [S, O, S]
+    assert [(float(iv.lo), float(iv.hi)) for iv in r.intervals] == [(-2, -1), (-1, 1), (1, 2)]
+    assert [str(x.relation) for x in r.roots] == ["overlap"]  # t = 0: identical circles
+
+
+def test_touch_and_leave_2d():
+    r = analyse(circle("t", "2"), circle("0"), ("-3", "3"))  # distance sqrt(t^2 + 4) >= 2
+    assert [(e.time.value, e.kind, e.before, e.after) for e in r.events] == [(0, "touch", S, S)]
+
+
+def test_sqrt2_in_the_input():
+    r = analyse(circle("sqrt(2)*t"), circle("0"), (None, None))  # tangent at |t| = sqrt 2
+    r2 = Decimal(2).sqrt()
+    assert close(r.events[0].value, -r2, 20) and close(r.events[1].value, r2, 20)
+    assert r.sqrt_d == 2 and [iv.relation for iv in r.intervals] == [S, O, S]
+    assert r.relation_at("1.4142135623") == O and r.relation_at("1.4142135624") == S
+
+
+def test_events_at_interval_ends():
+    r = analyse(circle("t"), circle("-t"), ("1", "2"))
+    assert [(e.time.value, e.kind, e.before, e.after) for e in r.events] == [(1, "endpoint", None, S)]
+    assert [iv.relation for iv in r.intervals] == [S]
+    assert r.relation_at(1) == T_ and r.relation_at(2) == S
+    r = analyse(circle("t"), circle("-t"), ("0", "1"))
+    assert [(e.time.value, e.kind, e.before, e.after) for e in r.events] == [(1, "endpoint", O, None)]
+    with pytest.raises(ValueError, match="outside"):
+        r.relation_at(3)
+
+
+def test_no_events_and_identical_shapes():
+    r = analyse(circle("t", "5"), circle("0"), (-1, 1))
+    assert r.events == [] and [iv.relation for iv in r.intervals] == [S]
+    same = analyse(circle("t"), circle("t"), (None, None))
+    assert same.case == "none" and same.events == [] and [iv.relation for iv in same.intervals] == [O]
+
+
+def test_refine_to_50_digits():
+    r = analyse(**preset_arguments("example-29"))
+    r2 = Decimal(2).sqrt()
+    assert close(r.events[0].decimal(50), (12 - 2 * r2) / 17, 50)
+
+
+def test_to_dict_is_json_ready():
+    import json
+
+    r = analyse(circle("t"), circle("-t"), ("-2", "2"), digits=12)
+    d = json.loads(json.dumps(r.to_dict()))
+    assert d["events"][0]["exact"] == "-1" and d["events"][0]["relation"] == "tangent"
+    assert [iv["relation"] for iv in d["intervals"]] == ["separate", "overlap", "separate"]
+    assert d["intervals"][0]["lo"]["exact"] == "-2" and d["polynomials"]["degrees"]["s0"] == 8
+    assert {"where", "a", "s0", "s1", "s10", "var", "relation"} <= set(d["sign_table"][0])
+    s = r.samples(num=11)
+    assert len(s["t"]) == 11 and len(s["a"]) == 4 and s["t"][0] == -2.0
+
+
+# -------------------------------------------------------------------------------------------
+# bad input
+
+
+@pytest.mark.parametrize(
+    "A, B, interval, fragment",
+    [
+        (circle("1/(t - 1)"), circle("0"), (0, 2), "denominator vanishes at t ≈ 1"),
+        ([["t", "0", "0"], ["0", "1", "0"], ["0", "0", "-1"]], circle("3"), (-1, 3), "stops being an ellipse at t ≈ 0"),
+        ([["1", "0", "0"], ["0", "-1", "0"], ["0", "0", "-1"]], circle("3"), (-1, 1), "not an ellipse anywhere in [-1, 1]"),
+        ({"shape": {"center": [0, 0], "semi_axes": ["t", "1"]}}, circle("3"), ("1/2", 2), None),
+        ({"shape": {"center": [0, 0], "semi_axes": ["t - 1", "1"]}}, circle("3"), (0, 2), "vanishes at t ≈ 1"),
+        (circle("t^20"), circle("0"), (0, 1), "degree in t too high"),
+        (circle("3*t + x"), circle("0"), (0, 1), "unexpected 'x'"),
+        (circle("t" + " + t" * 1000), circle("0"), (0, 1), "too long"),
+        (circle("sqrt(2)*t"), circle("sqrt(3)"), (0, 1), "only one square root"),
+        (circle("t"), circle("0"), (1, 1), "empty interval"),
+        (circle("t"), [["1", "0", "0", "0"], ["0", "1", "0", "0"], ["0", "0", "1", "0"], ["0", "0", "0", "-1"]], (0, 1), "both ellipses or both ellipsoids"),
+        (circle("t"), circle("0"), (0, 1, 2), "pair"),
+    ],
+)
+def test_bad_input(A, B, interval, fragment):
+    if fragment is None:  # valid on [1/2, 2]: no error
+        analyse(A, B, interval)
+        return
+    with pytest.raises(ValueError) as e:
+        analyse(A, B, interval)
+    assert fragment in str(e.value)
+
+
+def test_digits_argument():
+    with pytest.raises(ValueError, match="digits"):
+        analyse(circle("t"), circle("-t"), (-2, 2), digits=0)
+    r = analyse(circle("t"), circle("sqrt(2)"), (-1, 4), digits=5)  # |t - sqrt 2| = 2
+    assert [e.value for e in r.events] == ["-0.58579", "3.4142"]
+
+
+# -------------------------------------------------------------------------------------------
+# property: intervals agree with classify at rational points; events are tangent
+
+
+def _poly_str(coeffs):
+    return " + ".join(f"({c})*t^{k}" for k, c in enumerate(coeffs)) or "0"
+
+
+def _pv(coeffs, t):
+    return sum(Fraction(c) * t**k for k, c in enumerate(coeffs))
+
+
+small = st.integers(-3, 3)
+
+
+@st.composite
+def moving_pair(draw):
+    dim = draw(st.sampled_from([2, 3]))
+    shapes = []
+    for _ in range(2):
+        axes = [draw(st.integers(1, 3)) for _ in range(dim)]
+        trans = [[draw(small) for _ in range(draw(st.integers(1, 3)))] for _ in range(dim)]
+        shapes.append((axes, trans))
+    return dim, shapes
+
+
+def _matrix_strings(axes, trans):
+    d = len(axes)
+    c = [_poly_str(p) for p in trans]
+    q = [f"1/{a * a}" for a in axes]
+    M = [[q[i] if i == j else "0" for j in range(d)] + [f"-({q[i]})*({c[i]})"] for i in range(d)]
+    M.append([f"-({q[i]})*({c[i]})" for i in range(d)] + [" + ".join(f"({q[i]})*({c[i]})^2" for i in range(d)) + " - 1"])
+    return M
+
+
+def _matrix_at(axes, trans, t):
+    d = len(axes)
+    c = [_pv(p, t) for p in trans]
+    q = [Fraction(1, a * a) for a in axes]
+    M = [[q[i] if i == j else Fraction(0) for j in range(d)] + [-q[i] * c[i]] for i in range(d)]
+    M.append([-q[i] * c[i] for i in range(d)] + [sum(q[i] * c[i] ** 2 for i in range(d)) - 1])
+    return [[fmpq(v.numerator, v.denominator) for v in row] for row in M]
+
+
+def _tangent_at(axes_trans, ev) -> bool:
+    """Independent check at an algebraic time: P(T) has a positive double root (ball arithmetic)."""
+    ctx.prec = 400
+    try:
+        ev.time.refine_to(fmpq(1, 2**300))
+        x = arb((ev.time.lo + ev.time.hi) / 2)
+        mats = []
+        for axes, trans in axes_trans:
+            d = len(axes)
+            c = [sum(arb(v) * x**k for k, v in enumerate(p)) for p in trans]
+            q = [arb(1) / (a * a) for a in axes]
+            M = [[q[i] if i == j else arb(0) for j in range(d)] + [-q[i] * c[i]] for i in range(d)]
+            M.append([-q[i] * c[i] for i in range(d)] + [sum(q[i] * c[i] ** 2 for i in range(d)) - 1])
+            mats.append(M)
+        return has_positive_double_root(arb_poly(pencil_coefficients(*mats)), 1e-60)
+    finally:
+        ctx.prec = 53
+
+
+@settings(deadline=None, max_examples=40)
+@given(moving_pair(), st.data())
+def test_property_intervals_match_classify(pair, data):
+    dim, shapes = pair
+    A, B = (_matrix_strings(*s) for s in shapes)
+    r = analyse(A, B, ("-2", "2"), digits=10)
+    for iv in r.intervals:
+        lo = iv.lo.hi if iv.lo is not None else fmpq(-2)
+        hi = iv.hi.lo if iv.hi is not None else fmpq(2)
+        points = [iv.sample, lo + (hi - lo) / 3, lo + (hi - lo) * 2 / 3]
+        for t in points:
+            if not lo < t < hi:
+                continue
+            tf = Fraction(int(t.p), int(t.q))
+            rel = classify(_matrix_at(*shapes[0], tf), _matrix_at(*shapes[1], tf), method="exact")
+            assert rel == iv.relation, (t, rel, iv.relation)
+            assert r.relation_at(t) == iv.relation
+    for ev in r.events:
+        assert ev.relation == T_
+        if ev.time.value is not None:
+            tf = Fraction(int(ev.time.value.p), int(ev.time.value.q))
+            assert classify(_matrix_at(*shapes[0], tf), _matrix_at(*shapes[1], tf), method="exact") == T_
+        else:
+            assert _tangent_at(shapes, ev)
+    # and the exact evaluation of the motions agrees with this test's own matrices
+    t0 = fmpq(1, 3)
+    assert matrix_at_exact(A, t0) == _matrix_at(*shapes[0], Fraction(1, 3))
