@@ -329,12 +329,7 @@ def _det(M: Sequence[Sequence[Any]]) -> Any:
 
 
 def _sample_in(lo: fmpq | None, hi: fmpq | None) -> fmpq:
-    if lo is None and hi is None:
-        return fmpq(0)
-    if lo is None:
-        return _strictly_between(None, hi) if False else hi - 1  # type: ignore[operator]
-    if hi is None:
-        return lo + 1
+    """A simple rational point of I (inside when I has two finite ends)."""
     return _strictly_between(lo, hi)
 
 

@@ -414,3 +414,47 @@ def test_property_intervals_match_classify(pair, data):
     # and the exact evaluation of the motions agrees with this test's own matrices
     t0 = fmpq(1, 3)
     assert matrix_at_exact(A, t0) == _matrix_at(*shapes[0], Fraction(1, 3))
+
+
+@st.composite
+def rotating_pair(draw):
+    def motion():
+        q = ["1"] + [f"{draw(small)}*t + {draw(small)}" for _ in range(3)]
+        return {
+            "shape": {"center": [0, 0, 0], "semi_axes": [draw(st.integers(1, 3)) for _ in range(3)]},
+            "translation": [f"{draw(small)}*t + {draw(small)}" for _ in range(3)],
+            "rotation": {"quaternion": q},
+        }
+
+    return motion(), motion()
+
+
+def _rf_at(e, x):
+    num = arb_poly(e.num.p)(x)
+    if not e.num.q.is_zero():
+        num += arb_poly(e.num.q)(x) * arb(e.num.d).sqrt()
+    return num / arb_poly(e.den)(x)
+
+
+@settings(deadline=None, max_examples=12)
+@given(rotating_pair())
+def test_property_rotating_ellipsoids(pair):
+    A, B = pair
+    try:
+        r = analyse(A, B, ("-2", "2"), digits=10)
+    except ValueError as e:  # a random quaternion may vanish in I: then the error says so
+        assert "vanishes" in str(e) or "stops being" in str(e)
+        return
+    for iv in r.intervals:
+        t = iv.sample
+        rel = classify(matrix_at_exact(A, t), matrix_at_exact(B, t), method="exact")
+        assert rel == iv.relation
+    for ev in r.events:
+        ctx.prec = 400
+        try:
+            ev.time.refine_to(fmpq(1, 2**300))
+            x = arb((ev.time.lo + ev.time.hi) / 2)
+            mats = [[[_rf_at(e, x) for e in row] for row in r.A.matrix()], [[_rf_at(e, x) for e in row] for row in r.B.matrix()]]
+            assert has_positive_double_root(arb_poly(pencil_coefficients(*mats)), 1e-60)
+        finally:
+            ctx.prec = 53
