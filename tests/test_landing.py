@@ -1,0 +1,135 @@
+"""Landing page (static/index.html served at /): links, presets, figures, and curl examples that work.
+
+The curl examples are run for real (bash + curl against a uvicorn server on a free port) and their
+output is compared with the output printed under them on the page.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import re
+import shutil
+import socket
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import pytest
+import uvicorn
+from fastapi.testclient import TestClient
+
+from app.api import ApiSettings, create_api
+from app.api.settings import default_static_dir
+
+STATIC = default_static_dir()
+EXAMPLE = re.compile(r'<pre class="curl"><code>(.*?)</code></pre>\s*(?:<pre class="out"><code>(.*?)</code></pre>)?', re.S)
+PNG_1x1 = bytes.fromhex(
+    "89504e470d0a1a0a0000000d4948445200000001000000010806000000"
+    "1f15c4890000000d49444154789c6360000002000154a24f5d0000000049454e44ae426082"
+)
+
+
+def test_static_folder_is_found():
+    assert STATIC is not None and (STATIC / "index.html").is_file() and (STATIC / "style.css").is_file()
+
+
+def test_page_links_scene_docs_and_explains():
+    with TestClient(create_api(ApiSettings(scene_url="http://127.0.0.1:8080"))) as c:
+        r = c.get("/")
+        assert r.status_code == 200 and r.headers["content-type"].startswith("text/html")
+        page = r.text
+    assert '<a id="scene-link" class="button" href="http://127.0.0.1:8080">Open the 3D scene</a>' in page
+    assert 'href="/docs"' in page
+    assert "API=http://testserver" in page  # the examples are filled in with this server's URL
+    for phrase in ("interior is X<sup>T</sup> A X &lt; 0", "P(T) = det(T A + B)", "ascending", "certified"):
+        assert phrase in page
+    assert "<!--" not in page  # every marker was replaced
+
+
+def test_api_only_page_and_escaping():
+    with TestClient(create_api(ApiSettings(scene_url=None))) as c:
+        assert "The 3D scene is not running on this server (API only)." in c.get("/").text
+    with TestClient(create_api(ApiSettings(scene_url='http://x/"><script>alert(1)</script>'))) as c:
+        page = c.get("/").text
+    assert "<script>" not in page and 'href="http://x/&quot;&gt;&lt;script&gt;' in page
+
+
+def test_presets_screenshots_and_bench_figures(tmp_path):
+    static = tmp_path / "static"
+    shutil.copytree(STATIC, static, ignore=shutil.ignore_patterns("img"))
+    (static / "img" / "bench").mkdir(parents=True)
+    (static / "img" / "example-29.png").write_bytes(PNG_1x1)
+    (static / "img" / "bench" / "throughput.png").write_bytes(PNG_1x1)
+    with TestClient(create_api(ApiSettings(static_dir=static))) as c:
+        page = c.get("/").text
+        names = [p["name"] for p in c.get("/api/presets").json()]
+        assert c.get("/static/img/example-29.png").content == PNG_1x1
+        assert c.get("/static/style.css").status_code == 200
+    assert len(names) >= 5
+    for name in names:
+        assert f'id="preset-{name}"' in page and f'href="/api/presets/{name}"' in page
+    assert '<img src="/static/img/example-29.png" alt="example-29"' in page
+    assert page.count('<img src="/static/img/') == 2  # only the screenshot that exists, and the figure
+    assert '<img src="/static/img/bench/throughput.png" alt="throughput">' in page
+    with TestClient(create_api(ApiSettings(static_dir=STATIC))) as c:
+        assert "Benchmark figures will appear here" in c.get("/").text or "/static/img/bench/" in c.get("/").text
+
+
+def test_no_static_folder_is_404(tmp_path):
+    with TestClient(create_api(ApiSettings(static_dir=tmp_path))) as c:
+        r = c.get("/")
+    assert (r.status_code, r.json()) == (404, {"detail": "no landing page: static/index.html not found"})
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def live_server():
+    port = _free_port()
+    server = uvicorn.Server(uvicorn.Config(create_api(ApiSettings(scene_url=None)), host="127.0.0.1", port=port, log_level="warning"))
+    th = threading.Thread(target=server.run, daemon=True)
+    th.start()
+    deadline = time.monotonic() + 20
+    while not server.started and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert server.started, "uvicorn did not start"
+    yield f"http://127.0.0.1:{port}"
+    server.should_exit = True
+    th.join(timeout=10)
+
+
+def _examples(page: str) -> list[tuple[str, str | None]]:
+    return [(html.unescape(cmd), html.unescape(out) if out else None) for cmd, out in EXAMPLE.findall(page)]
+
+
+@pytest.mark.skipif(shutil.which("curl") is None or shutil.which("bash") is None, reason="needs curl and bash")
+def test_curl_examples_work_against_a_running_server(live_server):
+    page = subprocess.run(["curl", "-s", live_server + "/"], capture_output=True, text=True, timeout=30).stdout
+    examples = _examples(page)
+    assert len(examples) >= 6
+    for cmd, expected in examples:
+        res = subprocess.run(["bash", "-c", f"set -o pipefail; API={live_server}; {cmd}"], capture_output=True, text=True, timeout=120)
+        assert res.returncode == 0, (cmd, res.stderr)
+        got = res.stdout.strip()
+        assert got, cmd
+        if expected is None:
+            assert json.loads(got)["relation"] == "tangent"  # the explain example
+            continue
+        try:
+            assert json.loads(got) == json.loads(expected), cmd
+        except json.JSONDecodeError:
+            assert got == expected.strip(), cmd
+
+
+def test_examples_are_found_on_the_page():
+    page = (STATIC / "index.html").read_text()
+    cmds = [cmd for cmd, _ in _examples(page)]
+    assert any("/api/classify" in c for c in cmds) and any("/api/explain" in c for c in cmds)
+    assert any("/api/analyse" in c for c in cmds)
+    assert all(c.startswith("curl ") for c in cmds)
