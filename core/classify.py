@@ -13,6 +13,7 @@ import numpy.typing as npt
 
 from .exact import classify_exact
 from .fastpath import classify_one
+from .rationals import to_fmpq
 from .relation import Relation
 
 __all__ = ["classify", "Method", "METHODS", "Stats"]
@@ -52,9 +53,28 @@ def _as_array(x: Any, name: str) -> np.ndarray:
     flat = arr.reshape(-1)
     if all(type(v) is float or type(v) is np.float64 for v in flat):
         return arr.astype(np.float64)
-    if all(type(v) in (int, np.int64) and abs(int(v)) < 2**53 for v in flat):
-        return arr.astype(np.float64)  # exactly representable integers
-    return arr
+    out = np.empty(flat.shape, dtype=np.float64)
+    for k, v in enumerate(flat):  # exact inputs that are binary64 values can use the float filter
+        f = _as_exact_float(v)
+        if f is None:
+            return arr
+        out[k] = f
+    return out.reshape(arr.shape)
+
+
+def _as_exact_float(v: Any) -> float | None:
+    """v as a float if it is exactly a (finite) binary64 value, else None."""
+    if type(v) is float or type(v) is np.float64:
+        return float(v)
+    if isinstance(v, bool | np.bool_):
+        return None
+    try:
+        q = to_fmpq(v)
+    except ValueError:
+        return None
+    if abs(q.p) >= 2**53 or q.q & (q.q - 1) or q.q > 2**60:  # not a small dyadic rational
+        return None
+    return int(q.p) / int(q.q)
 
 
 def _int_array(x: np.ndarray) -> np.ndarray:

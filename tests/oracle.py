@@ -1,0 +1,74 @@
+"""Independent ground truth: the relation from the positive roots of the exact P(T).
+
+Does not use the code under test: P(T) = det(A) * charpoly(-A^-1 B) is computed with flint's
+``fmpq_mat`` (not the pencil formula), and the positive real roots are counted with flint's
+certified complex root isolation (real roots come back with an exactly zero imaginary part).
+Wang-Wang-Kim / paper Theorem 7 and 19: two distinct positive roots -> separate, a positive
+double root -> tangent, no positive root -> overlap.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from flint import ctx, fmpq, fmpq_mat, fmpz_poly
+
+from core.rationals import to_fmpq
+
+
+def exact_matrix(M: Any) -> fmpq_mat:
+    rows = [[to_fmpq(v) for v in row] for row in M]
+    return fmpq_mat(rows)
+
+
+def pencil_oracle(A: Any, B: Any) -> fmpz_poly:
+    """Integer multiple (positive) of det(T A + B), via the characteristic polynomial."""
+    MA, MB = exact_matrix(A), exact_matrix(B)
+    P = MA.det() * (-(MA.inv() * MB)).charpoly()
+    num, den = P.numer(), P.denom()
+    assert den > 0
+    return fmpz_poly(num.coeffs()) if hasattr(num, "coeffs") else fmpz_poly(num)
+
+
+def positive_roots(p: fmpz_poly) -> list[int]:
+    """Multiplicities of the distinct positive real roots of p (certified)."""
+    old = ctx.prec
+    try:
+        prec = 64
+        while True:
+            ctx.prec = prec
+            out: list[int] = []
+            undecided = False
+            for r, m in p.complex_roots():
+                if not r.imag == 0:
+                    continue
+                if r.real > 0:
+                    out.append(m)
+                elif not r.real < 0:
+                    undecided = True
+            if not undecided:
+                return out
+            prec *= 2
+    finally:
+        ctx.prec = old
+
+
+def oracle_relation(A: Any, B: Any) -> str:
+    """'separate', 'tangent' or 'overlap' for two valid ellipses/ellipsoids (signs normalised)."""
+    A = _normalise(A)
+    B = _normalise(B)
+    mults = positive_roots(pencil_oracle(A, B))
+    if mults == [1, 1]:
+        return "separate"
+    if mults == [2]:
+        return "tangent"
+    if not mults:
+        return "overlap"
+    raise AssertionError(f"impossible positive-root pattern {mults} for two ellipsoids")
+
+
+def _normalise(M: Any) -> list[list[fmpq]]:
+    E = [[to_fmpq(v) for v in row] for row in M]
+    if E[0][0] < 0:
+        E = [[-v for v in row] for row in E]
+    return E

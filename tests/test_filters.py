@@ -1,0 +1,141 @@
+"""The float filter: generated kernels are current, error bounds hold, implementations agree."""
+
+from __future__ import annotations
+
+from fractions import Fraction as F
+
+import numpy as np
+import pytest
+from flint import fmpq
+
+from core import Relation, explain, quadric_from_axes
+from core import _kernels as K
+from core.errorbound import UNIT_ROUNDOFF, gamma_constant
+from core.exact import exact_pair
+from core.fastpath import classify_one, classify_pairs
+from core.filters import _HAT, _PENCIL, _Prepared, _run_hat, _run_pencil, classify_float_numpy
+from core.kernelgen import main as kernelgen_main
+from core.pencil import pencil_coefficients
+from core.subresultants import hat_s0, hat_s1, hat_s10
+from strategies import dyadic_tangent_pair
+
+
+def test_generated_kernels_are_current():
+    assert kernelgen_main(["--check"]) == 0
+
+
+@pytest.mark.parametrize("K_, Kb", [(1, 1), (10, 18), (14, 18), (99, 120)])
+def test_gamma_constant_matches_formula(K_, Kb):
+    u = UNIT_ROUNDOFF
+    exact = K_ * u / (1 - K_ * u) / (1 - u) ** (Kb + 1)
+    c = gamma_constant(K_, Kb)
+    assert F(c) >= exact and F(c) < exact * (1 + F(1, 2**50))
+
+
+def _random_matrices(rng, n, count):
+    """Valid ellipses/ellipsoids, some near-degenerate, entries rounded to floats."""
+    out = []
+    for k in range(count):
+        d = n - 1
+        c = rng.uniform(-5, 5, d) * (10.0 ** rng.integers(-3, 4))
+        r = rng.uniform(0.1, 3, d) * (10.0 ** rng.integers(-2, 3))
+        o = rng.uniform(0, 3) if d == 2 else rng.normal(size=4)
+        out.append(quadric_from_axes(c, r, o))
+    return np.array(out)
+
+
+def _exact(M):
+    return [[fmpq(*float(v).as_integer_ratio()) for v in row] for row in M]
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_pencil_error_bounds_hold(n):
+    rng = np.random.default_rng(n)
+    A = _random_matrices(rng, n, 60)
+    B = _random_matrices(rng, n, 60)
+    B[::7] = A[::7]  # identical shapes: coefficients with huge cancellation
+    prep = _Prepared(A, B)
+    out = _run_pencil(prep.a, prep.b)
+    for i in range(len(A)):
+        EA, EB = _exact(prep.a[i]), _exact(prep.b[i])
+        coeffs = pencil_coefficients(EA, EB)
+        for k, c in enumerate(coeffs):
+            v, bd = out[f"c{k}"]
+            assert abs(fmpq(*float(v[i]).as_integer_ratio()) - c) <= fmpq(*float(bd[i]).as_integer_ratio())
+
+
+@pytest.mark.parametrize("n", [3, 4])
+@pytest.mark.parametrize("which", ["s0", "s1", "s10"])
+def test_subresultant_error_bounds_hold(n, which):
+    rng = np.random.default_rng(10 * n + len(which))
+    A = _random_matrices(rng, n, 40)
+    B = _random_matrices(rng, n, 40)
+    prep = _Prepared(A, B)
+    out = _run_pencil(prep.a, prep.b)
+    f = {"s0": hat_s0, "s1": hat_s1, "s10": hat_s10}[which]
+    for i in range(len(A)):
+        exact = f(pencil_coefficients(_exact(prep.a[i]), _exact(prep.b[i])))
+        vals = [float(out[f"c{k}"][0][i]) for k in range(n + 1)]
+        radii = [float(out[f"c{k}"][1][i]) for k in range(n + 1)]
+        v, bd = _run_hat(n, which, vals, radii)
+        assert abs(fmpq(*float(v).as_integer_ratio()) - exact) <= fmpq(*float(bd).as_integer_ratio())
+
+
+def test_kernel_tables_are_consistent():
+    for n in (3, 4):
+        fn, outputs, consts, floor = _PENCIL[n]
+        assert len(outputs) == len(consts) and 0 < floor < 2.0**-850
+        for which in ("s0", "s1", "s10"):
+            assert 0 < _HAT[(n, which)][1] < 2.0**-850
+    assert K.PENCIL4_OUTPUTS[:2] == ("c0", "c0_M")
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_numba_numpy_and_single_pair_paths_agree(n):
+    rng = np.random.default_rng(42 + n)
+    A = _random_matrices(rng, n, 300)
+    B = _random_matrices(rng, n, 300)
+    T1, T2 = dyadic_tangent_pair(n - 1, 2.0, 1.0, [0.0] * (n - 1))
+    A[:5], B[:5] = T1, T2  # exactly tangent: must abstain
+    A[5] = -A[5]  # flipped sign
+    B[6, 0, 1] += 1e-3  # not symmetric
+    A[7, 1, 1] = np.nan
+    B[8] = A[8]  # identical
+    a = classify_pairs(A, B)
+    b = classify_float_numpy(A, B)
+    c = np.array([classify_one(A[i], B[i]) for i in range(len(A))])
+    assert (a == b).all() and (a == c).all()
+    assert (a[:5] == Relation.UNDECIDED).all() and (a[6:8] == Relation.UNDECIDED).all()
+    assert a[8] in (Relation.OVERLAP, Relation.UNDECIDED)
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_filter_decides_ordinary_pairs(n):
+    """At scene scales (centres within 5, axes 0.2 .. 3) the filter should almost never abstain."""
+    rng = np.random.default_rng(5 + n)
+
+    def shapes(k):
+        d = n - 1
+        return np.array([
+            quadric_from_axes(rng.uniform(-5, 5, d), rng.uniform(0.2, 3, d),
+                              rng.uniform(0, 3) if d == 2 else rng.normal(size=4))
+            for _ in range(k)
+        ])
+
+    codes = classify_pairs(shapes(5000), shapes(5000))
+    assert (codes == Relation.UNDECIDED).mean() < 0.001
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_explain_float_values_within_bounds(n):
+    rng = np.random.default_rng(7 + n)
+    for _ in range(20):
+        A = _random_matrices(rng, n, 1)[0]
+        B = _random_matrices(rng, n, 1)[0]
+        e = explain(A, B)
+        if e.certified_by != "float":
+            continue
+        pair = exact_pair(A, B, scaled=False)
+        for q, c in zip(e.coefficients, pair.coefficients):
+            assert q.bound is not None and abs(F(q.approx) - F(int(c.p), int(c.q))) <= F(q.bound) * (1 + F(1, 10**6))
+            assert q.sign == (c > 0) - (c < 0)
