@@ -27,7 +27,7 @@ from typing import Any
 
 from flint import fmpq, fmpq_poly
 
-from .algebraic import QSqrtPoly, squarefree_decomposition
+from .qsqrt import QSqrtPoly, squarefree_decomposition
 from .rationals import to_fmpq
 
 __all__ = [
@@ -191,7 +191,7 @@ class RationalFunction:
     def __str__(self) -> str:
         if self.is_polynomial():
             return str(self.num)
-        from .algebraic import _poly_str
+        from .qsqrt import _poly_str
 
         return f"({self.num})/({_poly_str(self.den)})"
 

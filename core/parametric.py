@@ -31,7 +31,9 @@ from typing import Any
 import numpy as np
 from flint import fmpq, fmpq_poly
 
-from .algebraic import QSqrtPoly, RealAlgebraic, _simplest_between, real_roots, sign_at
+from .algebraic import RealAlgebraic, _simplest_between, sign_at
+from .qsqrt import QSqrtPoly
+from .realroots import real_roots
 from .decision import RULES, decide, sign_variations
 from .expressions import RationalFunction
 from .motions import Motion, as_motion, motion_to_dict
