@@ -93,13 +93,12 @@ def test_classify_exact_method_and_float_method_on_tangency(client):
     assert (r.status_code, r.json()) == (200, out("undecided", None, method="float"))
 
 
-def test_classify_float_input_is_certified_by_someone(client):
-    """Far apart float circles: separate, whichever arithmetic certified it."""
-    r = client.post("/api/classify", json={"a": UNIT, "b": [[1.0, 0.0, -10.0], [0.0, 1.0, 0.0], [-10.0, 0.0, 99.0]]})
-    assert r.status_code == 200
-    body = r.json()
-    assert body["certified_by"] in ("float", "exact")
-    assert body == out("separate", body["certified_by"])
+def test_classify_far_apart_float_input_is_certified_by_the_filter(client):
+    """Circles 10 apart (JSON ints and floats mixed): far from tangency, the float filter decides."""
+    r = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, -10.0], [0, 1, 0], [-10.0, 0, 99]]})
+    assert (r.status_code, r.json()) == (200, out("separate", "float"))
+    r = client.post("/api/classify", json={"pairs": [{"a": UNIT, "b": [[1, 0, -3.5], [0, 1, 0], [-3.5, 0, 11.25]]}]})
+    assert (r.status_code, r.json()) == (200, [out("separate", "float")])
 
 
 def test_classify_batch_keeps_order(client):

@@ -12,6 +12,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
+import numpy as np
 from fastapi import HTTPException
 
 from core import Relation, classify, quadric_from_axes, validate_quadric
@@ -68,6 +69,21 @@ def quadric_input(q: list[list[Any]] | ShapeIn) -> Any:
     return quadric_from_axes([fl(v) for v in q.center], [fl(v) for v in q.semi_axes], orientation)
 
 
+_EXACT_FLOAT_INT = 2**53
+"""Integers below this are exactly representable as float64."""
+
+
+def _as_float64_if_exact(m: Any) -> Any:
+    """A float64 array when every entry is a JSON float or a float-exact integer (same values,
+    so the float filter can run on e.g. ``[[1, 0, -3.5], ...]``); otherwise unchanged."""
+    if isinstance(m, np.ndarray):
+        return m
+    flat = [v for row in m for v in row]
+    if all(isinstance(v, float) or (type(v) is int and abs(v) < _EXACT_FLOAT_INT) for v in flat):
+        return np.array(m, dtype=np.float64)
+    return m
+
+
 def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
     """Both shapes as core input, validated (422 naming "a" or "b" otherwise)."""
     out = []
@@ -76,7 +92,7 @@ def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
             m = quadric_input(q)
         with bad_input(where):
             validate_quadric(m, name=name)
-        out.append(m)
+        out.append(_as_float64_if_exact(m))
     a, b = out
     if len(a) != len(b):
         raise HTTPException(
