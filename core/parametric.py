@@ -263,6 +263,11 @@ class MotionAnalysis:
             raise ValueError(f"bad sample window [{lo}, {hi}]")
         return float(lo), float(hi)
 
+    def subresultants(self) -> dict[str, QSqrtPoly]:
+        """The paper's s0, s1, s1,0 themselves: s_j = -a_n * ŝ_j (Examples 29, 32 print these)."""
+        an = self.a[-1]
+        return {"s0": -(an * self.s0), "s1": -(an * self.s1), "s10": -(an * self.s10)}
+
     def polynomial_strings(self) -> dict[str, Any]:
         """a_i, ŝ0, ŝ1, ŝ1,0 as parseable strings in t, with their degrees."""
         return {

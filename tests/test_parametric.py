@@ -89,6 +89,8 @@ def test_example29_pencil_and_subresultants(ex29):
     target = T([8, -24, 17]) * T([9, -24, 17]) ** 3 * fmpq(-1, 2)
     assert (ex29.s1 * (-ex29.a[4].p)).p == target
     assert (ex29.s10 * (-ex29.a[4].p)).p == target
+    full = ex29.subresultants()
+    assert full["s1"].p == target and full["s10"].p == target and full["s0"].is_zero()
 
 
 def test_example29_events_and_intervals(ex29):
@@ -205,6 +207,8 @@ def test_example32():
     assert all(p.degree() == 4 for p in r.a)
     # the paper's degrees are of s_j = -a4 * shat_j
     assert r.s0.degree() + r.a[4].degree() == 26 and r.s1.degree() + 4 == 20 and r.s10.degree() + 4 == 20
+    full = r.subresultants()
+    assert (full["s0"].degree(), full["s1"].degree(), full["s10"].degree()) == (26, 20, 20)
     rows = [row for row in r.sign_table if row.where == "point"]
     assert all(row.s1 < 0 < row.s10 for row in rows)
     assert [r.relation_at(x) for x in (-2, 0, 2)] == [O, S, O]
