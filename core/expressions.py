@@ -225,6 +225,7 @@ class _Token:
 
 
 _OPS = {"+", "-", "*", "/", "^"}
+_DIGITS = frozenset("0123456789")  # ASCII only: str.isdigit() also accepts e.g. superscripts
 
 
 def _tokenize(text: str) -> list[_Token]:
@@ -235,28 +236,28 @@ def _tokenize(text: str) -> list[_Token]:
         if ch.isspace():
             i += 1
             continue
-        if ch.isdigit() or (ch == "." and i + 1 < n and text[i + 1].isdigit()):
+        if ch in _DIGITS or (ch == "." and i + 1 < n and text[i + 1] in _DIGITS):
             j = i
-            while j < n and text[j].isdigit():
+            while j < n and text[j] in _DIGITS:
                 j += 1
             if j < n and text[j] == ".":
                 j += 1
-                while j < n and text[j].isdigit():
+                while j < n and text[j] in _DIGITS:
                     j += 1
             if j < n and text[j] in "eE":
                 k = j + 1
                 if k < n and text[k] in "+-":
                     k += 1
-                if k < n and text[k].isdigit():
-                    while k < n and text[k].isdigit():
+                if k < n and text[k] in _DIGITS:
+                    while k < n and text[k] in _DIGITS:
                         k += 1
                     j = k
             tokens.append(_Token("num", text[i:j], i))
             i = j
             continue
-        if ch.isalpha() or ch == "_":
+        if (ch.isascii() and ch.isalpha()) or ch == "_":
             j = i
-            while j < n and (text[j].isalnum() or text[j] == "_"):
+            while j < n and ((text[j].isascii() and text[j].isalnum()) or text[j] == "_"):
                 j += 1
             word = text[i:j]
             if word == "t":
@@ -369,7 +370,7 @@ class _Parser:
         if tok.kind == "op" and tok.text == "^":
             self._next()
             e = self._next()
-            if e.kind != "num" or not e.text.isdigit():
+            if e.kind != "num" or not all(c in _DIGITS for c in e.text):
                 raise self._error(e, "the exponent must be a non-negative integer")
             k = int(e.text) if len(e.text) <= 6 else MAX_EXPONENT + 1
             if k > MAX_EXPONENT:

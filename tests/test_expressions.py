@@ -81,6 +81,8 @@ def test_round_trip_of_printed_form():
         ("sqrt(2) + sqrt(3)", "only one sqrt(d)"),
         ("__import__('os')", "unexpected '__import__'"),
         ("T", "unexpected 'T'"),
+        ("t\u00b2", "unexpected '\u00b2' at position 1"),
+        ("\u0661\u0662", "unexpected '\u0661' at position 0"),
     ],
 )
 def test_errors_name_the_offender(text, fragment):
