@@ -11,11 +11,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
 from flint import fmpq, fmpz
 
 from .decision import Decision, decide
 from .pencil import pencil_coefficients
-from .quadrics import validate_quadric
+from .quadrics import check_determinant_sign, determinant, normalised_quadratic_part
 from .subresultants import hat_s0, hat_s1, hat_s10
 
 __all__ = ["ExactPair", "classify_exact", "exact_pair", "integer_matrix"]
@@ -39,8 +40,9 @@ def integer_matrix(M: list[list[fmpq]]) -> list[list[fmpz]]:
 class ExactPair:
     """A validated pair and its exact pencil; s-values are computed on first use and cached."""
 
-    A: list[list[fmpq]]
-    B: list[list[fmpq]]
+    A: list[list[fmpq]] | None
+    B: list[list[fmpq]] | None
+    """Normalised exact matrices (None on the integer fast path for float input)."""
     coefficients: list[Any]
     """[a_0..a_n] of det(T A' + B') for the integer-scaled A', B' (positive multiples)."""
     _cache: dict[str, Any]
@@ -69,6 +71,32 @@ class ExactPair:
         )
 
 
+def _float_int_matrix(M: Any) -> list[list[int]] | None:
+    """2^k * M as Python ints (k chosen so every entry is an integer) for a finite float64
+    (n, n) array, sign-normalised so its quadratic block is positive definite; None if M is not
+    such an array or is invalid (the general path then produces the precise error message)."""
+    if type(M) is not np.ndarray or M.dtype != np.float64 or M.ndim != 2 or M.shape[0] != M.shape[1]:
+        return None
+    if not np.isfinite(M).all() or not (M == M.T).all():
+        return None
+    m, e = np.frexp(M)
+    mi = np.ldexp(m, 53).astype(np.int64)  # exact: |m| < 1 has at most 53 significant bits
+    e = e - 53
+    nz = mi != 0
+    if not nz.any():
+        return None
+    emin = int(e[nz].min())
+    shifts = np.where(nz, e - emin, 0).tolist()  # zero entries: any shift, keep it 0
+    ints = [[v << s for v, s in zip(row, srow)] for row, srow in zip(mi.tolist(), shifts)]
+    n = len(ints)
+    minors = [determinant([row[:k] for row in ints[:k]]) for k in range(1, n)]
+    if all(d > 0 for d in minors):
+        return ints
+    if all((d < 0) if k % 2 == 0 else (d > 0) for k, d in enumerate(minors)):
+        return [[-v for v in row] for row in ints]
+    return None
+
+
 def exact_pair(A: Any, B: Any, *, scaled: bool = True) -> ExactPair:
     """Validate A and B exactly and build their pencil.
 
@@ -80,14 +108,25 @@ def exact_pair(A: Any, B: Any, *, scaled: bool = True) -> ExactPair:
     Raises:
         ValueError: either matrix is invalid, or A and B differ in size.
     """
-    EA = validate_quadric(A, name="A")
-    EB = validate_quadric(B, name="B")
-    if len(EA) != len(EB):
-        raise ValueError(f"A is {len(EA)}x{len(EA)} but B is {len(EB)}x{len(EB)}: both must be ellipses or both ellipsoids")
+    if scaled:  # fast path for float arrays: straight to integers, no rationals
+        IA, IB = _float_int_matrix(A), _float_int_matrix(B)
+        if IA is not None and IB is not None and len(IA) == len(IB):
+            n = len(IA)
+            coeffs = pencil_coefficients(IA, IB)
+            if coeffs[n] < 0 and coeffs[0] < 0:
+                return ExactPair(None, None, coeffs, {})
+    EA = normalised_quadratic_part(A, name="A")
+    EB = normalised_quadratic_part(B, name="B")
+    n = len(EA)
+    if n != len(EB):
+        raise ValueError(f"A is {n}x{n} but B is {len(EB)}x{len(EB)}: both must be ellipses or both ellipsoids")
     if scaled:
         coeffs = pencil_coefficients(integer_matrix(EA), integer_matrix(EB))
     else:
         coeffs = pencil_coefficients(EA, EB)
+    # det A = a_n and det B = a_0 (up to positive factors): the last validity check, for free
+    check_determinant_sign(_sign(coeffs[n]), n, "A")
+    check_determinant_sign(_sign(coeffs[0]), n, "B")
     return ExactPair(EA, EB, coeffs, {})
 
 

@@ -195,24 +195,61 @@ def _quaternion_from_rotation(R: np.ndarray) -> tuple[float, float, float, float
     return tuple(float(sign * v / n) for v in q)  # type: ignore[return-value]
 
 
-def _leading_minors(M: ExactMatrix, k: int) -> list[fmpq]:
-    """Leading principal minors of orders 1..k (fraction-free enough for k <= 3)."""
-    out = []
-    for order in range(1, k + 1):
-        S = [row[:order] for row in M[:order]]
-        out.append(_det(S))
-    return out
-
-
-def _det(S: ExactMatrix) -> fmpq:
+def determinant(S: ExactMatrix) -> fmpq:
+    """Determinant of a 1x1 .. 4x4 exact matrix (explicit expansions, no division)."""
     n = len(S)
     if n == 1:
         return S[0][0]
     if n == 2:
         return S[0][0] * S[1][1] - S[0][1] * S[1][0]
+    if n == 3:
+        return (
+            S[0][0] * (S[1][1] * S[2][2] - S[1][2] * S[2][1])
+            - S[0][1] * (S[1][0] * S[2][2] - S[1][2] * S[2][0])
+            + S[0][2] * (S[1][0] * S[2][1] - S[1][1] * S[2][0])
+        )
     return sum(
-        ((-1) ** j) * S[0][j] * _det([row[:j] + row[j + 1 :] for row in S[1:]]) for j in range(n)
+        ((-1) ** j) * S[0][j] * determinant([row[:j] + row[j + 1 :] for row in S[1:]]) for j in range(n)
     )
+
+
+def normalised_quadratic_part(M: Any, *, name: str = "matrix") -> ExactMatrix:
+    """Exact matrix of M with a positive definite quadratic block (signs flipped if needed).
+
+    Checks shape, readable finite entries, symmetry and definiteness (Sylvester's criterion on
+    the leading minors); the sign of det, which completes :func:`validate_quadric`, is left to
+    the caller (the exact classifier reads it off the pencil: det A = a_n, det B = a_0).
+    """
+    rows = _rows(M, name)
+    n = len(rows)
+    E = [[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)]
+    for i in range(n):
+        for j in range(i + 1, n):
+            if E[i][j] != E[j][i]:
+                raise ValueError(
+                    f"{name} is not symmetric: entry ({i},{j}) = {E[i][j]} but ({j},{i}) = {E[j][i]}"
+                )
+    minors = [determinant([row[:k] for row in E[:k]]) for k in range(1, n)]
+    if all(m > 0 for m in minors):
+        return E
+    if all((m < 0) if k % 2 == 0 else (m > 0) for k, m in enumerate(minors)):
+        return [[-v for v in row] for row in E]
+    kind = "ellipse" if n == 3 else "ellipsoid"
+    other = (
+        "a hyperbola, parabola or degenerate conic"
+        if n == 3
+        else "a hyperboloid, paraboloid, cylinder, cone or degenerate quadric"
+    )
+    raise ValueError(f"{name} is not an {kind}: its quadratic part is indefinite or semidefinite ({other})")
+
+
+def check_determinant_sign(det_sign: int, n: int, name: str) -> None:
+    """Raise unless det < 0 (given the sign of det of the normalised matrix)."""
+    kind = "ellipse" if n == 3 else "ellipsoid"
+    if det_sign == 0:
+        raise ValueError(f"{name} is a degenerate {kind} (det = 0: a single point)")
+    if det_sign > 0:
+        raise ValueError(f"{name} has an empty interior: no real points (det > 0), not an {kind}")
 
 
 def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
@@ -237,31 +274,9 @@ def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
         ...
         ValueError: matrix is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)
     """
-    rows = _rows(M, name)
-    n = len(rows)
-    E = [[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)]
-    for i in range(n):
-        for j in range(i + 1, n):
-            if E[i][j] != E[j][i]:
-                raise ValueError(
-                    f"{name} is not symmetric: entry ({i},{j}) = {E[i][j]} but ({j},{i}) = {E[j][i]}"
-                )
-    kind = "ellipse" if n == 3 else "ellipsoid"
-    minors = _leading_minors(E, n - 1)
-    if all(m > 0 for m in minors):
-        pass
-    elif all((m < 0) if k % 2 == 0 else (m > 0) for k, m in enumerate(minors)):
-        E = [[-v for v in row] for row in E]
-    else:
-        other = "a hyperbola, parabola or degenerate conic" if n == 3 else "a hyperboloid, paraboloid, cylinder, cone or degenerate quadric"
-        raise ValueError(
-            f"{name} is not an {kind}: its quadratic part is indefinite or semidefinite ({other})"
-        )
-    d = _det(E)
-    if d == 0:
-        raise ValueError(f"{name} is a degenerate {kind} (det = 0: a single point)")
-    if d > 0:
-        raise ValueError(f"{name} has an empty interior: no real points (det > 0), not an {kind}")
+    E = normalised_quadratic_part(M, name=name)
+    d = determinant(E)
+    check_determinant_sign((d > 0) - (d < 0), len(E), name)
     return E
 
 

@@ -75,7 +75,15 @@ def to_fmpq(x: Any) -> fmpq:
         >>> to_fmpq(0.1) == to_fmpq("0.1")
         False
     """
-    if isinstance(x, fmpq):
+    t = type(x)
+    if t is float or t is np.float64:  # the common case first (hot in the exact path)
+        f = float(x)
+        if f - f != 0.0:  # inf or nan
+            raise ValueError(f"not a finite number: {f!r}")
+        return fmpq(*f.as_integer_ratio())
+    if t is int:
+        return fmpq(x)
+    if t is fmpq:
         return x
     if isinstance(x, bool | np.bool_):
         raise ValueError(f"a boolean is not a number: {x!r}")
