@@ -586,7 +586,6 @@ def analyse(
         point_rel.append(dec.relation)
         point_rule.append(dec.rule)
         table.append(_row("point", alpha.decimal(digits), n, sg, dec))
-    bounds: list[fmpq | None] = [lo] + [None] * len(cands) + [hi]
     seg_rel: list[Relation] = []
     seg_sample: list[fmpq] = []
     seg_rows: list[SignRow] = []
@@ -614,7 +613,6 @@ def analyse(
         seg_rel.append(dec.relation)
         seg_sample.append(t)
         seg_rows.append(_row("interval", str(t), n, sg, dec))
-    del bounds
 
     # events, non-event roots, merged intervals
     events: list[Event] = []
