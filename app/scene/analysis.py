@@ -441,50 +441,50 @@ def _short_rational(text: str) -> str:
 
 
 def _explain_at(an: Any, t: float, event: int | None) -> dict[str, Any] | None:
-    """Readout data at t from the analysis polynomials (exact signs at the rational t).
+    """Readout data at t: ``core.explain`` of the exact matrices A(t), B(t) when they are rational.
 
-    At an event the signs come from the sign-table row of that instant (decided exactly at the
-    real algebraic time). Values a_i are those of the analysis: a common positive multiple of
-    the true coefficients; ŝ_j = -s_j / a_n has the sign of s_j.
+    At an event (an algebraic time) the signs come from the sign-table row of that instant,
+    decided exactly by the analysis. When A(t) has irrational entries (sqrt(d) presets) the
+    relation comes from ``relation_at`` and the signs from the row of the interval's sample.
     """
-    from core.algebraic import sign_qsqrt
-    from core.decision import RULES, decide, sign_variations
-    from core.rationals import to_fmpq
+    from core import explain
+    from core.decision import RULES
+    from core.motions import matrix_at_exact
 
     n = an.n
-    if event is not None:
+    if event is None:
+        try:
+            A = matrix_at_exact(an.A, t)
+            B = matrix_at_exact(an.B, t)
+        except ValueError:
+            A = B = None
+        if A is not None:
+            d = explain(A, B).to_dict()
+            d["relation"] = str(an.relation_at(t))  # the analysis' answer (same exact t)
+            return d
+        row = None
+        for iv in an.intervals:
+            if (iv.lo is None or float(iv.lo) <= t) and (iv.hi is None or t <= float(iv.hi)):
+                row = next((r for r in an.sign_table if r.where == "interval" and r.t == str(iv.sample)), None)
+                break
+        note = "(irrational A(t): signs at this interval's sample point)"
+    else:
         ev = an.events[event - 1]
         row = next((r for r in an.sign_table if r.where == "point" and r.t == ev.value), None)
-        if row is None:
-            return None
-        a_signs = list(reversed(row.a))
-        coeffs = [{"name": f"a{i}", "approx": float("nan"), "exact": None, "bound": None, "sign": a_signs[i]} for i in range(n + 1)]
-        subs = {k: {"name": k, "approx": float("nan"), "exact": None, "bound": None, "sign": getattr(row, k)} for k in ("s0", "s1", "s10")}
-        rel, rule, var = str(row.relation), row.rule, row.var
-    else:
-        tq = to_fmpq(t)
-        d = an.sqrt_d
-
-        def q(name: str, p: Any) -> dict[str, Any]:
-            a, b = p.at(tq)
-            s = sign_qsqrt(a, b, d) if d != 1 else (a > 0) - (a < 0)
-            approx = float(a) + (float(b) * d**0.5 if d != 1 else 0.0)
-            exact = str(a) if (d == 1 or b == 0) else None
-            return {"name": name, "approx": approx, "exact": exact if exact and len(exact) <= 18 else None, "bound": None, "sign": s}
-
-        coeffs = [q(f"a{i}", p) for i, p in enumerate(an.a)]
-        subs = {k: q(k, getattr(an, k)) for k in ("s0", "s1", "s10")}
-        rel = str(an.relation_at(t))
-        var = sign_variations([c["sign"] for c in reversed(coeffs)])
-        middle = [c["sign"] for c in reversed(coeffs)][1:-1]
-        rule = decide(n, middle, lambda: subs["s0"]["sign"], lambda: subs["s1"]["sign"], lambda: subs["s10"]["sign"]).rule
+        note = ""
+    if row is None:
+        return None
+    a_signs = list(reversed(row.a))
+    nan = float("nan")
+    coeffs = [{"name": f"a{i}", "approx": nan, "exact": None, "bound": None, "sign": a_signs[i]} for i in range(n + 1)]
+    subs = {k: {"name": k, "approx": nan, "exact": None, "bound": None, "sign": getattr(row, k)} for k in ("s0", "s1", "s10")}
     return {
         "n": n,
-        "relation": rel,
+        "relation": str(an.relation_at(t)) if event is None else str(row.relation),
         "certified_by": "exact",
-        "rule": rule,
-        "rule_text": RULES.get(rule, rule),
-        "var": var,
+        "rule": row.rule,
+        "rule_text": RULES.get(row.rule, row.rule) + (" " + note if note else ""),
+        "var": row.var,
         "coefficients": coeffs,
         "s0": subs["s0"],
         "s1": subs["s1"],

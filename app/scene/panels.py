@@ -46,6 +46,8 @@ def _fmt(q: dict[str, Any] | None) -> str:
     exact = q.get("exact")
     if exact is not None and len(exact) <= 18:
         val = exact
+    elif q.get("approx") is None or q["approx"] != q["approx"]:  # NaN: only the sign is known
+        val = "(sign only)"
     else:
         val = f"{q['approx']:.6g}"
         if q.get("bound") is not None:

@@ -454,7 +454,9 @@ class Session:
         self._set_md(self.status, "Analysing the motion (exact)…")
         self.progress.visible = True
         self.progress.value = 10.0
+        pending_event = self.state.event
         self.set_t(self.state.t)
+        self.state.event = pending_event  # shown exactly once the analysis knows the events
         fut = self.cache.submit(model, self.executor)
         self._pending = fut
 
@@ -473,6 +475,14 @@ class Session:
         fut.add_done_callback(done)
 
     def _analysis_done(self, model: MotionModel, result: AnalysisView) -> None:
+        try:
+            self._show_analysis(model, result)
+        except Exception as e:  # noqa: BLE001 - a display bug must not leave the tab waiting
+            self._set_md(self.status, f'<span style="color:#d62728">⚠ could not show the analysis: {e}</span>')
+            self.ready.set()
+            raise
+
+    def _show_analysis(self, model: MotionModel, result: AnalysisView) -> None:
         with self._lock:
             if self.model is not model:
                 return
