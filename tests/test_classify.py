@@ -135,6 +135,8 @@ def test_invariance_under_rigid_motion_and_scaling(pair, q, c, sa, sb):
 def test_exactly_tangent_pairs(pair):
     A, B = pair
     assert classify(A, B) == Relation.TANGENT
+    assert classify(A, B, method="float") in (U, Relation.TANGENT)
+    assert classify(A, B, method="exact") == Relation.TANGENT
     assert oracle_relation(A, B) == "tangent"
 
 
