@@ -462,3 +462,55 @@ def test_property_rotating_ellipsoids(pair):
             assert has_positive_double_root(arb_poly(pencil_coefficients(*mats)), 1e-60)
         finally:
             ctx.prec = 53
+
+
+# -------------------------------------------------------------------------------------------
+# the exact layer underneath: Q(sqrt d)[t], real roots, signs at algebraic numbers
+
+
+def test_real_roots_of_qsqrt_polynomials():
+    from core.qsqrt import QSqrtPoly
+    from core.realroots import real_roots
+
+    t = QSqrtPoly(fmpq_poly([0, 1]))
+    r2 = QSqrtPoly(0, 1, 2)
+    roots = real_roots((t - r2) * (t + 1))  # the conjugate root -sqrt 2 of the norm is not a root
+    assert [x.value for x in roots[:1]] == [-1] and len(roots) == 2
+    assert close(roots[1].decimal(30), Decimal(2).sqrt(), 30)
+    # two roots 1e-30 apart, plus complex ones
+    eps = fmpq(1, 10**30)
+    f = QSqrtPoly(fmpq_poly([-fmpq(1, 3), 1]) * fmpq_poly([-fmpq(1, 3) - eps, 1]) * fmpq_poly([1, 0, 1]))
+    got = real_roots(f)
+    assert [x.value for x in got] == [fmpq(1, 3), fmpq(1, 3) + eps]
+    # irrational roots 3.5e-31 apart: sqrt 2 and sqrt(2 + 1e-30) (and their negatives)
+    g = QSqrtPoly(fmpq_poly([-2, 0, 1]) * fmpq_poly([-2 - eps, 0, 1]))
+    got = real_roots(g, fmpq(0), None)
+    assert len(got) == 2 and got[0].hi < got[1].lo
+    assert close(got[0].decimal(40), Decimal(2).sqrt(), 40)
+    assert close(got[1].decimal(40), (2 + Decimal(1) / Decimal(10**30)).sqrt(), 40)
+    # Wilkinson's polynomial of degree 20: all 20 integer roots, exactly
+    w = fmpq_poly([1])
+    for k in range(1, 21):
+        w *= fmpq_poly([-k, 1])
+    assert [x.value for x in real_roots(QSqrtPoly(w))] == list(range(1, 21))
+    assert [x.value for x in real_roots(QSqrtPoly(w), fmpq(5), fmpq(7))] == [5, 6, 7]  # closed interval
+
+
+def test_signs_at_algebraic_numbers_are_exact():
+    from flint import fmpz_poly
+
+    from core.algebraic import RealAlgebraic, sign_at
+    from core.qsqrt import QSqrtPoly
+
+    alpha = RealAlgebraic.isolating(fmpz_poly([-2, 0, 1]), fmpq(1), fmpq(2))  # sqrt 2
+    t = fmpq_poly([0, 1])
+    assert sign_at(QSqrtPoly(-2, t, 2), alpha) == 0  # sqrt2 * sqrt2 - 2, with p, q both nonzero
+    assert sign_at(QSqrtPoly(2, t, 2), alpha) == 1
+    assert sign_at(QSqrtPoly(t * t - 2), alpha) == 0
+    # a rational 1e-40 below sqrt 2: the sign of t - r at sqrt 2 is +1 (needs refinement)
+    getcontext().prec = 80
+    r = Decimal(2).sqrt().quantize(Decimal(10) ** -40, rounding="ROUND_FLOOR")
+    rq = fmpq(int(r.scaleb(40)), 10**40)
+    assert sign_at(QSqrtPoly(t - rq), alpha) == 1
+    assert sign_at(QSqrtPoly(t - rq - fmpq(1, 10**40)), alpha) == -1
+    getcontext().prec = 60
