@@ -1,12 +1,15 @@
-"""Certified interference of two ellipses or ellipsoids (Caravantes, Diaz-Toca, Fioravanti,
-Gonzalez-Vega: "Solving the interference problem for ellipses and ellipsoids: new formulae").
+"""Certified interference of two ellipses or ellipsoids, fixed or moving.
 
-Conventions are documented once, in :mod:`core.quadrics`. Public API::
+Implements Caravantes, Diaz-Toca, Fioravanti, Gonzalez-Vega, "Solving the interference problem
+for ellipses and ellipsoids: new formulae". Conventions are documented once, in
+:mod:`core.quadrics`. Public API::
 
-    from core import classify, Relation, explain
+    from core import classify, Relation, explain          # static pairs (certified)
+    from core import analyse                              # moving pairs: events and intervals
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
+    from core import warm_up                              # compile the numba kernels early
 
-``core`` imports only numpy, python-flint and the standard library (no web packages).
+``core`` imports only numpy, python-flint, numba (optional) and the standard library.
 """
 
 from .classify import METHODS as METHODS
@@ -16,13 +19,8 @@ from .classify import classify as classify
 from .explain import Explanation as Explanation
 from .explain import Quantity as Quantity
 from .explain import explain as explain
-from .quadrics import ShapeParams as ShapeParams
-from .quadrics import axes_from_quadric as axes_from_quadric
-from .quadrics import quadric_from_axes as quadric_from_axes
-from .quadrics import rotation_from_quaternion as rotation_from_quaternion
-from .quadrics import validate_quadric as validate_quadric
-from .relation import Relation as Relation
 from .expressions import parse_expression as parse_expression
+from .fastpath import warm_up as warm_up
 from .motions import Motion as Motion
 from .motions import motion_from_dict as motion_from_dict
 from .motions import motion_to_dict as motion_to_dict
@@ -30,27 +28,34 @@ from .parametric import MotionAnalysis as MotionAnalysis
 from .parametric import analyse as analyse
 from .presets import preset as preset
 from .presets import preset_names as preset_names
+from .quadrics import ShapeParams as ShapeParams
+from .quadrics import axes_from_quadric as axes_from_quadric
+from .quadrics import quadric_from_axes as quadric_from_axes
+from .quadrics import rotation_from_quaternion as rotation_from_quaternion
+from .quadrics import validate_quadric as validate_quadric
+from .relation import Relation as Relation
 
 __all__ = [
     "METHODS",
     "Explanation",
     "Method",
+    "Motion",
+    "MotionAnalysis",
     "Quantity",
     "Relation",
     "ShapeParams",
     "Stats",
+    "analyse",
     "axes_from_quadric",
     "classify",
     "explain",
-    "quadric_from_axes",
-    "rotation_from_quaternion",
-    "validate_quadric",
-    "Motion",
-    "MotionAnalysis",
-    "analyse",
     "motion_from_dict",
     "motion_to_dict",
     "parse_expression",
     "preset",
     "preset_names",
+    "quadric_from_axes",
+    "rotation_from_quaternion",
+    "validate_quadric",
+    "warm_up",
 ]

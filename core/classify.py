@@ -132,7 +132,7 @@ def classify(A: Any, B: Any, *, method: Method = "adaptive", stats: Stats | None
         and A.shape[0] in (3, 4)
         and A.shape[0] == A.shape[1]
     ):  # one float pair (a drag in the scene): skip the batch machinery
-        code = classify_one(A, B)
+        code = classify_one(A, B, wait=False)
         if stats is not None:
             stats.pairs += 1
             stats.escalated += code == Relation.UNDECIDED

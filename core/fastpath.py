@@ -8,6 +8,7 @@ second) and so that a single pair (a drag in the scene) costs microseconds, not 
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 import numpy as np
@@ -15,7 +16,7 @@ import numpy as np
 from . import _kernels as K
 from .errorbound import RADIUS_FACTOR
 
-__all__ = ["HAVE_NUMBA", "classify_pairs", "classify_one"]
+__all__ = ["HAVE_NUMBA", "classify_pairs", "classify_one", "warm_up"]
 
 try:  # numba is optional: the plain-Python functions below are the reference
     from numba import njit as _njit
@@ -141,8 +142,63 @@ def _many4(A: Any, B: Any, out: Any) -> None:
         out[i] = _pair4(A[i], B[i], wa, wb, c, cr)
 
 
+@_njit(cache=True)
+def _one3(A: Any, B: Any) -> int:
+    wa = np.empty((3, 3))
+    wb = np.empty((3, 3))
+    c = np.empty(4)
+    cr = np.empty(4)
+    return _pair3(A, B, wa, wb, c, cr)
+
+
+@_njit(cache=True)
+def _one4(A: Any, B: Any) -> int:
+    wa = np.empty((4, 4))
+    wb = np.empty((4, 4))
+    c = np.empty(5)
+    cr = np.empty(5)
+    return _pair4(A, B, wa, wb, c, cr)
+
+
+_ready = threading.Event()
+_start_lock = threading.Lock()
+_started: list[threading.Thread] = []
+
+
+def _compile_all() -> None:
+    """Compile (or load from numba's disk cache) every entry point once."""
+    for n in (3, 4):
+        M = np.eye(n)
+        M[-1, -1] = -1.0
+        N = M.copy()
+        N[0, -1] = N[-1, 0] = -3.0
+        N[-1, -1] = 8.0
+        (_one3 if n == 3 else _one4)(M, N)
+        (_many3 if n == 3 else _many4)(M[None], N[None], np.empty(1, np.int8))
+    _ready.set()
+
+
+def warm_up(*, wait: bool = True) -> bool:
+    """Compile the numba kernels in a background thread (once); optionally wait for it.
+
+    Returns True when the compiled kernels are ready. Without numba there is nothing to do
+    (returns False: the numpy / exact paths are used).
+    """
+    if not HAVE_NUMBA:
+        return False
+    with _start_lock:
+        if not _started:
+            t = threading.Thread(target=_compile_all, name="numba-warm-up", daemon=True)
+            _started.append(t)
+            t.start()
+    if wait:
+        _ready.wait()
+    return _ready.is_set()
+
+
 def classify_pairs(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Codes for float64 arrays (N, n, n); requires numba for speed (works without it, slowly)."""
+    """Codes for float64 arrays (N, n, n) with the compiled per-pair kernel."""
+    warm_up(wait=True)
     out = np.empty(A.shape[0], dtype=np.int8)
     A = np.ascontiguousarray(A, dtype=np.float64)
     B = np.ascontiguousarray(B, dtype=np.float64)
@@ -150,8 +206,13 @@ def classify_pairs(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     return out
 
 
-def classify_one(A: np.ndarray, B: np.ndarray) -> int:
-    """Code for one float64 pair (n, n)."""
-    n = A.shape[-1]
-    work = (np.empty((n, n)), np.empty((n, n)), np.empty(n + 1), np.empty(n + 1))
-    return int((_pair3 if n == 3 else _pair4)(A, B, *work))
+def classify_one(A: np.ndarray, B: np.ndarray, *, wait: bool = True) -> int:
+    """Code for one float64 pair (n, n).
+
+    With ``wait=False`` it never blocks on numba's first compilation (several seconds without
+    the disk cache): until the kernels are ready it answers UNDECIDED, so an interactive caller
+    falls back to the exact path (~0.1 ms) instead of freezing.
+    """
+    if not warm_up(wait=wait):
+        return _UNDECIDED
+    return int((_one3 if A.shape[-1] == 3 else _one4)(A, B))
