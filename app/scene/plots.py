@@ -85,6 +85,9 @@ def update_plot(handle: Any, data: PlotData, cursor_index: int, *, labels: bool 
     array across series); event markers sit on y = 0 at the sample nearest each event.
     """
     if labels:
+        # fixed y range: uPlot's auto-range does not skip the NaN gaps of the cursor/event series
+        pad = 0.05 * (data.top - data.bot) or 1.0
+        handle.scales = {"x": {"time": False, "auto": True}, "y": {"auto": False, "range": [data.bot - pad, data.top + pad]}}
         cfg = list(handle.series)
         for k, name in enumerate(data.names, start=1):
             cfg[k] = {**cfg[k], "label": name, "show": True}

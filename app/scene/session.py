@@ -9,6 +9,7 @@ paths have cheap entry points that need no browser, for the benchmark helper:
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from concurrent.futures import Executor, Future
@@ -681,21 +682,42 @@ class Session:
             pts = self.model.extent_points()
         lo, hi = np.min(pts, axis=0), np.max(pts, axis=0)
         centre = (lo + hi) / 2
-        radius = float(np.linalg.norm(hi - lo)) / 2 + 2.0
+        radius = max(float(np.linalg.norm(hi - lo)) / 2, 1.0)
+        try:
+            fov, aspect = float(cam.fov), float(cam.aspect)
+        except Exception:  # noqa: BLE001 - camera state not known yet: typical values
+            fov, aspect = 1.3, 1.5
+        # the GUI panel covers about the right 35 % of the page: fit the shapes in the left 62 %
+        # and aim right of them by the matching offset
+        free = 0.62
+        half_h = math.tan(fov / 2)
+        dist = 0.9 * radius / (half_h * min(1.0, free * aspect))
+        shift = (0.5 - free / 2) * 2 * dist * half_h * aspect
+        size = float(2 ** math.ceil(math.log2(4 * radius)))
+        floor = 0.0 if self.state.dim == 2 else float(lo[2])
+        self.grid = self.scene.add_grid(
+            "/grid",
+            width=size,
+            height=size,
+            plane="xy",
+            cell_size=size / 16,
+            section_size=size / 4,
+            position=(float(centre[0]), float(centre[1]), floor - (0.02 if self.state.dim == 2 else 0.0)),
+        )
         if self.state.dim == 2:
             cam.up_direction = (0.0, 1.0, 0.0)
-            x = float(centre[0]) + 0.45 * radius
-            cam.position = (x, float(centre[1]) - 1e-3, 2.2 * radius + 2)
+            x = float(centre[0]) + shift
+            cam.position = (x, float(centre[1]) - 1e-3, dist)
             cam.look_at = (x, float(centre[1]), 0.0)
         else:
             cam.up_direction = (0.0, 0.0, 1.0)
+            view = np.array([0.3, -1.05, 0.6])
+            view /= np.linalg.norm(view)
+            right = np.cross(-view, np.array([0.0, 0.0, 1.0]))
+            right /= np.linalg.norm(right)
             # viser keeps the orientation when the position is set: position first, then look_at
-            offset = radius * np.array([0.45, -1.6, 0.9])
-            # the GUI panel covers the right of the page: aim right of the shapes so they sit left
-            right = np.cross(-offset, np.array([0.0, 0.0, 1.0]))
-            right *= 0.45 * radius / np.linalg.norm(right)
-            cam.position = tuple(float(v) for v in centre + offset + right)
-            cam.look_at = tuple(float(v) for v in centre + right)
+            cam.position = tuple(float(v) for v in centre + dist * view + shift * right)
+            cam.look_at = tuple(float(v) for v in centre + shift * right)
 
     def close(self) -> None:
         """Stop playback and ignore pending analyses (the tab went away)."""

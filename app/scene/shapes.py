@@ -110,6 +110,9 @@ class EllipsoidView:
         if (position, wxyz) != self._pose:
             self._pose = (position, wxyz)
             if not from_drag:
+                if self.dim == 2 and self.name == "B":
+                    # two discs in one plane z-fight where they overlap: lift B a hair (display)
+                    position = (position[0], position[1], position[2] + 0.01)
                 self.control.position = position
                 self.control.wxyz = wxyz
                 self.sent += 2
