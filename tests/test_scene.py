@@ -152,3 +152,83 @@ def test_compress_keeps_sign_and_order():
     assert np.all(np.sign(c) == np.sign(y))
     assert np.all(np.diff(c) > 0)
     assert np.max(np.abs(c)) < 100
+
+
+# ---------------------------------------------------------------------------- motions
+ALPHA1 = (12 - 2 * 2**0.5) / 17  # Example 29 (paper): tangent at (12 -+ 2 sqrt 2)/17
+ALPHA2 = (12 + 2 * 2**0.5) / 17
+
+
+def motion_session(server, **cfg) -> Session:
+    s = Session(server, SceneConfig.from_dict({"preset": "example-29", **cfg}), count_messages=True)
+    assert s.ready.wait(120), "analysis did not finish"
+    return s
+
+
+def test_example_29_timeline(server):
+    s = motion_session(server)
+    an = s.analysis
+    assert [round(e.t, 9) for e in an.events] == [round(ALPHA1, 9), round(ALPHA2, 9)]
+    assert [seg[2] for seg in an.segments] == ["separate", "overlap", "separate"]
+    # the paper: collision free on [0, alpha1), overlap on (alpha1, alpha2), free on (alpha2, 1]
+    for t, rel in [(0.0, "separate"), (0.3, "separate"), (0.75, "overlap"), (1.0, "separate")]:
+        assert s.set_t(t) == rel
+        assert colours(s) == {dict(separate=GREEN, overlap=RED)[rel]}
+    assert s.jump_to_event(1) == "tangent"
+    assert colours(s) == {AMBER}
+    assert s.contact.visible
+    assert "α1" in s.readout.content and "TANGENT" in s.readout.content
+    # contact point of Example 29 at alpha1: by symmetry of the two equal shapes it is the
+    # midpoint of the centres, (c_A + c_B) / 2 with c_A = (11 - 12 t, 0, 0), c_B = (3, 4t - 2, 4t - 4)
+    mid = np.array([(11 - 12 * ALPHA1 + 3) / 2, (4 * ALPHA1 - 2) / 2, (4 * ALPHA1 - 4) / 2])
+    np.testing.assert_allclose(s.contact.position, mid, atol=1e-6)
+    assert "| α1" in s.sign_table.content
+    s.close()
+
+
+def test_t_step_does_not_reanalyse_and_sends_few_messages(server):
+    s = motion_session(server)
+    key = s.state.motion_key
+    calls = []
+    s.cache.submit = lambda *a, **k: calls.append(a)  # any new analysis would go through here
+    m0 = s.messages
+    for i in range(50):
+        s.set_t(0.01 + i / 60, defer_panels=True)
+    assert calls == [] and s.state.motion_key == key
+    assert (s.messages - m0) / 50 <= 6
+    s.close()
+
+
+def test_typed_motion_errors_are_shown_next_to_the_field(server):
+    s = motion_session(server)
+    s.motion_fields["A"].value = '{"shape": {"center": [0, 0, 0], "semi_axes": [2, 1, 1]}, "translation": ["11 - 12*t", "0"]}'
+    s._on_analyse_click()
+    assert s.motion_errors["A"].visible and "translation" in s.motion_errors["A"].content
+    s.motion_fields["A"].value = '{"shape": '
+    s._on_analyse_click()
+    assert "not valid JSON" in s.motion_errors["A"].content
+    assert s.analysis is not None  # the previous analysis is still shown
+    s.close()
+
+
+def test_typed_motion_is_analysed(server):
+    s = motion_session(server)
+    # unit circles at (t, 0) and (-t, 0): tangent at t = -1 and t = 1 (centre distance 2|t| = 2)
+    s.motion_fields["A"].value = '{"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["t", "0"]}'
+    s.motion_fields["B"].value = '{"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["-t", "0"]}'
+    s.motion_fields["interval"].value = "-2, 2"
+    s.ready.clear()
+    s._on_analyse_click()
+    assert s.ready.wait(60)
+    assert s.state.dim == 2
+    assert [e.t for e in s.analysis.events] == [-1.0, 1.0]
+    assert s.set_t(0.5) == "overlap" and s.set_t(1.5) == "separate"
+    s.close()
+
+
+def test_drag_leaves_the_motion(server):
+    s = motion_session(server, t=0.3)
+    assert s.state.relation == "separate"
+    assert s.apply_drag("B", (4.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) in ("overlap", "tangent", "separate")
+    assert s.model is None and s.preset.value == "(static shapes)"
+    s.close()
