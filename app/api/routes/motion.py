@@ -8,7 +8,8 @@ from ..convert import bad_input
 from ..deps import SettingsDep, WorkersDep
 from ..jobs import analyse_job
 from ..motion_input import check_motion, motion_payload
-from ..schemas import ERROR_RESPONSES, AnalyseIn, AnalyseOut, ErrorOut
+from ..motion_schemas import AnalyseIn, AnalyseOut
+from ..schemas import ERROR_RESPONSES, ErrorOut
 from ..workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerTimeout
 
 router = APIRouter(
