@@ -63,6 +63,9 @@ __all__ = [
     "rotations",
     "label",
     "is_valid_exact",
+    "random_motion",
+    "grazing_motion",
+    "almost_tangent_motion",
 ]
 
 CODES = {"separate": 0, "tangent": 1, "overlap": 2}
@@ -328,3 +331,116 @@ def _check(dim: int, N: int) -> None:
     if not (isinstance(N, int) and N >= 1):
         raise ValueError(f"N must be a positive int, got {N!r}")
 
+
+
+# ------------------------------------------------------------------------------------ motions
+# Moving pairs in the JSON motion format of core.motions (exact strings), with an interval.
+
+
+def _q(x: Any) -> str:
+    v = to_fmpq(x)
+    return f"({v.p}/{v.q})" if v.q != 1 else f"({v.p})"
+
+
+def _poly_text(coeffs: list[int]) -> str:
+    return " + ".join(f"({c})*t^{k}" for k, c in enumerate(coeffs))
+
+
+def random_motion(dim: int, trans_deg: int, rot_deg: int, *, seed: int = 0) -> dict[str, Any]:
+    """Two shapes with integer semi-axes, random polynomial translations of degree ``trans_deg``
+    (integer coefficients in [-3, 3], constant terms chosen so that the shapes meet on [-1, 1]
+    often) and, for ``rot_deg > 0``, rational rotations from polynomial quaternions of that degree.
+
+    Returns:
+        {"A_t": motion, "B_t": motion, "interval": ("-1", "1"), "name": ...}.
+    """
+    import random
+
+    rng = random.Random(f"{seed}-{dim}-{trans_deg}-{rot_deg}")
+
+    def poly(deg: int) -> list[int]:
+        c = [rng.randint(-3, 3) for _ in range(deg + 1)]
+        if c[-1] == 0:
+            c[-1] = rng.choice([-2, -1, 1, 2])
+        return c
+
+    def motion() -> dict[str, Any]:
+        m: dict[str, Any] = {
+            "shape": {"center": [0] * dim, "semi_axes": [rng.randint(1, 4) for _ in range(dim)]},
+            "translation": [_poly_text(poly(trans_deg)) for _ in range(dim)],
+        }
+        if rot_deg > 0:
+            k = 4 if dim == 3 else 2
+            q = [_poly_text(poly(rot_deg)) for _ in range(k)]
+            q[0] = "3 + " + q[0]  # keeps |q| away from 0 on [-1, 1] most of the time
+            m["rotation"] = {"quaternion": q}
+        return m
+
+    return {"A_t": motion(), "B_t": motion(), "interval": ("-1", "1"), "name": f"random {dim}D trans {trans_deg} rot {rot_deg}"}
+
+
+def _rotation_exact(q: list[int], dim: int) -> list[list[fmpq]]:
+    if dim == 2:
+        w, z = (fmpq(v) for v in q)
+        n = w * w + z * z
+        return [[(w * w - z * z) / n, -2 * w * z / n], [2 * w * z / n, (w * w - z * z) / n]]
+    w, x, y, z = (fmpq(v) for v in q)
+    n = w * w + x * x + y * y + z * z
+    rows = [
+        [w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z],
+    ]
+    return [[v / n for v in r] for r in rows]
+
+
+def grazing_motion(dim: int, *, depth: Any = 0, seed: int = 0) -> dict[str, Any]:
+    """A ball sliding past a rotated ellipse/ellipsoid along a line tangent to its offset surface.
+
+    A: integer centre and semi-axes, rational orientation quaternion; p = end of one body axis
+    (world), n its outward normal. B: ball of radius r centred at p + (r - depth) n + t v with v a
+    rational vector orthogonal to n. Exactly:
+
+    * ``depth = 0``: a grazing touch: one event at t = 0, kind "touch" (separate on both sides);
+    * ``depth > 0`` (small): a double event: overlap on a short interval around 0 (two "change"
+      events at about -+ sqrt(2 depth rho) / |v|, rho a curvature radius);
+    * ``depth < 0``: a near miss: separate on the whole interval, no event.
+
+    Returns:
+        {"A_t", "B_t", "interval": ("-1", "1"), "name", "expect"} where ``expect`` is the known
+        event pattern for depth 0 ("touch at 0") or depth < 0 ("none"), else None.
+    """
+    import random
+
+    rng = random.Random(f"graze-{seed}-{dim}")
+    cA = [fmpq(rng.randint(-3, 3)) for _ in range(dim)]
+    axes = [fmpq(rng.randint(1, 4)) for _ in range(dim)]
+    q = [rng.randint(-2, 2) for _ in range(4 if dim == 3 else 2)]
+    if not any(q):
+        q[0] = 1
+    R = _rotation_exact(q, dim)
+    k = rng.randrange(dim)
+    j = (k + 1 + rng.randrange(dim - 1)) % dim
+    side = rng.choice([-1, 1])
+    col = [R[i][k] for i in range(dim)]
+    n = [side * v for v in col]
+    p = [cA[i] + axes[k] * n[i] for i in range(dim)]
+    r = fmpq(rng.randint(1, 3), rng.choice([1, 2]))
+    speed = fmpq(rng.randint(1, 4))
+    v = [speed * R[i][j] for i in range(dim)]
+    d = fmpq(0) + to_fmpq(depth)
+    c0 = [p[i] + (r - d) * n[i] for i in range(dim)]
+    A = {"shape": {"center": [str(x) for x in cA], "semi_axes": [str(x) for x in axes], "orientation": [str(x) for x in q]}}
+    B = {"shape": {"center": [0] * dim, "semi_axes": [str(r)] * dim}, "translation": [f"{_q(c0[i])} + {_q(v[i])}*t" for i in range(dim)]}
+    kind = "graze" if d == 0 else ("double" if d > 0 else "near miss")
+    expect = "touch at 0" if d == 0 else ("none" if d < 0 else None)
+    return {"A_t": A, "B_t": B, "interval": ("-1", "1"), "name": f"{kind} {dim}D depth {float(d):.0e}" if d else f"{kind} {dim}D", "expect": expect}
+
+
+def almost_tangent_motion(eps: Any) -> dict[str, Any]:
+    """Paper Example 33 (externally tangent for every t: s0 = 0 identically) with B moved by eps
+    along x: the shapes stay within |eps| of tangency for all t (eps > 0 apart, < 0 into A)."""
+    e = _q(eps)
+    A = {"shape": {"center": [0, 0, 0], "semi_axes": [2, 3, 4]}, "translation": ["2*(t^2 - 1)/(t^2 + 1)", "-6*t/(t^2 + 1)", "0"]}
+    B = {"shape": {"center": [0, 0, 0], "semi_axes": [2, 3, 2]}, "translation": [f"-2*(t^2 - 1)/(t^2 + 1) + {e}", "6*t/(t^2 + 1)", "0"]}
+    return {"A_t": A, "B_t": B, "interval": ("-3", "3"), "name": f"ex-33 moved {float(to_fmpq(eps)):+.0e}", "expect": None}
