@@ -33,7 +33,7 @@ def _presets(static_dir: Path) -> str:
         esc = html.escape(name)
         img = ""
         if (static_dir / "img" / f"{name}.png").is_file():
-            img = f'<img src="/static/img/{esc}.png" alt="{esc}" loading="lazy">'
+            img = f'<a href="/static/img/{esc}.png"><img src="/static/img/{esc}.png" alt="{esc}" loading="lazy"></a>'
         cards.append(
             f'<figure class="preset" id="preset-{esc}">{img}<figcaption><b>{esc}</b>: '
             f'{html.escape(description)} <a href="/api/presets/{esc}">JSON</a></figcaption></figure>'
