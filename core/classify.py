@@ -13,6 +13,7 @@ import numpy.typing as npt
 
 from .exact import classify_exact
 from .fastpath import classify_one
+from .filters import classify_float
 from .rationals import to_fmpq
 from .relation import Relation
 
@@ -153,14 +154,10 @@ def classify(A: Any, B: Any, *, method: Method = "adaptive", stats: Stats | None
     scalar = batch_shape == ()
     a = _flatten(a, batch_shape, n)
     b = _flatten(b, batch_shape, n)
-    codes = _classify_flat(a, b, method, scalar)
+    codes, undecided = _classify_flat(a, b, method, scalar)
     if stats is not None:
         stats.pairs += codes.shape[0]
-    if method != "exact":
-        from .filters import last_escalations
-
-        if stats is not None:
-            stats.escalated += last_escalations()
+        stats.escalated += undecided
     if scalar:
         return Relation(int(codes[0]))
     return codes.reshape(batch_shape)
@@ -178,18 +175,18 @@ def _where(i: int, scalar: bool) -> str:
     return "" if scalar else f"pair {i}: "
 
 
-def _classify_flat(a: np.ndarray, b: np.ndarray, method: str, scalar: bool) -> np.ndarray:
-    from .filters import classify_float
-
+def _classify_flat(a: np.ndarray, b: np.ndarray, method: str, scalar: bool) -> tuple[np.ndarray, int]:
+    """Codes for (N, n, n) stacks and the number of pairs the float filter did not decide."""
     N = a.shape[0]
     codes = np.full(N, Relation.UNDECIDED, dtype=np.int8)
     if method != "exact" and a.dtype == np.float64 and b.dtype == np.float64:
         codes = classify_float(a, b, scalar=scalar)
+    undecided = np.flatnonzero(codes == Relation.UNDECIDED)
     if method == "float":
-        return codes
-    for i in np.flatnonzero(codes == Relation.UNDECIDED):
+        return codes, undecided.size
+    for i in undecided:
         try:
             codes[i] = classify_exact(a[i], b[i]).relation
         except ValueError as e:
             raise ValueError(_where(int(i), scalar) + str(e)) from None
-    return codes
+    return codes, undecided.size

@@ -27,12 +27,10 @@ from .fastpath import HAVE_NUMBA, classify_one, classify_pairs, warm_up
 from .relation import Relation
 from .subresultants import hat_scale
 
-__all__ = ["classify_float", "classify_float_numpy", "explain_float", "last_escalations", "HAT_DEGREE_WEIGHT"]
+__all__ = ["classify_float", "classify_float_numpy", "explain_float", "HAT_DEGREE_WEIGHT"]
 
 _CHUNK = 4096
 """Pairs per numpy chunk: keeps the kernel's temporaries in cache."""
-
-_state = {"escalated": 0}
 
 _PENCIL = {
     3: (K.pencil3, K.PENCIL3_OUTPUTS, K.PENCIL3_CONSTANTS, K.PENCIL3_FLOOR),
@@ -52,11 +50,6 @@ HAT_DEGREE_WEIGHT: dict[tuple[int, str], tuple[int, int]] = {
     (4, "s0"): (6, 12), (4, "s1"): (4, 10), (4, "s10"): (4, 9),
 }
 """(degree, weight) of each hat form: hs(mu * lambda^i a_i) = mu^deg lambda^weight hs(a)."""
-
-
-def last_escalations() -> int:
-    """Number of pairs the last :func:`classify_float` call left UNDECIDED."""
-    return _state["escalated"]
 
 
 class _Prepared:
@@ -168,7 +161,6 @@ def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False, wait: 
         codes = classify_pairs(a, b)
     else:
         codes = classify_float_numpy(a, b)
-    _state["escalated"] = int((codes == Relation.UNDECIDED).sum())
     return codes
 
 
