@@ -138,6 +138,10 @@ class Session:
             self.speed = gui.add_slider("Speed (I per 10 s)", min=0.1, max=5.0, step=0.1, initial_value=1.0)
             self.events_md = gui.add_markdown("")
             self.events_folder = gui.add_folder("Events (jump to)")
+        with gui.add_folder("Plots") as self.plots_folder:
+            self.plots_on = gui.add_checkbox("Live plots", self.config.show_plots)
+            self.plot_coeffs = plots.add_plot(gui, "a_i(t) (asinh)", 4)
+            self.plot_subres = plots.add_plot(gui, "s0, s1, s1,0 (asinh)", 3)
         with gui.add_folder("Motion") as self.motion_folder:
             options = [STATIC, *list_presets()]
             self.preset = gui.add_dropdown("Preset", options, initial_value=STATIC)
@@ -166,10 +170,6 @@ class Session:
                 handle.on_update(lambda ev, n=name, k=key: self._on_shape_text(n, k, ev))
         with gui.add_folder("Sign table", expand_by_default=False):
             self.sign_table = gui.add_markdown("")
-        with gui.add_folder("Plots") as self.plots_folder:
-            self.plots_on = gui.add_checkbox("Live plots", self.config.show_plots)
-            self.plot_coeffs = plots.add_plot(gui, "a_i(t) (asinh)", 4)
-            self.plot_subres = plots.add_plot(gui, "s0, s1, s1,0 (asinh)", 3)
         with gui.add_folder("View", expand_by_default=False):
             self.dim_choice = gui.add_dropdown("Dimension", ["3D ellipsoids", "2D ellipses"], initial_value="3D ellipsoids" if self.state.dim == 3 else "2D ellipses")
             self.show_gizmos = gui.add_checkbox("Transform gizmos", self.config.gizmos)
