@@ -133,3 +133,35 @@ def test_examples_are_found_on_the_page():
     assert any("/api/classify" in c for c in cmds) and any("/api/explain" in c for c in cmds)
     assert any("/api/analyse" in c for c in cmds)
     assert all(c.startswith("curl ") for c in cmds)
+
+
+# --- Dockerfile (no Docker engine here: checked by reading) --------------------------------
+
+def _dockerfile() -> dict[str, list[str]]:
+    text = (Path(__file__).resolve().parents[1] / "Dockerfile").read_text()
+    text = text.replace("\\\n", " ")
+    out: dict[str, list[str]] = {}
+    for line in text.splitlines():
+        line = line.strip()
+        if line and not line.startswith("#"):
+            key, _, rest = line.partition(" ")
+            out.setdefault(key.upper(), []).append(rest.strip())
+    return out
+
+
+def test_dockerfile_serves_scene_and_api_as_documented():
+    from app.cli import build_parser
+
+    d = _dockerfile()
+    assert d["FROM"] == ["python:3.11-slim"]
+    assert any(u not in ("root", "0") for u in d["USER"])  # non-root
+    assert any("pip install ." in r and "[" not in r for r in d["RUN"])  # runtime deps only, no extras
+    cmd = json.loads(d["CMD"][-1])
+    assert cmd[:4] == ["python", "-m", "app", "serve"]
+    args = build_parser().parse_args(cmd[3:])  # the CLI accepts exactly this command
+    assert (args.host, args.port, args.api_port, args.api_only) == ("0.0.0.0", 8080, 8000, False)
+    assert set(d["EXPOSE"][0].split()) == {"8080", "8000"}
+    assert "/healthz" in d["HEALTHCHECK"][0] and "8000" in d["HEALTHCHECK"][0]
+    copied = " ".join(d["COPY"])
+    for part in ("pyproject.toml", "README.md", "core", "app", "static"):
+        assert part in copied
