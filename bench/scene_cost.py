@@ -1,0 +1,179 @@
+"""Server cost of the scene's hot paths: one drag update and one t-step (no browser).
+
+Uses the scene helper's entry points (``app.scene.session``): :meth:`Session.apply_drag` is what a
+gizmo drag event runs, :meth:`Session.set_t` what one slider step runs (``defer_panels=True``:
+panels coalesced to 20 Hz, as the slider and playback do; ``False``: every panel refreshed at
+once). A private ``viser.ViserServer`` on a free loopback port holds the shared scene; the time is
+the server's compute plus queueing the websocket messages (counted with ``count_messages``). The
+cross-check :func:`app.scene.session.measure_update_costs` (the scene helper's own timer) runs too.
+
+Shows that work is skipped: the number of exact analyses (``core.parametric.analyse``) and static
+explanations (``explain``) run during 200 t-steps (expected: 0 analyses; t only moves shapes and
+reads ``relation_at``), and the t-step cost with the live plots on and off (a closed panel).
+Targets (issue 6): drag < 2 ms, t-step < 1 ms.
+
+Run: ``python -m bench.scene_cost [--quick]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+
+__all__ = ["run_scene_cost", "format_scene", "TARGETS_MS"]
+
+TARGETS_MS = {"drag": 2.0, "t-step": 1.0}
+
+
+@contextmanager
+def _counting(module: Any, name: str) -> Iterator[list[int]]:
+    """Count calls of ``module.name`` (wrapped for the duration)."""
+    orig = getattr(module, name)
+    count = [0]
+
+    def wrapper(*a: Any, **k: Any) -> Any:
+        count[0] += 1
+        return orig(*a, **k)
+
+    setattr(module, name, wrapper)
+    try:
+        yield count
+    finally:
+        setattr(module, name, orig)
+
+
+def _stats(times: list[float]) -> dict[str, float]:
+    a = np.array(times) * 1e3
+    return {"median_ms": float(np.median(a)), "p95_ms": float(np.percentile(a, 95)), "max_ms": float(a.max())}
+
+
+def _time_calls(fn: Callable[[int], Any], repeats: int) -> list[float]:
+    out = []
+    for i in range(repeats):
+        t0 = time.perf_counter()
+        fn(i)
+        out.append(time.perf_counter() - t0)
+    return out
+
+
+def run_scene_cost(*, quick: bool = False, log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Measure drag and t-step costs; returns rows {name, median_ms, p95_ms, max_ms, messages, ...}.
+
+    Returns:
+        {"rows": [...], "cross_check": measure_update_costs(...) or {"error": ...}, "skipped": {...}}.
+    """
+    import viser
+
+    import core.parametric as cp
+    from app.scene import session as S
+    from app.scene.state import SceneConfig
+
+    repeats = 50 if quick else 300
+    rows: list[dict[str, Any]] = []
+    skipped: dict[str, Any] = {}
+    def fresh() -> Any:  # one server per measurement: the message buffer of a server grows
+        return viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+
+    for dim in (3, 2):  # drag: static shapes, B dragged along a path crossing A
+        server = fresh()
+        try:
+            s = S.Session(server, SceneConfig(dim=dim, preset=None), count_messages=True)
+            s.apply_drag("B", (2.0, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0))  # warm-up
+            m0 = s.messages
+            with _counting(cp, "analyse") as n_an:
+                ts = _time_calls(lambda i: s.apply_drag("B", (4.0 - 4.0 * i / repeats, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0)), repeats)
+            rows.append({"name": f"drag ({dim}D static shapes)", "kind": "drag", **_stats(ts),
+                         "messages": (s.messages - m0) / repeats, "analyses": n_an[0]})
+            s.close()
+        finally:
+            server.stop()
+        log(f"#   drag {dim}D: {rows[-1]['median_ms']:.3f} ms")
+    for preset in ("example-29", "example-30"):
+        for plots_on in (True, False):
+            for defer in (True, False):
+                server = fresh()
+                try:
+                    with _counting(cp, "analyse") as n_an:
+                        s = S.Session(server, SceneConfig(preset=preset, show_plots=plots_on), count_messages=True)
+                        s.ready.wait(120)
+                        lo, hi = s.model.interval_floats if s.model else (0.0, 1.0)
+                        s.set_t(lo)  # warm-up
+                        time.sleep(0.12)
+                        m0 = s.messages
+                        loaded = n_an[0]  # analyses so far (loading); none may follow
+                        with _counting(S, "explain") as n_ex:
+                            ts = _time_calls(lambda i: s.set_t(lo + (hi - lo) * (i + 0.5) / repeats, defer_panels=defer), repeats)
+                            time.sleep(0.12)  # let a coalesced panel refresh fire: its messages count too
+                    mode = "slider (panels at 20 Hz)" if defer else "all panels every step"
+                    rows.append({"name": f"t-step {preset}, {mode}, plots {'on' if plots_on else 'off (panel closed)'}",
+                                 "kind": "t-step", **_stats(ts), "messages": (s.messages - m0) / repeats,
+                                 "analyses": n_an[0] - loaded, "explains": n_ex[0], "analyses_on_load": loaded})
+                    s.close()
+                finally:
+                    server.stop()
+                log(f"#   {rows[-1]['name']}: {rows[-1]['median_ms']:.3f} ms")
+    try:
+        skipped["cross_check"] = S.measure_update_costs(repeats=50 if quick else 200)
+    except Exception as e:  # noqa: BLE001 - a cross-check; report, do not fail the run
+        skipped["cross_check"] = {"error": repr(e)[:120]}
+    return {"rows": rows, "cross_check": skipped.get("cross_check", {}), "repeats": repeats}
+
+
+def profile_drag(top: int = 12) -> str:
+    """cProfile of 200 drag updates (3D): the functions where the time goes, as text."""
+    import cProfile
+    import io
+    import pstats
+
+    import viser
+
+    from app.scene import session as S
+    from app.scene.state import SceneConfig
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        s = S.Session(server, SceneConfig(dim=3, preset=None))
+        s.apply_drag("B", (2.0, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0))
+        pr = cProfile.Profile()
+        pr.enable()
+        for i in range(200):
+            s.apply_drag("B", (4.0 - 4.0 * i / 200, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0))
+        pr.disable()
+        buf = io.StringIO()
+        pstats.Stats(pr, stream=buf).sort_stats("cumulative").print_stats(top)
+        return buf.getvalue()
+    finally:
+        server.stop()
+
+
+def format_scene(out: dict[str, Any]) -> str:
+    """Markdown table of the scene costs against the targets."""
+    lines = ["| update | median | p95 | max | target | messages / update | analyses run | explain() calls |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in out["rows"]:
+        tgt = TARGETS_MS[r["kind"]]
+        ok = "meets" if r["median_ms"] < tgt else "**misses**"
+        lines.append(f"| {r['name']} | {r['median_ms']:.3f} ms | {r['p95_ms']:.3f} ms | {r['max_ms']:.2f} ms | < {tgt:g} ms ({ok}) | "
+                     f"{r['messages']:.2f} | {r['analyses']} | {r.get('explains', '')} |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description="Server cost of one drag update and one t-step (markdown table).")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--profile", action="store_true", help="also print a cProfile of the drag path")
+    a = ap.parse_args()
+    out = run_scene_cost(quick=a.quick)
+    print(format_scene(out))
+    print("\ncross-check (app.scene.session.measure_update_costs):", out["cross_check"])
+    if a.profile:
+        print(profile_drag())
+
+
+if __name__ == "__main__":
+    main()
