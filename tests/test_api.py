@@ -270,6 +270,16 @@ def test_malformed_bodies_are_422(client, text, detail):
     assert (r.status_code, r.json()) == (422, {"detail": detail})
 
 
+def test_body_without_json_content_type_is_415(client):
+    text = json.dumps({"a": UNIT, "b": UNIT_AT_2})
+    r = client.post("/api/classify", content=text, headers={"content-type": "application/x-www-form-urlencoded"})
+    assert (r.status_code, r.json()) == (415, {"detail": "send the body as JSON with the header 'content-type: application/json' (got 'application/x-www-form-urlencoded')"})
+    r = client.post("/api/analyse", content=text)
+    assert (r.status_code, r.json()) == (415, {"detail": "send the body as JSON with the header 'content-type: application/json' (no content-type header)"})
+    r = client.post("/api/explain", content=text, headers={"content-type": "application/json; charset=utf-8"})
+    assert r.status_code == 200
+
+
 def test_huge_integer_and_long_string(client):
     big = 10**401
     r = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, big]]})

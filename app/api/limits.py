@@ -81,6 +81,23 @@ def _clean(error: dict[str, Any]) -> dict[str, Any]:
             "type": str(error.get("type", ""))}
 
 
+def _is_json(content_type: str) -> bool:
+    media = content_type.split(";", 1)[0].strip().lower()
+    return media == "application/json" or (media.startswith("application/") and media.endswith("+json"))
+
+
 async def validation_error_handler(request: Request, exc: RequestValidationError) -> JSONResponse:
-    """422 with ``{"detail": [{"loc", "msg", "type"}, ...]}`` (no echo of the input)."""
-    return JSONResponse(status_code=422, content={"detail": [_clean(e) for e in exc.errors()]})
+    """422 with ``{"detail": [{"loc", "msg", "type"}, ...]}`` (no echo of the input).
+
+    A body sent without a JSON content type (``curl -d`` sends a form type) is not read as JSON
+    by FastAPI; say so (415) instead of reporting a missing object.
+    """
+    errors = exc.errors()
+    content_type = request.headers.get("content-type", "")
+    if any(tuple(e.get("loc", ()))[:1] == ("body",) for e in errors) and not _is_json(content_type):
+        got = f"got {content_type!r}" if content_type else "no content-type header"
+        return JSONResponse(
+            status_code=415,
+            content={"detail": f"send the body as JSON with the header 'content-type: application/json' ({got})"},
+        )
+    return JSONResponse(status_code=422, content={"detail": [_clean(e) for e in errors]})

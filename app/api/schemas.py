@@ -234,6 +234,7 @@ class ErrorOut(BaseModel):
 ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     400: {"model": ErrorOut, "description": "Unreadable body (e.g. JSON nested too deeply)"},
     413: {"model": ErrorOut, "description": "Body over the size limit"},
+    415: {"model": ErrorOut, "description": "Body not sent as JSON (content-type: application/json)"},
     422: {"model": ErrorOut, "description": "Invalid input: the message says what is wrong"},
 }
 """Error responses documented on every API route."""
