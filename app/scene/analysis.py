@@ -87,6 +87,10 @@ class AnalysisView:
     """Callable t -> relation name (certified; core's ``relation_at``)."""
     explain_fn: Any = None
     """Callable (t, event) -> explanation dict, or None."""
+    window: tuple[float, float] = (0.0, 1.0)
+    """Slider window: I when finite, else around the events."""
+    default_t: float | None = None
+    """Suggested start: just before the first event."""
     _readout_cache: dict[Any, str] = field(default_factory=dict)
 
     @property
@@ -333,13 +337,28 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, dim: int) 
 
 
 class AnalysisCache:
-    """Analyses by motion key, shared by the tabs of one server; each runs once, off the GUI thread."""
+    """Analyses by motion key, shared by the tabs of one server; each runs once, off the GUI thread.
 
-    def __init__(self, executor: Executor | None = None) -> None:
+    With ``processes=True`` each analysis runs in a child process (``app.api.workers.WorkerPool``:
+    forkserver, killed after ``budget`` seconds), so a long exact computation never holds the
+    GIL of the process serving the tabs; results come back as plain data. Otherwise it runs in
+    a worker thread of ``executor``.
+    """
+
+    def __init__(self, executor: Executor | None = None, *, processes: bool = False, budget: float = 300.0) -> None:
         self._executor = executor
         self._done: dict[Hashable, AnalysisView] = {}
         self._running: dict[Hashable, Future[AnalysisView]] = {}
         self._lock = threading.Lock()
+        self.budget = budget
+        self._pool: Any = None
+        if processes:
+            try:
+                from app.api.workers import WorkerPool
+
+                self._pool = WorkerPool(2)
+            except ImportError:  # API package absent: threads only
+                self._pool = None
 
     def get(self, key: Hashable) -> AnalysisView | None:
         """The finished analysis of this motion, or None."""
@@ -361,8 +380,20 @@ class AnalysisCache:
 
     def _run(self, model: MotionModel) -> AnalysisView:
         t0 = time.perf_counter()
+        args = (model.A.source, model.B.source, model.interval)
         try:
-            view = _analyse(model)
+            if self._pool is not None:
+                from app.api.workers import WorkerBusy
+
+                while True:
+                    try:
+                        plain = self._pool.run(analyse_plain, *args, timeout=self.budget)
+                        break
+                    except WorkerBusy:
+                        time.sleep(0.2)  # other tabs' analyses hold the slots: wait our turn
+            else:
+                plain = analyse_plain(*args)
+            view = _view_from_plain(model, plain)
             view.seconds = time.perf_counter() - t0
             with self._lock:
                 self._done[model.key] = view
@@ -371,49 +402,118 @@ class AnalysisCache:
             with self._lock:
                 self._running.pop(model.key, None)
 
+    def shutdown(self) -> None:
+        """Kill running analysis processes."""
+        if self._pool is not None:
+            self._pool.shutdown()
+
 
 PLOT_SAMPLES = 300
 """Samples per curve in the plots (resampled only when the analysis changes)."""
 
 
-def _analyse(model: MotionModel) -> AnalysisView:
-    """Run core's exact analysis and turn it into what the timeline draws."""
+def analyse_plain(A_source: Any, B_source: Any, interval: tuple[Any, Any], digits: int = 20) -> dict[str, Any]:
+    """Run ``core.analyse`` and return plain, picklable data (runs in a worker process).
+
+    Returns:
+        {"result": MotionAnalysis.to_dict(polynomials=False), "samples": .samples(PLOT_SAMPLES)}.
+    """
     from core.parametric import analyse
 
-    try:
-        an = analyse(model.A, model.B, model.interval, digits=20)
-    except ValueError as e:
-        raise MotionError(str(e), "interval") from None
-    samples = an.samples(PLOT_SAMPLES)
+    an = analyse(A_source, B_source, interval, digits=digits)
+    return {"result": an.to_dict(polynomials=False), "samples": an.samples(PLOT_SAMPLES)}
+
+
+_SIGN = {"+": 1, "-": -1, "0": 0}
+
+
+class _RelationLookup:
+    """Certified relation at a float t from the analysis data (exact rational comparisons).
+
+    A float t is an exact binary rational. It is compared exactly with each event's isolating
+    interval; inside one (only possible when the interval is wider than the float spacing), a
+    rational event is compared with its exact value, and an irrational one falls back to
+    ``core``'s own ``relation_at`` on an analysis run here (once, cached).
+    """
+
+    def __init__(self, model: MotionModel, result: dict[str, Any]) -> None:
+        from core.rationals import to_fmpq
+
+        self._model = model
+        self._events = []
+        for e in result["events"]:
+            lo, hi = (to_fmpq(x) for x in e["isolating"])
+            exact = to_fmpq(e["exact"]) if e.get("exact") is not None else None
+            self._events.append((lo, hi, exact, e["relation"]))
+        self._intervals = []
+        for iv in result["intervals"]:
+            lo = None if iv["lo"] is None else to_fmpq(iv["lo"]["isolating"][1])
+            hi = None if iv["hi"] is None else to_fmpq(iv["hi"]["isolating"][0])
+            self._intervals.append((lo, hi, iv["relation"]))
+        self._direct: Any = None
+
+    def __call__(self, t: Any) -> str:
+        from core.rationals import to_fmpq
+
+        tq = to_fmpq(t)
+        for lo, hi, exact, rel in self._events:
+            if lo <= tq <= hi:
+                if exact is not None:
+                    if tq == exact:
+                        return rel
+                    break
+                return self._fallback(t)
+        for lo, hi, rel in self._intervals:
+            if (lo is None or lo < tq) and (hi is None or tq < hi):
+                return rel
+        return self._fallback(t)
+
+    def _fallback(self, t: Any) -> str:
+        if self._direct is None:
+            from core.parametric import analyse
+
+            m = self._model
+            self._direct = analyse(m.A, m.B, m.interval, digits=20)
+        return str(self._direct.relation_at(t))
+
+
+def _view_from_plain(model: MotionModel, plain: dict[str, Any]) -> AnalysisView:
+    """Turn the worker's plain data into what the timeline draws."""
+    result, samples = plain["result"], plain["samples"]
     ts = np.asarray(samples["t"], dtype=float)
-    model.interval_floats = (float(ts[0]), float(ts[-1]))
-    n = an.n
+    window = (float(ts[0]), float(ts[-1]))
+    model.interval_floats = window
+    n = int(result["dimension"]) + 1
     series: dict[str, np.ndarray] = {f"a{i}": np.asarray(v, dtype=float) for i, v in enumerate(samples["a"])}
     for k in ("s0", "s1", "s10"):
         series[k] = np.asarray(samples[k], dtype=float)
-    events = [EventView(t=float(e), text=e.value, relation=str(e.relation), kind=e.kind) for e in an.events]
-    lo, hi = model.interval_floats
+    events = [
+        EventView(t=float(e["approx"]), text=e["value"], relation=e["relation"], kind=e["kind"]) for e in result["events"]
+    ]
+    lo, hi = window
     segs: list[tuple[float, float, str]] = []
-    for iv in an.intervals:
-        a = lo if iv.lo is None else max(lo, float(iv.lo))
-        b = hi if iv.hi is None else min(hi, float(iv.hi))
+    for iv in result["intervals"]:
+        a = lo if iv["lo"] is None else max(lo, float(iv["lo"]["approx"]))
+        b = hi if iv["hi"] is None else min(hi, float(iv["hi"]["approx"]))
         if b > a:
-            segs.append((a, b, str(iv.relation)))
+            segs.append((a, b, iv["relation"]))
+    ev_by_value = {e["value"]: k for k, e in enumerate(result["events"], start=1)}
     rows = []
-    ev_by_value = {e.value: k for k, e in enumerate(an.events, start=1)}
-    for r in an.sign_table:
-        if r.where == "point":
-            k = ev_by_value.get(r.t)
-            label = f"α{k} ≈ {_short(r.t)}" if k else f"root ≈ {_short(r.t)}"
+    for r in result["sign_table"]:
+        if r["where"] == "point":
+            k = ev_by_value.get(r["t"])
+            label = f"α{k} ≈ {_short(r['t'])}" if k else f"root ≈ {_short(r['t'])}"
         else:
-            label = f"t = {_short_rational(r.t)}"
-        signs = {f"a{n - i}": s for i, s in enumerate(r.a)}
-        signs.update(s0=r.s0, s1=r.s1, s10=r.s10)
-        rows.append({"where": label, "signs": signs, "var": r.var, "relation": str(r.relation)})
-    if model._default_t is None:
-        inner = [e.t for e in events if lo < e.t < hi]
-        if inner:
-            model._default_t = max(lo, inner[0] - 0.08 * (hi - lo))
+            label = f"t = {_short_rational(r['t'])}"
+        signs = {f"a{n - i}": _SIGN[x] for i, x in enumerate(r["a"])}
+        signs.update(s0=_SIGN[r["s0"]], s1=_SIGN[r["s1"]], s10=_SIGN[r["s10"]])
+        rows.append({"where": label, "signs": signs, "var": r["var"], "relation": r["relation"]})
+    default_t = None
+    inner = [e.t for e in events if lo < e.t < hi]
+    if inner:
+        default_t = max(lo, inner[0] - 0.08 * (hi - lo))
+    model._default_t = default_t if model._default_t is None else model._default_t
+    lookup = _RelationLookup(model, result)
     return AnalysisView(
         degree=n,
         events=events,
@@ -422,8 +522,10 @@ def _analyse(model: MotionModel) -> AnalysisView:
         samples_t=ts,
         samples=series,
         seconds=0.0,
-        relation_fn=an.relation_at,
-        explain_fn=lambda t, event: _explain_at(an, t, event),
+        relation_fn=lookup,
+        explain_fn=lambda t, event: _explain_at(model, result, lookup, t, event),
+        window=window,
+        default_t=default_t,
     )
 
 
@@ -440,51 +542,55 @@ def _short_rational(text: str) -> str:
     return f"{float(q.p) / float(q.q):.6g}"
 
 
-def _explain_at(an: Any, t: float, event: int | None) -> dict[str, Any] | None:
+def _explain_at(model: MotionModel, result: dict[str, Any], lookup: Any, t: float, event: int | None) -> dict[str, Any] | None:
     """Readout data at t: ``core.explain`` of the exact matrices A(t), B(t) when they are rational.
 
     At an event (an algebraic time) the signs come from the sign-table row of that instant,
     decided exactly by the analysis. When A(t) has irrational entries (sqrt(d) presets) the
-    relation comes from ``relation_at`` and the signs from the row of the interval's sample.
+    relation comes from the analysis and the signs from the row of the interval's sample.
     """
     from core import explain
     from core.decision import RULES
     from core.motions import matrix_at_exact
+    from core.rationals import to_fmpq
 
-    n = an.n
+    n = int(result["dimension"]) + 1
+    note = ""
+    row = None
     if event is None:
         try:
-            A = matrix_at_exact(an.A, t)
-            B = matrix_at_exact(an.B, t)
+            A = matrix_at_exact(model.A, t)
+            B = matrix_at_exact(model.B, t)
         except ValueError:
             A = B = None
         if A is not None:
             d = explain(A, B).to_dict()
-            d["relation"] = str(an.relation_at(t))  # the analysis' answer (same exact t)
+            d["relation"] = lookup(t)  # the analysis' answer at the same exact t
             return d
-        row = None
-        for iv in an.intervals:
-            if (iv.lo is None or float(iv.lo) <= t) and (iv.hi is None or t <= float(iv.hi)):
-                row = next((r for r in an.sign_table if r.where == "interval" and r.t == str(iv.sample)), None)
+        tq = to_fmpq(t)
+        for iv in result["intervals"]:
+            lo = None if iv["lo"] is None else to_fmpq(iv["lo"]["isolating"][1])
+            hi = None if iv["hi"] is None else to_fmpq(iv["hi"]["isolating"][0])
+            if (lo is None or lo < tq) and (hi is None or tq < hi):
+                row = next((r for r in result["sign_table"] if r["where"] == "interval" and r["t"] == iv["sample"]), None)
                 break
         note = "(irrational A(t): signs at this interval's sample point)"
     else:
-        ev = an.events[event - 1]
-        row = next((r for r in an.sign_table if r.where == "point" and r.t == ev.value), None)
-        note = ""
+        ev = result["events"][event - 1]
+        row = next((r for r in result["sign_table"] if r["where"] == "point" and r["t"] == ev["value"]), None)
     if row is None:
         return None
-    a_signs = list(reversed(row.a))
+    a_signs = [_SIGN[x] for x in reversed(row["a"])]
     nan = float("nan")
     coeffs = [{"name": f"a{i}", "approx": nan, "exact": None, "bound": None, "sign": a_signs[i]} for i in range(n + 1)]
-    subs = {k: {"name": k, "approx": nan, "exact": None, "bound": None, "sign": getattr(row, k)} for k in ("s0", "s1", "s10")}
+    subs = {k: {"name": k, "approx": nan, "exact": None, "bound": None, "sign": _SIGN[row[k]]} for k in ("s0", "s1", "s10")}
     return {
         "n": n,
-        "relation": str(an.relation_at(t)) if event is None else str(row.relation),
+        "relation": lookup(t) if event is None else row["relation"],
         "certified_by": "exact",
-        "rule": row.rule,
-        "rule_text": RULES.get(row.rule, row.rule) + (" " + note if note else ""),
-        "var": row.var,
+        "rule": row["rule"],
+        "rule_text": RULES.get(row["rule"], row["rule"]) + (" " + note if note else ""),
+        "var": row["var"],
         "coefficients": coeffs,
         "s0": subs["s0"],
         "s1": subs["s1"],

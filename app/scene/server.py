@@ -22,12 +22,12 @@ __all__ = ["SceneServer", "start_scene"]
 class SceneServer:
     """A running scene: the ``ViserServer`` plus the live sessions (one per connected tab)."""
 
-    def __init__(self, server: Any, config: SceneConfig) -> None:
+    def __init__(self, server: Any, config: SceneConfig, *, processes: bool = True) -> None:
         self.server = server
         self.config = config
         """Configuration new tabs open on (change it to change what the next tab sees)."""
         self.executor = ThreadPoolExecutor(max_workers=2, thread_name_prefix="analysis")
-        self.cache = AnalysisCache(self.executor)
+        self.cache = AnalysisCache(self.executor, processes=processes)
         self.sessions: dict[int, Session] = {}
         self._lock = threading.Lock()
         self.new_session = threading.Condition(self._lock)
@@ -72,10 +72,18 @@ class SceneServer:
         for s in list(self.sessions.values()):
             s.close()
         self.server.stop()
+        self.cache.shutdown()
         self.executor.shutdown(wait=False, cancel_futures=True)
 
 
-def start_scene(host: str = "127.0.0.1", port: int = 8080, config: SceneConfig | None = None, *, verbose: bool = False) -> SceneServer:
+def start_scene(
+    host: str = "127.0.0.1",
+    port: int = 8080,
+    config: SceneConfig | None = None,
+    *,
+    verbose: bool = False,
+    processes: bool = True,
+) -> SceneServer:
     """Start the scene server (returns at once; viser serves from its own thread).
 
     Args:
@@ -84,9 +92,11 @@ def start_scene(host: str = "127.0.0.1", port: int = 8080, config: SceneConfig |
             move to the next free one.
         config: what each new tab opens on (default: :class:`SceneConfig` defaults).
         verbose: let viser print its own banner.
+        processes: run analyses in child processes (a long analysis never holds the GIL of
+            the process serving the tabs); False runs them in worker threads.
     """
     import viser
 
     server = viser.ViserServer(host=host, port=port, verbose=verbose)
     server.gui.configure_theme(control_width="large", show_share_button=False)
-    return SceneServer(server, config or SceneConfig())
+    return SceneServer(server, config or SceneConfig(), processes=processes)

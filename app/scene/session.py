@@ -487,6 +487,9 @@ class Session:
         with self._lock:
             if self.model is not model:
                 return
+            model.interval_floats = result.window
+            if result.default_t is not None:
+                model._default_t = result.default_t
             self.analysis = result
             self.progress.visible = False
             n_ev = len(result.events)
