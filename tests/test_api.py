@@ -349,6 +349,13 @@ def test_worker_pool_results_errors_and_timeout():
         pool.run(math.sqrt, "x", timeout=30)
 
 
+def test_worker_pool_memory_cap():
+    pool = WorkerPool(1, memory_mb=1024)
+    with pytest.raises(WorkerDied, match=r"ran out of memory \(limit 1024 MB\)"):
+        pool.run(bytearray, 3 * 1024**3, timeout=60)
+    assert len(pool.run(bytearray, 1024, timeout=60)) == 1024
+
+
 def test_worker_pool_refuses_when_busy():
     pool = WorkerPool(1)
     started = threading.Event()
