@@ -40,7 +40,8 @@ class ApiSettings:
     max_batch: int = 1000
     """Most pairs in one ``{"pairs": [...]}`` classify request."""
     max_expression_chars: int = 2000
-    """Longest expression string in a motion (and longest number string)."""
+    """Longest expression string in a motion (number strings in matrices are capped at 400
+    characters by core.rationals)."""
     max_degree: int = 16
     """Highest degree in t of a numerator or denominator of one motion entry after
     simplification (core.expressions caps it at MAX_DEGREE = 16 already; this can only lower it)."""
