@@ -62,8 +62,12 @@ def test_presets_screenshots_and_bench_figures(tmp_path):
     (static / "img" / "bench").mkdir(parents=True)
     (static / "img" / "example-29.png").write_bytes(PNG_1x1)
     (static / "img" / "bench" / "throughput.png").write_bytes(PNG_1x1)
-    with TestClient(create_api(ApiSettings(static_dir=static))) as c:
+    bench = tmp_path / "figures"
+    bench.mkdir()
+    (bench / "near_tangent.png").write_bytes(PNG_1x1)
+    with TestClient(create_api(ApiSettings(static_dir=static, bench_dir=bench))) as c:
         page = c.get("/").text
+        assert c.get("/bench/figures/near_tangent.png").content == PNG_1x1
         names = [p["name"] for p in c.get("/api/presets").json()]
         assert c.get("/static/img/example-29.png").content == PNG_1x1
         assert c.get("/static/style.css").status_code == 200
@@ -73,8 +77,10 @@ def test_presets_screenshots_and_bench_figures(tmp_path):
     assert '<img src="/static/img/example-29.png" alt="example-29"' in page
     assert page.count('<img src="/static/img/') == 2  # only the screenshot that exists, and the figure
     assert '<img src="/static/img/bench/throughput.png" alt="throughput">' in page
-    with TestClient(create_api(ApiSettings(static_dir=STATIC))) as c:
-        assert "Benchmark figures will appear here" in c.get("/").text or "/static/img/bench/" in c.get("/").text
+    assert '<img src="/bench/figures/near_tangent.png" alt="near_tangent">' in page
+    with TestClient(create_api(ApiSettings(static_dir=static, bench_dir=tmp_path / "missing"))) as c:
+        shutil.rmtree(static / "img" / "bench")
+        assert "Benchmark figures will appear here" in c.get("/").text
 
 
 def test_no_static_folder_is_404(tmp_path):

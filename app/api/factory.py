@@ -59,4 +59,6 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
         app.include_router(module.router)
     if settings.static_dir is not None and settings.static_dir.is_dir():
         app.mount("/static", StaticFiles(directory=settings.static_dir), name="static")
+    if settings.bench_dir is not None:  # may be written later by python -m bench.report
+        app.mount("/bench/figures", StaticFiles(directory=settings.bench_dir, check_dir=False), name="bench")
     return app

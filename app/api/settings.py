@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["ApiSettings", "default_static_dir"]
+__all__ = ["ApiSettings", "default_static_dir", "default_bench_dir"]
 
 
 def default_static_dir() -> Path | None:
@@ -27,6 +27,12 @@ def default_static_dir() -> Path | None:
         if (candidate / "index.html").is_file():
             return candidate
     return None
+
+
+def default_bench_dir() -> Path | None:
+    """``bench/figures`` of the repository (written by ``python -m bench.report``), if bench/ exists."""
+    bench = Path(__file__).resolve().parents[2] / "bench"
+    return bench / "figures" if bench.is_dir() else None
 
 
 @dataclass(frozen=True)
@@ -55,6 +61,8 @@ class ApiSettings:
     """Address-space cap of an analysis worker process (None: no cap)."""
     static_dir: Path | None = field(default_factory=default_static_dir)
     """Folder with ``index.html``, ``style.css`` and ``img/`` served at ``/`` and ``/static``."""
+    bench_dir: Path | None = field(default_factory=default_bench_dir)
+    """Benchmark figures (PNG) shown on the landing page and served at ``/bench/figures``."""
 
     def __post_init__(self) -> None:
         """Reject limits that make no sense (a ValueError naming the field)."""

@@ -3,7 +3,8 @@
 index.html holds markers that this route replaces: ``<!--scene-link-->`` (the scene URL from
 the settings), ``{{API}}`` (this server's base URL, so the curl examples can be copied),
 ``<!--presets-->`` (one card per preset, with its screenshot ``static/img/NAME.png`` when it
-exists) and ``<!--bench-->`` (the PNGs in ``static/img/bench/``).
+exists) and ``<!--bench-->`` (the PNGs in ``static/img/bench/`` and in the settings' ``bench_dir``,
+``bench/figures`` of the repository, served at ``/bench/figures``).
 """
 
 from __future__ import annotations
@@ -43,14 +44,17 @@ def _presets(static_dir: Path) -> str:
     return '<div class="grid">' + "".join(cards) + "</div>"
 
 
-def _bench(static_dir: Path) -> str:
-    figures = sorted((static_dir / "img" / "bench").glob("*.png"))
+def _bench(static_dir: Path, bench_dir: Path | None) -> str:
+    figures = [(f"/static/img/bench/{p.name}", p.stem) for p in sorted((static_dir / "img" / "bench").glob("*.png"))]
+    if bench_dir is not None and bench_dir.is_dir():
+        figures += [(f"/bench/figures/{p.name}", p.stem) for p in sorted(bench_dir.glob("*.png"))]
     if not figures:
-        return '<p class="muted">Benchmark figures will appear here once the benchmark report has been generated.</p>'
+        return ('<p class="muted">Benchmark figures will appear here once the benchmark report has been '
+                "generated (<code>python -m bench.report</code>).</p>")
     return '<div class="grid">' + "".join(
-        f'<figure><img src="/static/img/bench/{html.escape(p.name)}" alt="{html.escape(p.stem)}">'
-        f"<figcaption>{html.escape(p.stem)}</figcaption></figure>"
-        for p in figures
+        f'<figure><a href="{html.escape(url)}"><img src="{html.escape(url)}" alt="{html.escape(stem)}"></a>'
+        f"<figcaption>{html.escape(stem)}</figcaption></figure>"
+        for url, stem in figures
     ) + "</div>"
 
 
@@ -64,5 +68,5 @@ def landing(request: Request, settings: SettingsDep) -> HTMLResponse:
     page = page.replace("<!--scene-link-->", _scene_link(settings.scene_url))
     page = page.replace("{{API}}", html.escape(str(request.base_url).rstrip("/")))
     page = page.replace("<!--presets-->", _presets(static_dir))
-    page = page.replace("<!--bench-->", _bench(static_dir))
+    page = page.replace("<!--bench-->", _bench(static_dir, settings.bench_dir))
     return HTMLResponse(page)
