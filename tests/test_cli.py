@@ -112,3 +112,14 @@ def test_serve_starts_scene_and_api():
             out, _ = p.communicate()
     assert f"http://127.0.0.1:{scene_port}/" in out
     assert f"http://127.0.0.1:{api_port}/" in out
+
+
+def test_no_subcommand_means_serve():
+    from app.cli import build_parser
+
+    # main() prepends "serve"; check the options it then accepts
+    args = build_parser().parse_args(["serve", "--host", "0.0.0.0", "--port", "9001", "--api-port", "9002", "--api-only"])
+    assert (args.host, args.port, args.api_port, args.api_only) == ("0.0.0.0", 9001, 9002, True)
+    with pytest.raises(SystemExit) as e:
+        main(["--port", "not-a-port"])
+    assert e.value.code == 2

@@ -249,3 +249,45 @@ def test_analysis_in_a_child_process_matches_threads():
     assert len(view.events) == 4 and view.events[2].t == 0.5
     assert view.relation_at(0.5) == "tangent"  # a rational event compared exactly
     assert view.relation_at(0.25) == "separate" and view.relation_at(0.75) == "overlap"
+
+
+@pytest.mark.parametrize(
+    "module", ["app.scene.state", "app.scene.panels", "app.scene.contact", "app.scene.plots", "app.scene.shapes"]
+)
+def test_docstring_examples(module):
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(module))
+    assert result.failed == 0
+
+
+def test_separating_plane_separates(server):
+    cfg = unit_spheres(3, "3")
+    cfg.separating_plane = True
+    s = Session(server, cfg)
+    assert s.plane.visible
+    # unit spheres at x = 0 and x = 3: the plane halfway is x = 1.5 with normal +-x
+    np.testing.assert_allclose(s.plane.position, (1.5, 0.0, 0.0), atol=1e-6)
+    s.set_shape("B", center="1, 2, 2", semi_axes="1/2, 2, 1", orientation="1, 1, 0, 1")
+    from app.scene.contact import separating_plane
+
+    A, B = (sh.quadric() for sh in s.state.shapes.values())
+    found = separating_plane(A, B)
+    if s.state.relation == "separate":
+        n, h = found
+        # every sampled surface point of A is below the plane, of B above (floats, display only)
+        rng = np.random.default_rng(0)
+        for sh, sign in ((s.state.shapes["A"], -1), (s.state.shapes["B"], 1)):
+            pos, wxyz, scale = sh.float_pose()
+            from core import rotation_from_quaternion
+
+            R = rotation_from_quaternion(wxyz)
+            u = rng.normal(size=(500, 3))
+            u /= np.linalg.norm(u, axis=1, keepdims=True)
+            pts = (R @ (u * np.array(scale)).T).T + np.array(pos)
+            assert np.all(sign * (pts @ n - h) > 0)
+    else:
+        assert found is None and not s.plane.visible
+    s.set_shape("B", center="1, 0, 0", semi_axes="1, 1, 1", orientation="1, 0, 0, 0")
+    assert s.state.relation == "overlap" and not s.plane.visible

@@ -22,7 +22,7 @@ from core.pencil import pencil_coefficients
 
 from . import plots
 from .analysis import AnalysisCache, AnalysisView, MotionError, MotionModel, list_presets, load_motion
-from .contact import contact_point
+from .contact import contact_point, separating_plane
 from .panels import intervals_bar_html, readout_markdown, sign_table_markdown
 from .shapes import RELATION_COLORS, EllipsoidView
 from .state import AppState, SceneConfig, ShapeState, format_number, parse_vector
@@ -114,6 +114,20 @@ class Session:
         )
         self.contact_label = self.scene.add_label("/contact/point/label", "contact", visible=False)
         self._contact_on = False
+        square = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], dtype=np.float32)
+        self.plane = self.scene.add_mesh_simple(
+            "/separating_plane",
+            square,
+            np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32),
+            color=(60, 110, 200),
+            opacity=0.35,
+            side="double",
+            cast_shadow=False,
+            receive_shadow=False,
+            visible=False,
+        )
+        self._plane_on = False
+        self._plane_n: np.ndarray | None = None
 
     def _make_views(self) -> None:
         for v in self.views.values():
@@ -182,6 +196,7 @@ class Session:
         self.plots_on.on_update(lambda ev: self._refresh_plots(force=True))
         self.dim_choice.on_update(lambda ev: self._on_dim(ev))
         self.show_gizmos.on_update(lambda ev: self._update_gizmos())
+        self.show_plane.on_update(lambda ev: self._on_plane_toggle())
 
     # ------------------------------------------------------------------ loading
     def load(self, config: SceneConfig) -> None:
@@ -321,6 +336,13 @@ class Session:
             self.load(cfg)
             self._frame_camera()
 
+    def _on_plane_toggle(self) -> None:
+        with self._lock:
+            if self.model is not None:
+                self.set_t(self.state.t, event=self.state.event)
+            else:
+                self._refresh_static()
+
     def _update_gizmos(self) -> None:
         for v in self.views.values():
             v.set_gizmo(self.show_gizmos.value and self.model is None)
@@ -344,6 +366,7 @@ class Session:
         self._set_relation(expl["relation"])
         self._set_md(self.readout, readout_markdown(expl, where="(static shapes)"))
         self._update_contact(A, B, expl)
+        self._update_plane(A, B, expl["relation"])
         self._update_gizmos()
         return expl["relation"]
 
@@ -373,6 +396,43 @@ class Session:
             self.contact.visible = True
             self.contact_label.visible = True
             self._contact_on = True
+
+    def _update_plane(self, A: Any, B: Any, relation: str | None) -> None:
+        """Separating plane (display only) when asked for and the shapes are certified separate."""
+        found = None
+        if self.show_plane.value and relation == str(Relation.SEPARATE):
+            try:
+                found = separating_plane(A, B, start=self._plane_n)
+            except (np.linalg.LinAlgError, ValueError, FloatingPointError):
+                found = None
+        if found is None:
+            if self._plane_on:
+                self.plane.visible = False
+                self._plane_on = False
+            return
+        n, h = found
+        self._plane_n = n
+        Af = np.array([[float(v) for v in row] for row in A], dtype=float)
+        Bf = np.array([[float(v) for v in row] for row in B], dtype=float)
+        d = Af.shape[0] - 1
+        cA = -np.linalg.solve(Af[:d, :d], Af[:d, d])
+        cB = -np.linalg.solve(Bf[:d, :d], Bf[:d, d])
+        mid = (cA + cB) / 2
+        p = mid + (h - n @ mid) * n
+        n3 = np.append(n, 0.0) if d == 2 else n
+        p3 = np.append(p, 0.0) if d == 2 else p
+        z = np.array([0.0, 0.0, 1.0])
+        axis = np.cross(z, n3)
+        w = 1.0 + float(z @ n3)
+        q = np.array([w, *axis]) if w > 1e-9 else np.array([0.0, 1.0, 0.0, 0.0])
+        q /= np.linalg.norm(q)
+        size = 0.75 * float(np.linalg.norm(cB - cA)) + 1.0
+        self.plane.position = tuple(float(v) for v in p3)
+        self.plane.wxyz = tuple(float(v) for v in q)
+        self.plane.scale = (size, size, 1.0)
+        if not self._plane_on:
+            self.plane.visible = True
+            self._plane_on = True
 
     # ------------------------------------------------------------------ motion
     def _show_motion_error(self, e: Exception) -> None:
@@ -573,6 +633,9 @@ class Session:
                 self._update_contact(A, B, {"relation": relation, "coefficients": coeffs})
             else:
                 self._update_contact(None, None, None)
+            if self.show_plane.value or self._plane_on:
+                A, B = model.float_matrices(t)
+                self._update_plane(A, B, relation)
             if defer_panels:
                 self._panels_due = True
                 if self._panel_timer is None:
