@@ -186,7 +186,7 @@ def make_figures(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
     plt.close(fig)
     written.append("near_tangent.png")
 
-    if mv:
+    if mv and [c for c in mv["cases"] if "error" not in c]:
         ok = [c for c in mv["cases"] if "error" not in c]
         sizes = mv["sizes"]
         fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
@@ -438,7 +438,9 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
         if "scene_cost.png" in figs:
             L.append("![scene](figures/scene_cost.png)\n")
         L.append(scene_cost.format_scene(sc) + "\n")
-        L.append(f"Cross-check with the scene helper's `measure_update_costs()`: `{ {k: round(v, 3) if isinstance(v, float) else v for k, v in sc['cross_check'].items()} }`\n")
+        if sc.get("cross_check"):
+            cc = {k: round(v, 3) if isinstance(v, float) else v for k, v in sc["cross_check"].items()}
+            L.append(f"Cross-check with the scene helper's `measure_update_costs()`: `{cc}`\n")
     if profiles:
         L.append("## Where the time goes (profiles of targets not met)\n")
         for name, text in profiles.items():

@@ -61,8 +61,22 @@ def _time_calls(fn: Callable[[int], Any], repeats: int) -> list[float]:
     return out
 
 
-def run_scene_cost(*, quick: bool = False, log: Callable[[str], None] = print) -> dict[str, Any]:
+def run_scene_cost(
+    *,
+    quick: bool = False,
+    log: Callable[[str], None] = print,
+    presets: tuple[str, ...] = ("example-29", "example-30"),
+    repeats: int | None = None,
+    cross_check: bool = True,
+) -> dict[str, Any]:
     """Measure drag and t-step costs; returns rows {name, median_ms, p95_ms, max_ms, messages, ...}.
+
+    Args:
+        quick: fewer repetitions.
+        log: progress lines.
+        presets: motions whose t-steps are timed.
+        repeats: updates timed per row (default 50 quick, 300 full).
+        cross_check: also run the scene helper's ``measure_update_costs``.
 
     Returns:
         {"rows": [...], "cross_check": measure_update_costs(...) or {"error": ...}, "skipped": {...}}.
@@ -73,7 +87,7 @@ def run_scene_cost(*, quick: bool = False, log: Callable[[str], None] = print) -
     from app.scene import session as S
     from app.scene.state import SceneConfig
 
-    repeats = 50 if quick else 300
+    repeats = repeats or (50 if quick else 300)
     rows: list[dict[str, Any]] = []
     skipped: dict[str, Any] = {}
     def fresh() -> Any:  # one server per measurement: the message buffer of a server grows
@@ -93,7 +107,7 @@ def run_scene_cost(*, quick: bool = False, log: Callable[[str], None] = print) -
         finally:
             server.stop()
         log(f"#   drag {dim}D: {rows[-1]['median_ms']:.3f} ms")
-    for preset in ("example-29", "example-30"):
+    for preset in presets:
         for plots_on in (True, False):
             for defer in (True, False):
                 server = fresh()
@@ -117,10 +131,11 @@ def run_scene_cost(*, quick: bool = False, log: Callable[[str], None] = print) -
                 finally:
                     server.stop()
                 log(f"#   {rows[-1]['name']}: {rows[-1]['median_ms']:.3f} ms")
-    try:
-        skipped["cross_check"] = S.measure_update_costs(repeats=50 if quick else 200)
-    except Exception as e:  # noqa: BLE001 - a cross-check; report, do not fail the run
-        skipped["cross_check"] = {"error": repr(e)[:120]}
+    if cross_check:
+        try:
+            skipped["cross_check"] = S.measure_update_costs(repeats=50 if quick else 200)
+        except Exception as e:  # noqa: BLE001 - a cross-check; report, do not fail the run
+            skipped["cross_check"] = {"error": repr(e)[:120]}
     return {"rows": rows, "cross_check": skipped.get("cross_check", {}), "repeats": repeats}
 
 

@@ -65,7 +65,10 @@ def classify_eig(A: np.ndarray, B: np.ndarray, *, tol: float = EIG_TOL) -> np.nd
 
     Examples:
         >>> c = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
-        >>> classify_eig(np.array([c(0), c(0), c(0)], float), np.array([c(3), c(2), c(1)], float)).tolist()
+        >>> A, B = np.array([c(0), c(0), c(0)], float), np.array([c(3), c(2), c(1)], float)
+        >>> classify_eig(A, B).tolist()     # the tangent pair: its double eigenvalue -1 splits by 4e-8
+        [0, 0, 2]
+        >>> classify_eig(A, B, tol=1e-6).tolist()
         [0, 1, 2]
     """
     try:
