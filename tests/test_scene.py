@@ -291,3 +291,19 @@ def test_separating_plane_separates(server):
         assert found is None and not s.plane.visible
     s.set_shape("B", center="1, 0, 0", semi_axes="1, 1, 1", orientation="1, 0, 0, 0")
     assert s.state.relation == "overlap" and not s.plane.visible
+
+
+def test_play_advances_t_and_stops(server):
+    import time
+
+    s = motion_session(server, t=0.1)
+    s.speed.value = 5.0  # half of I per second
+    s.play.value = True  # runs the GUI callback: starts the playback thread
+    time.sleep(0.5)
+    s.play.value = False
+    time.sleep(0.15)
+    t_stopped = s.state.t
+    assert 0.15 < t_stopped < 0.6
+    time.sleep(0.2)
+    assert s.state.t == t_stopped
+    s.close()

@@ -97,6 +97,7 @@ class Session:
         self._build_scene()
         self._build_gui()
         self.timeline_folder.visible = False
+        self.plots_folder.visible = False
         self.load(self.config)
 
     # ------------------------------------------------------------------ building
@@ -452,6 +453,7 @@ class Session:
         """A drag or typed shape turns the scene static (keeps the shapes where they are)."""
         self.model = None
         self.timeline_folder.visible = False
+        self.plots_folder.visible = False
         self.analysis = None
         self.state.motion_key = None
         self.state.event = None
@@ -503,6 +505,7 @@ class Session:
         assert model is not None
         self.state.motion_key = model.key
         self.timeline_folder.visible = True
+        self.plots_folder.visible = True
         lo, hi = model.interval_floats
         self.t_slider.min, self.t_slider.max = lo, hi
         self.t_slider.step = (hi - lo) / 1000 or 1e-3
@@ -743,7 +746,11 @@ class Session:
         cam = getattr(self.target, "camera", None)
         if cam is None:
             return
-        pts = [np.array(sh.float_pose()[0]) for sh in self.state.shapes.values()]
+        pts = []
+        for sh in self.state.shapes.values():
+            pos, _, scale = sh.float_pose()
+            r = max(scale[:2] if self.state.dim == 2 else scale)
+            pts += [np.array(pos) + r, np.array(pos) - r]
         if self.model is not None:
             pts = self.model.extent_points()
         lo, hi = np.min(pts, axis=0), np.max(pts, axis=0)
