@@ -61,7 +61,8 @@ def classify_eig(A: np.ndarray, B: np.ndarray, *, tol: float = EIG_TOL) -> np.nd
         tol: relative tolerance.
 
     Returns:
-        (N,) int8 codes (0 separate, 1 tangent, 2 overlap); never undecided, may be wrong.
+        (N,) int8 codes (0 separate, 1 tangent, 2 overlap), -1 where numpy raised LinAlgError
+        (singular A, no convergence); may be wrong.
 
     Examples:
         >>> c = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
@@ -73,7 +74,9 @@ def classify_eig(A: np.ndarray, B: np.ndarray, *, tol: float = EIG_TOL) -> np.nd
     """
     try:
         lam = np.linalg.eigvals(np.linalg.solve(A, B))
-    except np.linalg.LinAlgError:  # a singular A in the batch: per pair
+    except np.linalg.LinAlgError:  # singular A or no convergence somewhere in the batch
+        if len(A) == 1:
+            return np.array([-1], dtype=np.int8)  # the baseline raises: counted as undecided
         return np.concatenate([classify_eig(A[i : i + 1], B[i : i + 1], tol=tol) for i in range(len(A))])
     mag = np.abs(lam)
     neg = (np.abs(lam.imag) <= tol * np.maximum(1.0, mag)) & (lam.real < 0)
@@ -271,7 +274,7 @@ def run_method(method: str, ds: D.Dataset, *, quick: bool, gjk: dict[str, Any] |
         At, Bt = _tile(A, total), _tile(B, total)
         dt = _best(lambda: classify_eig(At, Bt), repeat)
         worst, med = _single_times(lambda i: classify_eig(A[i : i + 1], B[i : i + 1]), np.arange(min(N, singles)))
-        return MethodResult(**base, n=N, pairs_per_s=len(At) / dt, wrong=_wrong(codes, truth), undecided=0,
+        return MethodResult(**base, n=N, pairs_per_s=len(At) / dt, wrong=_wrong(codes, truth), undecided=int((codes == -1).sum()),
                             worst_us=worst, median_us=med, timed_pairs=len(At))
     if gjk is not None and method in gjk:
         if ds.dim != 3 or not ds.shapes:
