@@ -159,3 +159,18 @@ def test_analysis_shows_intervals_and_jump_to_event(headless):
             f" return h === '{HEX['tangent']}'; }}"
         )
         assert hs.session.state.event == 2
+
+
+@pytest.mark.skipif(not _preset_available("circles-crossing"), reason="core.presets has no circles-crossing yet")
+def test_choosing_a_preset_in_the_dropdown_shows_its_intervals(headless):
+    with headless(static_config("4"), width=1200, height=900, timeout=60) as hs:
+        page = hs.page
+        hs.session.ready.clear()
+        page.get_by_text("Preset", exact=True).click()  # opens the Mantine combobox
+        page.get_by_role("option", name="circles-crossing").click()
+        assert hs.session.ready.wait(60)
+        # unit circles at (t, 0) and (-t, 0) on [-2, 2]: separate, overlap for |t| < 1, separate
+        page.wait_for_function("() => document.querySelectorAll('svg rect').length === 3")
+        bar = page.locator("svg rect")
+        assert [bar.nth(i).get_attribute("fill") for i in range(3)] == [HEX["separate"], HEX["overlap"], HEX["separate"]]
+        assert hs.session.state.dim == 2

@@ -178,6 +178,10 @@ def test_example_29_timeline(server):
     assert colours(s) == {AMBER}
     assert s.contact.visible
     assert "α1" in s.readout.content and "TANGENT" in s.readout.content
+    # paper: Var(-, a3, a2, a1, -) = Var(-, 0, 1/2, 0, -) = 2 at alpha_i, Theorem 24 (1)
+    assert "Var(-, 0, +, 0, -) = **2**" in s.readout.content
+    assert "| a<sub>2</sub> | 0.5 | + |" in s.readout.content
+    assert "Th. 24.1" in s.readout.content
     # contact point of Example 29 at alpha1: by symmetry of the two equal shapes it is the
     # midpoint of the centres, (c_A + c_B) / 2 with c_A = (11 - 12 t, 0, 0), c_B = (3, 4t - 2, 4t - 4)
     mid = np.array([(11 - 12 * ALPHA1 + 3) / 2, (4 * ALPHA1 - 2) / 2, (4 * ALPHA1 - 4) / 2])

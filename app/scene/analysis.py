@@ -582,8 +582,26 @@ def _explain_at(model: MotionModel, result: dict[str, Any], lookup: Any, t: floa
         return None
     a_signs = [_SIGN[x] for x in reversed(row["a"])]
     nan = float("nan")
-    coeffs = [{"name": f"a{i}", "approx": nan, "exact": None, "bound": None, "sign": a_signs[i]} for i in range(n + 1)]
-    subs = {k: {"name": k, "approx": nan, "exact": None, "bound": None, "sign": _SIGN[row[k]]} for k in ("s0", "s1", "s10")}
+    approx: dict[str, float] = {}
+    if event is not None:
+        # display values from the float matrices at the float event time; signs stay exact
+        from core.pencil import pencil_coefficients
+        from core.subresultants import s0_full, s1_full, s10_full
+
+        try:
+            Af, Bf = model.float_matrices(float(result["events"][event - 1]["approx"]))
+            fa = [float(v) for v in pencil_coefficients(Af, Bf)]
+            approx = {f"a{i}": v for i, v in enumerate(fa)}
+            approx.update(s0=float(s0_full(fa)), s1=float(s1_full(fa)), s10=float(s10_full(fa)))
+        except (ValueError, ArithmeticError):
+            approx = {}
+
+    def q(name: str, sign: int) -> dict[str, Any]:
+        v = 0.0 if sign == 0 else approx.get(name, nan)
+        return {"name": name, "approx": v, "exact": "0" if sign == 0 else None, "bound": None, "sign": sign}
+
+    coeffs = [q(f"a{i}", a_signs[i]) for i in range(n + 1)]
+    subs = {k: q(k, _SIGN[row[k]]) for k in ("s0", "s1", "s10")}
     return {
         "n": n,
         "relation": lookup(t) if event is None else row["relation"],

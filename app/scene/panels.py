@@ -73,7 +73,7 @@ def readout_markdown(expl: dict[str, Any] | None, *, where: str = "", error: str
         return f"**Relation** {relation_badge(None)}\n\n⚠ {error or 'no shapes'}"
     n = expl["n"]
     lines = [f"**Relation** {relation_badge(expl['relation'])} {where}".rstrip()]
-    cert = "float filter (proven error bound)" if expl["certified_by"] == "float" else "exact rational arithmetic"
+    cert = "float filter (proven error bound)" if expl["certified_by"] == "float" else "exact arithmetic"
     lines.append("")
     lines.append(f"Certified by: {cert}")
     coeffs = expl["coefficients"]
