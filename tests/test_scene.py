@@ -311,3 +311,12 @@ def test_play_advances_t_and_stops(server):
     time.sleep(0.2)
     assert s.state.t == t_stopped
     s.close()
+
+
+def test_dimension_switch_rebuilds_shapes(server):
+    s = Session(server, unit_spheres(3, "3"))
+    s.dim_choice.value = "2D ellipses"  # runs the GUI callback
+    assert s.state.dim == 2 and len(s.state.shapes["A"].center) == 2
+    assert s.state.relation in ("separate", "tangent", "overlap")
+    s.dim_choice.value = "3D ellipsoids"
+    assert s.state.dim == 3

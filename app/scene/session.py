@@ -24,7 +24,7 @@ from . import plots
 from .analysis import AnalysisCache, AnalysisView, MotionError, MotionModel, list_presets, load_motion
 from .contact import contact_point, separating_plane
 from .panels import intervals_bar_html, readout_markdown, sign_table_markdown
-from .shapes import RELATION_COLORS, EllipsoidView
+from .shapes import EllipsoidView
 from .state import AppState, SceneConfig, ShapeState, format_number, parse_vector
 
 __all__ = ["Session", "measure_update_costs"]
