@@ -320,3 +320,17 @@ def test_dimension_switch_rebuilds_shapes(server):
     assert s.state.relation in ("separate", "tangent", "overlap")
     s.dim_choice.value = "3D ellipsoids"
     assert s.state.dim == 3
+
+
+def test_t_box_accepts_fractions_and_event_names(server):
+    s = motion_session(server)
+    s.t_number.value = "3/4"
+    assert s.state.t == 0.75 and s.state.relation == "overlap"
+    s.t_number.value = "alpha2"
+    assert s.state.event == 2 and s.state.relation == "tangent"
+    s.t_number.value = "α7"
+    assert s.t_error.visible and "2 events" in s.t_error.content
+    s.t_number.value = "soon"
+    assert "not a number" in s.t_error.content
+    assert s.state.relation == "tangent"  # unchanged by bad input
+    s.close()

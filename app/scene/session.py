@@ -10,6 +10,7 @@ paths have cheap entry points that need no browser, for the benchmark helper:
 from __future__ import annotations
 
 import math
+import re
 import threading
 import time
 from concurrent.futures import Executor, Future
@@ -147,7 +148,7 @@ class Session:
         with gui.add_folder("Timeline") as self.timeline_folder:
             self.bar = gui.add_html("")
             self.t_slider = gui.add_slider("t", min=0.0, max=1.0, step=0.001, initial_value=0.0)
-            self.t_number = gui.add_text("t (exact)", "0", hint="a number or fraction, e.g. 3/4")
+            self.t_number = gui.add_text("t (exact)", "0", hint="a number or fraction (3/4), or α1, α2, … for an event")
             self.t_error = gui.add_markdown("", visible=False)
             self.play = gui.add_checkbox("Play", False)
             self.speed = gui.add_slider("Speed (I per 10 s)", min=0.1, max=5.0, step=0.1, initial_value=1.0)
@@ -687,10 +688,20 @@ class Session:
     def _on_t_text(self, ev: Any) -> None:
         if self._syncing or self.model is None:
             return
+        text = self.t_number.value.strip()
+        m = re.fullmatch(r"(?:α|alpha)\s*(\d+)", text, flags=re.IGNORECASE)
+        if m is not None:  # "α1" / "alpha1": the exact event
+            n_ev = len(self.analysis.events) if self.analysis else 0
+            if not 1 <= int(m.group(1)) <= n_ev:
+                self._field_error(self.t_error, f"t: there are {n_ev} events (α1..α{n_ev})")
+                return
+            self._field_error(self.t_error, None)
+            self.jump_to_event(int(m.group(1)))
+            return
         try:
-            (t,) = parse_vector(self.t_number.value, 1, "t")
+            (t,) = parse_vector(text, 1, "t")
         except ValueError as e:
-            self._field_error(self.t_error, str(e))
+            self._field_error(self.t_error, f"{e}; or type α1, α2, … for an event")
             return
         self._field_error(self.t_error, None)
         self.set_t(float(t))
