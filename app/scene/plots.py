@@ -67,6 +67,8 @@ class PlotData:
         finite = np.concatenate([y[np.isfinite(y)] for y in self.ys]) if self.ys else np.zeros(1)
         self.top = float(np.max(finite)) if finite.size else 1.0
         self.bot = float(np.min(finite)) if finite.size else -1.0
+        if self.top - self.bot < 1e-9:  # constant curves: give the cursor some height
+            self.top, self.bot = self.top + 1.0, self.bot - 1.0
         n = self.t.shape[0]
         self.ev = np.full(n, np.nan)
         for e in events:
