@@ -434,7 +434,8 @@ def grazing_motion(dim: int, *, depth: Any = 0, seed: int = 0) -> dict[str, Any]
     B = {"shape": {"center": [0] * dim, "semi_axes": [str(r)] * dim}, "translation": [f"{_q(c0[i])} + {_q(v[i])}*t" for i in range(dim)]}
     kind = "graze" if d == 0 else ("double" if d > 0 else "near miss")
     expect = "touch at 0" if d == 0 else ("none" if d < 0 else None)
-    return {"A_t": A, "B_t": B, "interval": ("-1", "1"), "name": f"{kind} {dim}D depth {float(d):.0e}" if d else f"{kind} {dim}D", "expect": expect}
+    name = f"{kind} {dim}D depth {float(d):.0e}" if d else f"{kind} {dim}D"
+    return {"A_t": A, "B_t": B, "interval": ("-1", "1"), "name": f"{name} #{seed}", "expect": expect}
 
 
 def almost_tangent_motion(eps: Any) -> dict[str, Any]:

@@ -292,7 +292,7 @@ def run_method(method: str, ds: D.Dataset, *, quick: bool, gjk: dict[str, Any] |
 
 def build_datasets(*, quick: bool, seed: int = 0, log: Callable[[str], None] = print) -> list[D.Dataset]:
     """All static data sets, labelled by the oracle (the slow part: ~1 ms per pair)."""
-    n_random, n_tan, n_near, n_ext = (500, 40, 20, 60) if quick else (5000, 300, 200, 500)
+    n_random, n_tan, n_near, n_ext = (500, 40, 20, 60) if quick else (20000, 300, 200, 500)
     out: list[D.Dataset] = []
     t0 = time.perf_counter()
     for dim in (2, 3):
