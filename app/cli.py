@@ -2,8 +2,9 @@
 
 * ``python -m app``: start the scene (http://127.0.0.1:8080) and the API (http://127.0.0.1:8000)
   with defaults and print the URLs; the scene opens on Example 29 just before the first touch.
-* ``python -m app serve --host H --port SCENE_PORT --api-port P [--api-only]``: the same with
-  options; uvicorn serves the API in the main thread, viser serves the scene from its own thread.
+* ``python -m app serve --host H --port SCENE_PORT --api-port P [--api-only] [--shared]``: the
+  same with options; uvicorn serves the API in the main thread, viser serves the scene from its
+  own thread; ``--shared`` is the presenter mode (one scene for every tab).
 * ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png [--config file.json]
   [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly.
 """
@@ -65,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--api-only", action="store_true", help="serve the API alone (no scene)")
     s.add_argument("--preset", default=None, help="preset the scene opens on (default example-29; 'none' for static shapes)")
     s.add_argument("--config", default=None, help="JSON configuration the scene opens on")
+    s.add_argument("--shared", action="store_true", help="presenter mode: every tab sees and drives one scene")
 
     sh = sub.add_parser("screenshot", help="render a configuration to PNG with headless Chromium")
     sh.add_argument("--preset", default=None, help="motion preset, e.g. example-29 ('none' for static shapes)")
@@ -115,7 +117,7 @@ def _serve(args: argparse.Namespace) -> int:
     if not args.api_only:
         from .scene.server import start_scene
 
-        scene = start_scene(args.host, args.port, config_from_args(args))  # type: ignore[arg-type]
+        scene = start_scene(args.host, args.port, config_from_args(args), shared=args.shared)  # type: ignore[arg-type]
         scene_url = scene.url
         print(f"Scene (open in a browser): {scene_url}", flush=True)
     try:

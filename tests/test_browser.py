@@ -174,3 +174,32 @@ def test_choosing_a_preset_in_the_dropdown_shows_its_intervals(headless):
         bar = page.locator("svg rect")
         assert [bar.nth(i).get_attribute("fill") for i in range(3)] == [HEX["separate"], HEX["overlap"], HEX["separate"]]
         assert hs.session.state.dim == 2
+
+
+def test_shared_presenter_scene_is_seen_by_every_tab(tmp_path):
+    from app.scene.server import start_scene
+
+    scene = start_scene("127.0.0.1", 0, static_config("4"), shared=True, processes=False)
+    try:
+        from playwright.sync_api import sync_playwright
+
+        from app.screenshot import CHROMIUM, CHROMIUM_FLAGS
+
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_FLAGS)
+            pages = [browser.new_page() for _ in range(2)]
+            for p in pages:
+                p.goto(f"http://127.0.0.1:{scene.port}/?fixedDpr=1&hideViserLogo")
+            colour_js = (
+                "(want) => { const r = window.__viserMutable?.nodeRefFromName?.['/shapes/B/mesh']; if (!r) return false;"
+                " let h = null; r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
+                " return h === want; }"
+            )
+            for p in pages:
+                p.wait_for_function(colour_js, arg=HEX["separate"], timeout=60000)
+            scene.shared.set_shape("B", center="1, 0, 0")  # the presenter moves B
+            for p in pages:
+                p.wait_for_function(colour_js, arg=HEX["overlap"], timeout=60000)
+            browser.close()
+    finally:
+        scene.stop()

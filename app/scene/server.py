@@ -3,7 +3,8 @@
 ``start_scene(host, port)`` returns a running ``viser.ViserServer`` (its own thread). Every tab
 that connects gets a private scene and GUI (``client.scene``/``client.gui``) built from the
 server's configuration, so a classroom of students never fights over one scene; analyses are
-shared through one cache and run in a worker pool, so a slow analysis never blocks other tabs.
+shared through one cache and run in worker processes, so a slow analysis never blocks other tabs.
+``shared=True`` (``python -m app serve --shared``) is the presenter mode: one scene for all tabs.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ __all__ = ["SceneServer", "start_scene"]
 class SceneServer:
     """A running scene: the ``ViserServer`` plus the live sessions (one per connected tab)."""
 
-    def __init__(self, server: Any, config: SceneConfig, *, processes: bool = True) -> None:
+    def __init__(self, server: Any, config: SceneConfig, *, processes: bool = True, shared: bool = False) -> None:
         self.server = server
         self.config = config
         """Configuration new tabs open on (change it to change what the next tab sees)."""
@@ -31,11 +32,20 @@ class SceneServer:
         self.sessions: dict[int, Session] = {}
         self._lock = threading.Lock()
         self.new_session = threading.Condition(self._lock)
+        self.shared: Session | None = None
+        """The one session every tab sees (presenter mode), or None (one session per tab)."""
+        if shared:
+            self.shared = Session(server, config, cache=self.cache, executor=self.executor)
 
         @server.on_client_connect
         def _(client: Any) -> None:
-            session = Session(client, self.config, cache=self.cache, executor=self.executor)
-            session._frame_camera()
+            if self.shared is not None:
+                session = self.shared
+                session.target = client  # frame this tab's camera; the scene itself is shared
+                session._frame_camera()
+            else:
+                session = Session(client, self.config, cache=self.cache, executor=self.executor)
+                session._frame_camera()
             with self._lock:
                 self.sessions[client.client_id] = session
                 self.new_session.notify_all()
@@ -44,7 +54,7 @@ class SceneServer:
         def _(client: Any) -> None:
             with self._lock:
                 s = self.sessions.pop(client.client_id, None)
-            if s is not None:
+            if s is not None and s is not self.shared:
                 s.close()
 
     @property
@@ -83,6 +93,7 @@ def start_scene(
     *,
     verbose: bool = False,
     processes: bool = True,
+    shared: bool = False,
 ) -> SceneServer:
     """Start the scene server (returns at once; viser serves from its own thread).
 
@@ -94,9 +105,11 @@ def start_scene(
         verbose: let viser print its own banner.
         processes: run analyses in child processes (a long analysis never holds the GIL of
             the process serving the tabs); False runs them in worker threads.
+        shared: presenter mode: every tab sees and drives one scene (default: each tab has
+            its own).
     """
     import viser
 
     server = viser.ViserServer(host=host, port=port, verbose=verbose)
     server.gui.configure_theme(control_width="large", show_share_button=False)
-    return SceneServer(server, config or SceneConfig(), processes=processes)
+    return SceneServer(server, config or SceneConfig(), processes=processes, shared=shared)
