@@ -235,6 +235,8 @@ def test_drag_leaves_the_motion(server):
     assert s.state.relation == "separate"
     assert s.apply_drag("B", (4.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) in ("overlap", "tangent", "separate")
     assert s.model is None and s.preset.value == "(static shapes)"
+    # the static shapes start from the motion's shapes at t = 0.3 (semi-axes 2, 1, 1)
+    assert sorted(round(float(v), 9) for v in s.state.shapes["A"].semi_axes) == [1.0, 1.0, 2.0]
     s.close()
 
 
@@ -333,4 +335,31 @@ def test_t_box_accepts_fractions_and_event_names(server):
     s.t_number.value = "soon"
     assert "not a number" in s.t_error.content
     assert s.state.relation == "tangent"  # unchanged by bad input
+    s.close()
+
+
+def test_config_with_a_typed_motion(server, tmp_path):
+    import json
+
+    cfg_file = tmp_path / "motion.json"
+    cfg_file.write_text(
+        json.dumps(
+            {
+                "preset": None,
+                "t": 0.25,
+                "motion": {
+                    # unit circles at (t, 0) and (3 - t, 0) on [0, 2]: distance 3 - 2t, tangent at t = 1/2
+                    "A": {"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["t", "0"]},
+                    "B": {"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["3 - t", "0"]},
+                    "interval": "0, 2",
+                },
+            }
+        )
+    )
+    s = Session(server, SceneConfig.from_json_file(cfg_file))
+    assert s.ready.wait(60)
+    assert s.state.dim == 2 and s.state.relation == "separate"
+    assert [e.t for e in s.analysis.events] == [0.5]
+    assert s.set_t(1.0) == "overlap"
+    assert s.jump_to_event(1) == "tangent"
     s.close()

@@ -468,6 +468,7 @@ class Session:
         self._event_buttons = []
         self._set_value(self.play, False)
         self._refresh_plots(force=True)
+        self._sync_shape_fields()
 
     def _on_preset(self, ev: Any) -> None:
         if self._syncing:
@@ -621,6 +622,7 @@ class Session:
             self.state.t = t
             self.state.event = event
             a, b = model.shapes_at(t)
+            self.state.shapes = {"A": a, "B": b}  # a drag from here starts where they are drawn
             for name, sh in (("A", a), ("B", b)):
                 pos, wxyz, scale = sh.float_pose()
                 self.views[name].set_pose(pos, wxyz, scale)
