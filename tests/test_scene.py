@@ -363,3 +363,10 @@ def test_config_with_a_typed_motion(server, tmp_path):
     assert s.set_t(1.0) == "overlap"
     assert s.jump_to_event(1) == "tangent"
     s.close()
+
+
+def test_typed_text_is_escaped_in_messages(server):
+    s = Session(server, unit_spheres(3, "3"))
+    s.shape_fields["B"]["center"].value = "1, <b>x</b>, 0"
+    assert s.shape_errors["B"].visible
+    assert "<b>" not in s.shape_errors["B"].content and "&lt;b&gt;" in s.shape_errors["B"].content

@@ -70,7 +70,7 @@ def readout_markdown(expl: dict[str, Any] | None, *, where: str = "", error: str
         ⚠ A.semi_axes: must be positive
     """
     if expl is None:
-        return f"**Relation** {relation_badge(None)}\n\n⚠ {error or 'no shapes'}"
+        return f"**Relation** {relation_badge(None)}\n\n⚠ {html.escape(error or 'no shapes')}"
     n = expl["n"]
     lines = [f"**Relation** {relation_badge(expl['relation'])} {where}".rstrip()]
     cert = "float filter (proven error bound)" if expl["certified_by"] == "float" else "exact arithmetic"

@@ -9,6 +9,7 @@ paths have cheap entry points that need no browser, for the benchmark helper:
 
 from __future__ import annotations
 
+import html
 import math
 import re
 import threading
@@ -317,7 +318,8 @@ class Session:
         if message is None:
             md.visible = False
         else:
-            md.content = f'<span style="color:#d62728">⚠ {message}</span>'
+            # typed text comes back in messages: escape it (a shared scene shows it to every tab)
+            md.content = f'<span style="color:#d62728">⚠ {html.escape(message)}</span>'
             md.visible = True
 
     def _sync_shape_fields(self, only: str | None = None) -> None:
@@ -533,7 +535,7 @@ class Session:
                 result = f.result()
             except Exception as e:  # noqa: BLE001 - shown next to the field, never a crash
                 self.progress.visible = False
-                self._set_md(self.status, f'<span style="color:#d62728">⚠ analysis failed: {e}</span>')
+                self._set_md(self.status, f'<span style="color:#d62728">⚠ analysis failed: {html.escape(str(e))}</span>')
                 self.ready.set()
                 return
             self._analysis_done(model, result)
@@ -544,7 +546,7 @@ class Session:
         try:
             self._show_analysis(model, result)
         except Exception as e:  # noqa: BLE001 - a display bug must not leave the tab waiting
-            self._set_md(self.status, f'<span style="color:#d62728">⚠ could not show the analysis: {e}</span>')
+            self._set_md(self.status, f'<span style="color:#d62728">⚠ could not show the analysis: {html.escape(str(e))}</span>')
             self.ready.set()
             raise
 
