@@ -388,7 +388,9 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
     L.append("\n## Static pairs\n")
     L.append("Methods: `float` (certified filter, may abstain), `adaptive` (filter + exact for abstentions; the default), `exact` "
              "(rationals, one call per pair), `numpy-eig` (batched `eigvals(solve(A, B))` with a tolerance), GJK collide from "
-             "coal and python-fcl on their ellipsoid primitives when installed (3D only; boolean, so on tangent pairs either answer counts as right).\n")
+             "coal and python-fcl on their ellipsoid primitives when installed (3D only; boolean, so on tangent pairs either answer counts as right; "
+             "GJK receives the centre / semi-axes / rotation the float matrices were built from, so below gaps of about 1e-15 the rounding of "
+             "the matrices alone can make its input differ from the labelled pair).\n")
     L.append("**Root criterion of the eigenvalue baseline.** det(A^-1 B - lam I) = 0 iff det(T A + B) = 0 with T = -lam, so the "
              "eigenvalues of A^-1 B are the negated roots of P. By Theorems 7 / 19, P has at least one (2D) or two (3D) negative "
              "roots, and the shapes are separate iff P has two distinct positive roots, externally tangent iff it has a positive "
