@@ -11,8 +11,9 @@ sampled labels that differ from the exact relation at the same (float, exact bin
 
 Stress (failures must be none): for every analysed case, rational times inside each reported
 interval, random rational times, and the two ends of each event's refined isolating interval
-(just before / just after), each checked with the independent oracle (``tests/oracle.py``) on the
-exact matrices A(q), B(q) against ``relation_at(q)``; rational events are checked to be tangent.
+(just before / just after), each checked on the exact matrices A(q), B(q) with the independent
+oracle (``tests/oracle.py``) and with ``classify(method="exact")`` against ``relation_at(q)``;
+rational events are checked to be tangent.
 Known patterns are asserted too (a graze is one "touch" event at t = 0, a near miss has none).
 Cases with sqrt(d) in their entries cannot be evaluated at rational times exactly and are
 marked "n/a" in the check.
@@ -129,10 +130,11 @@ def compare_sampling(args: dict[str, Any], res: Any, N: int, *, wrong_check: int
 
 
 # ------------------------------------------------------------------------------------ checks
-def _oracle_code(args: dict[str, Any], q: fmpq) -> int:
+def _oracle_code(args: dict[str, Any], q: fmpq) -> tuple[int, int]:
+    """(oracle code, classify(method="exact") code) of the exact matrices at rational time q."""
     A = matrix_at_exact(args["A_t"], q)
     B = matrix_at_exact(args["B_t"], q)
-    return D.label(np.array([A], dtype=object), np.array([B], dtype=object))[0]
+    return int(D.label(np.array([A], dtype=object), np.array([B], dtype=object))[0]), int(classify(A, B, method="exact"))
 
 
 def _rational_between(a: float, b: float, rng: random.Random) -> fmpq:
@@ -175,13 +177,13 @@ def check_analysis(args: dict[str, Any], res: Any, *, points: int = 12, seed: in
                 qs.append((q, f"{where} {e.kind} event"))
     for q, where in qs:
         try:
-            truth = _oracle_code(args, q)
+            truth, static_code = _oracle_code(args, q)
         except ValueError as err:  # e.g. a denominator vanishing at q
             failures.append(f"t = {q}: cannot evaluate ({err})")
             continue
         got = int(res.relation_at(q))
-        if truth != got:
-            failures.append(f"{where} t = {q}: analysis says {got}, oracle {truth}")
+        if truth != got or static_code != got:
+            failures.append(f"{where} t = {q}: analysis says {got}, oracle {truth}, classify {static_code}")
     expect = args.get("expect")
     kinds = [(e.kind, float(e)) for e in res.events]
     if expect == "touch at 0" and kinds != [("touch", 0.0)]:

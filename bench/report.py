@@ -428,8 +428,9 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
         if "moving_sampling.png" in figs:
             L.append("![moving](figures/moving_sampling.png)\n")
         L.append(moving.format_summary(mv) + "\n")
-        L.append("Per case (check = independent oracle at rational times inside every interval, random times, and just before/after "
-                 "each event; 'n/a' where sqrt(d) makes A(q) irrational):\n")
+        L.append("Per case (check = the independent oracle and `classify(method=\"exact\")` on the exact A(q), B(q) against "
+                 "`relation_at(q)` at rational times inside every interval, random times, and just before/after each event "
+                 "(isolating interval refined below 1e-12); 'n/a' where sqrt(d) makes A(q) irrational):\n")
         L.append(moving.format_cases(mv) + "\n")
         fails = [(c["name"], f) for c in mv["cases"] if "check" in c for f in c["check"]["failures"]]
         L.append(f"**Failures: {len(fails)}**" + ("" if not fails else ":\n" + "\n".join(f"- {n}: {f}" for n, f in fails)) + "\n")
