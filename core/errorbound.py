@@ -49,6 +49,7 @@ __all__ = [
     "UNIT_ROUNDOFF",
     "LEAF_MAX",
     "NO_SCALE_MIN",
+    "TRANSLATE_MAX",
     "RADIUS_FACTOR",
 ]
 
@@ -57,6 +58,9 @@ UNIT_ROUNDOFF = Fraction(1, 2**53)
 
 LEAF_MAX = 256
 """(Scaled) matrix entries must be <= 2^8: nothing can overflow (degree <= 24, constants <= 27)."""
+
+TRANSLATE_MAX = 2**30
+"""The translated second stage of the filter moves the origin by at most 2^30 per coordinate."""
 
 NO_SCALE_MIN = Fraction(1, 256)
 """Matrices whose largest |entry| is already in [2^-8, 2^8] are not rescaled (saves time)."""

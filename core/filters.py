@@ -22,12 +22,12 @@ import numpy as np
 
 from . import _kernels as K
 from .decision import RULES, sign_variations
-from .errorbound import RADIUS_FACTOR
+from .errorbound import RADIUS_FACTOR, TRANSLATE_MAX
 from .fastpath import HAVE_NUMBA, classify_one, classify_pairs, warm_up
 from .relation import Relation
 from .subresultants import hat_scale
 
-__all__ = ["classify_float", "classify_float_numpy", "explain_float", "HAT_DEGREE_WEIGHT"]
+__all__ = ["classify_float", "classify_float_numpy", "classify_translated", "explain_float", "HAT_DEGREE_WEIGHT"]
 
 _CHUNK = 4096
 """Pairs per numpy chunk: keeps the kernel's temporaries in cache."""
@@ -44,6 +44,12 @@ _HAT = {
     (4, "s1"): (K.hat_s1_4, K.HAT_S1_4_FLOOR),
     (4, "s10"): (K.hat_s10_4, K.HAT_S10_4_FLOOR),
 }
+
+_TRANSLATE = {3: K.translate3, 4: K.translate4}
+_TRANSLATE_OUTPUTS = {3: K.TRANSLATE3_OUTPUTS, 4: K.TRANSLATE4_OUTPUTS}
+_TRANSLATE_FLOOR = {3: K.TRANSLATE3_FLOOR, 4: K.TRANSLATE4_FLOOR}
+_PENCIL_RADIUS = {3: (K.pencil_radius3, K.PENCIL_RADIUS3_FLOOR), 4: (K.pencil_radius4, K.PENCIL_RADIUS4_FLOOR)}
+_PENCIL_RADIUS_OUTPUTS = {3: K.PENCIL_RADIUS3_OUTPUTS, 4: K.PENCIL_RADIUS4_OUTPUTS}
 
 HAT_DEGREE_WEIGHT: dict[tuple[int, str], tuple[int, int]] = {
     (3, "s0"): (4, 6), (3, "s1"): (2, 4), (3, "s10"): (2, 3),
@@ -98,13 +104,11 @@ def _certified_sign(v: np.ndarray, bound: np.ndarray) -> np.ndarray:
     return np.where(v > bound, 1, np.where(v < -bound, -1, 0)).astype(np.int8)
 
 
-def _classify_chunk(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    n = a.shape[-1]
-    N = a.shape[0]
+def _decide(out: dict[str, tuple[Any, Any]], ok: np.ndarray, n: int) -> np.ndarray:
+    """The certified tree (validity, Var, s0) on values with error bounds, for arrays of pairs."""
+    N = ok.shape[0]
     codes = np.full(N, Relation.UNDECIDED, dtype=np.int8)
-    prep = _Prepared(a, b)
-    ok = prep.ok
-    out = _run_pencil(prep.a, prep.b)
+    ok = ok.copy()
     for key in [k for k in out if k.startswith("d")]:
         v, bd = out[key]
         ok &= v > bd  # quadratic block positive definite, certified (Sylvester)
@@ -123,20 +127,94 @@ def _classify_chunk(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     codes[ok & (var != 2)] = Relation.OVERLAP
     idx = np.flatnonzero(ok & (var == 2))
     if idx.size:  # s0 only where the tree needs it
-        vals = [out[f"c{i}"][0][idx] for i in range(n + 1)]
-        radii = [out[f"c{i}"][1][idx] for i in range(n + 1)]
+        vals = [np.asarray(out[f"c{i}"][0])[idx] for i in range(n + 1)]
+        radii = [np.asarray(out[f"c{i}"][1])[idx] for i in range(n + 1)]
         s0 = _certified_sign(*_run_hat(n, "s0", vals, radii))
         first, second = (Relation.SEPARATE, Relation.OVERLAP) if n == 3 else (Relation.OVERLAP, Relation.SEPARATE)
         codes[idx] = np.where(s0 > 0, first, np.where(s0 < 0, second, Relation.UNDECIDED))
     return codes
 
 
+def _classify_chunk(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    prep = _Prepared(a, b)
+    return _decide(_run_pencil(prep.a, prep.b), prep.ok, a.shape[-1])
+
+
+_TINY_RADIUS = 2.0**-1073
+"""Covers an exact power-of-two rescaling that lands in the subnormal range (error <= 2^-1075)."""
+
+
+def _translated(M: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Values and certified radii of G^T M G (origin moved to t), rescaled so |v| + r < 2."""
+    n = M.shape[-1]
+    fn = _TRANSLATE[n]
+    res = fn(np.moveaxis(M, 0, -1), np.moveaxis(t, 0, -1))
+    outputs = _TRANSLATE_OUTPUTS[n]
+    V = np.empty_like(M)
+    R = np.empty_like(M)
+    k = len(outputs)
+    for name, v, r in zip(outputs, res[:k], res[k:]):
+        i, j = int(name[1]), int(name[2])
+        V[:, i, j] = V[:, j, i] = v
+        R[:, i, j] = R[:, j, i] = np.asarray(r) * RADIUS_FACTOR + _TRANSLATE_FLOOR[n]
+    mx = (np.abs(V) + R).max(axis=(1, 2))
+    _, e = np.frexp(np.where(np.isfinite(mx) & (mx > 0), mx, 1.0))
+    shift = (1 - e)[:, None, None]
+    return np.ldexp(V, shift), np.ldexp(R, shift) + _TINY_RADIUS
+
+
+def classify_translated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Second filter stage: both shapes moved so that A is centred near the origin.
+
+    The relation is invariant under a common translation. Far from the origin (centres at 1e6)
+    the entries c^T Q c dominate the first stage's bound; after moving the origin to (a float
+    approximation of) A's centre, with every entry's rounding error carried as a radius
+    (:mod:`core.errorbound`, midpoint-radius), most such pairs are certified without exact
+    arithmetic. Same contract as :func:`classify_float`: UNDECIDED where no sign is proven.
+    """
+    n = a.shape[-1]
+    d = n - 1
+    prep = _Prepared(a, b)
+    Q, m = prep.a[:, :d, :d], prep.a[:, :d, d]
+    with np.errstate(all="ignore"):
+        try:
+            centre = -np.linalg.solve(Q, m[..., None])[..., 0]
+        except np.linalg.LinAlgError:  # a singular block somewhere: solve one by one
+            centre = np.array([_solve_or_nan(q, v) for q, v in zip(Q, m)]).reshape(-1, d)
+    ok = prep.ok & np.isfinite(centre).all(axis=1) & (np.abs(centre) <= TRANSLATE_MAX).all(axis=1)
+    centre = np.where(ok[:, None], centre, 0.0)  # any float vector is exact: it is the chosen t
+    VA, RA = _translated(prep.a, centre)
+    VB, RB = _translated(prep.b, centre)
+    fn, floor = _PENCIL_RADIUS[n]
+    res = fn(*(np.moveaxis(X, 0, -1) for X in (VA, RA, VB, RB)))
+    outputs = _PENCIL_RADIUS_OUTPUTS[n]
+    k = len(outputs)
+    out = {name: (v, np.asarray(r) * RADIUS_FACTOR + floor) for name, v, r in zip(outputs, res[:k], res[k:])}
+    return _decide(out, ok, n)
+
+
+def _solve_or_nan(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    try:
+        return -np.linalg.solve(q, v)
+    except np.linalg.LinAlgError:
+        return np.full(v.shape, np.nan)
+
+
 def classify_float_numpy(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The vectorised numpy filter (used when numba is missing; cross-checked in the tests)."""
+    """The vectorised numpy first stage (used when numba is missing; cross-checked in the tests)."""
     N = a.shape[0]
     codes = np.empty(N, dtype=np.int8)
     for s in range(0, N, _CHUNK):
         codes[s : s + _CHUNK] = _classify_chunk(a[s : s + _CHUNK], b[s : s + _CHUNK])
+    return codes
+
+
+def _second_stage(a: np.ndarray, b: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """Run :func:`classify_translated` on the pairs the first stage left undecided."""
+    idx = np.flatnonzero(codes == Relation.UNDECIDED)
+    for s in range(0, idx.size, _CHUNK):
+        part = idx[s : s + _CHUNK]
+        codes[part] = classify_translated(a[part], b[part])
     return codes
 
 
@@ -153,14 +231,16 @@ def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False, wait: 
         int8 codes of :class:`Relation`, shape (N,). Never a wrong label.
 
     Batches use the numba kernel once it is compiled (started in the background on first use;
-    :func:`core.fastpath.warm_up` waits for it) and the numpy code until then.
+    :func:`core.fastpath.warm_up` waits for it) and the numpy code until then; the pairs this
+    first stage leaves undecided go through :func:`classify_translated`. A single pair skips
+    that second stage (exact arithmetic is as fast as numpy on one pair).
     """
     if scalar and HAVE_NUMBA:
         codes = np.array([classify_one(a[0], b[0], wait=wait)], dtype=np.int8)
     elif warm_up(wait=False):  # compiled kernels ready (never wait for numba's first compile)
-        codes = classify_pairs(a, b)
+        codes = _second_stage(a, b, classify_pairs(a, b))
     else:
-        codes = classify_float_numpy(a, b)
+        codes = _second_stage(a, b, classify_float_numpy(a, b))
     return codes
 
 

@@ -14,11 +14,19 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from .errorbound import LEAF_MAX, NO_SCALE_MIN, Kernel, build_kernel
+from .errorbound import LEAF_MAX, NO_SCALE_MIN, TRANSLATE_MAX, Kernel, build_kernel
 from .pencil import pencil_coefficients, poly_mul
 from .subresultants import hat_s0, hat_s1, hat_s10
 
-__all__ = ["pencil_kernel", "subresultant_kernel", "generate_module", "GENERATED_PATH", "HATS"]
+__all__ = [
+    "pencil_kernel",
+    "pencil_radius_kernel",
+    "translate_kernel",
+    "subresultant_kernel",
+    "generate_module",
+    "GENERATED_PATH",
+    "HATS",
+]
 
 GENERATED_PATH = Path(__file__).with_name("_kernels.py")
 HATS = {"s0": hat_s0, "s1": hat_s1, "s10": hat_s10}
@@ -94,9 +102,77 @@ def pencil_kernel(n: int) -> Kernel:
 
 
 @cache
+def translate_kernel(n: int) -> Kernel:
+    """Kernel ``translate{n}(M, t)`` (midpoint-radius): upper triangle of G^T M G, G = [[I, t], [0, 1]].
+
+    Moves the origin to the point t (both shapes of a pair get the same t: the relation is
+    invariant). Inputs are exact (radius 0); outputs carry certified radii. Leaves: entries of
+    the prepared matrix (|.| <= LEAF_MAX) and t (|t_i| <= TRANSLATE_MAX).
+    """
+    d = n - 1
+    names = [_leaf("m", i, j) for i in range(n) for j in range(i, n)] + [f"t{i}" for i in range(d)]
+
+    def formula(L: dict[str, Any]) -> dict[str, Any]:
+        M = [[L[_leaf("m", i, j)] for j in range(n)] for i in range(n)]
+        t = [L[f"t{i}"] for i in range(d)]
+        out: dict[str, Any] = {}
+        for i in range(d):
+            for j in range(i, d):
+                out[_leaf("m", i, j)] = M[i][j] * 1  # unchanged (exact)
+        Qt = []
+        for i in range(d):
+            acc = M[i][d]
+            for j in range(d):
+                acc = acc + M[i][j] * t[j]
+            Qt.append(acc)
+            out[_leaf("m", i, d)] = acc  # (Q t + m)_i
+        last = M[d][d]
+        for i in range(d):
+            last = last + t[i] * (Qt[i] + M[i][d])  # t^T Q t + 2 m.t + m_nn
+        out[_leaf("m", d, d)] = last
+        return out
+
+    exprs = {nm: (f"M[{nm[1]}, {nm[2]}]", "0.0") for nm in names if nm[0] == "m"}
+    exprs.update({f"t{i}": (f"t[{i}]", "0.0") for i in range(d)})
+    leaf_max = {nm: Fraction(LEAF_MAX) for nm in names if nm[0] == "m"}
+    leaf_max.update({f"t{i}": Fraction(TRANSLATE_MAX) for i in range(d)})
+    return build_kernel(
+        f"translate{n}", names, formula, style="radius", leaf_max=leaf_max, leaf_exprs=exprs, params=["M", "t"]
+    )
+
+
+@cache
+def pencil_radius_kernel(n: int) -> Kernel:
+    """Kernel ``pencil_radius{n}(A, Ar, B, Br)`` (midpoint-radius): a_0..a_n and the validity
+    minors from entries that carry radii (the translated matrices, rescaled to |entry| + radius <= 2)."""
+    names = _leaf_names(n)
+
+    def formula(L: dict[str, Any]) -> dict[str, Any]:
+        A = [[L[_leaf("a", i, j)] for j in range(n)] for i in range(n)]
+        B = [[L[_leaf("b", i, j)] for j in range(n)] for i in range(n)]
+        out = {f"c{i}": c for i, c in enumerate(pencil_coefficients(A, B))}
+        for name, M in (("A", A), ("B", B)):
+            for k in range(2, n):
+                out[f"d{name}{k}"] = _minor(M, k)
+        return out
+
+    exprs = {nm: (f"{nm[0].upper()}[{nm[1]}, {nm[2]}]", f"{nm[0].upper()}r[{nm[1]}, {nm[2]}]") for nm in names}
+    return build_kernel(
+        f"pencil_radius{n}",
+        names,
+        formula,
+        style="radius",
+        leaf_max={nm: Fraction(2) for nm in names},
+        leaf_exprs=exprs,
+        params=["A", "Ar", "B", "Br"],
+    )
+
+
+@cache
 def subresultant_kernel(n: int, which: str) -> Kernel:
     """Kernel ``hat_{which}_{n}(c, cr)`` (midpoint-radius): a_i with radii -> hs with a radius."""
     pk = pencil_kernel(n)
+    pr = pencil_radius_kernel(n)
     f = HATS[which]
     names = [f"c{i}" for i in range(n + 1)]
     return build_kernel(
@@ -104,7 +180,8 @@ def subresultant_kernel(n: int, which: str) -> Kernel:
         names,
         lambda L: {which: f([L[c] for c in names])},
         style="radius",
-        leaf_max={c: pk.output_max[pk.outputs.index(c)] for c in names},
+        # a_i from either pencil kernel (entries <= LEAF_MAX, or <= 2 with radii after translation)
+        leaf_max={c: max(pk.output_max[pk.outputs.index(c)], pr.output_max[pr.outputs.index(c)] * 2) for c in names},
         leaf_exprs={f"c{i}": (f"c[{i}]", f"cr[{i}]") for i in range(n + 1)},
         params=["c", "cr"],
     )
@@ -157,6 +234,11 @@ def generate_module() -> str:
         parts.append(f"PENCIL{n}_FLOOR = {k.underflow_floor!r}")
         parts.append("")
         parts.append(k.source)
+        for extra in (translate_kernel(n), pencil_radius_kernel(n)):
+            parts.append(f"{extra.fn.__name__.upper()}_OUTPUTS = {extra.outputs!r}")
+            parts.append(f"{extra.fn.__name__.upper()}_FLOOR = {extra.underflow_floor!r}")
+            parts.append("")
+            parts.append(extra.source)
         for which in HATS:
             h = subresultant_kernel(n, which)
             parts.append(f"HAT_{which.upper()}_{n}_FLOOR = {h.underflow_floor!r}")
