@@ -129,14 +129,55 @@ def _preset_available(name: str) -> bool:
 T_TANGENT = (12 - 2 * math.sqrt(2)) / 17
 
 
+def wait_colour(page, relation: str, node: str = "/shapes/A/mesh") -> None:
+    page.wait_for_function(
+        "([n, want]) => { const r = window.__viserMutable?.nodeRefFromName?.[n]; if (!r) return false; let h = null;"
+        " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
+        " return h === want; }",
+        arg=[node, HEX[relation]],
+        timeout=60000,
+    )
+
+
 @pytest.mark.skipif(not _preset_available("example-29"), reason="core.presets has no example-29 yet")
-@pytest.mark.parametrize("t, event, relation", [(0.3, None, "separate"), (0.7, None, "overlap"), (T_TANGENT, 1, "tangent")])
-def test_example_29_colours(headless, t, event, relation):
-    cfg = SceneConfig.from_dict({"preset": "example-29", "t": t, "event": event, "gizmos": False, "show_plots": False})
+def test_example_29_colours(headless):
+    """Paper, Example 29: separate on [0, alpha1), overlap on (alpha1, alpha2), tangent at alpha1."""
+    cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.3, "gizmos": False, "show_plots": False})
     with headless(cfg, width=1000, height=700, timeout=60) as hs:
-        assert hs.session.state.relation == relation
-        assert hs.mesh_color("A") == hs.mesh_color("B") == HEX[relation]
-        assert dominant_hue_share(hs.canvas_pixels(), HUE[relation]) > 0.7
+        steps = [
+            (None, "separate"),  # t = 0.3 from the configuration
+            (lambda: hs.session.set_t(0.7), "overlap"),
+            (lambda: hs.page.get_by_role("button", name="Jump to α1", exact=False).click(), "tangent"),
+        ]
+        for act, relation in steps:
+            if act is not None:
+                act()
+            wait_colour(hs.page, relation)
+            wait_colour(hs.page, relation, "/shapes/B/mesh")
+            assert hs.session.state.relation == relation
+            hs.wait_settled()
+            assert dominant_hue_share(hs.canvas_pixels(), HUE[relation]) > 0.7, relation
+        assert abs(hs.session.state.t - T_TANGENT) < 1e-12 and hs.session.state.event == 1
+
+
+@pytest.mark.skipif(not _preset_available("example-29"), reason="core.presets has no example-29 yet")
+def test_screenshot_command_contract(tmp_path):
+    """``python -m app screenshot --preset example-29 --t 0.7 --out shot.png`` writes the PNG."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    out = tmp_path / "shot.png"
+    root = Path(__file__).resolve().parents[1]
+    r = subprocess.run(
+        [sys.executable, "-m", "app", "screenshot", "--preset", "example-29", "--t", "0.7", "--out", str(out),
+         "--width", "800", "--height", "600"],
+        cwd=root, capture_output=True, text=True, timeout=180,
+    )
+    assert r.returncode == 0, r.stderr
+    data = out.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert int.from_bytes(data[16:20], "big") == 800 and int.from_bytes(data[20:24], "big") == 600
 
 
 @pytest.mark.skipif(not _preset_available("example-29"), reason="core.presets has no example-29 yet")
