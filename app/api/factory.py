@@ -9,6 +9,8 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 from fastapi.staticfiles import StaticFiles
 
+from core import warm_up
+
 from .limits import BodySizeLimit, validation_error_handler
 from .routes import classify, health, landing, motion, presets
 from .settings import ApiSettings
@@ -42,6 +44,7 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        warm_up(wait=False)  # compile the float filter in the background; exact/numpy meanwhile
         yield
         workers.shutdown()
 
