@@ -351,6 +351,8 @@ class AnalysisCache:
         self._running: dict[Hashable, Future[AnalysisView]] = {}
         self._lock = threading.Lock()
         self.budget = budget
+        self.max_entries = 64
+        """Analyses kept (the oldest is dropped first)."""
         self._pool: Any = None
         if processes:
             try:
@@ -397,6 +399,8 @@ class AnalysisCache:
             view.seconds = time.perf_counter() - t0
             with self._lock:
                 self._done[model.key] = view
+                while len(self._done) > self.max_entries:  # oldest first (dicts keep order)
+                    self._done.pop(next(iter(self._done)))
             return view
         finally:
             with self._lock:
