@@ -554,9 +554,12 @@ class Session:
         with self._lock:
             if self.model is not model:
                 return
+            reframe = model.interval_floats != result.window
             model.interval_floats = result.window
             if result.default_t is not None:
                 model._default_t = result.default_t
+            if reframe:  # an infinite I got its window around the events: frame the motion there
+                self._frame_camera()
             self.analysis = result
             self.progress.visible = False
             n_ev = len(result.events)
