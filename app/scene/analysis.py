@@ -230,9 +230,18 @@ class MotionModel:
             out.append(ShapeState(c, r, o))
         return out[0], out[1]
 
-    def extent_points(self) -> np.ndarray:
-        """Points spanning where the shapes go over the window (for framing the camera)."""
+    def extent_points(self, around: float | None = None, span: float = 0.1) -> np.ndarray:
+        """Points spanning where the shapes go (for framing the camera).
+
+        Args:
+            around: frame the motion on ``span`` of the window centred here (None: all of it;
+                cubic motions like Example 30 leave the scene far away at the window's ends).
+            span: fraction of the window.
+        """
         lo, hi = self.interval_floats
+        if around is not None:
+            half = 0.5 * span * (hi - lo)
+            lo, hi = max(lo, around - half), min(hi, around + half)
         pts = []
         for t in np.linspace(lo, hi, 9):
             try:
@@ -515,7 +524,7 @@ def _view_from_plain(model: MotionModel, plain: dict[str, Any]) -> AnalysisView:
     default_t = None
     inner = [e.t for e in events if lo < e.t < hi]
     if inner:
-        default_t = max(lo, inner[0] - 0.08 * (hi - lo))
+        default_t = max(lo, inner[0] - 0.03 * (hi - lo))
     model._default_t = default_t if model._default_t is None else model._default_t
     lookup = _RelationLookup(model, result)
     return AnalysisView(

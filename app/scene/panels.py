@@ -121,7 +121,7 @@ def intervals_bar_html(
     span = (hi - lo) or 1.0
     x = lambda t: 6 + (width - 12) * (min(max(t, lo), hi) - lo) / span
     parts = [
-        f'<svg viewBox="0 0 {width} 44" width="100%" xmlns="http://www.w3.org/2000/svg" '
+        f'<svg viewBox="0 0 {width} 56" width="100%" xmlns="http://www.w3.org/2000/svg" '
         'style="font:10px sans-serif">'
     ]
     for a, b, rel in segments:
@@ -129,15 +129,18 @@ def intervals_bar_html(
             f'<rect x="{x(a):.1f}" y="6" width="{max(x(b) - x(a), 0.5):.1f}" height="14" '
             f'fill="{RELATION_HEX.get(rel, "#999")}"/>'
         )
+    last_label = {0: -1e9, 1: -1e9}
     for k, (t, rel) in enumerate(events, start=1):
         xe = x(t)
+        row = 0 if xe - last_label[0] >= 18 else 1  # close events: second row of labels
+        last_label[row] = xe
         parts.append(
-            f'<line x1="{xe:.1f}" y1="2" x2="{xe:.1f}" y2="24" stroke="#000" stroke-width="1.5"/>'
+            f'<line x1="{xe:.1f}" y1="2" x2="{xe:.1f}" y2="{24 + 10 * row}" stroke="#000" stroke-width="1.5"/>'
             f'<circle cx="{xe:.1f}" cy="13" r="3.5" fill="{RELATION_HEX.get(rel, "#999")}" stroke="#000"/>'
-            f'<text x="{xe:.1f}" y="34" text-anchor="middle">α{k}</text>'
+            f'<text x="{xe:.1f}" y="{34 + 10 * row}" text-anchor="middle">α{k}</text>'
         )
-    parts.append(f'<text x="6" y="43">{lo:.4g}</text>')
-    parts.append(f'<text x="{width - 6}" y="43" text-anchor="end">{hi:.4g}</text>')
+    parts.append(f'<text x="6" y="53">{lo:.4g}</text>')
+    parts.append(f'<text x="{width - 6}" y="53" text-anchor="end">{hi:.4g}</text>')
     if cursor is not None:
         xc = x(cursor)
         parts.append(

@@ -554,12 +554,9 @@ class Session:
         with self._lock:
             if self.model is not model:
                 return
-            reframe = model.interval_floats != result.window
             model.interval_floats = result.window
             if result.default_t is not None:
                 model._default_t = result.default_t
-            if reframe:  # an infinite I got its window around the events: frame the motion there
-                self._frame_camera()
             self.analysis = result
             self.progress.visible = False
             n_ev = len(result.events)
@@ -592,6 +589,8 @@ class Session:
             else:
                 self.state.event = None
                 self.set_t(self.state.t)
+            # frame the motion around the t shown (the window of an infinite I is known only now)
+            self._frame_camera()
             self.ready.set()
 
     def jump_to_event(self, k: int) -> str | None:
@@ -770,7 +769,7 @@ class Session:
             r = max(scale[:2] if self.state.dim == 2 else scale)
             pts += [np.array(pos) + r, np.array(pos) - r]
         if self.model is not None:
-            pts = self.model.extent_points()
+            pts = self.model.extent_points(around=self.state.t)
         lo, hi = np.min(pts, axis=0), np.max(pts, axis=0)
         centre = (lo + hi) / 2
         radius = max(float(np.linalg.norm(hi - lo)) / 2, 1.0)
