@@ -110,6 +110,9 @@ def start_scene(
     """
     import viser
 
+    from core import warm_up
+
+    warm_up(wait=False)  # compile the float filter in the background; drags use exact meanwhile
     server = viser.ViserServer(host=host, port=port, verbose=verbose)
     server.gui.configure_theme(control_width="large", show_share_button=False)
     return SceneServer(server, config or SceneConfig(), processes=processes, shared=shared)
