@@ -208,20 +208,30 @@ class MotionAnalysis:
     _his: list[fmpq] = field(default_factory=list, repr=False)
 
     # -- queries ---------------------------------------------------------------------------
-    def relation_at(self, t: Any) -> Relation:
+    def relation_at(self, t: Any, *, method: str = "lookup") -> Relation:
         """Certified relation at one time t (float = exact binary rational, int, "p/q", "0.1").
 
-        Compares t exactly with the candidates' isolating intervals (one polynomial evaluation
-        when t falls inside one) and returns the relation of that instant or open interval,
-        which were decided exactly during :func:`analyse`.
+        ``method="lookup"`` (default, a few microseconds) compares t exactly with the
+        candidates' isolating intervals (one polynomial evaluation when t falls inside one) and
+        returns the relation of that instant or open interval, decided exactly during
+        :func:`analyse`. ``method="classify"`` evaluates the exact matrices A(t), B(t) and runs
+        the static classifier :func:`core.classify` on them (an independent check; rational
+        motions only, ~0.1-1 ms).
 
         Raises:
-            ValueError: t outside I or not a number.
+            ValueError: t outside I or not a number; "classify" on a motion with sqrt(d) entries.
         """
         tq = to_fmpq(t)
         lo, hi = self.interval
         if (lo is not None and tq < lo) or (hi is not None and tq > hi):
             raise ValueError(f"t = {t} is outside the analysed interval [{lo}, {hi}]")
+        if method == "classify":
+            from .classify import classify
+            from .motions import matrix_at_exact
+
+            return classify(matrix_at_exact(self.A, tq), matrix_at_exact(self.B, tq))
+        if method != "lookup":
+            raise ValueError(f"unknown method {method!r}; valid options: lookup, classify")
         i = bisect.bisect_left(self._his, tq)
         if i < len(self._points):
             c = self._points[i].compare(tq)

@@ -514,3 +514,18 @@ def test_signs_at_algebraic_numbers_are_exact():
     assert sign_at(QSqrtPoly(t - rq), alpha) == 1
     assert sign_at(QSqrtPoly(t - rq - fmpq(1, 10**40)), alpha) == -1
     getcontext().prec = 60
+
+
+def test_relation_at_lookup_agrees_with_static_classifier():
+    """relation_at's interval lookup against core.classify on the exact A(t), B(t)."""
+    from core.presets import preset_arguments
+
+    for name in ("example-29", "example-31", "example-32", "example-33", "circles-crossing"):
+        r = analyse(**preset_arguments(name))
+        lo = r.interval[0] if r.interval[0] is not None else fmpq(-3)
+        hi = r.interval[1] if r.interval[1] is not None else fmpq(6)
+        for k in range(0, 41):
+            t = lo + (hi - lo) * fmpq(k, 40)
+            assert r.relation_at(t) == r.relation_at(t, method="classify"), (name, t)
+    with pytest.raises(ValueError, match="valid options"):
+        r.relation_at(0, method="guess")
