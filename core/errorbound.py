@@ -172,8 +172,8 @@ class _Sym:
 class Kernel:
     """A generated kernel and the constants that make its outputs certified."""
 
-    fn: Callable[..., tuple[Any, ...]]
-    """permanent style: fn(*leaves) -> values; radius style: fn(*values, *radii) -> (values, radii)."""
+    name: str
+    """Function name in the generated source (core/_kernels.py)."""
     style: str
     inputs: tuple[str, ...]
     outputs: tuple[str, ...]
@@ -239,7 +239,7 @@ def build_kernel(
     leaf_exprs: dict[str, tuple[str, str]],
     params: Sequence[str],
 ) -> Kernel:
-    """Trace ``formula`` and emit a float kernel with its certified error constants.
+    """Trace ``formula`` and emit the source of a float kernel with its certified error constants.
 
     Args:
         name: function name in the generated source.
@@ -253,7 +253,8 @@ def build_kernel(
         params: parameter names of the generated function.
 
     Returns:
-        The compiled :class:`Kernel` (its ``source`` has no ``del`` so numba can compile it).
+        The :class:`Kernel`: source text (written to core/_kernels.py by core.kernelgen; no
+        ``del`` so numba can compile it) and certified constants.
     """
     t = _Trace()
     leaves = {nm: t.add(_Node("leaf", (), name=nm)) for nm in inputs}
@@ -304,12 +305,8 @@ def build_kernel(
         0.0 if radius or k.endswith("_M") else gamma_constant(K_of[k], K_of.get(k + "_M", K_of[k]))
         for k in outputs
     )
-    namespace: dict[str, Any] = {}
-    # exec of code generated here from our own formulas (never from user input); the same text
-    # is written to core/_kernels.py for numba, and a test checks the two agree
-    exec(compile(source, f"<kernel {name}>", "exec"), namespace)
     return Kernel(
-        fn=namespace[name],
+        name=name,
         style=style,
         inputs=tuple(inputs),
         outputs=outputs,

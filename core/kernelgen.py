@@ -235,8 +235,8 @@ def generate_module() -> str:
         parts.append("")
         parts.append(k.source)
         for extra in (translate_kernel(n), pencil_radius_kernel(n)):
-            parts.append(f"{extra.fn.__name__.upper()}_OUTPUTS = {extra.outputs!r}")
-            parts.append(f"{extra.fn.__name__.upper()}_FLOOR = {extra.underflow_floor!r}")
+            parts.append(f"{extra.name.upper()}_OUTPUTS = {extra.outputs!r}")
+            parts.append(f"{extra.name.upper()}_FLOOR = {extra.underflow_floor!r}")
             parts.append("")
             parts.append(extra.source)
         for which in HATS:
