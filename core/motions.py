@@ -87,12 +87,28 @@ class Motion:
     source: dict[str, Any]
     """The normalised JSON form (expressions as strings); ``motion_to_dict`` returns a copy."""
     _matrix: list[RFMatrix] = field(default_factory=list, repr=False, compare=False)
+    _float_coeffs: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list, repr=False, compare=False)
 
     def matrix(self) -> RFMatrix:
         """A(t) exactly: (dim+1) x (dim+1) nested lists of :class:`RationalFunction`."""
         if not self._matrix:
             self._matrix.append(_build_matrix(self.source, self.dim))
         return self._matrix[0]
+
+    def float_coefficients(self) -> tuple[np.ndarray, np.ndarray]:
+        """Float coefficients (entries x degree, descending) of every entry's numerator (sqrt(d)
+        folded in) and denominator, cached: the scene evaluates A(t) at each t-step with them."""
+        if not self._float_coeffs:
+            entries = [e for row in self.matrix() for e in row]
+            nums, dens = [], []
+            for e in entries:
+                p = [_to_float(c) for c in e.num.p.coeffs()] or [0.0]
+                q = [_to_float(c) * math.sqrt(e.num.d) for c in e.num.q.coeffs()] or [0.0]
+                size = max(len(p), len(q))
+                nums.append([a + b for a, b in zip(p + [0.0] * (size - len(p)), q + [0.0] * (size - len(q)))])
+                dens.append([_to_float(c) for c in e.den.coeffs()] or [1.0])
+            self._float_coeffs.append((_stack_descending(nums), _stack_descending(dens)))
+        return self._float_coeffs[0]
 
     def sqrt_d(self) -> int:
         """The d of the sqrt(d) in the entries (1 if all are rational)."""
@@ -330,8 +346,30 @@ def matrix_at(m: Any, t: float) -> np.ndarray:
         >>> matrix_at(m, 2.0).tolist()
         [[1.0, 0.0, -2.0], [0.0, 1.0, 0.0], [-2.0, 0.0, 3.0]]
     """
-    M = as_motion(m).matrix()
-    return np.array([[e.value_float(float(t)) for e in row] for row in M], dtype=float)
+    motion = as_motion(m)
+    num, den = motion.float_coefficients()
+    t = float(t)
+    vn = num[:, 0].copy()
+    for k in range(1, num.shape[1]):  # Horner on all entries at once
+        vn = vn * t + num[:, k]
+    vd = den[:, 0].copy()
+    for k in range(1, den.shape[1]):
+        vd = vd * t + den[:, k]
+    n = motion.dim + 1
+    return (vn / vd).reshape(n, n)
+
+
+def _to_float(c: fmpq) -> float:
+    return int(c.p) / int(c.q)
+
+
+def _stack_descending(rows: list[list[float]]) -> np.ndarray:
+    """Ascending coefficient lists -> (len(rows), max degree + 1) array in descending order."""
+    width = max(len(r) for r in rows)
+    out = np.zeros((len(rows), width))
+    for i, r in enumerate(rows):
+        out[i, width - len(r) :] = r[::-1]
+    return out
 
 
 def matrix_at_exact(m: Any, t: Any) -> list[list[fmpq]]:

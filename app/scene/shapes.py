@@ -116,6 +116,9 @@ class EllipsoidView:
                 self.control.position = position
                 self.control.wxyz = wxyz
                 self.sent += 2
+        # semi-axes from a float eigen-decomposition jitter in the last bits under a rigid
+        # motion: compare at display precision so an unchanged size sends nothing
+        scale = tuple(float(f"{v:.9g}") for v in scale)
         if scale != self._scale:
             self._scale = scale
             self.mesh.scale = scale
