@@ -99,3 +99,23 @@ def test_bad_motions(bad, fragment):
     with pytest.raises(ValueError) as e:
         motion_from_dict(bad).matrix()
     assert fragment in str(e.value)
+
+
+def test_float_matrix_matches_exact_evaluation_for_every_preset():
+    """matrix_at's cached float Horner agrees with the exact matrix rounded (display path)."""
+    import numpy as np
+
+    from core.motions import as_motion, matrix_at, matrix_at_exact
+    from core.presets import preset_arguments, preset_names
+
+    for name in preset_names():
+        args = preset_arguments(name)
+        for key in ("A_t", "B_t"):
+            m = as_motion(args[key])
+            for t in ("-7/10", "0", "3/10", "19/10"):
+                got = matrix_at(m, float(F(t)))
+                try:
+                    ref = np.array([[float(v) for v in row] for row in matrix_at_exact(m, t)])
+                except ValueError:  # sqrt(d) entries: compare with the entries' own float values
+                    ref = np.array([[e.value_float(float(F(t))) for e in row] for row in m.matrix()])
+                assert np.allclose(got, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max()), (name, key, t)
