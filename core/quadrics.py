@@ -145,20 +145,33 @@ def _orientation_matrix(d: int, orientation: Any, exact: bool) -> Any:
     return [[co, -si], [si, co]]
 
 
-def axes_from_quadric(M: Any) -> ShapeParams:
-    """Centre, semi-axes and orientation of a valid ellipse/ellipsoid matrix (floats, for drawing).
+def axes_from_quadric(M: Any, *, validate: bool = True) -> ShapeParams:
+    """Centre, semi-axes and orientation of an ellipse/ellipsoid matrix (floats, for drawing).
+
+    Args:
+        M: the matrix (any accepted input form; a float array when ``validate=False``).
+        validate: check exactly that M is an ellipse/ellipsoid first (:func:`validate_quadric`).
+            ``False`` is the float-only path the scene takes at every t-step; it raises
+            ValueError when the float matrix does not describe an ellipse/ellipsoid.
 
     Examples:
         >>> p = axes_from_quadric(quadric_from_axes([1, 2], [3, 1], 0.5))
         >>> [round(v, 9) for v in (*p.center, *p.semi_axes, *p.orientation)]
         [1.0, 2.0, 3.0, 1.0, 0.5]
     """
-    A = np.array([[float(v) for v in row] for row in validate_quadric(M)], dtype=float)
+    if validate:
+        A = np.array([[float(v) for v in row] for row in validate_quadric(M)], dtype=float)
+    else:
+        A = np.asarray(M, dtype=float)
+        if A[0, 0] < 0:
+            A = -A
     d = A.shape[0] - 1
     Q, m = A[:d, :d], A[:d, d]
     c = -np.linalg.solve(Q, m)
     k = float(c @ Q @ c - A[d, d])
-    w, V = np.linalg.eigh(Q / k)
+    w, V = np.linalg.eigh(Q / k) if k > 0 else (np.zeros(d), np.eye(d))
+    if not (k > 0 and np.all(w > 0)):
+        raise ValueError("the float matrix is not an ellipse/ellipsoid")
     # eigh sorts eigenvalues ascending, so semi-axes come out decreasing; keep det V = +1
     r = 1.0 / np.sqrt(w)
     if np.linalg.det(V) < 0:

@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from core.quadrics import axes_from_quadric
+
 __all__ = [
     "MotionError",
     "MotionModel",
@@ -149,25 +151,8 @@ def _pose_from_matrix(M: np.ndarray) -> tuple[tuple[float, ...], tuple[float, ..
     2D orientation is an angle, 3D a quaternion wxyz. Raises ValueError when the float matrix
     is not an ellipse/ellipsoid.
     """
-    from core.quadrics import _quaternion_from_rotation
-
-    d = M.shape[0] - 1
-    Q, m = M[:d, :d], M[:d, d]
-    if np.all(np.linalg.eigvalsh(Q) < 0):
-        M, Q, m = -M, -Q, -m
-    c = -np.linalg.solve(Q, m)
-    k = float(c @ Q @ c - M[d, d])
-    if k <= 0:
-        raise ValueError("not an ellipse/ellipsoid at this t")
-    w, V = np.linalg.eigh(Q / k)
-    if np.any(w <= 0):
-        raise ValueError("not an ellipse/ellipsoid at this t")
-    r = 1.0 / np.sqrt(w)
-    if np.linalg.det(V) < 0:
-        V[:, -1] = -V[:, -1]
-    if d == 2:
-        return tuple(c.tolist()), tuple(r.tolist()), (float(np.arctan2(V[1, 0], V[0, 0])),)
-    return tuple(c.tolist()), tuple(r.tolist()), tuple(_quaternion_from_rotation(V))
+    p = axes_from_quadric(M, validate=False)
+    return p.center, p.semi_axes, p.orientation
 
 
 class MotionModel:
