@@ -46,8 +46,9 @@ def _presets(static_dir: Path) -> str:
 
 def _bench(static_dir: Path, bench_dir: Path | None) -> str:
     figures = [(f"/static/img/bench/{p.name}", p.stem) for p in sorted((static_dir / "img" / "bench").glob("*.png"))]
-    if bench_dir is not None and bench_dir.is_dir():
-        figures += [(f"/bench/figures/{p.name}", p.stem) for p in sorted(bench_dir.glob("*.png"))]
+    if bench_dir is not None and bench_dir.is_dir():  # the live report, unless copied to static/
+        copied = {stem for _, stem in figures}
+        figures += [(f"/bench/figures/{p.name}", p.stem) for p in sorted(bench_dir.glob("*.png")) if p.stem not in copied]
     if not figures:
         return ('<p class="muted">Benchmark figures will appear here once the benchmark report has been '
                 "generated (<code>python -m bench.report</code>).</p>")
