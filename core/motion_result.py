@@ -1,0 +1,307 @@
+"""Result of a motion analysis: events, intervals, the sign table, exact polynomials (paper 4.5).
+
+:class:`MotionAnalysis` is what :func:`core.parametric.analyse` returns: typed, JSON-ready
+(``to_dict``), with ``relation_at(t)`` for timeline scrubbing and lazy float ``samples`` for plots.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from flint import fmpq
+
+from .algebraic import RealAlgebraic
+from .decision import RULES
+from .motions import Motion, motion_to_dict
+from .qsqrt import QSqrtPoly
+from .rationals import to_fmpq
+from .relation import Relation
+
+__all__ = ["MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
+
+EVENT_KINDS = ("change", "touch", "endpoint")
+"""change: relation differs on the two sides; touch: tangent and the same relation on both
+sides (touch and leave); endpoint: tangent at a finite end of I."""
+
+_SIGN = {1: "+", 0: "0", -1: "-"}
+
+
+def _sgn(x: Any) -> int:
+    return (x > 0) - (x < 0)
+
+
+def _alg_dict(a: RealAlgebraic | None, digits: int) -> dict[str, Any] | None:
+    if a is None:
+        return None
+    return {
+        "value": a.decimal(digits),
+        "approx": float(a),
+        "exact": str(a.value) if a.value is not None else None,
+        "isolating": [str(a.lo), str(a.hi)],
+    }
+
+
+@dataclass(frozen=True)
+class SignRow:
+    """One row of the sign table (paper's example tables): at an instant or on an interval."""
+
+    where: str
+    """"point" (a candidate root) or "interval" (an open interval, signs at its sample)."""
+    t: str
+    """Decimal value of the point, or the rational sample point of the interval."""
+    a: tuple[int, ...]
+    """Signs of a_n, ..., a_0 (descending, as the paper writes Var)."""
+    s0: int
+    s1: int
+    s10: int
+    var: int
+    """Var(a_n, ..., a_0)."""
+    relation: Relation
+    rule: str
+    """Key of :data:`core.decision.RULES` that decided."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (signs as "+", "0", "-")."""
+        return {
+            "where": self.where,
+            "t": self.t,
+            "a": [_SIGN[s] for s in self.a],
+            "s0": _SIGN[self.s0],
+            "s1": _SIGN[self.s1],
+            "s10": _SIGN[self.s10],
+            "var": self.var,
+            "relation": str(self.relation),
+            "rule": self.rule,
+        }
+
+
+@dataclass
+class Event:
+    """A tangency instant: an exact real algebraic time with its isolating interval."""
+
+    time: RealAlgebraic
+    """The exact time (``.lo``/``.hi`` isolating interval with rational ends, ``.value`` if rational)."""
+    relation: Relation
+    """Relation at that instant (TANGENT for events; any relation for ``roots``)."""
+    kind: str
+    """One of :data:`EVENT_KINDS` (events); "root" for non-tangency roots."""
+    before: Relation | None
+    """Relation just before (None at the left end of I)."""
+    after: Relation | None
+    """Relation just after (None at the right end of I)."""
+    value: str
+    """Decimal value to the requested digits."""
+    rule: str = ""
+
+    @property
+    def lo(self) -> fmpq:
+        """Left end of the isolating interval."""
+        return self.time.lo
+
+    @property
+    def hi(self) -> fmpq:
+        """Right end of the isolating interval."""
+        return self.time.hi
+
+    def decimal(self, digits: int) -> str:
+        """The time to ``digits`` significant digits (refines as needed)."""
+        return self.time.decimal(digits)
+
+    def __float__(self) -> float:
+        return float(self.time)
+
+    def to_dict(self, digits: int) -> dict[str, Any]:
+        """JSON form."""
+        out = _alg_dict(self.time, digits) or {}
+        out.update(
+            relation=str(self.relation),
+            kind=self.kind,
+            before=None if self.before is None else str(self.before),
+            after=None if self.after is None else str(self.after),
+            rule=self.rule,
+        )
+        return out
+
+
+@dataclass
+class Interval:
+    """An open interval of constant relation (ends None = infinite)."""
+
+    lo: RealAlgebraic | None
+    hi: RealAlgebraic | None
+    relation: Relation
+    sample: fmpq
+    """The rational point where the relation was decided exactly."""
+
+    def to_dict(self, digits: int) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "lo": _alg_dict(self.lo, digits),
+            "hi": _alg_dict(self.hi, digits),
+            "relation": str(self.relation),
+            "sample": str(self.sample),
+        }
+
+
+@dataclass
+class MotionAnalysis:
+    """Result of :func:`analyse`."""
+
+    n: int
+    """3 (ellipses) or 4 (ellipsoids): degree of P in T."""
+    interval: tuple[fmpq | None, fmpq | None]
+    """I (None = infinite end); finite ends are included."""
+    case: str
+    """"s0" (4.4.1), "s1" (s0 = 0 identically, 4.4.2) or "none" (s0 = s1 = 0, 4.4.3)."""
+    events: list[Event]
+    """Tangency events, ascending."""
+    roots: list[Event]
+    """Candidates (roots of s0, or s1) that are not events, with the relation there."""
+    intervals: list[Interval]
+    """Maximal open intervals of constant relation covering I minus the events."""
+    sign_table: list[SignRow]
+    """Rows for every candidate and for the sample of every interval between candidates."""
+    a: list[QSqrtPoly]
+    """[a_0, ..., a_n] of P(t, T): numerator of det(T A(t) + B(t)), common factors in t removed
+    (a positive multiple of the true coefficients on I; exact)."""
+    s0: QSqrtPoly
+    """ŝ0 = -s0/a_n (same sign as s0)."""
+    s1: QSqrtPoly
+    """ŝ1 = -s1/a_n."""
+    s10: QSqrtPoly
+    """ŝ1,0 = -s1,0/a_n."""
+    sqrt_d: int
+    """d of the sqrt(d) in the coefficients (1: all rational)."""
+    digits: int
+    A: Motion
+    B: Motion
+    matrices: tuple[list[list[QSqrtPoly]], list[list[QSqrtPoly]]]
+    """The denominator-free matrices (positive multiples of A(t), B(t) on I)."""
+    _points: list[RealAlgebraic] = field(default_factory=list, repr=False)
+    _point_rel: list[Relation] = field(default_factory=list, repr=False)
+    _seg_rel: list[Relation] = field(default_factory=list, repr=False)
+    _his: list[fmpq] = field(default_factory=list, repr=False)
+
+    # -- queries ---------------------------------------------------------------------------
+    def relation_at(self, t: Any, *, method: str = "lookup") -> Relation:
+        """Certified relation at one time t (float = exact binary rational, int, "p/q", "0.1").
+
+        ``method="lookup"`` (default, a few microseconds) compares t exactly with the
+        candidates' isolating intervals (one polynomial evaluation when t falls inside one) and
+        returns the relation of that instant or open interval, decided exactly during
+        :func:`analyse`. ``method="classify"`` evaluates the exact matrices A(t), B(t) and runs
+        the static classifier :func:`core.classify` on them (an independent check; rational
+        motions only, ~0.1-1 ms).
+
+        Raises:
+            ValueError: t outside I or not a number; "classify" on a motion with sqrt(d) entries.
+        """
+        tq = to_fmpq(t)
+        lo, hi = self.interval
+        if (lo is not None and tq < lo) or (hi is not None and tq > hi):
+            raise ValueError(f"t = {t} is outside the analysed interval [{lo}, {hi}]")
+        if method == "classify":
+            from .classify import classify
+            from .motions import matrix_at_exact
+
+            return classify(matrix_at_exact(self.A, tq), matrix_at_exact(self.B, tq))
+        if method != "lookup":
+            raise ValueError(f"unknown method {method!r}; valid options: lookup, classify")
+        i = bisect.bisect_left(self._his, tq)
+        if i < len(self._points):
+            c = self._points[i].compare(tq)
+            if c == 0:
+                return self._point_rel[i]
+            if c < 0:
+                return self._seg_rel[i + 1]
+        return self._seg_rel[i]
+
+    def samples(self, num: int = 256, lo: float | None = None, hi: float | None = None) -> dict[str, Any]:
+        """Float samples of a_i, ŝ0, ŝ1, ŝ1,0 on a uniform grid, for plots (display only).
+
+        Each polynomial is divided by its largest |coefficient| (a positive constant: signs and
+        roots are kept) so that huge exact coefficients do not overflow. Computed on request.
+
+        Args:
+            num: number of grid points (2..10000).
+            lo, hi: window; defaults to I, or around the events when I is unbounded.
+        """
+        if not 2 <= int(num) <= 10000:
+            raise ValueError(f"num must be in 2..10000, got {num}")
+        wlo, whi = self._window(lo, hi)
+        ts = np.linspace(wlo, whi, int(num))
+        out: dict[str, Any] = {"t": ts.tolist()}
+        out["a"] = [_eval_scaled(p, ts).tolist() for p in self.a]
+        for name in ("s0", "s1", "s10"):
+            out[name] = _eval_scaled(getattr(self, name), ts).tolist()
+        return out
+
+    def _window(self, lo: float | None, hi: float | None) -> tuple[float, float]:
+        ilo = None if self.interval[0] is None else float(self.interval[0])
+        ihi = None if self.interval[1] is None else float(self.interval[1])
+        pts = [float(p) for p in self._points]
+        if lo is None:
+            lo = ilo if ilo is not None else (min(pts) - max(1.0, 0.25 * (max(pts) - min(pts))) if pts else (ihi - 2.0 if ihi is not None else -1.0))
+        if hi is None:
+            hi = ihi if ihi is not None else (max(pts) + max(1.0, 0.25 * (max(pts) - min(pts))) if pts else (lo + 2.0))
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise ValueError(f"bad sample window [{lo}, {hi}]")
+        return float(lo), float(hi)
+
+    def subresultants(self) -> dict[str, QSqrtPoly]:
+        """The paper's s0, s1, s1,0 themselves: s_j = -a_n * ŝ_j (Examples 29, 32 print these)."""
+        an = self.a[-1]
+        return {"s0": -(an * self.s0), "s1": -(an * self.s1), "s10": -(an * self.s10)}
+
+    def polynomial_strings(self) -> dict[str, Any]:
+        """a_i, ŝ0, ŝ1, ŝ1,0 as parseable strings in t, with their degrees."""
+        return {
+            "a": [str(p) for p in self.a],
+            "s0": str(self.s0),
+            "s1": str(self.s1),
+            "s10": str(self.s10),
+            "degrees": {
+                "a": [p.degree() for p in self.a],
+                "s0": self.s0.degree(),
+                "s1": self.s1.degree(),
+                "s10": self.s10.degree(),
+            },
+        }
+
+    def to_dict(self, *, polynomials: bool = True) -> dict[str, Any]:
+        """JSON-ready form: exact numbers as "p/q" strings, floats alongside."""
+        lo, hi = self.interval
+        out: dict[str, Any] = {
+            "dimension": self.n - 1,
+            "interval": [None if lo is None else str(lo), None if hi is None else str(hi)],
+            "case": self.case,
+            "sqrt_d": self.sqrt_d,
+            "digits": self.digits,
+            "events": [e.to_dict(self.digits) for e in self.events],
+            "roots": [e.to_dict(self.digits) for e in self.roots],
+            "intervals": [iv.to_dict(self.digits) for iv in self.intervals],
+            "sign_table": [r.to_dict() for r in self.sign_table],
+            "rules": {r.rule: RULES[r.rule] for r in self.sign_table if r.rule in RULES},
+            "A": motion_to_dict(self.A),
+            "B": motion_to_dict(self.B),
+        }
+        if polynomials:
+            out["polynomials"] = self.polynomial_strings()
+        return out
+
+
+def _eval_scaled(p: QSqrtPoly, ts: np.ndarray) -> np.ndarray:
+    if p.is_zero():
+        return np.zeros_like(ts)
+    c = p.coefficients_float()
+    big = max(abs(v) for v in c if math.isfinite(v)) if any(math.isfinite(v) for v in c) else 1.0
+    if not all(math.isfinite(v) for v in c) or big == 0:
+        # scale exactly before converting (huge coefficients)
+        m = max(max((abs(x) for x in p.p.coeffs()), default=fmpq(0)), max((abs(x) for x in p.q.coeffs()), default=fmpq(0)))
+        c = p.scale_positive(1 / m).coefficients_float()
+        big = max(abs(v) for v in c)
+    return np.polynomial.polynomial.polyval(ts, np.array(c) / big)
