@@ -7,10 +7,10 @@ from fractions import Fraction as F
 
 import numpy as np
 import pytest
-from hypothesis import example, given
+from hypothesis import given
 from hypothesis import strategies as st
 
-from cases import CASES, axis_ellipsoid, circle, sphere
+from cases import CASES, circle, sphere
 from core import Relation, Stats, classify, explain, quadric_from_axes
 from oracle import oracle_relation
 from strategies import (
