@@ -13,8 +13,8 @@ not a power of two. Then |fl(v) - v| <= gamma_K * M with gamma_K = K u / (1 - K 
 of the expression on absolute values with every ``-`` turned into ``+`` (Higham, Lemma 3.1, monomial by
 monomial). Each output ``x`` has a companion output ``x_M``, an upper bound of M computed in the
 same kernel from ``abs`` of the leaves (for instance products of row sums); M <= fl(x_M) / (1 - u)^K_M
-since its terms are non-negative, so ``constants[x]`` = gamma_K / (1 - u)^(K_M + 1) rounded up (the
-extra rounding is that of ``C * fl(x_M)``).
+since its terms are non-negative, so ``constants[x]`` = gamma_K / (1 - u)^(K_M + 2) rounded up (the
+two extra roundings are those of ``C * fl(x_M)`` and of adding the underflow floor).
 
 ``"radius"`` (stage 2, uncertain a_i -> s0, s1, s1,0): midpoint-radius (running error) arithmetic;
 every node carries r >= |computed - exact|:
@@ -86,7 +86,8 @@ def gamma_constant(K: int, K_bound: int) -> float:
     Args:
         K: error count of the value v.
         K_bound: error count of the computed upper bound M of its permanent (nonneg terms, so
-            exact M <= fl(M) / (1 - u)^K_bound); one more rounding for the product C * fl(M).
+            exact M <= fl(M) / (1 - u)^K_bound); two more roundings: the product C * fl(M) and
+            the addition of the underflow floor.
 
     Examples:
         >>> gamma_constant(0, 0)
@@ -99,7 +100,7 @@ def gamma_constant(K: int, K_bound: int) -> float:
         return 0.0
     if max(K, K_bound) * u >= Fraction(1, 2**20):
         raise ValueError(f"error count {K} too large for float64")
-    return round_up(K * u / (1 - K * u) / (1 - u) ** (K_bound + 1))
+    return round_up(K * u / (1 - K * u) / (1 - u) ** (K_bound + 2))
 
 
 def _is_power_of_two(c: int) -> bool:

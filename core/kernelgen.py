@@ -259,6 +259,13 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     GENERATED_PATH.write_text(text)
     print(f"wrote {GENERATED_PATH} ({len(text.splitlines())} lines)")
+    # numba inlines these kernels into core.fastpath's compiled functions, whose disk cache is
+    # keyed on fastpath.py alone: drop it so the next run compiles the new kernels
+    stale = list((GENERATED_PATH.parent / "__pycache__").glob("fastpath.*.nb[ic]"))
+    for f in stale:
+        f.unlink()
+    if stale:
+        print(f"removed {len(stale)} stale numba cache files of core.fastpath")
     return 0
 
 
