@@ -31,6 +31,11 @@ except ImportError:  # pragma: no cover - exercised only where numba is missing
         return lambda f: f
 
 
+KERNELS_SHA = "d4e6c39c7e1bbebf"
+"""sha256 prefix of core/_kernels.py, rewritten by ``python -m core.kernelgen``: numba keys the disk
+cache of the compiled functions below on this file, and they inline those kernels, so this file
+must change whenever the kernels do (a test checks the value)."""
+
 _UNDECIDED, _SEPARATE, _OVERLAP = -1, 0, 2
 _RF = RADIUS_FACTOR
 _C3, _F3, _H3 = K.PENCIL3_CONSTANTS, K.PENCIL3_FLOOR, K.HAT_S0_3_FLOOR

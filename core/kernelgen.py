@@ -2,12 +2,14 @@
 
 Run ``python -m core.kernelgen`` after changing :mod:`core.pencil`, :mod:`core.subresultants` or
 :mod:`core.errorbound`; ``tests/test_filters.py`` fails if the committed file is not what this
-module generates. Committing the generated text (instead of ``exec`` at import) lets numba cache
+module generates (and ``KERNELS_SHA`` in core/fastpath.py, which keys numba's disk cache). Committing the generated text (instead of ``exec`` at import) lets numba cache
 its compiled code and keeps every line of the fast path readable.
 """
 
 from __future__ import annotations
 
+import hashlib
+import re
 import sys
 from fractions import Fraction
 from functools import cache
@@ -29,6 +31,7 @@ __all__ = [
 ]
 
 GENERATED_PATH = Path(__file__).with_name("_kernels.py")
+FASTPATH_PATH = Path(__file__).with_name("fastpath.py")
 HATS = {"s0": hat_s0, "s1": hat_s1, "s10": hat_s10}
 
 
@@ -247,25 +250,34 @@ def generate_module() -> str:
     return "\n".join(parts)
 
 
+def _kernels_sha(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _stamp_fastpath(text: str) -> tuple[str, str]:
+    """(current, updated) source of core/fastpath.py with KERNELS_SHA set for ``text``."""
+    current = FASTPATH_PATH.read_text()
+    updated = re.sub(r'^KERNELS_SHA = "[0-9a-f]*"', f'KERNELS_SHA = "{_kernels_sha(text)}"', current, flags=re.M)
+    return current, updated
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Write (default) or ``--check`` the generated module."""
+    """Write (default) or ``--check`` the generated module and the stamp in core/fastpath.py."""
     args = sys.argv[1:] if argv is None else argv
     text = generate_module()
+    current_fp, updated_fp = _stamp_fastpath(text)
     if "--check" in args:
         current = GENERATED_PATH.read_text() if GENERATED_PATH.exists() else ""
-        if current != text:
-            print(f"{GENERATED_PATH} is stale: run python -m core.kernelgen")
+        if current != text or current_fp != updated_fp:
+            print(f"{GENERATED_PATH} or its stamp in {FASTPATH_PATH} is stale: run python -m core.kernelgen")
             return 1
         return 0
     GENERATED_PATH.write_text(text)
-    print(f"wrote {GENERATED_PATH} ({len(text.splitlines())} lines)")
-    # numba inlines these kernels into core.fastpath's compiled functions, whose disk cache is
-    # keyed on fastpath.py alone: drop it so the next run compiles the new kernels
-    stale = list((GENERATED_PATH.parent / "__pycache__").glob("fastpath.*.nb[ic]"))
-    for f in stale:
-        f.unlink()
-    if stale:
-        print(f"removed {len(stale)} stale numba cache files of core.fastpath")
+    if updated_fp != current_fp:
+        # numba's disk cache of core.fastpath is keyed on fastpath.py: changing the stamp there
+        # makes every checkout (not only this one) recompile the new kernels
+        FASTPATH_PATH.write_text(updated_fp)
+    print(f"wrote {GENERATED_PATH} ({len(text.splitlines())} lines), KERNELS_SHA = {_kernels_sha(text)}")
     return 0
 
 
