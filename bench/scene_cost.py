@@ -5,7 +5,7 @@ gizmo drag event runs, :meth:`Session.set_t` what one slider step runs (``defer_
 panels coalesced to 20 Hz, as the slider and playback do; ``False``: every panel refreshed at
 once). A private ``viser.ViserServer`` on a free loopback port holds the shared scene; the time is
 the server's compute plus queueing the websocket messages (counted with ``count_messages``). The
-cross-check :func:`app.scene.session.measure_update_costs` (the scene helper's own timer) runs too.
+cross-check :func:`app.scene.costs.measure_update_costs` (the scene helper's own timer) runs too.
 
 Shows that work is skipped: the number of exact analyses (``core.parametric.analyse``) and static
 explanations (``explain``) run during 200 t-steps (expected: 0 analyses; t only moves shapes and
@@ -84,7 +84,7 @@ def run_scene_cost(
     import viser
 
     import core.parametric as cp
-    from app.scene import session as S
+    from app.scene import measure_update_costs, session as S
     from app.scene.state import SceneConfig
 
     repeats = repeats or (50 if quick else 300)
@@ -133,7 +133,7 @@ def run_scene_cost(
                 log(f"#   {rows[-1]['name']}: {rows[-1]['median_ms']:.3f} ms")
     if cross_check:
         try:
-            skipped["cross_check"] = S.measure_update_costs(repeats=50 if quick else 200)
+            skipped["cross_check"] = measure_update_costs(repeats=50 if quick else 200)
         except Exception as e:  # noqa: BLE001 - a cross-check; report, do not fail the run
             skipped["cross_check"] = {"error": repr(e)[:120]}
     return {"rows": rows, "cross_check": skipped.get("cross_check", {}), "repeats": repeats}
@@ -185,7 +185,7 @@ def main() -> None:
     a = ap.parse_args()
     out = run_scene_cost(quick=a.quick)
     print(format_scene(out))
-    print("\ncross-check (app.scene.session.measure_update_costs):", out["cross_check"])
+    print("\ncross-check (app.scene.costs.measure_update_costs):", out["cross_check"])
     if a.profile:
         print(profile_drag())
 

@@ -13,7 +13,8 @@ viser = pytest.importorskip("viser")
 
 from app.scene.panels import intervals_bar_html, readout_markdown, sign_table_markdown  # noqa: E402
 from app.scene.plots import compress  # noqa: E402
-from app.scene.session import Session, measure_update_costs  # noqa: E402
+from app.scene.costs import measure_update_costs  # noqa: E402
+from app.scene.session import Session  # noqa: E402
 from app.scene.state import SceneConfig, ShapeState, parse_vector  # noqa: E402
 
 GREEN, AMBER, RED = (0x2C, 0xA0, 0x2C), (0xFF, 0xBF, 0x00), (0xD6, 0x27, 0x28)

@@ -4,35 +4,40 @@ A :class:`Session` owns an :class:`~app.scene.state.AppState` and the handles th
 Callbacks only update the state and call one refresh; the maths is in ``core``. The two hot
 paths have cheap entry points that need no browser, for the benchmark helper:
 :meth:`Session.apply_drag` (a gizmo drag event) and :meth:`Session.set_t` (one t step);
-:func:`measure_update_costs` times both and counts the websocket messages they queue.
+:func:`app.scene.costs.measure_update_costs` times both and counts the websocket messages
+they queue. The timeline (:mod:`app.scene.timeline`) and the motion panel
+(:mod:`app.scene.motion_panel`) are mixins of :class:`Session`.
 """
 
 from __future__ import annotations
 
 import html
 import math
-import re
 import threading
-import time
 from concurrent.futures import Executor, Future
 from typing import Any
 
 import numpy as np
 
 from core import Relation, explain
-from core.pencil import pencil_coefficients
 
 from . import plots
-from .analysis import AnalysisCache, AnalysisView, MotionError, MotionModel, list_presets, load_motion
+from .analysis import (
+    AnalysisCache,
+    AnalysisView,
+    MotionError,
+    MotionModel,
+    list_presets,
+    load_motion,
+)
 from .contact import contact_point, separating_plane
-from .panels import intervals_bar_html, readout_markdown, sign_table_markdown
+from .motion_panel import STATIC, MotionPanelMixin
+from .panels import readout_markdown
 from .shapes import EllipsoidView
-from .state import AppState, SceneConfig, ShapeState, format_number, parse_vector
+from .state import AppState, SceneConfig, ShapeState, format_number
+from .timeline import TimelineMixin
 
-__all__ = ["Session", "measure_update_costs"]
-
-STATIC = "(static shapes)"
-"""Dropdown entry for no motion."""
+__all__ = ["Session"]
 
 
 class _Counter:
@@ -49,7 +54,7 @@ class _Counter:
         iface.queue_message = counting
 
 
-class Session:
+class Session(MotionPanelMixin, TimelineMixin):
     """The scene and GUI of one tab.
 
     Args:
@@ -439,323 +444,9 @@ class Session:
             self._plane_on = True
 
     # ------------------------------------------------------------------ motion
-    def _show_motion_error(self, e: Exception) -> None:
-        field = getattr(e, "field", None) or "A"
-        for key, md in self.motion_errors.items():
-            self._field_error(md, str(e) if key == field else None)
 
-    def _show_motion_fields(self) -> None:
-        assert self.model is not None
-        texts = self.model.texts()
-        for key, handle in self.motion_fields.items():
-            self._set_value(handle, texts.get(key, ""))
-            self._field_error(self.motion_errors[key], None)
-        self._set_md(self.preset_md, self.model.description)
-
-    def _leave_motion(self) -> None:
-        """A drag or typed shape turns the scene static (keeps the shapes where they are)."""
-        self.model = None
-        self.timeline_folder.visible = False
-        self.plots_folder.visible = False
-        self.analysis = None
-        self.state.motion_key = None
-        self.state.event = None
-        self._set_value(self.preset, STATIC)
-        self._set_md(self.status, "Static shapes: drag them or type their parameters.")
-        self._set_md(self.bar, "")
-        self._set_md(self.events_md, "")
-        self._set_md(self.sign_table, "")
-        for b in self._event_buttons:
-            b.remove()
-        self._event_buttons = []
-        self._set_value(self.play, False)
-        self._refresh_plots(force=True)
-        self._sync_shape_fields()
-
-    def _on_preset(self, ev: Any) -> None:
-        if self._syncing:
-            return
-        name = self.preset.value
-        if name == STATIC:
-            self._leave_motion()
-            self._refresh_static()
-            return
-        cfg = SceneConfig(dim=self.state.dim, preset=name, gizmos=self.show_gizmos.value, show_plots=self.plots_on.value)
-        self.load(cfg)
-        self._frame_camera()
-
-    def _on_analyse_click(self) -> None:
-        texts = {k: h.value for k, h in self.motion_fields.items()}
-        try:
-            model = load_motion(preset=None, motion=texts, dim=self.state.dim)
-        except MotionError as e:
-            self._show_motion_error(e)
-            return
-        for md in self.motion_errors.values():
-            self._field_error(md, None)
-        with self._lock:
-            self.model = model
-            if model.dim != self.state.dim:
-                self.state.dim = model.dim
-                self._make_views()
-            self._set_value(self.preset, STATIC if model.preset is None else model.preset)
-            self.state.t = model.default_t
-            self.state.event = None
-            self._analyse()
-
-    def _analyse(self) -> None:
-        """Analyse the loaded motion off the GUI thread (cached); draw t meanwhile."""
-        model = self.model
-        assert model is not None
-        self.state.motion_key = model.key
-        self.timeline_folder.visible = True
-        self.plots_folder.visible = True
-        lo, hi = model.interval_floats
-        self.t_slider.min, self.t_slider.max = lo, hi
-        self.t_slider.step = (hi - lo) / 1000 or 1e-3
-        self._update_gizmos()
-        cached = self.cache.get(model.key)
-        if cached is not None:
-            self._analysis_done(model, cached)
-            return
-        self.analysis = None
-        self._set_md(self.status, "Analysing the motion (exact)…")
-        self.progress.visible = True
-        self.progress.value = 10.0
-        pending_event = self.state.event
-        self.set_t(self.state.t)
-        self.state.event = pending_event  # shown exactly once the analysis knows the events
-        fut = self.cache.submit(model, self.executor)
-        self._pending = fut
-
-        def done(f: Future[Any]) -> None:
-            if self._closed or self.model is not model:
-                return
-            try:
-                result = f.result()
-            except Exception as e:  # noqa: BLE001 - shown next to the field, never a crash
-                self.progress.visible = False
-                self._set_md(self.status, f'<span style="color:#d62728">⚠ analysis failed: {html.escape(str(e))}</span>')
-                self.ready.set()
-                return
-            self._analysis_done(model, result)
-
-        fut.add_done_callback(done)
-
-    def _analysis_done(self, model: MotionModel, result: AnalysisView) -> None:
-        try:
-            self._show_analysis(model, result)
-        except Exception as e:  # noqa: BLE001 - a display bug must not leave the tab waiting
-            self._set_md(self.status, f'<span style="color:#d62728">⚠ could not show the analysis: {html.escape(str(e))}</span>')
-            self.ready.set()
-            raise
-
-    def _show_analysis(self, model: MotionModel, result: AnalysisView) -> None:
-        with self._lock:
-            if self.model is not model:
-                return
-            model.interval_floats = result.window
-            if result.default_t is not None:
-                model._default_t = result.default_t
-            self.analysis = result
-            self.progress.visible = False
-            n_ev = len(result.events)
-            self._set_md(
-                self.status,
-                f"Analysed in {result.seconds:.2f} s: {n_ev} event{'s' * (n_ev != 1)}, "
-                f"{len(result.segments)} interval{'s' * (len(result.segments) != 1)}.",
-            )
-            for b in self._event_buttons:
-                b.remove()
-            self._event_buttons = []
-            lines = []
-            for k, ev in enumerate(result.events, start=1):
-                lines.append(f"α{k} = {ev.text} ({ev.relation}, {ev.kind})")
-                with self.events_folder:
-                    btn = self.gui.add_button(f"Jump to α{k} ≈ {ev.t:.6f}")
-                btn.on_click(lambda _e, k=k: self.jump_to_event(k))
-                self._event_buttons.append(btn)
-            self._set_md(self.events_md, "<br>".join(lines) if lines else "No events: one relation on all of I.")
-            self._set_md(self.sign_table, sign_table_markdown(result.rows, result.degree))
-            self._plot_index = -2
-            self._refresh_plots(force=True)
-            lo, hi = model.interval_floats
-            self.t_slider.min, self.t_slider.max = lo, hi
-            self.t_slider.step = (hi - lo) / 1000 or 1e-3
-            if self._auto_t:
-                self.state.t = model.default_t
-            if self.state.event is not None and 1 <= self.state.event <= n_ev:
-                self.jump_to_event(self.state.event)
-            else:
-                self.state.event = None
-                self.set_t(self.state.t)
-            # frame the motion around the t shown (the window of an infinite I is known only now)
-            self._frame_camera()
-            self.ready.set()
-
-    def jump_to_event(self, k: int) -> str | None:
-        """Show the k-th event (1-based) exactly: shapes at alpha_k, relation of the event."""
-        with self._lock:
-            if self.analysis is None or not 1 <= k <= len(self.analysis.events):
-                return None
-            ev = self.analysis.events[k - 1]
-            self.set_t(ev.t, event=k)
-            return ev.relation
-
-    def set_t(self, t: float, *, event: int | None = None, defer_panels: bool = False) -> str | None:
-        """Move the motion to time t (one timeline step: hot path, no analysis).
-
-        The shapes move and recolour at once. The panels (readout, intervals-bar cursor, t box,
-        plot cursor) follow immediately, or with ``defer_panels`` at most every
-        :attr:`PANEL_PERIOD` seconds (what the slider and playback do: scrubbing stays cheap).
-
-        Args:
-            t: time (clamped to the window of I).
-            event: show the exact event k instead of the float t (set by "jump to").
-            defer_panels: coalesce panel updates (see above).
-
-        Returns:
-            The certified relation drawn at t (None while the analysis is running).
-        """
-        with self._lock:
-            model = self.model
-            if model is None:
-                return None
-            lo, hi = model.interval_floats
-            t = min(max(float(t), lo), hi)
-            self.state.t = t
-            self.state.event = event
-            a, b = model.shapes_at(t)
-            self.state.shapes = {"A": a, "B": b}  # a drag from here starts where they are drawn
-            for name, sh in (("A", a), ("B", b)):
-                pos, wxyz, scale = sh.float_pose()
-                self.views[name].set_pose(pos, wxyz, scale)
-            an = self.analysis
-            if an is None:
-                self._set_relation(None)
-                self._set_md(self.readout, readout_markdown(None, error="analysing the motion…"))
-                return None
-            relation = an.events[event - 1].relation if event is not None else an.relation_at(t)
-            self._set_relation(relation)
-            if relation == str(Relation.TANGENT):
-                A, B = model.float_matrices(t)
-                coeffs = [{"approx": float(v)} for v in pencil_coefficients(A, B)]
-                self._update_contact(A, B, {"relation": relation, "coefficients": coeffs})
-            else:
-                self._update_contact(None, None, None)
-            if self.show_plane.value or self._plane_on:
-                A, B = model.float_matrices(t)
-                self._update_plane(A, B, relation)
-            if defer_panels:
-                self._panels_due = True
-                if self._panel_timer is None:
-                    self._panel_timer = threading.Timer(self.PANEL_PERIOD, self._flush_panels)
-                    self._panel_timer.daemon = True
-                    self._panel_timer.start()
-            else:
-                self._panels_now()
-            return relation
-
-    PANEL_PERIOD = 0.05
-    """Seconds between panel refreshes while scrubbing or playing."""
-
-    def _flush_panels(self) -> None:
-        with self._lock:
-            self._panel_timer = None
-            if self._panels_due and not self._closed:
-                self._panels_now()
-
-    def _panels_now(self) -> None:
-        """Readout, bar, slider/t box and plot cursor for the current t (or event)."""
-        self._panels_due = False
-        model, an = self.model, self.analysis
-        if model is None or an is None:
-            return
-        t, event = self.state.t, self.state.event
-        lo, hi = model.interval_floats
-        self._set_value(self.t_slider, min(max(t, self.t_slider.min), self.t_slider.max))
-        if event is not None:
-            ev = an.events[event - 1]
-            where = f"at t = α{event} = {ev.text}"
-            self._set_value(self.t_number, ev.text)
-        else:
-            where = f"at t = {t:.6g}"
-            self._set_value(self.t_number, repr(t) if len(repr(t)) < 12 else f"{t:.6g}")
-        self._set_md(self.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t))
-        self._set_md(self.readout, an.readout(t, event, where))
-        self._refresh_plots()
-
-    def _on_slider(self, ev: Any) -> None:
-        if self._syncing:
-            return
-        self._auto_t = False
-        self.set_t(self.t_slider.value, defer_panels=True)
-
-    def _on_t_text(self, ev: Any) -> None:
-        if self._syncing or self.model is None:
-            return
-        text = self.t_number.value.strip()
-        m = re.fullmatch(r"(?:α|alpha)\s*(\d+)", text, flags=re.IGNORECASE)
-        if m is not None:  # "α1" / "alpha1": the exact event
-            n_ev = len(self.analysis.events) if self.analysis else 0
-            if not 1 <= int(m.group(1)) <= n_ev:
-                self._field_error(self.t_error, f"t: there are {n_ev} events (α1..α{n_ev})")
-                return
-            self._field_error(self.t_error, None)
-            self.jump_to_event(int(m.group(1)))
-            return
-        try:
-            (t,) = parse_vector(text, 1, "t")
-        except ValueError as e:
-            self._field_error(self.t_error, f"{e}; or type α1, α2, … for an event")
-            return
-        self._field_error(self.t_error, None)
-        self.set_t(float(t))
-
-    def _on_play(self) -> None:
-        if self._syncing or not self.play.value:
-            return
-        if self._play_thread is not None and self._play_thread.is_alive():
-            return
-        self._play_thread = threading.Thread(target=self._play_loop, daemon=True)
-        self._play_thread.start()
-
-    def _play_loop(self) -> None:
-        dt = 0.05
-        while self.play.value and not self._closed and self.model is not None:
-            lo, hi = self.model.interval_floats
-            t = self.state.t + (hi - lo) * self.speed.value * dt / 10.0
-            if t > hi:
-                t = lo
-            self.set_t(t, defer_panels=True)
-            time.sleep(dt)
 
     # ------------------------------------------------------------------ plots
-    def _refresh_plots(self, force: bool = False) -> None:
-        """Resample only when the analysis changed; move the cursor otherwise; skip when off."""
-        on = bool(self.plots_on.value) and self.analysis is not None
-        if not on:
-            if force:
-                self.plot_coeffs.visible = False
-                self.plot_subres.visible = False
-                self._plot_index = -2
-            return
-        an = self.analysis
-        assert an is not None
-        idx = int(np.searchsorted(an.samples_t, self.state.t))
-        if idx == self._plot_index and not force:
-            return
-        self._plot_index = idx
-        fresh = self._plot_data is None or self._plot_data[0] is not an
-        if fresh:
-            self._plot_data = (
-                an,
-                plots.PlotData(an.samples_t, an.coeff_series(), an.events_t),
-                plots.PlotData(an.samples_t, an.subres_series(), an.events_t),
-            )
-        assert self._plot_data is not None
-        plots.update_plot(self.plot_coeffs, self._plot_data[1], idx, labels=fresh or force)
-        plots.update_plot(self.plot_subres, self._plot_data[2], idx, labels=fresh or force)
 
     # ------------------------------------------------------------------ camera / lifecycle
     def _frame_camera(self) -> None:
@@ -812,50 +503,3 @@ class Session:
     def close(self) -> None:
         """Stop playback and ignore pending analyses (the tab went away)."""
         self._closed = True
-
-
-def measure_update_costs(repeats: int = 200, *, preset: str | None = "example-29") -> dict[str, float]:
-    """Server time of one drag update and one t-step, and messages each queues (no browser).
-
-    Starts a private ``ViserServer`` on a free loopback port, builds a :class:`Session` on its
-    shared scene, times :meth:`Session.apply_drag` and :meth:`Session.set_t`.
-
-    Returns:
-        {"drag_ms": median ms per drag, "drag_messages": messages per drag,
-         "t_step_ms"/"t_step_messages": per t-step as the slider does it (panels coalesced to
-         20 Hz, their messages included when the timer fires), "t_step_full_ms"/
-         "t_step_full_messages": with every panel refreshed synchronously}.
-    """
-    import viser
-
-    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-    try:
-        out: dict[str, float] = {}
-        if preset is not None:
-            s = Session(server, SceneConfig(preset=preset), count_messages=True)
-            s.ready.wait(120)
-            lo, hi = s.model.interval_floats if s.model else (0.0, 1.0)
-            for key, defer in (("t_step", True), ("t_step_full", False)):
-                times = []
-                m0 = s.messages
-                for i in range(repeats):
-                    t = lo + (hi - lo) * (i + 0.5) / repeats
-                    t0 = time.perf_counter()
-                    s.set_t(t, defer_panels=defer)
-                    times.append(time.perf_counter() - t0)
-                out[f"{key}_ms"] = float(np.median(times) * 1e3)
-                out[f"{key}_messages"] = (s.messages - m0) / repeats
-            s.close()
-        s = Session(server, SceneConfig(preset=None), count_messages=True)
-        times = []
-        m0 = s.messages
-        for i in range(repeats):
-            x = 2.0 + 2.0 * i / repeats
-            t0 = time.perf_counter()
-            s.apply_drag("B", (x, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0))
-            times.append(time.perf_counter() - t0)
-        out["drag_ms"] = float(np.median(times) * 1e3)
-        out["drag_messages"] = (s.messages - m0) / repeats
-        return out
-    finally:
-        server.stop()
