@@ -15,8 +15,8 @@ import numpy as np
 from flint import fmpq, fmpz
 
 from .decision import Decision, decide
-from .pencil import pencil_coefficients
-from .quadrics import check_determinant_sign, determinant, normalised_quadratic_part
+from .pencil import determinant, pencil_coefficients
+from .quadrics import check_determinant_sign, normalised_quadratic_part
 from .subresultants import hat_s0, hat_s1, hat_s10
 
 __all__ = ["ExactPair", "classify_exact", "exact_pair", "integer_matrix"]

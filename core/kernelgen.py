@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from .errorbound import LEAF_MAX, NO_SCALE_MIN, TRANSLATE_MAX, Kernel, build_kernel
-from .pencil import pencil_coefficients, poly_mul
+from .pencil import determinant, pencil_coefficients, poly_mul
 from .subresultants import hat_s0, hat_s1, hat_s10
 
 __all__ = [
@@ -42,17 +42,6 @@ def _leaf(prefix: str, i: int, j: int) -> str:
 
 def _leaf_names(n: int) -> list[str]:
     return [_leaf(p, i, j) for p in "ab" for i in range(n) for j in range(i, n)]
-
-
-def _minor(M: list[list[Any]], k: int) -> Any:
-    """Leading k x k principal minor (k = 2 or 3) of the quadratic block."""
-    if k == 2:
-        return M[0][0] * M[1][1] - M[0][1] * M[1][0]
-    return (
-        M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1])
-        - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0])
-        + M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0])
-    )
 
 
 def _row_bound_poly(A: list[list[Any]], B: list[list[Any]]) -> list[Any]:
@@ -84,7 +73,7 @@ def pencil_kernel(n: int) -> Kernel:
         for name, M in (("A", A), ("B", B)):
             rows = [sum((abs(x) for x in M[i][1 : n - 1]), abs(M[i][0])) for i in range(n - 1)]
             for k in range(2, n):
-                out[f"d{name}{k}"] = _minor(M, k)
+                out[f"d{name}{k}"] = determinant([row[:k] for row in M[:k]])
                 bound = rows[0]
                 for r in rows[1:k]:
                     bound = bound * r
@@ -156,7 +145,7 @@ def pencil_radius_kernel(n: int) -> Kernel:
         out = {f"c{i}": c for i, c in enumerate(pencil_coefficients(A, B))}
         for name, M in (("A", A), ("B", B)):
             for k in range(2, n):
-                out[f"d{name}{k}"] = _minor(M, k)
+                out[f"d{name}{k}"] = determinant([row[:k] for row in M[:k]])
         return out
 
     exprs = {nm: (f"{nm[0].upper()}[{nm[1]}, {nm[2]}]", f"{nm[0].upper()}r[{nm[1]}, {nm[2]}]") for nm in names}

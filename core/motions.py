@@ -29,6 +29,7 @@ import numpy as np
 from flint import fmpq
 
 from .expressions import RationalFunction, parse_expression
+from .pencil import determinant
 from .quadrics import ShapeParams, axes_from_quadric
 from .rationals import to_fmpq
 
@@ -248,23 +249,9 @@ def _rotation_from_quaternion(q: list[RationalFunction], dim: int) -> RFMatrix:
     return [[v / n for v in r] for r in rows]
 
 
-def _det(M: RFMatrix) -> RationalFunction:
-    n = len(M)
-    if n == 1:
-        return M[0][0]
-    if n == 2:
-        return M[0][0] * M[1][1] - M[0][1] * M[1][0]
-    out = RationalFunction.constant(0)
-    for j in range(n):
-        minor = [row[:j] + row[j + 1 :] for row in M[1:]]
-        term = M[0][j] * _det(minor)
-        out = out + term if j % 2 == 0 else out - term
-    return out
-
-
 def _inverse(M: RFMatrix, what: str) -> RFMatrix:
     n = len(M)
-    det = _det(M)
+    det = determinant(M)
     if det.num.is_zero():
         raise ValueError(f"{what} is singular for every t")
     inv_det = det.inverse()
@@ -272,7 +259,7 @@ def _inverse(M: RFMatrix, what: str) -> RFMatrix:
     for i in range(n):
         for j in range(n):
             minor = [row[:j] + row[j + 1 :] for k, row in enumerate(M) if k != i]
-            cof = _det(minor) if n > 1 else RationalFunction.constant(1)
+            cof = determinant(minor) if n > 1 else RationalFunction.constant(1)
             adj[j][i] = cof * inv_det if (i + j) % 2 == 0 else -(cof * inv_det)
     return adj
 

@@ -33,7 +33,7 @@ from .decision import decide, sign_variations
 from .expressions import RationalFunction
 from .motion_result import EVENT_KINDS, Event, Interval, MotionAnalysis, SignRow
 from .motions import as_motion
-from .pencil import pencil_coefficients
+from .pencil import determinant, pencil_coefficients
 from .qsqrt import QSqrtPoly
 from .rationals import to_fmpq
 from .realroots import real_roots
@@ -48,19 +48,6 @@ def _sgn(x: Any) -> int:
 
 # -------------------------------------------------------------------------------------------
 # preparation: exact denominator-free matrices valid on I
-
-
-def _det(M: Sequence[Sequence[Any]]) -> Any:
-    n = len(M)
-    if n == 1:
-        return M[0][0]
-    if n == 2:
-        return M[0][0] * M[1][1] - M[0][1] * M[1][0]
-    out = None
-    for j in range(n):
-        term = M[0][j] * _det([row[:j] + row[j + 1 :] for row in M[1:]])
-        out = term if out is None else (out + term if j % 2 == 0 else out - term)
-    return out
 
 
 def _sample_in(lo: fmpq | None, hi: fmpq | None) -> fmpq:
@@ -115,7 +102,7 @@ def _polynomial_matrix(
         P = [[-e for e in row] for row in P]
         lam = -lam
     shape = "ellipse" if k == 2 else "ellipsoid"
-    minors = [(_det([row[:j] for row in P[:j]]), j) for j in range(1, k + 2)]
+    minors = [(determinant([row[:j] for row in P[:j]]), j) for j in range(1, k + 2)]
     for m, order in minors:
         want = 1 if order <= k else -1
         what = f"leading minor of order {order} of the quadratic part" if order <= k else "determinant"

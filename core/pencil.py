@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any, TypeVar
 
-__all__ = ["pencil_coefficients", "poly_mul"]
+__all__ = ["determinant", "pencil_coefficients", "poly_mul"]
 
 R = TypeVar("R")
 Matrix = Sequence[Sequence[Any]]
@@ -29,6 +29,34 @@ def poly_mul(p: Sequence[Any], q: Sequence[Any]) -> list[Any]:
         for j, qj in enumerate(q):
             term = pi * qj
             out[i + j] = term if out[i + j] is None else out[i + j] + term
+    return out
+
+
+def determinant(M: Matrix) -> Any:
+    """Determinant of a 1x1 .. 4x4 matrix over any ring (+, -, * only; no division).
+
+    Explicit formulas up to 3x3, Laplace expansion along the first row above. Used exactly
+    (fmpq, fmpz, polynomials in t) and traced for the float kernels (leading minors).
+
+    Examples:
+        >>> determinant([[2, 1, 0], [1, 2, 1], [0, 1, 2]])
+        4
+    """
+    n = len(M)
+    if n == 1:
+        return M[0][0]
+    if n == 2:
+        return M[0][0] * M[1][1] - M[0][1] * M[1][0]
+    if n == 3:
+        return (
+            M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1])
+            - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0])
+            + M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0])
+        )
+    out: Any = None
+    for j in range(n):
+        term = M[0][j] * determinant([list(row[:j]) + list(row[j + 1 :]) for row in M[1:]])
+        out = term if out is None else (out + term if j % 2 == 0 else out - term)
     return out
 
 

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from flint import fmpq
 
+from .pencil import determinant
 from .rationals import to_fmpq
 
 __all__ = [
@@ -206,24 +207,6 @@ def _quaternion_from_rotation(R: np.ndarray) -> tuple[float, float, float, float
     n = math.sqrt(sum(v * v for v in q))
     sign = 1.0 if q[0] >= 0 else -1.0
     return tuple(float(sign * v / n) for v in q)  # type: ignore[return-value]
-
-
-def determinant(S: ExactMatrix) -> fmpq:
-    """Determinant of a 1x1 .. 4x4 exact matrix (explicit expansions, no division)."""
-    n = len(S)
-    if n == 1:
-        return S[0][0]
-    if n == 2:
-        return S[0][0] * S[1][1] - S[0][1] * S[1][0]
-    if n == 3:
-        return (
-            S[0][0] * (S[1][1] * S[2][2] - S[1][2] * S[2][1])
-            - S[0][1] * (S[1][0] * S[2][2] - S[1][2] * S[2][0])
-            + S[0][2] * (S[1][0] * S[2][1] - S[1][1] * S[2][0])
-        )
-    return sum(
-        ((-1) ** j) * S[0][j] * determinant([row[:j] + row[j + 1 :] for row in S[1:]]) for j in range(n)
-    )
 
 
 def normalised_quadratic_part(M: Any, *, name: str = "matrix") -> ExactMatrix:
