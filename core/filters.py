@@ -260,12 +260,12 @@ def explain_float(A: Any, B: Any) -> Any:
     if a.ndim != 2 or a.shape != b.shape or a.shape[0] not in (3, 4) or a.shape[0] != a.shape[1]:
         return None
     n = a.shape[0]
-    code = classify_float(a[None], b[None], scalar=True)[0]
+    prep = _Prepared(a[None], b[None])
+    out = _run_pencil(prep.a, prep.b)
+    code = _decide(out, prep.ok, n)[0]  # the same values the explanation shows decide
     if code == Relation.UNDECIDED:
         return None
-    prep = _Prepared(a[None], b[None])
     ea, eb = int(prep.ea[0]), int(prep.eb[0])
-    out = _run_pencil(prep.a, prep.b)
 
     def back(x: float, i: int) -> float:  # a_i(scaled) = 2^(i ea + (n - i) eb) a_i(true)
         return float(np.ldexp(x, -(i * ea + (n - i) * eb)))
