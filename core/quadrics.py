@@ -34,7 +34,6 @@ __all__ = [
     "axes_from_quadric",
     "rotation_from_quaternion",
     "validate_quadric",
-    "as_float_matrix",
 ]
 
 ExactMatrix = list[list[fmpq]]
@@ -298,8 +297,3 @@ def _entry(v: Any, name: str, i: int, j: int) -> fmpq:
         return to_fmpq(v)
     except ValueError as e:
         raise ValueError(f"{name} entry ({i},{j}): {e}") from None
-
-
-def as_float_matrix(M: Any) -> np.ndarray:
-    """Float view of an exact matrix (display only; never feeds a decision)."""
-    return np.array([[float(v) for v in row] for row in M], dtype=float)

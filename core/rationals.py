@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from flint import fmpq, fmpz
 
-__all__ = ["to_fmpq", "is_exact_scalar", "MAX_NUMBER_CHARS", "MAX_DECIMAL_EXPONENT"]
+__all__ = ["to_fmpq", "MAX_NUMBER_CHARS", "MAX_DECIMAL_EXPONENT"]
 
 MAX_NUMBER_CHARS = 400
 """Longest accepted number string (guards memory and time of a single conversion)."""
@@ -102,10 +102,3 @@ def to_fmpq(x: Any) -> fmpq:
         p, q = f.as_integer_ratio()
         return fmpq(p, q)
     raise ValueError(f"cannot read {type(x).__name__} {x!r} as a number")
-
-
-def is_exact_scalar(x: Any) -> bool:
-    """True for inputs that are not binary floats (strings, ints, rationals): they go to exact."""
-    return isinstance(x, str | fmpq | fmpz | Fraction) or (
-        isinstance(x, Integral) and not isinstance(x, bool)
-    )
