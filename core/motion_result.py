@@ -220,6 +220,27 @@ class MotionAnalysis:
                 return self._seg_rel[i + 1]
         return self._seg_rel[i]
 
+    def polynomials(self) -> dict[str, QSqrtPoly]:
+        """``a0``..``a{n}``, ``s0``, ``s1``, ``s10`` (hat forms) by name, as the sign table uses them."""
+        out = {f"a{i}": p for i, p in enumerate(self.a)}
+        out.update(s0=self.s0, s1=self.s1, s10=self.s10)
+        return out
+
+    def sign_row_at(self, t: Any) -> SignRow:
+        """Sign-table row at one rational time t in I: exact signs of a_n..a_0, ŝ0, ŝ1, ŝ1,0,
+        Var, relation and rule (exact polynomial evaluation; the readout of the scene).
+
+        Raises:
+            ValueError: t outside I or not a number.
+        """
+        from .parametric import sign_row_at
+
+        tq = to_fmpq(t)
+        lo, hi = self.interval
+        if (lo is not None and tq < lo) or (hi is not None and tq > hi):
+            raise ValueError(f"t = {t} is outside the analysed interval [{lo}, {hi}]")
+        return sign_row_at(self.n, self.polynomials(), tq)
+
     def samples(self, num: int = 256, lo: float | None = None, hi: float | None = None) -> dict[str, Any]:
         """Float samples of a_i, ŝ0, ŝ1, ŝ1,0 on a uniform grid, for plots (display only).
 

@@ -40,7 +40,7 @@ from .realroots import real_roots
 from .relation import Relation
 from .subresultants import hat_s0, hat_s1, hat_s10, hat_scale
 
-__all__ = ["analyse", "MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
+__all__ = ["analyse", "decide_at", "sign_row_at", "MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
 
 
 def _sgn(x: Any) -> int:
@@ -184,10 +184,11 @@ def _read_end(x: Any, which: str) -> fmpq | None:
 class _Signs:
     """Exact signs of a_i, ŝ_j at one point (rational or algebraic), computed on demand."""
 
-    def __init__(self, polys: dict[str, QSqrtPoly], point: fmpq | RealAlgebraic, zero: set[str]) -> None:
+    def __init__(self, polys: dict[str, QSqrtPoly], point: fmpq | RealAlgebraic, zero: set[str], float_point: float | None = None) -> None:
         self.polys = polys
         self.point = point
         self.zero = zero  # names known to vanish at this point
+        self.float_point = float_point  # the point as a float, when it is one exactly
         self.cache: dict[str, int] = {}
 
     def __call__(self, name: str) -> int:
@@ -199,7 +200,8 @@ class _Signs:
                 if isinstance(self.point, RealAlgebraic):
                     self.cache[name] = sign_at(p, self.point)
                 else:
-                    self.cache[name] = p.sign_at_rational(self.point)
+                    fs = None if self.float_point is None else p.float_sign_at(self.float_point)
+                    self.cache[name] = fs if fs is not None else p.sign_at_rational(self.point)
         return self.cache[name]
 
 
@@ -211,6 +213,40 @@ def _decide_at(n: int, sg: _Signs) -> Any:
 def _row(where: str, t: str, n: int, sg: _Signs, dec: Any) -> SignRow:
     a = tuple(sg(f"a{i}") for i in range(n, -1, -1))
     return SignRow(where, t, a, sg("s0"), sg("s1"), sg("s10"), sign_variations(list(a)), dec.relation, dec.rule)
+
+
+def decide_at(n: int, polys: dict[str, QSqrtPoly], t: Any) -> tuple[Any, dict[str, int]]:
+    """Decision at one rational time t from the exact polynomials, evaluating what the tree needs.
+
+    Like the static :func:`core.explain`: the signs of a_n..a_0 always, ŝ0, ŝ1, ŝ1,0 only when
+    the decision tree asks for them (the paper's point). Signs are exact: at a float t (its
+    exact binary value) a float Horner filter with a proven bound decides first
+    (:mod:`core.polysign`), exact evaluation otherwise; so the relation agrees with
+    :meth:`MotionAnalysis.relation_at`.
+
+    Args:
+        n: 3 (ellipses) or 4 (ellipsoids).
+        polys: ``a0``..``a{n}``, ``s0``, ``s1``, ``s10`` as in :class:`MotionAnalysis`.
+        t: a rational time (float, int, Fraction, "p/q").
+
+    Returns:
+        (:class:`core.decision.Decision`, {name: sign} of the polynomials evaluated).
+    """
+    sg = _Signs(polys, to_fmpq(t), set(), t if isinstance(t, float) else None)
+    for i in (0, n):
+        sg(f"a{i}")
+    return _decide_at(n, sg), sg.cache
+
+
+def sign_row_at(n: int, polys: dict[str, QSqrtPoly], t: Any) -> SignRow:
+    """The full sign-table row at one rational time t (every a_i, ŝ_j evaluated exactly).
+
+    Same arguments as :func:`decide_at`; the relation and rule come from the same decision
+    tree as the analysis' own rows.
+    """
+    tq = to_fmpq(t)
+    sg = _Signs(polys, tq, set())
+    return _row("point", str(tq), n, sg, _decide_at(n, sg))
 
 
 def analyse(

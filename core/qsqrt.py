@@ -79,12 +79,13 @@ class QSqrtPoly:
         3
     """
 
-    __slots__ = ("p", "q", "d")
+    __slots__ = ("p", "q", "d", "_float")
 
     def __init__(self, p: Any = 0, q: Any = 0, d: int = 1) -> None:
         self.p = _poly(p)
         self.q = _poly(q)
         self.d = int(d)
+        self._float: Any = None
         if self.d == 1 and not self.q.is_zero():
             self.p = self.p + self.q
             self.q = fmpq_poly()
@@ -208,6 +209,16 @@ class QSqrtPoly:
         a, b = self.at(t)
         return sign_qsqrt(a, b, self.d)
 
+    def float_sign_at(self, t: float) -> int | None:
+        """Certified sign at the float t from a float Horner step with a proven error bound
+        (:mod:`core.polysign`), or None when the bound cannot tell (then use
+        :meth:`sign_at_rational`). The float enclosure is built on first use."""
+        if self._float is None:
+            from .polysign import FloatPoly
+
+            self._float = FloatPoly(self.p, self.q, self.d)
+        return self._float.sign_at(t)
+
     def coefficients_float(self) -> list[float]:
         """Ascending float coefficients (display only; may overflow to inf for huge values)."""
         r = math.sqrt(self.d)
@@ -235,6 +246,19 @@ class QSqrtPoly:
 
     def __repr__(self) -> str:
         return f"QSqrtPoly({self})"
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        """Pickle as integer (numerator, denominator) pairs: flint polynomials do not pickle, and
+        the scene's analysis workers send these back to the GUI process."""
+        return (_from_pairs, (_pairs(self.p), _pairs(self.q), self.d))
+
+
+def _pairs(p: fmpq_poly) -> list[tuple[int, int]]:
+    return [(int(c.p), int(c.q)) for c in p.coeffs()]
+
+
+def _from_pairs(p: list[tuple[int, int]], q: list[tuple[int, int]], d: int) -> QSqrtPoly:
+    return QSqrtPoly(fmpq_poly([fmpq(a, b) for a, b in p]), fmpq_poly([fmpq(a, b) for a, b in q]), d)
 
 
 def _to_float(x: fmpq) -> float:

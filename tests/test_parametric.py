@@ -529,3 +529,52 @@ def test_relation_at_lookup_agrees_with_static_classifier():
             assert r.relation_at(t) == r.relation_at(t, method="classify"), (name, t)
     with pytest.raises(ValueError, match="valid options"):
         r.relation_at(0, method="guess")
+
+
+def test_sign_row_at_agrees_with_the_static_explanation():
+    """Signs at a rational t from the analysis polynomials == signs of core.explain on the exact
+    A(t), B(t) (an independent path: static pencil of the evaluated matrices), and the row's
+    relation == classify there. The analysis' a_i are a positive multiple of the true ones."""
+    from core import explain
+
+    for name in ("example-29", "example-31", "example-32", "example-33", "circles-crossing", "circles-graze"):
+        r = analyse(**preset_arguments(name))
+        lo = r.interval[0] if r.interval[0] is not None else fmpq(-3)
+        hi = r.interval[1] if r.interval[1] is not None else fmpq(6)
+        for k in range(0, 31):
+            t = lo + (hi - lo) * fmpq(k, 30)
+            row = r.sign_row_at(t)
+            e = explain(matrix_at_exact(r.A, t), matrix_at_exact(r.B, t))
+            assert row.a == tuple(q.sign for q in reversed(e.coefficients)), (name, t)
+            assert row.relation == e.relation == classify(matrix_at_exact(r.A, t), matrix_at_exact(r.B, t)), (name, t)
+            assert row.relation == r.relation_at(t), (name, t)
+            for key in ("s0", "s1", "s10"):  # the tree's needed s_j: same sign as the paper's s_j
+                q = getattr(e, key)
+                if q is not None:
+                    assert getattr(row, key) == q.sign, (name, t, key)
+    with pytest.raises(ValueError, match="outside"):
+        r.sign_row_at(hi + 1)
+
+
+def test_sign_row_at_sqrt2_motion_matches_interval_rows():
+    """Example 30 (sqrt 2 entries): at each interval's sample the row is the sign table's row."""
+    r = analyse(**preset_arguments("example-30"))
+    rows = [row for row in r.sign_table if row.where == "interval"]
+    assert rows
+    for row in rows:
+        got = r.sign_row_at(row.t)
+        assert (got.a, got.s0, got.s1, got.s10, got.var, got.relation, got.rule) == (
+            row.a, row.s0, row.s1, row.s10, row.var, row.relation, row.rule)
+    # alpha_3 = 1/2 is a rational event: the row there is tangent with s0 = 0
+    half = r.sign_row_at(fmpq(1, 2))
+    assert half.relation == Relation.TANGENT and half.s0 == 0
+
+
+def test_qsqrt_polynomials_pickle_exactly():
+    """The scene's workers send the analysis polynomials back through pickle."""
+    import pickle
+
+    r = analyse(**preset_arguments("example-30"))
+    polys = r.polynomials()
+    back = pickle.loads(pickle.dumps(polys))
+    assert back == polys and all(back[k].d == polys[k].d for k in polys)
