@@ -371,3 +371,90 @@ def test_typed_text_is_escaped_in_messages(server):
     s.shape_fields["B"]["center"].value = "1, <b>x</b>, 0"
     assert s.shape_errors["B"].visible
     assert "<b>" not in s.shape_errors["B"].content and "&lt;b&gt;" in s.shape_errors["B"].content
+
+
+def test_relation_lookup_inside_an_isolating_interval(server):
+    """A t inside an irrational event's isolating interval is decided by the exact signs at t:
+    Example 29's alpha1 = (12 - 2 sqrt 2)/17 separates 'separate' (before) from 'overlap'."""
+    from fractions import Fraction
+
+    from core.rationals import to_fmpq
+
+    s = motion_session(server)
+    look = s.analysis.relation_fn
+    lo, hi = (to_fmpq(x) for x in look._events[0][:2])
+    assert lo < hi
+    assert look(Fraction(int(lo.p), int(lo.q))) == "separate"
+    assert look(Fraction(int(hi.p), int(hi.q))) == "overlap"
+    for t in np.linspace(0.0, 1.0, 23):
+        assert look(float(t)) == ("overlap" if ALPHA1 < t < ALPHA2 else "separate")
+    s.close()
+
+
+def test_readout_at_t_shows_exact_signs_for_sqrt2_motion(server):
+    """Example 30 has sqrt(2) entries: the readout at a float t gives that t's own signs
+    (equal to core's sign_row_at), not a neighbouring sample's."""
+    from core import analyse
+    from core.presets import preset_arguments
+
+    s = motion_session(server, preset="example-30")
+    r = analyse(**preset_arguments("example-30"))
+    for t in (0.3, 0.55, 1.7):
+        s.set_t(t)
+        row = r.sign_row_at(t)
+        signs = "".join("+" if x > 0 else "-" if x < 0 else "0" for x in row.a)
+        assert f"Var({', '.join(signs)}) = **{row.var}**" in s.readout.content
+        assert str(row.relation).upper() in s.readout.content
+    s.close()
+
+
+def test_wire_setters_match_viser_public_setters(server):
+    """app.scene.wire queues the same messages and stores the same values as viser's setters."""
+    import dataclasses
+
+    from app.scene import plots, wire
+
+    iface = server.scene._websock_interface
+    sent: list = []
+    orig = iface.queue_message
+    iface.queue_message = lambda m: (sent.append(m), orig(m))[1]
+    try:
+        def payload(m):
+            return type(m).__name__, {k: v for k, v in dataclasses.asdict(m).items()}
+
+        a = server.scene.add_frame("/wire_a", show_axes=False)
+        b = server.scene.add_frame("/wire_b", show_axes=False)
+        sent.clear()
+        a.position, a.wxyz = (1.0, 2.0, 3.5), (0.0, 1.0, 0.0, 0.0)
+        public = [payload(m) for m in sent]
+        sent.clear()
+        wire.set_position(b, (1.0, 2.0, 3.5))
+        wire.set_wxyz(b, (0.0, 1.0, 0.0, 0.0))
+        ours = [payload(m) for m in sent]
+        assert [(n, {k: v for k, v in p.items() if k != "name"}) for n, p in ours] == [
+            (n, {k: v for k, v in p.items() if k != "name"}) for n, p in public]
+        np.testing.assert_array_equal(b.position, a.position)
+        np.testing.assert_array_equal(b.wxyz, a.wxyz)
+        sent.clear()
+        wire.set_position(b, (1.0, 2.0, 3.5))  # exactly unchanged: nothing sent
+        assert sent == []
+        wire.set_position(b, (1.0, 2.0, 3.5 + 1e-12))  # viser's allclose would drop this move
+        assert len(sent) == 1 and sent[0].position[2] == 3.5 + 1e-12
+
+        p = plots.add_plot(server.gui, "wire", 2)
+        data = tuple(np.linspace(0, 1, 5) * k for k in range(1, 6))
+        sent.clear()
+        wire.set_uplot_data(p, data)
+        assert len(sent) == 1 and type(sent[0]).__name__ == "GuiUpdateMessage"
+        assert list(sent[0].updates) == ["data"]
+        for got, want in zip(p.data, data, strict=True):
+            np.testing.assert_array_equal(got, want)
+        p.remove()
+        with pytest.raises(RuntimeError, match="removed"):
+            wire.set_uplot_data(p, data)
+        b.remove()
+        with pytest.raises(RuntimeError, match="removed"):
+            wire.set_position(b, (0.0, 0.0, 0.0))
+        a.remove()
+    finally:
+        iface.queue_message = orig

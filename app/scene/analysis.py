@@ -186,6 +186,7 @@ class MotionModel:
         """Window of the slider (I itself when finite; around the events once analysed)."""
         self.key: Hashable = (json.dumps([A.source, B.source], sort_keys=True, default=str), str(lo), str(hi))
         self._default_t: float | None = None
+        self._last_matrices: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None
 
     @property
     def default_t(self) -> float:
@@ -200,10 +201,18 @@ class MotionModel:
         return dict(self._texts)
 
     def float_matrices(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Float matrices A(t), B(t) (display only)."""
+        """Float matrices A(t), B(t) (display only; the last t is remembered: one t-step asks
+        for them to draw, to place the contact point and for the readout)."""
         from core.motions import matrix_at
 
-        return matrix_at(self.A, t), matrix_at(self.B, t)
+        last = self._last_matrices
+        if last is not None and last[0] == t:
+            return last[1]
+        mats = (matrix_at(self.A, t), matrix_at(self.B, t))
+        for M in mats:
+            M.flags.writeable = False  # shared by the callers of this t
+        self._last_matrices = (t, mats)
+        return mats
 
     def shapes_at(self, t: float) -> tuple[Any, Any]:
         """ShapeStates of A and B at the float t (drawing only)."""
@@ -414,12 +423,13 @@ def analyse_plain(A_source: Any, B_source: Any, interval: tuple[Any, Any], digit
     """Run ``core.analyse`` and return plain, picklable data (runs in a worker process).
 
     Returns:
-        {"result": MotionAnalysis.to_dict(polynomials=False), "samples": .samples(PLOT_SAMPLES)}.
+        {"result": MotionAnalysis.to_dict(polynomials=False), "samples": .samples(PLOT_SAMPLES),
+        "polys": .polynomials()} (the exact a_i, ŝ_j: the readout evaluates them at t).
     """
     from core.parametric import analyse
 
     an = analyse(A_source, B_source, interval, digits=digits)
-    return {"result": an.to_dict(polynomials=False), "samples": an.samples(PLOT_SAMPLES)}
+    return {"result": an.to_dict(polynomials=False), "samples": an.samples(PLOT_SAMPLES), "polys": an.polynomials()}
 
 
 _SIGN = {"+": 1, "-": -1, "0": 0}
@@ -429,15 +439,16 @@ class _RelationLookup:
     """Certified relation at a float t from the analysis data (exact rational comparisons).
 
     A float t is an exact binary rational. It is compared exactly with each event's isolating
-    interval; inside one (only possible when the interval is wider than the float spacing), a
-    rational event is compared with its exact value, and an irrational one falls back to
-    ``core``'s own ``relation_at`` on an analysis run here (once, cached).
+    interval and each open interval of constant relation; inside an isolating interval (only
+    possible when it is wider than the float spacing) a rational event is compared with its
+    exact value, and otherwise the exact signs at t decide (``core.parametric.decide_at``).
     """
 
-    def __init__(self, model: MotionModel, result: dict[str, Any]) -> None:
+    def __init__(self, result: dict[str, Any], polys: dict[str, Any]) -> None:
         from core.rationals import to_fmpq
 
-        self._model = model
+        self._n = int(result["dimension"]) + 1
+        self._polys = polys
         self._events = []
         for e in result["events"]:
             lo, hi = (to_fmpq(x) for x in e["isolating"])
@@ -448,7 +459,6 @@ class _RelationLookup:
             lo = None if iv["lo"] is None else to_fmpq(iv["lo"]["isolating"][1])
             hi = None if iv["hi"] is None else to_fmpq(iv["hi"]["isolating"][0])
             self._intervals.append((lo, hi, iv["relation"]))
-        self._direct: Any = None
 
     def __call__(self, t: Any) -> str:
         from core.rationals import to_fmpq
@@ -456,23 +466,18 @@ class _RelationLookup:
         tq = to_fmpq(t)
         for lo, hi, exact, rel in self._events:
             if lo <= tq <= hi:
-                if exact is not None:
-                    if tq == exact:
-                        return rel
-                    break
-                return self._fallback(t)
+                if exact is not None and tq == exact:
+                    return rel
+                return self._direct(tq)
         for lo, hi, rel in self._intervals:
             if (lo is None or lo < tq) and (hi is None or tq < hi):
                 return rel
-        return self._fallback(t)
+        return self._direct(tq)
 
-    def _fallback(self, t: Any) -> str:
-        if self._direct is None:
-            from core.parametric import analyse
+    def _direct(self, tq: Any) -> str:
+        from core.parametric import decide_at
 
-            m = self._model
-            self._direct = analyse(m.A, m.B, m.interval, digits=20)
-        return str(self._direct.relation_at(t))
+        return str(decide_at(self._n, self._polys, tq)[0].relation)
 
 
 def _view_from_plain(model: MotionModel, plain: dict[str, Any]) -> AnalysisView:
@@ -511,7 +516,7 @@ def _view_from_plain(model: MotionModel, plain: dict[str, Any]) -> AnalysisView:
     if inner:
         default_t = max(lo, inner[0] - 0.03 * (hi - lo))
     model._default_t = default_t if model._default_t is None else model._default_t
-    lookup = _RelationLookup(model, result)
+    lookup = _RelationLookup(result, plain["polys"])
     return AnalysisView(
         degree=n,
         events=events,
@@ -521,7 +526,7 @@ def _view_from_plain(model: MotionModel, plain: dict[str, Any]) -> AnalysisView:
         samples=series,
         seconds=0.0,
         relation_fn=lookup,
-        explain_fn=lambda t, event: _explain_at(model, result, lookup, t, event),
+        explain_fn=lambda t, event: _explain_at(model, result, plain["polys"], t, event),
         window=window,
         default_t=default_t,
     )
@@ -540,75 +545,71 @@ def _short_rational(text: str) -> str:
     return f"{float(q.p) / float(q.q):.6g}"
 
 
-def _explain_at(model: MotionModel, result: dict[str, Any], lookup: Any, t: float, event: int | None) -> dict[str, Any] | None:
-    """Readout data at t: ``core.explain`` of the exact matrices A(t), B(t) when they are rational.
+def _explain_at(model: MotionModel, result: dict[str, Any], polys: dict[str, Any], t: float, event: int | None) -> dict[str, Any] | None:
+    """Readout data at t, or at the k-th event: exact signs, float values for display.
 
-    At an event (an algebraic time) the signs come from the sign-table row of that instant,
-    decided exactly by the analysis. When A(t) has irrational entries (sqrt(d) presets) the
-    relation comes from the analysis and the signs from the row of the interval's sample.
+    At a float t (an exact binary rational) the signs of the a_i(t) of the analysis, and of the
+    ŝ_j(t) the decision tree needs, are evaluated exactly (``core.parametric.decide_at``: tens of
+    microseconds, sqrt(d) motions included; unneeded s_j show as "not needed", as in the static
+    readout). At an event (an algebraic time) they are the sign-table row of that instant,
+    decided exactly by the analysis. The values shown are float approximations of the
+    coefficients of det(T A(t) + B(t)) and of s0, s1, s1,0 from the float matrices (display
+    only; a value whose float falls on the wrong side of 0 is shown as "sign only").
     """
-    from core import explain
     from core.decision import RULES
-    from core.motions import matrix_at_exact
-    from core.rationals import to_fmpq
+    from core.parametric import decide_at
 
     n = int(result["dimension"]) + 1
-    note = ""
-    row = None
     if event is None:
-        try:
-            A = matrix_at_exact(model.A, t)
-            B = matrix_at_exact(model.B, t)
-        except ValueError:
-            A = B = None
-        if A is not None:
-            d = explain(A, B).to_dict()
-            d["relation"] = lookup(t)  # the analysis' answer at the same exact t
-            return d
-        tq = to_fmpq(t)
-        for iv in result["intervals"]:
-            lo = None if iv["lo"] is None else to_fmpq(iv["lo"]["isolating"][1])
-            hi = None if iv["hi"] is None else to_fmpq(iv["hi"]["isolating"][0])
-            if (lo is None or lo < tq) and (hi is None or tq < hi):
-                row = next((r for r in result["sign_table"] if r["where"] == "interval" and r["t"] == iv["sample"]), None)
-                break
-        note = "(irrational A(t): signs at this interval's sample point)"
+        dec, signs = decide_at(n, polys, t)
+        row = {"a": [signs[f"a{i}"] for i in range(n, -1, -1)], **{k: signs.get(k) for k in ("s0", "s1", "s10")},
+               "var": dec.var, "relation": str(dec.relation), "rule": dec.rule}
+        t_float = t
     else:
         ev = result["events"][event - 1]
-        row = next((r for r in result["sign_table"] if r["where"] == "point" and r["t"] == ev["value"]), None)
-    if row is None:
-        return None
-    a_signs = [_SIGN[x] for x in reversed(row["a"])]
+        plain = next((r for r in result["sign_table"] if r["where"] == "point" and r["t"] == ev["value"]), None)
+        if plain is None:
+            return None
+        row = {**plain, "a": [_SIGN[x] for x in plain["a"]], **{k: _SIGN[plain[k]] for k in ("s0", "s1", "s10")}}
+        t_float = float(ev["approx"])
+    approx = _float_readout_values(model, t_float)
     nan = float("nan")
-    approx: dict[str, float] = {}
-    if event is not None:
-        # display values from the float matrices at the float event time; signs stay exact
-        from core.pencil import pencil_coefficients
-        from core.subresultants import s0_full, s1_full, s10_full
 
-        try:
-            Af, Bf = model.float_matrices(float(result["events"][event - 1]["approx"]))
-            fa = [float(v) for v in pencil_coefficients(Af, Bf)]
-            approx = {f"a{i}": v for i, v in enumerate(fa)}
-            approx.update(s0=float(s0_full(fa)), s1=float(s1_full(fa)), s10=float(s10_full(fa)))
-        except (ValueError, ArithmeticError):
-            approx = {}
-
-    def q(name: str, sign: int) -> dict[str, Any]:
-        v = 0.0 if sign == 0 else approx.get(name, nan)
+    def q(name: str, sign: int | None) -> dict[str, Any] | None:
+        if sign is None:  # the tree did not need it
+            return None
+        v = approx.get(name, nan)
+        if sign == 0:
+            v = 0.0
+        elif (v > 0) - (v < 0) != sign:  # NaN, or a float on the wrong side of 0
+            v = nan
         return {"name": name, "approx": v, "exact": "0" if sign == 0 else None, "bound": None, "sign": sign}
 
-    coeffs = [q(f"a{i}", a_signs[i]) for i in range(n + 1)]
-    subs = {k: q(k, _SIGN[row[k]]) for k in ("s0", "s1", "s10")}
+    a_signs = list(reversed(row["a"]))
     return {
         "n": n,
-        "relation": lookup(t) if event is None else row["relation"],
+        "relation": row["relation"],
         "certified_by": "exact",
         "rule": row["rule"],
-        "rule_text": RULES.get(row["rule"], row["rule"]) + (" " + note if note else ""),
+        "rule_text": RULES.get(row["rule"], row["rule"]),
         "var": row["var"],
-        "coefficients": coeffs,
-        "s0": subs["s0"],
-        "s1": subs["s1"],
-        "s10": subs["s10"],
+        "coefficients": [q(f"a{i}", a_signs[i]) for i in range(n + 1)],
+        "s0": q("s0", row["s0"]),
+        "s1": q("s1", row["s1"]),
+        "s10": q("s10", row["s10"]),
     }
+
+
+def _float_readout_values(model: MotionModel, t: float) -> dict[str, float]:
+    """Float a_i, s0, s1, s1,0 of the float matrices at t (display only; {} if they fail)."""
+    from core.pencil import pencil_coefficients
+    from core.subresultants import s0_full, s1_full, s10_full
+
+    try:
+        Af, Bf = model.float_matrices(t)
+        fa = [float(v) for v in pencil_coefficients(Af, Bf)]
+        out = {f"a{i}": v for i, v in enumerate(fa)}
+        out.update(s0=float(s0_full(fa)), s1=float(s1_full(fa)), s10=float(s10_full(fa)))
+        return out
+    except (ValueError, ArithmeticError):
+        return {}

@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 import viser.uplot as uplot
 
+from . import wire
+
 __all__ = ["compress", "add_plot", "update_plot", "PlotData", "SERIES_COLORS"]
 
 SERIES_COLORS = ["#1f77b4", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2"]
@@ -102,6 +104,6 @@ def update_plot(handle: Any, data: PlotData, cursor_index: int, *, labels: bool 
     ys = list(data.ys)
     while len(ys) < len(handle.series) - 3:
         ys.append(np.zeros_like(data.t))
-    handle.data = (data.t, *ys, data.cursor(cursor_index), data.ev)
+    wire.set_uplot_data(handle, (data.t, *ys, data.cursor(cursor_index), data.ev))
     if not handle.visible:
         handle.visible = True

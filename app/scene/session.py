@@ -15,7 +15,8 @@ import html
 import math
 import threading
 from concurrent.futures import Executor, Future
-from typing import Any
+from contextlib import nullcontext
+from typing import Any, ContextManager
 
 import numpy as np
 
@@ -256,6 +257,13 @@ class Session(MotionPanelMixin, TimelineMixin):
         finally:
             self._syncing = False
 
+    def _batch(self) -> ContextManager[None]:
+        """One websocket batch for an update (viser's ``atomic``): the client applies the poses,
+        colours and panels of one step together, and the server wakes its sender once per step
+        instead of once per message."""
+        atomic = getattr(self.target, "atomic", None)
+        return atomic() if atomic is not None else nullcontext()
+
     def _on_gizmo(self, name: str, ev: Any) -> None:
         if self._syncing:
             return
@@ -268,7 +276,7 @@ class Session(MotionPanelMixin, TimelineMixin):
         Returns:
             The certified relation after the drag ("separate", "tangent", "overlap"), or None.
         """
-        with self._lock:
+        with self._lock, self._batch():
             if self.model is not None:
                 self._leave_motion()
             sh = self.state.shapes[name]

@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from . import wire
+
 __all__ = ["RELATION_COLORS", "RELATION_HEX", "EllipsoidView", "unit_sphere", "unit_disc"]
 
 RELATION_HEX: dict[str, str] = {
@@ -113,8 +115,8 @@ class EllipsoidView:
                 if self.dim == 2 and self.name == "B":
                     # two discs in one plane z-fight where they overlap: lift B a hair (display)
                     position = (position[0], position[1], position[2] + 0.01)
-                self.control.position = position
-                self.control.wxyz = wxyz
+                wire.set_position(self.control, position)
+                wire.set_wxyz(self.control, wxyz)
                 self.sent += 2
         # semi-axes from a float eigen-decomposition jitter in the last bits under a rigid
         # motion: compare at display precision so an unchanged size sends nothing

@@ -57,7 +57,7 @@ class TimelineMixin:
         Returns:
             The certified relation drawn at t (None while the analysis is running).
         """
-        with self._lock:
+        with self._lock, self._batch():
             model = self.model
             if model is None:
                 return None
@@ -100,7 +100,7 @@ class TimelineMixin:
     """Seconds between panel refreshes while scrubbing or playing."""
 
     def _flush_panels(self) -> None:
-        with self._lock:
+        with self._lock, self._batch():
             self._panel_timer = None
             if self._panels_due and not self._closed:
                 self._panels_now()
