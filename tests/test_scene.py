@@ -458,3 +458,32 @@ def test_wire_setters_match_viser_public_setters(server):
         a.remove()
     finally:
         iface.queue_message = orig
+
+
+def test_t_box_certifies_the_exact_fraction_typed(server, tmp_path):
+    """Unit circles at (0, 0) and (3t, 0) touch at t = 2/3 exactly (distance 3t = 2). The float
+    nearest 2/3 is below it (overlap there); typing "2/3" must show the tangency of 2/3 itself."""
+    import json
+    from fractions import Fraction
+
+    assert Fraction(2 / 3) < Fraction(2, 3)  # the float is on the overlap side
+    cfg_file = tmp_path / "two_thirds.json"
+    cfg_file.write_text(json.dumps({
+        "preset": None,
+        "t": 0.1,
+        "motion": {
+            "A": {"shape": {"center": [0, 0], "semi_axes": [1, 1]}},
+            "B": {"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["3*t", "0"]},
+            "interval": "0, 1",
+        },
+    }))
+    s = Session(server, SceneConfig.from_json_file(cfg_file))
+    assert s.ready.wait(60)
+    s.t_number.value = "2/3"
+    assert s.state.relation == "tangent" and colours(s) == {AMBER}
+    assert "at t = 2/3" in s.readout.content and "TANGENT" in s.readout.content
+    assert s.t_number.value == "2/3"
+    s.t_number.value = repr(2 / 3)  # the float: certified overlap
+    assert s.state.relation == "overlap" and colours(s) == {RED}
+    assert s.set_t(2 / 3) == "overlap"
+    s.close()

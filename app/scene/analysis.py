@@ -100,12 +100,12 @@ class AnalysisView:
         """Event times (floats)."""
         return [e.t for e in self.events]
 
-    def relation_at(self, t: float) -> str:
-        """Certified relation at the exact value of the float t."""
+    def relation_at(self, t: Any) -> str:
+        """Certified relation at the exact value of t (a float's binary value, or a rational)."""
         if self.relation_fn is not None:
             return str(self.relation_fn(t))
         for lo, hi, rel in self.segments:
-            if lo <= t <= hi:
+            if lo <= float(t) <= hi:
                 return rel
         return self.segments[-1][2]
 
@@ -564,7 +564,7 @@ def _explain_at(model: MotionModel, result: dict[str, Any], polys: dict[str, Any
         dec, signs = decide_at(n, polys, t)
         row = {"a": [signs[f"a{i}"] for i in range(n, -1, -1)], **{k: signs.get(k) for k in ("s0", "s1", "s10")},
                "var": dec.var, "relation": str(dec.relation), "rule": dec.rule}
-        t_float = t
+        t_float = float(t)
     else:
         ev = result["events"][event - 1]
         plain = next((r for r in result["sign_table"] if r["where"] == "point" and r["t"] == ev["value"]), None)

@@ -356,7 +356,8 @@ class Session(MotionPanelMixin, TimelineMixin):
     def _on_plane_toggle(self) -> None:
         with self._lock:
             if self.model is not None:
-                self.set_t(self.state.t, event=self.state.event)
+                t = self.state.t if self.state.t_exact is None else self.state.t_exact
+                self.set_t(t, event=self.state.event)
             else:
                 self._refresh_static()
 

@@ -324,7 +324,10 @@ class AppState:
     shapes: dict[str, ShapeState]
     """"A" and "B"."""
     t: float = 0.0
-    """Current time (when a motion is loaded)."""
+    """Current time (when a motion is loaded), as drawn."""
+    t_exact: Any = None
+    """The exact rational typed in the t box (e.g. 1/3), or None: the relation and the readout
+    are certified at this value; the shapes are drawn at its float ``t``."""
     event: int | None = None
     """1-based index of the event shown exactly, or None when showing the float ``t``."""
     motion_key: Any = None

@@ -50,7 +50,8 @@ class TimelineMixin:
         :attr:`PANEL_PERIOD` seconds (what the slider and playback do: scrubbing stays cheap).
 
         Args:
-            t: time (clamped to the window of I).
+            t: time (clamped to the window of I); a float, or an exact rational (typed in the t
+                box: the relation and readout are then certified at that exact value).
             event: show the exact event k instead of the float t (set by "jump to").
             defer_panels: coalesce panel updates (see above).
 
@@ -62,8 +63,12 @@ class TimelineMixin:
             if model is None:
                 return None
             lo, hi = model.interval_floats
-            t = min(max(float(t), lo), hi)
+            exact = None if isinstance(t, float) else t
+            t = float(t)
+            if not lo <= t <= hi:
+                t, exact = min(max(t, lo), hi), None
             self.state.t = t
+            self.state.t_exact = exact
             self.state.event = event
             a, b = model.shapes_at(t)
             self.state.shapes = {"A": a, "B": b}  # a drag from here starts where they are drawn
@@ -75,7 +80,7 @@ class TimelineMixin:
                 self._set_relation(None)
                 self._set_md(self.readout, readout_markdown(None, error="analysing the motion…"))
                 return None
-            relation = an.events[event - 1].relation if event is not None else an.relation_at(t)
+            relation = an.events[event - 1].relation if event is not None else an.relation_at(t if exact is None else exact)
             self._set_relation(relation)
             if relation == str(Relation.TANGENT):
                 A, B = model.float_matrices(t)
@@ -118,11 +123,15 @@ class TimelineMixin:
             ev = an.events[event - 1]
             where = f"at t = α{event} = {ev.text}"
             self._set_value(self.t_number, ev.text)
+        elif self.state.t_exact is not None:
+            where = f"at t = {self.state.t_exact}"
+            self._set_value(self.t_number, str(self.state.t_exact))
         else:
             where = f"at t = {t:.6g}"
             self._set_value(self.t_number, repr(t) if len(repr(t)) < 12 else f"{t:.6g}")
         self._set_md(self.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t))
-        self._set_md(self.readout, an.readout(t, event, where))
+        at = t if self.state.t_exact is None or event is not None else self.state.t_exact
+        self._set_md(self.readout, an.readout(at, event, where))
         self._refresh_plots()
 
     def _on_slider(self, ev: Any) -> None:
@@ -150,7 +159,7 @@ class TimelineMixin:
             self._field_error(self.t_error, f"{e}; or type α1, α2, … for an event")
             return
         self._field_error(self.t_error, None)
-        self.set_t(float(t))
+        self.set_t(t)  # exact when typed: "1/3" is certified at 1/3, drawn at its float
 
     def _on_play(self) -> None:
         if self._syncing or not self.play.value:
