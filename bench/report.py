@@ -276,7 +276,7 @@ def profile_exact(n: int = 100) -> str:
 
 
 def profile_t_step(n: int = 200) -> str:
-    """Top functions (cumulative) of n full t-steps of example-30 (all panels every step)."""
+    """Top functions (cumulative) of n jump t-steps of example-30 (readout, bar, t box at once)."""
     import cProfile
     import io
     import pstats
@@ -358,7 +358,7 @@ def _reading(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, Any] |
             out.append(f"Even with N = {big:g} samples, uniform sampling misses: " + "; ".join(missed_big[:8]) + (" …" if len(missed_big) > 8 else "") + ".")
     if sc:
         out.append("Scene: no exact analysis and no static explain() runs during t-steps (columns 'analyses run', 'explain() calls'); "
-                   "closing the plots panel removes the plot updates from each full panel refresh.")
+                   "closing the plots panel removes the plot-cursor updates (coalesced to 20 Hz in every mode).")
     out.append("Noise: the machine has 2 cores shared with other jobs during the run (load average above); throughputs are best-of-3 "
                "and single-pair worst cases are maxima, which scheduler pauses inflate.")
     return out
@@ -442,8 +442,10 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
         L.append("## Scene: server cost of one update\n")
         L.append("Measured without a browser on a private viser server (compute + queueing the websocket messages; `app.scene.session.Session`). "
                  "'slider' = `set_t(t, defer_panels=True)` (what the slider and playback run: shapes and colours at once, panels "
-                 "coalesced to 20 Hz, their messages counted); 'all panels every step' = `set_t(t)`. 'analyses run' = calls of "
-                 "`core.parametric.analyse` during the steps; 'explain() calls' = static explanations during the steps.\n")
+                 "coalesced to 20 Hz, their messages counted); 'jump' = `set_t(t)` (what an event button or a typed t runs: the readout, "
+                 "intervals bar and t box at once; the plot cursor follows within 50 ms in every mode). 'analyses run' = calls of "
+                 "`core.parametric.analyse` during the steps; 'explain() calls' = static explanations during the steps. "
+                 "Each row is the best of 3 runs on fresh servers (lowest median), as throughputs are best-of-3: the machine is shared.\n")
         if "scene_cost.png" in figs:
             L.append("![scene](figures/scene_cost.png)\n")
         L.append(scene_cost.format_scene(sc) + "\n")
@@ -492,7 +494,7 @@ def main(argv: list[str] | None = None) -> Path:
                 profiles["exact path, 100 random ellipsoid pairs (cProfile, own time)"] = profile_exact(30 if a.quick else 100)
         full = [r for r in (sc or {}).get("rows", []) if r["kind"] == "t-step" and r["median_ms"] >= scene_cost.TARGETS_MS["t-step"]]
         if full:
-            profiles["t-step with every panel refreshed (jump / typed t), example-30, over 1 ms (cProfile, cumulative)"] = profile_t_step(50 if a.quick else 200)
+            profiles["jump t-step (event button / typed t: readout, bar, t box at once), example-30, over 1 ms (cProfile, cumulative)"] = profile_t_step(50 if a.quick else 200)
     command = "python -m bench.report" + (" --quick" if a.quick else "") + (f" --seed {a.seed}" if a.seed else "")
     path = write_report(st, mv, sc, outdir=a.out, command=command, info=info, profiles=profiles, seconds=time.perf_counter() - t0)
     log(f"# wrote {path} in {time.perf_counter() - t0:.0f} s")

@@ -2,8 +2,8 @@
 
 Uses the scene helper's entry points (``app.scene.session``): :meth:`Session.apply_drag` is what a
 gizmo drag event runs, :meth:`Session.set_t` what one slider step runs (``defer_panels=True``:
-panels coalesced to 20 Hz, as the slider and playback do; ``False``: every panel refreshed at
-once). A private ``viser.ViserServer`` on a free loopback port holds the shared scene; the time is
+panels coalesced to 20 Hz, as the slider and playback do; ``False``: a jump, as an event button or
+a typed t runs it: readout, intervals bar and t box at once, the plot cursor within 50 ms). A private ``viser.ViserServer`` on a free loopback port holds the shared scene; the time is
 the server's compute plus queueing the websocket messages (counted with ``count_messages``). The
 cross-check :func:`app.scene.costs.measure_update_costs` (the scene helper's own timer) runs too.
 
@@ -67,6 +67,7 @@ def run_scene_cost(
     log: Callable[[str], None] = print,
     presets: tuple[str, ...] = ("example-29", "example-30"),
     repeats: int | None = None,
+    rounds: int | None = None,
     cross_check: bool = True,
 ) -> dict[str, Any]:
     """Measure drag and t-step costs; returns rows {name, median_ms, p95_ms, max_ms, messages, ...}.
@@ -76,6 +77,7 @@ def run_scene_cost(
         log: progress lines.
         presets: motions whose t-steps are timed.
         repeats: updates timed per row (default 50 quick, 300 full).
+        rounds: runs per row, the one with the lowest median is reported (default 1 quick, 3 full).
         cross_check: also run the scene helper's ``measure_update_costs``.
 
     Returns:
@@ -88,12 +90,19 @@ def run_scene_cost(
     from app.scene.state import SceneConfig
 
     repeats = repeats or (50 if quick else 300)
+    rounds = rounds or (1 if quick else 3)
     rows: list[dict[str, Any]] = []
     skipped: dict[str, Any] = {}
     def fresh() -> Any:  # one server per measurement: the message buffer of a server grows
         return viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
 
-    for dim in (3, 2):  # drag: static shapes, B dragged along a path crossing A
+    def best(measure: Callable[[], dict[str, Any]]) -> dict[str, Any]:
+        """Best of ``rounds`` runs (lowest median; each on a fresh server): the machine is shared,
+        so the least disturbed run is the closest to the code's own cost (as for throughputs)."""
+        runs = [measure() for _ in range(rounds)]
+        return min(runs, key=lambda r: r["median_ms"])
+
+    def drag_row(dim: int) -> dict[str, Any]:
         server = fresh()
         try:
             s = S.Session(server, SceneConfig(dim=dim, preset=None), count_messages=True)
@@ -101,35 +110,43 @@ def run_scene_cost(
             m0 = s.messages
             with _counting(cp, "analyse") as n_an:
                 ts = _time_calls(lambda i: s.apply_drag("B", (4.0 - 4.0 * i / repeats, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0)), repeats)
-            rows.append({"name": f"drag ({dim}D static shapes)", "kind": "drag", **_stats(ts),
-                         "messages": (s.messages - m0) / repeats, "analyses": n_an[0]})
+            row = {"name": f"drag ({dim}D static shapes)", "kind": "drag", **_stats(ts),
+                   "messages": (s.messages - m0) / repeats, "analyses": n_an[0]}
             s.close()
+            return row
         finally:
             server.stop()
+
+    def t_step_row(preset: str, plots_on: bool, defer: bool) -> dict[str, Any]:
+        server = fresh()
+        try:
+            with _counting(cp, "analyse") as n_an:
+                s = S.Session(server, SceneConfig(preset=preset, show_plots=plots_on), count_messages=True)
+                s.ready.wait(120)
+                lo, hi = s.model.interval_floats if s.model else (0.0, 1.0)
+                s.set_t(lo)  # warm-up
+                time.sleep(0.12)
+                m0 = s.messages
+                loaded = n_an[0]  # analyses so far (loading); none may follow
+                with _counting(S, "explain") as n_ex:
+                    ts = _time_calls(lambda i: s.set_t(lo + (hi - lo) * (i + 0.5) / repeats, defer_panels=defer), repeats)
+                    time.sleep(0.12)  # let a coalesced panel refresh fire: its messages count too
+            mode = "slider (panels at 20 Hz)" if defer else "jump: readout, bar, t box at once"
+            row = {"name": f"t-step {preset}, {mode}, plots {'on' if plots_on else 'off (panel closed)'}",
+                   "kind": "t-step", **_stats(ts), "messages": (s.messages - m0) / repeats,
+                   "analyses": n_an[0] - loaded, "explains": n_ex[0], "analyses_on_load": loaded}
+            s.close()
+            return row
+        finally:
+            server.stop()
+
+    for dim in (3, 2):  # drag: static shapes, B dragged along a path crossing A
+        rows.append(best(lambda: drag_row(dim)))
         log(f"#   drag {dim}D: {rows[-1]['median_ms']:.3f} ms")
     for preset in presets:
         for plots_on in (True, False):
             for defer in (True, False):
-                server = fresh()
-                try:
-                    with _counting(cp, "analyse") as n_an:
-                        s = S.Session(server, SceneConfig(preset=preset, show_plots=plots_on), count_messages=True)
-                        s.ready.wait(120)
-                        lo, hi = s.model.interval_floats if s.model else (0.0, 1.0)
-                        s.set_t(lo)  # warm-up
-                        time.sleep(0.12)
-                        m0 = s.messages
-                        loaded = n_an[0]  # analyses so far (loading); none may follow
-                        with _counting(S, "explain") as n_ex:
-                            ts = _time_calls(lambda i: s.set_t(lo + (hi - lo) * (i + 0.5) / repeats, defer_panels=defer), repeats)
-                            time.sleep(0.12)  # let a coalesced panel refresh fire: its messages count too
-                    mode = "slider (panels at 20 Hz)" if defer else "all panels every step"
-                    rows.append({"name": f"t-step {preset}, {mode}, plots {'on' if plots_on else 'off (panel closed)'}",
-                                 "kind": "t-step", **_stats(ts), "messages": (s.messages - m0) / repeats,
-                                 "analyses": n_an[0] - loaded, "explains": n_ex[0], "analyses_on_load": loaded})
-                    s.close()
-                finally:
-                    server.stop()
+                rows.append(best(lambda: t_step_row(preset, plots_on, defer)))
                 log(f"#   {rows[-1]['name']}: {rows[-1]['median_ms']:.3f} ms")
     if cross_check:
         try:

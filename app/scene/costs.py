@@ -22,7 +22,7 @@ def measure_update_costs(repeats: int = 200, *, preset: str | None = "example-29
         {"drag_ms": median ms per drag, "drag_messages": messages per drag,
          "t_step_ms"/"t_step_messages": per t-step as the slider does it (panels coalesced to
          20 Hz, their messages included when the timer fires), "t_step_full_ms"/
-         "t_step_full_messages": with every panel refreshed synchronously}.
+         "t_step_full_messages": a jump (event button, typed t): readout, bar and t box at once}.
     """
     import viser
 

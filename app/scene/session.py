@@ -99,6 +99,7 @@ class Session(MotionPanelMixin, TimelineMixin):
         self._plot_index = -2
         self._auto_t = False
         self._panels_due = False
+        self._plots_due = False
         self._panel_timer: threading.Timer | None = None
         self._plot_data: tuple[Any, Any, Any] | None = None
         self._last_text: dict[int, str] = {}

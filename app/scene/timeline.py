@@ -45,9 +45,10 @@ class TimelineMixin:
     def set_t(self, t: float, *, event: int | None = None, defer_panels: bool = False) -> str | None:
         """Move the motion to time t (one timeline step: hot path, no analysis).
 
-        The shapes move and recolour at once. The panels (readout, intervals-bar cursor, t box,
-        plot cursor) follow immediately, or with ``defer_panels`` at most every
-        :attr:`PANEL_PERIOD` seconds (what the slider and playback do: scrubbing stays cheap).
+        The shapes move and recolour at once. The panels (readout, intervals-bar cursor, t box)
+        follow immediately, or with ``defer_panels`` at most every :attr:`PANEL_PERIOD` seconds
+        (what the slider and playback do: scrubbing stays cheap). The plot cursor always
+        follows within :attr:`PANEL_PERIOD` (it resends the plot data: the heaviest message).
 
         Args:
             t: time (clamped to the window of I); a float, or an exact rational (typed in the t
@@ -93,25 +94,35 @@ class TimelineMixin:
                 self._update_plane(A, B, relation)
             if defer_panels:
                 self._panels_due = True
-                if self._panel_timer is None:
-                    self._panel_timer = threading.Timer(self.PANEL_PERIOD, self._flush_panels)
-                    self._panel_timer.daemon = True
-                    self._panel_timer.start()
+                self._schedule_flush()
             else:
-                self._panels_now()
+                self._panels_now(plots=False)
+                self._plots_due = True  # the plot cursor (the heaviest message) follows at 20 Hz
+                self._schedule_flush()
             return relation
 
     PANEL_PERIOD = 0.05
     """Seconds between panel refreshes while scrubbing or playing."""
 
+    def _schedule_flush(self) -> None:
+        if self._panel_timer is None:
+            self._panel_timer = threading.Timer(self.PANEL_PERIOD, self._flush_panels)
+            self._panel_timer.daemon = True
+            self._panel_timer.start()
+
     def _flush_panels(self) -> None:
         with self._lock, self._batch():
             self._panel_timer = None
-            if self._panels_due and not self._closed:
+            if self._closed:
+                return
+            if self._panels_due:
                 self._panels_now()
+            elif self._plots_due:
+                self._plots_due = False
+                self._refresh_plots()
 
-    def _panels_now(self) -> None:
-        """Readout, bar, slider/t box and plot cursor for the current t (or event)."""
+    def _panels_now(self, *, plots: bool = True) -> None:
+        """Readout, bar, slider/t box and (with ``plots``) the plot cursor for the current t."""
         self._panels_due = False
         model, an = self.model, self.analysis
         if model is None or an is None:
@@ -132,7 +143,9 @@ class TimelineMixin:
         self._set_md(self.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t))
         at = t if self.state.t_exact is None or event is not None else self.state.t_exact
         self._set_md(self.readout, an.readout(at, event, where))
-        self._refresh_plots()
+        if plots:
+            self._plots_due = False
+            self._refresh_plots()
 
     def _on_slider(self, ev: Any) -> None:
         if self._syncing:
