@@ -86,7 +86,8 @@ def run_scene_cost(
     import viser
 
     import core.parametric as cp
-    from app.scene import measure_update_costs, session as S
+    from app.scene import measure_update_costs
+    from app.scene import session as S
     from app.scene.state import SceneConfig
 
     repeats = repeats or (50 if quick else 300)
@@ -96,10 +97,10 @@ def run_scene_cost(
     def fresh() -> Any:  # one server per measurement: the message buffer of a server grows
         return viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
 
-    def best(measure: Callable[[], dict[str, Any]]) -> dict[str, Any]:
+    def best(measure: Callable[..., dict[str, Any]], *args: Any) -> dict[str, Any]:
         """Best of ``rounds`` runs (lowest median; each on a fresh server): the machine is shared,
         so the least disturbed run is the closest to the code's own cost (as for throughputs)."""
-        runs = [measure() for _ in range(rounds)]
+        runs = [measure(*args) for _ in range(rounds)]
         return min(runs, key=lambda r: r["median_ms"])
 
     def drag_row(dim: int) -> dict[str, Any]:
@@ -141,12 +142,12 @@ def run_scene_cost(
             server.stop()
 
     for dim in (3, 2):  # drag: static shapes, B dragged along a path crossing A
-        rows.append(best(lambda: drag_row(dim)))
+        rows.append(best(drag_row, dim))
         log(f"#   drag {dim}D: {rows[-1]['median_ms']:.3f} ms")
     for preset in presets:
         for plots_on in (True, False):
             for defer in (True, False):
-                rows.append(best(lambda: t_step_row(preset, plots_on, defer)))
+                rows.append(best(t_step_row, preset, plots_on, defer))
                 log(f"#   {rows[-1]['name']}: {rows[-1]['median_ms']:.3f} ms")
     if cross_check:
         try:

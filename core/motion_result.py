@@ -227,8 +227,10 @@ class MotionAnalysis:
         return out
 
     def sign_row_at(self, t: Any) -> SignRow:
-        """Sign-table row at one rational time t in I: exact signs of a_n..a_0, ŝ0, ŝ1, ŝ1,0,
-        Var, relation and rule (exact polynomial evaluation; the readout of the scene).
+        """Sign-table row at one rational time t in I.
+
+        Exact signs of a_n..a_0, ŝ0, ŝ1, ŝ1,0, Var, relation and rule, as the analysis' own
+        rows (exact polynomial evaluation).
 
         Raises:
             ValueError: t outside I or not a number.

@@ -210,9 +210,11 @@ class QSqrtPoly:
         return sign_qsqrt(a, b, self.d)
 
     def float_sign_at(self, t: float) -> int | None:
-        """Certified sign at the float t from a float Horner step with a proven error bound
-        (:mod:`core.polysign`), or None when the bound cannot tell (then use
-        :meth:`sign_at_rational`). The float enclosure is built on first use."""
+        """Certified sign at the float t, or None when the float bound cannot tell.
+
+        A float Horner step with a proven error bound (:mod:`core.polysign`); on None use
+        :meth:`sign_at_rational`. The float enclosure is built on first use.
+        """
         if self._float is None:
             from .polysign import FloatPoly
 
