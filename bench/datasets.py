@@ -47,8 +47,9 @@ for _p in (str(_ROOT), str(_ROOT / "tests")):
     if _p not in sys.path:
         sys.path.insert(0, _p)
 
-from core.rationals import to_fmpq  # noqa: E402
 from oracle import oracle_relation  # noqa: E402  (tests/oracle.py: independent ground truth)
+
+from core.rationals import to_fmpq  # noqa: E402
 
 __all__ = [
     "Dataset",

@@ -26,8 +26,9 @@ if __package__ in (None, ""):  # python bench/report.py
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
     __package__ = "bench"  # noqa: A001
 
-import bench  # noqa: E402,F401  (pins BLAS threads before numpy)
 import numpy as np  # noqa: E402
+
+import bench  # noqa: E402,F401  (pins BLAS threads before numpy)
 
 from . import moving, scene_cost, static  # noqa: E402
 

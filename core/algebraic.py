@@ -17,8 +17,15 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-from flint import arb, arb_poly, ctx, fmpq, fmpq_poly, fmpz
-from flint import fmpz_poly  # noqa: F401  (used by the doctests)
+from flint import (
+    arb,
+    arb_poly,
+    ctx,
+    fmpq,
+    fmpq_poly,
+    fmpz,
+    fmpz_poly,  # noqa: F401  (used by the doctests)
+)
 
 from .qsqrt import QSqrtPoly, _poly, _sgn, _to_float
 

@@ -74,7 +74,8 @@ class ExactPair:
 def _float_int_matrix(M: Any) -> list[list[int]] | None:
     """2^k * M as Python ints (k chosen so every entry is an integer) for a finite float64
     (n, n) array, sign-normalised so its quadratic block is positive definite; None if M is not
-    such an array or is invalid (the general path then produces the precise error message)."""
+    such an array or is invalid (the general path then produces the precise error message).
+    """
     if type(M) is not np.ndarray or M.dtype != np.float64 or M.ndim != 2 or M.shape[0] != M.shape[1]:
         return None
     if not np.isfinite(M).all() or not (M == M.T).all():

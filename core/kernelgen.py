@@ -136,7 +136,8 @@ def translate_kernel(n: int) -> Kernel:
 @cache
 def pencil_radius_kernel(n: int) -> Kernel:
     """Kernel ``pencil_radius{n}(A, Ar, B, Br)`` (midpoint-radius): a_0..a_n and the validity
-    minors from entries that carry radii (the translated matrices, rescaled to |entry| + radius <= 2)."""
+    minors from entries that carry radii (the translated matrices, rescaled to |entry| + radius <= 2).
+    """
     names = _leaf_names(n)
 
     def formula(L: dict[str, Any]) -> dict[str, Any]:

@@ -98,7 +98,8 @@ class Motion:
 
     def float_coefficients(self) -> tuple[np.ndarray, np.ndarray]:
         """Float coefficients (entries x degree, descending) of every entry's numerator (sqrt(d)
-        folded in) and denominator, cached: the scene evaluates A(t) at each t-step with them."""
+        folded in) and denominator, cached: the scene evaluates A(t) at each t-step with them.
+        """
         if not self._float_coeffs:
             entries = [e for row in self.matrix() for e in row]
             nums, dens = [], []

@@ -251,7 +251,8 @@ class QSqrtPoly:
 
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
         """Pickle as integer (numerator, denominator) pairs: flint polynomials do not pickle, and
-        the scene's analysis workers send these back to the GUI process."""
+        the scene's analysis workers send these back to the GUI process.
+        """
         return (_from_pairs, (_pairs(self.p), _pairs(self.q), self.d))
 
 

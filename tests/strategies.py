@@ -6,9 +6,9 @@ from fractions import Fraction as F
 from typing import Any
 
 import numpy as np
+from cases import axis_ellipsoid, sphere
 from hypothesis import strategies as st
 
-from cases import axis_ellipsoid, sphere
 from core import quadric_from_axes, rotation_from_quaternion
 
 

@@ -7,11 +7,9 @@ from fractions import Fraction as F
 
 import numpy as np
 import pytest
+from cases import CASES, circle, sphere
 from hypothesis import given
 from hypothesis import strategies as st
-
-from cases import CASES, circle, sphere
-from core import Relation, Stats, classify, explain, quadric_from_axes
 from oracle import oracle_relation
 from strategies import (
     dyadic_tangent_pair,
@@ -23,6 +21,8 @@ from strategies import (
     small_rationals,
     tangent_pairs,
 )
+
+from core import Relation, Stats, classify, explain, quadric_from_axes
 
 U = Relation.UNDECIDED
 

@@ -7,6 +7,7 @@ from fractions import Fraction as F
 import numpy as np
 import pytest
 from flint import fmpq
+from strategies import dyadic_tangent_pair
 
 from core import Relation, classify, explain, quadric_from_axes
 from core import _kernels as K
@@ -17,7 +18,6 @@ from core.filters import _HAT, _PENCIL, _Prepared, _run_hat, _run_pencil, classi
 from core.kernelgen import main as kernelgen_main
 from core.pencil import pencil_coefficients
 from core.subresultants import hat_s0, hat_s1, hat_s10
-from strategies import dyadic_tangent_pair
 
 
 def test_generated_kernels_are_current():
@@ -189,8 +189,9 @@ def test_translated_stage_abstains_on_exact_tangency_far_away(n):
 @pytest.mark.parametrize("n", [3, 4])
 def test_translated_stage_near_tangent_far_away(n):
     """Near-tangent pairs around 1e5 at gaps 1e-4..1e-12: labels from the independent oracle."""
-    from core.filters import classify_translated
     from oracle import oracle_relation
+
+    from core.filters import classify_translated
 
     rng = np.random.default_rng(99 + n)
     d = n - 1

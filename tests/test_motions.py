@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 from flint import fmpq
 
-from core.motions import as_motion, matrix_at, matrix_at_exact, motion_from_dict, motion_to_dict, shape_at
+from core.motions import (
+    as_motion,
+    matrix_at,
+    matrix_at_exact,
+    motion_from_dict,
+    motion_to_dict,
+    shape_at,
+)
 from core.presets import preset
 from core.quadrics import quadric_from_axes
 

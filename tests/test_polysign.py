@@ -76,8 +76,8 @@ def test_filter_decides_well_conditioned_cases():
 
 def test_qsqrt_method_falls_back_to_exact_when_the_filter_abstains():
     """QSqrtPoly.float_sign_at abstains (None) only; decide_at then evaluates exactly."""
-    from core.parametric import decide_at
     from core import analyse
+    from core.parametric import decide_at
     from core.presets import preset_arguments
 
     r = analyse(**preset_arguments("example-30"))

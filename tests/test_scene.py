@@ -11,9 +11,9 @@ import pytest
 
 viser = pytest.importorskip("viser")
 
+from app.scene.costs import measure_update_costs  # noqa: E402
 from app.scene.panels import intervals_bar_html, readout_markdown, sign_table_markdown  # noqa: E402
 from app.scene.plots import compress  # noqa: E402
-from app.scene.costs import measure_update_costs  # noqa: E402
 from app.scene.session import Session  # noqa: E402
 from app.scene.state import SceneConfig, ShapeState, parse_vector  # noqa: E402
 

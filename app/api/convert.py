@@ -75,7 +75,8 @@ _EXACT_FLOAT_INT = 2**53
 
 def _as_float64_if_exact(m: Any) -> Any:
     """A float64 array when every entry is a JSON float or a float-exact integer (same values,
-    so the float filter can run on e.g. ``[[1, 0, -3.5], ...]``); otherwise unchanged."""
+    so the float filter can run on e.g. ``[[1, 0, -3.5], ...]``); otherwise unchanged.
+    """
     if isinstance(m, np.ndarray):
         return m
     flat = [v for row in m for v in row]

@@ -261,7 +261,8 @@ class Session(MotionPanelMixin, TimelineMixin):
     def _batch(self) -> ContextManager[None]:
         """One websocket batch for an update (viser's ``atomic``): the client applies the poses,
         colours and panels of one step together, and the server wakes its sender once per step
-        instead of once per message."""
+        instead of once per message.
+        """
         atomic = getattr(self.target, "atomic", None)
         return atomic() if atomic is not None else nullcontext()
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from fastapi import APIRouter, HTTPException
 
-from ..presets_source import api_preset, api_presets
 from ..motion_schemas import PresetOut
+from ..presets_source import api_preset, api_presets
 from ..schemas import ErrorOut
 
 router = APIRouter(prefix="/api/presets", tags=["presets"])
