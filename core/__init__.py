@@ -5,6 +5,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
 :mod:`core.quadrics`. Public API::
 
     from core import classify, Relation, explain          # static pairs (certified)
+    from core import classify_detailed                    # + which arithmetic certified each pair
     from core import analyse                              # moving pairs: events and intervals
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
     from core import warm_up                              # compile the numba kernels early
@@ -13,9 +14,13 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
 """
 
 from .classify import METHODS as METHODS
+from .classify import ON_INVALID as ON_INVALID
+from .classify import Certifier as Certifier
+from .classify import Classification as Classification
 from .classify import Method as Method
 from .classify import Stats as Stats
 from .classify import classify as classify
+from .classify import classify_detailed as classify_detailed
 from .explain import Explanation as Explanation
 from .explain import Quantity as Quantity
 from .explain import explain as explain
@@ -37,6 +42,10 @@ from .relation import Relation as Relation
 
 __all__ = [
     "METHODS",
+    "ON_INVALID",
+    "Certifier",
+    "Classification",
+    "classify_detailed",
     "Explanation",
     "Method",
     "Motion",

@@ -16,25 +16,62 @@ def prepare3(M, out):
     x11 = M[1, 1]
     x12 = M[1, 2]
     x22 = M[2, 2]
-    bad = (x00 == 0.0) | (M[1, 0] != x01) | (M[2, 0] != x02) | (M[2, 1] != x12) | (x00 != x00) | (x01 != x01) | (x02 != x02) | (x11 != x11) | (x12 != x12) | (x22 != x22)
-    mx = max(abs(x00), abs(x01), abs(x02), abs(x11), abs(x12), abs(x22))
-    if bad or not mx <= 1.7976931348623157e308:
-        return False
+    y01 = M[1, 0]
+    y02 = M[2, 0]
+    y12 = M[2, 1]
+    if (x00 == 0.0) | (x00 != x00) | (x01 != x01) | (x02 != x02) | (x11 != x11) | (x12 != x12) | (x22 != x22) | (y01 != y01) | (y02 != y02) | (y12 != y12):
+        return 0
+    mx = max(abs(x00), abs(x01), abs(x02), abs(x11), abs(x12), abs(x22), abs(y01), abs(y02), abs(y12))
+    if not mx <= 1.7976931348623157e308:
+        return 0
     f = -1.0 if x00 < 0.0 else 1.0
     if not (0.00390625 <= mx <= 256.0):
         _, e = math.frexp(mx)
-        f = math.ldexp(f, 1 - e)
+        k = 1 - e  # up to 1075 for subnormal entries: 2^k is no float, use two factors
+        g = math.ldexp(1.0, k - k // 2)
+        x00 = x00 * g
+        x01 = x01 * g
+        x02 = x02 * g
+        x11 = x11 * g
+        x12 = x12 * g
+        x22 = x22 * g
+        y01 = y01 * g
+        y02 = y02 * g
+        y12 = y12 * g
+        f = math.ldexp(f, k // 2)
+    if (x01 == y01) & (x02 == y02) & (x12 == y12):
+        out[0, 0] = x00 * f
+        out[0, 1] = x01 * f
+        out[0, 2] = x02 * f
+        out[1, 1] = x11 * f
+        out[1, 2] = x12 * f
+        out[2, 2] = x22 * f
+        return 1
+    m0 = max(abs(x00), abs(x01), abs(x02), abs(y01), abs(y02)) * abs(f)
+    m1 = max(abs(x01), abs(x11), abs(x12), abs(y01), abs(y12)) * abs(f)
+    m2 = max(abs(x02), abs(x12), abs(x22), abs(y02), abs(y12)) * abs(f)
+    d01 = abs(x01 * f - y01 * f)
+    r01 = 9.094947017729282e-13 * m0 * m1
+    d02 = abs(x02 * f - y02 * f)
+    r02 = 9.094947017729282e-13 * m0 * m2
+    d12 = abs(x12 * f - y12 * f)
+    r12 = 9.094947017729282e-13 * m1 * m2
+    if not (((x01 == y01) | ((r01 >= 9.332636185032189e-302) & (d01 * d01 * 1.0000000000000036 <= r01 * 0.9999999999999964))) & ((x02 == y02) | ((r02 >= 9.332636185032189e-302) & (d02 * d02 * 1.0000000000000036 <= r02 * 0.9999999999999964))) & ((x12 == y12) | ((r12 >= 9.332636185032189e-302) & (d12 * d12 * 1.0000000000000036 <= r12 * 0.9999999999999964)))):
+        return 0
+    h = 0.5 * f
     out[0, 0] = x00 * f
-    out[0, 1] = x01 * f
-    out[0, 2] = x02 * f
     out[1, 1] = x11 * f
-    out[1, 2] = x12 * f
     out[2, 2] = x22 * f
-    return True
+    out[0, 1] = x01 * h + y01 * h
+    out[0, 2] = x02 * h + y02 * h
+    out[1, 2] = x12 * h + y12 * h
+    return 2
 
 PENCIL3_OUTPUTS = ('c0', 'c0_M', 'c1', 'c1_M', 'c2', 'c2_M', 'c3', 'c3_M', 'dA2', 'dA2_M', 'dB2', 'dB2_M')
 PENCIL3_CONSTANTS = (5.551115123125793e-16, 0.0, 7.771561172376113e-16, 0.0, 7.771561172376113e-16, 0.0, 5.551115123125793e-16, 0.0, 2.220446049250315e-16, 0.0, 2.220446049250315e-16, 0.0)
-PENCIL3_FLOOR = 5.2469317e-317
+PENCIL3_CONSTANTS_ROUNDED = (8.881784197001274e-16, 0.0, 1.1102230246251597e-15, 0.0, 1.1102230246251597e-15, 0.0, 8.881784197001274e-16, 0.0, 4.440892098500632e-16, 0.0, 4.440892098500632e-16, 0.0)
+PENCIL3_FLOOR_ROUNDED = 1.31150496e-316
+PENCIL3_FLOOR = 1.31150496e-316
 
 def pencil3(A, B):
     v0 = A[0, 0]
@@ -186,21 +223,21 @@ def pencil3(A, B):
     return (v79, v118, v80, v121, v81, v124, v82, v125, v134, v135, v144, v145,)
 
 TRANSLATE3_OUTPUTS = ('m00', 'm01', 'm11', 'm02', 'm12', 'm22')
-TRANSLATE3_FLOOR = 1.59149684397e-313
+TRANSLATE3_FLOOR = 6.835430175000615e-305
 
-def translate3(M, t):
+def translate3(M, Mr, t):
     v0 = M[0, 0]
-    r0 = 0.0
+    r0 = Mr[0, 0]
     v1 = M[0, 1]
-    r1 = 0.0
+    r1 = Mr[0, 1]
     v2 = M[0, 2]
-    r2 = 0.0
+    r2 = Mr[0, 2]
     v3 = M[1, 1]
-    r3 = 0.0
+    r3 = Mr[1, 1]
     v4 = M[1, 2]
-    r4 = 0.0
+    r4 = Mr[1, 2]
     v5 = M[2, 2]
-    r5 = 0.0
+    r5 = Mr[2, 2]
     v6 = t[0]
     r6 = 0.0
     v7 = t[1]
@@ -236,7 +273,7 @@ def translate3(M, t):
     return (v0, v1, v3, v11, v15, v21, r0, r1, r3, r11, r15, r21,)
 
 PENCIL_RADIUS3_OUTPUTS = ('c0', 'c1', 'c2', 'c3', 'dA2', 'dB2')
-PENCIL_RADIUS3_FLOOR = 1.067e-321
+PENCIL_RADIUS3_FLOOR = 4.27e-321
 
 def pencil_radius3(A, Ar, B, Br):
     v0 = A[0, 0]
@@ -419,7 +456,7 @@ def pencil_radius3(A, Ar, B, Br):
     r88 = r86 + r87 + 2.220446049250313e-16 * abs(v88)
     return (v79, v80, v81, v82, v85, v88, r79, r80, r81, r82, r85, r88,)
 
-HAT_S0_3_FLOOR = 2.0726563087484394e-305
+HAT_S0_3_FLOOR = 1.6328380290058883e-296
 
 def hat_s0_3(c, cr):
     v0 = c[0]
@@ -480,7 +517,7 @@ def hat_s0_3(c, cr):
     r27 = r26
     return (v27, r27,)
 
-HAT_S1_3_FLOOR = 1.04e-322
+HAT_S1_3_FLOOR = 2.6856509333e-314
 
 def hat_s1_3(c, cr):
     v0 = c[0]
@@ -501,7 +538,7 @@ def hat_s1_3(c, cr):
     r7 = r5 + r6 + 2.220446049250313e-16 * abs(v7)
     return (v7, r7,)
 
-HAT_S10_3_FLOOR = 1.93e-322
+HAT_S10_3_FLOOR = 3.5808679165e-314
 
 def hat_s10_3(c, cr):
     v0 = c[0]
@@ -533,29 +570,87 @@ def prepare4(M, out):
     x22 = M[2, 2]
     x23 = M[2, 3]
     x33 = M[3, 3]
-    bad = (x00 == 0.0) | (M[1, 0] != x01) | (M[2, 0] != x02) | (M[3, 0] != x03) | (M[2, 1] != x12) | (M[3, 1] != x13) | (M[3, 2] != x23) | (x00 != x00) | (x01 != x01) | (x02 != x02) | (x03 != x03) | (x11 != x11) | (x12 != x12) | (x13 != x13) | (x22 != x22) | (x23 != x23) | (x33 != x33)
-    mx = max(abs(x00), abs(x01), abs(x02), abs(x03), abs(x11), abs(x12), abs(x13), abs(x22), abs(x23), abs(x33))
-    if bad or not mx <= 1.7976931348623157e308:
-        return False
+    y01 = M[1, 0]
+    y02 = M[2, 0]
+    y03 = M[3, 0]
+    y12 = M[2, 1]
+    y13 = M[3, 1]
+    y23 = M[3, 2]
+    if (x00 == 0.0) | (x00 != x00) | (x01 != x01) | (x02 != x02) | (x03 != x03) | (x11 != x11) | (x12 != x12) | (x13 != x13) | (x22 != x22) | (x23 != x23) | (x33 != x33) | (y01 != y01) | (y02 != y02) | (y03 != y03) | (y12 != y12) | (y13 != y13) | (y23 != y23):
+        return 0
+    mx = max(abs(x00), abs(x01), abs(x02), abs(x03), abs(x11), abs(x12), abs(x13), abs(x22), abs(x23), abs(x33), abs(y01), abs(y02), abs(y03), abs(y12), abs(y13), abs(y23))
+    if not mx <= 1.7976931348623157e308:
+        return 0
     f = -1.0 if x00 < 0.0 else 1.0
     if not (0.00390625 <= mx <= 256.0):
         _, e = math.frexp(mx)
-        f = math.ldexp(f, 1 - e)
+        k = 1 - e  # up to 1075 for subnormal entries: 2^k is no float, use two factors
+        g = math.ldexp(1.0, k - k // 2)
+        x00 = x00 * g
+        x01 = x01 * g
+        x02 = x02 * g
+        x03 = x03 * g
+        x11 = x11 * g
+        x12 = x12 * g
+        x13 = x13 * g
+        x22 = x22 * g
+        x23 = x23 * g
+        x33 = x33 * g
+        y01 = y01 * g
+        y02 = y02 * g
+        y03 = y03 * g
+        y12 = y12 * g
+        y13 = y13 * g
+        y23 = y23 * g
+        f = math.ldexp(f, k // 2)
+    if (x01 == y01) & (x02 == y02) & (x03 == y03) & (x12 == y12) & (x13 == y13) & (x23 == y23):
+        out[0, 0] = x00 * f
+        out[0, 1] = x01 * f
+        out[0, 2] = x02 * f
+        out[0, 3] = x03 * f
+        out[1, 1] = x11 * f
+        out[1, 2] = x12 * f
+        out[1, 3] = x13 * f
+        out[2, 2] = x22 * f
+        out[2, 3] = x23 * f
+        out[3, 3] = x33 * f
+        return 1
+    m0 = max(abs(x00), abs(x01), abs(x02), abs(x03), abs(y01), abs(y02), abs(y03)) * abs(f)
+    m1 = max(abs(x01), abs(x11), abs(x12), abs(x13), abs(y01), abs(y12), abs(y13)) * abs(f)
+    m2 = max(abs(x02), abs(x12), abs(x22), abs(x23), abs(y02), abs(y12), abs(y23)) * abs(f)
+    m3 = max(abs(x03), abs(x13), abs(x23), abs(x33), abs(y03), abs(y13), abs(y23)) * abs(f)
+    d01 = abs(x01 * f - y01 * f)
+    r01 = 9.094947017729282e-13 * m0 * m1
+    d02 = abs(x02 * f - y02 * f)
+    r02 = 9.094947017729282e-13 * m0 * m2
+    d03 = abs(x03 * f - y03 * f)
+    r03 = 9.094947017729282e-13 * m0 * m3
+    d12 = abs(x12 * f - y12 * f)
+    r12 = 9.094947017729282e-13 * m1 * m2
+    d13 = abs(x13 * f - y13 * f)
+    r13 = 9.094947017729282e-13 * m1 * m3
+    d23 = abs(x23 * f - y23 * f)
+    r23 = 9.094947017729282e-13 * m2 * m3
+    if not (((x01 == y01) | ((r01 >= 9.332636185032189e-302) & (d01 * d01 * 1.0000000000000036 <= r01 * 0.9999999999999964))) & ((x02 == y02) | ((r02 >= 9.332636185032189e-302) & (d02 * d02 * 1.0000000000000036 <= r02 * 0.9999999999999964))) & ((x03 == y03) | ((r03 >= 9.332636185032189e-302) & (d03 * d03 * 1.0000000000000036 <= r03 * 0.9999999999999964))) & ((x12 == y12) | ((r12 >= 9.332636185032189e-302) & (d12 * d12 * 1.0000000000000036 <= r12 * 0.9999999999999964))) & ((x13 == y13) | ((r13 >= 9.332636185032189e-302) & (d13 * d13 * 1.0000000000000036 <= r13 * 0.9999999999999964))) & ((x23 == y23) | ((r23 >= 9.332636185032189e-302) & (d23 * d23 * 1.0000000000000036 <= r23 * 0.9999999999999964)))):
+        return 0
+    h = 0.5 * f
     out[0, 0] = x00 * f
-    out[0, 1] = x01 * f
-    out[0, 2] = x02 * f
-    out[0, 3] = x03 * f
     out[1, 1] = x11 * f
-    out[1, 2] = x12 * f
-    out[1, 3] = x13 * f
     out[2, 2] = x22 * f
-    out[2, 3] = x23 * f
     out[3, 3] = x33 * f
-    return True
+    out[0, 1] = x01 * h + y01 * h
+    out[0, 2] = x02 * h + y02 * h
+    out[0, 3] = x03 * h + y03 * h
+    out[1, 2] = x12 * h + y12 * h
+    out[1, 3] = x13 * h + y13 * h
+    out[2, 3] = x23 * h + y23 * h
+    return 2
 
 PENCIL4_OUTPUTS = ('c0', 'c0_M', 'c1', 'c1_M', 'c2', 'c2_M', 'c3', 'c3_M', 'c4', 'c4_M', 'dA2', 'dA2_M', 'dA3', 'dA3_M', 'dB2', 'dB2_M', 'dB3', 'dB3_M')
 PENCIL4_CONSTANTS = (1.1102230246251599e-15, 0.0, 1.3322676295501928e-15, 0.0, 1.554312234475225e-15, 0.0, 1.3322676295501928e-15, 0.0, 1.1102230246251599e-15, 0.0, 2.2204460492503155e-16, 0.0, 5.551115123125793e-16, 0.0, 2.2204460492503155e-16, 0.0, 5.551115123125793e-16, 0.0)
-PENCIL4_FLOOR = 3.8200071798e-313
+PENCIL4_CONSTANTS_ROUNDED = (1.5543122344752253e-15, 0.0, 1.7763568394002587e-15, 0.0, 1.9984014443252912e-15, 0.0, 1.7763568394002587e-15, 0.0, 1.5543122344752253e-15, 0.0, 4.440892098500633e-16, 0.0, 8.881784197001274e-16, 0.0, 4.440892098500633e-16, 0.0, 8.881784197001274e-16, 0.0)
+PENCIL4_FLOOR_ROUNDED = 8.9127970781e-313
+PENCIL4_FLOOR = 8.9127970781e-313
 
 def pencil4(A, B):
     v0 = A[0, 0]
@@ -990,29 +1085,29 @@ def pencil4(A, B):
     return (v274, v348, v275, v351, v276, v354, v277, v357, v278, v358, v376, v377, v391, v393, v411, v412, v426, v428,)
 
 TRANSLATE4_OUTPUTS = ('m00', 'm01', 'm02', 'm11', 'm12', 'm22', 'm03', 'm13', 'm23', 'm33')
-TRANSLATE4_FLOOR = 3.3421433718e-313
+TRANSLATE4_FLOOR = 1.5379717886589648e-304
 
-def translate4(M, t):
+def translate4(M, Mr, t):
     v0 = M[0, 0]
-    r0 = 0.0
+    r0 = Mr[0, 0]
     v1 = M[0, 1]
-    r1 = 0.0
+    r1 = Mr[0, 1]
     v2 = M[0, 2]
-    r2 = 0.0
+    r2 = Mr[0, 2]
     v3 = M[0, 3]
-    r3 = 0.0
+    r3 = Mr[0, 3]
     v4 = M[1, 1]
-    r4 = 0.0
+    r4 = Mr[1, 1]
     v5 = M[1, 2]
-    r5 = 0.0
+    r5 = Mr[1, 2]
     v6 = M[1, 3]
-    r6 = 0.0
+    r6 = Mr[1, 3]
     v7 = M[2, 2]
-    r7 = 0.0
+    r7 = Mr[2, 2]
     v8 = M[2, 3]
-    r8 = 0.0
+    r8 = Mr[2, 3]
     v9 = M[3, 3]
-    r9 = 0.0
+    r9 = Mr[3, 3]
     v10 = t[0]
     r10 = 0.0
     v11 = t[1]
@@ -1076,7 +1171,7 @@ def translate4(M, t):
     return (v0, v1, v2, v4, v5, v7, v18, v24, v30, v39, r0, r1, r2, r4, r5, r7, r18, r24, r30, r39,)
 
 PENCIL_RADIUS4_OUTPUTS = ('c0', 'c1', 'c2', 'c3', 'c4', 'dA2', 'dA3', 'dB2', 'dB3')
-PENCIL_RADIUS4_FLOOR = 2.899e-320
+PENCIL_RADIUS4_FLOOR = 9.729e-320
 
 def pencil_radius4(A, Ar, B, Br):
     v0 = A[0, 0]
@@ -1707,7 +1802,7 @@ def pencil_radius4(A, Ar, B, Br):
     r312 = r307 + r311 + 2.220446049250313e-16 * abs(v312)
     return (v274, v275, v276, v277, v278, v281, v295, v298, v312, r274, r275, r276, r277, r278, r281, r295, r298, r312,)
 
-HAT_S0_4_FLOOR = 3.821666698500349e-259
+HAT_S0_4_FLOOR = 2.0447461985229254e-258
 
 def hat_s0_4(c, cr):
     v0 = c[0]
@@ -1780,7 +1875,7 @@ def hat_s0_4(c, cr):
     r33 = r30 + r32 + 2.220446049250313e-16 * abs(v33)
     return (v33, r33,)
 
-HAT_S1_4_FLOOR = 5.834804289889245e-285
+HAT_S1_4_FLOOR = 3.052051474709801e-284
 
 def hat_s1_4(c, cr):
     v0 = c[0]
@@ -1857,7 +1952,7 @@ def hat_s1_4(c, cr):
     r35 = r32 + r34 + 2.220446049250313e-16 * abs(v35)
     return (v35, r35,)
 
-HAT_S10_4_FLOOR = 3.8150643433886e-285
+HAT_S10_4_FLOOR = 2.0253503352393524e-284
 
 def hat_s10_4(c, cr):
     v0 = c[0]

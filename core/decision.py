@@ -67,7 +67,7 @@ class Decision:
 
 def decide(
     n: int,
-    middle_signs: Sequence[int],
+    signs: Sequence[int],
     sign_s0: Callable[[], int],
     sign_s1: Callable[[], int],
     sign_s10: Callable[[], int],
@@ -76,17 +76,24 @@ def decide(
 
     Args:
         n: 3 for ellipses, 4 for ellipsoids.
-        middle_signs: signs of a_{n-1}, ..., a_1 (descending, as the paper writes Var).
+        signs: signs of a_n, a_{n-1}, ..., a_0 (descending, as the paper writes Var). a_n and
+            a_0 must be negative: the pencil of two normalised (negative interior) shapes.
         sign_s0, sign_s1, sign_s10: called only if the tree needs that sign.
 
     Raises:
+        RuntimeError: a_n or a_0 is not negative (a matrix was not normalised: a bug upstream,
+            never a wrong answer).
         ValueError: s0 = 0, s1 < 0, s1,0 = 0, which no pair of ellipsoids can produce.
 
     Examples:
-        >>> decide(3, [1, 1], lambda: 1, lambda: 0, lambda: 0).relation
+        >>> decide(3, [-1, 1, 1, -1], lambda: 1, lambda: 0, lambda: 0).relation
         <Relation.SEPARATE: 0>
     """
-    var = sign_variations([-1, *middle_signs, -1])
+    if len(signs) != n + 1 or signs[0] >= 0 or signs[-1] >= 0:
+        raise RuntimeError(
+            f"decide needs a_n < 0 and a_0 < 0 (normalised shapes), got signs {list(signs)} for degree {n}"
+        )
+    var = sign_variations(signs)
     if var != 2:
         return Decision(Relation.OVERLAP, "var", var)
     s0 = sign_s0()

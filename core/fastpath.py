@@ -31,7 +31,7 @@ except ImportError:  # pragma: no cover - exercised only where numba is missing
         return lambda f: f
 
 
-KERNELS_SHA = "d4e6c39c7e1bbebf"
+KERNELS_SHA = "6c2399ba7d5e5373"
 """sha256 prefix of core/_kernels.py, rewritten by ``python -m core.kernelgen``: numba keys the disk
 cache of the compiled functions below on this file, and they inline those kernels, so this file
 must change whenever the kernels do (a test checks the value)."""
@@ -40,6 +40,9 @@ _UNDECIDED, _SEPARATE, _OVERLAP = -1, 0, 2
 _RF = RADIUS_FACTOR
 _C3, _F3, _H3 = K.PENCIL3_CONSTANTS, K.PENCIL3_FLOOR, K.HAT_S0_3_FLOOR
 _C4, _F4, _H4 = K.PENCIL4_CONSTANTS, K.PENCIL4_FLOOR, K.HAT_S0_4_FLOOR
+# matrices symmetric only up to rounding: prepared entries are rounded (see prepare_source)
+_C3R, _F3R = K.PENCIL3_CONSTANTS_ROUNDED, K.PENCIL3_FLOOR_ROUNDED
+_C4R, _F4R = K.PENCIL4_CONSTANTS_ROUNDED, K.PENCIL4_FLOOR_ROUNDED
 _prepare3 = _njit(cache=True, inline="always")(K.prepare3)
 _prepare4 = _njit(cache=True, inline="always")(K.prepare4)
 _pencil3 = _njit(cache=True, inline="always")(K.pencil3)
@@ -85,17 +88,20 @@ def _coefficients(r: Any, C: Any, floor: float, n: int, c: Any, cr: Any) -> None
 
 @_njit(cache=True, inline="always")
 def _pair3(A: Any, B: Any, wa: Any, wb: Any, c: Any, cr: Any) -> int:
-    ok_a = _prepare3(A, wa)
-    ok_b = _prepare3(B, wb)
-    if not (ok_a and ok_b):
+    sa = _prepare3(A, wa)
+    sb = _prepare3(B, wb)
+    if sa == 0 or sb == 0:
         return _UNDECIDED
+    exact_leaves = sa == 1 and sb == 1
+    C = _C3 if exact_leaves else _C3R
+    F = _F3 if exact_leaves else _F3R
     r = _pencil3(wa, wb)
-    var = _certify(r, _C3, _F3, 3)
+    var = _certify(r, C, F, 3)
     if var < 0:
         return _UNDECIDED
     if var != 2:
         return _OVERLAP
-    _coefficients(r, _C3, _F3, 3, c, cr)
+    _coefficients(r, C, F, 3, c, cr)
     hv, hr = _hat3(c, cr)
     b = hr * _RF + _H3
     if hv > b:
@@ -107,17 +113,20 @@ def _pair3(A: Any, B: Any, wa: Any, wb: Any, c: Any, cr: Any) -> int:
 
 @_njit(cache=True, inline="always")
 def _pair4(A: Any, B: Any, wa: Any, wb: Any, c: Any, cr: Any) -> int:
-    ok_a = _prepare4(A, wa)
-    ok_b = _prepare4(B, wb)
-    if not (ok_a and ok_b):
+    sa = _prepare4(A, wa)
+    sb = _prepare4(B, wb)
+    if sa == 0 or sb == 0:
         return _UNDECIDED
+    exact_leaves = sa == 1 and sb == 1
+    C = _C4 if exact_leaves else _C4R
+    F = _F4 if exact_leaves else _F4R
     r = _pencil4(wa, wb)
-    var = _certify(r, _C4, _F4, 4)
+    var = _certify(r, C, F, 4)
     if var < 0:
         return _UNDECIDED
     if var != 2:
         return _OVERLAP
-    _coefficients(r, _C4, _F4, 4, c, cr)
+    _coefficients(r, C, F, 4, c, cr)
     hv, hr = _hat4(c, cr)
     b = hr * _RF + _H4
     if hv < -b:

@@ -16,14 +16,18 @@ numba); the tests check they agree.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
+from flint import fmpq
 
 from . import _kernels as K
 from .decision import RULES, sign_variations
-from .errorbound import RADIUS_FACTOR, TRANSLATE_MAX
+from .errorbound import LEAF_MAX, NO_SCALE_MIN, RADIUS_FACTOR, TRANSLATE_MAX
 from .fastpath import classify_one, classify_pairs, warm_up
+from .quadrics import SYMMETRY_TOLERANCE
+from .rationals import format_rational, to_fmpq
 from .relation import Relation
 from .subresultants import hat_scale
 
@@ -45,6 +49,10 @@ _HAT = {
     (4, "s10"): (K.hat_s10_4, K.HAT_S10_4_FLOOR),
 }
 
+_PENCIL_ROUNDED = {
+    3: (K.PENCIL3_CONSTANTS_ROUNDED, K.PENCIL3_FLOOR_ROUNDED),
+    4: (K.PENCIL4_CONSTANTS_ROUNDED, K.PENCIL4_FLOOR_ROUNDED),
+}
 _TRANSLATE = {3: K.translate3, 4: K.translate4}
 _TRANSLATE_OUTPUTS = {3: K.TRANSLATE3_OUTPUTS, 4: K.TRANSLATE4_OUTPUTS}
 _TRANSLATE_FLOOR = {3: K.TRANSLATE3_FLOOR, 4: K.TRANSLATE4_FLOOR}
@@ -58,38 +66,73 @@ HAT_DEGREE_WEIGHT: dict[tuple[int, str], tuple[int, int]] = {
 """(degree, weight) of each hat form: hs(mu * lambda^i a_i) = mu^deg lambda^weight hs(a)."""
 
 
+_TOL2 = float(SYMMETRY_TOLERANCE) ** 2
+
+
+def _prepare(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vectorised ``prepare{n}`` of :mod:`core._kernels` (same decisions, see kernelgen).
+
+    Returns (scaled symmetric matrices, exponents e with scaled = 2^e * sign * S, status) where
+    status is 1 (exactly symmetric), 2 (symmetric up to rounding: entries are rounded half sums)
+    or 0 (abstain).
+    """
+    with np.errstate(all="ignore"):
+        MT = np.swapaxes(M, 1, 2)
+        finite = np.isfinite(M).all(axis=(1, 2))
+        Mz = np.where(np.isfinite(M), M, 0.0)
+        q00 = Mz[:, 0, 0]
+        mx = np.abs(Mz).max(axis=(1, 2))
+        _, e = np.frexp(np.where(mx > 0, mx, 1.0))
+        keep = (mx >= float(NO_SCALE_MIN)) & (mx <= float(LEAF_MAX))
+        e = np.where(keep, 1, e)  # no rescaling when already in range: f = +-1
+        # exact power-of-two scaling (ldexp of each entry: 2^(1-e) itself may be no float)
+        X = np.ldexp(Mz * np.where(q00 < 0, -1.0, 1.0)[:, None, None], (1 - e)[:, None, None])
+        XT = np.swapaxes(X, 1, 2)
+        sym = (Mz == np.swapaxes(Mz, 1, 2)).all(axis=(1, 2))
+        m = np.maximum(np.abs(X).max(axis=2), np.abs(X).max(axis=1))  # row/column scales
+        d = np.abs(X - XT)
+        r = _TOL2 * m[:, :, None] * m[:, None, :]
+        within = (MT == M) | ((r >= 2.0**-1000) & (d * d * (1 + 2.0**-48) <= r * (1 - 2.0**-48)))
+        near = within.all(axis=(1, 2))
+        S = np.where(sym[:, None, None], X, X * 0.5 + XT * 0.5)
+    status = np.where(finite & (q00 != 0), np.where(sym, 1, np.where(near, 2, 0)), 0).astype(np.int8)
+    return S, 1 - e, status
+
+
 class _Prepared:
-    """Pairs flipped to negative interiors and scaled by 2^-ea, 2^-eb (exact), with abstentions."""
+    """Pairs flipped to negative interiors, symmetrised and scaled by 2^-ea, 2^-eb (exact)."""
 
     def __init__(self, a: np.ndarray, b: np.ndarray) -> None:
-        ok = np.isfinite(a).all(axis=(1, 2)) & np.isfinite(b).all(axis=(1, 2))
-        ok &= (a == np.swapaxes(a, 1, 2)).all(axis=(1, 2)) & (b == np.swapaxes(b, 1, 2)).all(axis=(1, 2))
-        scaled, exps = [], []
-        for M in (a, b):
-            M = np.where(np.isfinite(M), M, 0.0)
-            q00 = M[:, 0, 0]
-            ok &= q00 != 0
-            M = M * np.where(q00 < 0, -1.0, 1.0)[:, None, None]  # exact: normalise interior sign
-            mx = np.abs(M).max(axis=(1, 2))
-            _, e = np.frexp(np.where(mx > 0, mx, 1.0))
-            M = np.ldexp(M, (1 - e)[:, None, None])  # exact: largest |entry| now in [1, 2)
-            scaled.append(M)
-            exps.append(1 - e)
-        self.a, self.b = scaled
-        self.ea, self.eb = exps
-        """Scaled matrix = 2^ea * A (after the sign flip)."""
-        self.ok = ok
+        self.a, self.ea, sa = _prepare(a)
+        self.b, self.eb, sb = _prepare(b)
+        """Scaled matrix = 2^ea * (symmetric part of A) after the sign flip."""
+        self.ok = (sa > 0) & (sb > 0)
+        self.rounded = (sa == 2) | (sb == 2)
+        """Pairs whose entries are rounded half sums (leaf_K = 1 constants apply)."""
+        self.radius_a = np.where((sa == 2)[:, None, None], np.abs(self.a) * 2.0**-52 + 2.0**-1073, 0.0)
+        self.radius_b = np.where((sb == 2)[:, None, None], np.abs(self.b) * 2.0**-52 + 2.0**-1073, 0.0)
+        """Radius of each prepared entry (0 when exact)."""
 
 
-def _run_pencil(a: np.ndarray, b: np.ndarray) -> dict[str, tuple[Any, Any]]:
-    """name -> (value, certified error bound) of every pencil output, for arrays (N, n, n)."""
-    fn, outputs, consts, floor = _PENCIL[a.shape[-1]]
+def _run_pencil(a: np.ndarray, b: np.ndarray, rounded: np.ndarray | None = None) -> dict[str, tuple[Any, Any]]:
+    """Name -> (value, certified error bound) of every pencil output, for arrays (N, n, n).
+
+    ``rounded`` marks the pairs whose entries are rounded values (their own constants).
+    """
+    n = a.shape[-1]
+    fn, outputs, consts, floor = _PENCIL[n]
+    consts_r, floor_r = _PENCIL_ROUNDED[n]
     res = dict(zip(outputs, fn(np.moveaxis(a, 0, -1), np.moveaxis(b, 0, -1))))
-    return {
-        name: (res[name], c * res[name + "_M"] + floor)
-        for name, c in zip(outputs, consts)
-        if not name.endswith("_M")
-    }
+    out = {}
+    for name, c, cr in zip(outputs, consts, consts_r):
+        if name.endswith("_M"):
+            continue
+        if rounded is None or not rounded.any():
+            bound = c * res[name + "_M"] + floor
+        else:
+            bound = np.where(rounded, cr * res[name + "_M"] + floor_r, c * res[name + "_M"] + floor)
+        out[name] = (res[name], bound)
+    return out
 
 
 def _run_hat(n: int, which: str, vals: list[Any], radii: list[Any]) -> tuple[Any, Any]:
@@ -136,19 +179,20 @@ def _decide(out: dict[str, tuple[Any, Any]], ok: np.ndarray, n: int) -> np.ndarr
 
 
 def _classify_chunk(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    prep = _Prepared(a, b)
-    return _decide(_run_pencil(prep.a, prep.b), prep.ok, a.shape[-1])
+    with np.errstate(all="ignore"):  # non-finite intermediate values only make the filter abstain
+        prep = _Prepared(a, b)
+        return _decide(_run_pencil(prep.a, prep.b, prep.rounded), prep.ok, a.shape[-1])
 
 
 _TINY_RADIUS = 2.0**-1073
 """Covers an exact power-of-two rescaling that lands in the subnormal range (error <= 2^-1075)."""
 
 
-def _translated(M: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _translated(M: np.ndarray, Mr: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Values and certified radii of G^T M G (origin moved to t), rescaled so |v| + r < 2."""
     n = M.shape[-1]
     fn = _TRANSLATE[n]
-    res = fn(np.moveaxis(M, 0, -1), np.moveaxis(t, 0, -1))
+    res = fn(np.moveaxis(M, 0, -1), np.moveaxis(Mr, 0, -1), np.moveaxis(t, 0, -1))
     outputs = _TRANSLATE_OUTPUTS[n]
     V = np.empty_like(M)
     R = np.empty_like(M)
@@ -183,8 +227,8 @@ def classify_translated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
             centre = np.array([_solve_or_nan(q, v) for q, v in zip(Q, m)]).reshape(-1, d)
     ok = prep.ok & np.isfinite(centre).all(axis=1) & (np.abs(centre) <= TRANSLATE_MAX).all(axis=1)
     centre = np.where(ok[:, None], centre, 0.0)  # any float vector is exact: it is the chosen t
-    VA, RA = _translated(prep.a, centre)
-    VB, RB = _translated(prep.b, centre)
+    VA, RA = _translated(prep.a, prep.radius_a, centre)
+    VB, RB = _translated(prep.b, prep.radius_b, centre)
     fn, floor = _PENCIL_RADIUS[n]
     res = fn(*(np.moveaxis(X, 0, -1) for X in (VA, RA, VB, RB)))
     outputs = _PENCIL_RADIUS_OUTPUTS[n]
@@ -260,9 +304,10 @@ def explain_float(A: Any, B: Any) -> Any:
     if a.ndim != 2 or a.shape != b.shape or a.shape[0] not in (3, 4) or a.shape[0] != a.shape[1]:
         return None
     n = a.shape[0]
-    prep = _Prepared(a[None], b[None])
-    out = _run_pencil(prep.a, prep.b)
-    code = _decide(out, prep.ok, n)[0]  # the same values the explanation shows decide
+    with np.errstate(all="ignore"):  # non-finite intermediate values only make the filter abstain
+        prep = _Prepared(a[None], b[None])
+        out = _run_pencil(prep.a, prep.b, prep.rounded)
+        code = _decide(out, prep.ok, n)[0]  # the same values the explanation shows decide
     if code == Relation.UNDECIDED:
         return None
     ea, eb = int(prep.ea[0]), int(prep.eb[0])
@@ -270,11 +315,23 @@ def explain_float(A: Any, B: Any) -> Any:
     def back(x: float, i: int) -> float:  # a_i(scaled) = 2^(i ea + (n - i) eb) a_i(true)
         return float(np.ldexp(x, -(i * ea + (n - i) * eb)))
 
+    def quantity(name: str, v: float, bd: float, e: int, s: int | None) -> Quantity | None:
+        """V * 2^e with bound bd * 2^e; None if either leaves the normal float range."""
+        with np.errstate(all="ignore"):
+            val, bound = float(np.ldexp(v, e)), float(np.ldexp(bd, e))
+        if not (math.isfinite(val) and math.isfinite(bound)) or (val == 0.0) != (v == 0.0):
+            return None
+        exact_value = to_fmpq(v) * (fmpq(2) ** e if e >= 0 else fmpq(1, 2 ** (-e)))
+        return Quantity(name, val, None, bound, s, format_rational(exact_value))
+
     coeffs = []
     for i in range(n + 1):
         v, bd = (float(x[0]) for x in out[f"c{i}"])
         s = 1 if v > bd else (-1 if v < -bd else None)
-        coeffs.append(Quantity(f"a{i}", back(v, i), None, back(bd, i), s))
+        q = quantity(f"a{i}", v, bd, -(i * ea + (n - i) * eb), s)
+        if q is None:  # a value beyond the float range: the exact path shows it
+            return None
+        coeffs.append(q)
     var = sign_variations([q.sign or 0 for q in reversed(coeffs)])
     subs: dict[str, Any] = {}
     needed: list[str] = []
@@ -288,13 +345,18 @@ def explain_float(A: Any, B: Any) -> Any:
             deg, w = HAT_DEGREE_WEIGHT[(n, which)]
             # scaled a_i = mu lambda^i a_i with mu = 2^(n eb), lambda = 2^(ea - eb)
             e = -(n * eb * deg + (ea - eb) * w)
-            hv, hb = float(np.ldexp(hv, e)), float(np.ldexp(hb, e))
+            hv0, hb0 = float(hv[0] if np.ndim(hv) else hv), float(hb[0] if np.ndim(hb) else hb)
+            with np.errstate(all="ignore"):
+                hv, hb = float(np.ldexp(hv0, e)), float(np.ldexp(hb0, e))
             # s_j = -a_n c_j hs_j; a_n < 0 is certified, so sign(s_j) = sign(hs_j)
             factor = -an * float(scale)
-            s = 1 if hv > hb else (-1 if hv < -hb else None)
+            s = 1 if hv0 > hb0 else (-1 if hv0 < -hb0 else None)
             rel_an = coeffs[n].bound / abs(an) if an else float("inf")
+            value = factor * hv
             bound = abs(factor) * (hb + abs(hv) * rel_an) * (1 + 2.0**-40)
-            subs[which] = Quantity(which, factor * hv, None, bound, s)
+            if not (math.isfinite(value) and math.isfinite(bound)) or (value == 0.0) != (hv0 == 0.0):
+                return None
+            subs[which] = Quantity(which, value, None, bound, s, format_rational(to_fmpq(value)))
     rel = Relation(int(code))
     if var != 2:
         rule = "var"

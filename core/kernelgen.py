@@ -18,6 +18,7 @@ from typing import Any
 
 from .errorbound import LEAF_MAX, NO_SCALE_MIN, TRANSLATE_MAX, Kernel, build_kernel
 from .pencil import determinant, pencil_coefficients, poly_mul
+from .quadrics import SYMMETRY_TOLERANCE
 from .subresultants import hat_s0, hat_s1, hat_s10
 
 __all__ = [
@@ -55,12 +56,14 @@ def _row_bound_poly(A: list[list[Any]], B: list[list[Any]]) -> list[Any]:
 
 
 @cache
-def pencil_kernel(n: int) -> Kernel:
+def pencil_kernel(n: int, leaf_K: int = 0) -> Kernel:
     """Kernel ``pencil{n}(A, B)``: a_0..a_n and the validity minors, each with a ``_M`` bound.
 
     Outputs, in order: c0, c0_M, ..., cn, cn_M, dA2, dA2_M[, dA3, dA3_M], dB2, dB2_M[, dB3, dB3_M].
     ``x_M`` bounds the permanent of ``x`` (products of absolute row sums), so the error of ``x``
-    is at most ``constant * x_M`` (see :mod:`core.errorbound`).
+    is at most ``constant * x_M`` (see :mod:`core.errorbound`). ``leaf_K = 1`` gives the
+    constants for entries that are correctly rounded values (a matrix symmetrised in floats);
+    the source is the same.
     """
 
     def formula(L: dict[str, Any]) -> dict[str, Any]:
@@ -90,15 +93,17 @@ def pencil_kernel(n: int) -> Kernel:
         leaf_max={nm: Fraction(LEAF_MAX) for nm in names},
         leaf_exprs=exprs,
         params=["A", "B"],
+        leaf_K=leaf_K,
     )
 
 
 @cache
 def translate_kernel(n: int) -> Kernel:
-    """Kernel ``translate{n}(M, t)`` (midpoint-radius): upper triangle of G^T M G, G = [[I, t], [0, 1]].
+    """Kernel ``translate{n}(M, Mr, t)`` (midpoint-radius): upper triangle of G^T M G, G = [[I, t], [0, 1]].
 
     Moves the origin to the point t (both shapes of a pair get the same t: the relation is
-    invariant). Inputs are exact (radius 0); outputs carry certified radii. Leaves: entries of
+    invariant). Entries carry radii Mr (0 for exact inputs; a symmetrised matrix has rounded
+    entries); t is exact; outputs carry certified radii. Leaves: entries of
     the prepared matrix (|.| <= LEAF_MAX) and t (|t_i| <= TRANSLATE_MAX).
     """
     d = n - 1
@@ -124,12 +129,12 @@ def translate_kernel(n: int) -> Kernel:
         out[_leaf("m", d, d)] = last
         return out
 
-    exprs = {nm: (f"M[{nm[1]}, {nm[2]}]", "0.0") for nm in names if nm[0] == "m"}
+    exprs = {nm: (f"M[{nm[1]}, {nm[2]}]", f"Mr[{nm[1]}, {nm[2]}]") for nm in names if nm[0] == "m"}
     exprs.update({f"t{i}": (f"t[{i}]", "0.0") for i in range(d)})
     leaf_max = {nm: Fraction(LEAF_MAX) for nm in names if nm[0] == "m"}
     leaf_max.update({f"t{i}": Fraction(TRANSLATE_MAX) for i in range(d)})
     return build_kernel(
-        f"translate{n}", names, formula, style="radius", leaf_max=leaf_max, leaf_exprs=exprs, params=["M", "t"]
+        f"translate{n}", names, formula, style="radius", leaf_max=leaf_max, leaf_exprs=exprs, params=["M", "Mr", "t"]
     )
 
 
@@ -183,27 +188,56 @@ def subresultant_kernel(n: int, which: str) -> Kernel:
 def prepare_source(n: int) -> str:
     """Unrolled ``prepare{n}(M, out)``: validate cheaply, flip to a negative interior, scale.
 
-    Writes the upper triangle of ``f * M`` into ``out`` with f = +-1 when max|M_ij| already lies
-    in [NO_SCALE_MIN, LEAF_MAX], else f = +-2^k (exact) bringing it into [1, 2), so that every
-    entry is at most LEAF_MAX as :mod:`core.errorbound`'s bounds assume; returns False (abstain)
-    for NaN/inf, asymmetry or M_00 = 0 (the exact path then reports the error).
+    Writes the upper triangle of ``f * S`` into ``out``, S the symmetric part of M and f = +-1
+    when max|M_ij| already lies in [NO_SCALE_MIN, LEAF_MAX], else f = +-2^k (exact) bringing it
+    into [1, 2), so that every entry is at most LEAF_MAX as :mod:`core.errorbound`'s bounds
+    assume. Returns 1 when M is exactly symmetric (exact entries), 2 when it is symmetric up to
+    rounding (entries are the correctly rounded half sums: use the ``leaf_K = 1`` constants),
+    0 to abstain: NaN/inf, M_00 = 0, or an asymmetry that is not clearly within
+    :data:`core.quadrics.SYMMETRY_TOLERANCE` (the exact path then decides or reports the error).
+    The tolerance test is conservative: (d^2 (1 + 2^-48) <= tol^2 m_i m_j (1 - 2^-48), with
+    tol^2 m_i m_j >= 2^-1000) on the scaled values implies the exact rule.
     """
     idx = [(i, j) for i in range(n) for j in range(i, n)]
-    xs = [f"x{i}{j}" for i, j in idx]
+    off = [(i, j) for i, j in idx if i != j]
+    xs = [f"x{i}{j}" for i, j in idx] + [f"y{i}{j}" for i, j in off]
+    tol2 = float(SYMMETRY_TOLERANCE) ** 2
     L = [f"def prepare{n}(M, out):"]
     L += [f"    x{i}{j} = M[{i}, {j}]" for i, j in idx]
-    checks = ["(x00 == 0.0)"] + [f"(M[{j}, {i}] != x{i}{j})" for i, j in idx if i != j]
-    checks += [f"(x{i}{j} != x{i}{j})" for i, j in idx]
-    L.append("    bad = " + " | ".join(checks))
+    L += [f"    y{i}{j} = M[{j}, {i}]" for i, j in off]
+    L.append("    if (x00 == 0.0) | " + " | ".join(f"({x} != {x})" for x in xs) + ":")
+    L.append("        return 0")
     L.append("    mx = max(" + ", ".join(f"abs({x})" for x in xs) + ")")
-    L.append("    if bad or not mx <= 1.7976931348623157e308:")
-    L.append("        return False")
+    L.append("    if not mx <= 1.7976931348623157e308:")
+    L.append("        return 0")
     L.append("    f = -1.0 if x00 < 0.0 else 1.0")
     L.append(f"    if not ({float(NO_SCALE_MIN)!r} <= mx <= {float(LEAF_MAX)!r}):")
     L.append("        _, e = math.frexp(mx)")
-    L.append("        f = math.ldexp(f, 1 - e)")
-    L += [f"    out[{i}, {j}] = x{i}{j} * f" for i, j in idx]
-    L.append("    return True")
+    L.append("        k = 1 - e  # up to 1075 for subnormal entries: 2^k is no float, use two factors")
+    L.append("        g = math.ldexp(1.0, k - k // 2)")
+    L += [f"        {x} = {x} * g" for x in xs]
+    L.append("        f = math.ldexp(f, k // 2)")
+    L.append("    if " + " & ".join(f"(x{i}{j} == y{i}{j})" for i, j in off) + ":")
+    L += [f"        out[{i}, {j}] = x{i}{j} * f" for i, j in idx]
+    L.append("        return 1")
+    # symmetric up to rounding? row scales m_i of the scaled matrix (rows and columns)
+    for i in range(n):
+        row = [f"x{min(i, k)}{max(i, k)}" for k in range(n)] + [f"y{min(i, k)}{max(i, k)}" for k in range(n) if k != i]
+        L.append(f"    m{i} = max(" + ", ".join(f"abs({v})" for v in row) + ") * abs(f)")
+    conds = []
+    for i, j in off:
+        L.append(f"    d{i}{j} = abs(x{i}{j} * f - y{i}{j} * f)")
+        L.append(f"    r{i}{j} = {tol2!r} * m{i} * m{j}")
+        conds.append(
+            f"((x{i}{j} == y{i}{j}) | ((r{i}{j} >= 9.332636185032189e-302) & "
+            f"(d{i}{j} * d{i}{j} * 1.0000000000000036 <= r{i}{j} * 0.9999999999999964)))"
+        )
+    L.append("    if not (" + " & ".join(conds) + "):")
+    L.append("        return 0")
+    L.append("    h = 0.5 * f")
+    L += [f"    out[{i}, {i}] = x{i}{i} * f" for i in range(n)]
+    L += [f"    out[{i}, {j}] = x{i}{j} * h + y{i}{j} * h" for i, j in off]
+    L.append("    return 2")
     return "\n".join(L) + "\n"
 
 
@@ -224,6 +258,9 @@ def generate_module() -> str:
         parts.append(prepare_source(n))
         parts.append(f"PENCIL{n}_OUTPUTS = {k.outputs!r}")
         parts.append(f"PENCIL{n}_CONSTANTS = {tuple(float(c) for c in k.constants)!r}")
+        kr = pencil_kernel(n, leaf_K=1)
+        parts.append(f"PENCIL{n}_CONSTANTS_ROUNDED = {tuple(float(c) for c in kr.constants)!r}")
+        parts.append(f"PENCIL{n}_FLOOR_ROUNDED = {kr.underflow_floor!r}")
         parts.append(f"PENCIL{n}_FLOOR = {k.underflow_floor!r}")
         parts.append("")
         parts.append(k.source)
