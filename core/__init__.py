@@ -8,9 +8,10 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import classify_detailed                    # + which arithmetic certified each pair
     from core import analyse                              # moving pairs: events and intervals
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
-    from core import warm_up                              # compile the numba kernels early
+    from core import warm_up, set_threads                 # build the C kernels early; threads
 
-``core`` imports only numpy, python-flint, numba (optional) and the standard library.
+``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
+are compiled with the system's C compiler on first use, :mod:`core.compiled`).
 """
 
 from .classify import METHODS as METHODS
@@ -25,7 +26,8 @@ from .explain import Explanation as Explanation
 from .explain import Quantity as Quantity
 from .explain import explain as explain
 from .expressions import parse_expression as parse_expression
-from .fastpath import warm_up as warm_up
+from .compiled import set_threads as set_threads
+from .compiled import warm_up as warm_up
 from .motions import Motion as Motion
 from .motions import motion_from_dict as motion_from_dict
 from .motions import motion_to_dict as motion_to_dict
@@ -65,6 +67,7 @@ __all__ = [
     "preset_names",
     "quadric_from_axes",
     "rotation_from_quaternion",
+    "set_threads",
     "validate_quadric",
     "warm_up",
 ]

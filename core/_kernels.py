@@ -2,70 +2,12 @@
 
 Each ``pencil{n}(A, B)`` reads ``A[i, j]`` (a float, or an array of floats for many pairs) and
 returns the outputs listed in ``PENCIL{n}_OUTPUTS``; |error of x| <= constant * x_M + floor.
-Each ``hat_{s}_{n}(c, cr)`` takes values and error radii of a_0..a_n and returns (value, radius);
-|error| <= radius * RADIUS_FACTOR + floor. See core/errorbound.py for the proofs.
+The midpoint-radius kernels (``hat_{s}_{n}``, ``translate{n}``, ``pencil_radius{n}``,
+``pencil_at{n}``, ``form{n}``) return values and radii; |error| <= radius * RADIUS_FACTOR + floor.
+See core/errorbound.py for the proofs; core/_kernels.c holds the same kernels in C.
 """
 
 # ruff: noqa
-import math
-
-def prepare3(M, out):
-    x00 = M[0, 0]
-    x01 = M[0, 1]
-    x02 = M[0, 2]
-    x11 = M[1, 1]
-    x12 = M[1, 2]
-    x22 = M[2, 2]
-    y01 = M[1, 0]
-    y02 = M[2, 0]
-    y12 = M[2, 1]
-    if (x00 == 0.0) | (x00 != x00) | (x01 != x01) | (x02 != x02) | (x11 != x11) | (x12 != x12) | (x22 != x22) | (y01 != y01) | (y02 != y02) | (y12 != y12):
-        return 0
-    mx = max(abs(x00), abs(x01), abs(x02), abs(x11), abs(x12), abs(x22), abs(y01), abs(y02), abs(y12))
-    if not mx <= 1.7976931348623157e308:
-        return 0
-    f = -1.0 if x00 < 0.0 else 1.0
-    if not (0.00390625 <= mx <= 256.0):
-        _, e = math.frexp(mx)
-        k = 1 - e  # up to 1075 for subnormal entries: 2^k is no float, use two factors
-        g = math.ldexp(1.0, k - k // 2)
-        x00 = x00 * g
-        x01 = x01 * g
-        x02 = x02 * g
-        x11 = x11 * g
-        x12 = x12 * g
-        x22 = x22 * g
-        y01 = y01 * g
-        y02 = y02 * g
-        y12 = y12 * g
-        f = math.ldexp(f, k // 2)
-    if (x01 == y01) & (x02 == y02) & (x12 == y12):
-        out[0, 0] = x00 * f
-        out[0, 1] = x01 * f
-        out[0, 2] = x02 * f
-        out[1, 1] = x11 * f
-        out[1, 2] = x12 * f
-        out[2, 2] = x22 * f
-        return 1
-    m0 = max(abs(x00), abs(x01), abs(x02), abs(y01), abs(y02)) * abs(f)
-    m1 = max(abs(x01), abs(x11), abs(x12), abs(y01), abs(y12)) * abs(f)
-    m2 = max(abs(x02), abs(x12), abs(x22), abs(y02), abs(y12)) * abs(f)
-    d01 = abs(x01 * f - y01 * f)
-    r01 = 9.094947017729282e-13 * m0 * m1
-    d02 = abs(x02 * f - y02 * f)
-    r02 = 9.094947017729282e-13 * m0 * m2
-    d12 = abs(x12 * f - y12 * f)
-    r12 = 9.094947017729282e-13 * m1 * m2
-    if not (((x01 == y01) | ((r01 >= 9.332636185032189e-302) & (d01 * d01 * 1.0000000000000036 <= r01 * 0.9999999999999964))) & ((x02 == y02) | ((r02 >= 9.332636185032189e-302) & (d02 * d02 * 1.0000000000000036 <= r02 * 0.9999999999999964))) & ((x12 == y12) | ((r12 >= 9.332636185032189e-302) & (d12 * d12 * 1.0000000000000036 <= r12 * 0.9999999999999964)))):
-        return 0
-    h = 0.5 * f
-    out[0, 0] = x00 * f
-    out[1, 1] = x11 * f
-    out[2, 2] = x22 * f
-    out[0, 1] = x01 * h + y01 * h
-    out[0, 2] = x02 * h + y02 * h
-    out[1, 2] = x12 * h + y12 * h
-    return 2
 
 PENCIL3_OUTPUTS = ('c0', 'c0_M', 'c1', 'c1_M', 'c2', 'c2_M', 'c3', 'c3_M', 'dA2', 'dA2_M', 'dB2', 'dB2_M')
 PENCIL3_CONSTANTS = (5.551115123125793e-16, 0.0, 7.771561172376113e-16, 0.0, 7.771561172376113e-16, 0.0, 5.551115123125793e-16, 0.0, 2.220446049250315e-16, 0.0, 2.220446049250315e-16, 0.0)
@@ -456,6 +398,82 @@ def pencil_radius3(A, Ar, B, Br):
     r88 = r86 + r87 + 2.220446049250313e-16 * abs(v88)
     return (v79, v80, v81, v82, v85, v88, r79, r80, r81, r82, r85, r88,)
 
+PENCIL_AT3_OUTPUTS = ('p',)
+PENCIL_AT3_FLOOR = 4.9386053663595506e-303
+
+def pencil_at3(c, cr, T):
+    v0 = c[0]
+    r0 = cr[0]
+    v1 = c[1]
+    r1 = cr[1]
+    v2 = c[2]
+    r2 = cr[2]
+    v3 = c[3]
+    r3 = cr[3]
+    v4 = T
+    r4 = 0.0
+    v5 = v3 * v4
+    r5 = abs(v3) * r4 + r3 * (abs(v4) + r4) + 2.220446049250313e-16 * abs(v5)
+    v6 = v5 + v2
+    r6 = r5 + r2 + 2.220446049250313e-16 * abs(v6)
+    v7 = v6 * v4
+    r7 = abs(v6) * r4 + r6 * (abs(v4) + r4) + 2.220446049250313e-16 * abs(v7)
+    v8 = v7 + v1
+    r8 = r7 + r1 + 2.220446049250313e-16 * abs(v8)
+    v9 = v8 * v4
+    r9 = abs(v8) * r4 + r8 * (abs(v4) + r4) + 2.220446049250313e-16 * abs(v9)
+    v10 = v9 + v0
+    r10 = r9 + r0 + 2.220446049250313e-16 * abs(v10)
+    return (v10, r10,)
+
+FORM3_OUTPUTS = ('q',)
+FORM3_FLOOR = 6.835430175000615e-305
+
+def form3(M, Mr, x):
+    v0 = M[0, 0]
+    r0 = Mr[0, 0]
+    v1 = M[0, 1]
+    r1 = Mr[0, 1]
+    v2 = M[0, 2]
+    r2 = Mr[0, 2]
+    v3 = M[1, 1]
+    r3 = Mr[1, 1]
+    v4 = M[1, 2]
+    r4 = Mr[1, 2]
+    v5 = M[2, 2]
+    r5 = Mr[2, 2]
+    v6 = x[0]
+    r6 = 0.0
+    v7 = x[1]
+    r7 = 0.0
+    v8 = v2 * 2.0
+    r8 = r2 * 2.0
+    v9 = v0 * v6
+    r9 = abs(v0) * r6 + r0 * (abs(v6) + r6) + 2.220446049250313e-16 * abs(v9)
+    v10 = v8 + v9
+    r10 = r8 + r9 + 2.220446049250313e-16 * abs(v10)
+    v11 = v10 * v6
+    r11 = abs(v10) * r6 + r10 * (abs(v6) + r6) + 2.220446049250313e-16 * abs(v11)
+    v12 = v5 + v11
+    r12 = r5 + r11 + 2.220446049250313e-16 * abs(v12)
+    v13 = v4 * 2.0
+    r13 = r4 * 2.0
+    v14 = v1 * v6
+    r14 = abs(v1) * r6 + r1 * (abs(v6) + r6) + 2.220446049250313e-16 * abs(v14)
+    v15 = v14 * 2.0
+    r15 = r14 * 2.0
+    v16 = v13 + v15
+    r16 = r13 + r15 + 2.220446049250313e-16 * abs(v16)
+    v17 = v3 * v7
+    r17 = abs(v3) * r7 + r3 * (abs(v7) + r7) + 2.220446049250313e-16 * abs(v17)
+    v18 = v16 + v17
+    r18 = r16 + r17 + 2.220446049250313e-16 * abs(v18)
+    v19 = v18 * v7
+    r19 = abs(v18) * r7 + r18 * (abs(v7) + r7) + 2.220446049250313e-16 * abs(v19)
+    v20 = v12 + v19
+    r20 = r12 + r19 + 2.220446049250313e-16 * abs(v20)
+    return (v20, r20,)
+
 HAT_S0_3_FLOOR = 1.6328380290058883e-296
 
 def hat_s0_3(c, cr):
@@ -558,93 +576,6 @@ def hat_s10_3(c, cr):
     v7 = v5 - v6
     r7 = r5 + r6 + 2.220446049250313e-16 * abs(v7)
     return (v7, r7,)
-
-def prepare4(M, out):
-    x00 = M[0, 0]
-    x01 = M[0, 1]
-    x02 = M[0, 2]
-    x03 = M[0, 3]
-    x11 = M[1, 1]
-    x12 = M[1, 2]
-    x13 = M[1, 3]
-    x22 = M[2, 2]
-    x23 = M[2, 3]
-    x33 = M[3, 3]
-    y01 = M[1, 0]
-    y02 = M[2, 0]
-    y03 = M[3, 0]
-    y12 = M[2, 1]
-    y13 = M[3, 1]
-    y23 = M[3, 2]
-    if (x00 == 0.0) | (x00 != x00) | (x01 != x01) | (x02 != x02) | (x03 != x03) | (x11 != x11) | (x12 != x12) | (x13 != x13) | (x22 != x22) | (x23 != x23) | (x33 != x33) | (y01 != y01) | (y02 != y02) | (y03 != y03) | (y12 != y12) | (y13 != y13) | (y23 != y23):
-        return 0
-    mx = max(abs(x00), abs(x01), abs(x02), abs(x03), abs(x11), abs(x12), abs(x13), abs(x22), abs(x23), abs(x33), abs(y01), abs(y02), abs(y03), abs(y12), abs(y13), abs(y23))
-    if not mx <= 1.7976931348623157e308:
-        return 0
-    f = -1.0 if x00 < 0.0 else 1.0
-    if not (0.00390625 <= mx <= 256.0):
-        _, e = math.frexp(mx)
-        k = 1 - e  # up to 1075 for subnormal entries: 2^k is no float, use two factors
-        g = math.ldexp(1.0, k - k // 2)
-        x00 = x00 * g
-        x01 = x01 * g
-        x02 = x02 * g
-        x03 = x03 * g
-        x11 = x11 * g
-        x12 = x12 * g
-        x13 = x13 * g
-        x22 = x22 * g
-        x23 = x23 * g
-        x33 = x33 * g
-        y01 = y01 * g
-        y02 = y02 * g
-        y03 = y03 * g
-        y12 = y12 * g
-        y13 = y13 * g
-        y23 = y23 * g
-        f = math.ldexp(f, k // 2)
-    if (x01 == y01) & (x02 == y02) & (x03 == y03) & (x12 == y12) & (x13 == y13) & (x23 == y23):
-        out[0, 0] = x00 * f
-        out[0, 1] = x01 * f
-        out[0, 2] = x02 * f
-        out[0, 3] = x03 * f
-        out[1, 1] = x11 * f
-        out[1, 2] = x12 * f
-        out[1, 3] = x13 * f
-        out[2, 2] = x22 * f
-        out[2, 3] = x23 * f
-        out[3, 3] = x33 * f
-        return 1
-    m0 = max(abs(x00), abs(x01), abs(x02), abs(x03), abs(y01), abs(y02), abs(y03)) * abs(f)
-    m1 = max(abs(x01), abs(x11), abs(x12), abs(x13), abs(y01), abs(y12), abs(y13)) * abs(f)
-    m2 = max(abs(x02), abs(x12), abs(x22), abs(x23), abs(y02), abs(y12), abs(y23)) * abs(f)
-    m3 = max(abs(x03), abs(x13), abs(x23), abs(x33), abs(y03), abs(y13), abs(y23)) * abs(f)
-    d01 = abs(x01 * f - y01 * f)
-    r01 = 9.094947017729282e-13 * m0 * m1
-    d02 = abs(x02 * f - y02 * f)
-    r02 = 9.094947017729282e-13 * m0 * m2
-    d03 = abs(x03 * f - y03 * f)
-    r03 = 9.094947017729282e-13 * m0 * m3
-    d12 = abs(x12 * f - y12 * f)
-    r12 = 9.094947017729282e-13 * m1 * m2
-    d13 = abs(x13 * f - y13 * f)
-    r13 = 9.094947017729282e-13 * m1 * m3
-    d23 = abs(x23 * f - y23 * f)
-    r23 = 9.094947017729282e-13 * m2 * m3
-    if not (((x01 == y01) | ((r01 >= 9.332636185032189e-302) & (d01 * d01 * 1.0000000000000036 <= r01 * 0.9999999999999964))) & ((x02 == y02) | ((r02 >= 9.332636185032189e-302) & (d02 * d02 * 1.0000000000000036 <= r02 * 0.9999999999999964))) & ((x03 == y03) | ((r03 >= 9.332636185032189e-302) & (d03 * d03 * 1.0000000000000036 <= r03 * 0.9999999999999964))) & ((x12 == y12) | ((r12 >= 9.332636185032189e-302) & (d12 * d12 * 1.0000000000000036 <= r12 * 0.9999999999999964))) & ((x13 == y13) | ((r13 >= 9.332636185032189e-302) & (d13 * d13 * 1.0000000000000036 <= r13 * 0.9999999999999964))) & ((x23 == y23) | ((r23 >= 9.332636185032189e-302) & (d23 * d23 * 1.0000000000000036 <= r23 * 0.9999999999999964)))):
-        return 0
-    h = 0.5 * f
-    out[0, 0] = x00 * f
-    out[1, 1] = x11 * f
-    out[2, 2] = x22 * f
-    out[3, 3] = x33 * f
-    out[0, 1] = x01 * h + y01 * h
-    out[0, 2] = x02 * h + y02 * h
-    out[0, 3] = x03 * h + y03 * h
-    out[1, 2] = x12 * h + y12 * h
-    out[1, 3] = x13 * h + y13 * h
-    out[2, 3] = x23 * h + y23 * h
-    return 2
 
 PENCIL4_OUTPUTS = ('c0', 'c0_M', 'c1', 'c1_M', 'c2', 'c2_M', 'c3', 'c3_M', 'c4', 'c4_M', 'dA2', 'dA2_M', 'dA3', 'dA3_M', 'dB2', 'dB2_M', 'dB3', 'dB3_M')
 PENCIL4_CONSTANTS = (1.1102230246251599e-15, 0.0, 1.3322676295501928e-15, 0.0, 1.554312234475225e-15, 0.0, 1.3322676295501928e-15, 0.0, 1.1102230246251599e-15, 0.0, 2.2204460492503155e-16, 0.0, 5.551115123125793e-16, 0.0, 2.2204460492503155e-16, 0.0, 5.551115123125793e-16, 0.0)
@@ -1801,6 +1732,120 @@ def pencil_radius4(A, Ar, B, Br):
     v312 = v307 + v311
     r312 = r307 + r311 + 2.220446049250313e-16 * abs(v312)
     return (v274, v275, v276, v277, v278, v281, v295, v298, v312, r274, r275, r276, r277, r278, r281, r295, r298, r312,)
+
+PENCIL_AT4_OUTPUTS = ('p',)
+PENCIL_AT4_FLOOR = 7.045942467882672e-294
+
+def pencil_at4(c, cr, T):
+    v0 = c[0]
+    r0 = cr[0]
+    v1 = c[1]
+    r1 = cr[1]
+    v2 = c[2]
+    r2 = cr[2]
+    v3 = c[3]
+    r3 = cr[3]
+    v4 = c[4]
+    r4 = cr[4]
+    v5 = T
+    r5 = 0.0
+    v6 = v4 * v5
+    r6 = abs(v4) * r5 + r4 * (abs(v5) + r5) + 2.220446049250313e-16 * abs(v6)
+    v7 = v6 + v3
+    r7 = r6 + r3 + 2.220446049250313e-16 * abs(v7)
+    v8 = v7 * v5
+    r8 = abs(v7) * r5 + r7 * (abs(v5) + r5) + 2.220446049250313e-16 * abs(v8)
+    v9 = v8 + v2
+    r9 = r8 + r2 + 2.220446049250313e-16 * abs(v9)
+    v10 = v9 * v5
+    r10 = abs(v9) * r5 + r9 * (abs(v5) + r5) + 2.220446049250313e-16 * abs(v10)
+    v11 = v10 + v1
+    r11 = r10 + r1 + 2.220446049250313e-16 * abs(v11)
+    v12 = v11 * v5
+    r12 = abs(v11) * r5 + r11 * (abs(v5) + r5) + 2.220446049250313e-16 * abs(v12)
+    v13 = v12 + v0
+    r13 = r12 + r0 + 2.220446049250313e-16 * abs(v13)
+    return (v13, r13,)
+
+FORM4_OUTPUTS = ('q',)
+FORM4_FLOOR = 1.5379717886589648e-304
+
+def form4(M, Mr, x):
+    v0 = M[0, 0]
+    r0 = Mr[0, 0]
+    v1 = M[0, 1]
+    r1 = Mr[0, 1]
+    v2 = M[0, 2]
+    r2 = Mr[0, 2]
+    v3 = M[0, 3]
+    r3 = Mr[0, 3]
+    v4 = M[1, 1]
+    r4 = Mr[1, 1]
+    v5 = M[1, 2]
+    r5 = Mr[1, 2]
+    v6 = M[1, 3]
+    r6 = Mr[1, 3]
+    v7 = M[2, 2]
+    r7 = Mr[2, 2]
+    v8 = M[2, 3]
+    r8 = Mr[2, 3]
+    v9 = M[3, 3]
+    r9 = Mr[3, 3]
+    v10 = x[0]
+    r10 = 0.0
+    v11 = x[1]
+    r11 = 0.0
+    v12 = x[2]
+    r12 = 0.0
+    v13 = v3 * 2.0
+    r13 = r3 * 2.0
+    v14 = v0 * v10
+    r14 = abs(v0) * r10 + r0 * (abs(v10) + r10) + 2.220446049250313e-16 * abs(v14)
+    v15 = v13 + v14
+    r15 = r13 + r14 + 2.220446049250313e-16 * abs(v15)
+    v16 = v15 * v10
+    r16 = abs(v15) * r10 + r15 * (abs(v10) + r10) + 2.220446049250313e-16 * abs(v16)
+    v17 = v9 + v16
+    r17 = r9 + r16 + 2.220446049250313e-16 * abs(v17)
+    v18 = v6 * 2.0
+    r18 = r6 * 2.0
+    v19 = v1 * v10
+    r19 = abs(v1) * r10 + r1 * (abs(v10) + r10) + 2.220446049250313e-16 * abs(v19)
+    v20 = v19 * 2.0
+    r20 = r19 * 2.0
+    v21 = v18 + v20
+    r21 = r18 + r20 + 2.220446049250313e-16 * abs(v21)
+    v22 = v4 * v11
+    r22 = abs(v4) * r11 + r4 * (abs(v11) + r11) + 2.220446049250313e-16 * abs(v22)
+    v23 = v21 + v22
+    r23 = r21 + r22 + 2.220446049250313e-16 * abs(v23)
+    v24 = v23 * v11
+    r24 = abs(v23) * r11 + r23 * (abs(v11) + r11) + 2.220446049250313e-16 * abs(v24)
+    v25 = v17 + v24
+    r25 = r17 + r24 + 2.220446049250313e-16 * abs(v25)
+    v26 = v8 * 2.0
+    r26 = r8 * 2.0
+    v27 = v2 * v10
+    r27 = abs(v2) * r10 + r2 * (abs(v10) + r10) + 2.220446049250313e-16 * abs(v27)
+    v28 = v27 * 2.0
+    r28 = r27 * 2.0
+    v29 = v26 + v28
+    r29 = r26 + r28 + 2.220446049250313e-16 * abs(v29)
+    v30 = v5 * v11
+    r30 = abs(v5) * r11 + r5 * (abs(v11) + r11) + 2.220446049250313e-16 * abs(v30)
+    v31 = v30 * 2.0
+    r31 = r30 * 2.0
+    v32 = v29 + v31
+    r32 = r29 + r31 + 2.220446049250313e-16 * abs(v32)
+    v33 = v7 * v12
+    r33 = abs(v7) * r12 + r7 * (abs(v12) + r12) + 2.220446049250313e-16 * abs(v33)
+    v34 = v32 + v33
+    r34 = r32 + r33 + 2.220446049250313e-16 * abs(v34)
+    v35 = v34 * v12
+    r35 = abs(v34) * r12 + r34 * (abs(v12) + r12) + 2.220446049250313e-16 * abs(v35)
+    v36 = v25 + v35
+    r36 = r25 + r35 + 2.220446049250313e-16 * abs(v36)
+    return (v36, r36,)
 
 HAT_S0_4_FLOOR = 2.0447461985229254e-258
 

@@ -100,7 +100,7 @@ def test_numpy_built_batches_stay_in_the_float_filter():
         assert np.count_nonzero(res.certified_by == Certifier.FLOAT) >= 190
         for i in range(0, 200, 23):
             assert res.relation[i] == Relation[oracle_relation(A[i], B[i]).upper()]
-        # the numpy filter (used while numba compiles) takes the same decisions
+        # the numpy filter (no compiler, or while the C kernels build) takes the same decisions
         from core.filters import classify_float_numpy
 
         codes = classify_float_numpy(A, B)
