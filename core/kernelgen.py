@@ -512,7 +512,8 @@ def _fast_prep_c(n: int) -> str:
     """C statements of ``fast{n}``'s branch-free prepare of both matrices into wa, wb."""
     idx = [(i, j) for i in range(n) for j in range(i, n)]
     off = [(i, j) for i, j in idx if i != j]
-    tol2 = float(SYMMETRY_TOLERANCE) ** 2
+    tol_lo = float(SYMMETRY_TOLERANCE) * (1 - 2.0**-50)  # exact: 2^-20 - 2^-70
+    assert Fraction(tol_lo) == SYMMETRY_TOLERANCE * (1 - Fraction(1, 2**50))
     L = []
     for M, w in (("a", "a"), ("b", "b")):
         xs = [f"{M}x{i}{j}" for i, j in idx] + [f"{M}y{i}{j}" for i, j in off]
@@ -528,17 +529,15 @@ def _fast_prep_c(n: int) -> str:
             + ";"
         )
         L.append(f"    const int sym{w} = " + " & ".join(f"({M}x{i}{j} == {M}y{i}{j})" for i, j in off) + ";")
-        for i in range(n):
-            row = [f"{M}x{min(i, k)}{max(i, k)}" for k in range(n)] + [f"{M}y{min(i, k)}{max(i, k)}" for k in range(n) if k != i]
-            L.append(f"    double {M}m{i} = 0.0;")
-            L += [f"    {M}m{i} = fabs({v}) > {M}m{i} ? fabs({v}) : {M}m{i};" for v in row]
+        # a cheaper sufficient test than prepare's: |x - y| <= tol max(|x|, |y|) implies
+        # (x - y)^2 <= tol^2 m_i m_j (both m_i and m_j are >= max(|x|, |y|)); rounding covered
         conds = []
         for i, j in off:
-            L.append(f"    const double {M}d{i}{j} = fabs({M}x{i}{j} * {M}f - {M}y{i}{j} * {M}f);")
-            L.append(f"    const double {M}r{i}{j} = {tol2!r} * {M}m{i} * {M}m{j};")
+            x, y = f"{M}x{i}{j}", f"{M}y{i}{j}"
+            L.append(f"    const double {M}e{i}{j} = fabs({x}) > fabs({y}) ? fabs({x}) : fabs({y});")
             conds.append(
-                f"(({M}x{i}{j} == {M}y{i}{j}) | (({M}r{i}{j} >= 9.332636185032189e-302) & "
-                f"({M}d{i}{j} * {M}d{i}{j} * 1.0000000000000036 <= {M}r{i}{j} * 0.9999999999999964)))"
+                f"(({x} == {y}) | (({M}e{i}{j} >= 1e-270) & "
+                f"(fabs({x} - {y}) * {1 + 2.0**-50!r} <= {M}e{i}{j} * {tol_lo!r})))"
             )
         L.append(f"    const int near{w} = " + " & ".join(conds) + ";")
         L += [f"    w{w}[{i * n + i}] = {M}x{i}{i} * {M}f;" for i in range(n)]
