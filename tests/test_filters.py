@@ -121,6 +121,8 @@ def test_compiled_numpy_and_single_pair_paths_agree(n):
     B[6, 0, 1] += 1e-3  # not symmetric
     A[7, 1, 1] = np.nan
     B[8] = A[8]  # identical
+    A[9:60:3] *= 10.0 ** rng.integers(-150, 150, (17, 1, 1))  # scaled: the fast path rescales too
+    B[10:60:7] *= 2.0**-1040  # subnormal entries: the one-pair path rescales
     SA, SB = _structured(rng, n, 120)
     A, B = np.concatenate([A, SA]), np.concatenate([B, SB])
     a = compiled.rules(A, B, threads=1)
