@@ -14,6 +14,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
 are compiled with the system's C compiler on first use, :mod:`core.compiled`).
 """
 
+from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes)
 from .classify import METHODS as METHODS
 from .classify import ON_INVALID as ON_INVALID
 from .classify import Certifier as Certifier
