@@ -10,8 +10,6 @@ the hash of its source (:mod:`core.compiled`).
 
 from __future__ import annotations
 
-import hashlib
-import math
 import re
 import sys
 from collections.abc import Sequence

@@ -30,9 +30,6 @@ sides (touch and leave); endpoint: tangent at a finite end of I."""
 _SIGN = {1: "+", 0: "0", -1: "-"}
 
 
-def _sgn(x: Any) -> int:
-    return (x > 0) - (x < 0)
-
 
 def _alg_dict(a: RealAlgebraic | None, digits: int) -> dict[str, Any] | None:
     if a is None:

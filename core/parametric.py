@@ -37,16 +37,13 @@ from .motions import as_motion
 from .pencil import determinant, pencil_coefficients
 from .qsqrt import QSqrtPoly
 from .quadrics import interior_sign, not_a_quadric_message
-from .rationals import to_fmpq
+from .rationals import sign, to_fmpq
 from .realroots import real_roots
 from .relation import Relation
 from .subresultants import hat_s0, hat_s1, hat_s10, hat_scale
 
 __all__ = ["analyse", "decide_at", "sign_row_at", "MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
 
-
-def _sgn(x: Any) -> int:
-    return (x > 0) - (x < 0)
 
 # -------------------------------------------------------------------------------------------
 # preparation: exact denominator-free matrices valid on I
@@ -117,18 +114,18 @@ def _polynomial_matrix(
                 f"(its {what} vanishes there)"
             )
     signs = [m.sign_at_rational(t0) for m in minors]  # constant on I: no root there
-    sign = interior_sign(signs[:k])
-    if sign is None:
+    orient = interior_sign(signs[:k])
+    if orient is None:
         raise ValueError(
             f"{name} is not an {shape} anywhere in {where} "
             f"(its quadratic part is indefinite: {not_a_quadric_message(name, k + 1).split('(')[-1].rstrip(')')})"
         )
-    if signs[k] * sign ** (k + 1) >= 0:  # det of the normalised matrix must be negative
+    if signs[k] * orient ** (k + 1) >= 0:  # det of the normalised matrix must be negative
         raise ValueError(f"{name} is not an {shape} anywhere in {where} (its determinant has the wrong sign: no real points)")
-    if sign < 0:
+    if orient < 0:
         P = [[-e for e in row] for row in P]
-    lam = den * sign  # P = lam * M, normalised on all of I
-    return P, lam * _sgn(lam(t0))  # |lam| on I: P = |lam| * (normalised M)
+    lam = den * orient  # P = lam * M, normalised on all of I
+    return P, lam * sign(lam(t0))  # |lam| on I: P = |lam| * (normalised M)
 
 
 def _canonical_pencil(a: list[QSqrtPoly], lamA: fmpq_poly, lamB: fmpq_poly, t0: fmpq) -> list[QSqrtPoly]:
@@ -157,8 +154,8 @@ def _canonical_pencil(a: list[QSqrtPoly], lamA: fmpq_poly, lamB: fmpq_poly, t0: 
         c = c.gcd(p.p).gcd(p.q)
     if c.is_zero():
         return out
-    cs = _sgn(c(t0))
-    if _sgn(L(t0)) < 0:
+    cs = sign(c(t0))
+    if sign(L(t0)) < 0:
         cs = -cs
     # divide by c (and flip by the sign of L / c on I); normalise the scale to integers
     res = [QSqrtPoly(p.p // c, p.q // c, p.d) * cs for p in out]
