@@ -16,7 +16,8 @@ from typing import Any
 
 from flint import fmpq
 
-from core.rationals import to_fmpq
+from core.limits import SERVER
+from core.rationals import parse_number, to_fmpq
 
 __all__ = [
     "ShapeState",
@@ -77,6 +78,8 @@ def parse_vector(text: Any, count: int | tuple[int, ...], what: str) -> tuple[Nu
                 if not math.isfinite(p):
                     raise ValueError(f"not finite: {p}")
                 out.append(p)
+            elif isinstance(p, str):  # typed text: the scene's edge limits (core.limits.SERVER)
+                out.append(parse_number(p, SERVER))
             else:
                 out.append(to_fmpq(p))
         except ValueError as e:
