@@ -25,6 +25,8 @@ from pydantic import (
 from core.limits import SERVER
 from core.rationals import parse_number
 
+from .json_body import OutOfRange
+
 __all__ = [
     "Number",
     "Matrix",
@@ -53,6 +55,8 @@ def checked_number(v: Any) -> int | float | str:
     """Check one JSON number or number string (value kept as given; core converts it exactly)."""
     if isinstance(v, bool):
         raise ValueError(f"a boolean is not a number: {v!r}")
+    if isinstance(v, OutOfRange):  # a JSON number a float cannot hold (app.api.json_body)
+        raise ValueError(v.message)
     if isinstance(v, int):
         if v and math.log10(abs(v)) >= MAX_INT_DIGITS:
             raise ValueError(f"integer too large (more than {MAX_INT_DIGITS} digits); send it as a string fraction")
