@@ -8,6 +8,7 @@ once from the certified relation looked up in the analysis; the panels follow at
 
 from __future__ import annotations
 
+import math
 import re
 import threading
 import time
@@ -65,7 +66,10 @@ class TimelineMixin:
                 return None
             lo, hi = model.interval_floats
             exact = None if isinstance(t, float) else t
-            t = float(t)
+            try:
+                t = float(t)
+            except OverflowError:  # a typed 1e400: beyond every float, clamped like any t outside
+                t = math.inf if t > 0 else -math.inf
             if not lo <= t <= hi:
                 t, exact = min(max(t, lo), hi), None
             self.state.t = t
