@@ -295,7 +295,7 @@ def _read_interval(text: str, limits: Limits | None = None) -> tuple[Any, Any]:
         except ValueError as e:
             raise MotionError(f"interval: {e}", "interval") from None
         try:
-            floats.append(float(q.p) / float(q.q))
+            floats.append(int(q.p) / int(q.q))  # correctly rounded, 0.0 for a tiny value
         except OverflowError:
             floats.append(math.inf)
         if not math.isfinite(floats[-1]):

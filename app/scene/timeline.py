@@ -75,11 +75,15 @@ class TimelineMixin:
             self.state.t = t
             self.state.t_exact = exact
             self.state.event = event
-            a, b = model.shapes_at(t)
-            self.state.shapes = {"A": a, "B": b}  # a drag from here starts where they are drawn
-            for name, sh in (("A", a), ("B", b)):
-                pos, wxyz, scale = sh.float_pose()
-                self.views[name].set_pose(pos, wxyz, scale)
+            try:
+                a, b = model.shapes_at(t)
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+                a = b = None  # not drawable in floats at this t (extreme coefficients): keep the last pose
+            if a is not None and b is not None:
+                self.state.shapes = {"A": a, "B": b}  # a drag from here starts where they are drawn
+                for name, sh in (("A", a), ("B", b)):
+                    pos, wxyz, scale = sh.float_pose()
+                    self.views[name].set_pose(pos, wxyz, scale)
             an = self.analysis
             if an is None:
                 self._set_relation(None)
@@ -87,13 +91,15 @@ class TimelineMixin:
                 return None
             relation = an.events[event - 1].relation if event is not None else an.relation_at(t if exact is None else exact)
             self._set_relation(relation)
-            if relation == str(Relation.TANGENT):
+            if a is None:  # the float matrices are not ellipses here: no contact point or plane
+                self._update_contact(None, None, None)
+            elif relation == str(Relation.TANGENT):
                 A, B = model.float_matrices(t)
                 coeffs = [{"approx": float(v)} for v in pencil_coefficients(A, B)]
                 self._update_contact(A, B, {"relation": relation, "coefficients": coeffs})
             else:
                 self._update_contact(None, None, None)
-            if self.show_plane.value or self._plane_on:
+            if a is not None and (self.show_plane.value or self._plane_on):
                 A, B = model.float_matrices(t)
                 self._update_plane(A, B, relation)
             if defer_panels:
