@@ -22,7 +22,7 @@ from core.rationals import to_fmpq
 from .budget import Budget
 from .schemas import ClassifyOut, PairItem, ShapeIn
 
-__all__ = ["bad_input", "quadric_input", "checked_pair", "classify_items"]
+__all__ = ["bad_input", "quadric_input", "checked_pair", "classify_items", "is_plain_pair"]
 
 
 @contextmanager
@@ -110,6 +110,15 @@ def _validated(a: Any, b: Any, where: str) -> None:
         )
 
 
+def is_plain_pair(pair: PairItem) -> bool:
+    """True for two matrices of JSON numbers (binary64 values): classifying such a pair is
+    bounded work (the float filter, at worst one exact classification of doubles)."""
+    return all(
+        isinstance(q, list) and all(type(v) is float or type(v) is int and abs(v) < _EXACT_FLOAT_INT for row in q for v in row)
+        for q in (pair.a, pair.b)
+    )
+
+
 def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
     """Both shapes as core input, validated (422 naming "a" or "b" otherwise)."""
     a, b = _converted(pair, where)
@@ -153,7 +162,10 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
             if na != nb or na not in (3, 4):
                 continue
             try:
-                got = classify(np.stack([mats[i][0] for i in idx]), np.stack([mats[i][1] for i in idx]), method="float")
+                if len(idx) == 1:  # one pair: core's per-pair kernel, no stacking
+                    got = np.array([classify(mats[idx[0]][0], mats[idx[0]][1], method="float")], dtype=np.int8)
+                else:
+                    got = classify(np.stack([mats[i][0] for i in idx]), np.stack([mats[i][1] for i in idx]), method="float")
             except ValueError:  # some pair is invalid: the pairs below name it, one by one
                 continue
             codes[idx] = got

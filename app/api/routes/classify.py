@@ -14,7 +14,7 @@ from fastapi import APIRouter, HTTPException, Request
 from core import explain as core_explain
 
 from ..budget import Budget, BudgetExceeded, Cancelled, budget_error, run_off_loop
-from ..convert import bad_input, checked_pair, classify_items
+from ..convert import bad_input, checked_pair, classify_items, is_plain_pair
 from ..deps import SettingsDep
 from ..json_body import JsonRoute
 from ..schemas import (
@@ -47,7 +47,10 @@ async def classify(body: ClassifyIn, request: Request, settings: SettingsDep) ->
         return classify_items(pairs, body.method, Budget(settings.request_budget_s, cancel), batch=batch)
 
     try:
-        out = await run_off_loop(request, work)
+        if not batch and is_plain_pair(pairs[0]):  # bounded (< 1 ms): no thread hop
+            out = work(threading.Event())
+        else:
+            out = await run_off_loop(request, work)
     except (BudgetExceeded, Cancelled) as e:
         raise budget_error(e, "send fewer pairs per request" if batch else "") from None
     return out if batch else out[0]
