@@ -167,7 +167,7 @@ class TimelineMixin:
         if self._syncing or self.model is None:
             return
         text = self.t_number.value.strip()
-        m = re.fullmatch(r"(?:α|alpha)\s*(\d+)", text, flags=re.IGNORECASE)
+        m = re.fullmatch(r"(?:α|alpha)\s*([0-9]+)", text, flags=re.IGNORECASE)
         if m is not None:  # "α1" / "alpha1": the exact event
             n_ev = len(self.analysis.events) if self.analysis else 0
             if not 1 <= int(m.group(1)) <= n_ev:
