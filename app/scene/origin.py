@@ -5,11 +5,12 @@ Browsers let any web page open a websocket to ``localhost``; the page's address 
 scene on their machine (and send it expensive input). Accepted:
 
 * no ``Origin`` header (scripts, tests, non-browser clients: a browser always sends one);
-* the scene's own pages: ``http(s)://HOST:PORT`` with the scene's port and, as HOST, a loopback
-  name (``localhost``, ``127.x.y.z``, ``[::1]``), the host the scene is bound to, this machine's
-  host name, or (when bound to all interfaces) the IP address the page itself was loaded from
-  (the ``Host`` header; names other than the machine's are not taken from it, as DNS
-  rebinding can point any name at this machine);
+* the scene's own pages: ``http(s)://HOST:PORT`` with the scene's PORT and a HOST that is a
+  loopback name (``localhost``, ``127.x.y.z``, ``[::1]``), the host the scene is bound to or this
+  machine's host name; or, for such a HOST or an IP address, HOST:PORT is the address the
+  handshake itself was sent to (its ``Host`` header: a page served through a port mapping,
+  ``docker run -p 9090:8080``, or on the machine's LAN address). Other names are never taken
+  from the ``Host`` header: DNS rebinding can point any name at this machine;
 * origins listed with ``python -m app serve --allow-origin URL`` (repeatable), e.g. a reverse
   proxy's public address.
 
@@ -31,7 +32,6 @@ from urllib.parse import urlsplit
 __all__ = ["OriginPolicy", "normalise_origin", "start_viser"]
 
 _DEFAULT_PORTS = {"http": 80, "https": 443}
-_WILDCARD_HOSTS = ("", "0.0.0.0", "::")
 _PATCH_LOCK = threading.Lock()
 
 
@@ -77,12 +77,18 @@ def _split(origin: str) -> tuple[str, str, int] | None:
     return scheme, parts.hostname.lower(), port if port is not None else _DEFAULT_PORTS[scheme]
 
 
-def _host_of(host_header: str | None) -> str | None:
-    """The host part of a ``Host`` header (no port, no brackets), lower case."""
+def _address_of(host_header: str | None, scheme: str) -> tuple[str, int] | None:
+    """(host, port) of a ``Host`` header (no brackets, lower case; the scheme's default port)."""
     if not host_header:
         return None
-    parts = urlsplit(f"//{host_header.strip()}")
-    return parts.hostname.lower() if parts.hostname else None
+    try:
+        parts = urlsplit(f"//{host_header.strip()}")
+        port = parts.port
+    except ValueError:
+        return None
+    if not parts.hostname:
+        return None
+    return parts.hostname.lower(), port if port is not None else _DEFAULT_PORTS[scheme]
 
 
 def _is_loopback(host: str) -> bool:
@@ -111,6 +117,10 @@ class OriginPolicy:
         [True, True, True]
         >>> [p.allows(o, "127.0.0.1:8080") for o in ("http://evil.example", "http://localhost:9999", "null")]
         [False, False, False]
+        >>> p.allows("http://localhost:9090", "localhost:9090")   # served through a port mapping
+        True
+        >>> p.allows("http://192.168.1.99:8080", "localhost:8080")  # another machine's page
+        False
     """
 
     def __init__(self, host: str, allowed: Iterable[str] = (), *, port: int | None = None) -> None:
@@ -134,14 +144,14 @@ class OriginPolicy:
         except ValueError:
             return False
         parsed = _split(origin)
-        if parsed is None or self.port is None:
+        if parsed is None:
             return False
-        _, host, port = parsed
-        if port != self.port:
-            return False
-        if _is_loopback(host) or host == self.host or host in self.machine_names:
+        scheme, host, port = parsed
+        ours = _is_loopback(host) or host == self.host or host in self.machine_names
+        if ours and port == self.port:
             return True
-        return self.host in _WILDCARD_HOSTS and _is_ip(host) and host == _host_of(host_header)
+        # the page's address is the one this handshake was sent to (port mapping, proxy on an IP)
+        return (ours or _is_ip(host)) and (host, port) == _address_of(host_header, scheme)
 
     def process_request(self, inner: Callable[..., Any] | None) -> Callable[..., Any]:
         """A ``websockets`` ``process_request`` hook: 403 for a refused handshake, else ``inner``."""
