@@ -339,6 +339,17 @@ def start_slow_analysis(s: Server) -> threading.Thread:
     raise AssertionError("the analysis did not start")
 
 
+def test_work_of_a_client_that_went_away_is_stopped(server):
+    """The client gives up after 1 s: its analysis worker is killed (was: ran to its budget)."""
+    with pytest.raises(httpx.ReadTimeout):
+        httpx.post(f"{server.api}/api/analyse", json=slow_motion(), timeout=httpx.Timeout(30, read=1.0))
+    t0 = time.monotonic()
+    while httpx.get(f"{server.api}/healthz").json()["analyses_running"] and time.monotonic() - t0 < 5:
+        time.sleep(0.05)
+    assert time.monotonic() - t0 < 3.0  # the slow analysis takes ~9 s here: it was stopped, not finished
+    assert wait_gone(job_processes(server.proc.pid), 2) == set()
+
+
 def test_sigterm_ends_a_running_analysis_and_exits_within_5_s():
     s = Server()
     try:
