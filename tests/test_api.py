@@ -763,3 +763,14 @@ def test_cancelled_job_is_killed():
     with pytest.raises(WorkerCancelled):
         pool.run(time.sleep, 30, timeout=60, cancel=cancel)
     assert time.monotonic() - t0 < 5 and pool.running == 0
+
+
+def test_an_app_serves_analyses_again_after_its_lifespan_restarts():
+    """Shutdown refuses jobs (the server is stopping); a new lifespan of the same app takes them again."""
+    app = create_api(ApiSettings())
+    body = {"a": unit_circle_moving("t"), "b": unit_circle_moving("-t"), "interval": ["-2", "2"]}
+    for _ in range(2):
+        with TestClient(app) as c:
+            r = c.post("/api/analyse", json=body)
+            assert r.status_code == 200 and [e["value"] for e in r.json()["events"]] == ["-1", "1"]
+    assert app.state.workers.closed

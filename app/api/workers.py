@@ -161,6 +161,14 @@ class WorkerPool:
         self._closed = False
         self.max_jobs = max_jobs
 
+    def start(self) -> None:
+        """Accept jobs (again) after :meth:`shutdown`.
+
+        An app's lifespan can run more than once (tests); a new pool accepts jobs already.
+        """
+        with self._lock:
+            self._closed = False
+
     @property
     def closed(self) -> bool:
         """True once :meth:`shutdown` ran: every new job is refused."""
