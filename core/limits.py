@@ -73,7 +73,7 @@ class Limits:
 
 LIBRARY = Limits(
     number_chars=None,
-    decimal_exponent=100_000,
+    decimal_exponent=10_000,
     expression_chars=2000,
     coefficient_bits=1_000_000,
     work_degree=256,
@@ -83,7 +83,7 @@ LIBRARY = Limits(
     sqrt_trial_primes=1000,
 )
 """Defaults of the library: a 1-million-bit coefficient (300,000 digits) is the most any
-arithmetic on text may build; a decimal exponent up to 100,000."""
+arithmetic on text may build; a decimal exponent up to 10,000 (ten times the server's)."""
 
 SERVER = Limits(
     number_chars=400,

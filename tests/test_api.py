@@ -642,7 +642,10 @@ def test_exponent_limit_at_the_edge_states_the_real_limit(client):
 
 
 def _classified_one_by_one(pairs, method):
-    """Reference for the batch: core.classify per pair, certified_by from method="float" first."""
+    """Reference for the batch: core.classify per pair, certified_by from method="float" first
+    (JSON numbers as a stack of one, like the batch's stacked call; strings as they are)."""
+    import numpy as np
+
     from core import Relation, classify
 
     out_ = []
@@ -650,10 +653,11 @@ def _classified_one_by_one(pairs, method):
         a, b = p["a"], p["b"]
         kind = "ellipse" if len(a) == 3 else "ellipsoid"
         plain = all(isinstance(v, int | float) for m in (a, b) for row in m for v in row)
-        if method != "exact" and plain:  # JSON numbers: the float filter sees them; strings: exact
-            import numpy as np
-
-            rel = classify(np.array(a, dtype=float)[None], np.array(b, dtype=float)[None], method="float")[0]
+        if method != "exact":
+            if plain:
+                rel = classify(np.array(a, dtype=float)[None], np.array(b, dtype=float)[None], method="float")[0]
+            else:
+                rel = classify(a, b, method="float")
             if rel != Relation.UNDECIDED:
                 out_.append(out(str(Relation(rel)), "float", kind, method))
                 continue

@@ -130,7 +130,8 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
     """Certified relation of each pair, with the arithmetic that certified it.
 
     One vectorised :func:`core.classify` call with ``method="float"`` per matrix size (3x3, 4x4)
-    on all float pairs, then exact rationals (``adaptive``, ``exact``) for the pairs the filter
+    on all float pairs (pairs of exact values get the filter one by one: core uses it when the
+    values are doubles), then exact rationals (``adaptive``, ``exact``) for the pairs the filter
     leaves undecided, one by one in request order, checking ``budget`` between pairs. A pair the
     filter decides is certified valid by it; the others are validated exactly, so an invalid
     pair gets a 422 naming it (``pairs[i]: b: ...``, the first such pair in order).
@@ -158,6 +159,14 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
         for i, m in enumerate(mats):
             if m is not None and isinstance(m[0], np.ndarray) and isinstance(m[1], np.ndarray):
                 groups.setdefault((m[0].shape[0], m[1].shape[0]), []).append(i)
+            elif m is not None:  # exact input: core's filter runs if its values are doubles ("1/2")
+                if i % 64 == 0:
+                    budget.check(f"while filtering pair {i} of {n}")
+                try:
+                    codes[i] = classify(m[0], m[1], method="float")
+                except ValueError:  # invalid: named below
+                    continue
+                by[i] = "float" if codes[i] != Relation.UNDECIDED else None
         for (na, nb), idx in groups.items():
             if na != nb or na not in (3, 4):
                 continue
