@@ -23,7 +23,7 @@ import math
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 __all__ = ["Limits", "LimitExceeded", "LIBRARY", "SERVER", "current", "using", "check_bits", "check_degree", "log2_ceil"]
 
@@ -85,17 +85,7 @@ LIBRARY = Limits(
 """Defaults of the library: a 1-million-bit coefficient (300,000 digits) is the most any
 arithmetic on text may build; a decimal exponent up to 10,000 (ten times the server's)."""
 
-SERVER = Limits(
-    number_chars=400,
-    decimal_exponent=1000,
-    expression_chars=2000,
-    coefficient_bits=20_000,
-    work_degree=256,
-    degree=16,
-    exponent=64,
-    depth=60,
-    sqrt_trial_primes=1000,
-)
+SERVER = replace(LIBRARY, number_chars=400, decimal_exponent=1000, coefficient_bits=20_000)
 """The HTTP API's and the scene's limits: numbers up to 400 characters with |exponent| <= 1000
 (beyond the float range by a margin), coefficients up to 20,000 bits (~6,000 digits) while a
 motion is parsed and its matrix built; the rest as in the library."""

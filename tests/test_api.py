@@ -558,11 +558,17 @@ class SleepyPool(WorkerPool):
         return super().run(time.sleep, 30, timeout=timeout)
 
 
-def test_slow_analysis_is_stopped_and_healthz_stays_responsive():
-    """A 30 s job under a 1 s budget is killed at 1 s; /healthz answers at once meanwhile."""
-    app = create_api(ApiSettings(time_budget_s=1.0, max_concurrent_analyses=1))
+def sleepy_app(**settings):
+    """An app with one analysis slot whose jobs all sleep 30 s, and that pool."""
+    app = create_api(ApiSettings(max_concurrent_analyses=1, **settings))
     pool = SleepyPool(1)
     app.dependency_overrides[get_workers] = lambda: pool
+    return app, pool
+
+
+def test_slow_analysis_is_stopped_and_healthz_stays_responsive():
+    """A 30 s job under a 1 s budget is killed at 1 s; /healthz answers at once meanwhile."""
+    app, pool = sleepy_app(time_budget_s=1.0)
     body = {"a": unit_circle_moving("t"), "b": unit_circle_moving("-t")}
     with TestClient(app) as c:
         result = {}
@@ -703,9 +709,7 @@ def test_batch_over_the_request_budget_is_503():
 
 def test_busy_is_answered_before_the_motion_is_read():
     """With the only slot taken, even a hostile motion gets 503 at once (nothing is parsed)."""
-    app = create_api(ApiSettings(max_concurrent_analyses=1, time_budget_s=5.0))
-    pool = SleepyPool(1)
-    app.dependency_overrides[get_workers] = lambda: pool
+    app, pool = sleepy_app(time_budget_s=5.0)
     hostile = {"a": unit_circle_moving("(t+1e999)^64*(t+2e999)^64/(t+1e999)^63"), "b": unit_circle_moving("-t")}
     with TestClient(app) as c:
         th = threading.Thread(target=lambda: c.post("/api/analyse", json={"a": unit_circle_moving("t"), "b": unit_circle_moving("-t")}))
