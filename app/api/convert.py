@@ -111,8 +111,11 @@ def _validated(a: Any, b: Any, where: str) -> None:
 
 
 def is_plain_pair(pair: PairItem) -> bool:
-    """True for two matrices of JSON numbers (binary64 values): classifying such a pair is
-    bounded work (the float filter, at worst one exact classification of doubles)."""
+    """True for two matrices of JSON numbers (binary64 values).
+
+    Classifying such a pair is bounded work: the float filter, at worst one exact
+    classification of doubles.
+    """
     return all(
         isinstance(q, list) and all(type(v) is float or type(v) is int and abs(v) < _EXACT_FLOAT_INT for row in q for v in row)
         for q in (pair.a, pair.b)
