@@ -2,9 +2,12 @@
 
 * ``python -m app``: start the scene (http://127.0.0.1:8080) and the API (http://127.0.0.1:8000)
   with defaults and print the URLs; the scene opens on Example 29 just before the first touch.
-* ``python -m app serve --host H --port SCENE_PORT --api-port P [--api-only] [--shared]``: the
-  same with options; uvicorn serves the API in the main thread, viser serves the scene from its
-  own thread; ``--shared`` is the presenter mode (one scene for every tab).
+* ``python -m app serve --host H --port SCENE_PORT --api-port P [--api-only] [--shared]
+  [--allow-origin URL ...]``: the same with options; uvicorn serves the API in the main thread,
+  viser serves the scene from its own thread; ``--shared`` is the presenter mode (one scene for
+  every tab); ``--allow-origin`` lets pages at another origin open scene sessions
+  (:mod:`app.scene.origin`). SIGTERM/SIGINT stop the running analyses and exit within seconds
+  (:mod:`app.lifecycle`).
 * ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png [--config file.json]
   [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly.
 """
@@ -27,6 +30,15 @@ def _port(text: str) -> int:
     if not 0 <= p <= 65535:
         raise argparse.ArgumentTypeError(f"port out of range 0..65535: {p}")
     return p
+
+
+def _origin(text: str) -> str:
+    from .scene.origin import normalise_origin
+
+    try:
+        return normalise_origin(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
 
 
 def _size(text: str) -> int:
@@ -67,6 +79,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--preset", default=None, help="preset the scene opens on (default example-29; 'none' for static shapes)")
     s.add_argument("--config", default=None, help="JSON configuration the scene opens on")
     s.add_argument("--shared", action="store_true", help="presenter mode: every tab sees and drives one scene")
+    s.add_argument(
+        "--allow-origin", action="append", default=[], type=_origin, metavar="URL",
+        help="also accept scene connections from pages at this origin, e.g. https://example.org "
+        "(repeatable; default: only the scene's own pages, and clients that send no Origin)",
+    )
 
     sh = sub.add_parser("screenshot", help="render a configuration to PNG with headless Chromium")
     sh.add_argument("--preset", default=None, help="motion preset, e.g. example-29 ('none' for static shapes)")
@@ -110,18 +127,21 @@ def config_from_args(args: argparse.Namespace) -> object:
 
 
 def _serve(args: argparse.Namespace) -> int:
-    import uvicorn
+    from .lifecycle import serve
 
     scene = None
     scene_url = None
     if not args.api_only:
         from .scene.server import start_scene
 
-        scene = start_scene(args.host, args.port, config_from_args(args), shared=args.shared)  # type: ignore[arg-type]
+        scene = start_scene(
+            args.host, args.port, config_from_args(args), shared=args.shared, allow_origins=args.allow_origin
+        )  # type: ignore[arg-type]
         scene_url = scene.url
         print(f"Scene (open in a browser): {scene_url}", flush=True)
     try:
         from .api import ApiSettings, create_api
+        from .api.budget import STOPPING
     except ImportError as e:
         if args.api_only:
             print(f"error: the API package is not available: {e}", file=sys.stderr)
@@ -132,10 +152,18 @@ def _serve(args: argparse.Namespace) -> int:
             scene.stop()
         return 0
     api = create_api(ApiSettings(scene_url=scene_url))
+
+    def stop_work() -> None:
+        """On SIGTERM/SIGINT: fail every request budget, kill the analysis workers (API, scene)."""
+        STOPPING.set()
+        api.state.workers.shutdown()
+        if scene is not None:
+            scene.cache.shutdown()
+
     shown = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
     print(f"API: http://{shown}:{args.api_port}/  (docs: http://{shown}:{args.api_port}/docs)", flush=True)
     try:
-        uvicorn.run(api, host=args.host, port=args.api_port, log_level="warning")
+        serve(api, args.host, args.api_port, stop_work)
     finally:
         if scene is not None:
             scene.stop()

@@ -27,8 +27,18 @@ from typing import Any
 
 from flint import fmpq, fmpq_poly
 
+from .limits import (
+    LIBRARY,
+    LimitExceeded,
+    Limits,
+    check_bits,
+    check_degree,
+    current,
+    log2_ceil,
+    using,
+)
 from .qsqrt import QSqrtPoly, squarefree_decomposition
-from .rationals import to_fmpq
+from .rationals import parse_number, to_fmpq
 
 __all__ = [
     "RationalFunction",
@@ -39,15 +49,14 @@ __all__ = [
     "MAX_DEPTH",
 ]
 
-MAX_EXPRESSION_CHARS = 2000
-"""Longest accepted expression text."""
-MAX_DEGREE = 16
+MAX_EXPRESSION_CHARS = LIBRARY.expression_chars
+"""Longest accepted expression text (library default; all limits: :mod:`core.limits`)."""
+MAX_DEGREE = LIBRARY.degree
 """Largest degree in t of the numerator or denominator of one entry, after simplification."""
-MAX_EXPONENT = 64
+MAX_EXPONENT = LIBRARY.exponent
 """Largest integer exponent after ``^``."""
-MAX_DEPTH = 60
+MAX_DEPTH = LIBRARY.depth
 """Deepest nesting of parentheses / unary signs (guards the recursion)."""
-_MAX_WORK_DEGREE = 256  # intermediate results (before cancellation) stay below this degree
 
 
 class RationalFunction:
@@ -55,6 +64,10 @@ class RationalFunction:
 
     Common factors in Q[t] of num's two parts and den are cancelled (a factor that only splits
     over Q(sqrt d) is not: ``(t - sqrt 2) / (t^2 - 2)`` keeps its denominator).
+
+    Every operation first bounds the size of its result from the sizes of its operands (bits
+    of a coefficient, degree) and raises :class:`core.limits.LimitExceeded` when that bound is
+    over :func:`core.limits.current` (the work is never started), then checks the actual result.
 
     Examples:
         >>> t = RationalFunction.variable()
@@ -65,24 +78,27 @@ class RationalFunction:
         '-1 + sqrt(2)'
     """
 
-    __slots__ = ("num", "den")
+    __slots__ = ("num", "den", "_bits")
 
     def __init__(self, num: QSqrtPoly, den: fmpq_poly | None = None) -> None:
         den = fmpq_poly([1]) if den is None else den
+        self._bits: int | None = None
         if den.is_zero():
             raise ValueError("division by zero")
         if num.is_zero():
             self.num, self.den = QSqrtPoly(0, 0, num.d), fmpq_poly([1])
             return
-        g = den.gcd(num.p) if num.q.is_zero() else den.gcd(num.p.gcd(num.q))
-        if g.degree() > 0:
-            den = den // g
-            num = QSqrtPoly(num.p // g, num.q // g, num.d)
+        if den.degree() > 0:
+            g = den.gcd(num.p) if num.q.is_zero() else den.gcd(num.p.gcd(num.q))
+            if g.degree() > 0:
+                den = den // g
+                num = QSqrtPoly(num.p // g, num.q // g, num.d)
         lc = den.coeffs()[-1]
         if lc != 1:
             den = den / lc
             num = QSqrtPoly(num.p / lc, num.q / lc, num.d)
         self.num, self.den = num, den
+        check_bits(self.bits())
 
     @classmethod
     def constant(cls, c: Any) -> RationalFunction:
@@ -96,15 +112,37 @@ class RationalFunction:
 
     @classmethod
     def sqrt(cls, c: Any) -> RationalFunction:
-        """sqrt(c) for a positive rational c, as k*sqrt(d) with d squarefree."""
+        """The square root of a positive rational c, as k*sqrt(d) (d = 1 or d > 1 not a square)."""
         c = to_fmpq(c)
         if c <= 0:
             raise ValueError(f"sqrt needs a positive number, got {c}")
-        k, d = squarefree_decomposition(int(c.p * c.q))
+        k, d = squarefree_decomposition(int(c.p * c.q), current().sqrt_trial_primes)
         # sqrt(p/q) = sqrt(p q) / q
         if d == 1:
             return cls(QSqrtPoly(fmpq(k, int(c.q))))
         return cls(QSqrtPoly(0, fmpq(k, int(c.q)), d))
+
+    # sizes -----------------------------------------------------------------------------------
+    def bits(self) -> int:
+        """Size of the largest coefficient: bits of numerator plus denominator (sqrt(d) included)."""
+        if self._bits is None:
+            b = max(_poly_bits(self.num.p), _poly_bits(self.den))
+            if not self.num.q.is_zero():
+                b = max(b, _poly_bits(self.num.q), self.num.d.bit_length())
+            self._bits = b
+        return self._bits
+
+    def _dbits(self, other: RationalFunction) -> int:
+        """Bits added by ``sqrt(d)^2 = d`` when two irrational parts are multiplied."""
+        if self.num.q.is_zero() or other.num.q.is_zero():
+            return 0
+        return self.num.d.bit_length()
+
+    @staticmethod
+    def _plan(bits: int, degree: int) -> None:
+        """Refuse an operation whose result may exceed the limits (before computing it)."""
+        check_degree(degree)
+        check_bits(bits)
 
     # arithmetic ------------------------------------------------------------------------------
     @staticmethod
@@ -118,7 +156,13 @@ class RationalFunction:
     def __add__(self, other: Any) -> RationalFunction:
         o = self._lift(other)
         if self.den == o.den:
+            self._plan(max(self.bits(), o.bits()) + 1, max(self.num.degree(), o.num.degree()))
             return RationalFunction(self.num + o.num, self.den)
+        terms = log2_ceil(min(self.den.degree(), o.den.degree()) + 1) + 1
+        self._plan(
+            self.bits() + o.bits() + terms,
+            max(self.num.degree() + o.den.degree(), o.num.degree() + self.den.degree(), self.den.degree() + o.den.degree()),
+        )
         return RationalFunction(self.num * o.den + o.num * self.den, self.den * o.den)
 
     __radd__ = __add__
@@ -134,6 +178,11 @@ class RationalFunction:
 
     def __mul__(self, other: Any) -> RationalFunction:
         o = self._lift(other)
+        terms = log2_ceil(min(max(self.degree(), 0), max(o.degree(), 0)) + 1) + 1
+        self._plan(
+            self.bits() + o.bits() + self._dbits(o) + terms,
+            max(self.num.degree() + o.num.degree(), self.den.degree() + o.den.degree()),
+        )
         return RationalFunction(self.num * o.num, self.den * o.den)
 
     __rmul__ = __mul__
@@ -142,6 +191,10 @@ class RationalFunction:
         """1 / self (the sqrt(d) part of the denominator is cleared with the conjugate)."""
         if self.num.is_zero():
             raise ValueError("division by zero (the divisor is identically 0)")
+        if self.num.q.is_zero():
+            return RationalFunction(QSqrtPoly(self.den), self.num.p)
+        terms = log2_ceil(max(self.num.degree(), 0) + 1) + 1
+        self._plan(2 * self.bits() + self._dbits(self) + terms, 2 * self.num.degree() + self.den.degree())
         conj = self.num.conj()
         return RationalFunction(conj * self.den, self.num.norm())
 
@@ -154,6 +207,9 @@ class RationalFunction:
     def __pow__(self, e: int) -> RationalFunction:
         if not isinstance(e, int) or e < 0:
             raise ValueError(f"exponent must be a non-negative integer, got {e!r}")
+        if e > 1:
+            per_factor = self.bits() + self._dbits(self) + log2_ceil(max(self.degree(), 0) + 1) + 1
+            self._plan(e * per_factor, e * max(self.degree(), 0))
         return RationalFunction(self.num**e, self.den**e)
 
     def __eq__(self, other: object) -> bool:
@@ -162,6 +218,12 @@ class RationalFunction:
 
     def __hash__(self) -> int:
         return hash((hash(self.num), str(self.den)))
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        """Pickle as (num, integer pairs of den): worker processes send parsed motions back."""
+        from .qsqrt import _pairs
+
+        return (_rf_from_parts, (self.num, _pairs(self.den)))
 
     # structure -------------------------------------------------------------------------------
     @property
@@ -197,6 +259,20 @@ class RationalFunction:
 
     def __repr__(self) -> str:
         return f"RationalFunction({self})"
+
+
+def _poly_bits(p: fmpq_poly) -> int:
+    """Bits of the largest integer numerator plus bits of the common denominator of p."""
+    if p.is_zero():
+        return 0
+    return int(p.numer().height_bits()) + int(p.denom().bit_length())
+
+
+def _rf_from_parts(num: QSqrtPoly, den: list[tuple[int, int]]) -> RationalFunction:
+    """Rebuild a pickled RationalFunction as it was (already reduced: no gcd, no limit check)."""
+    f = RationalFunction.__new__(RationalFunction)
+    f.num, f.den, f._bits = num, fmpq_poly([fmpq(a, b) for a, b in den]), None
+    return f
 
 
 def _eval_float(p: fmpq_poly, t: float) -> float:
@@ -292,8 +368,9 @@ def _tokenize(text: str) -> list[_Token]:
 
 
 class _Parser:
-    def __init__(self, text: str) -> None:
+    def __init__(self, text: str, limits: Limits) -> None:
         self.text = text
+        self.limits = limits
         self.tokens = _tokenize(text)
         self.i = 0
         self.depth = 0
@@ -311,12 +388,12 @@ class _Parser:
         hint = f" ({what})" if what else ""
         return ValueError(f"unexpected {shown} at position {tok.pos}: {self.text}{hint}")
 
-    def _check(self, f: RationalFunction, tok: _Token) -> RationalFunction:
-        if f.degree() > _MAX_WORK_DEGREE:
-            raise ValueError(
-                f"degree in t too high (> {_MAX_WORK_DEGREE}) near position {tok.pos}: {self.text}"
-            )
-        return f
+    def _at(self, tok: _Token, op: Any) -> RationalFunction:
+        """Run one step; a limit it would exceed is reported with the operator's position."""
+        try:
+            return op()
+        except LimitExceeded as e:
+            raise LimitExceeded(f"{e} at position {tok.pos}: {self.text}") from None
 
     def parse(self) -> RationalFunction:
         if self._peek().kind == "end":
@@ -332,7 +409,7 @@ class _Parser:
         while self._peek().kind == "op" and self._peek().text in "+-":
             tok = self._next()
             g = self._term()
-            f = self._check(f + g if tok.text == "+" else f - g, tok)
+            f = self._at(tok, lambda f=f, g=g, plus=tok.text == "+": f + g if plus else f - g)
         return f
 
     def _term(self) -> RationalFunction:
@@ -341,12 +418,11 @@ class _Parser:
             tok = self._next()
             g = self._unary()
             if tok.text == "*":
-                f = f * g
+                f = self._at(tok, lambda f=f, g=g: f * g)
             else:
                 if g.num.is_zero():
                     raise ValueError(f"division by zero at position {tok.pos}: {self.text}")
-                f = f / g
-            f = self._check(f, tok)
+                f = self._at(tok, lambda f=f, g=g: f / g)
         return f
 
     def _unary(self) -> RationalFunction:
@@ -361,8 +437,8 @@ class _Parser:
 
     def _enter(self, tok: _Token) -> None:
         self.depth += 1
-        if self.depth > MAX_DEPTH:
-            raise ValueError(f"expression nested too deeply (> {MAX_DEPTH}) at position {tok.pos}")
+        if self.depth > self.limits.depth:
+            raise LimitExceeded(f"expression nested too deeply (> {self.limits.depth}) at position {tok.pos}")
 
     def _power(self) -> RationalFunction:
         base = self._atom()
@@ -372,12 +448,11 @@ class _Parser:
             e = self._next()
             if e.kind != "num" or not all(c in _DIGITS for c in e.text):
                 raise self._error(e, "the exponent must be a non-negative integer")
-            k = int(e.text) if len(e.text) <= 6 else MAX_EXPONENT + 1
-            if k > MAX_EXPONENT:
-                raise ValueError(f"exponent {e.text} too large (max {MAX_EXPONENT}) at position {e.pos}")
-            if base.degree() * k > _MAX_WORK_DEGREE:
-                raise ValueError(f"degree in t too high (> {_MAX_WORK_DEGREE}) at position {e.pos}: {self.text}")
-            base = base**k
+            top = self.limits.exponent
+            k = int(e.text) if len(e.text) <= 6 else top + 1
+            if k > top:
+                raise LimitExceeded(f"exponent {e.text[:20]} too large (max {top}) at position {e.pos}")
+            base = self._at(tok, lambda: base**k)
             nxt = self._peek()
             if nxt.kind == "op" and nxt.text == "^":
                 raise self._error(nxt, "write (a^b)^c with parentheses")
@@ -387,9 +462,10 @@ class _Parser:
         tok = self._next()
         if tok.kind == "num":
             try:
-                return RationalFunction.constant(to_fmpq(tok.text))
+                value = parse_number(tok.text, self.limits)
             except ValueError as e:
-                raise ValueError(f"bad number {tok.text!r} at position {tok.pos}: {e}") from None
+                raise type(e)(f"bad number {tok.text[:40]!r} at position {tok.pos}: {e}") from None
+            return self._at(tok, lambda: RationalFunction.constant(value))
         if tok.kind == "t":
             return RationalFunction.variable()
         if tok.kind == "(":
@@ -418,17 +494,20 @@ class _Parser:
             c = inner.num.p.coeffs()[0] if inner.num.p.coeffs() else fmpq(0)
             if c <= 0:
                 raise ValueError(f"sqrt at position {tok.pos} of a non-positive number {c}: {self.text}")
-            return RationalFunction.sqrt(c)
+            return self._at(tok, lambda: RationalFunction.sqrt(c))
         raise self._error(tok, "expected a number, t, sqrt(...) or '('")
 
 
-def parse_expression(text: Any, *, max_degree: int = MAX_DEGREE) -> RationalFunction:
+def parse_expression(text: Any, *, max_degree: int | None = None, limits: Limits | None = None) -> RationalFunction:
     """Parse one expression in t into an exact :class:`RationalFunction`.
 
     Args:
         text: the expression (str); ints, fmpq and Fractions are accepted as constants, and
             floats as the exact binary rationals they are.
-        max_degree: largest allowed degree of numerator and denominator after simplification.
+        max_degree: largest allowed degree of numerator and denominator after simplification
+            (default ``limits.degree``).
+        limits: size limits (:mod:`core.limits`); default: those in force
+            (:data:`core.limits.LIBRARY` unless the caller set others).
 
     Returns:
         The reduced rational function (coefficients in Q, or Q(sqrt d) if sqrt appears).
@@ -437,7 +516,9 @@ def parse_expression(text: Any, *, max_degree: int = MAX_DEGREE) -> RationalFunc
         ValueError: empty or too long text, an unexpected character (message gives it and its
             0-based position), unbalanced parentheses, division by zero, an exponent that is not
             a small non-negative integer, sqrt of something other than a positive constant, two
-            different square roots, or a degree above ``max_degree``.
+            different square roots, a degree above ``max_degree``, or a size over ``limits``
+            (:class:`core.limits.LimitExceeded`, refused before the work is done: e.g.
+            "constant too large: about 2^297664 (297664 bits), limit 20000 bits at position 10").
 
     Examples:
         >>> str(parse_expression("(-8*t^2 + 8*t - 1)/(8*t^2 - 8*t + 3) * 2"))
@@ -449,17 +530,21 @@ def parse_expression(text: Any, *, max_degree: int = MAX_DEGREE) -> RationalFunc
         ...
         ValueError: unexpected 'x' at position 6: 3*t + x (allowed: numbers, t, + - * / ^, parentheses, sqrt(n))
     """
-    if isinstance(text, RationalFunction):
-        f = text
-    elif isinstance(text, str):
-        if len(text) > MAX_EXPRESSION_CHARS:
-            raise ValueError(f"expression too long ({len(text)} > {MAX_EXPRESSION_CHARS} characters)")
-        f = _Parser(text).parse()
-    else:
-        f = RationalFunction.constant(text)
-    if f.num.degree() > max_degree or f.den.degree() > max_degree:
+    lim = limits if limits is not None else current()
+    top = lim.degree if max_degree is None else max_degree
+    with using(lim):
+        if isinstance(text, RationalFunction):
+            f = text
+        elif isinstance(text, str):
+            if lim.expression_chars is not None and len(text) > lim.expression_chars:
+                raise LimitExceeded(f"expression too long ({len(text)} > {lim.expression_chars} characters)")
+            f = _Parser(text, lim).parse()
+        else:
+            f = RationalFunction.constant(text)
+    if f.num.degree() > top or f.den.degree() > top:
+        shown = text if not isinstance(text, str) or len(text) <= 80 else text[:80] + "..."
         raise ValueError(
-            f"degree in t too high: {max(f.num.degree(), f.den.degree())} > {max_degree} "
-            f"after simplification in {text!r}"
+            f"degree in t too high: {max(f.num.degree(), f.den.degree())} > {top} "
+            f"after simplification in {shown!r}"
         )
     return f

@@ -29,6 +29,7 @@ import numpy as np
 from flint import fmpq
 
 from .expressions import RationalFunction, parse_expression
+from .limits import Limits, using
 from .pencil import determinant
 from .quadrics import ShapeParams, axes_from_quadric
 from .rationals import to_fmpq
@@ -80,20 +81,24 @@ class Motion:
     """One moving ellipse/ellipsoid, kept as the source expressions (see the module docstring).
 
     Build it with :func:`motion_from_dict` or :func:`as_motion`; ``matrix()`` gives the exact
-    A(t) (cached).
+    A(t) (cached). A Motion pickles with its matrix: a worker process can parse user text under
+    a time budget and send the result back.
     """
 
     dim: int
     """2 (ellipse, 3x3 matrix) or 3 (ellipsoid, 4x4)."""
     source: dict[str, Any]
     """The normalised JSON form (expressions as strings); ``motion_to_dict`` returns a copy."""
+    limits: Limits | None = field(default=None, repr=False, compare=False)
+    """Size limits while the matrix is built (:mod:`core.limits`; None: those in force)."""
     _matrix: list[RFMatrix] = field(default_factory=list, repr=False, compare=False)
     _float_coeffs: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list, repr=False, compare=False)
 
     def matrix(self) -> RFMatrix:
         """A(t) exactly: (dim+1) x (dim+1) nested lists of :class:`RationalFunction`."""
         if not self._matrix:
-            self._matrix.append(_build_matrix(self.source, self.dim))
+            with using(self.limits):
+                self._matrix.append(_build_matrix(self.source, self.dim))
         return self._matrix[0]
 
     def float_coefficients(self) -> tuple[np.ndarray, np.ndarray]:
@@ -120,12 +125,17 @@ class Motion:
         return ds.pop() if ds else 1
 
 
-def motion_from_dict(data: Any) -> Motion:
+def motion_from_dict(data: Any, *, limits: Limits | None = None) -> Motion:
     """Read a motion from its JSON form (see the module docstring); validates everything.
+
+    Args:
+        data: the JSON form (or a Motion, returned as it is).
+        limits: size limits of the text and of the arithmetic building A(t)
+            (:mod:`core.limits`; default: those in force, :data:`core.limits.LIBRARY`).
 
     Raises:
         ValueError: unknown keys, wrong sizes, unparsable expressions, a non-symmetric matrix,
-            or different square roots.
+            different square roots, or a size over ``limits``.
 
     Examples:
         >>> m = motion_from_dict({"shape": {"center": [0, 0], "semi_axes": [1, 1]},
@@ -146,7 +156,7 @@ def motion_from_dict(data: Any) -> Motion:
             raise ValueError("'matrix' must be a 3x3 (ellipse) or 4x4 (ellipsoid) nested list")
         n = len(rows)
         src = {"matrix": [_vector(r, n, f"matrix row {i}") for i, r in enumerate(rows)]}
-        m = Motion(n - 1, src)
+        m = Motion(n - 1, src, limits)
         M = m.matrix()
         for i in range(n):
             for j in range(i + 1, n):
@@ -196,7 +206,7 @@ def motion_from_dict(data: Any) -> Motion:
             if isinstance(rows, str) or not isinstance(rows, Sequence) or len(rows) != dim:
                 raise ValueError(f"rotation.matrix must be {dim}x{dim}")
             src["rotation"] = {"matrix": [_vector(r, dim, f"rotation.matrix row {i}") for i, r in enumerate(rows)]}
-    m = Motion(dim, src)
+    m = Motion(dim, src, limits)
     m.sqrt_d()
     return m
 

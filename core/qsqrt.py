@@ -18,21 +18,43 @@ from flint import fmpq, fmpq_poly, fmpz, fmpz_poly
 __all__ = ["QSqrtPoly", "sign_qsqrt", "squarefree_decomposition"]
 
 
-def squarefree_decomposition(n: int) -> tuple[int, int]:
-    """Write a positive integer as ``k^2 * d`` with d squarefree; returns (k, d).
+def squarefree_decomposition(n: int, trial_primes: int | None = None) -> tuple[int, int]:
+    """Write a positive integer as ``k^2 * d`` with d not a perfect square; returns (k, d).
+
+    Prime factors are found by trial division with ``trial_primes`` primes (default
+    :data:`core.limits.LIBRARY`'s; never a full factorisation: a 100-digit semiprime would take
+    forever) plus what FLINT finds cheaply; a cofactor left over is tested for being a perfect
+    square. So d is squarefree except for square factors of primes beyond the trial bound, and
+    never a perfect square: ``sqrt(d)`` is irrational (d > 1), all that the arithmetic of
+    :class:`QSqrtPoly` needs.
 
     Examples:
         >>> squarefree_decomposition(8), squarefree_decomposition(4), squarefree_decomposition(2)
         ((2, 2), (2, 1), (1, 2))
+        >>> p = 10**30 + 57                                     # a prime beyond trial division
+        >>> squarefree_decomposition(3 * p**2) == (p, 3)
+        True
     """
     if n <= 0:
         raise ValueError(f"need a positive integer, got {n}")
-    k, d = 1, 1
-    for p, e in fmpz(n).factor():
-        k *= int(p) ** (int(e) // 2)
-        if int(e) % 2:
-            d *= int(p)
-    return k, d
+    if trial_primes is None:
+        from .limits import LIBRARY
+
+        trial_primes = LIBRARY.sqrt_trial_primes
+    k, d = fmpz(1), fmpz(1)
+    for p, exp in fmpz(n).factor(trial_limit=trial_primes):
+        e = int(exp)
+        k *= p ** (e // 2)
+        if e % 2:
+            r = p.isqrt()
+            if r * r == p:  # a composite cofactor that is a square
+                k *= r
+            else:
+                d *= p
+    r = d.isqrt()
+    if r * r == d:  # two composite factors whose product is a square
+        k, d = k * r, fmpz(1)
+    return int(k), int(d)
 
 
 def _sgn(x: Any) -> int:

@@ -16,44 +16,81 @@ from typing import Any
 import numpy as np
 from flint import fmpq, fmpz
 
-__all__ = ["to_fmpq", "to_float", "format_rational", "sign", "MAX_NUMBER_CHARS", "MAX_DECIMAL_EXPONENT"]
+from .limits import LIBRARY, LimitExceeded, Limits
 
-MAX_NUMBER_CHARS = 400
-"""Longest accepted number string (guards memory and time of a single conversion)."""
+__all__ = ["to_fmpq", "to_float", "format_rational", "sign", "parse_number", "MAX_DECIMAL_EXPONENT"]
 
-MAX_DECIMAL_EXPONENT = 1000
-"""Largest |e| accepted in "1.5e-e": beyond the float range by a margin, far below a DoS."""
+MAX_DECIMAL_EXPONENT = LIBRARY.decimal_exponent
+"""Largest |e| accepted in "1.5e<e>" by the library (:data:`core.limits.LIBRARY`): "1e999999999"
+would ask for a 3-billion-bit integer. A number string has no length limit here (its cost grows
+with its length, which the caller chose); the HTTP API and the scene cap it at their edge."""
 
 _NUMBER_RE = re.compile(
-    r"^\s*(?P<sign>[+-]?)(?P<int>\d*)(?:\.(?P<frac>\d*))?(?:[eE](?P<exp>[+-]?\d+))?"
-    r"(?:\s*/\s*(?P<den>\d+))?\s*$"
+    r"^\s*(?P<sign>[+-]?)(?P<int>[0-9]*)(?:\.(?P<frac>[0-9]*))?(?:[eE](?P<exp>[+-]?[0-9]+))?"
+    r"(?:\s*/\s*(?P<den>[0-9]+))?\s*$",
+    re.ASCII,  # only the digits 0-9: int() would also read fullwidth or Arabic-Indic digits
 )
+_EXP_DIGITS = 12
+"""Longest exponent read as an integer (longer ones are out of range for any limit)."""
 
 
-def _from_string(text: str) -> fmpq:
-    if len(text) > MAX_NUMBER_CHARS:
-        raise ValueError(f"number string too long ({len(text)} > {MAX_NUMBER_CHARS} characters)")
+def parse_number(text: str, limits: Limits | None = None) -> fmpq:
+    """Read an exact decimal or fraction ("3", "-0.25", "1e-3", "3/7", "2.5e3/7") as ``fmpq``.
+
+    Args:
+        text: the number string (ASCII digits only; surrounding spaces are ignored).
+        limits: size limits (default :data:`core.limits.LIBRARY`): ``number_chars`` (None: any
+            length) and ``decimal_exponent`` (the |e| written after "e").
+
+    Raises:
+        ValueError: not a number, a zero denominator, or over a limit (the message gives it).
+
+    Examples:
+        >>> parse_number("2.5e-3"), parse_number(" -3/7 ")
+        (1/400, -3/7)
+        >>> from core.limits import SERVER
+        >>> parse_number("1e1001", SERVER)
+        Traceback (most recent call last):
+        ...
+        core.limits.LimitExceeded: exponent out of range in '1e1001': |e| <= 1000 after 'e'
+    """
+    lim = limits or LIBRARY
+    if lim.number_chars is not None and len(text) > lim.number_chars:
+        raise LimitExceeded(f"number string too long ({len(text)} > {lim.number_chars} characters)")
     m = _NUMBER_RE.match(text)
     if m is None or (not m.group("int") and not m.group("frac")):
-        raise ValueError(f"not a number: {text!r} (expected e.g. '3', '-0.25', '1e-3' or '3/7')")
-    digits = (m.group("int") or "") + (m.group("frac") or "")
-    exp = int(m.group("exp") or 0) - len(m.group("frac") or "")
-    if abs(exp) > MAX_DECIMAL_EXPONENT + MAX_NUMBER_CHARS:
-        raise ValueError(f"exponent out of range in {text!r} (|e| <= {MAX_DECIMAL_EXPONENT})")
-    num = fmpz(int(digits or "0"))
+        raise ValueError(f"not a number: {_shown(text)} (expected e.g. '3', '-0.25', '1e-3' or '3/7')")
+    exp_text = m.group("exp") or "0"
+    written = int(exp_text) if len(exp_text.lstrip("+-").lstrip("0")) <= _EXP_DIGITS else None
+    if written is None or abs(written) > lim.decimal_exponent:
+        raise LimitExceeded(
+            f"exponent out of range in {_shown(text)}: |e| <= {lim.decimal_exponent} after 'e'"
+        )
+    frac = m.group("frac") or ""
+    digits = ((m.group("int") or "") + frac).lstrip("0")
+    exp = written - len(frac)
+    num = fmpz(digits) if digits else fmpz(0)
     if m.group("sign") == "-":
         num = -num
     den = fmpz(1)
     if m.group("den") is not None:
-        den = fmpz(int(m.group("den")))
+        den = fmpz(m.group("den"))
         if den == 0:
-            raise ValueError(f"zero denominator in {text!r}")
+            raise ValueError(f"zero denominator in {_shown(text)}")
     value = fmpq(num, den)
-    if exp > 0:
-        value *= fmpz(10) ** exp
-    elif exp < 0:
-        value /= fmpz(10) ** (-exp)
+    if num != 0:
+        if exp > 0:
+            value *= fmpz(10) ** exp
+        elif exp < 0:
+            value /= fmpz(10) ** (-exp)
     return value
+
+
+def _shown(text: str, limit: int = 60) -> str:
+    """The repr of the text, shortened in the middle when long (messages never echo a megabyte)."""
+    if len(text) <= limit:
+        return repr(text)
+    return repr(text[: limit // 2]) + f" ... ({len(text)} characters) ... " + repr(text[-limit // 4 :])
 
 
 def to_fmpq(x: Any) -> fmpq:
@@ -90,7 +127,7 @@ def to_fmpq(x: Any) -> fmpq:
     if isinstance(x, fmpz):
         return fmpq(x)
     if isinstance(x, str):
-        return _from_string(x)
+        return parse_number(x)
     if isinstance(x, Integral):
         return fmpq(int(x))
     if isinstance(x, np.floating):  # float16/32/longdouble: exact, never through float64

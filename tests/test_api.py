@@ -290,9 +290,13 @@ def test_huge_integer_and_long_string(client):
     assert (r.status_code, r.json()) == (422, {"detail": [err(["body", "pair", "b", "matrix", 2, 2], "Value error, number string too long (401 > 400 characters)")]})
 
 
-def test_deeply_nested_json_is_400_not_500(client):
-    r = post_raw(client, "/api/classify", "[" * 100_000 + "]" * 100_000)
-    assert (r.status_code, r.json()) == (400, {"detail": "There was an error parsing the body"})
+def test_deeply_nested_json_is_400_that_says_so(client):
+    nested = "JSON nested too deeply: the body has more levels of [ and { than the JSON reader allows (about 1000); the inputs of this API need at most 5"
+    for path in ("/api/classify", "/api/explain", "/api/analyse"):
+        r = post_raw(client, path, "[" * 100_000 + "]" * 100_000)
+        assert (r.status_code, r.json()) == (400, {"detail": nested})
+    r = post_raw(client, "/api/classify", '{"pairs": ' + "[" * 50 + "]" * 50 + "}")  # deep but readable
+    assert r.status_code == 422 and "nested" not in r.text
 
 
 def test_body_size_limit_declared_and_streamed():
@@ -556,11 +560,17 @@ class SleepyPool(WorkerPool):
         return super().run(time.sleep, 30, timeout=timeout)
 
 
-def test_slow_analysis_is_stopped_and_healthz_stays_responsive():
-    """A 30 s job under a 1 s budget is killed at 1 s; /healthz answers at once meanwhile."""
-    app = create_api(ApiSettings(time_budget_s=1.0, max_concurrent_analyses=1))
+def sleepy_app(**settings):
+    """An app with one analysis slot whose jobs all sleep 30 s, and that pool."""
+    app = create_api(ApiSettings(max_concurrent_analyses=1, **settings))
     pool = SleepyPool(1)
     app.dependency_overrides[get_workers] = lambda: pool
+    return app, pool
+
+
+def test_slow_analysis_is_stopped_and_healthz_stays_responsive():
+    """A 30 s job under a 1 s budget is killed at 1 s; /healthz answers at once meanwhile."""
+    app, pool = sleepy_app(time_budget_s=1.0)
     body = {"a": unit_circle_moving("t"), "b": unit_circle_moving("-t")}
     with TestClient(app) as c:
         result = {}
@@ -591,3 +601,186 @@ def test_slow_analysis_is_stopped_and_healthz_stays_responsive():
         assert (r.status_code, r.json()) == (503, {"detail": "analysis stopped: the job exceeded its time budget of 1 s and was stopped; narrow the interval or simplify the motion"})
         assert 1.0 <= result["seconds"] < 5.0
         assert c.get("/healthz").json()["analyses_running"] == 0
+
+
+# --- edges: numbers a float cannot hold, non-ASCII digits, budgets, busy before parsing ----------
+
+@pytest.mark.parametrize(
+    "token, msg",
+    [
+        ("1e-400", 'JSON number 1e-400 underflows to 0 as a float; send it as a string ("1e-400") for its exact value'),
+        ("-2.5E-999", 'JSON number -2.5E-999 underflows to 0 as a float; send it as a string ("-2.5E-999") for its exact value'),
+        ("1e400", 'JSON number 1e400 overflows a float (|x| > 1.8e308); send it as a string ("1e400") for its exact value'),
+        ("9" * 401, "integer too large (more than 400 digits); send it as a string fraction"),
+    ],
+)
+def test_json_numbers_that_a_float_cannot_hold_are_refused(client, token, msg):
+    text = '{"a": [[1,0,0],[0,1,0],[0,0,-1]], "b": [[1,0,0],[0,1,0],[0,0,' + token + "]]}"
+    r = post_raw(client, "/api/classify", text)
+    assert (r.status_code, r.json()) == (422, {"detail": [err(["body", "pair", "b", "matrix", 2, 2], f"Value error, {msg}")]})
+
+
+def test_json_zero_and_tiny_subnormal_are_numbers(client):
+    """0.0, -0e5 and 5e-324 (the smallest subnormal) are exactly what they say: accepted."""
+    text = '{"a": [[1,0,0],[0,1,0],[0,0,-1]], "b": [[1,0,-0e5],[0,1,5e-324],[0.0,5e-324,-1]]}'
+    r = post_raw(client, "/api/classify", text)
+    assert r.status_code == 200 and r.json()["relation"] == "overlap"
+
+
+def test_json_number_limits_in_motions_too(client):
+    text = json.dumps({"a": unit_circle_moving("t"), "b": unit_circle_moving("-t")}).replace('"t"', "1e-400", 1)
+    r = post_raw(client, "/api/analyse", text)
+    assert r.status_code == 422
+    assert "underflows to 0 as a float" in r.text
+
+
+@pytest.mark.parametrize("text", ["\uff11", "\u0661/3", "1e\u0663", "\u0967.5"])
+def test_only_ascii_digits_are_numbers_at_the_api(client, text):
+    r = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, text]]})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["msg"] == f"Value error, not a number: {text!r} (expected e.g. '3', '-0.25', '1e-3' or '3/7')"
+
+
+def test_exponent_limit_at_the_edge_states_the_real_limit(client):
+    ok = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, "-1e1000"]]})
+    assert ok.status_code == 200
+    r = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, "-1e1001"]]})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["msg"] == "Value error, exponent out of range in '-1e1001': |e| <= 1000 after 'e'"
+
+
+def _classified_one_by_one(pairs, method):
+    """Reference for the batch: core.classify per pair, certified_by from method="float" first
+    (JSON numbers as a stack of one, like the batch's stacked call; strings as they are)."""
+    import numpy as np
+
+    from core import Relation, classify
+
+    out_ = []
+    for p in pairs:
+        a, b = p["a"], p["b"]
+        kind = "ellipse" if len(a) == 3 else "ellipsoid"
+        plain = all(isinstance(v, int | float) for m in (a, b) for row in m for v in row)
+        if method != "exact":
+            if plain:
+                rel = classify(np.array(a, dtype=float)[None], np.array(b, dtype=float)[None], method="float")[0]
+            else:
+                rel = classify(a, b, method="float")
+            if rel != Relation.UNDECIDED:
+                out_.append(out(str(Relation(rel)), "float", kind, method))
+                continue
+        if method == "float":
+            out_.append(out("undecided", None, kind, method))
+        else:
+            out_.append(out(str(classify(a, b, method="exact")), "exact", kind, method))
+    return out_
+
+
+@pytest.mark.parametrize("method", ["adaptive", "float", "exact"])
+def test_batch_mixes_sizes_and_arithmetic(client, method):
+    """Ellipses and ellipsoids, floats and exact strings, tangent and not, in one batch: each pair
+    gets the relation and certifier it gets alone."""
+    rng = __import__("random").Random(5)
+    pairs = []
+    for k in range(40):
+        x = rng.choice([0.5, 1.0, 2.0, 3.0, 5.0])
+        if k % 4 == 0:
+            pairs.append({"a": circle(0), "b": circle(Fraction(x).limit_denominator())})
+        elif k % 4 == 1:
+            pairs.append({"a": sphere(0), "b": sphere(Fraction(x).limit_denominator())})
+        elif k % 4 == 2:
+            pairs.append({"a": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]], "b": [[1.0, 0.0, -x], [0.0, 1.0, 0.0], [-x, 0.0, x * x - 1]]})
+        else:
+            pairs.append({"a": [[1.0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, -1]], "b": [[1.0, 0, 0, -x], [0, 1, 0, 0], [0, 0, 1, 0], [-x, 0, 0, x * x - 1]]})
+    r = client.post("/api/classify", json={"pairs": pairs, "method": method})
+    assert r.status_code == 200
+    got = r.json()
+    assert got == _classified_one_by_one(pairs, method)
+    assert {g["certified_by"] for g in got} >= ({"exact"} if method != "float" else {None})
+
+
+def test_batch_over_the_request_budget_is_503():
+    pairs = [{"a": sphere(0), "b": sphere(f"{k}/7")} for k in range(1, 400)]
+    with TestClient(create_api(ApiSettings(request_budget_s=0.01))) as c:
+        r = c.post("/api/classify", json={"pairs": pairs, "method": "exact"})
+    assert r.status_code == 503 and r.headers["retry-after"] == "2"
+    detail = r.json()["detail"]
+    assert detail.startswith("stopped after ") and detail.endswith(
+        " of the pairs needing exact arithmetic (399 pairs in the request): over the time budget of 0.01 s per request; send fewer pairs per request")
+
+
+def test_busy_is_answered_before_the_motion_is_read():
+    """With the only slot taken, even a hostile motion gets 503 at once (nothing is parsed)."""
+    app, pool = sleepy_app(time_budget_s=5.0)
+    hostile = {"a": unit_circle_moving("(t+1e999)^64*(t+2e999)^64/(t+1e999)^63"), "b": unit_circle_moving("-t")}
+    with TestClient(app) as c:
+        th = threading.Thread(target=lambda: c.post("/api/analyse", json={"a": unit_circle_moving("t"), "b": unit_circle_moving("-t")}))
+        th.start()
+        while pool.running == 0:
+            time.sleep(0.01)
+        t0 = time.monotonic()
+        r = c.post("/api/analyse", json=hostile)
+        assert time.monotonic() - t0 < 1.0
+        assert (r.status_code, r.json()) == (503, {"detail": "all 1 analysis workers are busy; retry in a moment"})
+        pool.shutdown()
+        th.join()
+
+
+def test_hostile_motion_is_refused_in_the_worker_with_its_place():
+    with TestClient(create_api(ApiSettings(time_budget_s=20.0))) as c:
+        body = {"a": unit_circle_moving("(t+1e999)^64*(t+2e999)^64/(t+1e999)^63"), "b": unit_circle_moving("-t")}
+        t0 = time.monotonic()
+        r = c.post("/api/analyse", json=body)
+        assert time.monotonic() - t0 < 10
+        assert r.status_code == 422
+        assert r.json()["detail"].startswith("a.translation[0]: constant too large: about 2^")
+        assert "limit 20000 bits at position 9" in r.json()["detail"]
+        body = {"a": unit_circle_moving("t"), "b": unit_circle_moving("-t"), "interval": ["1e1001", None]}
+        r = c.post("/api/analyse", json=body)
+        assert (r.status_code, r.json()) == (422, {"detail": "interval lo: exponent out of range in '1e1001': |e| <= 1000 after 'e'"})
+
+
+def test_shutdown_pool_refuses_and_releases_waiters():
+    pool = WorkerPool(1)
+    result = {}
+
+    def wait():
+        try:
+            pool.run(time.sleep, 30, timeout=60)
+        except WorkerBusy as e:
+            result["e"] = str(e)
+
+    th = threading.Thread(target=wait)
+    th.start()
+    while pool.running == 0:
+        time.sleep(0.01)
+    t0 = time.monotonic()
+    pool.shutdown()
+    th.join(5)
+    assert not th.is_alive() and time.monotonic() - t0 < 2
+    assert result["e"] == "the server is shutting down"
+    with pytest.raises(WorkerBusy, match="shutting down"):
+        pool.run(math.sqrt, 4.0, timeout=10)
+
+
+def test_cancelled_job_is_killed():
+    from app.api.workers import WorkerCancelled
+
+    pool = WorkerPool(1)
+    cancel = threading.Event()
+    threading.Timer(0.5, cancel.set).start()
+    t0 = time.monotonic()
+    with pytest.raises(WorkerCancelled):
+        pool.run(time.sleep, 30, timeout=60, cancel=cancel)
+    assert time.monotonic() - t0 < 5 and pool.running == 0
+
+
+def test_an_app_serves_analyses_again_after_its_lifespan_restarts():
+    """Shutdown refuses jobs (the server is stopping); a new lifespan of the same app takes them again."""
+    app = create_api(ApiSettings())
+    body = {"a": unit_circle_moving("t"), "b": unit_circle_moving("-t"), "interval": ["-2", "2"]}
+    for _ in range(2):
+        with TestClient(app) as c:
+            r = c.post("/api/analyse", json=body)
+            assert r.status_code == 200 and [e["value"] for e in r.json()["events"]] == ["-1", "1"]
+    assert app.state.workers.closed

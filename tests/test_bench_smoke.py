@@ -126,3 +126,18 @@ def test_scene_cost_and_report(tmp_path, static_out):
     except ImportError:
         return
     assert (tmp_path / "figures" / "static_tradeoff.png").stat().st_size > 1000
+
+
+def test_api_load_runs_end_to_end_and_reports():
+    """bench/api_load.py against the real server, tiny sizes: every request answered, rows written."""
+    from bench import api_load
+
+    d = api_load.run_api_load(quick=True, batch_pairs=20, concurrency=4, per_client=3, log=lambda s: None)
+    assert d["batch_2d"]["pairs"] == 20 and d["batch_3d"]["pairs"] == 20
+    assert d["concurrency"]["requests"] == 12
+    c = d["concurrency"]
+    assert 0 < c["p50_ms"] <= c["p99_ms"] <= c["max_ms"]
+    table = api_load.format_api(d)
+    assert "API batch of 20 ellipse pairs" in table and "single-pair classify at concurrency 4 (12 requests)" in table
+    rows = report.targets({"results": []}, None, d)
+    assert [r[0].split(" (")[0].split(":")[0] for r in rows[-2:]] == ["API batch of 20 pairs", "single-pair classify at concurrency 4"]

@@ -305,7 +305,7 @@ def test_to_dict_is_json_ready():
         ({"shape": {"center": [0, 0], "semi_axes": ["t - 1", "1"]}}, circle("3"), (0, 2), "vanishes at t ≈ 1"),
         (circle("t^20"), circle("0"), (0, 1), "degree in t too high"),
         (circle("3*t + x"), circle("0"), (0, 1), "unexpected 'x'"),
-        (circle("t" + " + t" * 1000), circle("0"), (0, 1), "too long"),
+        (circle("t" + " + t" * 1000), circle("0"), (0, 1), None),  # long but cheap: the library takes it
         (circle("sqrt(2)*t"), circle("sqrt(3)"), (0, 1), "only one square root"),
         (circle("t"), circle("0"), (1, 1), "empty interval"),
         (circle("t"), [["1", "0", "0", "0"], ["0", "1", "0", "0"], ["0", "0", "1", "0"], ["0", "0", "0", "-1"]], (0, 1), "both ellipses or both ellipsoids"),

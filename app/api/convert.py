@@ -2,13 +2,14 @@
 
 No mathematics here: shapes go to :func:`core.quadric_from_axes`, matrices to
 :func:`core.validate_quadric` (so every bad matrix is named "a" or "b", as in the JSON), and the
-relation comes from :func:`core.classify`. A core ``ValueError`` becomes a 422 whose detail is
-the core message, prefixed with where in the request the culprit is.
+relation comes from :func:`core.classify` (:func:`classify_items`: one vectorised call for a whole
+batch). A core ``ValueError`` becomes a 422 whose detail is the core message, prefixed with where
+in the request the culprit is.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -18,9 +19,10 @@ from fastapi import HTTPException
 from core import Relation, classify, quadric_from_axes, validate_quadric
 from core.rationals import to_fmpq
 
+from .budget import Budget
 from .schemas import ClassifyOut, PairItem, ShapeIn
 
-__all__ = ["bad_input", "quadric_input", "checked_pair", "classify_pair"]
+__all__ = ["bad_input", "quadric_input", "checked_pair", "classify_items", "is_plain_pair"]
 
 
 @contextmanager
@@ -79,47 +81,124 @@ def _as_float64_if_exact(m: Any) -> Any:
     """
     if isinstance(m, np.ndarray):
         return m
+    if len(m) not in (3, 4) or any(len(row) != len(m) for row in m):
+        return m  # not square: validation names the problem
     flat = [v for row in m for v in row]
     if all(isinstance(v, float) or (type(v) is int and abs(v) < _EXACT_FLOAT_INT) for v in flat):
         return np.array(m, dtype=np.float64)
     return m
 
 
-def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
-    """Both shapes as core input, validated (422 naming "a" or "b" otherwise)."""
+def _converted(pair: PairItem, where: str) -> tuple[Any, Any]:
+    """Both shapes as core input (float64 arrays where exact), not validated yet."""
     out = []
     for name, q in (("a", pair.a), ("b", pair.b)):
         with bad_input(f"{where}{name}: "):
-            m = quadric_input(q)
+            out.append(_as_float64_if_exact(quadric_input(q)))
+    return out[0], out[1]
+
+
+def _validated(a: Any, b: Any, where: str) -> None:
+    """422 naming "a" or "b" for an invalid matrix, or for an ellipse paired with an ellipsoid."""
+    for name, m in (("a", a), ("b", b)):
         with bad_input(where):
             validate_quadric(m, name=name)
-        out.append(_as_float64_if_exact(m))
-    a, b = out
     if len(a) != len(b):
         raise HTTPException(
             status_code=422,
             detail=f"{where}a is {len(a)}x{len(a)} and b is {len(b)}x{len(b)}: both must be ellipses (3x3) or both ellipsoids (4x4)",
         )
+
+
+def is_plain_pair(pair: PairItem) -> bool:
+    """True for two matrices of JSON numbers (binary64 values).
+
+    Classifying such a pair is bounded work: the float filter, at worst one exact
+    classification of doubles.
+    """
+    return all(
+        isinstance(q, list) and all(type(v) is float or type(v) is int and abs(v) < _EXACT_FLOAT_INT for row in q for v in row)
+        for q in (pair.a, pair.b)
+    )
+
+
+def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
+    """Both shapes as core input, validated (422 naming "a" or "b" otherwise)."""
+    a, b = _converted(pair, where)
+    _validated(a, b, where)
     return a, b
 
 
-def classify_pair(pair: PairItem, method: str, where: str = "") -> ClassifyOut:
-    """Certified relation of one pair, with the arithmetic that certified it.
+def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, batch: bool = True) -> list[ClassifyOut]:
+    """Certified relation of each pair, with the arithmetic that certified it.
 
-    ``adaptive`` asks the float filter first and exact rationals only when it abstains, so the
-    answer says which of the two decided (per pair, without shared counters).
+    One vectorised :func:`core.classify` call with ``method="float"`` per matrix size (3x3, 4x4)
+    on all float pairs (pairs of exact values get the filter one by one: core uses it when the
+    values are doubles), then exact rationals (``adaptive``, ``exact``) for the pairs the filter
+    leaves undecided, one by one in request order, checking ``budget`` between pairs. A pair the
+    filter decides is certified valid by it; the others are validated exactly, so an invalid
+    pair gets a 422 naming it (``pairs[i]: b: ...``, the first such pair in order).
+    (To be replaced by a core function that reports the certifier per pair.)
+
+    Raises:
+        HTTPException: 422 for bad input.
+        BudgetExceeded, Cancelled: from ``budget`` (the route answers 503).
     """
-    a, b = checked_pair(pair, where)
-    with bad_input(where):
-        if method == "exact":
-            rel, by = classify(a, b, method="exact"), "exact"
-        else:
-            rel, by = classify(a, b, method="float"), "float"
-            if rel == Relation.UNDECIDED and method == "adaptive":
-                rel, by = classify(a, b, method="exact"), "exact"
-    return ClassifyOut(
-        relation=str(rel),
-        certified_by=None if rel == Relation.UNDECIDED else by,
-        kind="ellipse" if len(a) == 3 else "ellipsoid",
-        method=method,
-    )
+    n = len(pairs)
+    where = [f"pairs[{i}]: " if batch else "" for i in range(n)]
+    mats: list[tuple[Any, Any] | None] = [None] * n
+    errors: dict[int, HTTPException] = {}
+    for i, pair in enumerate(pairs):
+        if i % 64 == 0:
+            budget.check(f"while reading pair {i} of {n}")
+        try:
+            mats[i] = _converted(pair, where[i])
+        except HTTPException as e:
+            errors[i] = e
+    codes = np.full(n, int(Relation.UNDECIDED), dtype=np.int8)
+    by: list[str | None] = [None] * n
+    if method != "exact":
+        groups: dict[tuple[int, int], list[int]] = {}
+        for i, m in enumerate(mats):
+            if m is not None and isinstance(m[0], np.ndarray) and isinstance(m[1], np.ndarray):
+                groups.setdefault((m[0].shape[0], m[1].shape[0]), []).append(i)
+            elif m is not None:  # exact input: core's filter runs if its values are doubles ("1/2")
+                if i % 64 == 0:
+                    budget.check(f"while filtering pair {i} of {n}")
+                try:
+                    codes[i] = classify(m[0], m[1], method="float")
+                except ValueError:  # invalid: named below
+                    continue
+                by[i] = "float" if codes[i] != Relation.UNDECIDED else None
+        for (na, nb), idx in groups.items():
+            if na != nb or na not in (3, 4):
+                continue
+            try:
+                if len(idx) == 1:  # one pair: core's per-pair kernel, no stacking
+                    got = np.array([classify(mats[idx[0]][0], mats[idx[0]][1], method="float")], dtype=np.int8)
+                else:
+                    got = classify(np.stack([mats[i][0] for i in idx]), np.stack([mats[i][1] for i in idx]), method="float")
+            except ValueError:  # some pair is invalid: the pairs below name it, one by one
+                continue
+            codes[idx] = got
+            for i in np.asarray(idx)[got != Relation.UNDECIDED]:
+                by[i] = "float"
+    for k, i in enumerate(np.flatnonzero(codes == Relation.UNDECIDED)):
+        budget.check(f"after {k} of the pairs needing exact arithmetic ({n} pairs in the request)")
+        if i in errors:
+            raise errors[i]
+        a, b = mats[i]  # type: ignore[misc]
+        _validated(a, b, where[i])
+        if method != "float":
+            with bad_input(where[i]):
+                codes[i] = classify(a, b, method="exact")
+            by[i] = "exact"
+    return [
+        ClassifyOut(
+            relation=str(Relation(int(codes[i]))),
+            certified_by=by[i],  # type: ignore[arg-type]
+            kind="ellipse" if len(mats[i][0]) == 3 else "ellipsoid",  # type: ignore[index]
+            method=method,  # type: ignore[arg-type]
+        )
+        for i in range(n)
+    ]

@@ -45,6 +45,7 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         warm_up(wait=False)  # compile the float filter in the background; exact/numpy meanwhile
+        workers.start()
         yield
         workers.shutdown()
 

@@ -4,14 +4,23 @@ from __future__ import annotations
 
 from typing import Any
 
+from core.limits import Limits
+
 __all__ = ["analyse_job"]
 
 
-def analyse_job(a: Any, b: Any, interval: list[Any], digits: int, polynomials: bool) -> dict[str, Any]:
-    """:func:`core.parametric.analyse` as a JSON-ready dict (motions under ``a``/``b``)."""
+def analyse_job(a: Any, b: Any, interval: list[Any], digits: int, polynomials: bool, limits: Limits) -> dict[str, Any]:
+    """Read both motions under ``limits``, then :func:`core.parametric.analyse` as a JSON-ready dict.
+
+    The request's text is parsed here, in the worker, never in the server process.
+    """
     from core.parametric import analyse
 
-    out = analyse(a, b, tuple(interval), digits=digits).to_dict(polynomials=polynomials)
+    from .motion_input import check_interval, check_motion
+
+    ma, mb = check_motion(a, "a", limits), check_motion(b, "b", limits)
+    check_interval(interval, limits)
+    out = analyse(ma, mb, tuple(interval), digits=digits).to_dict(polynomials=polynomials)
     out["a"] = out.pop("A")
     out["b"] = out.pop("B")
     return out

@@ -1,9 +1,11 @@
-"""Checks of a motion request before it is sent to a worker (fast 422s, limits from settings).
+"""Reading a motion request inside the analysis worker: every string parsed under the limits.
 
-Every expression string is checked against ``max_expression_chars`` and parsed once with
-``max_degree`` (core.expressions), so a typo is reported with its place in the request and its
-position in the text; then core.motions reads the whole motion (structure, symmetry, square
-roots). The worker parses again: parsing is cheap next to the analysis.
+Runs in the worker process (:func:`app.api.jobs.analyse_job`), never in the server process: a
+hostile expression costs at most the worker's time and memory budget. Every expression string
+is parsed once under the API's limits (:meth:`app.api.settings.ApiSettings.text_limits`), so a
+typo or an oversized constant is reported with its place in the request
+(``a.translation[0]: ...``) and its position in the text; then core.motions builds each motion
+(structure, symmetry, square roots) under the same limits.
 """
 
 from __future__ import annotations
@@ -12,11 +14,13 @@ from collections.abc import Iterator
 from typing import Any
 
 from core.expressions import parse_expression
-from core.motions import motion_from_dict
+from core.limits import Limits
+from core.motions import Motion, motion_from_dict
+from core.rationals import parse_number
 
-from .settings import ApiSettings
+__all__ = ["motion_payload", "check_motion", "check_interval"]
 
-__all__ = ["motion_payload", "check_motion"]
+_INFINITE = ("inf", "+inf", "-inf", "infinity", "-infinity", "+infinity")
 
 
 def motion_payload(m: Any) -> Any:
@@ -37,16 +41,26 @@ def _strings(x: Any, path: str) -> Iterator[tuple[str, str]]:
             yield from _strings(v, f"{path}[{i}]")
 
 
-def check_motion(payload: Any, name: str, settings: ApiSettings) -> None:
-    """Raise ValueError naming the place (``a.translation[0]: ...``) of the first problem."""
+def check_motion(payload: Any, name: str, limits: Limits) -> Motion:
+    """The motion, built under ``limits``; ValueError naming the place (``a.translation[0]: ...``)."""
     for path, text in _strings(payload, name):
-        if len(text) > settings.max_expression_chars:
-            raise ValueError(f"{path}: expression too long ({len(text)} > {settings.max_expression_chars} characters)")
         try:
-            parse_expression(text, max_degree=settings.max_degree)
+            parse_expression(text, limits=limits)
         except ValueError as e:
             raise ValueError(f"{path}: {e}") from None
     try:
-        motion_from_dict(payload).matrix()
+        m = motion_from_dict(payload, limits=limits)
+        m.matrix()
     except ValueError as e:
         raise ValueError(f"{name}: {e}") from None
+    return m
+
+
+def check_interval(interval: list[Any], limits: Limits) -> None:
+    """Number strings of the interval ends under ``limits`` (ValueError naming the end)."""
+    for which, end in zip(("lo", "hi"), interval, strict=True):
+        if isinstance(end, str) and end.strip().lower() not in _INFINITE:
+            try:
+                parse_number(end, limits)
+            except ValueError as e:
+                raise ValueError(f"interval {which}: {e}") from None

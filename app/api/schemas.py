@@ -22,7 +22,10 @@ from pydantic import (
     WithJsonSchema,
 )
 
-from core.rationals import MAX_NUMBER_CHARS, to_fmpq
+from core.limits import SERVER
+from core.rationals import parse_number
+
+from .json_body import OutOfRange
 
 __all__ = [
     "Number",
@@ -42,6 +45,8 @@ __all__ = [
     "ERROR_RESPONSES",
 ]
 
+MAX_NUMBER_CHARS = SERVER.number_chars
+"""Longest number string accepted by the API (:data:`core.limits.SERVER`; the library has none)."""
 MAX_INT_DIGITS = MAX_NUMBER_CHARS
 """Largest integer accepted as a JSON number, in decimal digits (as for number strings)."""
 
@@ -50,6 +55,8 @@ def checked_number(v: Any) -> int | float | str:
     """Check one JSON number or number string (value kept as given; core converts it exactly)."""
     if isinstance(v, bool):
         raise ValueError(f"a boolean is not a number: {v!r}")
+    if isinstance(v, OutOfRange):  # a JSON number a float cannot hold (app.api.json_body)
+        raise ValueError(v.message)
     if isinstance(v, int):
         if v and math.log10(abs(v)) >= MAX_INT_DIGITS:
             raise ValueError(f"integer too large (more than {MAX_INT_DIGITS} digits); send it as a string fraction")
@@ -59,7 +66,7 @@ def checked_number(v: Any) -> int | float | str:
             raise ValueError(f"not a finite number: {v!r} (NaN and infinity are not accepted)")
         return v
     if isinstance(v, str):
-        to_fmpq(v)  # raises ValueError saying what is wrong with the string
+        parse_number(v, SERVER)  # raises ValueError saying what is wrong with the string
         return v
     raise ValueError(f"expected a number or a number string like '3/7', got {type(v).__name__}")
 

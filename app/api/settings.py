@@ -7,8 +7,10 @@ with ``Depends(get_settings)`` (:mod:`app.api.deps`), so tests can swap it throu
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+
+from core.limits import SERVER, Limits
 
 __all__ = ["ApiSettings", "default_static_dir", "default_bench_dir"]
 
@@ -45,14 +47,17 @@ class ApiSettings:
     """Largest accepted request body (413 above)."""
     max_batch: int = 1000
     """Most pairs in one ``{"pairs": [...]}`` classify request."""
-    max_expression_chars: int = 2000
-    """Longest expression string in a motion (number strings in matrices are capped at 400
-    characters by core.rationals)."""
-    max_degree: int = 16
+    max_expression_chars: int = SERVER.expression_chars or 2000
+    """Longest expression string in a motion (all other size limits of user text:
+    :data:`core.limits.SERVER`, e.g. number strings up to 400 characters)."""
+    max_degree: int = SERVER.degree
     """Highest degree in t of a numerator or denominator of one motion entry after
-    simplification (core.expressions caps it at MAX_DEGREE = 16 already; this can only lower it)."""
+    simplification."""
     time_budget_s: float = 20.0
     """Wall-clock budget of one motion analysis; the worker process is killed when exceeded."""
+    request_budget_s: float = 5.0
+    """Wall-clock budget of one classify/explain request: a batch over it is stopped between
+    pairs and answered with 503."""
     max_digits: int = 200
     """Largest ``digits`` accepted by /api/analyse."""
     max_concurrent_analyses: int = 2
@@ -71,5 +76,13 @@ class ApiSettings:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"ApiSettings.{name} must be a positive integer, got {value!r}")
-        if not (self.time_budget_s > 0):
-            raise ValueError(f"ApiSettings.time_budget_s must be > 0, got {self.time_budget_s!r}")
+        for name in ("time_budget_s", "request_budget_s"):
+            if not (getattr(self, name) > 0):
+                raise ValueError(f"ApiSettings.{name} must be > 0, got {getattr(self, name)!r}")
+
+    def text_limits(self) -> Limits:
+        """Size limits of user text in this API.
+
+        :data:`core.limits.SERVER` with this instance's expression length and degree.
+        """
+        return replace(SERVER, expression_chars=self.max_expression_chars, degree=self.max_degree)

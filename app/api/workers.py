@@ -5,21 +5,36 @@ the GIL nor outlive its budget. Each job runs in a fresh child process (``forkse
 from a clean single-threaded server, never from the threaded web process); the caller waits on
 a pipe and kills the child when the budget is spent. A semaphore bounds the jobs running at once;
 a job that finds all slots taken is refused at once (the caller answers 503) instead of queueing.
+
+Children never outlive the server: each asks the kernel for SIGKILL when its parent dies
+(``prctl(PR_SET_PDEATHSIG)``; its parent is the fork server, which exits when the server
+process goes, even on SIGKILL), with a watchdog thread polling the parent pid as a fallback;
+:meth:`WorkerPool.shutdown` kills the running jobs and refuses new ones.
 """
 
 from __future__ import annotations
 
 import multiprocessing as mp
+import os
+import signal
+import sys
 import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerDied", "WorkerFailed"]
+__all__ = ["WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
+
+_POLL_S = 0.1
+"""How often a waiting caller checks the budget, the child and the cancel event."""
 
 
 class WorkerBusy(RuntimeError):
-    """All worker slots are taken."""
+    """All worker slots are taken, or the pool is shut down (the server is stopping)."""
+
+
+class WorkerCancelled(RuntimeError):
+    """The caller cancelled the job (its client went away); the child was killed."""
 
 
 class WorkerTimeout(RuntimeError):
@@ -34,7 +49,54 @@ class WorkerFailed(RuntimeError):
     """The job raised something other than ValueError or MemoryError (a bug)."""
 
 
+def _release_forkserver() -> None:
+    """Close this child's copy of the fd that keeps the fork server alive.
+
+    multiprocessing hands it to every child of the fork server, so a running child would keep
+    the fork server alive after the server process died, and the fork server (its parent) the
+    child: an orphan. Closed, the fork server exits when the server process goes, and the
+    child follows by its parent-death signal.
+    """
+    try:
+        from multiprocessing import forkserver
+
+        fs = forkserver._forkserver  # type: ignore[attr-defined]
+        fd = fs._forkserver_alive_fd
+        if fd is not None:
+            fs._forkserver_alive_fd = None
+            os.close(fd)
+    except (AttributeError, ImportError, OSError):  # another start method: nothing to release
+        pass
+
+
+def _die_with_parent() -> None:
+    """Ask for SIGKILL when the parent process dies (Linux), else watch the parent pid."""
+    _release_forkserver()
+    parent = os.getppid()
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            PR_SET_PDEATHSIG = 1
+            if libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0:
+                if os.getppid() != parent:  # the parent died before prctl took effect
+                    os._exit(1)
+                return
+        except (OSError, AttributeError):  # pragma: no cover - no libc / no prctl
+            pass
+
+    def watch() -> None:  # pragma: no cover - only where prctl is unavailable
+        while True:
+            time.sleep(0.5)
+            if os.getppid() != parent:
+                os.kill(os.getpid(), signal.SIGKILL)
+
+    threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
+
+
 def _child(conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_mb: int | None) -> None:
+    _die_with_parent()
     if memory_mb is not None:
         try:
             import resource
@@ -96,28 +158,61 @@ class WorkerPool:
         self._memory_mb = memory_mb
         self._running: set[Any] = set()
         self._lock = threading.Lock()
+        self._closed = False
         self.max_jobs = max_jobs
 
-    def run(self, fn: Callable[..., Any], /, *args: Any, timeout: float, **kwargs: Any) -> Any:
+    def start(self) -> None:
+        """Accept jobs (again) after :meth:`shutdown`.
+
+        An app's lifespan can run more than once (tests); a new pool accepts jobs already.
+        """
+        with self._lock:
+            self._closed = False
+
+    @property
+    def closed(self) -> bool:
+        """True once :meth:`shutdown` ran: every new job is refused."""
+        return self._closed
+
+    def run(
+        self,
+        fn: Callable[..., Any],
+        /,
+        *args: Any,
+        timeout: float,
+        cancel: threading.Event | None = None,
+        **kwargs: Any,
+    ) -> Any:
         """Run ``fn(*args, **kwargs)`` in a child process and return its result.
 
-        ``fn``, its arguments and its result must be picklable (module-level functions).
+        ``fn``, its arguments and its result must be picklable (module-level functions). The
+        slot is taken before anything else, so a busy pool answers before any input is read.
+
+        Args:
+            fn: module-level function run in the child.
+            *args: its positional arguments.
+            timeout: wall-clock budget in seconds (the child is killed when it is spent).
+            cancel: set it (e.g. when the client has disconnected) to kill the job.
+            **kwargs: its keyword arguments.
 
         Raises:
-            WorkerBusy: every slot is taken (nothing was started).
+            WorkerBusy: every slot is taken, or the pool is shut down (nothing was started).
             WorkerTimeout: ``timeout`` seconds passed; the child was killed.
+            WorkerCancelled: ``cancel`` was set; the child was killed.
             ValueError: the job raised ValueError (bad input): same message.
             WorkerDied: the child process died or ran out of memory.
             WorkerFailed: the job raised another exception.
         """
+        if self._closed:
+            raise WorkerBusy("the server is shutting down")
         if not self._slots.acquire(blocking=False):
             raise WorkerBusy(f"all {self.max_jobs} analysis workers are busy")
         try:
-            return self._run(fn, args, kwargs, timeout)
+            return self._run(fn, args, kwargs, timeout, cancel)
         finally:
             self._slots.release()
 
-    def _run(self, fn: Callable[..., Any], args: tuple, kwargs: dict, timeout: float) -> Any:
+    def _run(self, fn: Callable[..., Any], args: tuple, kwargs: dict, timeout: float, cancel: threading.Event | None) -> Any:
         recv, send = self._ctx.Pipe(duplex=False)
         proc = self._ctx.Process(target=_child, args=(send, fn, args, kwargs, self._memory_mb), daemon=True)
         try:
@@ -129,19 +224,28 @@ class WorkerPool:
         deadline = time.monotonic() + timeout  # after start: a cold fork server does not eat the budget
         with self._lock:
             self._running.add(proc)
+            closed = self._closed  # shutdown() ran while this child was starting
         try:
             send.close()  # the child holds the only write end: EOF when it dies
             while True:
+                if closed or self._closed:
+                    raise WorkerBusy("the server is shutting down")
+                if cancel is not None and cancel.is_set():
+                    raise WorkerCancelled("the job was cancelled (the client went away)")
                 left = deadline - time.monotonic()
                 if left <= 0:
                     raise WorkerTimeout(f"the job exceeded its time budget of {timeout:g} s and was stopped")
-                if recv.poll(min(left, 0.5)):
+                if recv.poll(min(left, _POLL_S)):
                     try:
                         status, payload = recv.recv()
                     except EOFError:
+                        if self._closed:
+                            raise WorkerBusy("the server is shutting down") from None
                         raise WorkerDied(self._died(proc)) from None
                     break
                 if not proc.is_alive() and not recv.poll(0):
+                    if self._closed:
+                        raise WorkerBusy("the server is shutting down")
                     raise WorkerDied(self._died(proc))
         finally:
             if proc.is_alive():
@@ -172,8 +276,13 @@ class WorkerPool:
             return len(self._running)
 
     def shutdown(self) -> None:
-        """Kill every running job (called when the server stops)."""
+        """Kill every running job and refuse new ones (called when the server stops).
+
+        The callers waiting on those jobs get :class:`WorkerBusy` ("shutting down") within
+        ``_POLL_S`` seconds.
+        """
         with self._lock:
+            self._closed = True
             procs = list(self._running)
         for proc in procs:
             try:

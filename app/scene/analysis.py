@@ -8,6 +8,7 @@ scene needs; it does no maths of its own beyond float evaluation for drawing.
 from __future__ import annotations
 
 import json
+import math
 import threading
 import time
 from collections.abc import Hashable
@@ -17,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from core.limits import SERVER, Limits
 from core.quadrics import axes_from_quadric
 
 from .instant import SIGN_VALUE, RelationLookup, explain_at
@@ -29,6 +31,8 @@ __all__ = [
     "AnalysisCache",
     "list_presets",
     "load_motion",
+    "read_motion_job",
+    "MAX_MOTION_TEXT",
 ]
 
 
@@ -271,29 +275,52 @@ def _interval_text(iv: Any) -> str:
     return f"{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}"
 
 
-def _read_interval(text: str) -> tuple[Any, Any]:
-    from core.rationals import to_fmpq
+MAX_MOTION_TEXT = 32 * (SERVER.expression_chars or 2000)
+"""Longest motion text (JSON) typed in one field: room for every entry of a motion at the
+longest expression length of :data:`core.limits.SERVER`."""
+
+
+def _read_interval(text: str, limits: Limits | None = None) -> tuple[Any, Any]:
+    from core.rationals import parse_number
 
     parts = [p.strip() for p in str(text).replace(";", ",").split(",")]
     if len(parts) != 2 or not all(parts):
         raise MotionError("interval: expected 'lo, hi' (use -inf / inf for an open end)", "interval")
     out: list[Any] = []
-    for p, infs in zip(parts, (("-inf", "none"), ("inf", "+inf", "none"))):
+    floats: list[float] = []
+    for p, infs in zip(parts, (("-inf", "none"), ("inf", "+inf", "none")), strict=True):
         if p.lower() in infs:
             out.append(None)
             continue
         try:
-            to_fmpq(p)
+            q = parse_number(p, limits)
         except ValueError as e:
             raise MotionError(f"interval: {e}", "interval") from None
-        out.append(p)
-    if out[0] is not None and out[1] is not None and to_fmpq(out[0]) >= to_fmpq(out[1]):
-        raise MotionError("interval: need lo < hi", "interval")
-    return out[0], out[1]
+        try:
+            floats.append(int(q.p) / int(q.q))  # correctly rounded, 0.0 for a tiny value
+        except OverflowError:
+            floats.append(math.inf)
+        if not math.isfinite(floats[-1]):
+            raise MotionError(f"interval: {p[:40]} is beyond the range of the time slider (|t| < 1.8e308)", "interval")
+        out.append((p, q))
+    if out[0] is not None and out[1] is not None:
+        if out[0][1] >= out[1][1]:
+            raise MotionError("interval: need lo < hi", "interval")
+        if floats[0] >= floats[1]:
+            raise MotionError("interval: lo and hi are too close for the time slider (the same as floats)", "interval")
+    return tuple(None if e is None else e[0] for e in out)  # type: ignore[return-value]
 
 
-def load_motion(*, preset: str | None, motion: dict[str, Any] | None, dim: int) -> MotionModel:
+def load_motion(*, preset: str | None, motion: dict[str, Any] | None, dim: int, limits: Limits | None = None) -> MotionModel:
     """Load a preset by name or a typed motion ({"A": text/dict, "B": text/dict, "interval": text}).
+
+    Args:
+        preset: a preset name (when ``motion`` is None).
+        motion: the typed texts {"A", "B", "interval"} (or dicts).
+        dim: dimension shown now (the motion's own wins).
+        limits: size limits of the text (:mod:`core.limits`); typed motions from a browser are
+            read with :data:`core.limits.SERVER` in a worker process
+            (:meth:`AnalysisCache.read_typed`).
 
     Raises:
         MotionError: unknown preset, or a typed motion/interval core cannot read (the error
@@ -324,26 +351,43 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, dim: int) 
             raise MotionError(f"motion of {key} is missing", key)
         if isinstance(value, str):
             texts[key] = value
+            if len(value) > MAX_MOTION_TEXT:
+                raise MotionError(f"motion of {key} is too long ({len(value)} > {MAX_MOTION_TEXT} characters)", key)
             try:
                 value = json.loads(value)
             except json.JSONDecodeError as e:
                 raise MotionError(f"motion of {key} is not valid JSON: {e.msg} (line {e.lineno}, column {e.colno})", key) from None
+            except RecursionError:
+                raise MotionError(f"motion of {key} is nested too deeply", key) from None
         else:
             texts[key] = json.dumps(value)
         try:
-            parsed[key] = motion_from_dict(value)
+            parsed[key] = motion_from_dict(value, limits=limits)
         except ValueError as e:
             raise MotionError(f"motion of {key}: {e}", key) from None
     iv = raw.get("interval", "-inf, inf")
     if not isinstance(iv, str):
         iv = _interval_text(iv)
     texts["interval"] = iv
-    interval = _read_interval(iv)
+    interval = _read_interval(iv, limits)
     if parsed["A"].dim != parsed["B"].dim:
         raise MotionError("A and B must both be ellipses (2D) or both ellipsoids (3D)", "B")
     return MotionModel(
         parsed["A"], parsed["B"], interval, preset=preset if motion is None else None, description=description, texts=texts
     )
+
+
+def read_motion_job(motion: dict[str, Any], dim: int) -> MotionModel | tuple[str, str]:
+    """Read a typed motion under :data:`core.limits.SERVER` (runs in a worker process).
+
+    Returns:
+        The loaded model (it pickles with its exact matrices), or (message, field) for a
+        MotionError (an exception would lose its field on the way back).
+    """
+    try:
+        return load_motion(preset=None, motion=motion, dim=dim, limits=SERVER)
+    except MotionError as e:
+        return str(e), e.field
 
 
 class AnalysisCache:
@@ -355,12 +399,22 @@ class AnalysisCache:
     a worker thread of ``executor``.
     """
 
-    def __init__(self, executor: Executor | None = None, *, processes: bool = False, budget: float = 300.0) -> None:
+    def __init__(
+        self,
+        executor: Executor | None = None,
+        *,
+        processes: bool = False,
+        budget: float = 300.0,
+        read_budget: float = 10.0,
+        memory_mb: int | None = 2048,
+    ) -> None:
         self._executor = executor
         self._done: dict[Hashable, AnalysisView] = {}
         self._running: dict[Hashable, Future[AnalysisView]] = {}
         self._lock = threading.Lock()
         self.budget = budget
+        self.read_budget = read_budget
+        """Seconds a worker may spend reading one typed motion."""
         self.max_entries = 64
         """Analyses kept (the oldest is dropped first)."""
         self._pool: Any = None
@@ -368,9 +422,39 @@ class AnalysisCache:
             try:
                 from app.api.workers import WorkerPool
 
-                self._pool = WorkerPool(2)
+                self._pool = WorkerPool(2, memory_mb=memory_mb)
             except ImportError:  # API package absent: threads only
                 self._pool = None
+
+    def read_typed(self, motion: dict[str, Any], dim: int) -> MotionModel:
+        """A typed motion, read in a worker process under a time and memory budget.
+
+        The tab's text never reaches the parser in the process that serves every tab; a busy
+        pool is answered at once, before anything is read.
+
+        Raises:
+            MotionError: bad text (named field), over a limit, busy, or over the budget.
+        """
+        for key in ("A", "B"):
+            value = motion.get(key)
+            if isinstance(value, str) and len(value) > MAX_MOTION_TEXT:
+                raise MotionError(f"motion of {key} is too long ({len(value)} > {MAX_MOTION_TEXT} characters)", key)
+        if self._pool is None:
+            out = read_motion_job(motion, dim)
+        else:
+            from app.api.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerTimeout
+
+            try:
+                out = self._pool.run(read_motion_job, motion, dim, timeout=self.read_budget)
+            except WorkerBusy as e:
+                raise MotionError(f"{e}: try again in a moment", "A") from None
+            except WorkerTimeout:
+                raise MotionError(f"reading the motion took over {self.read_budget:g} s: simplify the expressions", "A") from None
+            except (WorkerDied, WorkerFailed) as e:
+                raise MotionError(f"the motion could not be read: {e}", "A") from None
+        if isinstance(out, tuple):
+            raise MotionError(*out)
+        return out
 
     def get(self, key: Hashable) -> AnalysisView | None:
         """The finished analysis of this motion, or None."""
@@ -402,6 +486,8 @@ class AnalysisCache:
                         plain = self._pool.run(analyse_plain, *args, timeout=self.budget)
                         break
                     except WorkerBusy:
+                        if self._pool.closed:  # the server is stopping
+                            raise
                         time.sleep(0.2)  # other tabs' analyses hold the slots: wait our turn
             else:
                 plain = analyse_plain(*args)
@@ -433,9 +519,11 @@ def analyse_plain(A_source: Any, B_source: Any, interval: tuple[Any, Any], digit
         {"result": MotionAnalysis.to_dict(polynomials=False), "samples": .samples(PLOT_SAMPLES),
         "polys": .polynomials()} (the exact a_i, ŝ_j: the readout evaluates them at t).
     """
+    from core.motions import motion_from_dict
     from core.parametric import analyse
 
-    an = analyse(A_source, B_source, interval, digits=digits)
+    A, B = (motion_from_dict(m, limits=SERVER) for m in (A_source, B_source))
+    an = analyse(A, B, interval, digits=digits)
     return {
         "result": an.to_dict(polynomials=False),
         "samples": an.samples(PLOT_SAMPLES),

@@ -10,7 +10,7 @@ import html
 from concurrent.futures import Future
 from typing import Any
 
-from .analysis import AnalysisView, MotionError, MotionModel, load_motion
+from .analysis import AnalysisCache, AnalysisView, MotionError, MotionModel
 from .panels import degrees_text, sign_table_markdown
 from .state import AppState, SceneConfig
 
@@ -24,6 +24,7 @@ class MotionPanelMixin:
     """Motion-editor behaviour of :class:`~app.scene.session.Session` (see the module docstring)."""
 
     state: AppState
+    cache: AnalysisCache
     model: MotionModel | None
     analysis: AnalysisView | None
 
@@ -74,8 +75,8 @@ class MotionPanelMixin:
 
     def _on_analyse_click(self) -> None:
         texts = {k: h.value for k, h in self.motion_fields.items()}
-        try:
-            model = load_motion(preset=None, motion=texts, dim=self.state.dim)
+        try:  # typed text is read in a worker process, never in the one serving every tab
+            model = self.cache.read_typed(texts, self.state.dim)
         except MotionError as e:
             self._show_motion_error(e)
             return

@@ -5,11 +5,14 @@ that connects gets a private scene and GUI (``client.scene``/``client.gui``) bui
 server's configuration, so a classroom of students never fights over one scene; analyses are
 shared through one cache and run in worker processes, so a slow analysis never blocks other tabs.
 ``shared=True`` (``python -m app serve --shared``) is the presenter mode: one scene for all tabs.
+Only the scene's own pages (and clients without an Origin header) may connect
+(:mod:`app.scene.origin`).
 """
 
 from __future__ import annotations
 
 import threading
+from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
@@ -94,6 +97,7 @@ def start_scene(
     verbose: bool = False,
     processes: bool = True,
     shared: bool = False,
+    allow_origins: Iterable[str] = (),
 ) -> SceneServer:
     """Start the scene server (returns at once; viser serves from its own thread).
 
@@ -107,12 +111,14 @@ def start_scene(
             the process serving the tabs); False runs them in worker threads.
         shared: presenter mode: every tab sees and drives one scene (default: each tab has
             its own).
+        allow_origins: web origins (``https://host:port``) besides the scene's own whose pages
+            may open sessions (:mod:`app.scene.origin`; ``--allow-origin`` on the command line).
     """
-    import viser
-
     from core import warm_up
 
+    from .origin import OriginPolicy, start_viser
+
     warm_up(wait=False)  # compile the float filter in the background; drags use exact meanwhile
-    server = viser.ViserServer(host=host, port=port, verbose=verbose)
+    server = start_viser(OriginPolicy(host, allow_origins), host=host, port=port, verbose=verbose)
     server.gui.configure_theme(control_width="large", show_share_button=False)
     return SceneServer(server, config or SceneConfig(), processes=processes, shared=shared)

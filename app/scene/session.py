@@ -21,6 +21,7 @@ from typing import Any, ContextManager
 import numpy as np
 
 from core import Relation, classify, explain
+from core.rationals import to_fmpq
 
 from . import plots
 from .analysis import (
@@ -302,8 +303,7 @@ class Session(MotionPanelMixin, TimelineMixin):
             d = sh.to_dict()
             d[key] = self.shape_fields[name][key].value
             try:
-                new = ShapeState.from_dict(d, self.state.dim, name)
-                new.quadric()
+                new = _drawable(ShapeState.from_dict(d, self.state.dim, name))
             except ValueError as e:
                 self._field_error(self.shape_errors[name], str(e))
                 return
@@ -322,8 +322,7 @@ class Session(MotionPanelMixin, TimelineMixin):
         with self._lock:
             d = self.state.shapes[name].to_dict()
             d.update(fields)
-            new = ShapeState.from_dict(d, self.state.dim, name)
-            new.quadric()
+            new = _drawable(ShapeState.from_dict(d, self.state.dim, name))
             if self.model is not None:
                 self._leave_motion()
             self.state.shapes[name] = new
@@ -538,3 +537,23 @@ class Session(MotionPanelMixin, TimelineMixin):
     def close(self) -> None:
         """Stop playback and ignore pending analyses (the tab went away)."""
         self._closed = True
+
+
+def _drawable(shape: ShapeState) -> ShapeState:
+    """The shape if it is valid and inside the scene's drawing range, else ValueError.
+
+    A typed centre of 1e300 is exact, but its matrix, its drawing and the readout's floats
+    would overflow: the scene takes |centre| <= 1e12 and semi-axes in [1e-12, 1e12].
+    """
+    shape.quadric()
+    big = to_fmpq(DRAWABLE)
+    if any(abs(to_fmpq(v)) > big for v in shape.center):
+        raise ValueError(f"centre too far for the scene (|x| <= {DRAWABLE:g})")
+    if any(not 1 / big <= to_fmpq(v) <= big for v in shape.semi_axes):
+        raise ValueError(f"semi-axes out of the scene's range [{1 / DRAWABLE:g}, {DRAWABLE:g}]")
+    return shape
+
+
+DRAWABLE = 10**12
+"""Largest |coordinate| and semi-axis (and 1 / smallest semi-axis) of a shape typed in the
+scene: entries of its matrix stay below 1e48 and the readout's floats finite."""

@@ -8,6 +8,7 @@ once from the certified relation looked up in the analysis; the panels follow at
 
 from __future__ import annotations
 
+import math
 import re
 import threading
 import time
@@ -65,17 +66,24 @@ class TimelineMixin:
                 return None
             lo, hi = model.interval_floats
             exact = None if isinstance(t, float) else t
-            t = float(t)
+            try:
+                t = float(t)
+            except OverflowError:  # a typed 1e400: beyond every float, clamped like any t outside
+                t = math.inf if t > 0 else -math.inf
             if not lo <= t <= hi:
                 t, exact = min(max(t, lo), hi), None
             self.state.t = t
             self.state.t_exact = exact
             self.state.event = event
-            a, b = model.shapes_at(t)
-            self.state.shapes = {"A": a, "B": b}  # a drag from here starts where they are drawn
-            for name, sh in (("A", a), ("B", b)):
-                pos, wxyz, scale = sh.float_pose()
-                self.views[name].set_pose(pos, wxyz, scale)
+            try:
+                a, b = model.shapes_at(t)
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+                a = b = None  # not drawable in floats at this t (extreme coefficients): keep the last pose
+            if a is not None and b is not None:
+                self.state.shapes = {"A": a, "B": b}  # a drag from here starts where they are drawn
+                for name, sh in (("A", a), ("B", b)):
+                    pos, wxyz, scale = sh.float_pose()
+                    self.views[name].set_pose(pos, wxyz, scale)
             an = self.analysis
             if an is None:
                 self._set_relation(None)
@@ -83,13 +91,15 @@ class TimelineMixin:
                 return None
             relation = an.events[event - 1].relation if event is not None else an.relation_at(t if exact is None else exact)
             self._set_relation(relation)
-            if relation == str(Relation.TANGENT):
+            if a is None:  # the float matrices are not ellipses here: no contact point or plane
+                self._update_contact(None, None, None)
+            elif relation == str(Relation.TANGENT):
                 A, B = model.float_matrices(t)
                 coeffs = [{"approx": float(v)} for v in pencil_coefficients(A, B)]
                 self._update_contact(A, B, {"relation": relation, "coefficients": coeffs})
             else:
                 self._update_contact(None, None, None)
-            if self.show_plane.value or self._plane_on:
+            if a is not None and (self.show_plane.value or self._plane_on):
                 A, B = model.float_matrices(t)
                 self._update_plane(A, B, relation)
             if defer_panels:
@@ -159,7 +169,7 @@ class TimelineMixin:
         if self._syncing or self.model is None:
             return
         text = self.t_number.value.strip()
-        m = re.fullmatch(r"(?:α|alpha)\s*(\d+)", text, flags=re.IGNORECASE)
+        m = re.fullmatch(r"(?:α|alpha)\s*([0-9]+)", text, flags=re.IGNORECASE)
         if m is not None:  # "α1" / "alpha1": the exact event
             n_ev = len(self.analysis.events) if self.analysis else 0
             if not 1 <= int(m.group(1)) <= n_ev:

@@ -1,0 +1,101 @@
+"""Reading request bodies as JSON without silent changes: the route class of every API router.
+
+Python's JSON reader turns ``1e-400`` into 0.0 and ``1e400`` into inf, reads a 5,000-digit
+integer in quadratic time (or refuses it with a bare error), and reports a deeply nested body as
+a generic parse error. :class:`JsonRoute` reads bodies with hooks instead: a number that a float
+cannot hold, or an integer over the edge limit, becomes an :class:`OutOfRange` marker that the
+number validator (:func:`app.api.schemas.checked_number`) refuses with a message naming the
+field; a body nested too deeply is a 400 that says so.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Coroutine
+from typing import Any
+
+from fastapi import HTTPException, Request, Response
+from fastapi.routing import APIRoute
+
+from core.limits import SERVER
+
+__all__ = ["JsonRoute", "OutOfRange", "read_json"]
+
+_NONZERO = frozenset("123456789")
+
+
+class OutOfRange:
+    """A JSON number that cannot be read as given: ``message`` says why and what to send instead."""
+
+    __slots__ = ("text", "message")
+
+    def __init__(self, text: str, message: str) -> None:
+        self.text = text
+        self.message = message
+
+    def __repr__(self) -> str:
+        return f"OutOfRange({self.text[:40]!r})"
+
+
+def _shown(text: str) -> str:
+    return text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
+
+
+def _float(text: str) -> float | OutOfRange:
+    value = float(text)
+    if value - value != 0.0:  # inf: the literal overflows a double
+        return OutOfRange(text, f"JSON number {_shown(text)} overflows a float (|x| > 1.8e308); "
+                                f'send it as a string ("{_shown(text)}") for its exact value')
+    if value == 0.0 and _NONZERO.intersection(text.split("e")[0].split("E")[0]):
+        return OutOfRange(text, f"JSON number {_shown(text)} underflows to 0 as a float; "
+                                f'send it as a string ("{_shown(text)}") for its exact value')
+    return value
+
+
+def _int(text: str) -> int | OutOfRange:
+    digits = len(text.lstrip("-"))
+    limit = SERVER.number_chars or 0
+    if limit and digits > limit:
+        return OutOfRange(text, f"integer too large (more than {limit} digits); send it as a string fraction")
+    return int(text)
+
+
+def read_json(body: bytes | str) -> Any:
+    """Parse a request body like ``json.loads``, with the markers above.
+
+    Raises:
+        json.JSONDecodeError: malformed JSON (FastAPI answers 422 with the position).
+        HTTPException: 400 when the body is nested too deeply for the reader.
+
+    Examples:
+        >>> read_json('[1.5, 1e-400, 2]')
+        [1.5, OutOfRange('1e-400'), 2]
+    """
+    try:
+        return json.loads(body, parse_float=_float, parse_int=_int)
+    except RecursionError:
+        raise HTTPException(
+            400,
+            "JSON nested too deeply: the body has more levels of [ and { than the JSON reader allows "
+            "(about 1000); the inputs of this API need at most 5",
+        ) from None
+
+
+class _JsonRequest(Request):
+    async def json(self) -> Any:
+        if not hasattr(self, "_json"):
+            self._json = read_json(await self.body())
+        return self._json
+
+
+class JsonRoute(APIRoute):
+    """APIRoute whose handler reads JSON with :func:`read_json` (FastAPI's custom-route hook)."""
+
+    def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
+        """The default handler, given a request that parses its body with :func:`read_json`."""
+        handler = super().get_route_handler()
+
+        async def route_handler(request: Request) -> Response:
+            return await handler(_JsonRequest(request.scope, request.receive))
+
+        return route_handler
