@@ -8,6 +8,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import analyse                              # moving pairs: events and intervals
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
     from core import warm_up                              # compile the numba kernels early
+    from core import contact_scale, separating_plane, contact_point, witness   # witnesses
 
 ``core`` imports only numpy, python-flint, numba (optional) and the standard library.
 """
@@ -34,20 +35,34 @@ from .quadrics import quadric_from_axes as quadric_from_axes
 from .quadrics import rotation_from_quaternion as rotation_from_quaternion
 from .quadrics import validate_quadric as validate_quadric
 from .relation import Relation as Relation
+from .witness import ContactPoint as ContactPoint
+from .witness import ContactScale as ContactScale
+from .witness import SeparatingPlane as SeparatingPlane
+from .witness import Witness as Witness
+from .witness import contact_point as contact_point
+from .witness import contact_scale as contact_scale
+from .witness import separating_plane as separating_plane
+from .witness import witness as witness
 
 __all__ = [
     "METHODS",
+    "ContactPoint",
+    "ContactScale",
     "Explanation",
     "Method",
     "Motion",
     "MotionAnalysis",
     "Quantity",
     "Relation",
+    "SeparatingPlane",
     "ShapeParams",
     "Stats",
+    "Witness",
     "analyse",
     "axes_from_quadric",
     "classify",
+    "contact_point",
+    "contact_scale",
     "explain",
     "motion_from_dict",
     "motion_to_dict",
@@ -56,6 +71,8 @@ __all__ = [
     "preset_names",
     "quadric_from_axes",
     "rotation_from_quaternion",
+    "separating_plane",
     "validate_quadric",
     "warm_up",
+    "witness",
 ]

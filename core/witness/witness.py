@@ -1,0 +1,117 @@
+"""The witness behind each answer, in one call, with the sentence that explains it.
+
+* separate: a plane that separates them (exact rationals, verified; :mod:`core.witness.plane`),
+* tangent: the point where they touch and the common normal (exact; :mod:`core.witness.point`),
+* overlap: a rational point inside both (verified; :mod:`core.witness.point`),
+
+and, for every relation, the certified contact scale mu* (:mod:`core.witness.scale`): how far
+from touching, as a margin a class can read ("1.8 % apart", "overlapping by 3 %").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from ..classify import classify
+from ..relation import Relation
+from .plane import SeparatingPlane, separating_plane
+from .point import ContactPoint, contact_point
+from .scale import ContactScale, contact_scale
+
+__all__ = ["Witness", "witness", "margin_text", "SENTENCES"]
+
+SENTENCES = {
+    Relation.SEPARATE: "separate: this plane separates them",
+    Relation.TANGENT: "tangent: they touch here",
+    Relation.OVERLAP: "overlap: this point is inside both",
+}
+"""What each witness shows, as one sentence."""
+
+
+def margin_text(lo: float, hi: float, relation: Relation | int | str) -> str:
+    """The contact scale as a margin: "1.8 % apart", "touching", "overlapping by 3 %".
+
+    The percentage is (mu* - 1) or (1 - mu*) at the middle of the certified bracket [lo, hi]
+    with two significant digits: both shapes must grow (apart) or shrink (overlapping) by
+    that much about their own centres to touch.
+
+    Examples:
+        >>> margin_text(1.018, 1.018, "separate"), margin_text(0.97, 0.97, "overlap")
+        ('1.8 % apart', 'overlapping by 3 %')
+        >>> margin_text(1.0, 1.0, "tangent")
+        'touching'
+    """
+    rel = Relation.parse(relation) if isinstance(relation, str) else Relation(relation)
+    if rel == Relation.TANGENT:
+        return "touching"
+    mid = 0.5 * (float(lo) + float(hi))
+    pct = abs(mid - 1.0) * 100.0
+    text = f"{pct:.2g}"
+    if rel == Relation.SEPARATE:
+        return f"{text} % apart"
+    if rel == Relation.OVERLAP:
+        return f"overlapping by {text} %"
+    return "unknown"
+
+
+@dataclass
+class Witness:
+    """The certified relation, the sentence that explains it and the object that proves it."""
+
+    relation: Relation
+    sentence: str
+    scale: ContactScale
+    plane: SeparatingPlane | None = None
+    """Separate pairs: the verified separating plane."""
+    point: ContactPoint | None = None
+    """Tangent pairs: the exact contact point and normal; overlap: a rational point in both."""
+
+    @property
+    def margin(self) -> str:
+        """The contact scale as a margin ("1.8 % apart", "touching", "overlapping by 3 %")."""
+        return margin_text(float(self.scale.lo), float(self.scale.hi), self.relation)
+
+    def to_dict(self, digits: int = 20) -> dict[str, Any]:
+        """JSON form (exact values as strings)."""
+        return {
+            "relation": str(self.relation),
+            "sentence": self.sentence,
+            "margin": self.margin,
+            "contact_scale": self.scale.to_dict(digits),
+            "plane": None if self.plane is None else self.plane.to_dict(),
+            "point": None if self.point is None else self.point.to_dict(digits),
+        }
+
+
+def witness(A: Any, B: Any) -> Witness:
+    """The witness of the certified relation of one pair.
+
+    Args:
+        A, B: one pair, any input form of :func:`core.classify`.
+
+    Returns:
+        :class:`Witness`: relation, sentence, contact scale, and the plane (separate) or
+        point (tangent, overlap).
+
+    Raises:
+        ValueError: an invalid matrix.
+
+    Examples:
+        >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
+        >>> w = witness(circle(0), circle(3))
+        >>> w.sentence, w.plane.normal, w.plane.offset, w.margin
+        ('separate: this plane separates them', (1, 0), 3/2, '50 % apart')
+        >>> witness(circle(0), circle(2)).point.rational_point
+        (1, 0)
+    """
+    rel = classify(A, B)
+    scale = contact_scale(A, B)
+    if scale.relation != rel:  # two independent certified computations: never expected
+        raise RuntimeError(f"contact scale says {scale.relation}, the classifier {rel}: please report this pair")
+    out = Witness(rel, SENTENCES[rel], scale)
+    if rel == Relation.SEPARATE:
+        out.plane = separating_plane(A, B)
+    else:
+        out.point = contact_point(A, B)
+    return out
