@@ -35,6 +35,7 @@ from flint import fmpq, fmpq_mat, fmpq_poly
 from ..pencil import determinant
 from .centred import CentredShape, dot
 from .floats import maximise
+from .numbers import simplest_between
 
 __all__ = ["ContactFunction", "Bracket", "dyadic"]
 
@@ -166,9 +167,7 @@ class ContactFunction:
         if d_hi == 0:
             return Bracket(hi, hi, f_hi, f_hi, hi, True)
         # the simplest rational of the bracket is often lambda* itself (spheres, symmetric pairs)
-        from ..algebraic import _simplest_between
-
-        mid = _simplest_between(lo, hi)
+        mid = simplest_between(lo, hi)
         f_m, d_m, _ = self.values(mid)
         if d_m == 0:
             return Bracket(mid, mid, f_m, f_m, mid, True)

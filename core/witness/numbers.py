@@ -16,7 +16,7 @@ from typing import Any
 
 from flint import arb, arb_poly, fmpq, fmpq_poly
 
-from ..algebraic import RealAlgebraic, _arb_to_fmpq, _simplest_between, _workprec
+from ..algebraic import RealAlgebraic, _arb_to_fmpq, _workprec
 from ..qsqrt import QSqrtPoly
 from ..realroots import real_roots
 
@@ -26,11 +26,37 @@ __all__ = ["sqrt_bounds", "simplest_between", "value_at_root", "algebraic_dict",
 def simplest_between(lo: fmpq, hi: fmpq) -> fmpq:
     """The rational with the smallest denominator in [lo, hi] (lo <= hi).
 
+    The same continued-fraction descent as ``core.algebraic._simplest_between``, without
+    recursion: intervals a few thousand bits wide (exact refinements) need thousands of terms.
+
     Examples:
         >>> simplest_between(fmpq(31, 100), fmpq(34, 100))
         1/3
+        >>> x = fmpq(2**3000 + 1, 2**3000); simplest_between(x, x) == x
+        True
     """
-    return _simplest_between(lo, hi)
+    if lo <= 0 <= hi:
+        return fmpq(0)
+    if hi < 0:
+        return -simplest_between(-hi, -lo)
+    terms = []
+    a, b = lo, hi
+    while True:
+        fl = a.p // a.q
+        if fmpq(fl) == a:
+            terms.append(fl)
+            break
+        if fl + 1 <= b:
+            terms.append(fl + 1)
+            break
+        terms.append(fl)
+        a, b = 1 / (b - fl), 1 / (a - fl)
+    # fold the continued fraction [t0; t1, ..., tk] with integer convergents
+    h0, h1, k0, k1 = 1, terms[0], 0, 1
+    for t in terms[1:]:
+        h0, h1 = h1, t * h1 + h0
+        k0, k1 = k1, t * k1 + k0
+    return fmpq(h1, k1)
 
 
 def rational_near(x: float, rel: float) -> fmpq:
@@ -39,7 +65,7 @@ def rational_near(x: float, rel: float) -> fmpq:
     if rel <= 0 or q == 0:
         return q
     w = abs(q) * fmpq(*float(rel).as_integer_ratio())
-    return _simplest_between(q - w, q + w)
+    return simplest_between(q - w, q + w)
 
 
 def _floor_sqrt_scaled(q: fmpq, b: int) -> int:

@@ -121,23 +121,31 @@ def _relation(cf: ContactFunction, br: Bracket, tangent: list[bool | None]) -> R
     return Relation.TANGENT if tangent[0] else None
 
 
+def _mu_bounds(br: Bracket, rel: Relation, bits: int) -> tuple[fmpq, fmpq]:
+    """Rational bounds of sqrt(s*) from those of s*, precise enough to stay on the side of 1."""
+    while True:
+        lo, _ = sqrt_bounds(br.s_lo, bits)
+        _, hi = sqrt_bounds(br.s_hi, bits)
+        if (rel != Relation.SEPARATE or lo > 1) and (rel != Relation.OVERLAP or hi < 1):
+            return lo, hi
+        bits *= 2
+
+
 def _contact_scale_pair(A: Any, B: Any, rtol: float) -> ContactScale:
     cf, br = solve_pair(A, B)
     if br is None:
         return ContactScale(fmpq(0), fmpq(0), Relation.OVERLAP, cf, None)
-    bits = max(64, int(-math.log2(rtol)) + 16) if rtol > 0 else 64
+    bits = max(64, int(-math.log2(rtol)) + 16)
     tangent: list[bool | None] = [None]
     for _ in range(_MAX_REFINEMENTS):
         rel = _relation(cf, br, tangent)
         if rel == Relation.TANGENT:
             return ContactScale(fmpq(1), fmpq(1), rel, cf, br)
         if rel is not None:
-            lo, _ = sqrt_bounds(br.s_lo, bits)
-            _, hi = sqrt_bounds(br.s_hi, bits)
+            lo, hi = _mu_bounds(br, rel, bits)
             if br.exact or hi - lo <= hi * fmpq(*float(rtol).as_integer_ratio()):
                 return ContactScale(lo, hi, rel, cf, br)
         br = cf.refine(br, 2 * max(bits, int(br.hi.q.bit_length())))
-        bits = bits * 2 if rtol == 0 else bits
     raise RuntimeError("contact_scale: the bracket did not converge (please report this pair)")
 
 
@@ -156,8 +164,9 @@ def contact_scale(A: Any, B: Any, *, rtol: float = 1e-12) -> Any:
     Args:
         A, B: one matrix each (any input form of :func:`core.classify`), or stacks (..., n, n)
             of float matrices that broadcast (then the vectorised batch form is used).
-        rtol: relative width asked of the bracket: hi - lo <= rtol * hi (one pair: met exactly,
-            usually far better; batch: see :func:`core.witness.batch.contact_scale_batch`).
+        rtol: relative width asked of the bracket, > 0: hi - lo <= rtol * hi (one pair: met,
+            usually far better; batch: see :func:`core.witness.batch.contact_scale_batch`). The
+            exact value is :meth:`ContactScale.algebraic`.
 
     Returns:
         One pair: a :class:`ContactScale` (exact rational ``lo``, ``hi``; ``approx``;
@@ -178,8 +187,8 @@ def contact_scale(A: Any, B: Any, *, rtol: float = 1e-12) -> Any:
         >>> cs.approx, str(cs.relation)
         (0.75, 'overlap')
     """
-    if not (rtol >= 0 and math.isfinite(rtol)):
-        raise ValueError(f"rtol must be a finite number >= 0, got {rtol!r}")
+    if not (rtol > 0 and math.isfinite(rtol)):
+        raise ValueError(f"rtol must be a finite number > 0 (the exact value is .algebraic()), got {rtol!r}")
     if _is_stack(A) or _is_stack(B):
         from .batch import contact_scale_batch
 
