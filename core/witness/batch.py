@@ -34,6 +34,7 @@ from ..classify import Stats, classify
 from ..relation import Relation
 from .floatdet import certified_sign, det_with_bound
 from .floats import centred_floats, maximise, stack_lists
+from .numbers import to_float
 
 __all__ = ["ContactScaleBatch", "PlaneBatch", "contact_scale_batch", "separating_plane_batch"]
 
@@ -298,14 +299,14 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
 
 def _float_down(q: Any) -> float:
     """The largest float <= the rational q."""
-    f = float(q)
-    return f if fmpq(*f.as_integer_ratio()) <= q else float(np.nextafter(f, -_INF))
+    f = to_float(q)
+    return f if not np.isfinite(f) or fmpq(*f.as_integer_ratio()) <= q else float(np.nextafter(f, -_INF))
 
 
 def _float_up(q: Any) -> float:
     """The smallest float >= the rational q."""
-    f = float(q)
-    return f if fmpq(*f.as_integer_ratio()) >= q else float(np.nextafter(f, _INF))
+    f = to_float(q)
+    return f if not np.isfinite(f) or fmpq(*f.as_integer_ratio()) >= q else float(np.nextafter(f, _INF))
 
 
 def _exact_batch(A: Any, B: Any, rtol: float, codes: np.ndarray) -> ContactScaleBatch:
@@ -399,6 +400,7 @@ def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
 
 def _planes_exact(a: np.ndarray, b: np.ndarray, codes: np.ndarray, shape: tuple[int, ...], which: np.ndarray) -> PlaneBatch:
     """Exact planes for the pairs ``which`` that are separate, rounded to floats and re-checked."""
+    from ..rationals import to_fmpq
     from .plane import separating_plane
 
     N, n = a.shape[0], a.shape[-1]
@@ -408,15 +410,13 @@ def _planes_exact(a: np.ndarray, b: np.ndarray, codes: np.ndarray, shape: tuple[
     certified = np.zeros(N, bool)
     for i in np.flatnonzero(which & (codes == Relation.SEPARATE)):
         plane = separating_plane(a[i].tolist(), b[i].tolist())
-        nf = np.array([float(v) for v in plane.normal])
-        scale = float(np.abs(nf).max())
-        nf = nf / scale
-        normal[i] = nf
-        offset[i] = float(plane.offset) / scale
+        big = max(abs(v) for v in plane.normal)  # exact scaling: the largest component is +-1
+        normal[i] = [to_float(v / big) for v in plane.normal]
+        offset[i] = to_float(plane.offset / big)
     idx = np.flatnonzero(np.isfinite(offset))
     if idx.size:
-        fa = np.array([[[float(v) for v in row] for row in a[i]] for i in idx])
-        fb = np.array([[[float(v) for v in row] for row in b[i]] for i in idx])
+        fa = np.array([[[to_float(to_fmpq(v)) for v in row] for row in a[i]] for i in idx])
+        fb = np.array([[[to_float(to_fmpq(v)) for v in row] for row in b[i]] for i in idx])
         fa, fb = _normalised(fa), _normalised(fb)
         exact_floats = all(_is_float_exact(a[i]) and _is_float_exact(b[i]) for i in idx)
         pi = np.concatenate([normal[idx], -offset[idx][:, None]], axis=-1)

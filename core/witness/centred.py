@@ -85,8 +85,10 @@ class CentredShape:
     def floats(self) -> tuple[list[float], list[list[float]]]:
         """(centre, S) as Python floats (for float estimates only)."""
         d = self.d
-        return [float(self.centre[i, 0]) for i in range(d)], [
-            [float(self.S[i, j]) for j in range(d)] for i in range(d)
+        from ..qsqrt import _to_float
+
+        return [_to_float(self.centre[i, 0]) for i in range(d)], [
+            [_to_float(self.S[i, j]) for j in range(d)] for i in range(d)
         ]
 
 

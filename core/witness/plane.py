@@ -23,7 +23,7 @@ from ..classify import classify
 from ..relation import Relation
 from .centred import CentredShape, column, dot
 from .contact_function import ContactFunction
-from .numbers import simplest_between, sqrt_bounds
+from .numbers import simplest_between, sqrt_bounds, to_float
 
 __all__ = ["SeparatingPlane", "separating_plane", "plane_separates"]
 
@@ -52,14 +52,15 @@ class SeparatingPlane:
         norm2 = sum(v * v for v in self.normal)
         _, upper = sqrt_bounds(norm2, 64)
         g = (self.support_b - self.support_a) / upper
-        f = float(g)
-        return f if fmpq(*f.as_integer_ratio()) <= g else float(np.nextafter(f, -np.inf))
+        f = to_float(g)
+        return f if not np.isfinite(f) or fmpq(*f.as_integer_ratio()) <= g else float(np.nextafter(f, -np.inf))
 
     def unit(self) -> tuple[np.ndarray, float]:
         """(unit normal, offset) as floats, for drawing (not certified)."""
-        n = np.array([float(v) for v in self.normal])
+        big = max(abs(v) for v in self.normal)  # exact: the largest component becomes +-1
+        n = np.array([to_float(v / big) for v in self.normal])
         s = float(np.linalg.norm(n))
-        return n / s, float(self.offset) / s
+        return n / s, to_float(self.offset / big) / s
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form: exact strings and float approximations."""

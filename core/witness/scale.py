@@ -29,7 +29,7 @@ from ..algebraic import RealAlgebraic
 from ..relation import Relation
 from .centred import centred_pair
 from .contact_function import Bracket, ContactFunction
-from .numbers import algebraic_dict, sqrt_bounds, value_at_root
+from .numbers import algebraic_dict, sqrt_bounds, to_float, value_at_root
 
 __all__ = ["ContactScale", "contact_scale", "solve_pair"]
 
@@ -54,12 +54,12 @@ class ContactScale:
     @property
     def approx(self) -> float:
         """A float inside [lo, hi] (the midpoint, rounded)."""
-        return float((self.lo + self.hi) / 2)
+        return to_float((self.lo + self.hi) / 2)
 
     @property
     def margin(self) -> float:
         """mu* - 1 as a float: > 0 apart, 0 touching, < 0 overlapping (relative to the sizes)."""
-        return float((self.lo + self.hi) / 2 - 1)
+        return to_float((self.lo + self.hi) / 2 - 1)
 
     @property
     def is_exact(self) -> bool:

@@ -17,6 +17,7 @@ from ..classify import classify
 from ..relation import Relation
 from .plane import SeparatingPlane, separating_plane
 from .point import ContactPoint, contact_point
+from .numbers import to_float
 from .scale import ContactScale, contact_scale
 
 __all__ = ["Witness", "witness", "margin_text", "SENTENCES"]
@@ -70,7 +71,7 @@ class Witness:
     @property
     def margin(self) -> str:
         """The contact scale as a margin ("1.8 % apart", "touching", "overlapping by 3 %")."""
-        return margin_text(float(self.scale.lo), float(self.scale.hi), self.relation)
+        return margin_text(to_float(self.scale.lo), to_float(self.scale.hi), self.relation)
 
     def to_dict(self, digits: int = 20) -> dict[str, Any]:
         """JSON form (exact values as strings)."""
