@@ -39,7 +39,7 @@ from core import (
 )
 from core.motions import matrix_at_exact
 from core.presets import preset_arguments
-from core.witness import margin_text
+from core.witness import contact_scale_batch, margin_text
 
 # ------------------------------------------------------------------ independent exact helpers
 
@@ -528,3 +528,24 @@ def test_batch_planes_certified_and_checked(d):
         assert plane_misses_on_side(frac(A[i]), n, F(float(p.offset[i])), -1)
         assert plane_misses_on_side(frac(B[i]), n, F(float(p.offset[i])), 1)
     assert np.isnan(p.offset[~sep]).all()
+
+
+def test_batch_one_float_pair_and_far_centres():
+    # one float pair gives 0-d arrays (the scene's drag path); centres far out compared with the
+    # sizes make the plain float k lose digits, the compensated enclosure does not
+    for shift in (0.0, 100.0, 1e4):
+        A = quadric_from_axes([shift, shift, 0.0], [0.2, 0.3, 0.25], [0.9, 0.1, 0.2, 0.3])
+        B = quadric_from_axes([shift + 0.5, shift + 0.3, 0.1], [0.1, 0.3, 0.2], [0.2, 0.8, 0.1, 0.3])
+        r = contact_scale_batch(A, B, rtol=1e-10)
+        assert r.lo.shape == ()
+        assert r.exact_pairs == (1 if shift > 1000 else 0)  # at 1e4 x the sizes the last entry loses s*
+        cs = contact_scale(A, B)
+        assert int(r.relation) == cs.relation
+        assert fmpq(*float(r.lo).as_integer_ratio()) <= cs.hi and cs.lo <= fmpq(*float(r.hi).as_integer_ratio())
+        assert float(r.hi - r.lo) <= 1e-10 * float(r.hi)
+        p = separating_plane(A[None], B[None])
+        if cs.relation == Relation.SEPARATE:
+            assert p.certified[0]
+            n = [F(float(v)) for v in p.normal[0]]
+            assert plane_misses_on_side(frac(A), n, F(float(p.offset[0])), -1)
+            assert plane_misses_on_side(frac(B), n, F(float(p.offset[0])), 1)

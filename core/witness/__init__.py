@@ -13,6 +13,8 @@ ellipsoids, certified like the relation itself::
 * :func:`contact_point`: the exact contact point and normal of a tangent pair, or a rational
   point inside both shapes of an overlapping pair.
 * :func:`witness`: the one that proves the relation, with a sentence.
+* :func:`contact_scale_batch`, :func:`separating_plane_batch`: the float forms, for stacks or
+  for one float pair (0-d results; fast: the scene's drag path).
 
 Modules: :mod:`~core.witness.centred` (centre, size, inverse shape matrix),
 :mod:`~core.witness.contact_function` (the contact function, exact), :mod:`~core.witness.floats`
@@ -24,6 +26,8 @@ Modules: :mod:`~core.witness.centred` (centre, size, inverse shape matrix),
 
 from .batch import ContactScaleBatch as ContactScaleBatch
 from .batch import PlaneBatch as PlaneBatch
+from .batch import contact_scale_batch as contact_scale_batch
+from .batch import separating_plane_batch as separating_plane_batch
 from .plane import SeparatingPlane as SeparatingPlane
 from .plane import separating_plane as separating_plane
 from .point import ContactPoint as ContactPoint
@@ -45,7 +49,9 @@ __all__ = [
     "Witness",
     "contact_point",
     "contact_scale",
+    "contact_scale_batch",
     "margin_text",
     "separating_plane",
+    "separating_plane_batch",
     "witness",
 ]

@@ -1,29 +1,38 @@
-"""Vectorised witnesses for stacks of float pairs: contact-scale brackets and separating planes.
+"""Witnesses from float arithmetic with proofs: contact-scale brackets and separating planes.
+
+For stacks of float pairs (vectorised) and for one float pair (the scene's drag path: the same
+code on Python floats, a few hundred microseconds).
 
 Contact scale (:func:`contact_scale_batch`): a float estimate s of s* = mu*^2 (Newton on the
-contact function, all pairs at once) is bracketed by two certified classifications of the pairs
-*scaled* about their centres. Scaling a shape to s means adding k (1 - s) to the last entry of
-its matrix (:mod:`core.witness.centred`); the float written there is an exact binary rational,
-and the scale s' it really stands for is enclosed from certified float determinants
-(k = -det A / det M, :mod:`core.witness.floatdet`) with directed rounding (one ``nextafter`` per
-correctly rounded operation). Scaled shapes are nested in s, so
+contact function) is bracketed by two certified classifications of the pairs *scaled* about
+their centres. Scaling a shape to s means adding k (1 - s) to the last entry of its matrix
+(:mod:`core.witness.centred`); the float written there is an exact binary rational, and the scale
+s' it stands for is enclosed with directed rounding (one ``nextafter`` per correctly rounded
+operation) from a certified enclosure of k: with V = (v, 1) at the float centre v,
+k = -V^T A V + r^T Q^-1 r (r = Q v + m), where V^T A V comes from compensated dot products (no
+loss to the cancellation between c^T Q c and the last entry) and 0 <= r^T Q^-1 r <= |r|^2 /
+lambda_min(Q), lambda_min(Q) >= det Q / tr(Q)^(d-1) (certified determinant,
+:mod:`core.witness.floatdet`). Scaled shapes are nested in s, so
 
 * scaled pair certified SEPARATE at scales (s_A', s_B')  =>  s* > min(s_A', s_B'),
 * scaled pair certified TANGENT or OVERLAP              =>  s* <= max(s_A', s_B').
 
-``classify`` certifies those labels (float filter; ``method="float"`` so nothing escalates).
-Pairs the floats cannot bracket within ``rtol`` (near s* = 0, or a scaled pair the filter leaves
-undecided) get the exact one-pair computation; tangent pairs are exactly mu* = 1.
+:func:`core.classify` certifies those labels (float filter, exact where it abstains). Pairs the
+floats cannot bracket within ``rtol`` (near s* = 0, extreme magnitudes) get the exact one-pair
+computation; tangent pairs are exactly mu* = 1; the relation at scale 1 (certified) puts 1 on
+the right side of every bracket. Centres far from the origin compared with the sizes (about
+1e3 times and more) put the scale in the last digits of the last entry: those pairs go exact.
 
-Planes (:func:`separating_plane_batch`): the candidate normal y(lambda*) of the contact function,
-the offset halfway between the two support values, and a certificate from determinant signs:
-the plane pi = (n, -d) misses the ellipsoid A iff pi^T adj(A) pi > 0, i.e. the bordered
-determinant det [[A, pi], [pi^T, 0]] < 0, and A lies on the side n.x < d iff det(A with its last
-column replaced by pi) < 0 (Cramer: that is (A^-1 pi)_last det A, and (A^-1 pi)_last = (d - n.c)/k).
+Planes (:func:`separating_plane_batch`): the normal y(lambda*) of the contact function, the
+offset halfway between the two support values, and a certificate from determinant signs: the
+plane pi = (n, -d) misses the ellipsoid A iff pi^T adj(A) pi > 0, i.e. the bordered determinant
+det [[A, pi], [pi^T, 0]] < 0, and A lies on the side n.x < d iff det(A with its last column
+replaced by pi) < 0 (Cramer: (A^-1 pi)_last = (d - n.c) / k, and det A < 0).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -32,28 +41,23 @@ from flint import fmpq
 
 from ..classify import Stats, classify
 from ..relation import Relation
-from .floatdet import certified_sign, det_with_bound
-from .floats import centred_floats, maximise, stack_lists
+from .floatdet import det_with_bound
+from .floats import centred, dot, down, is_array, lists, maximise, scaled, stacked, up, where
 from .numbers import to_float
 
 __all__ = ["ContactScaleBatch", "PlaneBatch", "contact_scale_batch", "separating_plane_batch"]
 
-_INF = np.inf
 _SMALLEST_S = 1e-8
 """Below this estimate of s* the float scaled matrices lose the scale: exact path instead."""
-
-
-def _up(x: np.ndarray) -> np.ndarray:
-    return np.nextafter(x, _INF)
-
-
-def _down(x: np.ndarray) -> np.ndarray:
-    return np.nextafter(x, -_INF)
+_U = 2.0**-53
+_SPLIT = 134217729.0  # 2^27 + 1 (Veltkamp)
+_ARITHMETIC = (ZeroDivisionError, OverflowError, ValueError)
+"""What Python floats raise where numpy arrays give inf/nan (one pair: that pair goes exact)."""
 
 
 @dataclass
 class ContactScaleBatch:
-    """Certified float brackets ``lo <= mu* <= hi`` of a stack of pairs (batch shape)."""
+    """Certified float brackets ``lo <= mu* <= hi`` for pairs (arrays of the batch shape)."""
 
     lo: np.ndarray
     hi: np.ndarray
@@ -69,10 +73,10 @@ class ContactScaleBatch:
 
 @dataclass
 class PlaneBatch:
-    """Separating planes n.x = d of a stack of pairs: A in n.x < d, B in n.x > d where certified."""
+    """Separating planes n.x = d of pairs: A in n.x < d, B in n.x > d where ``certified``."""
 
     normal: np.ndarray
-    """(..., dim) float normals (unit length up to rounding; NaN where the pair is not separate)."""
+    """(..., dim) float normals of unit length (up to rounding); NaN where the pair is not separate."""
     offset: np.ndarray
     """(...) float offsets d."""
     certified: np.ndarray
@@ -82,48 +86,52 @@ class PlaneBatch:
     """int8 Relation codes of the pairs."""
 
 
-def _stacks(A: Any, B: Any) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
-    """Broadcast float stacks (N, n, n) and the batch shape; ValueError for non-float input."""
-    a = np.asarray(A)
-    b = np.asarray(B)
+# ------------------------------------------------------------------ inputs
+
+
+def _normalised(M: np.ndarray) -> np.ndarray:
+    """Interior negative (signs flipped where needed) and the largest |entry| in [1, 2): both
+    exact (a sign and a power of two) and neither changes the shape."""
+    mx = np.abs(M).max(axis=(-2, -1))
+    _, e = np.frexp(np.where((mx > 0) & np.isfinite(mx), mx, 1.0))
+    factor = np.ldexp(np.where(M[..., 0, 0] < 0, -1.0, 1.0), 1 - e)
+    return M * factor[..., None, None]
+
+
+def _float_input(A: Any, B: Any) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]] | None:
+    """Normalised float arrays, (n, n) for one pair or (N, n, n), and the batch shape; None for
+    exact input (fractions, strings), which goes pair by pair."""
+    a, b = np.asarray(A), np.asarray(B)
     if a.dtype.kind not in "fiu" or b.dtype.kind not in "fiu":
-        raise TypeError("not float stacks")
-    a = a.astype(np.float64, copy=False)
-    b = b.astype(np.float64, copy=False)
-    if a.ndim < 2 or b.ndim < 2:
-        raise ValueError(f"A and B must be matrices or stacks of them, got shapes {a.shape} and {b.shape}")
-    n = a.shape[-1]
-    if a.shape[-2:] != (n, n) or b.shape[-2:] != (n, n) or n not in (3, 4):
-        raise ValueError(f"A and B must be stacks of 3x3 or 4x4 matrices of one size, got {a.shape} and {b.shape}")
+        return None
+    a, b = a.astype(np.float64), b.astype(np.float64)
     shape = np.broadcast_shapes(a.shape[:-2], b.shape[:-2])
+    if shape == ():
+        return _normalised(a), _normalised(b), shape
+    n = a.shape[-1]
     a = np.ascontiguousarray(np.broadcast_to(a, (*shape, n, n))).reshape(-1, n, n)
     b = np.ascontiguousarray(np.broadcast_to(b, (*shape, n, n))).reshape(-1, n, n)
     return _normalised(a), _normalised(b), shape
 
 
-def _normalised(M: np.ndarray) -> np.ndarray:
-    """Interior negative (signs flipped where needed) and the largest |entry| in [1, 2): both exact
-    (a power of two and a sign), and neither changes the shape.
-    """
-    mx = np.abs(M).max(axis=(1, 2))
-    _, e = np.frexp(np.where((mx > 0) & np.isfinite(mx), mx, 1.0))
-    factor = np.ldexp(np.where(M[:, 0, 0] < 0, -1.0, 1.0), 1 - e)
-    return M * factor[:, None, None]
+def _object_pairs(A: Any, B: Any, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    a, b = np.asarray(A, dtype=object), np.asarray(B, dtype=object)
+    n = a.shape[-1]
+    return np.broadcast_to(a, (*shape, n, n)).reshape(-1, n, n), np.broadcast_to(b, (*shape, n, n)).reshape(-1, n, n)
 
 
-_U = 2.0**-53
-_SPLIT = 134217729.0  # 2^27 + 1 (Veltkamp)
+# ------------------------------------------------------------------ error-free arithmetic
 
 
-def _two_sum(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """S + e = a + b exactly (Knuth)."""
+def _two_sum(a: Any, b: Any) -> tuple[Any, Any]:
+    """s + e = a + b exactly (Knuth)."""
     s = a + b
     bb = s - a
     return s, (a - (s - bb)) + (b - bb)
 
 
-def _two_product(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """P + e = a * b exactly (Dekker, Veltkamp splitting; no overflow or underflow)."""
+def _two_product(a: Any, b: Any) -> tuple[Any, Any]:
+    """p + e = a * b exactly (Dekker, Veltkamp splitting; no overflow or underflow)."""
     p = a * b
     ca, cb = _SPLIT * a, _SPLIT * b
     ah = ca - (ca - a)
@@ -133,96 +141,174 @@ def _two_product(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return p, al * bl - (((p - ah * bh) - al * bh) - ah * bl)
 
 
-def _dot2(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Compensated dot products over the last axis and certified error bounds.
+def _dot2(x: list[Any], y: list[Any]) -> tuple[Any, Any]:
+    """Compensated dot product and a certified error bound.
 
     Ogita, Rump, Oishi, "Accurate sum and dot product" (2005), Dot2:
     |res - x.y| <= u |x.y| + gamma_n^2 |x|.|y| (no underflow). The bound returned doubles both
-    terms, which also covers |x.y| <= |res| + bound and the rounding of the bound itself, and adds
-    an absolute floor for products below the normal range.
+    terms, which covers |x.y| <= |res| + bound and the rounding of the bound itself, and adds an
+    absolute floor for products below the normal range.
     """
-    n = x.shape[-1]
-    p, s = _two_product(x[..., 0], y[..., 0])
+    n = len(x)
+    p, s = _two_product(x[0], y[0])
+    absdot = abs(x[0]) * abs(y[0])
     for i in range(1, n):
-        h, r = _two_product(x[..., i], y[..., i])
+        h, r = _two_product(x[i], y[i])
         p, q = _two_sum(p, h)
         s = s + (q + r)
+        absdot = absdot + abs(x[i]) * abs(y[i])
     res = p + s
     g = n * _U / (1 - n * _U)
-    absdot = np.einsum("...i,...i->...", np.abs(x), np.abs(y))
-    return res, 4.0 * _U * np.abs(res) + 4.0 * g * g * absdot + 2.0**-1000
+    return res, 4.0 * _U * abs(res) + 4.0 * g * g * absdot + 2.0**-1000
 
 
-def _k_enclosure(M: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Certified [k_lo, k_hi] of k = -det(M) / det(quadratic block), NaN where not certified.
+@dataclass
+class _Centre:
+    """Certified float facts about one normalised matrix [[Q, m], [m^T, a]] (or a stack):
+    v a float centre, r = Q v + m with |r - r_float| <= rb (componentwise), 0 < lam_lo <=
+    lambda_min(Q), k_lo <= k <= k_hi, and ``ok`` where all of it is certified."""
 
-    With V = (v, 1) for any v (here the float centre c), X^T M X at V is F(v) = (v - c)^T Q (v - c) - k,
-    so k = -F(v) + r^T Q^-1 r with r = Q v + m (Q the quadratic block). F(v) = v.r + (m.v + a)
-    is evaluated from M V by compensated dot products (the cancellation between c^T Q c and a
-    costs nothing), and 0 <= r^T Q^-1 r <= |r|^2 / lambda_min(Q), lambda_min >= det Q / tr(Q)^(d-1).
+    v: list[Any]
+    Qinv: list[list[Any]]
+    r: list[Any]
+    rb: list[Any]
+    lam_lo: Any
+    k_lo: Any
+    k_hi: Any
+    ok: Any
+
+    @property
+    def k_mid(self) -> Any:
+        return 0.5 * (self.k_lo + self.k_hi)
+
+    def offset_error(self) -> Any:
+        """An upper bound of |r|_2 / lambda_min: |u.(c - v)| <= |u|_2 times this, for any u."""
+        rr = sum(((abs(ri) + b) * (abs(ri) + b) for ri, b in zip(self.r, self.rb, strict=True)), 0.0)
+        return up(_sqrt(up(rr)) / self.lam_lo * (1 + 2.0**-40))
+
+
+def _sqrt(x: Any) -> Any:
+    return np.sqrt(x) if is_array(x) else math.sqrt(x)
+
+
+def _centre(M: list[list[Any]]) -> _Centre:
+    """Centre facts of M (see :class:`_Centre`).
+
+    With V = (v, 1), V^T M V = (v - c)^T Q (v - c) - k, so k = -V^T M V + r^T Q^-1 r. V^T M V
+    = v.r + (m.v + a) comes from compensated dot products (the cancellation between c^T Q c and
+    a costs nothing) and 0 <= r^T Q^-1 r <= |r|^2 / lambda_min(Q), lambda_min(Q) >= det Q /
+    tr(Q)^(d-1) (certified determinant).
     """
-    d = M.shape[-1] - 1
-    V = np.concatenate([c, np.ones((c.shape[0], 1))], axis=-1)
-    with np.errstate(all="ignore"):
-        w, wb = _dot2(M, V[:, None, :])
-        r, rb = w[:, :d], wb[:, :d]
-        F = np.einsum("ni,ni->n", c, r) + w[:, d]
-        Fb = (np.einsum("ni,ni->n", np.abs(c), rb) + wb[:, d]
-              + 4.0 * (d + 2) * _U * (np.einsum("ni,ni->n", np.abs(c), np.abs(r)) + np.abs(w[:, d]))) * (1 + 2.0**-40)
-        det, detb, e = det_with_bound(M[:, :d, :d])
-        det_lo = np.ldexp(_down(det - detb), e)
-        trace = np.trace(M[:, :d, :d], axis1=1, axis2=2)
-        lam_lo = _down(det_lo / _up(trace ** (d - 1) * (1 + 2.0**-40)))
-        rr = np.einsum("ni,ni->n", np.abs(r) + rb, np.abs(r) + rb)
-        extra = 2.0 * rr / lam_lo
-        k_lo = _down(-F - Fb)
-        k_hi = _up(-F + Fb + extra)
-    ok = np.isfinite(k_lo) & np.isfinite(k_hi) & (k_lo > 0) & (lam_lo > 0) & np.isfinite(V).all(axis=-1)
-    ok &= (np.abs(M).max(axis=(1, 2)) < 2.0**500) & (np.abs(V).max(axis=-1) < 2.0**200)
-    return np.where(ok, k_lo, np.nan), np.where(ok, k_hi, np.nan)
+    d = len(M) - 1
+    v, Qinv, _ = centred(M)
+    V = [*v, 1.0]
+    w, wb = zip(*(_dot2(row, V) for row in M), strict=True)
+    r, rb = list(w[:d]), list(wb[:d])
+    F = dot(v, r) + w[d]
+    spread = sum((abs(ci) * abs(ri) for ci, ri in zip(v, r, strict=True)), abs(w[d]))
+    Fb = (sum((abs(ci) * b for ci, b in zip(v, rb, strict=True)), wb[d]) + 4.0 * (d + 2) * _U * spread) * (1 + 2.0**-40)
+    Q = [row[:d] for row in M[:d]]
+    det, detb, e = det_with_bound(Q)
+    det_lo = np.ldexp(down(det - detb), e)
+    trace = sum((Q[i][i] for i in range(1, d)), Q[0][0])
+    lam_lo = down(det_lo / up(trace ** (d - 1) * (1 + 2.0**-40)))
+    lam_ok = lam_lo > 0
+    lam_lo = where(lam_ok, lam_lo, 1.0)
+    rr = sum(((abs(ri) + b) * (abs(ri) + b) for ri, b in zip(r, rb, strict=True)), 0.0)
+    k_lo = down(-F - Fb)
+    k_hi = up(-F + Fb + 2.0 * rr / lam_lo)
+    big = max(abs(x) for row in M for x in row) if not is_array(M[0][0]) else np.max(np.abs(stacked(M)), axis=(1, 2))
+    ok = np.isfinite(k_lo) & np.isfinite(k_hi) & (k_lo > 0) & lam_ok & (big < 2.0**500)
+    for x in v:
+        ok = ok & (abs(x) < 2.0**200)
+    return _Centre(v, Qinv, r, rb, lam_lo, k_lo, k_hi, ok)
 
 
-def _scaled(M: np.ndarray, k_est: np.ndarray, k_lo: np.ndarray, k_hi: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """M scaled about its centre to about s; returns (matrix, s_lo, s_hi) enclosing its true scale."""
-    d = M.shape[-1] - 1
-    a = M[:, d, d]
-    with np.errstate(all="ignore"):
-        new = a + k_est * (1.0 - s)
-        diff, err = _two_sum(new, -a)  # alpha = new - a = diff + err exactly
-        alpha = diff + err
-        al_lo, al_hi = _down(alpha), _up(alpha)
-        q = [al_lo / k_lo, al_lo / k_hi, al_hi / k_lo, al_hi / k_hi]
-        q_lo = _down(np.minimum.reduce(q))
-        q_hi = _up(np.maximum.reduce(q))
-        s_lo = _down(1.0 - q_hi)
-        s_hi = _up(1.0 - q_lo)
-    out = M.copy()
-    out[:, d, d] = new
-    return out, s_lo, s_hi
+def _scaled_last(M: list[list[Any]], k_mid: Any, k_lo: Any, k_hi: Any, s: Any) -> tuple[Any, Any, Any]:
+    """Last entry of M scaled about its centre to about s, and an enclosure [s_lo, s_hi] of the
+    scale that float stands for."""
+    a = M[-1][-1]
+    new = a + k_mid * (1.0 - s)
+    diff, err = _two_sum(new, -a)  # alpha = new - a = diff + err exactly
+    alpha = diff + err
+    al_lo, al_hi = down(alpha), up(alpha)
+    q = [al_lo / k_lo, al_lo / k_hi, al_hi / k_lo, al_hi / k_hi]
+    if is_array(new):
+        q_lo, q_hi = down(np.minimum.reduce(q)), up(np.maximum.reduce(q))
+    else:
+        q_lo, q_hi = down(min(q)), up(max(q))
+    return new, down(1.0 - q_hi), up(1.0 - q_lo)
 
 
-def _estimate(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
-    """(s estimate, y, (c_A, S_A, k_A), (c_B, S_B, k_B)) floats for normalised stacks (N, n, n)."""
-    with np.errstate(all="ignore"):
-        ca, SA, ka = centred_floats(a)
-        cb, SB, kb = centred_floats(b)
-        SAl, delta = stack_lists(SA, cb - ca)
-        SBl, _ = stack_lists(SB, cb - ca)
-        _, s, y = maximise(SAl, SBl, delta)
-    return np.asarray(s, dtype=np.float64), np.stack(y, axis=-1), (ca, SA, ka), (cb, SB, kb)
+def _with_last(M: list[list[Any]], value: Any) -> np.ndarray:
+    out = stacked(M).copy()
+    out[..., -1, -1] = value
+    return out
+
+
+def _classify_valid(A: np.ndarray, B: np.ndarray, valid: Any, stats: Stats) -> Any:
+    """Certified codes where ``valid`` (UNDECIDED elsewhere): float filter, exact where it abstains."""
+    if not is_array(valid):
+        return int(classify(A, B, stats=stats)) if valid else int(Relation.UNDECIDED)
+    got = np.full(valid.shape, Relation.UNDECIDED, dtype=np.int8)
+    if valid.any():
+        got[valid] = classify(A[valid], B[valid], stats=stats)
+    return got
+
+
+# ------------------------------------------------------------------ contact scale
+
+
+def _float_bracket(a: np.ndarray, b: np.ndarray, codes: Any, rtol: float, stats: Stats) -> tuple[Any, Any, Any, Any]:
+    """(mu_lo, mu_hi, certified, estimate) from floats, for one pair or a stack."""
+    al, bl = lists(a), lists(b)
+    A, B = _centre(al), _centre(bl)
+    kal, kah, oka = A.k_lo, A.k_hi, A.ok
+    kbl, kbh, okb = B.k_lo, B.k_hi, B.ok
+    SA, SB = scaled(A.k_mid, A.Qinv), scaled(B.k_mid, B.Qinv)
+    _, s_est, _ = maximise(SA, SB, [q - p for p, q in zip(A.v, B.v, strict=True)])
+    eps = 0.45 * rtol  # bracket width about 2 eps mu*, below rtol mu*
+    todo = (codes != Relation.TANGENT) & np.isfinite(s_est) & (s_est > _SMALLEST_S) & oka & okb & (eps >= 2.0**-48)
+    s_lo = s_hi = None
+    found = todo
+    for sign in (-1, 1):
+        goal = s_est * (1.0 + sign * eps) ** 2
+        # k from the compensated enclosure (the plain float k loses digits to cancellation)
+        na, sal, sah = _scaled_last(al, A.k_mid, kal, kah, goal)
+        nb, sbl, sbh = _scaled_last(bl, B.k_mid, kbl, kbh, goal)
+        valid = todo & (sal > 0) & (sbl > 0) & np.isfinite(na) & np.isfinite(nb)
+        got = _classify_valid(_with_last(al, na), _with_last(bl, nb), valid, stats)
+        if sign < 0:
+            found = found & valid & (got == Relation.SEPARATE)
+            s_lo = where(sal < sbl, sal, sbl)
+        else:
+            found = found & valid & ((got == Relation.TANGENT) | (got == Relation.OVERLAP))
+            s_hi = where(sah > sbh, sah, sbh)
+    s_lo = where(found, s_lo, 0.0)
+    s_hi = where(found, s_hi, 1.0)
+    if is_array(s_lo):
+        mu_lo, mu_hi = down(np.sqrt(np.maximum(s_lo, 0.0))), up(np.sqrt(np.maximum(s_hi, 0.0)))
+    else:
+        mu_lo, mu_hi = down(math.sqrt(max(s_lo, 0.0))), up(math.sqrt(max(s_hi, 0.0)))
+    mu_lo = where(mu_lo > 0, mu_lo, 0.0)
+    found = found & (mu_hi - mu_lo <= rtol * mu_hi)  # e.g. deep overlaps: floats lose s* ~ 0
+    return mu_lo, mu_hi, found, s_est
 
 
 def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleBatch:
-    """Certified float brackets of mu* for stacks of pairs (see the module docstring).
+    """Certified float brackets of mu* for one float pair or stacks of pairs (module docstring).
 
     Args:
-        A, B: stacks (..., n, n) that broadcast; float input runs vectorised, exact input
-            (fractions, strings) pair by pair through :func:`core.witness.contact_scale`.
-        rtol: relative width asked of each bracket (floats: about ``rtol``; at least about
-            1e-15 is reachable in float64, tighter requests go to the exact path).
+        A: a matrix or a stack (..., n, n); float input runs in floats (vectorised), exact input
+            (fractions, strings) pair by pair through the exact one-pair computation.
+        B: the same for B (the stacks broadcast).
+        rtol: relative width asked of each bracket (hi - lo <= rtol * hi); float64 reaches about
+            1e-14, tighter requests go to the exact path. 1e-9 and above stay in floats for
+            nearly every pair; near 1e-12 the scaled pairs are a hair from touching and the float
+            filter leaves some to exact classification.
 
     Returns:
-        :class:`ContactScaleBatch` with float arrays of the batch shape.
+        :class:`ContactScaleBatch` with float arrays of the batch shape (0-d for one pair).
 
     Raises:
         ValueError: an invalid matrix (the message names the pair), or shapes that do not broadcast.
@@ -233,66 +319,43 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
         >>> bool(r.lo[0] <= 1.5 <= r.hi[0]), float(r.lo[1]), float(r.hi[1]), r.relation.tolist()
         (True, 1.0, 1.0, [0, 1])
     """
-    codes_full = classify(A, B)
-    codes_full = np.asarray(codes_full, dtype=np.int8)
-    try:
-        a, b, shape = _stacks(A, B)
-    except TypeError:
-        return _exact_batch(A, B, rtol, codes_full)
-    N = a.shape[0]
-    codes = codes_full.reshape(-1)
-    s_est, _, (ca, _, ka), (cb, _, kb) = _estimate(a, b)
-    lo_s = np.zeros(N)
-    hi_s = np.full(N, _INF)
-    found_lo = np.zeros(N, bool)
-    found_hi = np.zeros(N, bool)
-    todo = (codes != Relation.TANGENT) & np.isfinite(s_est) & (s_est > _SMALLEST_S)
-    eps = 0.45 * rtol  # bracket width about 2 eps mu*, below rtol mu*
+    if not (rtol > 0 and math.isfinite(rtol)):
+        raise ValueError(f"rtol must be a finite number > 0, got {rtol!r}")
+    codes_full = np.asarray(classify(A, B), dtype=np.int8)  # validates, names a bad pair
     stats = Stats()
-    if eps >= 2.0**-48 and todo.any():
-        idx = np.flatnonzero(todo)
-        kal, kah = _k_enclosure(a[idx], ca[idx])
-        kbl, kbh = _k_enclosure(b[idx], cb[idx])
-        ok = np.isfinite(kal) & np.isfinite(kbl)
-        idx, kal, kah, kbl, kbh = idx[ok], kal[ok], kah[ok], kbl[ok], kbh[ok]
-        s = s_est[idx]
-        for sign in (-1, 1):
-            goal = s * (1.0 + sign * eps) ** 2
-            As, sal, sah = _scaled(a[idx], ka[idx], kal, kah, goal)
-            Bs, sbl, sbh = _scaled(b[idx], kb[idx], kbl, kbh, goal)
-            valid = (sal > 0) & (sbl > 0) & np.isfinite(As).all(axis=(1, 2)) & np.isfinite(Bs).all(axis=(1, 2))
-            got = np.full(idx.size, Relation.UNDECIDED, dtype=np.int8)
-            if valid.any():  # float filter, exact rationals where it abstains (valid: s > 0)
-                got[valid] = classify(As[valid], Bs[valid], stats=stats)
-            if sign < 0:
-                hit = got == Relation.SEPARATE
-                lo_s[idx[hit]] = np.minimum(sal, sbl)[hit]
-                found_lo[idx[hit]] = True
-            else:
-                hit = (got == Relation.TANGENT) | (got == Relation.OVERLAP)
-                hi_s[idx[hit]] = np.maximum(sah, sbh)[hit]
-                found_hi[idx[hit]] = True
-    with np.errstate(invalid="ignore"):
-        mu_lo = np.where(lo_s > 0, _down(np.sqrt(np.maximum(lo_s, 0.0))), 0.0)
-        mu_lo = np.maximum(mu_lo, 0.0)
-        mu_hi = _up(np.sqrt(hi_s))
-    # one pair at a time where the floats could not bracket (rare: the tests count them)
-    with np.errstate(invalid="ignore"):
-        wide = ~(mu_hi - mu_lo <= rtol * mu_hi)  # e.g. deep overlaps: the floats lose s* ~ 0
-    need = (codes != Relation.TANGENT) & (~(found_lo & found_hi) | wide)
+    floats = _float_input(A, B)
+    if floats is None:
+        a_obj, b_obj = _object_pairs(A, B, codes_full.shape)
+        N = a_obj.shape[0]
+        mu_lo, mu_hi, approx = np.zeros(N), np.full(N, np.inf), np.zeros(N)
+        need = np.ones(N, bool)
+    else:
+        a, b, shape = floats
+        codes = codes_full.reshape(-1) if shape != () else int(codes_full)
+        try:
+            with np.errstate(all="ignore"):
+                mu_lo, mu_hi, found, s_est = _float_bracket(a, b, codes, rtol, stats)
+        except _ARITHMETIC:  # one pair only: Python floats raise where arrays give inf/nan
+            mu_lo, mu_hi, found, s_est = 0.0, math.inf, False, 0.0
+        with np.errstate(all="ignore"):
+            approx = np.sqrt(np.maximum(np.nan_to_num(np.asarray(s_est, dtype=np.float64)), 0.0)).reshape(-1)
+        mu_lo = np.asarray(mu_lo, dtype=np.float64).reshape(-1)
+        mu_hi = np.asarray(mu_hi, dtype=np.float64).reshape(-1)
+        need = (codes_full.reshape(-1) != Relation.TANGENT) & ~np.asarray(found).reshape(-1)
+        a_obj, b_obj = (a, b) if a.ndim == 3 else (a[None], b[None])
     from .scale import _contact_scale_pair
 
     for i in np.flatnonzero(need):
-        cs = _contact_scale_pair(a[i], b[i], max(rtol, 1e-15))
-        mu_lo[i], mu_hi[i] = _float_down(cs.lo), _float_up(cs.hi)
-    # the relation at scale 1 is certified too: it puts 1 on the right side of the bracket
+        cs = _contact_scale_pair(a_obj[i].tolist(), b_obj[i].tolist(), max(rtol, 1e-15))
+        mu_lo[i], mu_hi[i], approx[i] = _float_down(cs.lo), _float_up(cs.hi), cs.approx
+    codes = codes_full.reshape(-1)
     sep, ovl, tan = codes == Relation.SEPARATE, codes == Relation.OVERLAP, codes == Relation.TANGENT
     mu_lo = np.where(sep, np.maximum(mu_lo, 1.0), np.where(tan, 1.0, mu_lo))
     mu_hi = np.where(ovl, np.minimum(mu_hi, 1.0), np.where(tan, 1.0, mu_hi))
-    with np.errstate(invalid="ignore"):
-        approx = np.clip(np.sqrt(np.maximum(np.nan_to_num(s_est), 0.0)), mu_lo, mu_hi)
+    approx = np.clip(approx, mu_lo, mu_hi)
+    shape = codes_full.shape
     return ContactScaleBatch(
-        mu_lo.reshape(shape), mu_hi.reshape(shape), approx.reshape(shape), codes.reshape(shape),
+        mu_lo.reshape(shape), mu_hi.reshape(shape), approx.reshape(shape), codes_full,
         int(need.sum()), stats.escalated,
     )
 
@@ -300,55 +363,68 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
 def _float_down(q: Any) -> float:
     """The largest float <= the rational q."""
     f = to_float(q)
-    return f if not np.isfinite(f) or fmpq(*f.as_integer_ratio()) <= q else float(np.nextafter(f, -_INF))
+    return f if not math.isfinite(f) or fmpq(*f.as_integer_ratio()) <= q else math.nextafter(f, -math.inf)
 
 
 def _float_up(q: Any) -> float:
     """The smallest float >= the rational q."""
     f = to_float(q)
-    return f if not np.isfinite(f) or fmpq(*f.as_integer_ratio()) >= q else float(np.nextafter(f, _INF))
+    return f if not math.isfinite(f) or fmpq(*f.as_integer_ratio()) >= q else math.nextafter(f, math.inf)
 
 
-def _exact_batch(A: Any, B: Any, rtol: float, codes: np.ndarray) -> ContactScaleBatch:
-    """Pair by pair for exact (non-float) stacks."""
-    from .scale import _contact_scale_pair
-
-    a = np.asarray(A, dtype=object)
-    b = np.asarray(B, dtype=object)
-    shape = codes.shape
-    n = a.shape[-1]
-    a = np.broadcast_to(a, (*shape, n, n)).reshape(-1, n, n)
-    b = np.broadcast_to(b, (*shape, n, n)).reshape(-1, n, n)
-    lo, hi, ap = (np.empty(a.shape[0]) for _ in range(3))
-    for i in range(a.shape[0]):
-        cs = _contact_scale_pair(a[i].tolist(), b[i].tolist(), max(rtol, 1e-15))
-        lo[i], hi[i] = _float_down(cs.lo), _float_up(cs.hi)
-        ap[i] = cs.approx
-    return ContactScaleBatch(lo.reshape(shape), hi.reshape(shape), ap.reshape(shape), codes, a.shape[0])
+# ------------------------------------------------------------------ planes
 
 
-def _plane_certified(M: np.ndarray, pi: np.ndarray, side: int) -> np.ndarray:
-    """Certified: plane pi misses ellipsoid M (normalised) and M lies on the ``side`` of it
-    (-1: n.x < d, +1: n.x > d).
+def _plane_certified(C: _Centre, M: list[list[Any]], n: list[Any], d: Any, side: int) -> Any:
+    """Certified: the plane n.x = d misses the shape, which lies on ``side`` of it (-1: n.x < d,
+    +1: n.x > d). Elements floats (one pair) or (N,) arrays.
+
+    The shape lies strictly on that side iff h = side (n.c - d) > sqrt(k n^T Q^-1 n) (its
+    support in direction -side n stays beyond the plane). With the float centre v:
+    n.c = n.v - n.Q^-1 r, so h >= side (n.v - d) - |n| |r| / lambda_min (n.v - d by a compensated
+    dot product). With w the float Q^-1 n and e = Q w - n (compensated):
+    n^T Q^-1 n = w.n - w.e + e^T Q^-1 e <= w.n + |w|.|e| + |e|^2 / lambda_min.
     """
-    N, n, _ = M.shape
-    bordered = np.zeros((N, n + 1, n + 1))
-    bordered[:, :n, :n] = M
-    bordered[:, :n, n] = pi
-    bordered[:, n, :n] = pi
-    replaced = M.copy()
-    replaced[:, :, n - 1] = pi
-    return (certified_sign(bordered) < 0) & (certified_sign(replaced) == side)
+    dim = len(n)
+    t, tb = _dot2([*n, d], [*C.v, -1.0])  # n.v - d
+    norm_n = up(_sqrt(up(dot(n, n))) * (1 + 2.0**-40))
+    h_lo = down(side * t - tb - up(norm_n * C.offset_error()))
+    w = [dot(row, n) for row in C.Qinv]
+    e, eb = zip(*(_dot2([*M[i][:dim], n[i]], [*w, -1.0]) for i in range(dim)), strict=True)
+    wn, wnb = _dot2(w, n)
+    e_abs = [abs(x) + b for x, b in zip(e, eb, strict=True)]
+    we = sum((abs(wi) * ei for wi, ei in zip(w, e_abs, strict=True)), 0.0)
+    ee = sum((ei * ei for ei in e_abs), 0.0)
+    q_hi = up((wn + wnb + we + ee / C.lam_lo) * (1 + 2.0**-40))
+    return C.ok & (h_lo > 0) & (q_hi > 0) & (down(h_lo * h_lo) > up(C.k_hi * q_hi))
+
+
+def _float_planes(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any]:
+    """Candidate planes (unit normal, offset) and their certificates."""
+    al, bl = lists(a), lists(b)
+    A, B = _centre(al), _centre(bl)
+    SA, SB = scaled(A.k_mid, A.Qinv), scaled(B.k_mid, B.Qinv)
+    ca, cb = A.v, B.v
+    _, _, y = maximise(SA, SB, [q - p for p, q in zip(ca, cb, strict=True)])
+    sqrt = np.sqrt if is_array(y[0]) else math.sqrt
+    norm = sqrt(dot(y, y))
+    nrm = [v / norm for v in y]
+    wa = dot(nrm, [dot(row, nrm) for row in SA])
+    wb = dot(nrm, [dot(row, nrm) for row in SB])
+    off = 0.5 * ((dot(nrm, ca) + sqrt(wa)) + (dot(nrm, cb) - sqrt(wb)))
+    ok = _plane_certified(A, al, nrm, off, -1) & _plane_certified(B, bl, nrm, off, 1)
+    normal = np.stack(nrm, axis=-1)
+    return normal.reshape(-1, normal.shape[-1]), np.asarray(off, dtype=np.float64).reshape(-1), np.asarray(ok).reshape(-1)
 
 
 def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
-    """Float separating planes of stacks of pairs, each with a certified flag.
+    """Float separating planes of one float pair or stacks of pairs, each with a certified flag.
 
-    For every pair certified SEPARATE a plane n.x = d (n of unit length) is computed from the
-    contact function and verified with certified float determinant signs as the binary
-    rationals it holds; pairs the floats cannot verify (gaps near rounding) get the exact plane
-    of :func:`core.witness.separating_plane` rounded to floats, flagged certified only if the
-    rounded plane passes the same check. Not separate: NaN plane, ``certified`` False.
+    Every pair certified SEPARATE gets a plane n.x = d (n of unit length) from the contact
+    function, verified with certified float determinant signs as the binary rationals it holds;
+    pairs the floats cannot verify (gaps near rounding) get the exact plane of
+    :func:`core.witness.separating_plane` rounded to floats, flagged certified only if the rounded
+    plane passes the same check. Pairs that are not separate: NaN plane, ``certified`` False.
 
     Examples:
         >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
@@ -357,83 +433,65 @@ def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
         ([1.0, 0.0], 1.5, [True, False])
     """
     codes_full = np.asarray(classify(A, B), dtype=np.int8)
-    try:
-        a, b, shape = _stacks(A, B)
-    except TypeError:
-        a = np.asarray(A, dtype=object)
-        b = np.asarray(B, dtype=object)
-        n = a.shape[-1]
-        shape = codes_full.shape
-        a = np.broadcast_to(a, (*shape, n, n)).reshape(-1, n, n)
-        b = np.broadcast_to(b, (*shape, n, n)).reshape(-1, n, n)
-        return _planes_exact(a, b, codes_full.reshape(-1), shape, np.ones(a.shape[0], bool))
+    shape = codes_full.shape
     codes = codes_full.reshape(-1)
-    N, n, _ = a.shape
-    d = n - 1
-    normal = np.full((N, d), np.nan)
-    offset = np.full(N, np.nan)
-    certified = np.zeros(N, bool)
-    sep = np.flatnonzero(codes == Relation.SEPARATE)
-    if sep.size:
-        aa, bb = a[sep], b[sep]
-        with np.errstate(all="ignore"):
-            _, y, (ca, SA, _), (cb, SB, _) = _estimate(aa, bb)
-            nrm = y / np.linalg.norm(y, axis=-1, keepdims=True)
-            ha = np.einsum("ni,ni->n", nrm, ca) + np.sqrt(np.einsum("ni,nij,nj->n", nrm, SA, nrm))
-            hb = np.einsum("ni,ni->n", nrm, cb) - np.sqrt(np.einsum("ni,nij,nj->n", nrm, SB, nrm))
-            off = 0.5 * (ha + hb)
-        pi = np.concatenate([nrm, -off[:, None]], axis=-1)
-        fin = np.isfinite(pi).all(axis=-1)
-        ok = np.zeros(sep.size, bool)
-        if fin.any():
-            ok[fin] = _plane_certified(aa[fin], pi[fin], -1) & _plane_certified(bb[fin], pi[fin], 1)
-        normal[sep], offset[sep], certified[sep] = nrm, off, ok
-    retry = np.zeros(N, bool)
-    retry[sep] = ~certified[sep]
+    floats = _float_input(A, B)
+    if floats is None:
+        a_obj, b_obj = _object_pairs(A, B, shape)
+        dim = a_obj.shape[-1] - 1
+        normal, offset, certified = np.full((codes.size, dim), np.nan), np.full(codes.size, np.nan), np.zeros(codes.size, bool)
+        retry = codes == Relation.SEPARATE
+    else:
+        a, b, _ = floats
+        a_obj, b_obj = (a, b) if a.ndim == 3 else (a[None], b[None])
+        try:
+            with np.errstate(all="ignore"):
+                normal, offset, certified = _float_planes(a, b)  # one pair: Python floats
+        except _ARITHMETIC:
+            dim = a.shape[-1] - 1
+            normal, offset, certified = np.full((1, dim), np.nan), np.full(1, np.nan), np.zeros(1, bool)
+        sep = codes == Relation.SEPARATE
+        certified = certified & sep
+        retry = sep & ~certified
+        normal = np.where(sep[:, None], normal, np.nan)
+        offset = np.where(sep, offset, np.nan)
     if retry.any():
-        exact = _planes_exact(a, b, codes, (N,), retry)
-        normal[retry] = exact.normal[retry]
-        offset[retry] = exact.offset[retry]
-        certified[retry] = exact.certified[retry]
-    return PlaneBatch(normal.reshape(*shape, d), offset.reshape(shape), certified.reshape(shape), codes.reshape(shape))
+        _exact_planes(a_obj, b_obj, retry, normal, offset, certified, floats is not None)
+    dim = normal.shape[-1]
+    return PlaneBatch(normal.reshape(*shape, dim), offset.reshape(shape), certified.reshape(shape), codes_full)
 
 
-def _planes_exact(a: np.ndarray, b: np.ndarray, codes: np.ndarray, shape: tuple[int, ...], which: np.ndarray) -> PlaneBatch:
-    """Exact planes for the pairs ``which`` that are separate, rounded to floats and re-checked."""
+def _exact_planes(a: np.ndarray, b: np.ndarray, which: np.ndarray, normal: np.ndarray, offset: np.ndarray, certified: np.ndarray, float_input: bool) -> None:
+    """Exact planes for the pairs ``which``, rounded to floats (in place) and re-checked."""
     from ..rationals import to_fmpq
     from .plane import separating_plane
 
-    N, n = a.shape[0], a.shape[-1]
-    d = n - 1
-    normal = np.full((N, d), np.nan)
-    offset = np.full(N, np.nan)
-    certified = np.zeros(N, bool)
-    for i in np.flatnonzero(which & (codes == Relation.SEPARATE)):
+    idx = np.flatnonzero(which)
+    for i in idx:
         plane = separating_plane(a[i].tolist(), b[i].tolist())
         big = max(abs(v) for v in plane.normal)  # exact scaling: the largest component is +-1
-        normal[i] = [to_float(v / big) for v in plane.normal]
-        offset[i] = to_float(plane.offset / big)
-    idx = np.flatnonzero(np.isfinite(offset))
-    if idx.size:
-        fa = np.array([[[to_float(to_fmpq(v)) for v in row] for row in a[i]] for i in idx])
-        fb = np.array([[[to_float(to_fmpq(v)) for v in row] for row in b[i]] for i in idx])
-        fa, fb = _normalised(fa), _normalised(fb)
-        exact_floats = all(_is_float_exact(a[i]) and _is_float_exact(b[i]) for i in idx)
-        pi = np.concatenate([normal[idx], -offset[idx][:, None]], axis=-1)
-        if exact_floats:
-            certified[idx] = _plane_certified(fa, pi, -1) & _plane_certified(fb, pi, 1)
-    return PlaneBatch(normal.reshape(*shape, d), offset.reshape(shape), certified.reshape(shape), codes.reshape(shape))
+        n = np.array([to_float(v / big) for v in plane.normal])
+        norm = float(np.linalg.norm(n))
+        normal[i] = n / norm
+        offset[i] = to_float(plane.offset / big) / norm
+    fa = np.array([[[to_float(to_fmpq(v)) for v in row] for row in a[i]] for i in idx])
+    fb = np.array([[[to_float(to_fmpq(v)) for v in row] for row in b[i]] for i in idx])
+    exact_floats = float_input or all(_is_float_exact(a[i]) and _is_float_exact(b[i]) for i in idx)
+    if exact_floats:  # the float matrices are the input itself: their check is the pair's
+        al, bl = lists(_normalised(fa)), lists(_normalised(fb))
+        n = [np.ascontiguousarray(normal[idx, i]) for i in range(normal.shape[-1])]
+        with np.errstate(all="ignore"):
+            certified[idx] = _plane_certified(_centre(al), al, n, offset[idx], -1) & _plane_certified(_centre(bl), bl, n, offset[idx], 1)
 
 
 def _is_float_exact(M: Any) -> bool:
-    """True when every entry of M is a binary64 value (so float(M) is M itself)."""
+    """True when every entry of M is a binary64 value (so its float matrix is M itself)."""
     from ..rationals import to_fmpq
 
     for row in M:
         for v in row:
-            if isinstance(v, float | np.floating):
-                continue
             q = to_fmpq(v)
-            if to_fmpq(float(q)) != q:
+            f = to_float(q)
+            if not math.isfinite(f) or fmpq(*f.as_integer_ratio()) != q:
                 return False
     return True

@@ -12,6 +12,7 @@ det(original) = 2^exponent * det(scaled). A sign is certain when |value| > bound
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from fractions import Fraction
 from functools import cache
@@ -52,8 +53,24 @@ def _kernel(n: int) -> tuple[Callable[..., Any], float, float]:
     return namespace[f"det{n}"], k.constants[0], k.underflow_floor
 
 
-def det_with_bound(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Determinants of a stack (N, n, n) of finite float matrices, n = 2..5, certified.
+class _Rows:
+    """``M[i, j]`` indexing (what the generated kernel reads) over nested lists."""
+
+    __slots__ = ("rows",)
+
+    def __init__(self, rows: list[list[Any]]) -> None:
+        self.rows = rows
+
+    def __getitem__(self, ij: tuple[int, int]) -> Any:
+        return self.rows[ij[0]][ij[1]]
+
+
+def det_with_bound(M: Any) -> tuple[Any, Any, Any]:
+    """Determinants of n x n float matrices, n = 2..5, certified.
+
+    Args:
+        M: nested lists (n x n) of Python floats (one matrix) or of (N,) arrays (N matrices),
+            or an (N, n, n) array.
 
     Returns:
         (value, bound, exponent): ``|value - det(scaled)| <= bound`` where scaled has each row
@@ -63,19 +80,35 @@ def det_with_bound(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         >>> v, b, e = det_with_bound(np.array([[[3.0, 1.0], [1.0, 2.0]]]))
         >>> float(np.ldexp(v, e)[0]), bool(b[0] < 1e-14)
         (5.0, True)
+        >>> v, b, e = det_with_bound([[3.0, 1.0], [1.0, 2.0]])
+        >>> float(v * 2.0**e)
+        5.0
     """
-    M = np.asarray(M, dtype=np.float64)
-    n = M.shape[-1]
-    mx = np.abs(M).max(axis=-1)
-    _, e = np.frexp(np.where(mx > 0, mx, 1.0))
-    shift = 1 - e  # largest |entry| of each row now in [1, 2)
-    scaled = np.ldexp(M, shift[..., None])
+    if isinstance(M, np.ndarray):
+        M = [[np.ascontiguousarray(M[:, i, j]) for j in range(M.shape[-1])] for i in range(M.shape[-1])]
+    n = len(M)
+    rows = []
+    total = 0
+    for row in M:
+        if isinstance(row[0], np.ndarray):
+            mx = np.maximum.reduce([np.abs(x) for x in row])
+            _, e = np.frexp(np.where(np.isfinite(mx), mx, 1.0))
+            shift = 1 - e  # largest |entry| of the row now in [1, 2)
+            rows.append([np.ldexp(x, shift) for x in row])
+        else:
+            mx = max(abs(x) for x in row)
+            shift = 1 - (math.frexp(mx)[1] if math.isfinite(mx) else 0)
+            rows.append([math.ldexp(x, shift) for x in row])
+        total = total + shift
     fn, C, floor = _kernel(n)
-    value, perm = fn(np.moveaxis(scaled, 0, -1).reshape(n, n, -1))
-    return value, C * perm + floor, -shift.sum(axis=-1)
+    value, perm = fn(_Rows(rows))
+    return value, C * perm + floor, -total
 
 
-def certified_sign(M: np.ndarray) -> np.ndarray:
-    """Sign of det for each matrix of a stack: +1, -1, or 0 when the float bound cannot tell."""
+def certified_sign(M: Any) -> Any:
+    """Sign of det for each matrix (same inputs as :func:`det_with_bound`): +1, -1, or 0 when
+    the float bound cannot tell."""
     v, b, _ = det_with_bound(M)
-    return np.where(v > b, 1, np.where(v < -b, -1, 0)).astype(np.int8)
+    if isinstance(v, np.ndarray):
+        return np.where(v > b, 1, np.where(v < -b, -1, 0)).astype(np.int8)
+    return 1 if v > b else (-1 if v < -b else 0)
