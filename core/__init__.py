@@ -8,7 +8,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import analyse                              # moving pairs: events and intervals
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
     from core import warm_up                              # compile the numba kernels early
-    from core import contact_scale, separating_plane, contact_point, witness   # witnesses
+    from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
 
 ``core`` imports only numpy, python-flint, numba (optional) and the standard library.
 """
@@ -42,7 +42,6 @@ from .witness import Witness as Witness
 from .witness import contact_point as contact_point
 from .witness import contact_scale as contact_scale
 from .witness import separating_plane as separating_plane
-from .witness import witness as witness
 
 __all__ = [
     "METHODS",
@@ -74,5 +73,4 @@ __all__ = [
     "separating_plane",
     "validate_quadric",
     "warm_up",
-    "witness",
 ]

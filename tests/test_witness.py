@@ -35,11 +35,10 @@ from core import (
     contact_scale,
     quadric_from_axes,
     separating_plane,
-    witness,
 )
 from core.motions import matrix_at_exact
 from core.presets import preset_arguments
-from core.witness import contact_scale_batch, margin_text
+from core.witness import contact_scale_batch, margin_text, witness
 
 # ------------------------------------------------------------------ independent exact helpers
 

@@ -162,13 +162,12 @@ def maximise(SA: Any, SB: Any, delta: list[Any], *, iterations: int = 60) -> tup
         _, f1, f2, _ = _derivatives(SA, SB, delta, lam)
         lo = where(f1 > 0, lam, lo)
         hi = where(f1 < 0, lam, hi)
-        new = lam - f1 / f2
+        step = f1 / f2
+        new = lam - step
+        done = (abs(step) <= _TOL * lam) | (f1 == 0)
         inside = (new > lo) & (new < hi)
-        new = where(inside, new, 0.5 * (lo + hi))
-        step = abs(new - lam)
-        lam = new
-        done = (step <= _TOL * lam) | (f1 == 0) | ~np.asarray(ok)
-        if bool(np.all(done)):
+        lam = where(inside | done, new, 0.5 * (lo + hi))  # Newton, or bisection when it leaves [lo, hi]
+        if bool(np.all(done | ~np.asarray(ok))):
             break
     f, _, _, y = _derivatives(SA, SB, delta, lam)
     return lam, where(ok, f, 0.0), y

@@ -159,8 +159,27 @@ def _inside_both(A: CentredShape, B: CentredShape, x: fmpq_mat) -> bool:
     return A.form(x) < 0 and B.form(x) < 0
 
 
+def _float_candidate(A: CentredShape, B: CentredShape) -> fmpq_mat | None:
+    """x(lambda*) from float arithmetic (a candidate only: checked exactly by the caller)."""
+    from .floats import maximise
+
+    try:
+        ca, SA = A.floats()
+        cb, SB = B.floats()
+        lam, _, y = maximise(SA, SB, [q - p for p, q in zip(ca, cb, strict=True)])
+        x = [ca[i] + (1 - lam) * sum(SA[i][j] * y[j] for j in range(A.d)) for i in range(A.d)]
+        return column([fmpq(*float(v).as_integer_ratio()) for v in x])
+    except (ArithmeticError, ValueError):
+        return None
+
+
 def _overlap_point(A: CentredShape, B: CentredShape) -> ContactPoint:
     size = min(min(A.S[i, i] for i in range(A.d)), min(B.S[i, i] for i in range(B.d)))
+    quick = _float_candidate(A, B)
+    if quick is not None:
+        for cand in _candidates(quick, size):
+            if _inside_both(A, B, cand):
+                return ContactPoint(Relation.OVERLAP, tuple(RealAlgebraic.rational(cand[i, 0]) for i in range(A.d)))
     cf = ContactFunction(A, B)
     br = cf.first_bracket()
     rounds = [A.centre] if br is None else []
