@@ -19,6 +19,7 @@ overlap is too thin for the first candidates.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -144,15 +145,13 @@ def _tangent_point(A: CentredShape, B: CentredShape) -> ContactPoint:
     return ContactPoint(Relation.TANGENT, point, normal, T)
 
 
-def _candidates(x: fmpq_mat, size: fmpq) -> list[fmpq_mat]:
-    """X itself and simpler rationals near it (coarse first), at scales of the shapes' size."""
+def _candidates(x: fmpq_mat, size: fmpq) -> Iterator[fmpq_mat]:
+    """Simple rationals near x (coarse first, at scales of the shapes' size), then x itself."""
     d = x.nrows()
-    out = []
     for k in (4, 10, 20, 40):
         tol = size / 2**k
-        out.append(column([simplest_between(x[i, 0] - tol, x[i, 0] + tol) for i in range(d)]))
-    out.append(x)
-    return out
+        yield column([simplest_between(x[i, 0] - tol, x[i, 0] + tol) for i in range(d)])
+    yield x
 
 
 def _inside_both(A: CentredShape, B: CentredShape, x: fmpq_mat) -> bool:
