@@ -14,7 +14,8 @@ ellipsoids, certified like the relation itself::
   point inside both shapes of an overlapping pair.
 * :func:`witness`: the one that proves the relation, with a sentence.
 * :func:`contact_scale_batch`, :func:`separating_plane_batch`: the float forms, for stacks or
-  for one float pair (0-d results; fast: the scene's drag path).
+  for one float pair (0-d results); :func:`float_witness`: all of them for one float pair from
+  one float preparation (the scene's drag path).
 
 Modules: :mod:`~core.witness.centred` (centre, size, inverse shape matrix),
 :mod:`~core.witness.contact_function` (the contact function, exact), :mod:`~core.witness.floats`
@@ -25,8 +26,10 @@ Modules: :mod:`~core.witness.centred` (centre, size, inverse shape matrix),
 """
 
 from .batch import ContactScaleBatch as ContactScaleBatch
+from .batch import FloatWitness as FloatWitness
 from .batch import PlaneBatch as PlaneBatch
 from .batch import contact_scale_batch as contact_scale_batch
+from .batch import float_witness as float_witness
 from .batch import separating_plane_batch as separating_plane_batch
 from .plane import SeparatingPlane as SeparatingPlane
 from .plane import separating_plane as separating_plane
@@ -44,12 +47,14 @@ __all__ = [
     "ContactPoint",
     "ContactScale",
     "ContactScaleBatch",
+    "FloatWitness",
     "PlaneBatch",
     "SeparatingPlane",
     "Witness",
     "contact_point",
     "contact_scale",
     "contact_scale_batch",
+    "float_witness",
     "margin_text",
     "separating_plane",
     "separating_plane_batch",

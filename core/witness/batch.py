@@ -45,7 +45,7 @@ from .floatdet import det_with_bound
 from .floats import centred, dot, down, is_array, lists, maximise, scaled, stacked, up, where
 from .numbers import to_float
 
-__all__ = ["ContactScaleBatch", "PlaneBatch", "contact_scale_batch", "separating_plane_batch"]
+__all__ = ["ContactScaleBatch", "PlaneBatch", "FloatWitness", "contact_scale_batch", "separating_plane_batch", "float_witness"]
 
 _SMALLEST_S = 1e-8
 """Below this estimate of s* the float scaled matrices lose the scale: exact path instead."""
@@ -259,25 +259,43 @@ def _classify_valid(A: np.ndarray, B: np.ndarray, valid: Any, stats: Stats) -> A
 # ------------------------------------------------------------------ contact scale
 
 
-def _float_bracket(a: np.ndarray, b: np.ndarray, codes: Any, rtol: float, stats: Stats) -> tuple[Any, Any, Any, Any]:
-    """(mu_lo, mu_hi, certified, estimate) from floats, for one pair or a stack."""
+@dataclass
+class _Pair:
+    """Float data of one pair or a stack, computed once: matrices, centre facts, the maximiser."""
+
+    al: list[list[Any]]
+    bl: list[list[Any]]
+    A: _Centre
+    B: _Centre
+    SA: list[list[Any]]
+    SB: list[list[Any]]
+    lam: Any
+    s_est: Any
+    y: list[Any]
+
+
+def _pair(a: np.ndarray, b: np.ndarray) -> _Pair:
     al, bl = lists(a), lists(b)
     A, B = _centre(al), _centre(bl)
-    kal, kah, oka = A.k_lo, A.k_hi, A.ok
-    kbl, kbh, okb = B.k_lo, B.k_hi, B.ok
+    # S from the compensated k (the plain float k loses digits to cancellation)
     SA, SB = scaled(A.k_mid, A.Qinv), scaled(B.k_mid, B.Qinv)
-    _, s_est, _ = maximise(SA, SB, [q - p for p, q in zip(A.v, B.v, strict=True)])
+    lam, s_est, y = maximise(SA, SB, [q - p for p, q in zip(A.v, B.v, strict=True)])
+    return _Pair(al, bl, A, B, SA, SB, lam, s_est, y)
+
+
+def _float_bracket(P: _Pair, codes: Any, rtol: float, stats: Stats) -> tuple[Any, Any, Any]:
+    """(mu_lo, mu_hi, certified) from floats, for one pair or a stack."""
+    A, B, s_est = P.A, P.B, P.s_est
     eps = 0.45 * rtol  # bracket width about 2 eps mu*, below rtol mu*
-    todo = (codes != Relation.TANGENT) & np.isfinite(s_est) & (s_est > _SMALLEST_S) & oka & okb & (eps >= 2.0**-48)
+    todo = (codes != Relation.TANGENT) & np.isfinite(s_est) & (s_est > _SMALLEST_S) & A.ok & B.ok & (eps >= 2.0**-48)
     s_lo = s_hi = None
     found = todo
     for sign in (-1, 1):
         goal = s_est * (1.0 + sign * eps) ** 2
-        # k from the compensated enclosure (the plain float k loses digits to cancellation)
-        na, sal, sah = _scaled_last(al, A.k_mid, kal, kah, goal)
-        nb, sbl, sbh = _scaled_last(bl, B.k_mid, kbl, kbh, goal)
+        na, sal, sah = _scaled_last(P.al, A.k_mid, A.k_lo, A.k_hi, goal)
+        nb, sbl, sbh = _scaled_last(P.bl, B.k_mid, B.k_lo, B.k_hi, goal)
         valid = todo & (sal > 0) & (sbl > 0) & np.isfinite(na) & np.isfinite(nb)
-        got = _classify_valid(_with_last(al, na), _with_last(bl, nb), valid, stats)
+        got = _classify_valid(_with_last(P.al, na), _with_last(P.bl, nb), valid, stats)
         if sign < 0:
             found = found & valid & (got == Relation.SEPARATE)
             s_lo = where(sal < sbl, sal, sbl)
@@ -292,7 +310,7 @@ def _float_bracket(a: np.ndarray, b: np.ndarray, codes: Any, rtol: float, stats:
         mu_lo, mu_hi = down(math.sqrt(max(s_lo, 0.0))), up(math.sqrt(max(s_hi, 0.0)))
     mu_lo = where(mu_lo > 0, mu_lo, 0.0)
     found = found & (mu_hi - mu_lo <= rtol * mu_hi)  # e.g. deep overlaps: floats lose s* ~ 0
-    return mu_lo, mu_hi, found, s_est
+    return mu_lo, mu_hi, found
 
 
 def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleBatch:
@@ -334,7 +352,9 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
         codes = codes_full.reshape(-1) if shape != () else int(codes_full)
         try:
             with np.errstate(all="ignore"):
-                mu_lo, mu_hi, found, s_est = _float_bracket(a, b, codes, rtol, stats)
+                P = _pair(a, b)
+                s_est = P.s_est
+                mu_lo, mu_hi, found = _float_bracket(P, codes, rtol, stats)
         except _ARITHMETIC:  # one pair only: Python floats raise where arrays give inf/nan
             mu_lo, mu_hi, found, s_est = 0.0, math.inf, False, 0.0
         with np.errstate(all="ignore"):
@@ -399,22 +419,34 @@ def _plane_certified(C: _Centre, M: list[list[Any]], n: list[Any], d: Any, side:
     return C.ok & (h_lo > 0) & (q_hi > 0) & (down(h_lo * h_lo) > up(C.k_hi * q_hi))
 
 
-def _float_planes(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any]:
-    """Candidate planes (unit normal, offset) and their certificates."""
-    al, bl = lists(a), lists(b)
-    A, B = _centre(al), _centre(bl)
-    SA, SB = scaled(A.k_mid, A.Qinv), scaled(B.k_mid, B.Qinv)
-    ca, cb = A.v, B.v
-    _, _, y = maximise(SA, SB, [q - p for p, q in zip(ca, cb, strict=True)])
+def _float_planes(P: _Pair) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate planes (unit normal (N, d), offset (N,)) and their certificates (N,)."""
+    y = P.y
     sqrt = np.sqrt if is_array(y[0]) else math.sqrt
     norm = sqrt(dot(y, y))
     nrm = [v / norm for v in y]
-    wa = dot(nrm, [dot(row, nrm) for row in SA])
-    wb = dot(nrm, [dot(row, nrm) for row in SB])
-    off = 0.5 * ((dot(nrm, ca) + sqrt(wa)) + (dot(nrm, cb) - sqrt(wb)))
-    ok = _plane_certified(A, al, nrm, off, -1) & _plane_certified(B, bl, nrm, off, 1)
+    wa = dot(nrm, [dot(row, nrm) for row in P.SA])
+    wb = dot(nrm, [dot(row, nrm) for row in P.SB])
+    off = 0.5 * ((dot(nrm, P.A.v) + sqrt(wa)) + (dot(nrm, P.B.v) - sqrt(wb)))
+    ok = _plane_certified(P.A, P.al, nrm, off, -1) & _plane_certified(P.B, P.bl, nrm, off, 1)
     normal = np.stack(nrm, axis=-1)
     return normal.reshape(-1, normal.shape[-1]), np.asarray(off, dtype=np.float64).reshape(-1), np.asarray(ok).reshape(-1)
+
+
+def _inside_certified(M: list[list[Any]], x: list[Any]) -> Any:
+    """Certified: X^T M X < 0 at X = (x, 1), the float point as the binary rationals it holds."""
+    V = [*x, 1.0]
+    w, wb = zip(*(_dot2(row, V) for row in M), strict=True)
+    val, vb = _dot2(V, list(w))
+    spread = sum((abs(v) * b for v, b in zip(V, wb, strict=True)), 0.0)
+    return up(val + up((vb + spread) * (1 + 2.0**-40))) < 0
+
+
+def _float_point(P: _Pair) -> tuple[list[Any], Any]:
+    """x(lambda*) = c_A + (1 - lambda*) S_A y, and whether it is certified inside both shapes."""
+    d = len(P.y)
+    x = [P.A.v[i] + (1 - P.lam) * dot(P.SA[i], P.y) for i in range(d)]
+    return x, _inside_certified(P.al, x) & _inside_certified(P.bl, x)
 
 
 def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
@@ -446,7 +478,7 @@ def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
         a_obj, b_obj = (a, b) if a.ndim == 3 else (a[None], b[None])
         try:
             with np.errstate(all="ignore"):
-                normal, offset, certified = _float_planes(a, b)  # one pair: Python floats
+                normal, offset, certified = _float_planes(_pair(a, b))  # one pair: Python floats
         except _ARITHMETIC:
             dim = a.shape[-1] - 1
             normal, offset, certified = np.full((1, dim), np.nan), np.full(1, np.nan), np.zeros(1, bool)
@@ -459,6 +491,63 @@ def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
         _exact_planes(a_obj, b_obj, retry, normal, offset, certified, floats is not None)
     dim = normal.shape[-1]
     return PlaneBatch(normal.reshape(*shape, dim), offset.reshape(shape), certified.reshape(shape), codes_full)
+
+
+@dataclass
+class FloatWitness:
+    """The witnesses of one float pair from float arithmetic with proofs (see :func:`float_witness`)."""
+
+    relation: Relation
+    lo: float
+    hi: float
+    """Certified lo <= mu* <= hi (or 0 and inf when the floats could not bracket it)."""
+    plane: tuple[np.ndarray, float] | None = None
+    """Separate: a certified plane n.x = d (unit n, float values as the exact binary rationals
+    they are: A in n.x < d, B in n.x > d); None if the floats could not certify one."""
+    point: tuple[float, ...] | None = None
+    """Overlap: a float point certified inside both (X^T A X < 0 and X^T B X < 0 exactly)."""
+
+
+def float_witness(A: np.ndarray, B: np.ndarray, *, rtol: float = 1e-6) -> FloatWitness:
+    """Contact-scale bracket, plane (separate) and interior point (overlap) of ONE float pair,
+    sharing one float preparation: the scene's drag path (a few tenths of a millisecond).
+
+    Everything returned is certified; what the floats cannot certify is left out (``lo = 0``,
+    ``hi = inf``, ``plane``/``point`` None), for the caller to ask the exact functions.
+
+    Examples:
+        >>> circle = lambda x: np.array([[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]], float)
+        >>> w = float_witness(circle(0), circle(3))
+        >>> str(w.relation), w.lo <= 1.5 <= w.hi, w.plane[0].tolist(), w.plane[1]
+        ('separate', True, [1.0, 0.0], 1.5)
+        >>> float_witness(circle(0), circle(1)).point
+        (0.5, 0.0)
+    """
+    rel = Relation(classify(A, B))
+    floats = _float_input(A, B)
+    if floats is None or floats[2] != ():
+        raise ValueError("float_witness takes one pair of float matrices")
+    a, b, _ = floats
+    out = FloatWitness(rel, 0.0, math.inf)
+    if rel == Relation.TANGENT:
+        out.lo = out.hi = 1.0
+        return out
+    try:
+        P = _pair(a, b)
+        lo, hi, found = _float_bracket(P, int(rel), rtol, Stats())
+        if found:
+            out.lo, out.hi = (max(lo, 1.0), hi) if rel == Relation.SEPARATE else (lo, min(hi, 1.0))
+        if rel == Relation.SEPARATE:
+            normal, offset, ok = _float_planes(P)
+            if ok[0]:
+                out.plane = (normal[0], float(offset[0]))
+        else:
+            x, ok = _float_point(P)
+            if ok:
+                out.point = tuple(float(v) for v in x)
+    except _ARITHMETIC:
+        pass
+    return out
 
 
 def _exact_planes(a: np.ndarray, b: np.ndarray, which: np.ndarray, normal: np.ndarray, offset: np.ndarray, certified: np.ndarray, float_input: bool) -> None:

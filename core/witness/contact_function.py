@@ -79,6 +79,7 @@ class ContactFunction:
         self.B = B
         self.delta = B.centre - A.centre
         self.D = B.S - A.S
+        self._first: Bracket | None = None
 
     @property
     def coincident(self) -> bool:
@@ -114,17 +115,24 @@ class ContactFunction:
         return f, f1, f2
 
     # ---------------------------------------------------------------- brackets
-    def first_bracket(self) -> Bracket | None:
-        """A first bracket of lambda*, started from a float estimate; None when the centres coincide."""
+    def first_bracket(self, bits: int = 40) -> Bracket | None:
+        """A first bracket of lambda*, started from a float estimate (relative width 2^-bits, wider
+        if the estimate is off); None when the centres coincide. Cached: later calls return the
+        first one, whatever ``bits``."""
         if self.coincident:
             return None
+        if self._first is None:
+            self._first = self._start(bits)
+        return self._first
+
+    def _start(self, bits: int) -> Bracket:
         ca, SA = self.A.floats()
         cb, SB = self.B.floats()
         try:
             guess = float(maximise(SA, SB, [q - p for p, q in zip(ca, cb)])[0])
         except (ZeroDivisionError, OverflowError, ValueError):
             guess = 0.5
-        return self.bracket(guess if math.isfinite(guess) else 0.5)
+        return self.bracket(guess if math.isfinite(guess) else 0.5, bits=bits)
 
     def bracket(self, guess: float, *, bits: int = 40) -> Bracket:
         """Bracket lambda* around a float guess: width 2^-bits relative, widened until valid.

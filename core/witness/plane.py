@@ -25,7 +25,7 @@ from .centred import CentredShape, column, dot
 from .contact_function import ContactFunction
 from .numbers import simplest_between, sqrt_bounds, to_float
 
-__all__ = ["SeparatingPlane", "separating_plane", "plane_separates"]
+__all__ = ["SeparatingPlane", "separating_plane", "plane_separates", "plane_from"]
 
 _TOLERANCES = (fmpq(1, 2**6), fmpq(1, 2**14), fmpq(1, 2**30), fmpq(1, 2**52), fmpq(0))
 _MAX_ROUNDS = 12
@@ -149,7 +149,11 @@ def separating_plane(A: Any, B: Any) -> Any:
         raise ValueError("A and B are tangent: they touch, so no plane separates them strictly (contact_point gives where)")
     if rel == Relation.OVERLAP:
         raise ValueError("A and B overlap: their interiors meet, so no plane separates them (contact_point gives a common point)")
-    cf, br = solve_pair(A, B)
+    return plane_from(*solve_pair(A, B))
+
+
+def plane_from(cf: ContactFunction, br: Any) -> SeparatingPlane:
+    """The verified plane of a separate pair from its contact function and first bracket."""
     assert br is not None  # separate shapes have distinct centres
     bits = 64
     for _ in range(_MAX_ROUNDS):

@@ -35,7 +35,7 @@ from .centred import CentredShape, column
 from .contact_function import ContactFunction
 from .numbers import algebraic_dict, simplest_between
 
-__all__ = ["ContactPoint", "contact_point"]
+__all__ = ["ContactPoint", "contact_point", "tangent_point", "overlap_point"]
 
 _MAX_ROUNDS = 12
 
@@ -101,7 +101,8 @@ def _form_numerator(E: fmpq_mat, P: list[fmpq_poly], Q: fmpq_poly) -> fmpq_poly:
     return out
 
 
-def _tangent_point(A: CentredShape, B: CentredShape) -> ContactPoint:
+def tangent_point(A: CentredShape, B: CentredShape) -> ContactPoint:
+    """The exact contact point and normal of a tangent pair (see the module docstring)."""
     EA, EB = A.matrix, B.matrix
     n = EA.nrows()
     d = n - 1
@@ -172,14 +173,19 @@ def _float_candidate(A: CentredShape, B: CentredShape) -> fmpq_mat | None:
         return None
 
 
-def _overlap_point(A: CentredShape, B: CentredShape) -> ContactPoint:
+def overlap_point(A: CentredShape, B: CentredShape, cf: ContactFunction | None = None) -> ContactPoint:
+    """A rational point inside both shapes of an overlapping pair (see the module docstring);
+    ``cf``: the pair's contact function if already built (its first bracket is cached)."""
     size = min(min(A.S[i, i] for i in range(A.d)), min(B.S[i, i] for i in range(B.d)))
-    quick = _float_candidate(A, B)
+    if cf is not None and cf.first_bracket() is not None:  # cached: x(lambda) at its best lambda
+        quick: fmpq_mat | None = cf.point(cf.first_bracket().best)  # type: ignore[union-attr]
+    else:
+        quick = _float_candidate(A, B)
     if quick is not None:
         for cand in _candidates(quick, size):
             if _inside_both(A, B, cand):
                 return ContactPoint(Relation.OVERLAP, tuple(RealAlgebraic.rational(cand[i, 0]) for i in range(A.d)))
-    cf = ContactFunction(A, B)
+    cf = cf or ContactFunction(A, B)
     br = cf.first_bracket()
     rounds = [A.centre] if br is None else []
     bits = 64
@@ -226,5 +232,5 @@ def contact_point(A: Any, B: Any) -> ContactPoint:
     if rel == Relation.SEPARATE:
         raise ValueError("A and B are separate: they have no point in common (separating_plane gives a plane between them)")
     if rel == Relation.TANGENT:
-        return _tangent_point(a, b)
-    return _overlap_point(a, b)
+        return tangent_point(a, b)
+    return overlap_point(a, b)

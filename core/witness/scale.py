@@ -31,7 +31,7 @@ from .centred import centred_pair
 from .contact_function import Bracket, ContactFunction
 from .numbers import algebraic_dict, sqrt_bounds, to_float, value_at_root
 
-__all__ = ["ContactScale", "contact_scale", "solve_pair"]
+__all__ = ["ContactScale", "contact_scale", "solve_pair", "scale_from"]
 
 _MAX_REFINEMENTS = 40
 
@@ -105,10 +105,14 @@ class ContactScale:
         return out
 
 
-def solve_pair(A: Any, B: Any) -> tuple[ContactFunction, Bracket | None]:
-    """Validate a pair, build its contact function and a first exact bracket (None: same centre)."""
+def solve_pair(A: Any, B: Any, rtol: float = 1e-12) -> tuple[ContactFunction, Bracket | None]:
+    """Validate a pair, build its contact function and a first exact bracket (None: same centre).
+
+    The bracket of lambda* is about sqrt(rtol) wide: by concavity the bracket of s* = f(lambda*)
+    it gives is about rtol wide.
+    """
     cf = ContactFunction(*centred_pair(A, B))
-    return cf, cf.first_bracket()
+    return cf, cf.first_bracket(bits=min(40, max(12, int(-math.log2(rtol) / 2) + 8)))
 
 
 def _relation(cf: ContactFunction, br: Bracket, tangent: list[bool | None]) -> Relation | None:
@@ -132,7 +136,11 @@ def _mu_bounds(br: Bracket, rel: Relation, bits: int) -> tuple[fmpq, fmpq]:
 
 
 def _contact_scale_pair(A: Any, B: Any, rtol: float) -> ContactScale:
-    cf, br = solve_pair(A, B)
+    return scale_from(*solve_pair(A, B, rtol), rtol)
+
+
+def scale_from(cf: ContactFunction, br: Bracket | None, rtol: float) -> ContactScale:
+    """The contact scale from a pair's contact function and first bracket (see :func:`solve_pair`)."""
     if br is None:
         return ContactScale(fmpq(0), fmpq(0), Relation.OVERLAP, cf, None)
     bits = max(64, int(-math.log2(rtol)) + 16)

@@ -10,17 +10,18 @@ from touching, as a margin a class can read ("1.8 % apart", "overlapping by 3 %"
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 from ..classify import classify
 from ..relation import Relation
-from .plane import SeparatingPlane, separating_plane
-from .point import ContactPoint, contact_point
 from .numbers import to_float
-from .scale import ContactScale, contact_scale
+from .plane import SeparatingPlane, plane_from
+from .point import ContactPoint, overlap_point, tangent_point
+from .scale import ContactScale, scale_from, solve_pair
 
-__all__ = ["Witness", "witness", "margin_text", "SENTENCES"]
+__all__ = ["Witness", "witness", "witness_of", "margin_text", "SENTENCES"]
 
 SENTENCES = {
     Relation.SEPARATE: "separate: this plane separates them",
@@ -34,21 +35,23 @@ def margin_text(lo: float, hi: float, relation: Relation | int | str) -> str:
     """The contact scale as a margin: "1.8 % apart", "touching", "overlapping by 3 %".
 
     The percentage is (mu* - 1) or (1 - mu*) at the middle of the certified bracket [lo, hi]
-    with two significant digits: both shapes must grow (apart) or shrink (overlapping) by
+    with two significant digits (whole percents from 10 %): both shapes must grow (apart) or shrink (overlapping) by
     that much about their own centres to touch.
 
     Examples:
         >>> margin_text(1.018, 1.018, "separate"), margin_text(0.97, 0.97, "overlap")
         ('1.8 % apart', 'overlapping by 3 %')
-        >>> margin_text(1.0, 1.0, "tangent")
-        'touching'
+        >>> margin_text(1.0, 1.0, "tangent"), margin_text(2.0, 2.0, "separate")
+        ('touching', '100 % apart')
+        >>> margin_text(1 + 3e-9, 1 + 3e-9, "separate")
+        '3e-07 % apart'
     """
     rel = Relation.parse(relation) if isinstance(relation, str) else Relation(relation)
     if rel == Relation.TANGENT:
         return "touching"
     mid = 0.5 * (float(lo) + float(hi))
     pct = abs(mid - 1.0) * 100.0
-    text = f"{pct:.2g}"
+    text = f"{pct:.0f}" if pct >= 10 else f"{pct:.2g}"
     if rel == Relation.SEPARATE:
         return f"{text} % apart"
     if rel == Relation.OVERLAP:
@@ -85,11 +88,16 @@ class Witness:
         }
 
 
-def witness(A: Any, B: Any) -> Witness:
+def witness(A: Any, B: Any, *, rtol: float = 1e-12) -> Witness:
     """The witness of the certified relation of one pair.
 
+    One validation and one bracket of the contact function serve the contact scale and the
+    plane or point.
+
     Args:
-        A, B: one pair, any input form of :func:`core.classify`.
+        A: one matrix, any input form of :func:`core.classify`.
+        B: the other.
+        rtol: relative width of the contact-scale bracket.
 
     Returns:
         :class:`Witness`: relation, sentence, contact scale, and the plane (separate) or
@@ -106,13 +114,24 @@ def witness(A: Any, B: Any) -> Witness:
         >>> witness(circle(0), circle(2)).point.rational_point
         (1, 0)
     """
-    rel = classify(A, B)
-    scale = contact_scale(A, B)
+    if not (rtol > 0 and math.isfinite(rtol)):
+        raise ValueError(f"rtol must be a finite number > 0, got {rtol!r}")
+    return witness_of(A, B, classify(A, B), rtol)
+
+
+def witness_of(A: Any, B: Any, rel: Relation, rtol: float = 1e-12) -> Witness:
+    """:func:`witness` for a pair whose relation ``rel`` was already certified by ``core``
+    (``classify`` or ``explain``): the scene's path, without classifying twice. The contact
+    scale is computed independently and must agree (RuntimeError otherwise)."""
+    cf, br = solve_pair(A, B, rtol)
+    scale = scale_from(cf, br, rtol)
     if scale.relation != rel:  # two independent certified computations: never expected
         raise RuntimeError(f"contact scale says {scale.relation}, the classifier {rel}: please report this pair")
     out = Witness(rel, SENTENCES[rel], scale)
     if rel == Relation.SEPARATE:
-        out.plane = separating_plane(A, B)
+        out.plane = plane_from(cf, br)
+    elif rel == Relation.TANGENT:
+        out.point = tangent_point(cf.A, cf.B)
     else:
-        out.point = contact_point(A, B)
+        out.point = overlap_point(cf.A, cf.B, cf)
     return out
