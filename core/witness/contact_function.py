@@ -174,19 +174,18 @@ class ContactFunction:
             return Bracket(lo, lo, f_lo, f_lo, lo, True)
         if d_hi == 0:
             return Bracket(hi, hi, f_hi, f_hi, hi, True)
-        # the simplest rational of the bracket is often lambda* itself (spheres, symmetric pairs)
-        mid = simplest_between(lo, hi)
-        f_m, d_m, _ = self.values(mid)
-        if d_m == 0:
-            return Bracket(mid, mid, f_m, f_m, mid, True)
-        s_lo, best = max((f_lo, lo), (f_hi, hi), (f_m, mid))
         # tangent lines L_lo (slope d_lo > 0) and L_hi (slope d_hi < 0) cross at x; f <= min(L_lo, L_hi)
         x = (f_hi - f_lo + d_lo * lo - d_hi * hi) / (d_lo - d_hi)
         s_hi = f_lo + d_lo * (x - lo)
-        if d_m > 0:
-            lo = mid
-        else:
-            hi = mid
+        s_lo, best = max((f_lo, lo), (f_hi, hi))
+        # a simple rational in the bracket is often lambda* itself (spheres, symmetric pairs)
+        mid = simplest_between(lo, hi)
+        if mid.q.bit_length() <= 32:
+            f_m, d_m, _ = self.values(mid)
+            if d_m == 0:
+                return Bracket(mid, mid, f_m, f_m, mid, True)
+            s_lo, best = max((s_lo, best), (f_m, mid))
+            lo, hi = (mid, hi) if d_m > 0 else (lo, mid)
         return Bracket(lo, hi, s_lo, max(s_hi, s_lo), best, False)
 
     # ---------------------------------------------------------------- polynomials
