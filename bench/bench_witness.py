@@ -87,7 +87,7 @@ def main() -> None:
     for d in (2, 3):
         kind = "ellipses" if d == 2 else "ellipsoids"
         A, B = random_floats(rng, d, n_one), random_floats(rng, d, n_one)
-        fl = list(zip(A, B))
+        fl = list(zip(A, B, strict=True))
         ex = [(random_exact(rng, d), random_exact(rng, d)) for _ in range(n_one)]
         rows.append(("contact_scale, exact bracket (rtol 1e-12)", f"float {kind}", per_pair(contact_scale, fl, repeat), ""))
         rows.append(("contact_scale, exact bracket (rtol 1e-12)", f"rational {kind}", per_pair(contact_scale, ex, repeat), ""))
@@ -100,7 +100,7 @@ def main() -> None:
         ovl = [(a, b) for a, b in fl if classify(a, b) == 2]
         rows.append(("separating_plane, exact, verified", f"float {kind}, separate", per_pair(separating_plane, sep, repeat), ""))
         rows.append(("contact_point, overlap (rational point)", f"float {kind}, overlap", per_pair(contact_point, ovl, repeat), ""))
-        tan = [tangent_pair(d, F(int(a), 4), F(int(r), 3)) for a, r in zip(rng.integers(2, 12, n_one // 3), rng.integers(1, 9, n_one // 3))]
+        tan = [tangent_pair(d, F(int(a), 4), F(int(r), 3)) for a, r in zip(rng.integers(2, 12, n_one // 3), rng.integers(1, 9, n_one // 3), strict=True)]
         rows.append(("contact_point, tangent (exact point, normal)", f"rational {kind}, tangent", per_pair(contact_point, tan, repeat), ""))
         rows.append(("witness (scale + plane or point)", f"float {kind}", per_pair(witness, fl, repeat), ""))
 

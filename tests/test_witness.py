@@ -118,7 +118,7 @@ def plane_misses_on_side(M: list[list[F]], n: list[F], d: F, side: int) -> bool:
     R = [[sum(T[a][r] * M[a][b] * T[b][c] for a in range(dim + 1) for b in range(dim + 1)) for c in range(dim)] for r in range(dim)]
     minimum = det(R) / det([row[: dim - 1] for row in R[: dim - 1]])
     c = centre(M)
-    s = sum(a * b for a, b in zip(n, c)) - d
+    s = sum(a * b for a, b in zip(n, c, strict=True)) - d
     return minimum > 0 and (s > 0) - (s < 0) == side
 
 

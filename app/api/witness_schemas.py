@@ -68,8 +68,11 @@ class AlgebraicOut(BaseModel):
 
 
 class ContactScaleOut(BaseModel):
-    """Certified bracket lo <= mu* <= hi of the contact scale: scale both shapes about their
-    centres by mu* and they touch. mu* > 1 separate, = 1 tangent, < 1 overlap."""
+    """Certified bracket lo <= mu* <= hi of the contact scale.
+
+    Scale both shapes about their centres by mu* and they touch: mu* > 1 separate, = 1 tangent,
+    < 1 overlap.
+    """
 
     relation: Literal["separate", "tangent", "overlap"]
     kind: Kind

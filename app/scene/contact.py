@@ -133,7 +133,8 @@ def contact_point(A: Any, B: Any, coefficients: Sequence[float]) -> np.ndarray |
     """Approximate contact point of two tangent shapes (floats, for drawing).
 
     Args:
-        A, B: the two matrices (3x3 or 4x4; floats or exact numbers).
+        A: one matrix (3x3 or 4x4; floats or exact numbers).
+        B: the other.
         coefficients: a_0..a_n of P(T) (floats, ascending).
 
     Returns:

@@ -401,9 +401,12 @@ class Session(MotionPanelMixin, TimelineMixin):
             v.set_relation(relation)
 
     def _update_contact(self, A: Any, B: Any, expl: dict[str, Any] | None, view: WitnessView | None = None) -> None:
-        """Contact point: the exact witness when ``view`` has one (tangent: where they touch, with
-        the common normal; overlap: a point inside both), else at a timeline tangency the float
-        kernel of the pencil (display only: the float matrices at an event are not tangent)."""
+        """Contact point: the certified witness when ``view`` has one, else a float estimate.
+
+        The witness: where they touch, with the common normal (tangent), or a point inside both
+        (overlap). Without one, at a timeline tangency: the float kernel of the pencil (display
+        only: the float matrices at an algebraic event time are not tangent).
+        """
         point, normal, label = None, None, "contact"
         if view is not None and view.point is not None:
             point, normal, label = view.point, view.normal, view.point_label

@@ -90,8 +90,10 @@ class PlaneBatch:
 
 
 def _normalised(M: np.ndarray) -> np.ndarray:
-    """Interior negative (signs flipped where needed) and the largest |entry| in [1, 2): both
-    exact (a sign and a power of two) and neither changes the shape."""
+    """Matrices with negative interiors and the largest |entry| in [1, 2).
+
+    Both changes are exact (a sign and a power of two) and neither changes the shape.
+    """
     mx = np.abs(M).max(axis=(-2, -1))
     _, e = np.frexp(np.where((mx > 0) & np.isfinite(mx), mx, 1.0))
     factor = np.ldexp(np.where(M[..., 0, 0] < 0, -1.0, 1.0), 1 - e)
@@ -99,8 +101,10 @@ def _normalised(M: np.ndarray) -> np.ndarray:
 
 
 def _float_input(A: Any, B: Any) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]] | None:
-    """Normalised float arrays, (n, n) for one pair or (N, n, n), and the batch shape; None for
-    exact input (fractions, strings), which goes pair by pair."""
+    """Normalised float arrays, (n, n) for one pair or (N, n, n), and the batch shape.
+
+    None for exact input (fractions, strings), which goes pair by pair.
+    """
     a, b = np.asarray(A), np.asarray(B)
     if a.dtype.kind not in "fiu" or b.dtype.kind not in "fiu":
         return None
@@ -124,14 +128,14 @@ def _object_pairs(A: Any, B: Any, shape: tuple[int, ...]) -> tuple[np.ndarray, n
 
 
 def _two_sum(a: Any, b: Any) -> tuple[Any, Any]:
-    """s + e = a + b exactly (Knuth)."""
+    """Exact sum: s + e = a + b (Knuth's TwoSum)."""
     s = a + b
     bb = s - a
     return s, (a - (s - bb)) + (b - bb)
 
 
 def _two_product(a: Any, b: Any) -> tuple[Any, Any]:
-    """p + e = a * b exactly (Dekker, Veltkamp splitting; no overflow or underflow)."""
+    """Exact product: p + e = a * b (Dekker, Veltkamp splitting; no overflow or underflow)."""
     p = a * b
     ca, cb = _SPLIT * a, _SPLIT * b
     ah = ca - (ca - a)
@@ -164,9 +168,11 @@ def _dot2(x: list[Any], y: list[Any]) -> tuple[Any, Any]:
 
 @dataclass
 class _Centre:
-    """Certified float facts about one normalised matrix [[Q, m], [m^T, a]] (or a stack):
+    """Certified float facts about one normalised matrix [[Q, m], [m^T, a]] (or a stack).
+
     v a float centre, r = Q v + m with |r - r_float| <= rb (componentwise), 0 < lam_lo <=
-    lambda_min(Q), k_lo <= k <= k_hi, and ``ok`` where all of it is certified."""
+    lambda_min(Q), k_lo <= k <= k_hi, and ``ok`` where all of it is certified.
+    """
 
     v: list[Any]
     Qinv: list[list[Any]]
@@ -225,8 +231,10 @@ def _centre(M: list[list[Any]]) -> _Centre:
 
 
 def _scaled_last(M: list[list[Any]], k_mid: Any, k_lo: Any, k_hi: Any, s: Any) -> tuple[Any, Any, Any]:
-    """Last entry of M scaled about its centre to about s, and an enclosure [s_lo, s_hi] of the
-    scale that float stands for."""
+    """Last entry of M scaled about its centre to about s, with an enclosure [s_lo, s_hi].
+
+    The enclosure is of the scale the rounded float entry stands for.
+    """
     a = M[-1][-1]
     new = a + k_mid * (1.0 - s)
     diff, err = _two_sum(new, -a)  # alpha = new - a = diff + err exactly
@@ -396,8 +404,9 @@ def _float_up(q: Any) -> float:
 
 
 def _plane_certified(C: _Centre, M: list[list[Any]], n: list[Any], d: Any, side: int) -> Any:
-    """Certified: the plane n.x = d misses the shape, which lies on ``side`` of it (-1: n.x < d,
-    +1: n.x > d). Elements floats (one pair) or (N,) arrays.
+    """Certified: the plane n.x = d misses the shape, which lies on ``side`` of it.
+
+    ``side`` -1: n.x < d, +1: n.x > d. Elements floats (one pair) or (N,) arrays.
 
     The shape lies strictly on that side iff h = side (n.c - d) > sqrt(k n^T Q^-1 n) (its
     support in direction -side n stays beyond the plane). With the float centre v:
@@ -509,8 +518,9 @@ class FloatWitness:
 
 
 def float_witness(A: np.ndarray, B: np.ndarray, *, rtol: float = 1e-6) -> FloatWitness:
-    """Contact-scale bracket, plane (separate) and interior point (overlap) of ONE float pair,
-    sharing one float preparation: the scene's drag path (a few tenths of a millisecond).
+    """Contact-scale bracket, plane (separate) and interior point (overlap) of ONE float pair.
+
+    They share one float preparation: the scene's drag path (a few tenths of a millisecond).
 
     Everything returned is certified; what the floats cannot certify is left out (``lo = 0``,
     ``hi = inf``, ``plane``/``point`` None), for the caller to ask the exact functions.

@@ -87,7 +87,7 @@ class ContactFunction:
         return all(self.delta[i, 0] == 0 for i in range(self.A.d))
 
     def C(self, lam: fmpq) -> fmpq_mat:
-        """C(lambda) = (1 - lambda) S_A + lambda S_B."""
+        """The matrix (1 - lambda) S_A + lambda S_B."""
         return self.A.S * (1 - lam) + self.B.S * lam
 
     def normal(self, lam: fmpq) -> fmpq_mat:
@@ -116,9 +116,11 @@ class ContactFunction:
 
     # ---------------------------------------------------------------- brackets
     def first_bracket(self, bits: int = 40) -> Bracket | None:
-        """A first bracket of lambda*, started from a float estimate (relative width 2^-bits, wider
-        if the estimate is off); None when the centres coincide. Cached: later calls return the
-        first one, whatever ``bits``."""
+        """A first bracket of lambda*, started from a float estimate; None when the centres coincide.
+
+        Relative width 2^-bits (wider if the estimate is off). Cached: later calls return the
+        first one, whatever ``bits``.
+        """
         if self.coincident:
             return None
         if self._first is None:
@@ -129,7 +131,7 @@ class ContactFunction:
         ca, SA = self.A.floats()
         cb, SB = self.B.floats()
         try:
-            guess = float(maximise(SA, SB, [q - p for p, q in zip(ca, cb)])[0])
+            guess = float(maximise(SA, SB, [q - p for p, q in zip(ca, cb, strict=True)])[0])
         except (ZeroDivisionError, OverflowError, ValueError):
             guess = 0.5
         return self.bracket(guess if math.isfinite(guess) else 0.5, bits=bits)

@@ -7,7 +7,8 @@ its float kernel and error constant are traced from that formula by
 sums). Each row is first multiplied by a power of two that brings its largest entry into [1, 2)
 (exact; it keeps every leaf <= 2, so nothing overflows and the underflow floor applies), and the
 total exponent is returned so that callers can recover the value itself:
-det(original) = 2^exponent * det(scaled). A sign is certain when |value| > bound.
+det(original) = 2^exponent * det(scaled). A sign is certain when |value| > bound;
+:mod:`core.witness.batch` uses it for a certified lower bound of det Q (the smallest eigenvalue).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import numpy as np
 from ..errorbound import build_kernel
 from ..pencil import determinant
 
-__all__ = ["det_with_bound", "certified_sign"]
+__all__ = ["det_with_bound"]
 
 
 @cache
@@ -103,12 +104,3 @@ def det_with_bound(M: Any) -> tuple[Any, Any, Any]:
     fn, C, floor = _kernel(n)
     value, perm = fn(_Rows(rows))
     return value, C * perm + floor, -total
-
-
-def certified_sign(M: Any) -> Any:
-    """Sign of det for each matrix (same inputs as :func:`det_with_bound`): +1, -1, or 0 when
-    the float bound cannot tell."""
-    v, b, _ = det_with_bound(M)
-    if isinstance(v, np.ndarray):
-        return np.where(v > b, 1, np.where(v < -b, -1, 0)).astype(np.int8)
-    return 1 if v > b else (-1 if v < -b else 0)

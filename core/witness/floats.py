@@ -90,7 +90,7 @@ def mat_vec(M: list[list[Any]], v: list[Any]) -> list[Any]:
 
 
 def dot(u: list[Any], v: list[Any]) -> Any:
-    """u . v."""
+    """Dot product u . v."""
     out = u[0] * v[0]
     for a, b in zip(u[1:], v[1:], strict=True):
         out = out + a * b
@@ -112,7 +112,7 @@ def centred(M: list[list[Any]]) -> tuple[list[Any], list[list[Any]], Any]:
 
 
 def scaled(k: Any, M: list[list[Any]]) -> list[list[Any]]:
-    """k M."""
+    """The matrix k M."""
     return [[k * x for x in row] for row in M]
 
 

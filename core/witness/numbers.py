@@ -103,7 +103,7 @@ def sqrt_bounds(q: fmpq, bits: int = 64) -> tuple[fmpq, fmpq]:
 def _interpolate(xs: list[fmpq], ys: list[fmpq]) -> fmpq_poly:
     """The polynomial of degree < len(xs) through the points (Lagrange, exact)."""
     out = fmpq_poly(0)
-    for i, (xi, yi) in enumerate(zip(xs, ys)):
+    for i, (xi, yi) in enumerate(zip(xs, ys, strict=True)):
         if yi == 0:
             continue
         term = fmpq_poly([yi])
@@ -138,7 +138,9 @@ def value_at_root(alpha: RealAlgebraic, num: fmpq_poly, den: fmpq_poly, *, squar
 
     Args:
         alpha: a real root of an irreducible polynomial (``alpha.poly``), or a rational.
-        num, den: polynomials with den(alpha) != 0 (and v > 0 for ``square_root``).
+        num: numerator polynomial.
+        den: denominator polynomial, den(alpha) != 0.
+        square_root: return sqrt(v) instead (v must be positive).
 
     Examples:
         >>> r2 = RealAlgebraic.isolating(fmpq_poly([-2, 0, 1]), fmpq(1), fmpq(2))   # sqrt(2)
@@ -180,8 +182,10 @@ def value_at_root(alpha: RealAlgebraic, num: fmpq_poly, den: fmpq_poly, *, squar
 
 
 def algebraic_dict(a: RealAlgebraic, digits: int = 20) -> dict[str, Any]:
-    """JSON form: decimal ``value``, ``approx`` float, ``exact`` "p/q" when rational, else the
-    isolating interval and the integer ``polynomial`` (ascending coefficients) it is a root of.
+    """JSON form of a real algebraic number.
+
+    Decimal ``value``, ``approx`` float, ``exact`` "p/q" when rational, else the isolating
+    interval and the integer ``polynomial`` (ascending coefficients) it is a root of.
     """
     if a.value is not None:
         v = a.value

@@ -46,8 +46,9 @@ class SeparatingPlane:
 
     @property
     def gap(self) -> float:
-        """A lower bound of the Euclidean distance between A and B: (support_b - support_a) / |n|,
-        rounded down (the plane's width of empty space).
+        """A lower bound of the Euclidean distance between A and B.
+
+        (support_b - support_a) / |n|, rounded down: the plane's width of empty space.
         """
         norm2 = sum(v * v for v in self.normal)
         _, upper = sqrt_bounds(norm2, 64)
@@ -117,9 +118,10 @@ def separating_plane(A: Any, B: Any) -> Any:
     """A plane n.x = d with exact rational n, d: A strictly in n.x < d, B strictly in n.x > d.
 
     Args:
-        A, B: one pair (any input form of :func:`core.classify`), or float stacks (..., n, n)
+        A: one matrix (any input form of :func:`core.classify`), or a float stack (..., n, n)
             (then :func:`core.witness.batch.separating_plane_batch`: float planes with a
             certified flag).
+        B: the same for B.
 
     Returns:
         A :class:`SeparatingPlane`, verified exactly (dual quadric) before it is returned.

@@ -1,5 +1,7 @@
-"""Where two shapes meet: the exact contact point and normal of a tangent pair, or a rational
-point strictly inside both shapes of an overlapping pair.
+"""Where two shapes meet: exact contact point and normal, or a point inside both.
+
+Tangent pairs get the exact contact point and common normal; overlapping pairs a rational point
+strictly inside both shapes.
 
 Tangent (paper, Theorems 14 and 24): P(T) = det(T A + B) has a positive double root T*, a root of
 gcd(P, P'). For a quartic or cubic with rational coefficients that gcd has degree <= 2 unless
@@ -174,9 +176,11 @@ def _float_candidate(A: CentredShape, B: CentredShape) -> fmpq_mat | None:
 
 
 def overlap_point(A: CentredShape, B: CentredShape, cf: ContactFunction | None = None) -> ContactPoint:
-    """A rational point inside both shapes of an overlapping pair (see the module docstring);
-    ``cf``: the pair's contact function if already built (its first bracket is cached)."""
-    size = min(min(A.S[i, i] for i in range(A.d)), min(B.S[i, i] for i in range(B.d)))
+    """A rational point inside both shapes of an overlapping pair (see the module docstring).
+
+    ``cf``: the pair's contact function if already built (its first bracket is cached).
+    """
+    size = min(*(A.S[i, i] for i in range(A.d)), *(B.S[i, i] for i in range(B.d)))
     if cf is not None and cf.first_bracket() is not None:  # cached: x(lambda) at its best lambda
         quick: fmpq_mat | None = cf.point(cf.first_bracket().best)  # type: ignore[union-attr]
     else:
@@ -207,7 +211,8 @@ def contact_point(A: Any, B: Any) -> ContactPoint:
     """Where the pair meets: exact contact point and normal (tangent) or a common interior point (overlap).
 
     Args:
-        A, B: one pair, any input form of :func:`core.classify`.
+        A: one matrix, any input form of :func:`core.classify`.
+        B: the other.
 
     Returns:
         :class:`ContactPoint`. Tangent: exact point and common normal (rational, or real

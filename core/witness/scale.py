@@ -90,8 +90,9 @@ class ContactScale:
         return self.algebraic().decimal(digits)
 
     def to_dict(self, digits: int | None = None) -> dict[str, Any]:
-        """JSON form: exact bounds as strings, float approximation, relation, and with ``digits``
-        the exact algebraic value (decimal, polynomial, isolating interval).
+        """JSON form: exact bounds as strings, float approximation, relation.
+
+        With ``digits``, also the exact algebraic value (decimal, polynomial, isolating interval).
         """
         out: dict[str, Any] = {
             "lo": str(self.lo),
@@ -170,8 +171,9 @@ def contact_scale(A: Any, B: Any, *, rtol: float = 1e-12) -> Any:
     """Certified contact scale mu* of a pair: > 1 separate, = 1 tangent, < 1 overlap.
 
     Args:
-        A, B: one matrix each (any input form of :func:`core.classify`), or stacks (..., n, n)
-            of float matrices that broadcast (then the vectorised batch form is used).
+        A: one matrix (any input form of :func:`core.classify`), or a stack (..., n, n) of
+            float matrices (then the vectorised batch form is used).
+        B: the same for B (stacks broadcast against A).
         rtol: relative width asked of the bracket, > 0: hi - lo <= rtol * hi (one pair: met,
             usually far better; batch: see :func:`core.witness.batch.contact_scale_batch`). The
             exact value is :meth:`ContactScale.algebraic`.

@@ -120,9 +120,11 @@ def witness(A: Any, B: Any, *, rtol: float = 1e-12) -> Witness:
 
 
 def witness_of(A: Any, B: Any, rel: Relation, rtol: float = 1e-12) -> Witness:
-    """:func:`witness` for a pair whose relation ``rel`` was already certified by ``core``
-    (``classify`` or ``explain``): the scene's path, without classifying twice. The contact
-    scale is computed independently and must agree (RuntimeError otherwise)."""
+    """:func:`witness` for a pair whose relation ``rel`` ``core`` already certified.
+
+    ``rel`` comes from ``classify`` or ``explain``: the scene's path, without classifying twice. The contact
+    scale is computed independently and must agree (RuntimeError otherwise).
+    """
     cf, br = solve_pair(A, B, rtol)
     scale = scale_from(cf, br, rtol)
     if scale.relation != rel:  # two independent certified computations: never expected

@@ -14,7 +14,14 @@ from typing import Any
 from fastapi import APIRouter, HTTPException
 
 from core import Relation
-from core.witness import SENTENCES, ContactPoint, ContactScale, contact_point, contact_scale, margin_text
+from core.witness import (
+    SENTENCES,
+    ContactPoint,
+    ContactScale,
+    contact_point,
+    contact_scale,
+    margin_text,
+)
 from core.witness import separating_plane as core_separating_plane
 from core.witness.numbers import algebraic_dict
 
@@ -84,8 +91,10 @@ def _kind(a: Any) -> str:
 
 @router.post("/contact-scale", response_model=ContactScaleOut)
 def contact_scale_route(body: ContactScaleIn, settings: SettingsDep) -> ContactScaleOut:
-    """Certified bracket of the contact scale mu* (mu* > 1 separate, = 1 tangent, < 1 overlap);
-    with ``exact``, mu* as an algebraic number (polynomial, isolating interval, decimals)."""
+    """Certified bracket of the contact scale mu* (mu* > 1 separate, = 1 tangent, < 1 overlap).
+
+    With ``exact``, mu* as an algebraic number too (polynomial, isolating interval, decimals).
+    """
     _check_digits(body.digits, settings)
     a, b = checked_pair(body)
     with bad_input():
@@ -95,8 +104,11 @@ def contact_scale_route(body: ContactScaleIn, settings: SettingsDep) -> ContactS
 
 @router.post("/separating-plane", response_model=PlaneOut)
 def separating_plane_route(body: WitnessIn) -> PlaneOut:
-    """A plane n.x = d, exact rationals, with a strictly on the side n.x < d and b strictly on
-    n.x > d, verified exactly. 422 when the pair is tangent or overlapping."""
+    """A separating plane n.x = d with exact rationals, verified exactly.
+
+    a lies strictly on the side n.x < d and b strictly on n.x > d; 422 when the pair is tangent
+    or overlapping.
+    """
     a, b = checked_pair(body)
     with bad_input():
         return _plane_out(core_separating_plane(a, b))
@@ -104,8 +116,11 @@ def separating_plane_route(body: WitnessIn) -> PlaneOut:
 
 @router.post("/contact-point", response_model=ContactPointOut)
 def contact_point_route(body: WitnessIn, settings: SettingsDep) -> ContactPointOut:
-    """Tangent pair: the exact contact point and common normal. Overlapping pair: a rational point
-    strictly inside both. 422 when the pair is separate."""
+    """Where the pair meets.
+
+    Tangent pair: the exact contact point and common normal. Overlapping pair: a rational point
+    strictly inside both. 422 when the pair is separate.
+    """
     _check_digits(body.digits, settings)
     a, b = checked_pair(body)
     with bad_input():
@@ -114,8 +129,11 @@ def contact_point_route(body: WitnessIn, settings: SettingsDep) -> ContactPointO
 
 @router.post("/witness", response_model=WitnessOut)
 def witness_route(body: WitnessIn, settings: SettingsDep) -> WitnessOut:
-    """All of it at once: relation, the sentence that explains it, the contact scale, and the
-    separating plane (separate) or the point (tangent, overlap)."""
+    """All of it at once.
+
+    The relation, the sentence that explains it, the contact scale, and the separating plane
+    (separate) or the point (tangent, overlap).
+    """
     from core.witness import witness
 
     _check_digits(body.digits, settings)
