@@ -55,7 +55,7 @@ def machine_info() -> dict[str, str]:
 
     info["numpy"] = np.__version__
     info["python-flint"] = flint.__version__
-    for mod, key in (("numba", "numba"), ("viser", "viser"), ("coal", "coal"), ("fcl", "python-fcl"), ("matplotlib", "matplotlib")):
+    for mod, key in (("viser", "viser"), ("coal", "coal"), ("fcl", "python-fcl"), ("matplotlib", "matplotlib")):
         try:
             m = __import__(mod)
             info[key] = getattr(m, "__version__", "installed")
@@ -377,7 +377,7 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
              "Rerun it to reproduce; `--quick` gives a smaller run in under a minute.\n")
     L.append("## Machine\n")
     L.append(_md_table(info) + "\n")
-    L.append("All timings on one core: the numba filter is single-threaded, BLAS pools pinned to one thread. "
+    L.append("Timings of the static rows on one core (`core.set_threads(1)`; the scaling section uses every core), BLAS pools pinned to one thread. "
              "Ground truth: `tests/oracle.py` (exact characteristic polynomial with flint `fmpq_mat`, certified root isolation), "
              "never the code under test.\n")
     L.append("## Targets\n")

@@ -308,7 +308,11 @@ def build_datasets(*, quick: bool, seed: int = 0, log: Callable[[str], None] = p
 
 
 def warm_up() -> None:
-    """Compile / load the numba kernels before timing (first call in a process)."""
+    """Build / load the compiled kernels before timing, and pin the static rows to one thread."""
+    import core
+
+    core.warm_up(wait=True)
+    core.set_threads(1)
     for dim in (2, 3):
         ds = D.random_pairs(dim, 8, seed=99)
         classify(ds.A, ds.B, method="float")

@@ -5,23 +5,30 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
 :mod:`core.quadrics`. Public API::
 
     from core import classify, Relation, explain          # static pairs (certified)
+    from core import classify_detailed                    # + which arithmetic certified each pair
     from core import analyse                              # moving pairs: events and intervals
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
-    from core import warm_up                              # compile the numba kernels early
+    from core import warm_up, set_threads                 # build the C kernels early; threads
     from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
 
-``core`` imports only numpy, python-flint, numba (optional) and the standard library.
+``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
+are compiled with the system's C compiler on first use, :mod:`core.compiled`).
 """
 
 from .classify import METHODS as METHODS
+from .classify import ON_INVALID as ON_INVALID
+from .classify import Certifier as Certifier
+from .classify import Classification as Classification
 from .classify import Method as Method
 from .classify import Stats as Stats
 from .classify import classify as classify
+from .classify import classify_detailed as classify_detailed
 from .explain import Explanation as Explanation
 from .explain import Quantity as Quantity
 from .explain import explain as explain
 from .expressions import parse_expression as parse_expression
-from .fastpath import warm_up as warm_up
+from .compiled import set_threads as set_threads
+from .compiled import warm_up as warm_up
 from .motions import Motion as Motion
 from .motions import motion_from_dict as motion_from_dict
 from .motions import motion_to_dict as motion_to_dict
@@ -45,8 +52,12 @@ from .witness import separating_plane as separating_plane
 
 __all__ = [
     "METHODS",
+    "ON_INVALID",
+    "Certifier",
+    "Classification",
     "ContactPoint",
     "ContactScale",
+    "classify_detailed",
     "Explanation",
     "Method",
     "Motion",
@@ -71,6 +82,7 @@ __all__ = [
     "quadric_from_axes",
     "rotation_from_quaternion",
     "separating_plane",
+    "set_threads",
     "validate_quadric",
     "warm_up",
 ]

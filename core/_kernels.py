@@ -2,39 +2,18 @@
 
 Each ``pencil{n}(A, B)`` reads ``A[i, j]`` (a float, or an array of floats for many pairs) and
 returns the outputs listed in ``PENCIL{n}_OUTPUTS``; |error of x| <= constant * x_M + floor.
-Each ``hat_{s}_{n}(c, cr)`` takes values and error radii of a_0..a_n and returns (value, radius);
-|error| <= radius * RADIUS_FACTOR + floor. See core/errorbound.py for the proofs.
+The midpoint-radius kernels (``hat_{s}_{n}``, ``translate{n}``, ``pencil_radius{n}``,
+``pencil_at{n}``, ``form{n}``) return values and radii; |error| <= radius * RADIUS_FACTOR + floor.
+See core/errorbound.py for the proofs; core/_kernels.c holds the same kernels in C.
 """
 
 # ruff: noqa
-import math
-
-def prepare3(M, out):
-    x00 = M[0, 0]
-    x01 = M[0, 1]
-    x02 = M[0, 2]
-    x11 = M[1, 1]
-    x12 = M[1, 2]
-    x22 = M[2, 2]
-    bad = (x00 == 0.0) | (M[1, 0] != x01) | (M[2, 0] != x02) | (M[2, 1] != x12) | (x00 != x00) | (x01 != x01) | (x02 != x02) | (x11 != x11) | (x12 != x12) | (x22 != x22)
-    mx = max(abs(x00), abs(x01), abs(x02), abs(x11), abs(x12), abs(x22))
-    if bad or not mx <= 1.7976931348623157e308:
-        return False
-    f = -1.0 if x00 < 0.0 else 1.0
-    if not (0.00390625 <= mx <= 256.0):
-        _, e = math.frexp(mx)
-        f = math.ldexp(f, 1 - e)
-    out[0, 0] = x00 * f
-    out[0, 1] = x01 * f
-    out[0, 2] = x02 * f
-    out[1, 1] = x11 * f
-    out[1, 2] = x12 * f
-    out[2, 2] = x22 * f
-    return True
 
 PENCIL3_OUTPUTS = ('c0', 'c0_M', 'c1', 'c1_M', 'c2', 'c2_M', 'c3', 'c3_M', 'dA2', 'dA2_M', 'dB2', 'dB2_M')
 PENCIL3_CONSTANTS = (5.551115123125793e-16, 0.0, 7.771561172376113e-16, 0.0, 7.771561172376113e-16, 0.0, 5.551115123125793e-16, 0.0, 2.220446049250315e-16, 0.0, 2.220446049250315e-16, 0.0)
-PENCIL3_FLOOR = 5.2469317e-317
+PENCIL3_CONSTANTS_ROUNDED = (8.881784197001274e-16, 0.0, 1.1102230246251597e-15, 0.0, 1.1102230246251597e-15, 0.0, 8.881784197001274e-16, 0.0, 4.440892098500632e-16, 0.0, 4.440892098500632e-16, 0.0)
+PENCIL3_FLOOR_ROUNDED = 1.31150496e-316
+PENCIL3_FLOOR = 1.31150496e-316
 
 def pencil3(A, B):
     v0 = A[0, 0]
@@ -186,21 +165,21 @@ def pencil3(A, B):
     return (v79, v118, v80, v121, v81, v124, v82, v125, v134, v135, v144, v145,)
 
 TRANSLATE3_OUTPUTS = ('m00', 'm01', 'm11', 'm02', 'm12', 'm22')
-TRANSLATE3_FLOOR = 1.59149684397e-313
+TRANSLATE3_FLOOR = 6.835430175000615e-305
 
-def translate3(M, t):
+def translate3(M, Mr, t):
     v0 = M[0, 0]
-    r0 = 0.0
+    r0 = Mr[0, 0]
     v1 = M[0, 1]
-    r1 = 0.0
+    r1 = Mr[0, 1]
     v2 = M[0, 2]
-    r2 = 0.0
+    r2 = Mr[0, 2]
     v3 = M[1, 1]
-    r3 = 0.0
+    r3 = Mr[1, 1]
     v4 = M[1, 2]
-    r4 = 0.0
+    r4 = Mr[1, 2]
     v5 = M[2, 2]
-    r5 = 0.0
+    r5 = Mr[2, 2]
     v6 = t[0]
     r6 = 0.0
     v7 = t[1]
@@ -236,7 +215,7 @@ def translate3(M, t):
     return (v0, v1, v3, v11, v15, v21, r0, r1, r3, r11, r15, r21,)
 
 PENCIL_RADIUS3_OUTPUTS = ('c0', 'c1', 'c2', 'c3', 'dA2', 'dB2')
-PENCIL_RADIUS3_FLOOR = 1.067e-321
+PENCIL_RADIUS3_FLOOR = 4.27e-321
 
 def pencil_radius3(A, Ar, B, Br):
     v0 = A[0, 0]
@@ -419,7 +398,83 @@ def pencil_radius3(A, Ar, B, Br):
     r88 = r86 + r87 + 2.220446049250313e-16 * abs(v88)
     return (v79, v80, v81, v82, v85, v88, r79, r80, r81, r82, r85, r88,)
 
-HAT_S0_3_FLOOR = 2.0726563087484394e-305
+PENCIL_AT3_OUTPUTS = ('p',)
+PENCIL_AT3_FLOOR = 4.9386053663595506e-303
+
+def pencil_at3(c, cr, T):
+    v0 = c[0]
+    r0 = cr[0]
+    v1 = c[1]
+    r1 = cr[1]
+    v2 = c[2]
+    r2 = cr[2]
+    v3 = c[3]
+    r3 = cr[3]
+    v4 = T
+    r4 = 0.0
+    v5 = v3 * v4
+    r5 = abs(v3) * r4 + r3 * (abs(v4) + r4) + 2.220446049250313e-16 * abs(v5)
+    v6 = v5 + v2
+    r6 = r5 + r2 + 2.220446049250313e-16 * abs(v6)
+    v7 = v6 * v4
+    r7 = abs(v6) * r4 + r6 * (abs(v4) + r4) + 2.220446049250313e-16 * abs(v7)
+    v8 = v7 + v1
+    r8 = r7 + r1 + 2.220446049250313e-16 * abs(v8)
+    v9 = v8 * v4
+    r9 = abs(v8) * r4 + r8 * (abs(v4) + r4) + 2.220446049250313e-16 * abs(v9)
+    v10 = v9 + v0
+    r10 = r9 + r0 + 2.220446049250313e-16 * abs(v10)
+    return (v10, r10,)
+
+FORM3_OUTPUTS = ('q',)
+FORM3_FLOOR = 6.835430175000615e-305
+
+def form3(M, Mr, x):
+    v0 = M[0, 0]
+    r0 = Mr[0, 0]
+    v1 = M[0, 1]
+    r1 = Mr[0, 1]
+    v2 = M[0, 2]
+    r2 = Mr[0, 2]
+    v3 = M[1, 1]
+    r3 = Mr[1, 1]
+    v4 = M[1, 2]
+    r4 = Mr[1, 2]
+    v5 = M[2, 2]
+    r5 = Mr[2, 2]
+    v6 = x[0]
+    r6 = 0.0
+    v7 = x[1]
+    r7 = 0.0
+    v8 = v2 * 2.0
+    r8 = r2 * 2.0
+    v9 = v0 * v6
+    r9 = abs(v0) * r6 + r0 * (abs(v6) + r6) + 2.220446049250313e-16 * abs(v9)
+    v10 = v8 + v9
+    r10 = r8 + r9 + 2.220446049250313e-16 * abs(v10)
+    v11 = v10 * v6
+    r11 = abs(v10) * r6 + r10 * (abs(v6) + r6) + 2.220446049250313e-16 * abs(v11)
+    v12 = v5 + v11
+    r12 = r5 + r11 + 2.220446049250313e-16 * abs(v12)
+    v13 = v4 * 2.0
+    r13 = r4 * 2.0
+    v14 = v1 * v6
+    r14 = abs(v1) * r6 + r1 * (abs(v6) + r6) + 2.220446049250313e-16 * abs(v14)
+    v15 = v14 * 2.0
+    r15 = r14 * 2.0
+    v16 = v13 + v15
+    r16 = r13 + r15 + 2.220446049250313e-16 * abs(v16)
+    v17 = v3 * v7
+    r17 = abs(v3) * r7 + r3 * (abs(v7) + r7) + 2.220446049250313e-16 * abs(v17)
+    v18 = v16 + v17
+    r18 = r16 + r17 + 2.220446049250313e-16 * abs(v18)
+    v19 = v18 * v7
+    r19 = abs(v18) * r7 + r18 * (abs(v7) + r7) + 2.220446049250313e-16 * abs(v19)
+    v20 = v12 + v19
+    r20 = r12 + r19 + 2.220446049250313e-16 * abs(v20)
+    return (v20, r20,)
+
+HAT_S0_3_FLOOR = 1.6328380290058883e-296
 
 def hat_s0_3(c, cr):
     v0 = c[0]
@@ -480,7 +535,7 @@ def hat_s0_3(c, cr):
     r27 = r26
     return (v27, r27,)
 
-HAT_S1_3_FLOOR = 1.04e-322
+HAT_S1_3_FLOOR = 2.6856509333e-314
 
 def hat_s1_3(c, cr):
     v0 = c[0]
@@ -501,7 +556,7 @@ def hat_s1_3(c, cr):
     r7 = r5 + r6 + 2.220446049250313e-16 * abs(v7)
     return (v7, r7,)
 
-HAT_S10_3_FLOOR = 1.93e-322
+HAT_S10_3_FLOOR = 3.5808679165e-314
 
 def hat_s10_3(c, cr):
     v0 = c[0]
@@ -522,40 +577,11 @@ def hat_s10_3(c, cr):
     r7 = r5 + r6 + 2.220446049250313e-16 * abs(v7)
     return (v7, r7,)
 
-def prepare4(M, out):
-    x00 = M[0, 0]
-    x01 = M[0, 1]
-    x02 = M[0, 2]
-    x03 = M[0, 3]
-    x11 = M[1, 1]
-    x12 = M[1, 2]
-    x13 = M[1, 3]
-    x22 = M[2, 2]
-    x23 = M[2, 3]
-    x33 = M[3, 3]
-    bad = (x00 == 0.0) | (M[1, 0] != x01) | (M[2, 0] != x02) | (M[3, 0] != x03) | (M[2, 1] != x12) | (M[3, 1] != x13) | (M[3, 2] != x23) | (x00 != x00) | (x01 != x01) | (x02 != x02) | (x03 != x03) | (x11 != x11) | (x12 != x12) | (x13 != x13) | (x22 != x22) | (x23 != x23) | (x33 != x33)
-    mx = max(abs(x00), abs(x01), abs(x02), abs(x03), abs(x11), abs(x12), abs(x13), abs(x22), abs(x23), abs(x33))
-    if bad or not mx <= 1.7976931348623157e308:
-        return False
-    f = -1.0 if x00 < 0.0 else 1.0
-    if not (0.00390625 <= mx <= 256.0):
-        _, e = math.frexp(mx)
-        f = math.ldexp(f, 1 - e)
-    out[0, 0] = x00 * f
-    out[0, 1] = x01 * f
-    out[0, 2] = x02 * f
-    out[0, 3] = x03 * f
-    out[1, 1] = x11 * f
-    out[1, 2] = x12 * f
-    out[1, 3] = x13 * f
-    out[2, 2] = x22 * f
-    out[2, 3] = x23 * f
-    out[3, 3] = x33 * f
-    return True
-
 PENCIL4_OUTPUTS = ('c0', 'c0_M', 'c1', 'c1_M', 'c2', 'c2_M', 'c3', 'c3_M', 'c4', 'c4_M', 'dA2', 'dA2_M', 'dA3', 'dA3_M', 'dB2', 'dB2_M', 'dB3', 'dB3_M')
 PENCIL4_CONSTANTS = (1.1102230246251599e-15, 0.0, 1.3322676295501928e-15, 0.0, 1.554312234475225e-15, 0.0, 1.3322676295501928e-15, 0.0, 1.1102230246251599e-15, 0.0, 2.2204460492503155e-16, 0.0, 5.551115123125793e-16, 0.0, 2.2204460492503155e-16, 0.0, 5.551115123125793e-16, 0.0)
-PENCIL4_FLOOR = 3.8200071798e-313
+PENCIL4_CONSTANTS_ROUNDED = (1.5543122344752253e-15, 0.0, 1.7763568394002587e-15, 0.0, 1.9984014443252912e-15, 0.0, 1.7763568394002587e-15, 0.0, 1.5543122344752253e-15, 0.0, 4.440892098500633e-16, 0.0, 8.881784197001274e-16, 0.0, 4.440892098500633e-16, 0.0, 8.881784197001274e-16, 0.0)
+PENCIL4_FLOOR_ROUNDED = 8.9127970781e-313
+PENCIL4_FLOOR = 8.9127970781e-313
 
 def pencil4(A, B):
     v0 = A[0, 0]
@@ -990,29 +1016,29 @@ def pencil4(A, B):
     return (v274, v348, v275, v351, v276, v354, v277, v357, v278, v358, v376, v377, v391, v393, v411, v412, v426, v428,)
 
 TRANSLATE4_OUTPUTS = ('m00', 'm01', 'm02', 'm11', 'm12', 'm22', 'm03', 'm13', 'm23', 'm33')
-TRANSLATE4_FLOOR = 3.3421433718e-313
+TRANSLATE4_FLOOR = 1.5379717886589648e-304
 
-def translate4(M, t):
+def translate4(M, Mr, t):
     v0 = M[0, 0]
-    r0 = 0.0
+    r0 = Mr[0, 0]
     v1 = M[0, 1]
-    r1 = 0.0
+    r1 = Mr[0, 1]
     v2 = M[0, 2]
-    r2 = 0.0
+    r2 = Mr[0, 2]
     v3 = M[0, 3]
-    r3 = 0.0
+    r3 = Mr[0, 3]
     v4 = M[1, 1]
-    r4 = 0.0
+    r4 = Mr[1, 1]
     v5 = M[1, 2]
-    r5 = 0.0
+    r5 = Mr[1, 2]
     v6 = M[1, 3]
-    r6 = 0.0
+    r6 = Mr[1, 3]
     v7 = M[2, 2]
-    r7 = 0.0
+    r7 = Mr[2, 2]
     v8 = M[2, 3]
-    r8 = 0.0
+    r8 = Mr[2, 3]
     v9 = M[3, 3]
-    r9 = 0.0
+    r9 = Mr[3, 3]
     v10 = t[0]
     r10 = 0.0
     v11 = t[1]
@@ -1076,7 +1102,7 @@ def translate4(M, t):
     return (v0, v1, v2, v4, v5, v7, v18, v24, v30, v39, r0, r1, r2, r4, r5, r7, r18, r24, r30, r39,)
 
 PENCIL_RADIUS4_OUTPUTS = ('c0', 'c1', 'c2', 'c3', 'c4', 'dA2', 'dA3', 'dB2', 'dB3')
-PENCIL_RADIUS4_FLOOR = 2.899e-320
+PENCIL_RADIUS4_FLOOR = 9.729e-320
 
 def pencil_radius4(A, Ar, B, Br):
     v0 = A[0, 0]
@@ -1707,7 +1733,121 @@ def pencil_radius4(A, Ar, B, Br):
     r312 = r307 + r311 + 2.220446049250313e-16 * abs(v312)
     return (v274, v275, v276, v277, v278, v281, v295, v298, v312, r274, r275, r276, r277, r278, r281, r295, r298, r312,)
 
-HAT_S0_4_FLOOR = 3.821666698500349e-259
+PENCIL_AT4_OUTPUTS = ('p',)
+PENCIL_AT4_FLOOR = 7.045942467882672e-294
+
+def pencil_at4(c, cr, T):
+    v0 = c[0]
+    r0 = cr[0]
+    v1 = c[1]
+    r1 = cr[1]
+    v2 = c[2]
+    r2 = cr[2]
+    v3 = c[3]
+    r3 = cr[3]
+    v4 = c[4]
+    r4 = cr[4]
+    v5 = T
+    r5 = 0.0
+    v6 = v4 * v5
+    r6 = abs(v4) * r5 + r4 * (abs(v5) + r5) + 2.220446049250313e-16 * abs(v6)
+    v7 = v6 + v3
+    r7 = r6 + r3 + 2.220446049250313e-16 * abs(v7)
+    v8 = v7 * v5
+    r8 = abs(v7) * r5 + r7 * (abs(v5) + r5) + 2.220446049250313e-16 * abs(v8)
+    v9 = v8 + v2
+    r9 = r8 + r2 + 2.220446049250313e-16 * abs(v9)
+    v10 = v9 * v5
+    r10 = abs(v9) * r5 + r9 * (abs(v5) + r5) + 2.220446049250313e-16 * abs(v10)
+    v11 = v10 + v1
+    r11 = r10 + r1 + 2.220446049250313e-16 * abs(v11)
+    v12 = v11 * v5
+    r12 = abs(v11) * r5 + r11 * (abs(v5) + r5) + 2.220446049250313e-16 * abs(v12)
+    v13 = v12 + v0
+    r13 = r12 + r0 + 2.220446049250313e-16 * abs(v13)
+    return (v13, r13,)
+
+FORM4_OUTPUTS = ('q',)
+FORM4_FLOOR = 1.5379717886589648e-304
+
+def form4(M, Mr, x):
+    v0 = M[0, 0]
+    r0 = Mr[0, 0]
+    v1 = M[0, 1]
+    r1 = Mr[0, 1]
+    v2 = M[0, 2]
+    r2 = Mr[0, 2]
+    v3 = M[0, 3]
+    r3 = Mr[0, 3]
+    v4 = M[1, 1]
+    r4 = Mr[1, 1]
+    v5 = M[1, 2]
+    r5 = Mr[1, 2]
+    v6 = M[1, 3]
+    r6 = Mr[1, 3]
+    v7 = M[2, 2]
+    r7 = Mr[2, 2]
+    v8 = M[2, 3]
+    r8 = Mr[2, 3]
+    v9 = M[3, 3]
+    r9 = Mr[3, 3]
+    v10 = x[0]
+    r10 = 0.0
+    v11 = x[1]
+    r11 = 0.0
+    v12 = x[2]
+    r12 = 0.0
+    v13 = v3 * 2.0
+    r13 = r3 * 2.0
+    v14 = v0 * v10
+    r14 = abs(v0) * r10 + r0 * (abs(v10) + r10) + 2.220446049250313e-16 * abs(v14)
+    v15 = v13 + v14
+    r15 = r13 + r14 + 2.220446049250313e-16 * abs(v15)
+    v16 = v15 * v10
+    r16 = abs(v15) * r10 + r15 * (abs(v10) + r10) + 2.220446049250313e-16 * abs(v16)
+    v17 = v9 + v16
+    r17 = r9 + r16 + 2.220446049250313e-16 * abs(v17)
+    v18 = v6 * 2.0
+    r18 = r6 * 2.0
+    v19 = v1 * v10
+    r19 = abs(v1) * r10 + r1 * (abs(v10) + r10) + 2.220446049250313e-16 * abs(v19)
+    v20 = v19 * 2.0
+    r20 = r19 * 2.0
+    v21 = v18 + v20
+    r21 = r18 + r20 + 2.220446049250313e-16 * abs(v21)
+    v22 = v4 * v11
+    r22 = abs(v4) * r11 + r4 * (abs(v11) + r11) + 2.220446049250313e-16 * abs(v22)
+    v23 = v21 + v22
+    r23 = r21 + r22 + 2.220446049250313e-16 * abs(v23)
+    v24 = v23 * v11
+    r24 = abs(v23) * r11 + r23 * (abs(v11) + r11) + 2.220446049250313e-16 * abs(v24)
+    v25 = v17 + v24
+    r25 = r17 + r24 + 2.220446049250313e-16 * abs(v25)
+    v26 = v8 * 2.0
+    r26 = r8 * 2.0
+    v27 = v2 * v10
+    r27 = abs(v2) * r10 + r2 * (abs(v10) + r10) + 2.220446049250313e-16 * abs(v27)
+    v28 = v27 * 2.0
+    r28 = r27 * 2.0
+    v29 = v26 + v28
+    r29 = r26 + r28 + 2.220446049250313e-16 * abs(v29)
+    v30 = v5 * v11
+    r30 = abs(v5) * r11 + r5 * (abs(v11) + r11) + 2.220446049250313e-16 * abs(v30)
+    v31 = v30 * 2.0
+    r31 = r30 * 2.0
+    v32 = v29 + v31
+    r32 = r29 + r31 + 2.220446049250313e-16 * abs(v32)
+    v33 = v7 * v12
+    r33 = abs(v7) * r12 + r7 * (abs(v12) + r12) + 2.220446049250313e-16 * abs(v33)
+    v34 = v32 + v33
+    r34 = r32 + r33 + 2.220446049250313e-16 * abs(v34)
+    v35 = v34 * v12
+    r35 = abs(v34) * r12 + r34 * (abs(v12) + r12) + 2.220446049250313e-16 * abs(v35)
+    v36 = v25 + v35
+    r36 = r25 + r35 + 2.220446049250313e-16 * abs(v36)
+    return (v36, r36,)
+
+HAT_S0_4_FLOOR = 2.0447461985229254e-258
 
 def hat_s0_4(c, cr):
     v0 = c[0]
@@ -1780,7 +1920,7 @@ def hat_s0_4(c, cr):
     r33 = r30 + r32 + 2.220446049250313e-16 * abs(v33)
     return (v33, r33,)
 
-HAT_S1_4_FLOOR = 5.834804289889245e-285
+HAT_S1_4_FLOOR = 3.052051474709801e-284
 
 def hat_s1_4(c, cr):
     v0 = c[0]
@@ -1857,7 +1997,7 @@ def hat_s1_4(c, cr):
     r35 = r32 + r34 + 2.220446049250313e-16 * abs(v35)
     return (v35, r35,)
 
-HAT_S10_4_FLOOR = 3.8150643433886e-285
+HAT_S10_4_FLOOR = 2.0253503352393524e-284
 
 def hat_s10_4(c, cr):
     v0 = c[0]

@@ -2,25 +2,61 @@
 
 Float filter first (:mod:`core.filters`: sound, may abstain), exact rationals only for the pairs it
 could not certify (:mod:`core.exact`), in the manner of CGAL's filtered predicates.
+:func:`classify_detailed` is the same pipeline, reporting per pair which arithmetic certified the
+answer and, with ``on_invalid="mark"``, why a pair is invalid.
+
+Inputs are read exactly: float16/32/64 and long double arrays are the binary rationals they hold
+(a long double that is not a float64 value goes to the exact path, never rounded), numpy integers
+are integers, object arrays may hold Fractions, fmpq, ints or number strings.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+from enum import IntEnum
 from typing import Any, Literal, overload
 
 import numpy as np
 import numpy.typing as npt
 
 from .exact import classify_exact
-from .fastpath import classify_one
+from . import compiled
+from .decision import RULE_RELATION
 from .filters import classify_float
+from .quadrics import validate_quadric
 from .rationals import to_fmpq
 from .relation import Relation
 
-__all__ = ["classify", "Method", "METHODS", "Stats"]
+__all__ = [
+    "classify",
+    "classify_detailed",
+    "Classification",
+    "Certifier",
+    "Method",
+    "METHODS",
+    "OnInvalid",
+    "ON_INVALID",
+    "Stats",
+]
 
 Method = Literal["adaptive", "float", "exact"]
 METHODS: tuple[str, ...] = ("adaptive", "float", "exact")
+OnInvalid = Literal["raise", "mark"]
+ON_INVALID: tuple[str, ...] = ("raise", "mark")
+
+
+class Certifier(IntEnum):
+    """Which arithmetic certified a pair's relation (int8 codes of ``Classification.certified_by``)."""
+
+    NONE = 0
+    """Undecided (``method="float"``) or invalid."""
+    FLOAT = 1
+    """The float filter, with proven error bounds."""
+    EXACT = 2
+    """Exact rational arithmetic."""
+
+    def __str__(self) -> str:
+        return self.name.lower()
 
 
 class Stats:
@@ -36,21 +72,76 @@ class Stats:
         return f"Stats(pairs={self.pairs}, escalated={self.escalated})"
 
 
-def _check_method(method: str) -> None:
-    if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; valid options: {', '.join(METHODS)}")
+@dataclass
+class Classification:
+    """Relations of a batch with, per pair, the arithmetic that certified each one.
+
+    ``relation`` and ``certified_by`` have the broadcast batch shape (0-d for one pair);
+    ``errors`` maps the flat index of each invalid pair to the reason (``on_invalid="mark"``).
+    """
+
+    relation: np.ndarray
+    """int8 :class:`Relation` codes."""
+    certified_by: np.ndarray
+    """int8 :class:`Certifier` codes."""
+    errors: dict[int, str] = field(default_factory=dict)
+    """Flat pair index -> why the pair is invalid (only with ``on_invalid="mark"``)."""
+
+    @property
+    def escalated(self) -> int:
+        """Pairs decided by exact arithmetic."""
+        return int(np.count_nonzero(self.certified_by == Certifier.EXACT))
+
+
+def _check_choice(value: str, options: tuple[str, ...], what: str) -> None:
+    if value not in options:
+        raise ValueError(f"unknown {what} {value!r}; valid options: {', '.join(options)}")
+
+
+_EXACT_INT = 2**53
+"""Integers of smaller magnitude are exact float64 values."""
 
 
 def _as_array(x: Any, name: str) -> np.ndarray:
-    """Float64 array if every entry is a binary float/int, else an object array (exact input)."""
-    if isinstance(x, np.ndarray) and x.dtype.kind in "fiu":
-        return x.astype(np.float64, copy=False) if x.dtype.kind == "f" else _int_array(x)
+    """Float64 array if every entry is exactly a binary64 value, else an object array (exact input).
+
+    Never rounds: a long double or a big integer that is not a float64 value keeps its exact
+    value in an object array (the exact path then reads it).
+    """
+    arr = _read_array(x, name)
+    if arr.ndim < 2:
+        raise ValueError(
+            f"{name} must be a 3x3 (ellipse) or 4x4 (ellipsoid) matrix, or a stack (..., n, n) of them; "
+            f"got {'a scalar' if arr.ndim == 0 else f'shape {arr.shape}'}"
+        )
+    return arr
+
+
+def _read_array(x: Any, name: str) -> np.ndarray:
+    if isinstance(x, np.ndarray):
+        kind = x.dtype.kind
+        if kind == "f":
+            if x.dtype == np.float64:
+                return x
+            if x.dtype.itemsize < 8:  # float16/32: widening is exact
+                return x.astype(np.float64)
+            wide = x.astype(np.float64)  # long double: float64 only where that is exact
+            same = (wide.astype(x.dtype) == x) | np.isnan(x)
+            return wide if same.all() else x.astype(object)
+        if kind in "iu":
+            if x.size and np.abs(x.astype(object)).max() >= _EXACT_INT:
+                return x.astype(object)
+            return x.astype(np.float64)
+        if kind == "b":
+            raise ValueError(f"{name} holds booleans, not numbers")
+        if kind == "c":
+            raise ValueError(f"{name} holds complex numbers; a quadric matrix is real")
     try:
         arr = np.asarray(x, dtype=object)
     except ValueError:
         raise ValueError(f"{name} is ragged: rows of different lengths") from None
     if arr.ndim < 2:
-        raise ValueError(f"{name} must be a 3x3 or 4x4 matrix (or a stack of them), got shape {arr.shape}")
+        return arr
     flat = arr.reshape(-1)
     if all(type(v) is float or type(v) is np.float64 for v in flat):
         return arr.astype(np.float64)
@@ -64,7 +155,7 @@ def _as_array(x: Any, name: str) -> np.ndarray:
 
 
 def _as_exact_float(v: Any) -> float | None:
-    """v as a float if it is exactly a (finite) binary64 value, else None."""
+    """V as a float if it is exactly a (finite) binary64 value, else None."""
     if type(v) is float or type(v) is np.float64:
         return float(v)
     if isinstance(v, bool | np.bool_):
@@ -73,32 +164,60 @@ def _as_exact_float(v: Any) -> float | None:
         q = to_fmpq(v)
     except ValueError:
         return None
-    if abs(q.p) >= 2**53 or q.q & (q.q - 1) or q.q > 2**60:  # not a small dyadic rational
+    if abs(q.p) >= _EXACT_INT or q.q & (q.q - 1) or q.q > 2**1074:  # not a float64 dyadic rational
         return None
-    return int(q.p) / int(q.q)
+    f = int(q.p) / int(q.q)
+    return f if to_fmpq(f) == q else None
 
 
-def _int_array(x: np.ndarray) -> np.ndarray:
-    if x.size and np.abs(x).max() >= 2**53:
-        return x.astype(object)
-    return x.astype(np.float64)
+def _single_float_pair(A: Any, B: Any) -> bool:
+    """One float64 (n, n) pair, n = 3 or 4: the scene's drag, served without the batch machinery."""
+    return (
+        type(A) is np.ndarray
+        and type(B) is np.ndarray
+        and A.dtype == np.float64
+        and B.dtype == np.float64
+        and A.ndim == 2
+        and A.shape == B.shape
+        and A.shape[0] in (3, 4)
+        and A.shape[0] == A.shape[1]
+    )
 
 
-@overload
-def classify(A: Any, B: Any, *, method: Method = ..., stats: Stats | None = ...) -> Relation: ...
 @overload
 def classify(
-    A: npt.ArrayLike, B: npt.ArrayLike, *, method: Method = ..., stats: Stats | None = ...
+    A: Any, B: Any, *, method: Method = ..., on_invalid: OnInvalid = ..., stats: Stats | None = ...
+) -> Relation: ...
+@overload
+def classify(
+    A: npt.ArrayLike,
+    B: npt.ArrayLike,
+    *,
+    method: Method = ...,
+    on_invalid: OnInvalid = ...,
+    stats: Stats | None = ...,
 ) -> npt.NDArray[np.int8]: ...
-def classify(A: Any, B: Any, *, method: Method = "adaptive", stats: Stats | None = None) -> Any:
+def classify(
+    A: Any,
+    B: Any,
+    *,
+    method: Method = "adaptive",
+    on_invalid: OnInvalid = "raise",
+    stats: Stats | None = None,
+) -> Any:
     """Certified relative position of two ellipses (3x3) or ellipsoids (4x4).
 
     Args:
         A, B: one matrix each (n, n), or stacks (..., n, n) that broadcast against each other.
-            Entries: floats (exact binary rationals), ints, Fractions, fmpq, or strings like
-            "3/7" / "0.1" (exact decimals). Signs may be flipped (positive interior).
+            Entries: floats of any width (exact binary rationals), ints, Fractions, fmpq, or
+            strings like "3/7" / "0.1" (exact decimals). Signs may be flipped (positive
+            interior). The exact symmetric part (A + A^T)/2 is classified (the quadratic form);
+            a matrix symmetric only up to rounding is accepted, a clearly asymmetric one is not
+            (:data:`core.quadrics.SYMMETRY_TOLERANCE`).
         method: "adaptive" (default: float filter, exact only where it abstains), "float"
             (filter only, may return UNDECIDED) or "exact" (rationals throughout).
+        on_invalid: "raise" (default) a ValueError for the first invalid pair, or "mark" it
+            :attr:`Relation.INVALID` and classify the others (why: :func:`classify_detailed`).
         stats: optional :class:`Stats` to count pairs and escalations.
 
     Returns:
@@ -106,8 +225,10 @@ def classify(A: Any, B: Any, *, method: Method = "adaptive", stats: Stats | None
         batch shape for stacks.
 
     Raises:
-        ValueError: wrong shape, non-symmetric, NaN/inf, not an ellipse/ellipsoid (the message
-            names the matrix and, for stacks, the index of the pair), or unknown method.
+        ValueError: wrong shape, clearly non-symmetric, NaN/inf, not an ellipse/ellipsoid (the
+            message names the matrix and, for stacks, the index of the pair), or an unknown
+            option. Every method checks its input; ``method="float"`` validates exactly the
+            pairs it cannot certify.
 
     Guarantee:
         Never a wrong Relation; UNDECIDED only when ``method="float"``.
@@ -120,47 +241,65 @@ def classify(A: Any, B: Any, *, method: Method = "adaptive", stats: Stats | None
         'separate'
         >>> classify([circle(0), circle(1)], circle(5)).tolist()     # a batch of two
         [0, 0]
+        >>> classify([circle(0), [[1, 0, 0], [0, -1, 0], [0, 0, -1]]], circle(5), on_invalid="mark").tolist()
+        [0, -2]
     """
-    _check_method(method)
-    if (
-        method == "adaptive"
-        and type(A) is np.ndarray
-        and type(B) is np.ndarray
-        and A.dtype == np.float64
-        and B.dtype == np.float64
-        and A.ndim == 2
-        and A.shape == B.shape
-        and A.shape[0] in (3, 4)
-        and A.shape[0] == A.shape[1]
-    ):  # one float pair (a drag in the scene): skip the batch machinery
-        code = classify_one(A, B, wait=False)
+    _check_choice(method, METHODS, "method")
+    _check_choice(on_invalid, ON_INVALID, "on_invalid")
+    if _single_float_pair(A, B) and (method == "adaptive" or (method == "float" and compiled.warm_up(wait=False))):
+        # a drag in the scene: microseconds. Until the compiled kernels are loaded the adaptive
+        # path goes straight to exact (~0.1 ms, faster than numpy on one pair)
+        rule = compiled.rule_one(np.ascontiguousarray(A), np.ascontiguousarray(B)) if compiled.warm_up(wait=False) else -1
+        codes = np.array([RULE_RELATION[rule] if rule >= 0 else Relation.UNDECIDED], dtype=np.int8)
         if stats is not None:
             stats.pairs += 1
-            stats.escalated += code == Relation.UNDECIDED
-        if code != Relation.UNDECIDED:
-            return Relation(code)
-        return classify_exact(A, B).relation
+            stats.escalated += int(codes[0] == Relation.UNDECIDED)
+        if codes[0] == Relation.UNDECIDED:  # kernels still loading, or the filter abstained
+            _resolve(A[None], B[None], codes, np.zeros(1, np.int8), method, True, on_invalid)
+        return Relation(int(codes[0]))
+    res = classify_detailed(A, B, method=method, on_invalid=on_invalid)
+    if stats is not None:
+        stats.pairs += res.relation.size
+        stats.escalated += res.escalated + int(np.count_nonzero(res.relation == Relation.UNDECIDED))
+    if res.relation.ndim == 0:
+        return Relation(int(res.relation))
+    return res.relation
+
+
+def classify_detailed(
+    A: Any, B: Any, *, method: Method = "adaptive", on_invalid: OnInvalid = "raise"
+) -> Classification:
+    """:func:`classify` with, per pair, the arithmetic that certified it and the invalid reasons.
+
+    Same arguments and guarantee as :func:`classify`; the result's arrays have the broadcast
+    batch shape (0-d for one pair).
+
+    Examples:
+        >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
+        >>> r = classify_detailed([circle(0), circle(3)], circle(2.0))
+        >>> r.relation.tolist(), [str(Certifier(c)) for c in r.certified_by]
+        ([1, 2], ['exact', 'float'])
+    """
+    _check_choice(method, METHODS, "method")
+    _check_choice(on_invalid, ON_INVALID, "on_invalid")
     a = _as_array(A, "A")
     b = _as_array(B, "B")
     n = a.shape[-1]
     if a.shape[-2:] != (n, n) or n not in (3, 4):
-        raise ValueError(f"A must be 3x3 or 4x4 (or a stack of them), got trailing shape {a.shape[-2:]}")
+        raise ValueError(
+            f"A must be a 3x3 (ellipse) or 4x4 (ellipsoid) matrix, or a stack (..., n, n) of them; got trailing shape {a.shape[-2:]}"
+        )
     if b.shape[-2:] != (n, n):
-        raise ValueError(f"B has trailing shape {b.shape[-2:]} but A is {n}x{n}: both must be ellipses or both ellipsoids")
+        raise ValueError(
+            f"B has trailing shape {b.shape[-2:]} but A is {n}x{n}: both must be ellipses or both ellipsoids"
+        )
     try:
         batch_shape = np.broadcast_shapes(a.shape[:-2], b.shape[:-2])
     except ValueError:
         raise ValueError(f"batch shapes {a.shape[:-2]} and {b.shape[:-2]} do not broadcast") from None
     scalar = batch_shape == ()
-    a = _flatten(a, batch_shape, n)
-    b = _flatten(b, batch_shape, n)
-    codes, undecided = _classify_flat(a, b, method, scalar)
-    if stats is not None:
-        stats.pairs += codes.shape[0]
-        stats.escalated += undecided
-    if scalar:
-        return Relation(int(codes[0]))
-    return codes.reshape(batch_shape)
+    codes, by, errors = _classify_flat(_flatten(a, batch_shape, n), _flatten(b, batch_shape, n), method, scalar, on_invalid)
+    return Classification(codes.reshape(batch_shape), by.reshape(batch_shape), errors)
 
 
 def _flatten(x: np.ndarray, batch_shape: tuple[int, ...], n: int) -> np.ndarray:
@@ -175,18 +314,43 @@ def _where(i: int, scalar: bool) -> str:
     return "" if scalar else f"pair {i}: "
 
 
-def _classify_flat(a: np.ndarray, b: np.ndarray, method: str, scalar: bool) -> tuple[np.ndarray, int]:
-    """Codes for (N, n, n) stacks and the number of pairs the float filter did not decide."""
+def _validate_pair(a: Any, b: Any) -> None:
+    """Raise ValueError (naming A or B) unless both matrices are valid ellipses/ellipsoids."""
+    validate_quadric(a, name="A")
+    validate_quadric(b, name="B")
+
+
+def _classify_flat(
+    a: np.ndarray, b: np.ndarray, method: str, scalar: bool, on_invalid: str
+) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
+    """Codes, certifiers and invalid reasons for (N, n, n) stacks."""
     N = a.shape[0]
     codes = np.full(N, Relation.UNDECIDED, dtype=np.int8)
+    by = np.zeros(N, dtype=np.int8)
     if method != "exact" and a.dtype == np.float64 and b.dtype == np.float64:
         codes = classify_float(a, b, scalar=scalar)
-    undecided = np.flatnonzero(codes == Relation.UNDECIDED)
-    if method == "float":
-        return codes, undecided.size
-    for i in undecided:
+        by[codes != Relation.UNDECIDED] = Certifier.FLOAT
+    errors = _resolve(a, b, codes, by, method, scalar, on_invalid)
+    return codes, by, errors
+
+
+def _resolve(
+    a: np.ndarray, b: np.ndarray, codes: np.ndarray, by: np.ndarray, method: str, scalar: bool, on_invalid: str
+) -> dict[int, str]:
+    """Decide the UNDECIDED entries of ``codes`` in place: exactly, or (``method="float"``) only
+    validate them. Returns the invalid reasons (``on_invalid="mark"``) or raises the first.
+    """
+    errors: dict[int, str] = {}
+    for i in np.flatnonzero(codes == Relation.UNDECIDED):
         try:
+            if method == "float":  # no exact classification, but invalid input is still an error
+                _validate_pair(a[i], b[i])
+                continue
             codes[i] = classify_exact(a[i], b[i]).relation
+            by[i] = Certifier.EXACT
         except ValueError as e:
-            raise ValueError(_where(int(i), scalar) + str(e)) from None
-    return codes, undecided.size
+            if on_invalid == "raise":
+                raise ValueError(_where(int(i), scalar) + str(e)) from None
+            codes[i] = Relation.INVALID
+            errors[int(i)] = str(e)
+    return errors

@@ -225,7 +225,9 @@ def _underflow_floor(nodes: list[_Node], outputs: list[int], mag: list[Fraction]
             else:
                 for x in nd.args:
                     F[x] += F[i]
-        rounded = sum((F[i] for i, nd in enumerate(nodes) if nd.op not in ("leaf", "neg", "abs")), Fraction(0))
+        # every node but neg/abs may round in the subnormal range; leaves too (the filter's
+        # power-of-two rescaling of an input, or a rounded input, can land there)
+        rounded = sum((F[i] for i, nd in enumerate(nodes) if nd.op not in ("neg", "abs")), Fraction(0))
         worst = max(worst, rounded)
     return round_up(chains * _UNDERFLOW_ABS * (worst + 1))
 
@@ -239,6 +241,7 @@ def build_kernel(
     leaf_max: dict[str, Fraction],
     leaf_exprs: dict[str, tuple[str, str]],
     params: Sequence[str],
+    leaf_K: int = 0,
 ) -> Kernel:
     """Trace ``formula`` and emit the source of a float kernel with its certified error constants.
 
@@ -252,13 +255,17 @@ def build_kernel(
         leaf_exprs: source expressions (value, radius) reading each leaf from the parameters,
             e.g. ``("A[0, 1]", "")`` or ``("c[2]", "cr[2]")``.
         params: parameter names of the generated function.
+        leaf_K: error count of every leaf ("permanent" style). 0: the inputs are exact. 1: each
+            input is a correctly rounded value of the exact one (relative error <= u), e.g. the
+            float sum a_ij + a_ji of a matrix symmetric only up to rounding; Higham's count
+            then treats the leaf as one more rounding, in the value and in its bound.
 
     Returns:
         The :class:`Kernel`: source text (written to core/_kernels.py by core.kernelgen; no
         ``del`` so numba can compile it) and certified constants.
     """
     t = _Trace()
-    leaves = {nm: t.add(_Node("leaf", (), name=nm)) for nm in inputs}
+    leaves = {nm: t.add(_Node("leaf", (), name=nm, K=leaf_K)) for nm in inputs}
     out = formula(leaves)
     outputs = tuple(out)
     out_idx = [out[k].i for k in outputs]

@@ -16,7 +16,12 @@ from flint import fmpq, fmpz
 
 from .decision import Decision, decide
 from .pencil import determinant, pencil_coefficients
-from .quadrics import check_determinant_sign, normalised_quadratic_part
+from .quadrics import (
+    SYMMETRY_TOLERANCE,
+    check_determinant_sign,
+    interior_sign,
+    normalised_quadratic_part,
+)
 from .subresultants import hat_s0, hat_s1, hat_s10
 
 __all__ = ["ExactPair", "classify_exact", "exact_pair", "integer_matrix"]
@@ -61,10 +66,9 @@ class ExactPair:
     def decide(self) -> Decision:
         """The paper's tree on exact signs, computing only what it needs."""
         a = self.coefficients
-        middle = [_sign(a[i]) for i in range(self.n - 1, 0, -1)]
         return decide(
             self.n,
-            middle,
+            [_sign(a[i]) for i in range(self.n, -1, -1)],
             lambda: _sign(self.hat("s0")),
             lambda: _sign(self.hat("s1")),
             lambda: _sign(self.hat("s10")),
@@ -72,13 +76,14 @@ class ExactPair:
 
 
 def _float_int_matrix(M: Any) -> list[list[int]] | None:
-    """2^k * M as Python ints (k chosen so every entry is an integer) for a finite float64
-    (n, n) array, sign-normalised so its quadratic block is positive definite; None if M is not
-    such an array or is invalid (the general path then produces the precise error message).
+    """2^k * (M + M^T) as Python ints (k chosen so every entry is an integer) for a finite float64
+    (n, n) array symmetric up to rounding, sign-normalised so its quadratic block is positive
+    definite; None if M is not such an array or is invalid (the general path then produces the
+    precise error message). A positive multiple of the symmetric part: the same shape.
     """
     if type(M) is not np.ndarray or M.dtype != np.float64 or M.ndim != 2 or M.shape[0] != M.shape[1]:
         return None
-    if not np.isfinite(M).all() or not (M == M.T).all():
+    if not np.isfinite(M).all():
         return None
     m, e = np.frexp(M)
     mi = np.ldexp(m, 53).astype(np.int64)  # exact: |m| < 1 has at most 53 significant bits
@@ -90,12 +95,20 @@ def _float_int_matrix(M: Any) -> list[list[int]] | None:
     shifts = np.where(nz, e - emin, 0).tolist()  # zero entries: any shift, keep it 0
     ints = [[v << s for v, s in zip(row, srow)] for row, srow in zip(mi.tolist(), shifts)]
     n = len(ints)
+    if not (M == M.T).all():
+        tol = SYMMETRY_TOLERANCE
+        m_row = [max(max(abs(ints[i][k]), abs(ints[k][i])) for k in range(n)) for i in range(n)]
+        for i in range(n):
+            for j in range(i + 1, n):
+                d = ints[i][j] - ints[j][i]
+                if d * d * tol.denominator**2 > tol.numerator**2 * m_row[i] * m_row[j]:
+                    return None  # beyond rounding: the general path raises with the message
+    ints = [[ints[i][j] + ints[j][i] for j in range(n)] for i in range(n)]
     minors = [determinant([row[:k] for row in ints[:k]]) for k in range(1, n)]
-    if all(d > 0 for d in minors):
-        return ints
-    if all((d < 0) if k % 2 == 0 else (d > 0) for k, d in enumerate(minors)):
-        return [[-v for v in row] for row in ints]
-    return None
+    sign = interior_sign([(d > 0) - (d < 0) for d in minors])
+    if sign is None:
+        return None
+    return ints if sign == 1 else [[-v for v in row] for row in ints]
 
 
 def exact_pair(A: Any, B: Any, *, scaled: bool = True) -> ExactPair:

@@ -8,6 +8,7 @@ decided, and which arithmetic certified it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
 
@@ -15,10 +16,11 @@ from flint import fmpq
 
 from .decision import RULES, sign_variations
 from .exact import exact_pair
+from .rationals import format_rational, to_float
 from .relation import Relation
 from .subresultants import hat_scale
 
-__all__ = ["Quantity", "Explanation", "explain"]
+__all__ = ["Quantity", "Explanation", "explain", "display_float"]
 
 
 @dataclass(frozen=True)
@@ -27,14 +29,17 @@ class Quantity:
 
     name: str
     """"a0".."a4", "s0", "s1" or "s10"."""
-    approx: float
-    """Float value (display only when ``exact`` is set)."""
+    approx: float | None
+    """Nearest float (display only), or None when the value is outside the float range
+    (|value| > 1.8e308, or nonzero and below the smallest subnormal): read ``text`` then."""
     exact: str | None = None
     """Exact rational as "p/q" when the exact path computed it."""
     bound: float | None = None
     """|exact - approx| <= bound, when the value comes from the float filter."""
     sign: int | None = None
     """Certified sign (-1, 0, 1), or None when the bound cannot certify it."""
+    text: str = ""
+    """The value in scientific notation at any size ("-1.23457e+612"), computed exactly."""
 
 
 @dataclass(frozen=True)
@@ -69,8 +74,18 @@ def _sign(x: Any) -> int:
     return (x > 0) - (x < 0)
 
 
+def display_float(v: fmpq) -> float | None:
+    """The nearest float of an exact value, or None when it does not fit (overflow, or a nonzero
+    value that rounds to 0): a display value never misstates the sign or the size.
+    """
+    f = to_float(v)
+    if math.isinf(f) or (f == 0 and v != 0):
+        return None
+    return f
+
+
 def _q(name: str, v: fmpq) -> Quantity:
-    return Quantity(name, float(v.p) / float(v.q) if abs(v.p) < 2**1000 else float(v), str(v), None, _sign(v))
+    return Quantity(name, display_float(v), str(v), None, _sign(v), format_rational(v))
 
 
 def explain(A: Any, B: Any) -> Explanation:

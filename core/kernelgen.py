@@ -1,37 +1,46 @@
-"""Generate ``core/_kernels.py``: the float kernels of the filter, traced from the generic formulas.
+"""Generate ``core/_kernels.py`` and ``core/_kernels.c``: the float kernels of the filter, traced
+from the generic formulas, with the per-pair C driver and the decision tables.
 
-Run ``python -m core.kernelgen`` after changing :mod:`core.pencil`, :mod:`core.subresultants` or
-:mod:`core.errorbound`; ``tests/test_filters.py`` fails if the committed file is not what this
-module generates (and ``KERNELS_SHA`` in core/fastpath.py, which keys numba's disk cache). Committing the generated text (instead of ``exec`` at import) lets numba cache
-its compiled code and keeps every line of the fast path readable.
+Run ``python -m core.kernelgen`` after changing :mod:`core.pencil`, :mod:`core.subresultants`,
+:mod:`core.errorbound` or :mod:`core.decision`; ``tests/test_filters.py`` fails if the committed
+files are not what this module generates. Committing the generated text (instead of ``exec`` at
+import) keeps every line of the fast path readable and lets the compiled library be cached by
+the hash of its source (:mod:`core.compiled`).
 """
 
 from __future__ import annotations
 
 import hashlib
+import math
 import re
 import sys
+from collections.abc import Sequence
 from fractions import Fraction
 from functools import cache
 from pathlib import Path
 from typing import Any
 
-from .errorbound import LEAF_MAX, NO_SCALE_MIN, TRANSLATE_MAX, Kernel, build_kernel
+from .errorbound import LEAF_MAX, NO_SCALE_MIN, RADIUS_FACTOR, TRANSLATE_MAX, Kernel, build_kernel
 from .pencil import determinant, pencil_coefficients, poly_mul
+from .quadrics import SYMMETRY_TOLERANCE
 from .subresultants import hat_s0, hat_s1, hat_s10
 
 __all__ = [
     "pencil_kernel",
     "pencil_radius_kernel",
+    "pencil_at_kernel",
+    "form_kernel",
     "translate_kernel",
     "subresultant_kernel",
     "generate_module",
+    "generate_c",
+    "c_function",
     "GENERATED_PATH",
+    "GENERATED_C_PATH",
     "HATS",
 ]
 
 GENERATED_PATH = Path(__file__).with_name("_kernels.py")
-FASTPATH_PATH = Path(__file__).with_name("fastpath.py")
 HATS = {"s0": hat_s0, "s1": hat_s1, "s10": hat_s10}
 
 
@@ -55,12 +64,14 @@ def _row_bound_poly(A: list[list[Any]], B: list[list[Any]]) -> list[Any]:
 
 
 @cache
-def pencil_kernel(n: int) -> Kernel:
+def pencil_kernel(n: int, leaf_K: int = 0) -> Kernel:
     """Kernel ``pencil{n}(A, B)``: a_0..a_n and the validity minors, each with a ``_M`` bound.
 
     Outputs, in order: c0, c0_M, ..., cn, cn_M, dA2, dA2_M[, dA3, dA3_M], dB2, dB2_M[, dB3, dB3_M].
     ``x_M`` bounds the permanent of ``x`` (products of absolute row sums), so the error of ``x``
-    is at most ``constant * x_M`` (see :mod:`core.errorbound`).
+    is at most ``constant * x_M`` (see :mod:`core.errorbound`). ``leaf_K = 1`` gives the
+    constants for entries that are correctly rounded values (a matrix symmetrised in floats);
+    the source is the same.
     """
 
     def formula(L: dict[str, Any]) -> dict[str, Any]:
@@ -90,15 +101,17 @@ def pencil_kernel(n: int) -> Kernel:
         leaf_max={nm: Fraction(LEAF_MAX) for nm in names},
         leaf_exprs=exprs,
         params=["A", "B"],
+        leaf_K=leaf_K,
     )
 
 
 @cache
 def translate_kernel(n: int) -> Kernel:
-    """Kernel ``translate{n}(M, t)`` (midpoint-radius): upper triangle of G^T M G, G = [[I, t], [0, 1]].
+    """Kernel ``translate{n}(M, Mr, t)`` (midpoint-radius): upper triangle of G^T M G, G = [[I, t], [0, 1]].
 
     Moves the origin to the point t (both shapes of a pair get the same t: the relation is
-    invariant). Inputs are exact (radius 0); outputs carry certified radii. Leaves: entries of
+    invariant). Entries carry radii Mr (0 for exact inputs; a symmetrised matrix has rounded
+    entries); t is exact; outputs carry certified radii. Leaves: entries of
     the prepared matrix (|.| <= LEAF_MAX) and t (|t_i| <= TRANSLATE_MAX).
     """
     d = n - 1
@@ -124,12 +137,12 @@ def translate_kernel(n: int) -> Kernel:
         out[_leaf("m", d, d)] = last
         return out
 
-    exprs = {nm: (f"M[{nm[1]}, {nm[2]}]", "0.0") for nm in names if nm[0] == "m"}
+    exprs = {nm: (f"M[{nm[1]}, {nm[2]}]", f"Mr[{nm[1]}, {nm[2]}]") for nm in names if nm[0] == "m"}
     exprs.update({f"t{i}": (f"t[{i}]", "0.0") for i in range(d)})
     leaf_max = {nm: Fraction(LEAF_MAX) for nm in names if nm[0] == "m"}
     leaf_max.update({f"t{i}": Fraction(TRANSLATE_MAX) for i in range(d)})
     return build_kernel(
-        f"translate{n}", names, formula, style="radius", leaf_max=leaf_max, leaf_exprs=exprs, params=["M", "t"]
+        f"translate{n}", names, formula, style="radius", leaf_max=leaf_max, leaf_exprs=exprs, params=["M", "Mr", "t"]
     )
 
 
@@ -180,54 +193,162 @@ def subresultant_kernel(n: int, which: str) -> Kernel:
     )
 
 
-def prepare_source(n: int) -> str:
-    """Unrolled ``prepare{n}(M, out)``: validate cheaply, flip to a negative interior, scale.
+CERT_T_MIN, CERT_T_MAX = Fraction(1, 2**20), Fraction(2**20)
+"""The separation certificate evaluates P(T*) only for T* in this range (overflow-free bounds)."""
 
-    Writes the upper triangle of ``f * M`` into ``out`` with f = +-1 when max|M_ij| already lies
-    in [NO_SCALE_MIN, LEAF_MAX], else f = +-2^k (exact) bringing it into [1, 2), so that every
-    entry is at most LEAF_MAX as :mod:`core.errorbound`'s bounds assume; returns False (abstain)
-    for NaN/inf, asymmetry or M_00 = 0 (the exact path then reports the error).
+
+@cache
+def pencil_at_kernel(n: int) -> Kernel:
+    """Kernel ``pencil_at{n}(c, cr, T)`` (midpoint-radius): P(T) = sum a_i T^i by Horner, from
+    a_i with radii and an exact T in [CERT_T_MIN, CERT_T_MAX]: the separation certificate
+    (P(T*) > 0 with a_n, a_0 < 0 means two positive roots)."""
+    pk = pencil_kernel(n)
+    pr = pencil_radius_kernel(n)
+    names = [f"c{i}" for i in range(n + 1)]
+
+    def formula(L: dict[str, Any]) -> dict[str, Any]:
+        acc = L[f"c{n}"]
+        for i in range(n - 1, -1, -1):
+            acc = acc * L["T"] + L[f"c{i}"]
+        return {"p": acc}
+
+    leaf_max = {c: max(pk.output_max[pk.outputs.index(c)], pr.output_max[pr.outputs.index(c)] * 2) for c in names}
+    leaf_max["T"] = CERT_T_MAX
+    exprs = {f"c{i}": (f"c[{i}]", f"cr[{i}]") for i in range(n + 1)}
+    exprs["T"] = ("T", "0.0")
+    return build_kernel(
+        f"pencil_at{n}", [*names, "T"], formula, style="radius", leaf_max=leaf_max, leaf_exprs=exprs, params=["c", "cr", "T"]
+    )
+
+
+@cache
+def form_kernel(n: int) -> Kernel:
+    """Kernel ``form{n}(M, Mr, x)`` (midpoint-radius): X^T M X for X = (x, 1), M the prepared
+    matrix (entries with radii), x exact with |x_i| <= TRANSLATE_MAX: the common-point
+    certificate (negative for both shapes means x is inside both)."""
+    d = n - 1
+    mnames = [_leaf("m", i, j) for i in range(n) for j in range(i, n)]
+    names = mnames + [f"x{i}" for i in range(d)]
+
+    def formula(L: dict[str, Any]) -> dict[str, Any]:
+        M = [[L[_leaf("m", i, j)] for j in range(n)] for i in range(n)]
+        X = [L[f"x{i}"] for i in range(d)]
+        acc = M[d][d]
+        for i in range(d):  # 2 (m_i + sum_j<i M_ij x_j) x_i + M_ii x_i^2, row by row
+            row = M[i][d] * 2
+            for j in range(i):
+                row = row + M[i][j] * X[j] * 2
+            row = row + M[i][i] * X[i]
+            acc = acc + row * X[i]
+        return {"q": acc}
+
+    exprs = {nm: (f"M[{nm[1]}, {nm[2]}]", f"Mr[{nm[1]}, {nm[2]}]") for nm in mnames}
+    exprs.update({f"x{i}": (f"x[{i}]", "0.0") for i in range(d)})
+    leaf_max = {nm: Fraction(LEAF_MAX) for nm in mnames}
+    leaf_max.update({f"x{i}": Fraction(TRANSLATE_MAX) for i in range(d)})
+    return build_kernel(f"form{n}", names, formula, style="radius", leaf_max=leaf_max, leaf_exprs=exprs, params=["M", "Mr", "x"])
+
+
+# ---------------------------------------------------------------------------------------------
+# C: the same traced kernels, the prepare step and the per-pair driver (core/_kernels.c)
+
+
+def c_function(k: Kernel, n: int, scalars: Sequence[str] = ()) -> str:
+    """The kernel's straight-line Python source rewritten as a C function (same operations in
+    the same order: the error constants carry over; compile without contraction, -ffp-contract=off).
+
+    Matrix leaves ``X[i, j]`` read a row-major n x n buffer; the outputs go to ``out[k]``.
     """
+    lines = k.source.rstrip().split("\n")
+    params = re.match(r"def \w+\((.*)\):", lines[0]).group(1).split(", ")  # type: ignore[union-attr]
+    decl = [f"double {p}" if p in scalars else f"const double *restrict {p}" for p in params]
+    body = [f"static inline __attribute__((always_inline)) void {k.name}({', '.join(decl)}, double *restrict out) {{"]
+    for ln in lines[1:]:
+        ln = ln.strip()
+        if ln.startswith("return"):
+            for i, v in enumerate(ln[len("return (") : -len(",)")].split(", ")):
+                body.append(f"    out[{i}] = {v};")
+            continue
+        name, rhs = ln.split(" = ", 1)
+        rhs = re.sub(r"(\w+)\[(\d+), (\d+)\]", lambda m: f"{m.group(1)}[{int(m.group(2)) * n + int(m.group(3))}]", rhs)
+        rhs = rhs.replace("abs(", "fabs(")
+        body.append(f"    const double {name} = {rhs};")
+    body.append("}")
+    return "\n".join(body) + "\n"
+
+
+def _c_double(x: float) -> str:
+    return repr(float(x)) if math.isfinite(x) else "INFINITY"
+
+
+def prepare_c(n: int) -> str:
+    """``prepare{n}`` of :func:`prepare_source` in C (the same decisions and operations)."""
     idx = [(i, j) for i in range(n) for j in range(i, n)]
-    xs = [f"x{i}{j}" for i, j in idx]
-    L = [f"def prepare{n}(M, out):"]
-    L += [f"    x{i}{j} = M[{i}, {j}]" for i, j in idx]
-    checks = ["(x00 == 0.0)"] + [f"(M[{j}, {i}] != x{i}{j})" for i, j in idx if i != j]
-    checks += [f"(x{i}{j} != x{i}{j})" for i, j in idx]
-    L.append("    bad = " + " | ".join(checks))
-    L.append("    mx = max(" + ", ".join(f"abs({x})" for x in xs) + ")")
-    L.append("    if bad or not mx <= 1.7976931348623157e308:")
-    L.append("        return False")
-    L.append("    f = -1.0 if x00 < 0.0 else 1.0")
-    L.append(f"    if not ({float(NO_SCALE_MIN)!r} <= mx <= {float(LEAF_MAX)!r}):")
-    L.append("        _, e = math.frexp(mx)")
-    L.append("        f = math.ldexp(f, 1 - e)")
-    L += [f"    out[{i}, {j}] = x{i}{j} * f" for i, j in idx]
-    L.append("    return True")
+    off = [(i, j) for i, j in idx if i != j]
+    xs = [f"x{i}{j}" for i, j in idx] + [f"y{i}{j}" for i, j in off]
+    tol2 = float(SYMMETRY_TOLERANCE) ** 2
+    L = [f"static inline int prepare{n}(const double *restrict M, double *restrict out) {{"]
+    L += [f"    double x{i}{j} = M[{i * n + j}];" for i, j in idx]
+    L += [f"    double y{i}{j} = M[{j * n + i}];" for i, j in off]
+    L.append("    if ((x00 == 0.0) | " + " | ".join(f"({x} != {x})" for x in xs) + ") return 0;")
+    L.append("    double mx = 0.0;")
+    L += [f"    if (fabs({x}) > mx) mx = fabs({x});" for x in xs]
+    L.append("    if (!(mx <= 1.7976931348623157e308)) return 0;")
+    L.append("    const double f = x00 < 0.0 ? -1.0 : 1.0;")
+    L.append(f"    if (!({float(NO_SCALE_MIN)!r} <= mx && mx <= {float(LEAF_MAX)!r})) {{")
+    L.append("        int e;")
+    L.append("        frexp(mx, &e);")
+    L.append("        const int k = 1 - e;  /* exact power-of-two scaling, entry by entry (2^k may be no float) */")
+    L += [f"        {x} = ldexp({x}, k);" for x in xs]
+    L.append("    }")
+    L.append("    if (" + " & ".join(f"({'x'}{i}{j} == y{i}{j})" for i, j in off) + ") {")
+    L += [f"        out[{i * n + j}] = x{i}{j} * f;" for i, j in idx]
+    L.append("        return 1;")
+    L.append("    }")
+    for i in range(n):
+        row = [f"x{min(i, k)}{max(i, k)}" for k in range(n)] + [f"y{min(i, k)}{max(i, k)}" for k in range(n) if k != i]
+        L.append(f"    double m{i} = 0.0;")
+        L += [f"    if (fabs({v}) > m{i}) m{i} = fabs({v});" for v in row]
+    conds = []
+    for i, j in off:
+        L.append(f"    const double d{i}{j} = fabs(x{i}{j} * f - y{i}{j} * f);")
+        L.append(f"    const double r{i}{j} = {tol2!r} * m{i} * m{j};")
+        conds.append(
+            f"((x{i}{j} == y{i}{j}) | ((r{i}{j} >= 9.332636185032189e-302) & "
+            f"(d{i}{j} * d{i}{j} * 1.0000000000000036 <= r{i}{j} * 0.9999999999999964)))"
+        )
+    L.append("    if (!(" + " & ".join(conds) + ")) return 0;")
+    L.append("    const double h = 0.5 * f;")
+    L += [f"    out[{i * n + i}] = x{i}{i} * f;" for i in range(n)]
+    L += [f"    out[{i * n + j}] = x{i}{j} * h + y{i}{j} * h;" for i, j in off]
+    L.append("    return 2;")
+    L.append("}")
     return "\n".join(L) + "\n"
 
 
 def generate_module() -> str:
-    """Source text of ``core/_kernels.py``."""
+    """Source text of ``core/_kernels.py`` (the numpy filter runs these on arrays of pairs)."""
     parts = [
         '"""Float kernels of the certified filter. GENERATED by ``python -m core.kernelgen``: do not edit.\n\n'
         "Each ``pencil{n}(A, B)`` reads ``A[i, j]`` (a float, or an array of floats for many pairs) and\n"
         "returns the outputs listed in ``PENCIL{n}_OUTPUTS``; |error of x| <= constant * x_M + floor.\n"
-        "Each ``hat_{s}_{n}(c, cr)`` takes values and error radii of a_0..a_n and returns (value, radius);\n"
-        '|error| <= radius * RADIUS_FACTOR + floor. See core/errorbound.py for the proofs.\n"""\n',
+        "The midpoint-radius kernels (``hat_{s}_{n}``, ``translate{n}``, ``pencil_radius{n}``,\n"
+        "``pencil_at{n}``, ``form{n}``) return values and radii; |error| <= radius * RADIUS_FACTOR + floor.\n"
+        'See core/errorbound.py for the proofs; core/_kernels.c holds the same kernels in C.\n"""\n',
         "# ruff: noqa",
-        "import math",
         "",
     ]
     for n in (3, 4):
         k = pencil_kernel(n)
-        parts.append(prepare_source(n))
         parts.append(f"PENCIL{n}_OUTPUTS = {k.outputs!r}")
         parts.append(f"PENCIL{n}_CONSTANTS = {tuple(float(c) for c in k.constants)!r}")
+        kr = pencil_kernel(n, leaf_K=1)
+        parts.append(f"PENCIL{n}_CONSTANTS_ROUNDED = {tuple(float(c) for c in kr.constants)!r}")
+        parts.append(f"PENCIL{n}_FLOOR_ROUNDED = {kr.underflow_floor!r}")
         parts.append(f"PENCIL{n}_FLOOR = {k.underflow_floor!r}")
         parts.append("")
         parts.append(k.source)
-        for extra in (translate_kernel(n), pencil_radius_kernel(n)):
+        for extra in (translate_kernel(n), pencil_radius_kernel(n), pencil_at_kernel(n), form_kernel(n)):
             parts.append(f"{extra.name.upper()}_OUTPUTS = {extra.outputs!r}")
             parts.append(f"{extra.name.upper()}_FLOOR = {extra.underflow_floor!r}")
             parts.append("")
@@ -240,34 +361,313 @@ def generate_module() -> str:
     return "\n".join(parts)
 
 
-def _kernels_sha(text: str) -> str:
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+_C_HEADER = """/* Float kernels of the certified filter, in C. GENERATED by `python -m core.kernelgen`: do not edit.
+ *
+ * The straight-line kernels are the traced formulas of core/_kernels.py (same operations, same
+ * order, so the same proven error constants; compile with -ffp-contract=off and without
+ * -ffast-math). The decision tables are core.decision.decide_signs tabulated. core/compiled.py
+ * compiles this file once per machine and source hash and calls classify3/classify4 (the GIL
+ * is released: ctypes) from a thread pool.
+ */
+#include <math.h>
+#include <stdint.h>
+
+#define RADIUS_FACTOR @RF@
+#define NEED_S0 @NEED_S0@
+#define RULE_SEP @RULE_SEP@
+#define RULE_POINT @RULE_POINT@
+#define CERT_T_MIN @TMIN@
+#define CERT_T_MAX @TMAX@
+#define TRANSLATE_MAX @XMAX@
+#define LEAF_ROUNDING 2.220446049250313e-16 /* 2^-52 >= u / (1 - u): radius of a rounded half sum */
+#define LEAF_UNDERFLOW 1.0e-323           /* >= 2^-1073: subnormal rounding of a scaled entry */
+#define BLOCK 16                          /* pairs per structure-of-arrays block of the fast path */
+
+/* Table digit of a certified sign: 0 for -1, 2 for +1, 3 for uncertain (core.decision.SIGN_CODES). */
+static inline int sign_digit(double v, double b) { return v > b ? 2 : (v < -b ? 0 : 3); }
+"""
+
+_C_DRIVER = """
+/* ---- degree @N@: ellipses (3) / ellipsoids (4) ------------------------------------------- */
+static const double PC@N@[@NOUT@] = {@PC@};
+static const double PCR@N@[@NOUT@] = {@PCR@};
+static const double PF@N@ = @PF@, PFR@N@ = @PFR@, HF@N@ = @HF@, PAF@N@ = @PAF@, FF@N@ = @FF@;
+static const int TAB@N@[@TABSIZE@] = {@TAB@};
+
+/* Validity, a_i with radii and the tree: a rule id, -1 (valid, undecided) or -2 (not certified valid). */
+static inline int core@N@(const double *wa, const double *wb, int rounded, double *c, double *cr) {
+    double r[@NOUT@];
+    pencil@N@(wa, wb, r);
+    const double *C = rounded ? PCR@N@ : PC@N@;
+    const double F = rounded ? PFR@N@ : PF@N@;
+    for (int k = 2 * (@N@ + 1); k < @NOUT@; k += 2)
+        if (!(r[k] > C[k] * r[k + 1] + F)) return -2;
+    for (int i = 0; i <= @N@; i++) {
+        c[i] = r[2 * i];
+        cr[i] = C[2 * i] * r[2 * i + 1] + F;
+    }
+    if (!(c[@N@] < -cr[@N@]) || !(c[0] < -cr[0])) return -2;
+    int idx = 0;
+    for (int i = @N@ - 1; i >= 1; i--) idx = idx * 5 + sign_digit(c[i], cr[i]);
+    const int out = TAB@N@[idx * 125 + 124]; /* s0, s1, s1,0 pending */
+    if (out != NEED_S0) return out;
+    double h[2];
+    hat_s0_@N@(c, cr, h);
+    return TAB@N@[idx * 125 + sign_digit(h[0], h[1] * RADIUS_FACTOR + HF@N@) * 25 + 24];
+}
+
+/* Centre (Q c = -m, adjugate) and scale k = -m.c - M_dd of a prepared matrix (upper triangle). */
+static inline int centre@N@(const double *w, double *ctr, double *k) {
+@CENTRE@
+}
+
+static inline double quad@N@(const double *w, const double *u) {
+@QUAD@
+}
+
+/* Certificates that do not need s0 (spheres, translated and homothetic copies): a rule or -1. */
+static inline int certify@N@(const double *wa, const double *wb, int rnd_a, int rnd_b, const double *c, const double *cr) {
+    double ca[@D@], cb[@D@], ka, kb, u[@D@], x[@D@], ra[@NN@], rb[@NN@], q[2];
+    if (!centre@N@(wa, ca, &ka) || !centre@N@(wb, cb, &kb)) return -1;
+    if (!(ka > 0.0 && kb > 0.0)) return -1;
+    for (int i = 0; i < @D@; i++) u[i] = cb[i] - ca[i];
+    const double qa = quad@N@(wa, u), qb = quad@N@(wb, u);
+    double s = 0.0; /* concentric shapes: try A's centre */
+    if (qa > 0.0 && qb > 0.0) {
+        const double ta = sqrt(ka / qa), tb = sqrt(kb / qb);
+        const double T = (ta / tb) * (kb / ka);
+        if (T >= CERT_T_MIN && T <= CERT_T_MAX) {
+            pencil_at@N@(c, cr, T, q);
+            if (q[0] > q[1] * RADIUS_FACTOR + PAF@N@) return RULE_SEP;
+        }
+        s = ta / (ta + tb);
+    }
+    for (int i = 0; i < @D@; i++) {
+        x[i] = ca[i] + s * u[i];
+        if (!(fabs(x[i]) <= TRANSLATE_MAX)) return -1;
+    }
+    for (int k = 0; k < @NN@; k++) {
+        ra[k] = rnd_a ? fabs(wa[k]) * LEAF_ROUNDING + LEAF_UNDERFLOW : 0.0;
+        rb[k] = rnd_b ? fabs(wb[k]) * LEAF_ROUNDING + LEAF_UNDERFLOW : 0.0;
+    }
+    form@N@(wa, ra, x, q);
+    if (!(q[0] < -(q[1] * RADIUS_FACTOR + FF@N@))) return -1;
+    form@N@(wb, rb, x, q);
+    if (!(q[0] < -(q[1] * RADIUS_FACTOR + FF@N@))) return -1;
+    return RULE_POINT;
+}
+
+/* One pair: a rule id (>= 0) or -1 (the exact path decides). */
+static inline int pair@N@(const double *A, const double *B) {
+    double wa[@NN@] = {0}, wb[@NN@] = {0}, c[@N@ + 1], cr[@N@ + 1];
+    const int sa = prepare@N@(A, wa), sb = prepare@N@(B, wb);
+    if (!sa || !sb) return -1;
+    const int code = core@N@(wa, wb, (sa == 2) | (sb == 2), c, cr);
+    if (code != -1) return code < 0 ? -1 : code;
+    return certify@N@(wa, wb, sa == 2, sb == 2, c, cr);
+}
+
+/* The common case without branches, so that the compiler vectorises the loop over pairs: both
+ * matrices finite, symmetric (or within the tolerance), largest entry in [NO_SCALE_MIN, LEAF_MAX]
+ * (no scaling). Same operations as prepare@N@ + core@N@ on such pairs, s0 computed for every pair
+ * (a rule that does not need it ignores it: decide_signs stops before s0). Returns the rule id,
+ * or -9: take pair@N@ (scaling, certificates, abstention). */
+static inline __attribute__((always_inline)) int fast@N@(const double *restrict a, const double *restrict b, const int64_t s) {
+    double wa[@NN@], wb[@NN@], r[@NOUT@], c[@N@ + 1], cr[@N@ + 1], h[2];
+@FASTPREP@
+    pencil@N@(wa, wb, r);
+    const int rounded = !(syma & symb);
+    /* constants chosen by selects on unconditional loads: no control flow, the loop vectorises */
+    const double F = rounded ? PFR@N@ : PF@N@;
+@FASTBOUNDS@
+    hat_s0_@N@(c, cr, h);
+    const int code = TAB@N@[idx * 125 + sign_digit(h[0], h[1] * RADIUS_FACTOR + HF@N@) * 25 + 24];
+    return (valid & (code >= 0)) ? code : -9;
+}
+
+/* count contiguous pairs (count, @N@, @N@) of float64 -> rule ids (int8, -1 undecided). Blocks of
+ * BLOCK pairs are transposed to structure-of-arrays first, so that the branch-free fast path
+ * reads consecutive lanes and vectorises; the rare pairs it leaves go through pair@N@. */
+void classify@N@(const double *A, const double *B, signed char *out, int64_t count) {
+    int64_t i = 0;
+    for (; i + BLOCK <= count; i += BLOCK) {
+        double sa[@NN@ * BLOCK], sb[@NN@ * BLOCK];
+        for (int p = 0; p < BLOCK; p++)
+            for (int k = 0; k < @NN@; k++) {
+                sa[k * BLOCK + p] = A[(i + p) * @NN@ + k];
+                sb[k * BLOCK + p] = B[(i + p) * @NN@ + k];
+            }
+        int res[BLOCK]; /* int lanes: the vectoriser then uses the full double-vector width */
+        for (int p = 0; p < BLOCK; p++) res[p] = fast@N@(sa + p, sb + p, BLOCK);
+        for (int p = 0; p < BLOCK; p++) out[i + p] = (signed char)res[p];
+    }
+    for (; i < count; i++) out[i] = (signed char)fast@N@(A + (int64_t)@NN@ * i, B + (int64_t)@NN@ * i, 1);
+    for (int64_t j = 0; j < count; j++)
+        if (out[j] == -9) out[j] = (signed char)pair@N@(A + (int64_t)@NN@ * j, B + (int64_t)@NN@ * j);
+}
+"""
 
 
-def _stamp_fastpath(text: str) -> tuple[str, str]:
-    """(current, updated) source of core/fastpath.py with KERNELS_SHA set for ``text``."""
-    current = FASTPATH_PATH.read_text()
-    updated = re.sub(r'^KERNELS_SHA = "[0-9a-f]*"', f'KERNELS_SHA = "{_kernels_sha(text)}"', current, flags=re.M)
-    return current, updated
+def _fast_prep_c(n: int) -> str:
+    """C statements of ``fast{n}``'s branch-free prepare of both matrices into wa, wb."""
+    idx = [(i, j) for i in range(n) for j in range(i, n)]
+    off = [(i, j) for i, j in idx if i != j]
+    tol_lo = float(SYMMETRY_TOLERANCE) * (1 - 2.0**-50)  # exact: 2^-20 - 2^-70
+    assert Fraction(tol_lo) == SYMMETRY_TOLERANCE * (1 - Fraction(1, 2**50))
+    L = []
+    for M, w in (("a", "a"), ("b", "b")):
+        xs = [f"{M}x{i}{j}" for i, j in idx] + [f"{M}y{i}{j}" for i, j in off]
+        L += [f"    const double {M}x{i}{j} = {M}[{i * n + j} * s];" for i, j in idx]
+        L += [f"    const double {M}y{i}{j} = {M}[{j * n + i} * s];" for i, j in off]
+        L.append(f"    const double {M}f = {M}x00 < 0.0 ? -1.0 : 1.0, {M}h = 0.5 * {M}f;")
+        L.append(f"    double {M}mx = 0.0;")
+        L += [f"    {M}mx = fabs({x}) > {M}mx ? fabs({x}) : {M}mx;" for x in xs]
+        # finite entries (NaN fails every comparison), M_00 != 0, in range: no scaling needed
+        L.append(
+            f"    const int {M}ok = ({M}x00 != 0.0) & ({float(NO_SCALE_MIN)!r} <= {M}mx) & ({M}mx <= {float(LEAF_MAX)!r}) & "
+            + " & ".join(f"({x} == {x})" for x in xs)
+            + ";"
+        )
+        L.append(f"    const int sym{w} = " + " & ".join(f"({M}x{i}{j} == {M}y{i}{j})" for i, j in off) + ";")
+        # a cheaper sufficient test than prepare's: |x - y| <= tol max(|x|, |y|) implies
+        # (x - y)^2 <= tol^2 m_i m_j (both m_i and m_j are >= max(|x|, |y|)); rounding covered
+        conds = []
+        for i, j in off:
+            x, y = f"{M}x{i}{j}", f"{M}y{i}{j}"
+            L.append(f"    const double {M}e{i}{j} = fabs({x}) > fabs({y}) ? fabs({x}) : fabs({y});")
+            conds.append(
+                f"(({x} == {y}) | (({M}e{i}{j} >= 1e-270) & "
+                f"(fabs({x} - {y}) * {1 + 2.0**-50!r} <= {M}e{i}{j} * {tol_lo!r})))"
+            )
+        L.append(f"    const int near{w} = " + " & ".join(conds) + ";")
+        L += [f"    w{w}[{i * n + i}] = {M}x{i}{i} * {M}f;" for i in range(n)]
+        L += [
+            f"    w{w}[{i * n + j}] = sym{w} ? {M}x{i}{j} * {M}f : {M}x{i}{j} * {M}h + {M}y{i}{j} * {M}h;"
+            for i, j in off
+        ]
+    L.append("    const int eligible = aok & bok & (syma | neara) & (symb | nearb);")
+    return "\n".join(L)
+
+
+def _fast_bounds_c(n: int, nout: int) -> str:
+    """C statements of ``fast{n}``: certified bounds, validity and the table index, unrolled."""
+    L = []
+    for k in range(0, nout, 2):
+        L.append(f"    const double C{k} = rounded ? PCR{n}[{k}] : PC{n}[{k}];")
+    valid = ["eligible"]
+    for k in range(2 * (n + 1), nout, 2):
+        valid.append(f"(r[{k}] > C{k} * r[{k + 1}] + F)")
+    for i in range(n + 1):
+        L.append(f"    c[{i}] = r[{2 * i}];")
+        L.append(f"    cr[{i}] = C{2 * i} * r[{2 * i + 1}] + F;")
+    valid += [f"(c[{n}] < -cr[{n}])", "(c[0] < -cr[0])"]
+    L.append("    const int valid = " + " & ".join(valid) + ";")
+    idx = "0"
+    for i in range(n - 1, 0, -1):
+        idx = f"({idx}) * 5 + sign_digit(c[{i}], cr[{i}])"
+    L.append(f"    const int idx = {idx};")
+    return "\n".join(L)
+
+
+def _centre_c(n: int) -> str:
+    """C body of ``centre{n}`` (explicit adjugate: the numpy filter does the same operations)."""
+    w = lambda i, j: f"w[{min(i, j) * n + max(i, j)}]"  # noqa: E731
+    d = n - 1
+    L = []
+    if d == 2:
+        L.append(f"    const double a00 = {w(1, 1)}, a01 = -{w(0, 1)}, a11 = {w(0, 0)};")
+        L.append(f"    const double det = {w(0, 0)} * {w(1, 1)} - {w(0, 1)} * {w(0, 1)};")
+        L.append(f"    const double m0 = {w(0, 2)}, m1 = {w(1, 2)};")
+        L.append("    if (!(det > 0.0)) return 0;")
+        L.append("    ctr[0] = -(a00 * m0 + a01 * m1) / det;")
+        L.append("    ctr[1] = -(a01 * m0 + a11 * m1) / det;")
+        L.append(f"    *k = -(m0 * ctr[0] + m1 * ctr[1]) - {w(2, 2)};")
+    else:
+        L.append(f"    const double a00 = {w(1, 1)} * {w(2, 2)} - {w(1, 2)} * {w(1, 2)};")
+        L.append(f"    const double a01 = {w(0, 2)} * {w(1, 2)} - {w(0, 1)} * {w(2, 2)};")
+        L.append(f"    const double a02 = {w(0, 1)} * {w(1, 2)} - {w(0, 2)} * {w(1, 1)};")
+        L.append(f"    const double a11 = {w(0, 0)} * {w(2, 2)} - {w(0, 2)} * {w(0, 2)};")
+        L.append(f"    const double a12 = {w(0, 1)} * {w(0, 2)} - {w(0, 0)} * {w(1, 2)};")
+        L.append(f"    const double a22 = {w(0, 0)} * {w(1, 1)} - {w(0, 1)} * {w(0, 1)};")
+        L.append(f"    const double det = {w(0, 0)} * a00 + {w(0, 1)} * a01 + {w(0, 2)} * a02;")
+        L.append(f"    const double m0 = {w(0, 3)}, m1 = {w(1, 3)}, m2 = {w(2, 3)};")
+        L.append("    if (!(det > 0.0)) return 0;")
+        L.append("    ctr[0] = -(a00 * m0 + a01 * m1 + a02 * m2) / det;")
+        L.append("    ctr[1] = -(a01 * m0 + a11 * m1 + a12 * m2) / det;")
+        L.append("    ctr[2] = -(a02 * m0 + a12 * m1 + a22 * m2) / det;")
+        L.append(f"    *k = -(m0 * ctr[0] + m1 * ctr[1] + m2 * ctr[2]) - {w(3, 3)};")
+    L.append("    return 1;")
+    return "\n".join(L)
+
+
+def _quad_c(n: int) -> str:
+    w = lambda i, j: f"w[{min(i, j) * n + max(i, j)}]"  # noqa: E731
+    d = n - 1
+    terms = [f"{w(i, i)} * u[{i}] * u[{i}]" for i in range(d)]
+    terms += [f"2.0 * {w(i, j)} * u[{i}] * u[{j}]" for i in range(d) for j in range(i + 1, d)]
+    return "    return " + " + ".join(terms) + ";"
+
+
+def generate_c() -> str:
+    """Source text of ``core/_kernels.c``."""
+    from .decision import NEED_S0, TABLE3, TABLE4, rule_by_key
+
+    head = (
+        _C_HEADER.replace("@RF@", repr(RADIUS_FACTOR))
+        .replace("@NEED_S0@", str(NEED_S0))
+        .replace("@RULE_SEP@", str(rule_by_key("sep-witness").id))
+        .replace("@RULE_POINT@", str(rule_by_key("common-point").id))
+        .replace("@TMIN@", repr(float(CERT_T_MIN)))
+        .replace("@TMAX@", repr(float(CERT_T_MAX)))
+        .replace("@XMAX@", repr(float(TRANSLATE_MAX)))
+    )
+    parts = [head]
+    for n, table in ((3, TABLE3), (4, TABLE4)):
+        k, kr = pencil_kernel(n), pencil_kernel(n, leaf_K=1)
+        h, pa, fm = subresultant_kernel(n, "s0"), pencil_at_kernel(n), form_kernel(n)
+        parts += [c_function(k, n), c_function(h, n), c_function(pa, n, ["T"]), c_function(fm, n), prepare_c(n)]
+        fill = {
+            "@N@": str(n),
+            "@D@": str(n - 1),
+            "@NN@": str(n * n),
+            "@NOUT@": str(len(k.outputs)),
+            "@PC@": ", ".join(repr(float(c)) for c in k.constants),
+            "@PCR@": ", ".join(repr(float(c)) for c in kr.constants),
+            "@PF@": repr(k.underflow_floor),
+            "@PFR@": repr(kr.underflow_floor),
+            "@HF@": repr(h.underflow_floor),
+            "@PAF@": repr(pa.underflow_floor),
+            "@FF@": repr(fm.underflow_floor),
+            "@TABSIZE@": str(table.size),
+            "@TAB@": ", ".join(str(int(v)) for v in table),
+            "@CENTRE@": _centre_c(n),
+            "@QUAD@": _quad_c(n),
+            "@FASTPREP@": _fast_prep_c(n),
+            "@FASTBOUNDS@": _fast_bounds_c(n, len(k.outputs)),
+        }
+        text = _C_DRIVER
+        for key, val in fill.items():
+            text = text.replace(key, val)
+        parts.append(text)
+    return "\n".join(parts)
+
+
+GENERATED_C_PATH = Path(__file__).with_name("_kernels.c")
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Write (default) or ``--check`` the generated module and the stamp in core/fastpath.py."""
+    """Write (default) or ``--check`` the generated modules core/_kernels.py and core/_kernels.c."""
     args = sys.argv[1:] if argv is None else argv
-    text = generate_module()
-    current_fp, updated_fp = _stamp_fastpath(text)
+    outputs = {GENERATED_PATH: generate_module(), GENERATED_C_PATH: generate_c()}
     if "--check" in args:
-        current = GENERATED_PATH.read_text() if GENERATED_PATH.exists() else ""
-        if current != text or current_fp != updated_fp:
-            print(f"{GENERATED_PATH} or its stamp in {FASTPATH_PATH} is stale: run python -m core.kernelgen")
+        stale = [str(p) for p, text in outputs.items() if not p.exists() or p.read_text() != text]
+        if stale:
+            print(f"stale: {', '.join(stale)}: run python -m core.kernelgen")
             return 1
         return 0
-    GENERATED_PATH.write_text(text)
-    if updated_fp != current_fp:
-        # numba's disk cache of core.fastpath is keyed on fastpath.py: changing the stamp there
-        # makes every checkout (not only this one) recompile the new kernels
-        FASTPATH_PATH.write_text(updated_fp)
-    print(f"wrote {GENERATED_PATH} ({len(text.splitlines())} lines), KERNELS_SHA = {_kernels_sha(text)}")
+    for path, text in outputs.items():
+        path.write_text(text)
+        print(f"wrote {path} ({len(text.splitlines())} lines)")
     return 0
 
 

@@ -280,19 +280,28 @@ class MotionAnalysis:
         an = self.a[-1]
         return {"s0": -(an * self.s0), "s1": -(an * self.s1), "s10": -(an * self.s10)}
 
+    def degrees(self) -> dict[str, Any]:
+        """Degrees in t: ``a`` (a_0..a_n), ``s0``/``s1``/``s10`` of the hat forms ŝ_j = -s_j/a_n
+        that are stored and plotted, and ``paper_s0``/``paper_s1``/``paper_s10`` of the paper's
+        s_j = -a_n ŝ_j themselves (Example 32: 26, 20, 20 where the hat forms have 22, 16, 16).
+        A polynomial that is identically 0 has degree -1.
+        """
+        dn = self.a[-1].degree()
+        out: dict[str, Any] = {"a": [p.degree() for p in self.a]}
+        for name in ("s0", "s1", "s10"):
+            d = getattr(self, name).degree()
+            out[name] = d
+            out[f"paper_{name}"] = d + dn if d >= 0 else -1
+        return out
+
     def polynomial_strings(self) -> dict[str, Any]:
-        """a_i, ŝ0, ŝ1, ŝ1,0 as parseable strings in t, with their degrees."""
+        """a_i, ŝ0, ŝ1, ŝ1,0 as parseable strings in t, with their degrees (:meth:`degrees`)."""
         return {
             "a": [str(p) for p in self.a],
             "s0": str(self.s0),
             "s1": str(self.s1),
             "s10": str(self.s10),
-            "degrees": {
-                "a": [p.degree() for p in self.a],
-                "s0": self.s0.degree(),
-                "s1": self.s1.degree(),
-                "s10": self.s10.degree(),
-            },
+            "degrees": self.degrees(),
         }
 
     def to_dict(self, *, polynomials: bool = True) -> dict[str, Any]:

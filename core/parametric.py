@@ -35,6 +35,7 @@ from .motion_result import EVENT_KINDS, Event, Interval, MotionAnalysis, SignRow
 from .motions import as_motion
 from .pencil import determinant, pencil_coefficients
 from .qsqrt import QSqrtPoly
+from .quadrics import interior_sign, not_a_quadric_message
 from .rationals import to_fmpq
 from .realroots import real_roots
 from .relation import Relation
@@ -79,9 +80,13 @@ def _fmt_t(a: RealAlgebraic) -> str:
 def _polynomial_matrix(
     M: list[list[RationalFunction]], lo: fmpq | None, hi: fmpq | None, name: str
 ) -> tuple[list[list[QSqrtPoly]], fmpq_poly]:
-    """Clear denominators with a factor of constant sign on I and check validity on I.
+    """Clear denominators and normalise the interior sign on I; check validity on I.
 
-    Returns (P, lam) with P = lam * M, lam in Q[t] without roots in I.
+    Returns (P, lam) with P = lam * M, lam in Q[t] with no root in I and P the matrix of a valid
+    ellipse/ellipsoid (negative interior) at every t in I. The factor that multiplies the
+    normalised matrix, P / sign, is |lam| > 0 on I: the caller divides by ``abs_lam`` = lam times
+    its sign on I, so a flipped or negatively scaled input gives the same pencil as its
+    normalised form (the same rule as the static :func:`core.quadrics.interior_sign`).
     """
     den = fmpq_poly([1])
     for row in M:
@@ -94,17 +99,13 @@ def _polynomial_matrix(
         if bad:
             raise ValueError(f"{name}: a denominator vanishes at t ≈ {_fmt_t(bad[0])} in {where}")
     t0 = _sample_in(lo, hi)
-    sgn = _sgn(den(t0))
-    P = [[e.num * (den // e.den) * sgn for e in row] for row in M]
-    lam = den * sgn
+    P = [[e.num * (den // e.den) for e in row] for row in M]
     k = len(P) - 1
-    if P[0][0].sign_at_rational(t0) < 0:
-        P = [[-e for e in row] for row in P]
-        lam = -lam
     shape = "ellipse" if k == 2 else "ellipsoid"
-    minors = [(determinant([row[:j] for row in P[:j]]), j) for j in range(1, k + 2)]
-    for m, order in minors:
-        want = 1 if order <= k else -1
+    # leading minors (orders 1..k of the quadratic block, k+1 = det): a sign change in I, or
+    # the wrong sign pattern, means the matrix is not an ellipse/ellipsoid somewhere in I
+    minors = [determinant([row[:j] for row in P[:j]]) for j in range(1, k + 2)]
+    for order, m in enumerate(minors, start=1):
         what = f"leading minor of order {order} of the quadratic part" if order <= k else "determinant"
         if m.is_zero():
             raise ValueError(f"{name} is not an {shape} for any t: its {what} is identically 0")
@@ -114,9 +115,19 @@ def _polynomial_matrix(
                 f"{name} stops being an {shape} at t ≈ {_fmt_t(roots[0])} in {where} "
                 f"(its {what} vanishes there)"
             )
-        if m.sign_at_rational(t0) != want:
-            raise ValueError(f"{name} is not an {shape} anywhere in {where} (its {what} has the wrong sign)")
-    return P, lam
+    signs = [m.sign_at_rational(t0) for m in minors]  # constant on I: no root there
+    sign = interior_sign(signs[:k])
+    if sign is None:
+        raise ValueError(
+            f"{name} is not an {shape} anywhere in {where} "
+            f"(its quadratic part is indefinite: {not_a_quadric_message(name, k + 1).split('(')[-1].rstrip(')')})"
+        )
+    if signs[k] * sign ** (k + 1) >= 0:  # det of the normalised matrix must be negative
+        raise ValueError(f"{name} is not an {shape} anywhere in {where} (its determinant has the wrong sign: no real points)")
+    if sign < 0:
+        P = [[-e for e in row] for row in P]
+    lam = den * sign  # P = lam * M, normalised on all of I
+    return P, lam * _sgn(lam(t0))  # |lam| on I: P = |lam| * (normalised M)
 
 
 def _canonical_pencil(a: list[QSqrtPoly], lamA: fmpq_poly, lamB: fmpq_poly, t0: fmpq) -> list[QSqrtPoly]:
@@ -206,8 +217,7 @@ class _Signs:
 
 
 def _decide_at(n: int, sg: _Signs) -> Any:
-    middle = [sg(f"a{i}") for i in range(n - 1, 0, -1)]
-    return decide(n, middle, lambda: sg("s0"), lambda: sg("s1"), lambda: sg("s10"))
+    return decide(n, [sg(f"a{i}") for i in range(n, -1, -1)], lambda: sg("s0"), lambda: sg("s1"), lambda: sg("s10"))
 
 
 def _row(where: str, t: str, n: int, sg: _Signs, dec: Any) -> SignRow:

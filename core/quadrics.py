@@ -11,8 +11,15 @@ Conventions (written once here and in the README):
 * A shape is centre c, semi-axes r and orientation R (2D: angle in radians, counter-clockwise;
   3D: unit quaternion wxyz, viser's convention). Its matrix is
   [[Q, -Q c], [-c^T Q, c^T Q c - 1]] with Q = R diag(1/r^2) R^T (body axes -> world).
-* Inputs may be floats (the exact binary rationals they are), ints, Fractions, fmpq, or strings
-  ("3/7", "0.1" exact decimal). See :func:`core.numbers.to_fmpq`.
+* Inputs may be floats of any width (float16/32/64, long double: the exact binary rationals they
+  are), ints, Fractions, fmpq, or strings ("3/7", "0.1" exact decimal). See
+  :func:`core.rationals.to_fmpq`.
+* The shape {X : X^T A X <= 0} depends only on the quadratic form, that is on the exact symmetric
+  part (A + A^T)/2: that is what is classified, so a matrix built in floating point
+  (``R @ D @ R.T``), symmetric only up to rounding, is certified for its own quadratic form. A
+  matrix whose asymmetry is far beyond rounding is refused as a likely mistake: entry pair (i, j)
+  may differ by at most :data:`SYMMETRY_TOLERANCE` times sqrt(m_i m_j), m_i the largest |entry|
+  in row or column i (about 1e-6 relative: ten billion float64 roundings, a few float32 ones).
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -29,6 +37,7 @@ from .pencil import determinant
 from .rationals import to_fmpq
 
 __all__ = [
+    "SYMMETRY_TOLERANCE",
     "ShapeParams",
     "quadric_from_axes",
     "axes_from_quadric",
@@ -37,6 +46,10 @@ __all__ = [
 ]
 
 ExactMatrix = list[list[fmpq]]
+
+SYMMETRY_TOLERANCE = Fraction(1, 2**20)
+"""Largest accepted asymmetry |a_ij - a_ji| / sqrt(m_i m_j) (see the module docstring); the
+float filter applies the same rule, conservatively, and leaves borderline pairs to this one."""
 
 
 @dataclass(frozen=True)
@@ -208,34 +221,89 @@ def _quaternion_from_rotation(R: np.ndarray) -> tuple[float, float, float, float
     return tuple(float(sign * v / n) for v in q)  # type: ignore[return-value]
 
 
-def normalised_quadratic_part(M: Any, *, name: str = "matrix") -> ExactMatrix:
-    """Exact matrix of M with a positive definite quadratic block (signs flipped if needed).
+def symmetric_part(E: ExactMatrix, name: str = "matrix") -> ExactMatrix:
+    """The exact symmetric part (E + E^T)/2 of a square rational matrix (the quadratic form).
 
-    Checks shape, readable finite entries, symmetry and definiteness (Sylvester's criterion on
-    the leading minors); the sign of det, which completes :func:`validate_quadric`, is left to
-    the caller (the exact classifier reads it off the pencil: det A = a_n, det B = a_0).
+    Raises:
+        ValueError: the asymmetry exceeds :data:`SYMMETRY_TOLERANCE` (a mistake, not rounding);
+            the message gives its size and suggests ``(A + A.T) / 2``.
+
+    Examples:
+        >>> S = symmetric_part([[fmpq(1), fmpq(1, 3)], [fmpq(1, 3) + fmpq(1, 2**60), fmpq(1)]])
+        >>> S[0][1] == S[1][0] == fmpq(1, 3) + fmpq(1, 2**61)
+        True
     """
-    rows = _rows(M, name)
-    n = len(rows)
-    E = [[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)]
+    n = len(E)
+    if all(E[i][j] == E[j][i] for i in range(n) for j in range(i + 1, n)):
+        return E
+    m = [max(max(abs(E[i][k]), abs(E[k][i])) for k in range(n)) for i in range(n)]
+    tol2 = fmpq(SYMMETRY_TOLERANCE.numerator**2, SYMMETRY_TOLERANCE.denominator**2)
     for i in range(n):
         for j in range(i + 1, n):
-            if E[i][j] != E[j][i]:
+            diff = E[i][j] - E[j][i]
+            if diff != 0 and diff * diff > tol2 * m[i] * m[j]:
+                from .rationals import format_rational
+
+                scale = math.sqrt(float(m[i]) * float(m[j])) if m[i] * m[j] > 0 else 0.0
+                rel = abs(float(diff)) / scale if scale > 0 else math.inf
+                def short(v: fmpq) -> str:
+                    return str(v) if len(str(v)) <= 24 else format_rational(v, 8)
+
                 raise ValueError(
-                    f"{name} is not symmetric: entry ({i},{j}) = {E[i][j]} but ({j},{i}) = {E[j][i]}"
+                    f"{name} is not symmetric: entry ({i},{j}) = {short(E[i][j])} but "
+                    f"({j},{i}) = {short(E[j][i])}, a difference of {rel:.2g} relative to "
+                    f"the scale of rows {i} and {j} (rounding is accepted up to "
+                    f"{float(SYMMETRY_TOLERANCE):.2g}); if this is rounding, pass (A + A.T) / 2"
                 )
-    minors = [determinant([row[:k] for row in E[:k]]) for k in range(1, n)]
-    if all(m > 0 for m in minors):
-        return E
-    if all((m < 0) if k % 2 == 0 else (m > 0) for k, m in enumerate(minors)):
-        return [[-v for v in row] for row in E]
+    half = fmpq(1, 2)
+    return [[E[i][j] if i == j else (E[i][j] + E[j][i]) * half for j in range(n)] for i in range(n)]
+
+
+def interior_sign(minor_signs: Sequence[int]) -> int | None:
+    """+1 if the leading principal minors of a quadratic block are all positive (definite),
+    -1 if they alternate -, +, -, ... (negative definite: the matrix is a flipped ellipse or
+    ellipsoid), None otherwise. The one normalisation rule of static and moving shapes.
+
+    Examples:
+        >>> interior_sign([1, 1]), interior_sign([-1, 1]), interior_sign([1, -1])
+        (1, -1, None)
+    """
+    if all(s > 0 for s in minor_signs):
+        return 1
+    if all(s == (-1 if k % 2 == 0 else 1) for k, s in enumerate(minor_signs)):
+        return -1
+    return None
+
+
+def not_a_quadric_message(name: str, n: int) -> str:
+    """Why a matrix whose quadratic block is not definite is refused."""
     kind = "ellipse" if n == 3 else "ellipsoid"
     other = (
         "a hyperbola, parabola or degenerate conic"
         if n == 3
         else "a hyperboloid, paraboloid, cylinder, cone or degenerate quadric"
     )
-    raise ValueError(f"{name} is not an {kind}: its quadratic part is indefinite or semidefinite ({other})")
+    return f"{name} is not an {kind}: its quadratic part is indefinite or semidefinite ({other})"
+
+
+def normalised_quadratic_part(M: Any, *, name: str = "matrix") -> ExactMatrix:
+    """Exact symmetric part of M with a positive definite quadratic block (signs flipped if needed).
+
+    Checks shape, readable finite entries, symmetry up to rounding (:func:`symmetric_part`) and
+    definiteness (Sylvester's criterion on the leading minors); the sign of det, which completes
+    :func:`validate_quadric`, is left to the caller (the exact classifier reads it off the
+    pencil: det A = a_n, det B = a_0).
+    """
+    rows = _rows(M, name)
+    n = len(rows)
+    E = symmetric_part([[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)], name)
+    minors = [determinant([row[:k] for row in E[:k]]) for k in range(1, n)]
+    sign = interior_sign([(m > 0) - (m < 0) for m in minors])
+    if sign == 1:
+        return E
+    if sign == -1:
+        return [[-v for v in row] for row in E]
+    raise ValueError(not_a_quadric_message(name, n))
 
 
 def check_determinant_sign(det_sign: int, n: int, name: str) -> None:
@@ -276,19 +344,24 @@ def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
 
 
 def _rows(M: Any, name: str) -> list[list[Any]]:
+    expected = "a 3x3 (ellipse) or 4x4 (ellipsoid) matrix"
     if isinstance(M, np.ndarray):
         if M.ndim != 2:
-            raise ValueError(f"{name} must be a square 3x3 or 4x4 matrix, got shape {M.shape}")
-        rows = M.tolist() if M.dtype != object else [list(r) for r in M]
+            raise ValueError(f"{name} must be {expected}, got an array of shape {M.shape}")
+        rows = [list(r) for r in M]  # numpy scalars kept: long doubles are read exactly
     else:
+        if isinstance(M, str | bytes) or not isinstance(M, Sequence):
+            raise ValueError(f"{name} must be {expected} (nested lists or an array), got {type(M).__name__}")
         try:
             rows = [list(r) for r in M]
         except TypeError:
-            raise ValueError(f"{name} must be a square 3x3 or 4x4 matrix (nested lists)") from None
+            raise ValueError(f"{name} must be {expected} (nested lists or an array): a row is not a list") from None
+        if any(isinstance(r, str | bytes) for r in M):
+            raise ValueError(f"{name} must be {expected}: a row is a string")
     n = len(rows)
     if n not in (3, 4) or any(len(r) != n for r in rows):
         shape = f"{n}x{'/'.join(sorted({str(len(r)) for r in rows})) or 0}"
-        raise ValueError(f"{name} must be 3x3 (ellipse) or 4x4 (ellipsoid), got {shape}")
+        raise ValueError(f"{name} must be {expected}, got {shape}")
     return rows
 
 

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from flint import fmpq, fmpz
 
-__all__ = ["to_fmpq", "MAX_NUMBER_CHARS", "MAX_DECIMAL_EXPONENT"]
+__all__ = ["to_fmpq", "to_float", "format_rational", "MAX_NUMBER_CHARS", "MAX_DECIMAL_EXPONENT"]
 
 MAX_NUMBER_CHARS = 400
 """Longest accepted number string (guards memory and time of a single conversion)."""
@@ -93,12 +93,76 @@ def to_fmpq(x: Any) -> fmpq:
         return _from_string(x)
     if isinstance(x, Integral):
         return fmpq(int(x))
+    if isinstance(x, np.floating):  # float16/32/longdouble: exact, never through float64
+        if not np.isfinite(x):
+            raise ValueError(f"not a finite number: {x!r}")
+        p, q = x.as_integer_ratio()
+        return fmpq(int(p), int(q))
     if isinstance(x, Fraction | Rational):
         return fmpq(int(x.numerator), int(x.denominator))
-    if isinstance(x, float | np.floating | Real):
+    if isinstance(x, float | Real):
         f = float(x)
         if not math.isfinite(f):
             raise ValueError(f"not a finite number: {f!r}")
+        if f != x:  # a Real type wider than a float (e.g. Decimal): refuse rather than round
+            raise ValueError(f"cannot read {type(x).__name__} {x!r} exactly; pass a string or a Fraction")
         p, q = f.as_integer_ratio()
         return fmpq(p, q)
+    if isinstance(x, np.ndarray) and x.ndim == 0:
+        return to_fmpq(x[()])
     raise ValueError(f"cannot read {type(x).__name__} {x!r} as a number")
+
+
+def to_float(q: Any) -> float:
+    """The float nearest to an exact rational (``fmpq``, ``fmpz``, int, Fraction); never raises.
+
+    Correctly rounded (Python's int / int true division); ``inf``/``-inf`` when the value is
+    beyond the float range and 0.0 (or a subnormal) below it. Display only: a float never
+    decides anything in this project. The one rational-to-float conversion of the code base.
+
+    Examples:
+        >>> to_float(fmpq(1, 3)), to_float(fmpz(10) ** 400), to_float(-fmpq(1, fmpz(10) ** 400))
+        (0.3333333333333333, inf, -0.0)
+    """
+    if isinstance(q, float):
+        return q
+    if not isinstance(q, fmpq):
+        q = to_fmpq(q)
+    p, d = int(q.p), int(q.q)
+    try:
+        return p / d
+    except OverflowError:  # |p / d| beyond the largest float
+        return math.inf if p > 0 else -math.inf
+
+
+def format_rational(q: Any, digits: int = 6) -> str:
+    """Scientific text of an exact rational with ``digits`` significant digits, at any size.
+
+    Mantissa and exponent are computed exactly (no float), so values far outside the float
+    range (1e-400, 2^5000) still read as numbers: ``-1.23457e+612``.
+
+    Examples:
+        >>> format_rational(fmpq(-1, 3)), format_rational(fmpz(10) ** 400 * 7, 3), format_rational(0)
+        ('-3.33333e-01', '7.00e+400', '0')
+    """
+    if not isinstance(q, fmpq):
+        q = to_fmpq(q)
+    if q == 0:
+        return "0"
+    sign = "-" if q < 0 else ""
+    p, d = abs(int(q.p)), int(q.q)
+    # exponent e with 10^e <= p/d < 10^(e+1), from the digit counts, corrected by one step
+    e = len(str(p)) - len(str(d))
+    if (p * 10 ** max(0, -e)) < d * 10 ** max(0, e):
+        e -= 1
+    k = digits - 1 - e  # mantissa digits = round(p/d * 10^k)
+    num, den = (p * 10**k, d) if k >= 0 else (p, d * 10 ** (-k))
+    m, r = divmod(num, den)
+    if 2 * r >= den:
+        m += 1
+    if m >= 10**digits:  # rounding carried into a new digit (9.999 -> 10.00)
+        m //= 10
+        e += 1
+    text = str(m)
+    mant = text[0] + ("." + text[1:] if digits > 1 else "")
+    return f"{sign}{mant}e{'+' if e >= 0 else '-'}{abs(e):02d}"

@@ -23,7 +23,7 @@ def exact_matrix(M: Any) -> fmpq_mat:
 
 def pencil_oracle(A: Any, B: Any) -> fmpz_poly:
     """Integer multiple (positive) of det(T A + B), via the characteristic polynomial."""
-    MA, MB = exact_matrix(A), exact_matrix(B)
+    MA, MB = exact_matrix(_normalise(A)), exact_matrix(_normalise(B))
     P = MA.det() * (-(MA.inv() * MB)).charpoly()
     num, den = P.numer(), P.denom()
     assert den > 0
@@ -68,7 +68,10 @@ def oracle_relation(A: Any, B: Any) -> str:
 
 
 def _normalise(M: Any) -> list[list[fmpq]]:
+    """Exact symmetric part (the quadratic form the shape is), negative interior."""
     E = [[to_fmpq(v) for v in row] for row in M]
+    n = len(E)
+    E = [[(E[i][j] + E[j][i]) / 2 for j in range(n)] for i in range(n)]
     if E[0][0] < 0:
         E = [[-v for v in row] for row in E]
     return E

@@ -119,7 +119,9 @@ def test_classify_batch_keeps_order(client):
 def test_classify_batch_error_names_the_pair(client):
     pairs = [{"a": circle(0), "b": circle(2)}, {"a": circle(0), "b": [[1, 0, 1], [0, 1, 0], [0, 0, -1]]}]
     r = client.post("/api/classify", json={"pairs": pairs})
-    assert (r.status_code, r.json()) == (422, {"detail": "pairs[1]: b is not symmetric: entry (0,2) = 1 but (2,0) = 0"})
+    assert r.status_code == 422
+    assert r.json()["detail"].startswith("pairs[1]: b is not symmetric: entry (0,2) = 1 but (2,0) = 0, a difference of 1 ")
+    assert r.json()["detail"].endswith("pass (A + A.T) / 2")
 
 
 def test_batch_limit_from_overridden_settings():
@@ -219,11 +221,11 @@ def test_explain_rejects_batch_and_bad_matrix(client):
 @pytest.mark.parametrize(
     "b, detail",
     [
-        ([[1, 0, 1], [0, 1, 0], [0, 0, -1]], "b is not symmetric: entry (0,2) = 1 but (2,0) = 0"),
+        ([[1, 0, 1], [0, 1, 0], [0, 0, -1]], "b is not symmetric: entry (0,2) = 1 but (2,0) = 0, a difference of 1 relative to the scale of rows 0 and 2 (rounding is accepted up to 9.5e-07); if this is rounding, pass (A + A.T) / 2"),
         ([[1, 0, 0], [0, -1, 0], [0, 0, -1]], "b is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)"),
         ([[1, 0, 0], [0, 1, 0], [0, 0, 1]], "b has an empty interior: no real points (det > 0), not an ellipse"),
         ([[1, 0, 0], [0, 1, 0], [0, 0, 0]], "b is a degenerate ellipse (det = 0: a single point)"),
-        ([[1, 0, 0], [0, 1, 0, 0], [0, 0, -1]], "b must be 3x3 (ellipse) or 4x4 (ellipsoid), got 3x3/4"),
+        ([[1, 0, 0], [0, 1, 0, 0], [0, 0, -1]], "b must be a 3x3 (ellipse) or 4x4 (ellipsoid) matrix, got 3x3/4"),
         (SPHERE, "a is 3x3 and b is 4x4: both must be ellipses (3x3) or both ellipsoids (4x4)"),
         ({"center": [0, 0], "semi_axes": [-1, 1]}, "b: semi-axes must be positive, got ['-1', '1']"),
         ({"center": [0, 0, 0], "semi_axes": [1, 1, 1], "orientation": 0.5}, "b: a 3D orientation is a quaternion [w, x, y, z], not an angle"),

@@ -1,4 +1,4 @@
-"""core/ is pure mathematics: it imports only numpy, python-flint (flint), numba and the stdlib."""
+"""core/ is pure mathematics: it imports only numpy, python-flint (flint) and the stdlib."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 CORE = Path(__file__).resolve().parent.parent / "core"
-ALLOWED = {"numpy", "flint", "numba"}
+ALLOWED = {"numpy", "flint"}
 FORBIDDEN = {"viser", "fastapi", "pydantic", "starlette", "uvicorn", "trimesh", "app"}
 
 

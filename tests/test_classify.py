@@ -72,13 +72,23 @@ def test_flipped_sign_is_normalised():
     ],
 )
 def test_bad_input_messages(A, message):
+    # every method checks its input, also "float" (which validates the pairs it cannot certify),
+    # for a nested list, a float array (the single-pair fast path) and inside a batch
+    forms = [A]
+    try:
+        forms.append(np.array(A, dtype=float))
+    except ValueError:
+        pass
     for method in ("adaptive", "float", "exact"):
-        if method == "float" and message in ("not a number",):
-            continue
-        with pytest.raises(ValueError, match=message):
-            r = classify(A, circle(5, 0, 1), method=method)
-            if method == "float" and r == U:
-                raise ValueError("finite / indefinite or semidefinite / degenerate / empty interior / not symmetric")
+        for form in forms:
+            with pytest.raises(ValueError, match=message):
+                classify(form, np.array(circle(5, 0, 1), dtype=float) if len(np.shape(form)) == 2 and np.shape(form)[0] == 3 else circle(5, 0, 1), method=method)
+        if len(A) == 3 and all(len(r) == 3 for r in A):
+            with pytest.raises(ValueError, match="pair 1: .*" + message):
+                classify([circle(0, 0, 1), A], circle(5, 0, 1), method=method)
+            marked = classify([circle(0, 0, 1), A], circle(5, 0, 1), method=method, on_invalid="mark")
+            assert marked.tolist()[1] == Relation.INVALID
+            assert marked.tolist()[0] in ((Relation.SEPARATE, U) if method == "float" else (Relation.SEPARATE,))
 
 
 def test_bad_method_and_shapes():

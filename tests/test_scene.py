@@ -486,3 +486,16 @@ def test_t_box_certifies_the_exact_fraction_typed(server, tmp_path):
     assert s.state.relation == "overlap" and colours(s) == {RED}
     assert s.set_t(2 / 3) == "overlap"
     s.close()
+
+
+@pytest.mark.parametrize("centre, ok", [("1e300, 0, 0", True), ("1e-300, 0, 0", True), ("1e400, 0, 0", False)])
+def test_extreme_typed_centre_is_classified_or_refused_never_silent(server, centre, ok):
+    s = Session(server, unit_spheres(3, "3"))
+    if ok:
+        rel = s.set_shape("B", center=centre)
+        assert rel in ("separate", "overlap") and rel.upper() in s.readout.content
+        return
+    s.shape_fields["B"]["center"].value = centre  # the GUI path: the error is shown next to the field
+    assert s.shape_errors["B"].visible and "beyond the range" in s.shape_errors["B"].content
+    with pytest.raises(ValueError, match="beyond the range"):
+        s.set_shape("B", center=centre)

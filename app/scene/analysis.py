@@ -95,6 +95,8 @@ class AnalysisView:
     """Slider window: I when finite, else around the events."""
     default_t: float | None = None
     """Suggested start: just before the first event."""
+    degrees: dict[str, Any] = field(default_factory=dict)
+    """Degrees in t (core ``MotionAnalysis.degrees``: hat forms and the paper's s_j)."""
     _readout_cache: dict[Any, str] = field(default_factory=dict)
 
     @property
@@ -434,7 +436,12 @@ def analyse_plain(A_source: Any, B_source: Any, interval: tuple[Any, Any], digit
     from core.parametric import analyse
 
     an = analyse(A_source, B_source, interval, digits=digits)
-    return {"result": an.to_dict(polynomials=False), "samples": an.samples(PLOT_SAMPLES), "polys": an.polynomials()}
+    return {
+        "result": an.to_dict(polynomials=False),
+        "samples": an.samples(PLOT_SAMPLES),
+        "polys": an.polynomials(),
+        "degrees": an.degrees(),
+    }
 
 
 def _view_from_plain(model: MotionModel, plain: dict[str, Any]) -> AnalysisView:
@@ -486,6 +493,7 @@ def _view_from_plain(model: MotionModel, plain: dict[str, Any]) -> AnalysisView:
         explain_fn=lambda t, event: explain_at(model, result, plain["polys"], t, event),
         window=window,
         default_t=default_t,
+        degrees=dict(plain.get("degrees") or {}),
     )
 
 

@@ -11,7 +11,7 @@ from concurrent.futures import Future
 from typing import Any
 
 from .analysis import AnalysisView, MotionError, MotionModel, load_motion
-from .panels import sign_table_markdown
+from .panels import degrees_text, sign_table_markdown
 from .state import AppState, SceneConfig
 
 __all__ = ["MotionPanelMixin", "STATIC"]
@@ -151,7 +151,8 @@ class MotionPanelMixin:
             self._set_md(
                 self.status,
                 f"Analysed in {result.seconds:.2f} s: {n_ev} event{'s' * (n_ev != 1)}, "
-                f"{len(result.segments)} interval{'s' * (len(result.segments) != 1)}.",
+                f"{len(result.segments)} interval{'s' * (len(result.segments) != 1)}."
+                + degrees_text(result.degrees),
             )
             for b in self._event_buttons:
                 b.remove()

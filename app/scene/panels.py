@@ -157,6 +157,32 @@ def intervals_bar_html(
     return "".join(parts)
 
 
+def degrees_text(degrees: dict[str, Any]) -> str:
+    """One line on the degrees in t: the paper's s0, s1, s1,0 and the plotted ŝ_j = -s_j/a_n.
+
+    Examples:
+        >>> degrees_text({"a": [4, 4, 4, 4, 4], "s0": 22, "paper_s0": 26, "s1": 16, "paper_s1": 20,
+        ...               "s10": 16, "paper_s10": 20})
+        ' Degrees in t: a_i ≤ 4; s0 26, s1 20, s1,0 20 (plots and signs use ŝ = −s/a_n: 22, 16, 16).'
+        >>> degrees_text({})
+        ''
+    """
+    if not degrees:
+        return ""
+
+    def deg(k: str) -> str:
+        d = degrees.get(k, -1)
+        return "≡ 0" if d < 0 else str(d)
+
+    names = (("s0", "s0"), ("s1", "s1"), ("s10", "s1,0"))
+    paper = ", ".join(f"{label} {deg('paper_' + k)}" for k, label in names)
+    hats = ", ".join(deg(k) for k, _ in names)
+    return (
+        f" Degrees in t: a_i ≤ {max(degrees.get('a', [0]))}; {paper}"
+        f" (plots and signs use ŝ = −s/a_n: {hats})."
+    )
+
+
 def sign_table_markdown(rows: Sequence[dict[str, Any]], degree: int) -> str:
     """The paper's table: one row per event/interval sample, signs of a_i, s0, s1, s1,0, Var.
 

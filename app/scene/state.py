@@ -16,7 +16,7 @@ from typing import Any
 
 from flint import fmpq
 
-from core.rationals import to_fmpq
+from core.rationals import format_rational, to_float, to_fmpq
 
 __all__ = [
     "ShapeState",
@@ -94,7 +94,10 @@ def format_number(v: Number, digits: int = 6) -> str:
     if isinstance(v, fmpq):
         if len(str(v)) <= 24:
             return str(v)
-        v = float(v.p) / float(v.q)
+        f = to_float(v)
+        if not math.isfinite(f) or (f == 0 and v != 0):  # beyond the float range: exact digits
+            return format_rational(v, digits)
+        v = f
     return f"{float(v):.{digits}g}"
 
 
@@ -170,6 +173,14 @@ class ShapeState:
             raise ValueError(f"shape {name}: unknown keys {sorted(unknown)}")
         center = parse_vector(d.get("center", [0] * dim), dim, f"{name}.center")
         axes = parse_vector(d.get("semi_axes", [1] * dim), dim, f"{name}.semi_axes")
+        for what, vec in (("center", center), ("semi_axes", axes)):
+            for i, v in enumerate(vec, start=1):
+                f = to_float(v)
+                if not math.isfinite(f) or (f == 0 and v != 0):
+                    raise ValueError(
+                        f"{name}.{what}: component {i} is beyond the range the scene can draw "
+                        "(floats: 1e-308 < |x| < 1.8e308); core.classify takes it exactly"
+                    )
         if any(v <= 0 for v in axes):
             raise ValueError(f"{name}.semi_axes: must be positive")
         default_o = [0] if dim == 2 else [1, 0, 0, 0]
