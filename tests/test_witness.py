@@ -29,6 +29,7 @@ from strategies import dyadic_tangent_pair, exact_shapes, float_pairs, tangent_p
 
 from core import (
     Relation,
+    rotation_from_quaternion,
     analyse,
     classify,
     contact_point,
@@ -48,7 +49,8 @@ def frac(M: Any) -> list[list[F]]:
     out = [[F(str(v)) if isinstance(v, str | fmpq) else F(v) for v in row] for row in (np.asarray(M, dtype=object).tolist())]
     if out[0][0] < 0:
         out = [[-v for v in row] for row in out]
-    return out
+    n = len(out)  # the quadratic form: the exact symmetric part (floats symmetric up to rounding)
+    return [[(out[i][j] + out[j][i]) / 2 for j in range(n)] for i in range(n)]
 
 
 def q(x: Any) -> F:
@@ -548,3 +550,46 @@ def test_batch_one_float_pair_and_far_centres():
             n = [F(float(v)) for v in p.normal[0]]
             assert plane_misses_on_side(frac(A), n, F(float(p.offset[0])), -1)
             assert plane_misses_on_side(frac(B), n, F(float(p.offset[0])), 1)
+
+
+def _rotated(center: list[float], axes: list[float], q: list[float]) -> np.ndarray:
+    """The way users build them: R diag(1/r^2) R^T from a float rotation (symmetric up to rounding)."""
+    R = rotation_from_quaternion(q)
+    Q = R @ np.diag([1 / r**2 for r in axes]) @ R.T
+    c = np.array(center)
+    M = np.zeros((4, 4))
+    M[:3, :3] = Q
+    M[:3, 3] = -Q @ c
+    M[3, :3] = -(c @ Q)
+    M[3, 3] = c @ Q @ c - 1
+    return M
+
+
+def test_near_symmetric_float_matrices():
+    rng = np.random.default_rng(7)
+    pairs = []
+    while len(pairs) < 12:
+        A = _rotated(list(rng.uniform(-2, 2, 3)), list(rng.uniform(0.3, 2, 3)), list(rng.normal(size=4)))
+        B = _rotated(list(rng.uniform(-2, 2, 3)), list(rng.uniform(0.3, 2, 3)), list(rng.normal(size=4)))
+        if not (np.array_equal(A, A.T) and np.array_equal(B, B.T)):
+            pairs.append((A, B))
+    A = np.array([p[0] for p in pairs])
+    B = np.array([p[1] for p in pairs])
+    r = contact_scale(A, B, rtol=1e-9)
+    p = separating_plane(A, B)
+    for i, (a, b) in enumerate(pairs):
+        cs = contact_scale(a, b)
+        assert str(cs.relation) == oracle_relation(frac(a), frac(b)) == str(Relation(int(r.relation[i])))
+        assert fmpq(*float(r.lo[i]).as_integer_ratio()) <= cs.hi and cs.lo <= fmpq(*float(r.hi[i]).as_integer_ratio())
+        if cs.relation == Relation.SEPARATE:
+            _check_plane(a, b, separating_plane(a, b))
+            if p.certified[i]:
+                n = [F(float(v)) for v in p.normal[i]]
+                assert plane_misses_on_side(frac(a), n, F(float(p.offset[i])), -1)
+                assert plane_misses_on_side(frac(b), n, F(float(p.offset[i])), 1)
+        else:
+            cp = contact_point(a, b)
+            if cs.relation == Relation.OVERLAP:
+                x = [q(c.value) for c in cp.point]
+                assert form(frac(a), x) < 0 and form(frac(b), x) < 0
+    assert p.certified[r.relation == 0].all()

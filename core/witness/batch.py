@@ -182,6 +182,8 @@ class _Centre:
     k_lo: Any
     k_hi: Any
     ok: Any
+    symmetric: bool
+    """Every matrix exactly symmetric (else the exact symmetric part is what is certified)."""
 
     @property
     def k_mid(self) -> Any:
@@ -197,6 +199,33 @@ def _sqrt(x: Any) -> Any:
     return np.sqrt(x) if is_array(x) else math.sqrt(x)
 
 
+def _is_symmetric(M: list[list[Any]]) -> bool:
+    """True when every matrix is exactly symmetric (floats from rotations often are not)."""
+    n = len(M)
+    return all(bool(np.all(M[i][j] == M[j][i])) for i in range(n) for j in range(i + 1, n))
+
+
+def _sym_matvec(M: list[list[Any]], x: list[Any], symmetric: bool, minus: list[Any] | None = None) -> tuple[list[Any], list[Any]]:
+    """(S x - minus) with S the exact symmetric part (M + M^T)/2 of the leading block, by
+    compensated dot products: values and certified error bounds, componentwise.
+
+    Core reads a matrix symmetric only up to rounding as its exact symmetric part (the quadratic
+    form); a row of S is (row + column)/2, taken as 2m products with x/2 (halving is exact).
+    """
+    m = len(x)
+    out, bounds = [], []
+    for i in range(m):
+        extra_x, extra_y = ([minus[i]], [-1.0]) if minus is not None else ([], [])
+        if symmetric:
+            val, b = _dot2([*M[i][:m], *extra_x], [*x, *extra_y])
+        else:
+            half = [0.5 * v for v in x]
+            val, b = _dot2([*M[i][:m], *(M[j][i] for j in range(m)), *extra_x], [*half, *half, *extra_y])
+        out.append(val)
+        bounds.append(b)
+    return out, bounds
+
+
 def _centre(M: list[list[Any]]) -> _Centre:
     """Centre facts of M (see :class:`_Centre`).
 
@@ -208,16 +237,22 @@ def _centre(M: list[list[Any]]) -> _Centre:
     d = len(M) - 1
     v, Qinv, _ = centred(M)
     V = [*v, 1.0]
-    w, wb = zip(*(_dot2(row, V) for row in M), strict=True)
-    r, rb = list(w[:d]), list(wb[:d])
+    sym = _is_symmetric(M)
+    w, wb = _sym_matvec(M, V, sym)
+    r, rb = w[:d], wb[:d]
     F = dot(v, r) + w[d]
     spread = sum((abs(ci) * abs(ri) for ci, ri in zip(v, r, strict=True)), abs(w[d]))
     Fb = (sum((abs(ci) * b for ci, b in zip(v, rb, strict=True)), wb[d]) + 4.0 * (d + 2) * _U * spread) * (1 + 2.0**-40)
     Q = [row[:d] for row in M[:d]]
+    if not sym:  # the float symmetric part, within u |entry| of the exact one (Weyl: shift lambda)
+        Q = [[(Q[i][j] + Q[j][i]) * 0.5 for j in range(d)] for i in range(d)]
     det, detb, e = det_with_bound(Q)
     det_lo = np.ldexp(down(det - detb), e)
     trace = sum((Q[i][i] for i in range(1, d)), Q[0][0])
     lam_lo = down(det_lo / up(trace ** (d - 1) * (1 + 2.0**-40)))
+    if not sym:
+        frob = _sqrt(sum((Q[i][j] * Q[i][j] for i in range(d) for j in range(d)), 0.0))
+        lam_lo = down(lam_lo - up(4.0 * _U * frob))
     lam_ok = lam_lo > 0
     lam_lo = where(lam_ok, lam_lo, 1.0)
     rr = sum(((abs(ri) + b) * (abs(ri) + b) for ri, b in zip(r, rb, strict=True)), 0.0)
@@ -227,7 +262,7 @@ def _centre(M: list[list[Any]]) -> _Centre:
     ok = np.isfinite(k_lo) & np.isfinite(k_hi) & (k_lo > 0) & lam_ok & (big < 2.0**500)
     for x in v:
         ok = ok & (abs(x) < 2.0**200)
-    return _Centre(v, Qinv, r, rb, lam_lo, k_lo, k_hi, ok)
+    return _Centre(v, Qinv, r, rb, lam_lo, k_lo, k_hi, ok, sym)
 
 
 def _scaled_last(M: list[list[Any]], k_mid: Any, k_lo: Any, k_hi: Any, s: Any) -> tuple[Any, Any, Any]:
@@ -419,7 +454,7 @@ def _plane_certified(C: _Centre, M: list[list[Any]], n: list[Any], d: Any, side:
     norm_n = up(_sqrt(up(dot(n, n))) * (1 + 2.0**-40))
     h_lo = down(side * t - tb - up(norm_n * C.offset_error()))
     w = [dot(row, n) for row in C.Qinv]
-    e, eb = zip(*(_dot2([*M[i][:dim], n[i]], [*w, -1.0]) for i in range(dim)), strict=True)
+    e, eb = _sym_matvec(M, w, C.symmetric, minus=n)
     wn, wnb = _dot2(w, n)
     e_abs = [abs(x) + b for x, b in zip(e, eb, strict=True)]
     we = sum((abs(wi) * ei for wi, ei in zip(w, e_abs, strict=True)), 0.0)
@@ -445,8 +480,8 @@ def _float_planes(P: _Pair) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _inside_certified(M: list[list[Any]], x: list[Any]) -> Any:
     """Certified: X^T M X < 0 at X = (x, 1), the float point as the binary rationals it holds."""
     V = [*x, 1.0]
-    w, wb = zip(*(_dot2(row, V) for row in M), strict=True)
-    val, vb = _dot2(V, list(w))
+    w, wb = _sym_matvec(M, V, True)  # the form X^T M X is that of the symmetric part
+    val, vb = _dot2(V, w)
     spread = sum((abs(v) * b for v, b in zip(V, wb, strict=True)), 0.0)
     return up(val + up((vb + spread) * (1 + 2.0**-40))) < 0
 
