@@ -8,6 +8,7 @@ Prints a table of the time per pair (median over repeats) for:
   1e-9, ``separating_plane`` on stacks), with how many pairs fell back to exact arithmetic;
 * ``float_witness`` (one float pair: the scene's drag path);
 * ``separating_plane`` and ``contact_point`` (tangent: exact; overlap: a rational point), one pair;
+* ``distance`` (certified bracket of the Euclidean distance), one separate pair;
 * ``witness`` (everything for one pair).
 
 Run: ``python bench/bench_witness.py [--quick]``.
@@ -32,6 +33,7 @@ from core import classify, quadric_from_axes, warm_up  # noqa: E402
 from core.witness import (  # noqa: E402
     contact_point,
     contact_scale,
+    distance,
     float_witness,
     separating_plane,
     witness,
@@ -99,6 +101,7 @@ def main() -> None:
         sep = [(a, b) for a, b in fl if classify(a, b) == 0]
         ovl = [(a, b) for a, b in fl if classify(a, b) == 2]
         rows.append(("separating_plane, exact, verified", f"float {kind}, separate", per_pair(separating_plane, sep, repeat), ""))
+        rows.append(("distance bracket (rtol 1e-12)", f"float {kind}, separate", per_pair(distance, sep, repeat), ""))
         rows.append(("contact_point, overlap (rational point)", f"float {kind}, overlap", per_pair(contact_point, ovl, repeat), ""))
         tan = [tangent_pair(d, F(int(a), 4), F(int(r), 3)) for a, r in zip(rng.integers(2, 12, n_one // 3), rng.integers(1, 9, n_one // 3), strict=True)]
         rows.append(("contact_point, tangent (exact point, normal)", f"rational {kind}, tangent", per_pair(contact_point, tan, repeat), ""))

@@ -39,7 +39,7 @@ from core import (
 )
 from core.motions import matrix_at_exact
 from core.presets import preset_arguments
-from core.witness import contact_scale_batch, margin_text, witness
+from core.witness import contact_scale_batch, distance, margin_text, witness
 
 # ------------------------------------------------------------------ independent exact helpers
 
@@ -593,3 +593,50 @@ def test_near_symmetric_float_matrices():
                 x = [q(c.value) for c in cp.point]
                 assert form(frac(a), x) < 0 and form(frac(b), x) < 0
     assert p.certified[r.relation == 0].all()
+
+
+# ------------------------------------------------------------------ distance (stretch)
+
+
+def _check_distance(A: Any, B: Any, r: Any) -> None:
+    """Exactly: the two points lie in the shapes, |p - q| <= hi, lo <= hi."""
+    p, qq = [q(v) for v in r.point_a], [q(v) for v in r.point_b]
+    assert form(frac(A), p) <= 0 and form(frac(B), qq) <= 0
+    assert sum((x - y) ** 2 for x, y in zip(p, qq, strict=True)) <= q(r.hi) ** 2
+    assert 0 < q(r.lo) <= q(r.hi)
+
+
+@pytest.mark.parametrize(("c2", "r1", "r2"), [((3, 4, 12), 2, F(3, 2)), ((1, 1, 1), F(1, 3), F(1, 4)), ((5, 0, 0), 1, 2)])
+def test_distance_spheres(c2, r1, r2):
+    A, B = sphere(0, 0, 0, r1), sphere(*c2, r2)
+    dist = math.sqrt(sum(F(v) ** 2 for v in c2)) - r1 - r2  # closed form (float only for irrational |c2|)
+    r = distance(A, B)
+    _check_distance(A, B, r)
+    assert float(r.lo) <= dist + 1e-15 and dist - 1e-15 <= float(r.hi)
+    assert r.hi - r.lo <= r.hi * fmpq(1, 10**12)
+
+
+@pytest.mark.parametrize("k", [2, 9, 20, 40])
+def test_distance_ellipse_and_circle(k):
+    # ellipse x^2/4 + y^2 <= 1 and a unit circle centred at (3 + g, 0): distance exactly g
+    g = F(1, 10**k)
+    A, B = axis_ellipsoid([0, 0], [2, 1]), circle(3 + g, 0, 1)
+    r = distance(A, B)
+    _check_distance(A, B, r)
+    assert q(r.lo) <= g <= q(r.hi) and r.hi - r.lo <= r.hi * fmpq(1, 10**12)
+
+
+@given(float_pairs())
+def test_distance_random(pair):
+    A, B = pair
+    r = distance(A, B)
+    if classify(A, B) != Relation.SEPARATE:
+        assert r.lo == r.hi == 0
+        return
+    _check_distance(A, B, r)
+    assert r.hi - r.lo <= r.hi * fmpq(1, 10**12)
+    # the plane with normal n through the middle of the slab separates them (independent check)
+    n = [q(v) for v in r.normal]
+    p, qq = [q(v) for v in r.point_a], [q(v) for v in r.point_b]
+    mid = (sum(a * b for a, b in zip(n, p, strict=True)) + sum(a * b for a, b in zip(n, qq, strict=True))) / 2
+    assert plane_misses_on_side(frac(A), n, mid, -1) and plane_misses_on_side(frac(B), n, mid, 1)

@@ -13,6 +13,8 @@ ellipsoids, certified like the relation itself::
 * :func:`contact_point`: the exact contact point and normal of a tangent pair, or a rational
   point inside both shapes of an overlapping pair.
 * :func:`witness`: the one that proves the relation, with a sentence.
+* :func:`distance`: a certified bracket of the Euclidean distance (an empty slab below, two
+  points of the shapes above).
 * :func:`contact_scale_batch`, :func:`separating_plane_batch`: the float forms, for stacks or
   for one float pair (0-d results); :func:`float_witness`: all of them for one float pair from
   one float preparation (the scene's drag path).
@@ -20,7 +22,7 @@ ellipsoids, certified like the relation itself::
 Modules: :mod:`~core.witness.centred` (centre, size, inverse shape matrix),
 :mod:`~core.witness.contact_function` (the contact function, exact), :mod:`~core.witness.floats`
 (float estimates), :mod:`~core.witness.scale`, :mod:`~core.witness.plane`,
-:mod:`~core.witness.point`, :mod:`~core.witness.batch` (vectorised forms),
+:mod:`~core.witness.point`, :mod:`~core.witness.distance`, :mod:`~core.witness.batch` (vectorised forms),
 :mod:`~core.witness.floatdet` (certified float determinants), :mod:`~core.witness.numbers`
 (exact algebraic values), :mod:`~core.witness.witness`.
 """
@@ -31,6 +33,8 @@ from .batch import PlaneBatch as PlaneBatch
 from .batch import contact_scale_batch as contact_scale_batch
 from .batch import float_witness as float_witness
 from .batch import separating_plane_batch as separating_plane_batch
+from .distance import DistanceBracket as DistanceBracket
+from .distance import distance as distance
 from .plane import SeparatingPlane as SeparatingPlane
 from .plane import separating_plane as separating_plane
 from .point import ContactPoint as ContactPoint
@@ -47,6 +51,7 @@ __all__ = [
     "ContactPoint",
     "ContactScale",
     "ContactScaleBatch",
+    "DistanceBracket",
     "FloatWitness",
     "PlaneBatch",
     "SeparatingPlane",
@@ -54,6 +59,7 @@ __all__ = [
     "contact_point",
     "contact_scale",
     "contact_scale_batch",
+    "distance",
     "float_witness",
     "margin_text",
     "separating_plane",
