@@ -29,12 +29,12 @@ from strategies import dyadic_tangent_pair, exact_shapes, float_pairs, tangent_p
 
 from core import (
     Relation,
-    rotation_from_quaternion,
     analyse,
     classify,
     contact_point,
     contact_scale,
     quadric_from_axes,
+    rotation_from_quaternion,
     separating_plane,
 )
 from core.motions import matrix_at_exact

@@ -206,8 +206,9 @@ def _is_symmetric(M: list[list[Any]]) -> bool:
 
 
 def _sym_matvec(M: list[list[Any]], x: list[Any], symmetric: bool, minus: list[Any] | None = None) -> tuple[list[Any], list[Any]]:
-    """(S x - minus) with S the exact symmetric part (M + M^T)/2 of the leading block, by
-    compensated dot products: values and certified error bounds, componentwise.
+    """S x - minus, S the exact symmetric part of M's leading block: values and error bounds.
+
+    Compensated dot products, certified error bounds componentwise.
 
     Core reads a matrix symmetric only up to rounding as its exact symmetric part (the quadratic
     form); a row of S is (row + column)/2, taken as 2m products with x/2 (halving is exact).
@@ -449,7 +450,6 @@ def _plane_certified(C: _Centre, M: list[list[Any]], n: list[Any], d: Any, side:
     dot product). With w the float Q^-1 n and e = Q w - n (compensated):
     n^T Q^-1 n = w.n - w.e + e^T Q^-1 e <= w.n + |w|.|e| + |e|^2 / lambda_min.
     """
-    dim = len(n)
     t, tb = _dot2([*n, d], [*C.v, -1.0])  # n.v - d
     norm_n = up(_sqrt(up(dot(n, n))) * (1 + 2.0**-40))
     h_lo = down(side * t - tb - up(norm_n * C.offset_error()))

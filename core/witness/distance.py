@@ -28,8 +28,8 @@ from ..algebraic import _workprec
 from ..classify import classify
 from ..relation import Relation
 from .centred import CentredShape, centred_pair, column, dot
-from .floats import inverse, mat_vec, maximise
 from .floats import dot as fdot
+from .floats import inverse, mat_vec, maximise
 from .numbers import sqrt_bounds, to_float
 
 __all__ = ["DistanceBracket", "distance"]
@@ -74,8 +74,10 @@ class DistanceBracket:
 
 
 def _newton(SA: Any, SB: Any, delta: list[Any], n: list[Any], sqrt: Any, iterations: int, tol: Any = 1e-30) -> list[Any]:
-    """Newton steps on h(n) = n.delta - |n|_A - |n|_B - |n|^2 / 2 (strictly concave; maximiser
-    dist * unit normal), with step halving while h does not increase. Floats or arb balls."""
+    """Newton steps on h(n) = n.delta - |n|_A - |n|_B - |n|^2 / 2, halving while h does not grow.
+
+    h is strictly concave and its maximiser is dist * unit normal. Floats or arb balls.
+    """
     d = len(delta)
 
     def h(v: list[Any]) -> Any:
