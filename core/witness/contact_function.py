@@ -128,13 +128,18 @@ class ContactFunction:
         return self._first
 
     def _start(self, bits: int) -> Bracket:
+        return self.bracket(self.float_guess, bits=bits)
+
+    @cached_property
+    def float_guess(self) -> float:
+        """lambda* estimated in floats (0.5 when floats fail): where exact work starts."""
         ca, SA = self.A.floats()
         cb, SB = self.B.floats()
         try:
             guess = float(maximise(SA, SB, [q - p for p, q in zip(ca, cb, strict=True)])[0])
         except (ZeroDivisionError, OverflowError, ValueError):
-            guess = 0.5
-        return self.bracket(guess if math.isfinite(guess) else 0.5, bits=bits)
+            return 0.5
+        return min(max(guess, 0.0), 1.0) if math.isfinite(guess) else 0.5
 
     def bracket(self, guess: float, *, bits: int = 40) -> Bracket:
         """Bracket lambda* around a float guess: width 2^-bits relative, widened until valid.

@@ -21,8 +21,8 @@ from flint import fmpq, fmpq_mat
 
 from ..classify import classify
 from ..relation import Relation
-from .centred import CentredShape, column, dot
-from .contact_function import ContactFunction
+from .centred import CentredShape, centred_pair, column, dot
+from .contact_function import Bracket, ContactFunction
 from .numbers import simplest_between, sqrt_bounds, to_float
 
 __all__ = ["SeparatingPlane", "separating_plane", "plane_separates", "plane_from"]
@@ -140,7 +140,7 @@ def separating_plane(A: Any, B: Any) -> Any:
         ...
         ValueError: A and B are tangent: they touch, so no plane separates them strictly (contact_point gives where)
     """
-    from .scale import _is_stack, solve_pair
+    from .scale import _is_stack
 
     if _is_stack(A) or _is_stack(B):
         from .batch import separating_plane_batch
@@ -151,13 +151,24 @@ def separating_plane(A: Any, B: Any) -> Any:
         raise ValueError("A and B are tangent: they touch, so no plane separates them strictly (contact_point gives where)")
     if rel == Relation.OVERLAP:
         raise ValueError("A and B overlap: their interiors meet, so no plane separates them (contact_point gives a common point)")
-    return plane_from(*solve_pair(A, B))
+    return plane_from(ContactFunction(*centred_pair(A, B)))
 
 
-def plane_from(cf: ContactFunction, br: Any) -> SeparatingPlane:
-    """The verified plane of a separate pair from its contact function and first bracket."""
-    assert br is not None  # separate shapes have distinct centres
+def plane_from(cf: ContactFunction, br: Bracket | None = None) -> SeparatingPlane:
+    """The verified plane of a separate pair from its contact function (and bracket, if known).
+
+    The normal at the float estimate of lambda* is tried first (no exact bracket needed when it
+    works, the usual case); then the exact bracket, refined until a plane verifies.
+    """
     bits = 64
+    if br is None:
+        y = cf.normal(fmpq(*cf.float_guess.as_integer_ratio()))
+        for tol in _TOLERANCES:
+            plane = _try_normal(cf, _simplified(y, tol), bits)
+            if plane is not None:
+                return plane
+        br = cf.first_bracket()
+    assert br is not None  # separate shapes have distinct centres
     for _ in range(_MAX_ROUNDS):
         y = cf.normal(br.best)
         for tol in _TOLERANCES:
