@@ -152,14 +152,16 @@ def quadrics(centers: np.ndarray, axes: np.ndarray, R: np.ndarray) -> np.ndarray
 def is_valid_exact(M: np.ndarray) -> bool:
     """Exact check (flint) that a float matrix is a valid ellipse/ellipsoid up to sign.
 
-    Symmetric, quadratic block positive definite (leading minors > 0 after normalising the sign
-    of M[0, 0]), det < 0. Independent of ``core.quadrics``.
+    The exact symmetric part has a positive definite quadratic block (leading minors > 0 after
+    normalising the sign of M[0, 0]) and det < 0. Independent of ``core.quadrics`` (its
+    asymmetry tolerance is not checked here: the generators only round).
     """
     n = M.shape[0]
-    if not np.isfinite(M).all() or not (M == M.T).all() or M[0, 0] == 0:
+    if not np.isfinite(M).all() or M[0, 0] == 0:
         return False
     s = 1 if M[0, 0] > 0 else -1
-    E = fmpq_mat([[to_fmpq(float(s * v)) for v in row] for row in M])
+    # the shape is the exact symmetric part (numpy-built matrices are symmetric up to rounding)
+    E = fmpq_mat([[(to_fmpq(float(s * M[i, j])) + to_fmpq(float(s * M[j, i]))) / 2 for j in range(n)] for i in range(n)])
     for k in range(1, n):
         if not fmpq_mat([[E[i, j] for j in range(k)] for i in range(k)]).det() > 0:
             return False
@@ -323,6 +325,76 @@ def extreme_pairs(dim: int, N: int, *, kind: str, seed: int = 0) -> Dataset:
     A = quadrics(cA, aA, RA) * sA[:, None, None]
     B = quadrics(cB, aB, RB) * sB[:, None, None]
     ds = _finish(f"{kind} {dim}D", "extreme", dim, A, B, _params(cA, aA, RA, cB, aB, RB))
+    return _with_dropped(ds, N)
+
+
+STRUCTURED_KINDS = ("spheres", "translated copies", "homothetic copies", "numpy-built")
+"""Inputs users bring: s0 vanishes identically for the first three (a structural double root)."""
+
+
+def structured_pairs(dim: int, N: int, *, kind: str, seed: int = 0) -> Dataset:
+    """Spheres/circles, translated copies of one shape, homothetic copies (same orientation,
+    scaled), or generic pairs built the numpy way (``R @ diag(1/a^2) @ R.T``, symmetric only up
+    to rounding). Centres U[-4, 4]^d; B's centre at a random distance up to 8 from A's."""
+    _check(dim, N)
+    if kind not in STRUCTURED_KINDS:
+        raise ValueError(f"unknown structured kind {kind!r}; valid: {', '.join(STRUCTURED_KINDS)}")
+    rng = np.random.default_rng([seed, dim, 5, STRUCTURED_KINDS.index(kind)])
+    cA = rng.uniform(-4, 4, (N, dim))
+    u = rng.normal(size=(N, dim))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    cB = cA + u * rng.uniform(0.0, 8.0, (N, 1))
+    aA = rng.uniform(0.2, 3.0, (N, dim))
+    RA = rotations(rng, dim, N)
+    if kind == "spheres":
+        aA = np.repeat(aA[:, :1], dim, axis=1)
+        aB = np.repeat(rng.uniform(0.2, 3.0, (N, 1)), dim, axis=1)
+        RA = np.broadcast_to(np.eye(dim), (N, dim, dim)).copy()
+        RB = RA
+    elif kind == "translated copies":
+        aB, RB = aA, RA
+    elif kind == "homothetic copies":
+        aB, RB = aA * rng.uniform(0.3, 3.0, (N, 1)), RA
+    else:
+        aB, RB = rng.uniform(0.2, 3.0, (N, dim)), rotations(rng, dim, N)
+    if kind == "numpy-built":
+        A, B = (_numpy_quadrics(c, a, R) for c, a, R in ((cA, aA, RA), (cB, aB, RB)))
+    else:
+        A, B = quadrics(cA, aA, RA), quadrics(cB, aB, RB)
+    ds = _finish(f"{kind} {dim}D", "structured", dim, A, B, _params(cA, aA, RA, cB, aB, RB))
+    return _with_dropped(ds, N)
+
+
+def _numpy_quadrics(c: np.ndarray, a: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """The matrices as user code computes them: Q = R @ diag(a^-2) @ R.T, no symmetrisation."""
+    N, d = c.shape
+    Q = R @ (a[:, :, None] ** -2.0 * np.swapaxes(R, 1, 2))
+    M = np.empty((N, d + 1, d + 1))
+    M[:, :d, :d] = Q
+    M[:, :d, d] = -np.einsum("nij,nj->ni", Q, c)
+    M[:, d, :d] = -np.einsum("ni,nij->nj", c, Q)
+    M[:, d, d] = np.einsum("ni,nij,nj->n", c, Q, c) - 1.0
+    return M
+
+
+def big_small_pairs(dim: int, N: int, *, gap: float, sign: int, seed: int = 0) -> Dataset:
+    """A large ellipsoid (axes 1e2..1e3) beside a small sphere (radius 1e-2..1), externally tangent
+    at a random point, then moved by ``sign * gap * radius`` along the normal (sign +1 apart)."""
+    _check(dim, N)
+    rng = np.random.default_rng([seed, dim, 6, int(round(-math.log10(gap) * 10)), sign + 1])
+    cA = rng.uniform(-4, 4, (N, dim))
+    aA = 10.0 ** rng.uniform(2, 3, (N, dim))
+    RA = rotations(rng, dim, N)
+    r = 10.0 ** rng.uniform(-2, 0, (N, 1))
+    p_body, n_body = _surface_point(rng, aA)
+    p = cA + np.einsum("nij,nj->ni", RA, p_body)
+    n = np.einsum("nij,nj->ni", RA, n_body)
+    cB = p + n * r * (1 + sign * gap)
+    aB = np.repeat(r, dim, axis=1)
+    I = np.broadcast_to(np.eye(dim), (N, dim, dim)).copy()
+    A, B = quadrics(cA, aA, RA), quadrics(cB, aB, I)
+    name = f"big-small {'+' if sign > 0 else '-'}{gap:g} {dim}D"
+    ds = _finish(name, "big-small", dim, A, B, _params(cA, aA, RA, cB, aB, I))
     return _with_dropped(ds, N)
 
 

@@ -15,6 +15,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
 are compiled with the system's C compiler on first use, :mod:`core.compiled`).
 """
 
+from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes)
 from .classify import METHODS as METHODS
 from .classify import ON_INVALID as ON_INVALID
 from .classify import Certifier as Certifier
@@ -23,12 +24,12 @@ from .classify import Method as Method
 from .classify import Stats as Stats
 from .classify import classify as classify
 from .classify import classify_detailed as classify_detailed
+from .compiled import set_threads as set_threads
+from .compiled import warm_up as warm_up
 from .explain import Explanation as Explanation
 from .explain import Quantity as Quantity
 from .explain import explain as explain
 from .expressions import parse_expression as parse_expression
-from .compiled import set_threads as set_threads
-from .compiled import warm_up as warm_up
 from .motions import Motion as Motion
 from .motions import motion_from_dict as motion_from_dict
 from .motions import motion_to_dict as motion_to_dict

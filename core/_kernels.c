@@ -5,9 +5,15 @@
  * -ffast-math). The decision tables are core.decision.decide_signs tabulated. core/compiled.py
  * compiles this file once per machine and source hash and calls classify3/classify4 (the GIL
  * is released: ctypes) from a thread pool.
+ *
+ * Layout: blocks of BLOCK pairs are transposed to structure-of-arrays; the branch-free fast path
+ * (fast{n}) and certificate pass (cert{n}) run over the lanes of a block and vectorise; pairs the
+ * fast path cannot take (scaling, asymmetry beyond its cheap test, abstention of the
+ * validity test) go through pair{n}, which takes the same decisions one pair at a time.
  */
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
 
 #define RADIUS_FACTOR 1.0000000000009095
 #define NEED_S0 -3
@@ -19,23 +25,25 @@
 #define LEAF_ROUNDING 2.220446049250313e-16 /* 2^-52 >= u / (1 - u): radius of a rounded half sum */
 #define LEAF_UNDERFLOW 1.0e-323           /* >= 2^-1073: subnormal rounding of a scaled entry */
 #define BLOCK 16                          /* pairs per structure-of-arrays block of the fast path */
+#define NEEDS_CERT -8                     /* fast path: valid, tree undecided: try the certificates */
+#define NEEDS_PAIR -9                     /* fast path: not its case: the one-pair path decides */
 
 /* Table digit of a certified sign: 0 for -1, 2 for +1, 3 for uncertain (core.decision.SIGN_CODES). */
 static inline int sign_digit(double v, double b) { return v > b ? 2 : (v < -b ? 0 : 3); }
 
-static inline __attribute__((always_inline)) void pencil3(const double *restrict A, const double *restrict B, double *restrict out) {
-    const double v0 = A[0];
-    const double v1 = A[1];
-    const double v2 = A[2];
-    const double v3 = A[4];
-    const double v4 = A[5];
-    const double v5 = A[8];
-    const double v6 = B[0];
-    const double v7 = B[1];
-    const double v8 = B[2];
-    const double v9 = B[4];
-    const double v10 = B[5];
-    const double v11 = B[8];
+static inline __attribute__((always_inline)) void pencil3(const double *restrict A, const double *restrict B, const int64_t s, double *restrict out) {
+    const double v0 = A[0 * s];
+    const double v1 = A[1 * s];
+    const double v2 = A[2 * s];
+    const double v3 = A[4 * s];
+    const double v4 = A[5 * s];
+    const double v5 = A[8 * s];
+    const double v6 = B[0 * s];
+    const double v7 = B[1 * s];
+    const double v8 = B[2 * s];
+    const double v9 = B[4 * s];
+    const double v10 = B[5 * s];
+    const double v11 = B[8 * s];
     const double v12 = v3 * v5;
     const double v13 = v4 * v4;
     const double v14 = v12 - v13;
@@ -184,15 +192,15 @@ static inline __attribute__((always_inline)) void pencil3(const double *restrict
     out[11] = v145;
 }
 
-static inline __attribute__((always_inline)) void hat_s0_3(const double *restrict c, const double *restrict cr, double *restrict out) {
-    const double v0 = c[0];
-    const double r0 = cr[0];
-    const double v1 = c[1];
-    const double r1 = cr[1];
-    const double v2 = c[2];
-    const double r2 = cr[2];
-    const double v3 = c[3];
-    const double r3 = cr[3];
+static inline __attribute__((always_inline)) void hat_s0_3(const double *restrict c, const double *restrict cr, const int64_t s, double *restrict out) {
+    const double v0 = c[0 * s];
+    const double r0 = cr[0 * s];
+    const double v1 = c[1 * s];
+    const double r1 = cr[1 * s];
+    const double v2 = c[2 * s];
+    const double r2 = cr[2 * s];
+    const double v3 = c[3 * s];
+    const double r3 = cr[3 * s];
     const double v4 = v0 * v0;
     const double r4 = fabs(v0) * r0 + r0 * (fabs(v0) + r0) + 2.220446049250313e-16 * fabs(v4);
     const double v5 = v4 * v3;
@@ -245,15 +253,15 @@ static inline __attribute__((always_inline)) void hat_s0_3(const double *restric
     out[1] = r27;
 }
 
-static inline __attribute__((always_inline)) void pencil_at3(const double *restrict c, const double *restrict cr, double T, double *restrict out) {
-    const double v0 = c[0];
-    const double r0 = cr[0];
-    const double v1 = c[1];
-    const double r1 = cr[1];
-    const double v2 = c[2];
-    const double r2 = cr[2];
-    const double v3 = c[3];
-    const double r3 = cr[3];
+static inline __attribute__((always_inline)) void pencil_at3(const double *restrict c, const double *restrict cr, double T, const int64_t s, double *restrict out) {
+    const double v0 = c[0 * s];
+    const double r0 = cr[0 * s];
+    const double v1 = c[1 * s];
+    const double r1 = cr[1 * s];
+    const double v2 = c[2 * s];
+    const double r2 = cr[2 * s];
+    const double v3 = c[3 * s];
+    const double r3 = cr[3 * s];
     const double v4 = T;
     const double r4 = 0.0;
     const double v5 = v3 * v4;
@@ -272,18 +280,18 @@ static inline __attribute__((always_inline)) void pencil_at3(const double *restr
     out[1] = r10;
 }
 
-static inline __attribute__((always_inline)) void form3(const double *restrict M, const double *restrict Mr, const double *restrict x, double *restrict out) {
-    const double v0 = M[0];
+static inline __attribute__((always_inline)) void form3(const double *restrict M, const double *restrict Mr, const double *restrict x, const int64_t s, double *restrict out) {
+    const double v0 = M[0 * s];
     const double r0 = Mr[0];
-    const double v1 = M[1];
+    const double v1 = M[1 * s];
     const double r1 = Mr[1];
-    const double v2 = M[2];
+    const double v2 = M[2 * s];
     const double r2 = Mr[2];
-    const double v3 = M[4];
+    const double v3 = M[4 * s];
     const double r3 = Mr[4];
-    const double v4 = M[5];
+    const double v4 = M[5 * s];
     const double r4 = Mr[5];
-    const double v5 = M[8];
+    const double v5 = M[8 * s];
     const double r5 = Mr[8];
     const double v6 = x[0];
     const double r6 = 0.0;
@@ -407,102 +415,131 @@ static const double PCR3[12] = {8.881784197001274e-16, 0.0, 1.1102230246251597e-
 static const double PF3 = 1.31150496e-316, PFR3 = 1.31150496e-316, HF3 = 1.6328380290058883e-296, PAF3 = 4.9386053663595506e-303, FF3 = 6.835430175000615e-305;
 static const int TAB3[3125] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
 
-/* Validity, a_i with radii and the tree: a rule id, -1 (valid, undecided) or -2 (not certified valid). */
-static inline int core3(const double *wa, const double *wb, int rounded, double *c, double *cr) {
-    double r[12];
-    pencil3(wa, wb, r);
-    const double *C = rounded ? PCR3 : PC3;
+/* Pencil with certified bounds, validity and the tree on prepared matrices (stride s): writes
+ * a_i and their radii to c, cr; returns a rule id, NEEDS_CERT (valid, undecided) or -1 (not
+ * certified valid). No control flow: it vectorises over the lanes of a block. */
+static inline __attribute__((always_inline)) int tree3(const double *restrict wa, const double *restrict wb, const int rounded,
+                                                       double *restrict c, double *restrict cr, const int64_t s) {
+    double r[12], h[2];
+    pencil3(wa, wb, s, r);
+    /* constants chosen by selects on unconditional loads */
     const double F = rounded ? PFR3 : PF3;
-    for (int k = 2 * (3 + 1); k < 12; k += 2)
-        if (!(r[k] > C[k] * r[k + 1] + F)) return -2;
-    for (int i = 0; i <= 3; i++) {
-        c[i] = r[2 * i];
-        cr[i] = C[2 * i] * r[2 * i + 1] + F;
-    }
-    if (!(c[3] < -cr[3]) || !(c[0] < -cr[0])) return -2;
-    int idx = 0;
-    for (int i = 3 - 1; i >= 1; i--) idx = idx * 5 + sign_digit(c[i], cr[i]);
-    const int out = TAB3[idx * 125 + 124]; /* s0, s1, s1,0 pending */
-    if (out != NEED_S0) return out;
-    double h[2];
-    hat_s0_3(c, cr, h);
-    return TAB3[idx * 125 + sign_digit(h[0], h[1] * RADIUS_FACTOR + HF3) * 25 + 24];
+    const double C0 = rounded ? PCR3[0] : PC3[0];
+    const double C2 = rounded ? PCR3[2] : PC3[2];
+    const double C4 = rounded ? PCR3[4] : PC3[4];
+    const double C6 = rounded ? PCR3[6] : PC3[6];
+    const double C8 = rounded ? PCR3[8] : PC3[8];
+    const double C10 = rounded ? PCR3[10] : PC3[10];
+    c[0 * s] = r[0];
+    cr[0 * s] = C0 * r[1] + F;
+    c[1 * s] = r[2];
+    cr[1 * s] = C2 * r[3] + F;
+    c[2 * s] = r[4];
+    cr[2 * s] = C4 * r[5] + F;
+    c[3 * s] = r[6];
+    cr[3 * s] = C6 * r[7] + F;
+    const int valid = (r[8] > C8 * r[9] + F) & (r[10] > C10 * r[11] + F) & (c[3 * s] < -cr[3 * s]) & (c[0] < -cr[0]);
+    const int idx = ((0) * 5 + sign_digit(c[2 * s], cr[2 * s])) * 5 + sign_digit(c[1 * s], cr[1 * s]);
+    hat_s0_3(c, cr, s, h);
+    const int code = TAB3[idx * 125 + sign_digit(h[0], h[1] * RADIUS_FACTOR + HF3) * 25 + 24];
+    return valid ? (code >= 0 ? code : NEEDS_CERT) : -1;
 }
 
-/* Centre (Q c = -m, adjugate) and scale k = -m.c - M_dd of a prepared matrix (upper triangle). */
-static inline int centre3(const double *w, double *ctr, double *k) {
-    const double a00 = w[4], a01 = -w[1], a11 = w[0];
-    const double det = w[0] * w[4] - w[1] * w[1];
-    const double m0 = w[2], m1 = w[5];
-    if (!(det > 0.0)) return 0;
+/* Centre (Q c = -m, adjugate) and scale k = -m.c - M_dd of a prepared matrix (upper triangle);
+ * returns det Q > 0. */
+static inline __attribute__((always_inline)) int centre3(const double *restrict w, double *restrict ctr, double *restrict k, const int64_t s) {
+    const double a00 = w[4 * s], a01 = -w[1 * s], a11 = w[0 * s];
+    const double det = w[0 * s] * w[4 * s] - w[1 * s] * w[1 * s];
+    const double m0 = w[2 * s], m1 = w[5 * s];
     ctr[0] = -(a00 * m0 + a01 * m1) / det;
     ctr[1] = -(a01 * m0 + a11 * m1) / det;
-    *k = -(m0 * ctr[0] + m1 * ctr[1]) - w[8];
-    return 1;
+    *k = -(m0 * ctr[0] + m1 * ctr[1]) - w[8 * s];
+    return det > 0.0;
 }
 
-static inline double quad3(const double *w, const double *u) {
-    return w[0] * u[0] * u[0] + w[4] * u[1] * u[1] + 2.0 * w[1] * u[0] * u[1];
+static inline __attribute__((always_inline)) double quad3(const double *restrict w, const double *restrict u, const int64_t s) {
+    return w[0 * s] * u[0] * u[0] + w[4 * s] * u[1] * u[1] + 2.0 * w[1 * s] * u[0] * u[1];
 }
 
-/* Certificates that do not need s0 (spheres, translated and homothetic copies): a rule or -1. */
-static inline int certify3(const double *wa, const double *wb, int rnd_a, int rnd_b, const double *c, const double *cr) {
-    double ca[2], cb[2], ka, kb, u[2], x[2], ra[9], rb[9], q[2];
-    if (!centre3(wa, ca, &ka) || !centre3(wb, cb, &kb)) return -1;
-    if (!(ka > 0.0 && kb > 0.0)) return -1;
-    for (int i = 0; i < 2; i++) u[i] = cb[i] - ca[i];
-    const double qa = quad3(wa, u), qb = quad3(wb, u);
-    double s = 0.0; /* concentric shapes: try A's centre */
-    if (qa > 0.0 && qb > 0.0) {
-        const double ta = sqrt(ka / qa), tb = sqrt(kb / qb);
-        const double T = (ta / tb) * (kb / ka);
-        if (T >= CERT_T_MIN && T <= CERT_T_MAX) {
-            pencil_at3(c, cr, T, q);
-            if (q[0] > q[1] * RADIUS_FACTOR + PAF3) return RULE_SEP;
-        }
-        s = ta / (ta + tb);
-    }
-    for (int i = 0; i < 2; i++) {
-        x[i] = ca[i] + s * u[i];
-        if (!(fabs(x[i]) <= TRANSLATE_MAX)) return -1;
-    }
-    for (int k = 0; k < 9; k++) {
-        ra[k] = rnd_a ? fabs(wa[k]) * LEAF_ROUNDING + LEAF_UNDERFLOW : 0.0;
-        rb[k] = rnd_b ? fabs(wb[k]) * LEAF_ROUNDING + LEAF_UNDERFLOW : 0.0;
-    }
-    form3(wa, ra, x, q);
-    if (!(q[0] < -(q[1] * RADIUS_FACTOR + FF3))) return -1;
-    form3(wb, rb, x, q);
-    if (!(q[0] < -(q[1] * RADIUS_FACTOR + FF3))) return -1;
-    return RULE_POINT;
+/* Certificates that do not need s0 (spheres, translated and homothetic copies): sep-witness,
+ * common-point or -1. Branch-free (vectorises over a block). */
+static inline __attribute__((always_inline)) int cert3(const double *restrict wa, const double *restrict wb, const int rnd_a,
+                                                       const int rnd_b, const double *restrict c, const double *restrict cr, const int64_t s) {
+    double ca[2], cb[2], ka, kb, u[2], x[2], ra[9], rb[9], q[2], fa[2], fb[2];
+    const int oka = centre3(wa, ca, &ka, s), okb = centre3(wb, cb, &kb, s);
+    u[0] = cb[0] - ca[0];
+    u[1] = cb[1] - ca[1];
+    const double qa = quad3(wa, u, s), qb = quad3(wb, u, s);
+    const int ok = oka & okb & (ka > 0.0) & (kb > 0.0);
+    const int pos = (qa > 0.0) & (qb > 0.0);
+    /* every operation unconditional (NaN or inf where a guess makes no sense), then selects:
+     * no control flow, so the loop over the lanes of a block vectorises */
+    const double ta = sqrt(ka / qa), tb = sqrt(kb / qb);
+    const double T = (ta / tb) * (kb / ka);
+    const int tin = pos & (T >= CERT_T_MIN) & (T <= CERT_T_MAX);
+    pencil_at3(c, cr, tin ? T : 1.0, s, q);
+    const int sep = ok & tin & (q[0] > q[1] * RADIUS_FACTOR + PAF3);
+    const double tt = ta / (ta + tb);
+    const double st = pos ? tt : 0.0; /* concentric shapes: A's centre */
+    /* unrolled (no inner loops: the compiler would not unroll them in a body this large) */
+    x[0] = ca[0] + st * u[0];
+    x[1] = ca[1] + st * u[1];
+    const int xin = (fabs(x[0]) <= TRANSLATE_MAX) & (fabs(x[1]) <= TRANSLATE_MAX);
+    x[0] = xin ? x[0] : 0.0;
+    x[1] = xin ? x[1] : 0.0;
+    const double ga = rnd_a ? LEAF_ROUNDING : 0.0, gb = rnd_b ? LEAF_ROUNDING : 0.0;
+    const double ha = rnd_a ? LEAF_UNDERFLOW : 0.0, hb = rnd_b ? LEAF_UNDERFLOW : 0.0;
+    /* radii of the entries: exactly 0 for exact entries (finite times 0) */
+    ra[0] = fabs(wa[0 * s]) * ga + ha;
+    rb[0] = fabs(wb[0 * s]) * gb + hb;
+    ra[1] = fabs(wa[1 * s]) * ga + ha;
+    rb[1] = fabs(wb[1 * s]) * gb + hb;
+    ra[2] = fabs(wa[2 * s]) * ga + ha;
+    rb[2] = fabs(wb[2 * s]) * gb + hb;
+    ra[3] = fabs(wa[3 * s]) * ga + ha;
+    rb[3] = fabs(wb[3 * s]) * gb + hb;
+    ra[4] = fabs(wa[4 * s]) * ga + ha;
+    rb[4] = fabs(wb[4 * s]) * gb + hb;
+    ra[5] = fabs(wa[5 * s]) * ga + ha;
+    rb[5] = fabs(wb[5 * s]) * gb + hb;
+    ra[6] = fabs(wa[6 * s]) * ga + ha;
+    rb[6] = fabs(wb[6 * s]) * gb + hb;
+    ra[7] = fabs(wa[7 * s]) * ga + ha;
+    rb[7] = fabs(wb[7 * s]) * gb + hb;
+    ra[8] = fabs(wa[8 * s]) * ga + ha;
+    rb[8] = fabs(wb[8 * s]) * gb + hb;
+    form3(wa, ra, x, s, fa); /* wa strided; the radii ra and the point x are this lane's */
+    form3(wb, rb, x, s, fb);
+    const int point = ok & xin & (fa[0] < -(fa[1] * RADIUS_FACTOR + FF3)) & (fb[0] < -(fb[1] * RADIUS_FACTOR + FF3));
+    return sep ? RULE_SEP : (point ? RULE_POINT : -1);
 }
 
-/* One pair: a rule id (>= 0) or -1 (the exact path decides). */
+/* One pair, every case: a rule id (>= 0) or -1 (the exact path decides). */
 static inline int pair3(const double *A, const double *B) {
     double wa[9] = {0}, wb[9] = {0}, c[3 + 1], cr[3 + 1];
     const int sa = prepare3(A, wa), sb = prepare3(B, wb);
     if (!sa || !sb) return -1;
-    const int code = core3(wa, wb, (sa == 2) | (sb == 2), c, cr);
-    if (code != -1) return code < 0 ? -1 : code;
-    return certify3(wa, wb, sa == 2, sb == 2, c, cr);
+    const int code = tree3(wa, wb, (sa == 2) | (sb == 2), c, cr, 1);
+    if (code != NEEDS_CERT) return code;
+    return cert3(wa, wb, sa == 2, sb == 2, c, cr, 1);
 }
 
-/* The common case without branches, so that the compiler vectorises the loop over pairs: both
- * matrices finite, symmetric (or within the tolerance), largest entry in [NO_SCALE_MIN, LEAF_MAX]
- * (no scaling). Same operations as prepare3 + core3 on such pairs, s0 computed for every pair
- * (a rule that does not need it ignores it: decide_signs stops before s0). Returns the rule id,
- * or -9: take pair3 (scaling, certificates, abstention). */
-static inline __attribute__((always_inline)) int fast3(const double *restrict a, const double *restrict b, const int64_t s) {
-    double wa[9], wb[9], r[12], c[3 + 1], cr[3 + 1], h[2];
-    const double ax00 = a[0 * s];
-    const double ax01 = a[1 * s];
-    const double ax02 = a[2 * s];
-    const double ax11 = a[4 * s];
-    const double ax12 = a[5 * s];
-    const double ax22 = a[8 * s];
-    const double ay01 = a[3 * s];
-    const double ay02 = a[6 * s];
-    const double ay12 = a[7 * s];
+/* The fast path's prepare of one lane (branch-free): both matrices finite, M_00 != 0, largest
+ * entry within 2^-1000 .. 2^1000 (scaled by the same power of two as prepare3), symmetric or
+ * within a cheap sufficient tolerance test. Writes the prepared upper triangles with stride s
+ * (the same values as prepare3); returns eligibility, and which matrices are rounded. */
+static inline __attribute__((always_inline)) int fastprep3(const double *restrict a, const double *restrict b, const int64_t si,
+                                                           double *restrict wa, double *restrict wb, const int64_t s,
+                                                           int *restrict rnd_a, int *restrict rnd_b) {
+    const double ax00 = a[0 * si];
+    const double ax01 = a[1 * si];
+    const double ax02 = a[2 * si];
+    const double ax11 = a[4 * si];
+    const double ax12 = a[5 * si];
+    const double ax22 = a[8 * si];
+    const double ay01 = a[3 * si];
+    const double ay02 = a[6 * si];
+    const double ay12 = a[7 * si];
     const double af = ax00 < 0.0 ? -1.0 : 1.0, ah = 0.5 * af;
     double amx = 0.0;
     amx = fabs(ax00) > amx ? fabs(ax00) : amx;
@@ -514,27 +551,33 @@ static inline __attribute__((always_inline)) int fast3(const double *restrict a,
     amx = fabs(ay01) > amx ? fabs(ay01) : amx;
     amx = fabs(ay02) > amx ? fabs(ay02) : amx;
     amx = fabs(ay12) > amx ? fabs(ay12) : amx;
-    const int aok = (ax00 != 0.0) & (0.00390625 <= amx) & (amx <= 256.0) & (ax00 == ax00) & (ax01 == ax01) & (ax02 == ax02) & (ax11 == ax11) & (ax12 == ax12) & (ax22 == ax22) & (ay01 == ay01) & (ay02 == ay02) & (ay12 == ay12);
+    uint64_t amb;
+    memcpy(&amb, &amx, 8);
+    const uint64_t asb = (uint64_t)(1 - ((int64_t)((amb >> 52) & 0x7ff) - 1022) + 1023) << 52;
+    double ag;
+    memcpy(&ag, &asb, 8);
+    const double asc = (0.00390625 <= amx) & (amx <= 256.0) ? 1.0 : ag;
+    const int aok = (ax00 != 0.0) & (amx >= 0x1p-1000) & (amx <= 0x1p+1000) & (ax00 == ax00) & (ax01 == ax01) & (ax02 == ax02) & (ax11 == ax11) & (ax12 == ax12) & (ax22 == ax22) & (ay01 == ay01) & (ay02 == ay02) & (ay12 == ay12);
     const int syma = (ax01 == ay01) & (ax02 == ay02) & (ax12 == ay12);
     const double ae01 = fabs(ax01) > fabs(ay01) ? fabs(ax01) : fabs(ay01);
     const double ae02 = fabs(ax02) > fabs(ay02) ? fabs(ax02) : fabs(ay02);
     const double ae12 = fabs(ax12) > fabs(ay12) ? fabs(ax12) : fabs(ay12);
     const int neara = ((ax01 == ay01) | ((ae01 >= 1e-270) & (fabs(ax01 - ay01) * 1.0000000000000009 <= ae01 * 9.536743164062492e-07))) & ((ax02 == ay02) | ((ae02 >= 1e-270) & (fabs(ax02 - ay02) * 1.0000000000000009 <= ae02 * 9.536743164062492e-07))) & ((ax12 == ay12) | ((ae12 >= 1e-270) & (fabs(ax12 - ay12) * 1.0000000000000009 <= ae12 * 9.536743164062492e-07)));
-    wa[0] = ax00 * af;
-    wa[4] = ax11 * af;
-    wa[8] = ax22 * af;
-    wa[1] = syma ? ax01 * af : ax01 * ah + ay01 * ah;
-    wa[2] = syma ? ax02 * af : ax02 * ah + ay02 * ah;
-    wa[5] = syma ? ax12 * af : ax12 * ah + ay12 * ah;
-    const double bx00 = b[0 * s];
-    const double bx01 = b[1 * s];
-    const double bx02 = b[2 * s];
-    const double bx11 = b[4 * s];
-    const double bx12 = b[5 * s];
-    const double bx22 = b[8 * s];
-    const double by01 = b[3 * s];
-    const double by02 = b[6 * s];
-    const double by12 = b[7 * s];
+    wa[0 * s] = (ax00 * asc) * af;
+    wa[4 * s] = (ax11 * asc) * af;
+    wa[8 * s] = (ax22 * asc) * af;
+    wa[1 * s] = syma ? (ax01 * asc) * af : (ax01 * asc) * ah + (ay01 * asc) * ah;
+    wa[2 * s] = syma ? (ax02 * asc) * af : (ax02 * asc) * ah + (ay02 * asc) * ah;
+    wa[5 * s] = syma ? (ax12 * asc) * af : (ax12 * asc) * ah + (ay12 * asc) * ah;
+    const double bx00 = b[0 * si];
+    const double bx01 = b[1 * si];
+    const double bx02 = b[2 * si];
+    const double bx11 = b[4 * si];
+    const double bx12 = b[5 * si];
+    const double bx22 = b[8 * si];
+    const double by01 = b[3 * si];
+    const double by02 = b[6 * si];
+    const double by12 = b[7 * si];
     const double bf = bx00 < 0.0 ? -1.0 : 1.0, bh = 0.5 * bf;
     double bmx = 0.0;
     bmx = fabs(bx00) > bmx ? fabs(bx00) : bmx;
@@ -546,86 +589,83 @@ static inline __attribute__((always_inline)) int fast3(const double *restrict a,
     bmx = fabs(by01) > bmx ? fabs(by01) : bmx;
     bmx = fabs(by02) > bmx ? fabs(by02) : bmx;
     bmx = fabs(by12) > bmx ? fabs(by12) : bmx;
-    const int bok = (bx00 != 0.0) & (0.00390625 <= bmx) & (bmx <= 256.0) & (bx00 == bx00) & (bx01 == bx01) & (bx02 == bx02) & (bx11 == bx11) & (bx12 == bx12) & (bx22 == bx22) & (by01 == by01) & (by02 == by02) & (by12 == by12);
+    uint64_t bmb;
+    memcpy(&bmb, &bmx, 8);
+    const uint64_t bsb = (uint64_t)(1 - ((int64_t)((bmb >> 52) & 0x7ff) - 1022) + 1023) << 52;
+    double bg;
+    memcpy(&bg, &bsb, 8);
+    const double bsc = (0.00390625 <= bmx) & (bmx <= 256.0) ? 1.0 : bg;
+    const int bok = (bx00 != 0.0) & (bmx >= 0x1p-1000) & (bmx <= 0x1p+1000) & (bx00 == bx00) & (bx01 == bx01) & (bx02 == bx02) & (bx11 == bx11) & (bx12 == bx12) & (bx22 == bx22) & (by01 == by01) & (by02 == by02) & (by12 == by12);
     const int symb = (bx01 == by01) & (bx02 == by02) & (bx12 == by12);
     const double be01 = fabs(bx01) > fabs(by01) ? fabs(bx01) : fabs(by01);
     const double be02 = fabs(bx02) > fabs(by02) ? fabs(bx02) : fabs(by02);
     const double be12 = fabs(bx12) > fabs(by12) ? fabs(bx12) : fabs(by12);
     const int nearb = ((bx01 == by01) | ((be01 >= 1e-270) & (fabs(bx01 - by01) * 1.0000000000000009 <= be01 * 9.536743164062492e-07))) & ((bx02 == by02) | ((be02 >= 1e-270) & (fabs(bx02 - by02) * 1.0000000000000009 <= be02 * 9.536743164062492e-07))) & ((bx12 == by12) | ((be12 >= 1e-270) & (fabs(bx12 - by12) * 1.0000000000000009 <= be12 * 9.536743164062492e-07)));
-    wb[0] = bx00 * bf;
-    wb[4] = bx11 * bf;
-    wb[8] = bx22 * bf;
-    wb[1] = symb ? bx01 * bf : bx01 * bh + by01 * bh;
-    wb[2] = symb ? bx02 * bf : bx02 * bh + by02 * bh;
-    wb[5] = symb ? bx12 * bf : bx12 * bh + by12 * bh;
+    wb[0 * s] = (bx00 * bsc) * bf;
+    wb[4 * s] = (bx11 * bsc) * bf;
+    wb[8 * s] = (bx22 * bsc) * bf;
+    wb[1 * s] = symb ? (bx01 * bsc) * bf : (bx01 * bsc) * bh + (by01 * bsc) * bh;
+    wb[2 * s] = symb ? (bx02 * bsc) * bf : (bx02 * bsc) * bh + (by02 * bsc) * bh;
+    wb[5 * s] = symb ? (bx12 * bsc) * bf : (bx12 * bsc) * bh + (by12 * bsc) * bh;
     const int eligible = aok & bok & (syma | neara) & (symb | nearb);
-    pencil3(wa, wb, r);
-    const int rounded = !(syma & symb);
-    /* constants chosen by selects on unconditional loads: no control flow, the loop vectorises */
-    const double F = rounded ? PFR3 : PF3;
-    const double C0 = rounded ? PCR3[0] : PC3[0];
-    const double C2 = rounded ? PCR3[2] : PC3[2];
-    const double C4 = rounded ? PCR3[4] : PC3[4];
-    const double C6 = rounded ? PCR3[6] : PC3[6];
-    const double C8 = rounded ? PCR3[8] : PC3[8];
-    const double C10 = rounded ? PCR3[10] : PC3[10];
-    c[0] = r[0];
-    cr[0] = C0 * r[1] + F;
-    c[1] = r[2];
-    cr[1] = C2 * r[3] + F;
-    c[2] = r[4];
-    cr[2] = C4 * r[5] + F;
-    c[3] = r[6];
-    cr[3] = C6 * r[7] + F;
-    const int valid = eligible & (r[8] > C8 * r[9] + F) & (r[10] > C10 * r[11] + F) & (c[3] < -cr[3]) & (c[0] < -cr[0]);
-    const int idx = ((0) * 5 + sign_digit(c[2], cr[2])) * 5 + sign_digit(c[1], cr[1]);
-    hat_s0_3(c, cr, h);
-    const int code = TAB3[idx * 125 + sign_digit(h[0], h[1] * RADIUS_FACTOR + HF3) * 25 + 24];
-    return (valid & (code >= 0)) ? code : -9;
+    *rnd_a = !syma;
+    *rnd_b = !symb;
+    return eligible;
 }
 
-/* count contiguous pairs (count, 3, 3) of float64 -> rule ids (int8, -1 undecided). Blocks of
- * BLOCK pairs are transposed to structure-of-arrays first, so that the branch-free fast path
- * reads consecutive lanes and vectorises; the rare pairs it leaves go through pair3. */
+/* count contiguous pairs (count, 3, 3) of float64 -> rule ids (int8, -1 undecided). */
 void classify3(const double *A, const double *B, signed char *out, int64_t count) {
     int64_t i = 0;
     for (; i + BLOCK <= count; i += BLOCK) {
-        double sa[9 * BLOCK], sb[9 * BLOCK];
+        double sa[9 * BLOCK], sb[9 * BLOCK], wa[9 * BLOCK], wb[9 * BLOCK];
+        double c[(3 + 1) * BLOCK], cr[(3 + 1) * BLOCK];
+        int res[BLOCK], ra[BLOCK], rb[BLOCK];
         for (int p = 0; p < BLOCK; p++)
             for (int k = 0; k < 9; k++) {
                 sa[k * BLOCK + p] = A[(i + p) * 9 + k];
                 sb[k * BLOCK + p] = B[(i + p) * 9 + k];
             }
-        int res[BLOCK]; /* int lanes: the vectoriser then uses the full double-vector width */
-        for (int p = 0; p < BLOCK; p++) res[p] = fast3(sa + p, sb + p, BLOCK);
+        for (int p = 0; p < BLOCK; p++) {
+            const int ok = fastprep3(sa + p, sb + p, BLOCK, wa + p, wb + p, BLOCK, ra + p, rb + p);
+            const int code = tree3(wa + p, wb + p, ra[p] | rb[p], c + p, cr + p, BLOCK);
+            res[p] = ok ? code : NEEDS_PAIR;
+            res[p] = res[p] == -1 ? NEEDS_PAIR : res[p]; /* validity not certified here: pair3 rescales */
+        }
+        int need = 0;
+        for (int p = 0; p < BLOCK; p++) need |= res[p] == NEEDS_CERT;
+        if (need) /* only blocks with undecided lanes pay for the certificates (spheres, copies) */
+            for (int p = 0; p < BLOCK; p++) {
+                const int cc = cert3(wa + p, wb + p, ra[p], rb[p], c + p, cr + p, BLOCK);
+                res[p] = res[p] == NEEDS_CERT ? (cc >= 0 ? cc : -1) : res[p];
+            }
         for (int p = 0; p < BLOCK; p++) out[i + p] = (signed char)res[p];
     }
-    for (; i < count; i++) out[i] = (signed char)fast3(A + (int64_t)9 * i, B + (int64_t)9 * i, 1);
+    for (; i < count; i++) out[i] = (signed char)pair3(A + (int64_t)9 * i, B + (int64_t)9 * i);
     for (int64_t j = 0; j < count; j++)
-        if (out[j] == -9) out[j] = (signed char)pair3(A + (int64_t)9 * j, B + (int64_t)9 * j);
+        if (out[j] == NEEDS_PAIR) out[j] = (signed char)pair3(A + (int64_t)9 * j, B + (int64_t)9 * j);
 }
 
-static inline __attribute__((always_inline)) void pencil4(const double *restrict A, const double *restrict B, double *restrict out) {
-    const double v0 = A[0];
-    const double v1 = A[1];
-    const double v2 = A[2];
-    const double v3 = A[3];
-    const double v4 = A[5];
-    const double v5 = A[6];
-    const double v6 = A[7];
-    const double v7 = A[10];
-    const double v8 = A[11];
-    const double v9 = A[15];
-    const double v10 = B[0];
-    const double v11 = B[1];
-    const double v12 = B[2];
-    const double v13 = B[3];
-    const double v14 = B[5];
-    const double v15 = B[6];
-    const double v16 = B[7];
-    const double v17 = B[10];
-    const double v18 = B[11];
-    const double v19 = B[15];
+static inline __attribute__((always_inline)) void pencil4(const double *restrict A, const double *restrict B, const int64_t s, double *restrict out) {
+    const double v0 = A[0 * s];
+    const double v1 = A[1 * s];
+    const double v2 = A[2 * s];
+    const double v3 = A[3 * s];
+    const double v4 = A[5 * s];
+    const double v5 = A[6 * s];
+    const double v6 = A[7 * s];
+    const double v7 = A[10 * s];
+    const double v8 = A[11 * s];
+    const double v9 = A[15 * s];
+    const double v10 = B[0 * s];
+    const double v11 = B[1 * s];
+    const double v12 = B[2 * s];
+    const double v13 = B[3 * s];
+    const double v14 = B[5 * s];
+    const double v15 = B[6 * s];
+    const double v16 = B[7 * s];
+    const double v17 = B[10 * s];
+    const double v18 = B[11 * s];
+    const double v19 = B[15 * s];
     const double v20 = v0 * v4;
     const double v21 = v1 * v1;
     const double v22 = v20 - v21;
@@ -1055,17 +1095,17 @@ static inline __attribute__((always_inline)) void pencil4(const double *restrict
     out[17] = v428;
 }
 
-static inline __attribute__((always_inline)) void hat_s0_4(const double *restrict c, const double *restrict cr, double *restrict out) {
-    const double v0 = c[0];
-    const double r0 = cr[0];
-    const double v1 = c[1];
-    const double r1 = cr[1];
-    const double v2 = c[2];
-    const double r2 = cr[2];
-    const double v3 = c[3];
-    const double r3 = cr[3];
-    const double v4 = c[4];
-    const double r4 = cr[4];
+static inline __attribute__((always_inline)) void hat_s0_4(const double *restrict c, const double *restrict cr, const int64_t s, double *restrict out) {
+    const double v0 = c[0 * s];
+    const double r0 = cr[0 * s];
+    const double v1 = c[1 * s];
+    const double r1 = cr[1 * s];
+    const double v2 = c[2 * s];
+    const double r2 = cr[2 * s];
+    const double v3 = c[3 * s];
+    const double r3 = cr[3 * s];
+    const double v4 = c[4 * s];
+    const double r4 = cr[4 * s];
     const double v5 = v4 * 12.0;
     const double r5 = r4 * 12.0 + 2.220446049250313e-16 * fabs(v5);
     const double v6 = v3 * -3.0;
@@ -1128,17 +1168,17 @@ static inline __attribute__((always_inline)) void hat_s0_4(const double *restric
     out[1] = r33;
 }
 
-static inline __attribute__((always_inline)) void pencil_at4(const double *restrict c, const double *restrict cr, double T, double *restrict out) {
-    const double v0 = c[0];
-    const double r0 = cr[0];
-    const double v1 = c[1];
-    const double r1 = cr[1];
-    const double v2 = c[2];
-    const double r2 = cr[2];
-    const double v3 = c[3];
-    const double r3 = cr[3];
-    const double v4 = c[4];
-    const double r4 = cr[4];
+static inline __attribute__((always_inline)) void pencil_at4(const double *restrict c, const double *restrict cr, double T, const int64_t s, double *restrict out) {
+    const double v0 = c[0 * s];
+    const double r0 = cr[0 * s];
+    const double v1 = c[1 * s];
+    const double r1 = cr[1 * s];
+    const double v2 = c[2 * s];
+    const double r2 = cr[2 * s];
+    const double v3 = c[3 * s];
+    const double r3 = cr[3 * s];
+    const double v4 = c[4 * s];
+    const double r4 = cr[4 * s];
     const double v5 = T;
     const double r5 = 0.0;
     const double v6 = v4 * v5;
@@ -1161,26 +1201,26 @@ static inline __attribute__((always_inline)) void pencil_at4(const double *restr
     out[1] = r13;
 }
 
-static inline __attribute__((always_inline)) void form4(const double *restrict M, const double *restrict Mr, const double *restrict x, double *restrict out) {
-    const double v0 = M[0];
+static inline __attribute__((always_inline)) void form4(const double *restrict M, const double *restrict Mr, const double *restrict x, const int64_t s, double *restrict out) {
+    const double v0 = M[0 * s];
     const double r0 = Mr[0];
-    const double v1 = M[1];
+    const double v1 = M[1 * s];
     const double r1 = Mr[1];
-    const double v2 = M[2];
+    const double v2 = M[2 * s];
     const double r2 = Mr[2];
-    const double v3 = M[3];
+    const double v3 = M[3 * s];
     const double r3 = Mr[3];
-    const double v4 = M[5];
+    const double v4 = M[5 * s];
     const double r4 = Mr[5];
-    const double v5 = M[6];
+    const double v5 = M[6 * s];
     const double r5 = Mr[6];
-    const double v6 = M[7];
+    const double v6 = M[7 * s];
     const double r6 = Mr[7];
-    const double v7 = M[10];
+    const double v7 = M[10 * s];
     const double r7 = Mr[10];
-    const double v8 = M[11];
+    const double v8 = M[11 * s];
     const double r8 = Mr[11];
-    const double v9 = M[15];
+    const double v9 = M[15 * s];
     const double r9 = Mr[15];
     const double v10 = x[0];
     const double r10 = 0.0;
@@ -1377,115 +1417,166 @@ static const double PCR4[18] = {1.5543122344752253e-15, 0.0, 1.7763568394002587e
 static const double PF4 = 8.9127970781e-313, PFR4 = 8.9127970781e-313, HF4 = 2.0447461985229254e-258, PAF4 = 7.045942467882672e-294, FF4 = 1.5379717886589648e-304;
 static const int TAB4[15625] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 9, -1, 8, -1, -5, 7, 7, 7, 7, 7, 6, 6, 6, 6, 6, -1, -1, -1, -1, -1, -4, -4, -4, -4, -4, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
 
-/* Validity, a_i with radii and the tree: a rule id, -1 (valid, undecided) or -2 (not certified valid). */
-static inline int core4(const double *wa, const double *wb, int rounded, double *c, double *cr) {
-    double r[18];
-    pencil4(wa, wb, r);
-    const double *C = rounded ? PCR4 : PC4;
+/* Pencil with certified bounds, validity and the tree on prepared matrices (stride s): writes
+ * a_i and their radii to c, cr; returns a rule id, NEEDS_CERT (valid, undecided) or -1 (not
+ * certified valid). No control flow: it vectorises over the lanes of a block. */
+static inline __attribute__((always_inline)) int tree4(const double *restrict wa, const double *restrict wb, const int rounded,
+                                                       double *restrict c, double *restrict cr, const int64_t s) {
+    double r[18], h[2];
+    pencil4(wa, wb, s, r);
+    /* constants chosen by selects on unconditional loads */
     const double F = rounded ? PFR4 : PF4;
-    for (int k = 2 * (4 + 1); k < 18; k += 2)
-        if (!(r[k] > C[k] * r[k + 1] + F)) return -2;
-    for (int i = 0; i <= 4; i++) {
-        c[i] = r[2 * i];
-        cr[i] = C[2 * i] * r[2 * i + 1] + F;
-    }
-    if (!(c[4] < -cr[4]) || !(c[0] < -cr[0])) return -2;
-    int idx = 0;
-    for (int i = 4 - 1; i >= 1; i--) idx = idx * 5 + sign_digit(c[i], cr[i]);
-    const int out = TAB4[idx * 125 + 124]; /* s0, s1, s1,0 pending */
-    if (out != NEED_S0) return out;
-    double h[2];
-    hat_s0_4(c, cr, h);
-    return TAB4[idx * 125 + sign_digit(h[0], h[1] * RADIUS_FACTOR + HF4) * 25 + 24];
+    const double C0 = rounded ? PCR4[0] : PC4[0];
+    const double C2 = rounded ? PCR4[2] : PC4[2];
+    const double C4 = rounded ? PCR4[4] : PC4[4];
+    const double C6 = rounded ? PCR4[6] : PC4[6];
+    const double C8 = rounded ? PCR4[8] : PC4[8];
+    const double C10 = rounded ? PCR4[10] : PC4[10];
+    const double C12 = rounded ? PCR4[12] : PC4[12];
+    const double C14 = rounded ? PCR4[14] : PC4[14];
+    const double C16 = rounded ? PCR4[16] : PC4[16];
+    c[0 * s] = r[0];
+    cr[0 * s] = C0 * r[1] + F;
+    c[1 * s] = r[2];
+    cr[1 * s] = C2 * r[3] + F;
+    c[2 * s] = r[4];
+    cr[2 * s] = C4 * r[5] + F;
+    c[3 * s] = r[6];
+    cr[3 * s] = C6 * r[7] + F;
+    c[4 * s] = r[8];
+    cr[4 * s] = C8 * r[9] + F;
+    const int valid = (r[10] > C10 * r[11] + F) & (r[12] > C12 * r[13] + F) & (r[14] > C14 * r[15] + F) & (r[16] > C16 * r[17] + F) & (c[4 * s] < -cr[4 * s]) & (c[0] < -cr[0]);
+    const int idx = (((0) * 5 + sign_digit(c[3 * s], cr[3 * s])) * 5 + sign_digit(c[2 * s], cr[2 * s])) * 5 + sign_digit(c[1 * s], cr[1 * s]);
+    hat_s0_4(c, cr, s, h);
+    const int code = TAB4[idx * 125 + sign_digit(h[0], h[1] * RADIUS_FACTOR + HF4) * 25 + 24];
+    return valid ? (code >= 0 ? code : NEEDS_CERT) : -1;
 }
 
-/* Centre (Q c = -m, adjugate) and scale k = -m.c - M_dd of a prepared matrix (upper triangle). */
-static inline int centre4(const double *w, double *ctr, double *k) {
-    const double a00 = w[5] * w[10] - w[6] * w[6];
-    const double a01 = w[2] * w[6] - w[1] * w[10];
-    const double a02 = w[1] * w[6] - w[2] * w[5];
-    const double a11 = w[0] * w[10] - w[2] * w[2];
-    const double a12 = w[1] * w[2] - w[0] * w[6];
-    const double a22 = w[0] * w[5] - w[1] * w[1];
-    const double det = w[0] * a00 + w[1] * a01 + w[2] * a02;
-    const double m0 = w[3], m1 = w[7], m2 = w[11];
-    if (!(det > 0.0)) return 0;
+/* Centre (Q c = -m, adjugate) and scale k = -m.c - M_dd of a prepared matrix (upper triangle);
+ * returns det Q > 0. */
+static inline __attribute__((always_inline)) int centre4(const double *restrict w, double *restrict ctr, double *restrict k, const int64_t s) {
+    const double a00 = w[5 * s] * w[10 * s] - w[6 * s] * w[6 * s];
+    const double a01 = w[2 * s] * w[6 * s] - w[1 * s] * w[10 * s];
+    const double a02 = w[1 * s] * w[6 * s] - w[2 * s] * w[5 * s];
+    const double a11 = w[0 * s] * w[10 * s] - w[2 * s] * w[2 * s];
+    const double a12 = w[1 * s] * w[2 * s] - w[0 * s] * w[6 * s];
+    const double a22 = w[0 * s] * w[5 * s] - w[1 * s] * w[1 * s];
+    const double det = w[0 * s] * a00 + w[1 * s] * a01 + w[2 * s] * a02;
+    const double m0 = w[3 * s], m1 = w[7 * s], m2 = w[11 * s];
     ctr[0] = -(a00 * m0 + a01 * m1 + a02 * m2) / det;
     ctr[1] = -(a01 * m0 + a11 * m1 + a12 * m2) / det;
     ctr[2] = -(a02 * m0 + a12 * m1 + a22 * m2) / det;
-    *k = -(m0 * ctr[0] + m1 * ctr[1] + m2 * ctr[2]) - w[15];
-    return 1;
+    *k = -(m0 * ctr[0] + m1 * ctr[1] + m2 * ctr[2]) - w[15 * s];
+    return det > 0.0;
 }
 
-static inline double quad4(const double *w, const double *u) {
-    return w[0] * u[0] * u[0] + w[5] * u[1] * u[1] + w[10] * u[2] * u[2] + 2.0 * w[1] * u[0] * u[1] + 2.0 * w[2] * u[0] * u[2] + 2.0 * w[6] * u[1] * u[2];
+static inline __attribute__((always_inline)) double quad4(const double *restrict w, const double *restrict u, const int64_t s) {
+    return w[0 * s] * u[0] * u[0] + w[5 * s] * u[1] * u[1] + w[10 * s] * u[2] * u[2] + 2.0 * w[1 * s] * u[0] * u[1] + 2.0 * w[2 * s] * u[0] * u[2] + 2.0 * w[6 * s] * u[1] * u[2];
 }
 
-/* Certificates that do not need s0 (spheres, translated and homothetic copies): a rule or -1. */
-static inline int certify4(const double *wa, const double *wb, int rnd_a, int rnd_b, const double *c, const double *cr) {
-    double ca[3], cb[3], ka, kb, u[3], x[3], ra[16], rb[16], q[2];
-    if (!centre4(wa, ca, &ka) || !centre4(wb, cb, &kb)) return -1;
-    if (!(ka > 0.0 && kb > 0.0)) return -1;
-    for (int i = 0; i < 3; i++) u[i] = cb[i] - ca[i];
-    const double qa = quad4(wa, u), qb = quad4(wb, u);
-    double s = 0.0; /* concentric shapes: try A's centre */
-    if (qa > 0.0 && qb > 0.0) {
-        const double ta = sqrt(ka / qa), tb = sqrt(kb / qb);
-        const double T = (ta / tb) * (kb / ka);
-        if (T >= CERT_T_MIN && T <= CERT_T_MAX) {
-            pencil_at4(c, cr, T, q);
-            if (q[0] > q[1] * RADIUS_FACTOR + PAF4) return RULE_SEP;
-        }
-        s = ta / (ta + tb);
-    }
-    for (int i = 0; i < 3; i++) {
-        x[i] = ca[i] + s * u[i];
-        if (!(fabs(x[i]) <= TRANSLATE_MAX)) return -1;
-    }
-    for (int k = 0; k < 16; k++) {
-        ra[k] = rnd_a ? fabs(wa[k]) * LEAF_ROUNDING + LEAF_UNDERFLOW : 0.0;
-        rb[k] = rnd_b ? fabs(wb[k]) * LEAF_ROUNDING + LEAF_UNDERFLOW : 0.0;
-    }
-    form4(wa, ra, x, q);
-    if (!(q[0] < -(q[1] * RADIUS_FACTOR + FF4))) return -1;
-    form4(wb, rb, x, q);
-    if (!(q[0] < -(q[1] * RADIUS_FACTOR + FF4))) return -1;
-    return RULE_POINT;
+/* Certificates that do not need s0 (spheres, translated and homothetic copies): sep-witness,
+ * common-point or -1. Branch-free (vectorises over a block). */
+static inline __attribute__((always_inline)) int cert4(const double *restrict wa, const double *restrict wb, const int rnd_a,
+                                                       const int rnd_b, const double *restrict c, const double *restrict cr, const int64_t s) {
+    double ca[3], cb[3], ka, kb, u[3], x[3], ra[16], rb[16], q[2], fa[2], fb[2];
+    const int oka = centre4(wa, ca, &ka, s), okb = centre4(wb, cb, &kb, s);
+    u[0] = cb[0] - ca[0];
+    u[1] = cb[1] - ca[1];
+    u[2] = cb[2] - ca[2];
+    const double qa = quad4(wa, u, s), qb = quad4(wb, u, s);
+    const int ok = oka & okb & (ka > 0.0) & (kb > 0.0);
+    const int pos = (qa > 0.0) & (qb > 0.0);
+    /* every operation unconditional (NaN or inf where a guess makes no sense), then selects:
+     * no control flow, so the loop over the lanes of a block vectorises */
+    const double ta = sqrt(ka / qa), tb = sqrt(kb / qb);
+    const double T = (ta / tb) * (kb / ka);
+    const int tin = pos & (T >= CERT_T_MIN) & (T <= CERT_T_MAX);
+    pencil_at4(c, cr, tin ? T : 1.0, s, q);
+    const int sep = ok & tin & (q[0] > q[1] * RADIUS_FACTOR + PAF4);
+    const double tt = ta / (ta + tb);
+    const double st = pos ? tt : 0.0; /* concentric shapes: A's centre */
+    /* unrolled (no inner loops: the compiler would not unroll them in a body this large) */
+    x[0] = ca[0] + st * u[0];
+    x[1] = ca[1] + st * u[1];
+    x[2] = ca[2] + st * u[2];
+    const int xin = (fabs(x[0]) <= TRANSLATE_MAX) & (fabs(x[1]) <= TRANSLATE_MAX) & (fabs(x[2]) <= TRANSLATE_MAX);
+    x[0] = xin ? x[0] : 0.0;
+    x[1] = xin ? x[1] : 0.0;
+    x[2] = xin ? x[2] : 0.0;
+    const double ga = rnd_a ? LEAF_ROUNDING : 0.0, gb = rnd_b ? LEAF_ROUNDING : 0.0;
+    const double ha = rnd_a ? LEAF_UNDERFLOW : 0.0, hb = rnd_b ? LEAF_UNDERFLOW : 0.0;
+    /* radii of the entries: exactly 0 for exact entries (finite times 0) */
+    ra[0] = fabs(wa[0 * s]) * ga + ha;
+    rb[0] = fabs(wb[0 * s]) * gb + hb;
+    ra[1] = fabs(wa[1 * s]) * ga + ha;
+    rb[1] = fabs(wb[1 * s]) * gb + hb;
+    ra[2] = fabs(wa[2 * s]) * ga + ha;
+    rb[2] = fabs(wb[2 * s]) * gb + hb;
+    ra[3] = fabs(wa[3 * s]) * ga + ha;
+    rb[3] = fabs(wb[3 * s]) * gb + hb;
+    ra[4] = fabs(wa[4 * s]) * ga + ha;
+    rb[4] = fabs(wb[4 * s]) * gb + hb;
+    ra[5] = fabs(wa[5 * s]) * ga + ha;
+    rb[5] = fabs(wb[5 * s]) * gb + hb;
+    ra[6] = fabs(wa[6 * s]) * ga + ha;
+    rb[6] = fabs(wb[6 * s]) * gb + hb;
+    ra[7] = fabs(wa[7 * s]) * ga + ha;
+    rb[7] = fabs(wb[7 * s]) * gb + hb;
+    ra[8] = fabs(wa[8 * s]) * ga + ha;
+    rb[8] = fabs(wb[8 * s]) * gb + hb;
+    ra[9] = fabs(wa[9 * s]) * ga + ha;
+    rb[9] = fabs(wb[9 * s]) * gb + hb;
+    ra[10] = fabs(wa[10 * s]) * ga + ha;
+    rb[10] = fabs(wb[10 * s]) * gb + hb;
+    ra[11] = fabs(wa[11 * s]) * ga + ha;
+    rb[11] = fabs(wb[11 * s]) * gb + hb;
+    ra[12] = fabs(wa[12 * s]) * ga + ha;
+    rb[12] = fabs(wb[12 * s]) * gb + hb;
+    ra[13] = fabs(wa[13 * s]) * ga + ha;
+    rb[13] = fabs(wb[13 * s]) * gb + hb;
+    ra[14] = fabs(wa[14 * s]) * ga + ha;
+    rb[14] = fabs(wb[14 * s]) * gb + hb;
+    ra[15] = fabs(wa[15 * s]) * ga + ha;
+    rb[15] = fabs(wb[15 * s]) * gb + hb;
+    form4(wa, ra, x, s, fa); /* wa strided; the radii ra and the point x are this lane's */
+    form4(wb, rb, x, s, fb);
+    const int point = ok & xin & (fa[0] < -(fa[1] * RADIUS_FACTOR + FF4)) & (fb[0] < -(fb[1] * RADIUS_FACTOR + FF4));
+    return sep ? RULE_SEP : (point ? RULE_POINT : -1);
 }
 
-/* One pair: a rule id (>= 0) or -1 (the exact path decides). */
+/* One pair, every case: a rule id (>= 0) or -1 (the exact path decides). */
 static inline int pair4(const double *A, const double *B) {
     double wa[16] = {0}, wb[16] = {0}, c[4 + 1], cr[4 + 1];
     const int sa = prepare4(A, wa), sb = prepare4(B, wb);
     if (!sa || !sb) return -1;
-    const int code = core4(wa, wb, (sa == 2) | (sb == 2), c, cr);
-    if (code != -1) return code < 0 ? -1 : code;
-    return certify4(wa, wb, sa == 2, sb == 2, c, cr);
+    const int code = tree4(wa, wb, (sa == 2) | (sb == 2), c, cr, 1);
+    if (code != NEEDS_CERT) return code;
+    return cert4(wa, wb, sa == 2, sb == 2, c, cr, 1);
 }
 
-/* The common case without branches, so that the compiler vectorises the loop over pairs: both
- * matrices finite, symmetric (or within the tolerance), largest entry in [NO_SCALE_MIN, LEAF_MAX]
- * (no scaling). Same operations as prepare4 + core4 on such pairs, s0 computed for every pair
- * (a rule that does not need it ignores it: decide_signs stops before s0). Returns the rule id,
- * or -9: take pair4 (scaling, certificates, abstention). */
-static inline __attribute__((always_inline)) int fast4(const double *restrict a, const double *restrict b, const int64_t s) {
-    double wa[16], wb[16], r[18], c[4 + 1], cr[4 + 1], h[2];
-    const double ax00 = a[0 * s];
-    const double ax01 = a[1 * s];
-    const double ax02 = a[2 * s];
-    const double ax03 = a[3 * s];
-    const double ax11 = a[5 * s];
-    const double ax12 = a[6 * s];
-    const double ax13 = a[7 * s];
-    const double ax22 = a[10 * s];
-    const double ax23 = a[11 * s];
-    const double ax33 = a[15 * s];
-    const double ay01 = a[4 * s];
-    const double ay02 = a[8 * s];
-    const double ay03 = a[12 * s];
-    const double ay12 = a[9 * s];
-    const double ay13 = a[13 * s];
-    const double ay23 = a[14 * s];
+/* The fast path's prepare of one lane (branch-free): both matrices finite, M_00 != 0, largest
+ * entry within 2^-1000 .. 2^1000 (scaled by the same power of two as prepare4), symmetric or
+ * within a cheap sufficient tolerance test. Writes the prepared upper triangles with stride s
+ * (the same values as prepare4); returns eligibility, and which matrices are rounded. */
+static inline __attribute__((always_inline)) int fastprep4(const double *restrict a, const double *restrict b, const int64_t si,
+                                                           double *restrict wa, double *restrict wb, const int64_t s,
+                                                           int *restrict rnd_a, int *restrict rnd_b) {
+    const double ax00 = a[0 * si];
+    const double ax01 = a[1 * si];
+    const double ax02 = a[2 * si];
+    const double ax03 = a[3 * si];
+    const double ax11 = a[5 * si];
+    const double ax12 = a[6 * si];
+    const double ax13 = a[7 * si];
+    const double ax22 = a[10 * si];
+    const double ax23 = a[11 * si];
+    const double ax33 = a[15 * si];
+    const double ay01 = a[4 * si];
+    const double ay02 = a[8 * si];
+    const double ay03 = a[12 * si];
+    const double ay12 = a[9 * si];
+    const double ay13 = a[13 * si];
+    const double ay23 = a[14 * si];
     const double af = ax00 < 0.0 ? -1.0 : 1.0, ah = 0.5 * af;
     double amx = 0.0;
     amx = fabs(ax00) > amx ? fabs(ax00) : amx;
@@ -1504,7 +1595,13 @@ static inline __attribute__((always_inline)) int fast4(const double *restrict a,
     amx = fabs(ay12) > amx ? fabs(ay12) : amx;
     amx = fabs(ay13) > amx ? fabs(ay13) : amx;
     amx = fabs(ay23) > amx ? fabs(ay23) : amx;
-    const int aok = (ax00 != 0.0) & (0.00390625 <= amx) & (amx <= 256.0) & (ax00 == ax00) & (ax01 == ax01) & (ax02 == ax02) & (ax03 == ax03) & (ax11 == ax11) & (ax12 == ax12) & (ax13 == ax13) & (ax22 == ax22) & (ax23 == ax23) & (ax33 == ax33) & (ay01 == ay01) & (ay02 == ay02) & (ay03 == ay03) & (ay12 == ay12) & (ay13 == ay13) & (ay23 == ay23);
+    uint64_t amb;
+    memcpy(&amb, &amx, 8);
+    const uint64_t asb = (uint64_t)(1 - ((int64_t)((amb >> 52) & 0x7ff) - 1022) + 1023) << 52;
+    double ag;
+    memcpy(&ag, &asb, 8);
+    const double asc = (0.00390625 <= amx) & (amx <= 256.0) ? 1.0 : ag;
+    const int aok = (ax00 != 0.0) & (amx >= 0x1p-1000) & (amx <= 0x1p+1000) & (ax00 == ax00) & (ax01 == ax01) & (ax02 == ax02) & (ax03 == ax03) & (ax11 == ax11) & (ax12 == ax12) & (ax13 == ax13) & (ax22 == ax22) & (ax23 == ax23) & (ax33 == ax33) & (ay01 == ay01) & (ay02 == ay02) & (ay03 == ay03) & (ay12 == ay12) & (ay13 == ay13) & (ay23 == ay23);
     const int syma = (ax01 == ay01) & (ax02 == ay02) & (ax03 == ay03) & (ax12 == ay12) & (ax13 == ay13) & (ax23 == ay23);
     const double ae01 = fabs(ax01) > fabs(ay01) ? fabs(ax01) : fabs(ay01);
     const double ae02 = fabs(ax02) > fabs(ay02) ? fabs(ax02) : fabs(ay02);
@@ -1513,32 +1610,32 @@ static inline __attribute__((always_inline)) int fast4(const double *restrict a,
     const double ae13 = fabs(ax13) > fabs(ay13) ? fabs(ax13) : fabs(ay13);
     const double ae23 = fabs(ax23) > fabs(ay23) ? fabs(ax23) : fabs(ay23);
     const int neara = ((ax01 == ay01) | ((ae01 >= 1e-270) & (fabs(ax01 - ay01) * 1.0000000000000009 <= ae01 * 9.536743164062492e-07))) & ((ax02 == ay02) | ((ae02 >= 1e-270) & (fabs(ax02 - ay02) * 1.0000000000000009 <= ae02 * 9.536743164062492e-07))) & ((ax03 == ay03) | ((ae03 >= 1e-270) & (fabs(ax03 - ay03) * 1.0000000000000009 <= ae03 * 9.536743164062492e-07))) & ((ax12 == ay12) | ((ae12 >= 1e-270) & (fabs(ax12 - ay12) * 1.0000000000000009 <= ae12 * 9.536743164062492e-07))) & ((ax13 == ay13) | ((ae13 >= 1e-270) & (fabs(ax13 - ay13) * 1.0000000000000009 <= ae13 * 9.536743164062492e-07))) & ((ax23 == ay23) | ((ae23 >= 1e-270) & (fabs(ax23 - ay23) * 1.0000000000000009 <= ae23 * 9.536743164062492e-07)));
-    wa[0] = ax00 * af;
-    wa[5] = ax11 * af;
-    wa[10] = ax22 * af;
-    wa[15] = ax33 * af;
-    wa[1] = syma ? ax01 * af : ax01 * ah + ay01 * ah;
-    wa[2] = syma ? ax02 * af : ax02 * ah + ay02 * ah;
-    wa[3] = syma ? ax03 * af : ax03 * ah + ay03 * ah;
-    wa[6] = syma ? ax12 * af : ax12 * ah + ay12 * ah;
-    wa[7] = syma ? ax13 * af : ax13 * ah + ay13 * ah;
-    wa[11] = syma ? ax23 * af : ax23 * ah + ay23 * ah;
-    const double bx00 = b[0 * s];
-    const double bx01 = b[1 * s];
-    const double bx02 = b[2 * s];
-    const double bx03 = b[3 * s];
-    const double bx11 = b[5 * s];
-    const double bx12 = b[6 * s];
-    const double bx13 = b[7 * s];
-    const double bx22 = b[10 * s];
-    const double bx23 = b[11 * s];
-    const double bx33 = b[15 * s];
-    const double by01 = b[4 * s];
-    const double by02 = b[8 * s];
-    const double by03 = b[12 * s];
-    const double by12 = b[9 * s];
-    const double by13 = b[13 * s];
-    const double by23 = b[14 * s];
+    wa[0 * s] = (ax00 * asc) * af;
+    wa[5 * s] = (ax11 * asc) * af;
+    wa[10 * s] = (ax22 * asc) * af;
+    wa[15 * s] = (ax33 * asc) * af;
+    wa[1 * s] = syma ? (ax01 * asc) * af : (ax01 * asc) * ah + (ay01 * asc) * ah;
+    wa[2 * s] = syma ? (ax02 * asc) * af : (ax02 * asc) * ah + (ay02 * asc) * ah;
+    wa[3 * s] = syma ? (ax03 * asc) * af : (ax03 * asc) * ah + (ay03 * asc) * ah;
+    wa[6 * s] = syma ? (ax12 * asc) * af : (ax12 * asc) * ah + (ay12 * asc) * ah;
+    wa[7 * s] = syma ? (ax13 * asc) * af : (ax13 * asc) * ah + (ay13 * asc) * ah;
+    wa[11 * s] = syma ? (ax23 * asc) * af : (ax23 * asc) * ah + (ay23 * asc) * ah;
+    const double bx00 = b[0 * si];
+    const double bx01 = b[1 * si];
+    const double bx02 = b[2 * si];
+    const double bx03 = b[3 * si];
+    const double bx11 = b[5 * si];
+    const double bx12 = b[6 * si];
+    const double bx13 = b[7 * si];
+    const double bx22 = b[10 * si];
+    const double bx23 = b[11 * si];
+    const double bx33 = b[15 * si];
+    const double by01 = b[4 * si];
+    const double by02 = b[8 * si];
+    const double by03 = b[12 * si];
+    const double by12 = b[9 * si];
+    const double by13 = b[13 * si];
+    const double by23 = b[14 * si];
     const double bf = bx00 < 0.0 ? -1.0 : 1.0, bh = 0.5 * bf;
     double bmx = 0.0;
     bmx = fabs(bx00) > bmx ? fabs(bx00) : bmx;
@@ -1557,7 +1654,13 @@ static inline __attribute__((always_inline)) int fast4(const double *restrict a,
     bmx = fabs(by12) > bmx ? fabs(by12) : bmx;
     bmx = fabs(by13) > bmx ? fabs(by13) : bmx;
     bmx = fabs(by23) > bmx ? fabs(by23) : bmx;
-    const int bok = (bx00 != 0.0) & (0.00390625 <= bmx) & (bmx <= 256.0) & (bx00 == bx00) & (bx01 == bx01) & (bx02 == bx02) & (bx03 == bx03) & (bx11 == bx11) & (bx12 == bx12) & (bx13 == bx13) & (bx22 == bx22) & (bx23 == bx23) & (bx33 == bx33) & (by01 == by01) & (by02 == by02) & (by03 == by03) & (by12 == by12) & (by13 == by13) & (by23 == by23);
+    uint64_t bmb;
+    memcpy(&bmb, &bmx, 8);
+    const uint64_t bsb = (uint64_t)(1 - ((int64_t)((bmb >> 52) & 0x7ff) - 1022) + 1023) << 52;
+    double bg;
+    memcpy(&bg, &bsb, 8);
+    const double bsc = (0.00390625 <= bmx) & (bmx <= 256.0) ? 1.0 : bg;
+    const int bok = (bx00 != 0.0) & (bmx >= 0x1p-1000) & (bmx <= 0x1p+1000) & (bx00 == bx00) & (bx01 == bx01) & (bx02 == bx02) & (bx03 == bx03) & (bx11 == bx11) & (bx12 == bx12) & (bx13 == bx13) & (bx22 == bx22) & (bx23 == bx23) & (bx33 == bx33) & (by01 == by01) & (by02 == by02) & (by03 == by03) & (by12 == by12) & (by13 == by13) & (by23 == by23);
     const int symb = (bx01 == by01) & (bx02 == by02) & (bx03 == by03) & (bx12 == by12) & (bx13 == by13) & (bx23 == by23);
     const double be01 = fabs(bx01) > fabs(by01) ? fabs(bx01) : fabs(by01);
     const double be02 = fabs(bx02) > fabs(by02) ? fabs(bx02) : fabs(by02);
@@ -1566,64 +1669,50 @@ static inline __attribute__((always_inline)) int fast4(const double *restrict a,
     const double be13 = fabs(bx13) > fabs(by13) ? fabs(bx13) : fabs(by13);
     const double be23 = fabs(bx23) > fabs(by23) ? fabs(bx23) : fabs(by23);
     const int nearb = ((bx01 == by01) | ((be01 >= 1e-270) & (fabs(bx01 - by01) * 1.0000000000000009 <= be01 * 9.536743164062492e-07))) & ((bx02 == by02) | ((be02 >= 1e-270) & (fabs(bx02 - by02) * 1.0000000000000009 <= be02 * 9.536743164062492e-07))) & ((bx03 == by03) | ((be03 >= 1e-270) & (fabs(bx03 - by03) * 1.0000000000000009 <= be03 * 9.536743164062492e-07))) & ((bx12 == by12) | ((be12 >= 1e-270) & (fabs(bx12 - by12) * 1.0000000000000009 <= be12 * 9.536743164062492e-07))) & ((bx13 == by13) | ((be13 >= 1e-270) & (fabs(bx13 - by13) * 1.0000000000000009 <= be13 * 9.536743164062492e-07))) & ((bx23 == by23) | ((be23 >= 1e-270) & (fabs(bx23 - by23) * 1.0000000000000009 <= be23 * 9.536743164062492e-07)));
-    wb[0] = bx00 * bf;
-    wb[5] = bx11 * bf;
-    wb[10] = bx22 * bf;
-    wb[15] = bx33 * bf;
-    wb[1] = symb ? bx01 * bf : bx01 * bh + by01 * bh;
-    wb[2] = symb ? bx02 * bf : bx02 * bh + by02 * bh;
-    wb[3] = symb ? bx03 * bf : bx03 * bh + by03 * bh;
-    wb[6] = symb ? bx12 * bf : bx12 * bh + by12 * bh;
-    wb[7] = symb ? bx13 * bf : bx13 * bh + by13 * bh;
-    wb[11] = symb ? bx23 * bf : bx23 * bh + by23 * bh;
+    wb[0 * s] = (bx00 * bsc) * bf;
+    wb[5 * s] = (bx11 * bsc) * bf;
+    wb[10 * s] = (bx22 * bsc) * bf;
+    wb[15 * s] = (bx33 * bsc) * bf;
+    wb[1 * s] = symb ? (bx01 * bsc) * bf : (bx01 * bsc) * bh + (by01 * bsc) * bh;
+    wb[2 * s] = symb ? (bx02 * bsc) * bf : (bx02 * bsc) * bh + (by02 * bsc) * bh;
+    wb[3 * s] = symb ? (bx03 * bsc) * bf : (bx03 * bsc) * bh + (by03 * bsc) * bh;
+    wb[6 * s] = symb ? (bx12 * bsc) * bf : (bx12 * bsc) * bh + (by12 * bsc) * bh;
+    wb[7 * s] = symb ? (bx13 * bsc) * bf : (bx13 * bsc) * bh + (by13 * bsc) * bh;
+    wb[11 * s] = symb ? (bx23 * bsc) * bf : (bx23 * bsc) * bh + (by23 * bsc) * bh;
     const int eligible = aok & bok & (syma | neara) & (symb | nearb);
-    pencil4(wa, wb, r);
-    const int rounded = !(syma & symb);
-    /* constants chosen by selects on unconditional loads: no control flow, the loop vectorises */
-    const double F = rounded ? PFR4 : PF4;
-    const double C0 = rounded ? PCR4[0] : PC4[0];
-    const double C2 = rounded ? PCR4[2] : PC4[2];
-    const double C4 = rounded ? PCR4[4] : PC4[4];
-    const double C6 = rounded ? PCR4[6] : PC4[6];
-    const double C8 = rounded ? PCR4[8] : PC4[8];
-    const double C10 = rounded ? PCR4[10] : PC4[10];
-    const double C12 = rounded ? PCR4[12] : PC4[12];
-    const double C14 = rounded ? PCR4[14] : PC4[14];
-    const double C16 = rounded ? PCR4[16] : PC4[16];
-    c[0] = r[0];
-    cr[0] = C0 * r[1] + F;
-    c[1] = r[2];
-    cr[1] = C2 * r[3] + F;
-    c[2] = r[4];
-    cr[2] = C4 * r[5] + F;
-    c[3] = r[6];
-    cr[3] = C6 * r[7] + F;
-    c[4] = r[8];
-    cr[4] = C8 * r[9] + F;
-    const int valid = eligible & (r[10] > C10 * r[11] + F) & (r[12] > C12 * r[13] + F) & (r[14] > C14 * r[15] + F) & (r[16] > C16 * r[17] + F) & (c[4] < -cr[4]) & (c[0] < -cr[0]);
-    const int idx = (((0) * 5 + sign_digit(c[3], cr[3])) * 5 + sign_digit(c[2], cr[2])) * 5 + sign_digit(c[1], cr[1]);
-    hat_s0_4(c, cr, h);
-    const int code = TAB4[idx * 125 + sign_digit(h[0], h[1] * RADIUS_FACTOR + HF4) * 25 + 24];
-    return (valid & (code >= 0)) ? code : -9;
+    *rnd_a = !syma;
+    *rnd_b = !symb;
+    return eligible;
 }
 
-/* count contiguous pairs (count, 4, 4) of float64 -> rule ids (int8, -1 undecided). Blocks of
- * BLOCK pairs are transposed to structure-of-arrays first, so that the branch-free fast path
- * reads consecutive lanes and vectorises; the rare pairs it leaves go through pair4. */
+/* count contiguous pairs (count, 4, 4) of float64 -> rule ids (int8, -1 undecided). */
 void classify4(const double *A, const double *B, signed char *out, int64_t count) {
     int64_t i = 0;
     for (; i + BLOCK <= count; i += BLOCK) {
-        double sa[16 * BLOCK], sb[16 * BLOCK];
+        double sa[16 * BLOCK], sb[16 * BLOCK], wa[16 * BLOCK], wb[16 * BLOCK];
+        double c[(4 + 1) * BLOCK], cr[(4 + 1) * BLOCK];
+        int res[BLOCK], ra[BLOCK], rb[BLOCK];
         for (int p = 0; p < BLOCK; p++)
             for (int k = 0; k < 16; k++) {
                 sa[k * BLOCK + p] = A[(i + p) * 16 + k];
                 sb[k * BLOCK + p] = B[(i + p) * 16 + k];
             }
-        int res[BLOCK]; /* int lanes: the vectoriser then uses the full double-vector width */
-        for (int p = 0; p < BLOCK; p++) res[p] = fast4(sa + p, sb + p, BLOCK);
+        for (int p = 0; p < BLOCK; p++) {
+            const int ok = fastprep4(sa + p, sb + p, BLOCK, wa + p, wb + p, BLOCK, ra + p, rb + p);
+            const int code = tree4(wa + p, wb + p, ra[p] | rb[p], c + p, cr + p, BLOCK);
+            res[p] = ok ? code : NEEDS_PAIR;
+            res[p] = res[p] == -1 ? NEEDS_PAIR : res[p]; /* validity not certified here: pair4 rescales */
+        }
+        int need = 0;
+        for (int p = 0; p < BLOCK; p++) need |= res[p] == NEEDS_CERT;
+        if (need) /* only blocks with undecided lanes pay for the certificates (spheres, copies) */
+            for (int p = 0; p < BLOCK; p++) {
+                const int cc = cert4(wa + p, wb + p, ra[p], rb[p], c + p, cr + p, BLOCK);
+                res[p] = res[p] == NEEDS_CERT ? (cc >= 0 ? cc : -1) : res[p];
+            }
         for (int p = 0; p < BLOCK; p++) out[i + p] = (signed char)res[p];
     }
-    for (; i < count; i++) out[i] = (signed char)fast4(A + (int64_t)16 * i, B + (int64_t)16 * i, 1);
+    for (; i < count; i++) out[i] = (signed char)pair4(A + (int64_t)16 * i, B + (int64_t)16 * i);
     for (int64_t j = 0; j < count; j++)
-        if (out[j] == -9) out[j] = (signed char)pair4(A + (int64_t)16 * j, B + (int64_t)16 * j);
+        if (out[j] == NEEDS_PAIR) out[j] = (signed char)pair4(A + (int64_t)16 * j, B + (int64_t)16 * j);
 }

@@ -27,7 +27,9 @@ from flint import (
     fmpz_poly,  # noqa: F401  (used by the doctests)
 )
 
-from .qsqrt import QSqrtPoly, _poly, _sgn, _to_float
+from .qsqrt import QSqrtPoly, _poly
+from .rationals import sign as _sgn
+from .rationals import to_float as _to_float
 
 __all__ = ["RealAlgebraic", "sign_at"]
 

@@ -19,9 +19,9 @@ from typing import Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
-from .exact import classify_exact
 from . import compiled
 from .decision import RULE_RELATION
+from .exact import classify_exact
 from .filters import classify_float
 from .quadrics import validate_quadric
 from .rationals import to_fmpq

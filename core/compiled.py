@@ -40,10 +40,18 @@ FLAGS: tuple[str, ...] = (
     "-std=c99",
     "-ffp-contract=off",
     "-fno-fast-math",
+    "-fno-math-errno",
+    "-fno-trapping-math",
     "-fPIC",
     "-shared",
 )
-"""Compiler flags: optimise for this CPU, but never fuse or reassociate floating-point operations."""
+"""Compiler flags: optimise for this CPU, but never fuse or reassociate floating-point operations.
+
+``-fno-math-errno`` and ``-fno-trapping-math`` only let the compiler assume that sqrt need not
+set errno and that floating-point exceptions are not trapped (so it may evaluate both sides of a
+select and vectorise the branch-free loops); the value of every operation is unchanged, which is
+all the error bounds rely on. Value-changing options (-ffast-math, -fassociative-math,
+-ffinite-math-only, contraction into FMA) stay off."""
 
 PORTABLE_FLAGS: tuple[str, ...] = ("-O2", "-std=c99", "-ffp-contract=off", "-fno-fast-math", "-fPIC", "-shared")
 """Fallback for compilers that do not know a flag of FLAGS (same guarantees, less speed)."""

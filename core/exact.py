@@ -22,13 +22,11 @@ from .quadrics import (
     interior_sign,
     normalised_quadratic_part,
 )
+from .rationals import sign
 from .subresultants import hat_s0, hat_s1, hat_s10
 
 __all__ = ["ExactPair", "classify_exact", "exact_pair", "integer_matrix"]
 
-
-def _sign(x: Any) -> int:
-    return (x > 0) - (x < 0)
 
 
 def integer_matrix(M: list[list[fmpq]]) -> list[list[fmpz]]:
@@ -68,10 +66,10 @@ class ExactPair:
         a = self.coefficients
         return decide(
             self.n,
-            [_sign(a[i]) for i in range(self.n, -1, -1)],
-            lambda: _sign(self.hat("s0")),
-            lambda: _sign(self.hat("s1")),
-            lambda: _sign(self.hat("s10")),
+            [sign(a[i]) for i in range(self.n, -1, -1)],
+            lambda: sign(self.hat("s0")),
+            lambda: sign(self.hat("s1")),
+            lambda: sign(self.hat("s10")),
         )
 
 
@@ -105,10 +103,10 @@ def _float_int_matrix(M: Any) -> list[list[int]] | None:
                     return None  # beyond rounding: the general path raises with the message
     ints = [[ints[i][j] + ints[j][i] for j in range(n)] for i in range(n)]
     minors = [determinant([row[:k] for row in ints[:k]]) for k in range(1, n)]
-    sign = interior_sign([(d > 0) - (d < 0) for d in minors])
-    if sign is None:
+    orient = interior_sign([sign(d) for d in minors])
+    if orient is None:
         return None
-    return ints if sign == 1 else [[-v for v in row] for row in ints]
+    return ints if orient == 1 else [[-v for v in row] for row in ints]
 
 
 def exact_pair(A: Any, B: Any, *, scaled: bool = True) -> ExactPair:
@@ -139,8 +137,8 @@ def exact_pair(A: Any, B: Any, *, scaled: bool = True) -> ExactPair:
     else:
         coeffs = pencil_coefficients(EA, EB)
     # det A = a_n and det B = a_0 (up to positive factors): the last validity check, for free
-    check_determinant_sign(_sign(coeffs[n]), n, "A")
-    check_determinant_sign(_sign(coeffs[0]), n, "B")
+    check_determinant_sign(sign(coeffs[n]), n, "A")
+    check_determinant_sign(sign(coeffs[0]), n, "B")
     return ExactPair(EA, EB, coeffs, {})
 
 

@@ -16,7 +16,7 @@ from flint import fmpq
 
 from .decision import RULES, sign_variations
 from .exact import exact_pair
-from .rationals import format_rational, to_float
+from .rationals import format_rational, sign, to_float
 from .relation import Relation
 from .subresultants import hat_scale
 
@@ -70,9 +70,6 @@ class Explanation:
         return d
 
 
-def _sign(x: Any) -> int:
-    return (x > 0) - (x < 0)
-
 
 def display_float(v: fmpq) -> float | None:
     """The nearest float of an exact value, or None when it does not fit (overflow, or a nonzero
@@ -85,7 +82,7 @@ def display_float(v: fmpq) -> float | None:
 
 
 def _q(name: str, v: fmpq) -> Quantity:
-    return Quantity(name, display_float(v), str(v), None, _sign(v), format_rational(v))
+    return Quantity(name, display_float(v), str(v), None, sign(v), format_rational(v))
 
 
 def explain(A: Any, B: Any) -> Explanation:
@@ -120,7 +117,7 @@ def explain(A: Any, B: Any) -> Explanation:
         certified_by="exact",
         rule=dec.rule,
         rule_text=RULES[dec.rule],
-        var=sign_variations([_sign(x) for x in reversed(a)]),
+        var=sign_variations([sign(x) for x in reversed(a)]),
         coefficients=coeffs,
         s0=subs["s0"],
         s1=subs["s1"],

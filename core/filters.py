@@ -27,7 +27,15 @@ from flint import fmpq
 
 from . import _kernels as K
 from . import compiled
-from .decision import NEED_S0, RULE_LIST, RULE_RELATION, TABLE3, TABLE4, rule_by_key, sign_variations
+from .decision import (
+    NEED_S0,
+    RULE_LIST,
+    RULE_RELATION,
+    TABLE3,
+    TABLE4,
+    rule_by_key,
+    sign_variations,
+)
 from .errorbound import LEAF_MAX, NO_SCALE_MIN, RADIUS_FACTOR, TRANSLATE_MAX
 from .kernelgen import CERT_T_MAX, CERT_T_MIN
 from .quadrics import SYMMETRY_TOLERANCE

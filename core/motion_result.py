@@ -30,9 +30,6 @@ sides (touch and leave); endpoint: tangent at a finite end of I."""
 _SIGN = {1: "+", 0: "0", -1: "-"}
 
 
-def _sgn(x: Any) -> int:
-    return (x > 0) - (x < 0)
-
 
 def _alg_dict(a: RealAlgebraic | None, digits: int) -> dict[str, Any] | None:
     if a is None:
@@ -181,6 +178,9 @@ class MotionAnalysis:
     B: Motion
     matrices: tuple[list[list[QSqrtPoly]], list[list[QSqrtPoly]]]
     """The denominator-free matrices (positive multiples of A(t), B(t) on I)."""
+    paper_case: str = ""
+    """The paper's case: "3.4(1)", "3.4(2)" for ellipses; "4.4.1", "4.4.2(1)".."4.4.2(3)",
+    "4.4.3(1)", "4.4.3(2)" for ellipsoids (see :func:`core.parametric.analyse`)."""
     _points: list[RealAlgebraic] = field(default_factory=list, repr=False)
     _point_rel: list[Relation] = field(default_factory=list, repr=False)
     _seg_rel: list[Relation] = field(default_factory=list, repr=False)
@@ -311,6 +311,7 @@ class MotionAnalysis:
             "dimension": self.n - 1,
             "interval": [None if lo is None else str(lo), None if hi is None else str(hi)],
             "case": self.case,
+            "paper_case": self.paper_case,
             "sqrt_d": self.sqrt_d,
             "digits": self.digits,
             "events": [e.to_dict(self.digits) for e in self.events],

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from flint import fmpq, fmpq_poly
@@ -36,16 +37,13 @@ from .motions import as_motion
 from .pencil import determinant, pencil_coefficients
 from .qsqrt import QSqrtPoly
 from .quadrics import interior_sign, not_a_quadric_message
-from .rationals import to_fmpq
+from .rationals import sign, to_fmpq
 from .realroots import real_roots
 from .relation import Relation
 from .subresultants import hat_s0, hat_s1, hat_s10, hat_scale
 
 __all__ = ["analyse", "decide_at", "sign_row_at", "MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
 
-
-def _sgn(x: Any) -> int:
-    return (x > 0) - (x < 0)
 
 # -------------------------------------------------------------------------------------------
 # preparation: exact denominator-free matrices valid on I
@@ -116,18 +114,18 @@ def _polynomial_matrix(
                 f"(its {what} vanishes there)"
             )
     signs = [m.sign_at_rational(t0) for m in minors]  # constant on I: no root there
-    sign = interior_sign(signs[:k])
-    if sign is None:
+    orient = interior_sign(signs[:k])
+    if orient is None:
         raise ValueError(
             f"{name} is not an {shape} anywhere in {where} "
             f"(its quadratic part is indefinite: {not_a_quadric_message(name, k + 1).split('(')[-1].rstrip(')')})"
         )
-    if signs[k] * sign ** (k + 1) >= 0:  # det of the normalised matrix must be negative
+    if signs[k] * orient ** (k + 1) >= 0:  # det of the normalised matrix must be negative
         raise ValueError(f"{name} is not an {shape} anywhere in {where} (its determinant has the wrong sign: no real points)")
-    if sign < 0:
+    if orient < 0:
         P = [[-e for e in row] for row in P]
-    lam = den * sign  # P = lam * M, normalised on all of I
-    return P, lam * _sgn(lam(t0))  # |lam| on I: P = |lam| * (normalised M)
+    lam = den * orient  # P = lam * M, normalised on all of I
+    return P, lam * sign(lam(t0))  # |lam| on I: P = |lam| * (normalised M)
 
 
 def _canonical_pencil(a: list[QSqrtPoly], lamA: fmpq_poly, lamB: fmpq_poly, t0: fmpq) -> list[QSqrtPoly]:
@@ -156,8 +154,8 @@ def _canonical_pencil(a: list[QSqrtPoly], lamA: fmpq_poly, lamB: fmpq_poly, t0: 
         c = c.gcd(p.p).gcd(p.q)
     if c.is_zero():
         return out
-    cs = _sgn(c(t0))
-    if _sgn(L(t0)) < 0:
+    cs = sign(c(t0))
+    if sign(L(t0)) < 0:
         cs = -cs
     # divide by c (and flip by the sign of L / c on I); normalise the scale to integers
     res = [QSqrtPoly(p.p // c, p.q // c, p.d) * cs for p in out]
@@ -308,11 +306,81 @@ def analyse(
     """
     if not isinstance(digits, int) or isinstance(digits, bool) or not 1 <= digits <= 1000:
         raise ValueError(f"digits must be an integer in 1..1000, got {digits!r}")
+    lo, hi = _read_interval(interval)
+    pencil = _motion_pencil(A_t, B_t, lo, hi)
+    case = _paper_case(pencil, lo, hi)
+    cands = real_roots(case.candidates, lo, hi) if case.candidates is not None else []
+    _separate(cands)
+    points = [_decide_point(pencil, alpha, case.zero_at_candidates, digits) for alpha in cands]
+    segments = _decide_segments(pencil, case, cands, lo, hi)
+    events, roots, breaks = _events(cands, points, segments, digits)
+    res = MotionAnalysis(
+        n=pencil.n,
+        interval=(lo, hi),
+        case=case.name,
+        events=events,
+        roots=roots,
+        intervals=_intervals(cands, segments, breaks, lo, hi),
+        sign_table=_sign_table(cands, points, segments),
+        a=pencil.a,
+        s0=pencil.s0,
+        s1=pencil.s1,
+        s10=pencil.s10,
+        sqrt_d=pencil.sqrt_d,
+        digits=digits,
+        A=pencil.A,
+        B=pencil.B,
+        matrices=pencil.matrices,
+        paper_case=case.paper,
+    )
+    res._points = list(cands)
+    res._point_rel = [p.relation for p in points]
+    # empty end segments take the relation of the point itself (never queried strictly inside)
+    res._seg_rel = [
+        sg.relation if sg.relation != Relation.UNDECIDED else points[0 if k == 0 else -1].relation
+        for k, sg in enumerate(segments)
+    ]
+    res._his = [c.hi for c in cands]
+    return res
+
+
+# -------------------------------------------------------------------------------------------
+# the steps of analyse
+
+
+def _read_interval(interval: Any) -> tuple[fmpq | None, fmpq | None]:
+    """I = [lo, hi] from numbers, exact strings or None / inf (infinite ends)."""
     if isinstance(interval, str) or not isinstance(interval, Sequence) or len(interval) != 2:
         raise ValueError(f"interval must be a pair (lo, hi), got {interval!r}")
     lo, hi = _read_end(interval[0], "lo"), _read_end(interval[1], "hi")
     if lo is not None and hi is not None and not lo < hi:
         raise ValueError(f"empty interval: need lo < hi, got [{lo}, {hi}]")
+    return lo, hi
+
+
+@dataclass
+class _MotionPencil:
+    """P(t, T) of the pair on I: its coefficients a_i(t) and the hat subresultants ŝ_j(t)."""
+
+    n: int
+    a: list[QSqrtPoly]
+    s0: QSqrtPoly
+    s1: QSqrtPoly
+    s10: QSqrtPoly
+    sqrt_d: int
+    A: Any
+    B: Any
+    matrices: tuple[Any, Any]
+
+    @property
+    def polys(self) -> dict[str, QSqrtPoly]:
+        out = {f"a{i}": p for i, p in enumerate(self.a)}
+        out.update(s0=self.s0, s1=self.s1, s10=self.s10)
+        return out
+
+
+def _motion_pencil(A_t: Any, B_t: Any, lo: fmpq | None, hi: fmpq | None) -> _MotionPencil:
+    """Read both motions, clear denominators, check validity on I, build a_i(t) and ŝ_j(t)."""
     mA, mB = as_motion(A_t), as_motion(B_t)
     if mA.dim != mB.dim:
         raise ValueError(f"A is {mA.dim + 1}x{mA.dim + 1} but B is {mB.dim + 1}x{mB.dim + 1}: both ellipses or both ellipsoids")
@@ -324,40 +392,102 @@ def analyse(
     a = _canonical_pencil(pencil_coefficients(PA, PB), lamA, lamB, _sample_in(lo, hi))
     n = len(a) - 1
     c0, c1, c10 = hat_scale(n)
-    s0 = hat_s0(a).scale_positive(fmpq(c0.numerator, c0.denominator))
-    s1 = hat_s1(a).scale_positive(fmpq(c1.numerator, c1.denominator))
-    s10 = hat_s10(a).scale_positive(fmpq(c10.numerator, c10.denominator))
-    polys = {f"a{i}": p for i, p in enumerate(a)}
-    polys.update(s0=s0, s1=s1, s10=s10)
+    return _MotionPencil(
+        n=n,
+        a=a,
+        s0=hat_s0(a).scale_positive(fmpq(c0.numerator, c0.denominator)),
+        s1=hat_s1(a).scale_positive(fmpq(c1.numerator, c1.denominator)),
+        s10=hat_s10(a).scale_positive(fmpq(c10.numerator, c10.denominator)),
+        sqrt_d=max(dA, dB),
+        A=mA,
+        B=mB,
+        matrices=(PA, PB),
+    )
 
-    if not s0.is_zero():
-        case, cands, known_zero = "s0", real_roots(s0, lo, hi), {"s0"}
-    elif not s1.is_zero():
-        case, cands, known_zero = "s1", real_roots(s1, lo, hi), {"s0", "s1"}
-    else:
-        case, cands, known_zero = "none", [], {"s0", "s1"}
-    _separate(cands)
 
-    # relation at each candidate, and on each open segment between consecutive breakpoints
-    table: list[SignRow] = []
-    point_rel, point_rule = [], []
-    for alpha in cands:
-        sg = _Signs(polys, alpha, known_zero)
-        dec = _decide_at(n, sg)
-        point_rel.append(dec.relation)
-        point_rule.append(dec.rule)
-        table.append(_row("point", alpha.decimal(digits), n, sg, dec))
-    seg_rel: list[Relation] = []
-    seg_sample: list[fmpq] = []
-    seg_rows: list[SignRow] = []
+@dataclass
+class _Case:
+    """Which case of the paper applies, and where the relation can change."""
+
+    name: str
+    """"s0", "s1" or "none": the polynomial whose roots are the candidates (JSON ``case``)."""
+    paper: str
+    """The paper's name: 3.4(1), 3.4(2) for ellipses; 4.4.1, 4.4.2(1..3), 4.4.3(1..2)."""
+    candidates: QSqrtPoly | None
+    identically_zero: set[str]
+    """Hat subresultants identically zero in this case (their sign is 0 everywhere)."""
+
+    @property
+    def zero_at_candidates(self) -> set[str]:
+        """Also the candidate polynomial itself vanishes at its roots."""
+        return self.identically_zero | ({self.name} if self.name != "none" else set())
+
+
+def _paper_case(pencil: _MotionPencil, lo: fmpq | None, hi: fmpq | None) -> _Case:
+    """Sections 3.4 and 4.4: the real roots of s0(t) are the only times the relation can change
+    (4.4.1, 3.4(1)); if s0 vanishes identically, those of s1(t) (4.4.2; for ellipses 3.4(2):
+    tangent or overlapping on all of I); if s1 does too, none (4.4.3). The sub-case of 4.4.2
+    (signs of s1, s1,0 at a point alpha where neither vanishes) and of 4.4.3 (Var at alpha)
+    is named for the reader; the decisions below do not depend on it (each point and interval
+    is decided by the tree itself)."""
+    if not pencil.s0.is_zero():
+        return _Case("s0", "4.4.1" if pencil.n == 4 else "3.4(1)", pencil.s0, set())
+    alpha = _sample_in(lo, hi)
+    if not pencil.s1.is_zero():
+        if pencil.n == 3:
+            return _Case("s1", "3.4(2)", pencil.s1, {"s0"})
+        # an alpha in I where s1 and s1,0 do not vanish (they have the same real roots, Lemma 17)
+        for k in range(64):
+            if pencil.s1.sign_at_rational(alpha) != 0 and pencil.s10.sign_at_rational(alpha) != 0:
+                break
+            alpha = _strictly_between(alpha, hi if hi is not None else alpha + 1 + k)
+        s1a, s10a = pencil.s1.sign_at_rational(alpha), pencil.s10.sign_at_rational(alpha)
+        sub = "1" if s1a > 0 else ("2" if s10a > 0 else "3")
+        return _Case("s1", f"4.4.2({sub})", pencil.s1, {"s0"})
+    if pencil.n == 3:
+        return _Case("none", "3.4(2)", None, {"s0", "s1"})
+    signs = [pencil.a[i].sign_at_rational(alpha) for i in range(pencil.n, -1, -1)]
+    return _Case("none", "4.4.3(1)" if sign_variations(signs) == 2 else "4.4.3(2)", None, {"s0", "s1"})
+
+
+@dataclass
+class _Point:
+    """The decision at one candidate root."""
+
+    relation: Relation
+    rule: str
+    row: SignRow
+
+
+@dataclass
+class _Segment:
+    """The decision on one open interval between consecutive candidates (UNDECIDED: empty)."""
+
+    relation: Relation
+    sample: fmpq
+    row: SignRow | None
+
+
+def _decide_point(pencil: _MotionPencil, alpha: RealAlgebraic, known_zero: set[str], digits: int) -> _Point:
+    sg = _Signs(pencil.polys, alpha, known_zero)
+    dec = _decide_at(pencil.n, sg)
+    return _Point(dec.relation, dec.rule, _row("point", alpha.decimal(digits), pencil.n, sg, dec))
+
+
+def _decide_segments(
+    pencil: _MotionPencil, case: _Case, cands: list[RealAlgebraic], lo: fmpq | None, hi: fmpq | None
+) -> list[_Segment]:
+    """The relation on each open interval between consecutive candidates (exact signs at a
+    rational sample point; constant there by continuity, paper 3.4/4.4)."""
+    zero = case.identically_zero
+    out: list[_Segment] = []
     for i in range(len(cands) + 1):
         left = cands[i - 1].hi if i > 0 else lo
         right = cands[i].lo if i < len(cands) else hi
         if (i == 0 and cands and lo is not None and cands[0].compare(lo) == 0) or (
             i == len(cands) and cands and hi is not None and cands[-1].compare(hi) == 0
         ):
-            seg_rel.append(Relation.UNDECIDED)  # empty: the candidate is the end of I
-            seg_sample.append(fmpq(0))
+            out.append(_Segment(Relation.UNDECIDED, fmpq(0), None))  # empty: the candidate is the end of I
             continue
         if left is not None and right is not None and not left < right:
             # I's end inside a candidate's isolating interval: narrow it (the root is inside I)
@@ -369,73 +499,64 @@ def analyse(
             if not left < right:
                 raise RuntimeError("candidate isolating intervals overlap")
         t = _strictly_between(left, right)
-        sg = _Signs(polys, t, known_zero if case == "none" else ({"s0"} if case == "s1" else set()))
-        dec = _decide_at(n, sg)
-        seg_rel.append(dec.relation)
-        seg_sample.append(t)
-        seg_rows.append(_row("interval", str(t), n, sg, dec))
+        sg = _Signs(pencil.polys, t, zero)
+        dec = _decide_at(pencil.n, sg)
+        out.append(_Segment(dec.relation, t, _row("interval", str(t), pencil.n, sg, dec)))
+    return out
 
-    # events, non-event roots, merged intervals
+
+def _events(
+    cands: list[RealAlgebraic], points: list[_Point], segments: list[_Segment], digits: int
+) -> tuple[list[Event], list[Event], list[int]]:
+    """Tangency events (a candidate where the shapes touch and the relation changes or is left
+    again), the other candidates (roots), and the candidates that split intervals."""
     events: list[Event] = []
     roots: list[Event] = []
     breaks: list[int] = []
     for i, alpha in enumerate(cands):
-        before = seg_rel[i] if seg_rel[i] != Relation.UNDECIDED else None
-        after = seg_rel[i + 1] if seg_rel[i + 1] != Relation.UNDECIDED else None
-        rel = point_rel[i]
+        before = segments[i].relation if segments[i].relation != Relation.UNDECIDED else None
+        after = segments[i + 1].relation if segments[i + 1].relation != Relation.UNDECIDED else None
+        rel = points[i].relation
         sides = [r for r in (before, after) if r is not None]
         if rel == Relation.TANGENT and any(r != rel for r in sides):
             kind = "endpoint" if len(sides) < 2 else ("touch" if before == after else "change")
-            events.append(Event(alpha, rel, kind, before, after, alpha.decimal(digits), point_rule[i]))
+            events.append(Event(alpha, rel, kind, before, after, alpha.decimal(digits), points[i].rule))
             breaks.append(i)
         else:
-            roots.append(Event(alpha, rel, "root", before, after, alpha.decimal(digits), point_rule[i]))
+            roots.append(Event(alpha, rel, "root", before, after, alpha.decimal(digits), points[i].rule))
             if any(r != rel for r in sides):
                 breaks.append(i)  # not expected by the theory; keep the boundary honest
+    return events, roots, breaks
+
+
+def _intervals(
+    cands: list[RealAlgebraic], segments: list[_Segment], breaks: list[int], lo: fmpq | None, hi: fmpq | None
+) -> list[Interval]:
+    """Maximal open intervals of constant relation (segments merged across non-event roots)."""
     intervals: list[Interval] = []
     start_lo: RealAlgebraic | None = None if lo is None else RealAlgebraic.rational(lo)
     seg_idx = 0
     for b in breaks + [len(cands)]:
-        rel = next((seg_rel[k] for k in range(seg_idx, b + 1) if seg_rel[k] != Relation.UNDECIDED), None)
-        sample = next((seg_sample[k] for k in range(seg_idx, b + 1) if seg_rel[k] != Relation.UNDECIDED), None)
+        decided = [segments[k] for k in range(seg_idx, b + 1) if segments[k].relation != Relation.UNDECIDED]
         end_hi = cands[b] if b < len(cands) else (None if hi is None else RealAlgebraic.rational(hi))
-        if rel is not None and sample is not None:
-            intervals.append(Interval(start_lo, end_hi, rel, sample))
+        if decided:
+            intervals.append(Interval(start_lo, end_hi, decided[0].relation, decided[0].sample))
         if b < len(cands):
             start_lo = cands[b]
         seg_idx = b + 1
-    # interleave the table: point rows between the interval rows, in time order
+    return intervals
+
+
+def _sign_table(cands: list[RealAlgebraic], points: list[_Point], segments: list[_Segment]) -> list[SignRow]:
+    """Rows in time order: each decided interval's sample, then the candidate after it."""
     rows: list[SignRow] = []
-    seg_iter = iter(seg_rows)
     for i in range(len(cands) + 1):
-        if seg_rel[i] != Relation.UNDECIDED:
-            rows.append(next(seg_iter))
+        row = segments[i].row
+        if row is not None:
+            rows.append(row)
         if i < len(cands):
-            rows.append(table[i])
-    res = MotionAnalysis(
-        n=n,
-        interval=(lo, hi),
-        case=case,
-        events=events,
-        roots=roots,
-        intervals=intervals,
-        sign_table=rows,
-        a=a,
-        s0=s0,
-        s1=s1,
-        s10=s10,
-        sqrt_d=max(dA, dB),
-        digits=digits,
-        A=mA,
-        B=mB,
-        matrices=(PA, PB),
-    )
-    res._points = list(cands)
-    res._point_rel = point_rel
-    # empty end segments take the relation of the point itself (never queried strictly inside)
-    res._seg_rel = [r if r != Relation.UNDECIDED else point_rel[0 if k == 0 else -1] for k, r in enumerate(seg_rel)]
-    res._his = [c.hi for c in cands]
-    return res
+            rows.append(points[i].row)
+    return rows
 
 
 def _separate(cands: list[RealAlgebraic]) -> None:

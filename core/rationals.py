@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from flint import fmpq, fmpz
 
-__all__ = ["to_fmpq", "to_float", "format_rational", "MAX_NUMBER_CHARS", "MAX_DECIMAL_EXPONENT"]
+__all__ = ["to_fmpq", "to_float", "format_rational", "sign", "MAX_NUMBER_CHARS", "MAX_DECIMAL_EXPONENT"]
 
 MAX_NUMBER_CHARS = 400
 """Longest accepted number string (guards memory and time of a single conversion)."""
@@ -111,6 +111,16 @@ def to_fmpq(x: Any) -> fmpq:
     if isinstance(x, np.ndarray) and x.ndim == 0:
         return to_fmpq(x[()])
     raise ValueError(f"cannot read {type(x).__name__} {x!r} as a number")
+
+
+def sign(x: Any) -> int:
+    """-1, 0 or 1: the sign of any ordered number (int, fmpz, fmpq, Fraction, float).
+
+    Examples:
+        >>> sign(fmpq(-1, 3)), sign(0), sign(2.5)
+        (-1, 0, 1)
+    """
+    return (x > 0) - (x < 0)
 
 
 def to_float(q: Any) -> float:

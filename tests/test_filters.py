@@ -65,6 +65,79 @@ def test_pencil_error_bounds_hold(n):
             assert abs(fmpq(*float(v[i]).as_integer_ratio()) - c) <= fmpq(*float(bd[i]).as_integer_ratio())
 
 
+def _fq(x):
+    return fmpq(*float(x).as_integer_ratio())
+
+
+def _numpy_built(rng, n, count):
+    """R diag R^T computed in floats: symmetric only up to rounding (the leaf_K = 1 case)."""
+    d = n - 1
+    out = []
+    for _ in range(count):
+        q = rng.normal(size=4)
+        R = quadric_from_axes([0] * d, [1] * d, q if d == 3 else float(rng.uniform(0, 3)))[:d, :d]  # a rotation-ish block
+        w, v = np.linalg.eigh(R)
+        rot = v if d == 3 else np.array([[np.cos(q[0]), -np.sin(q[0])], [np.sin(q[0]), np.cos(q[0])]])
+        S = rot @ np.diag(rng.uniform(0.2, 3, d) ** -2) @ rot.T
+        c = rng.uniform(-5, 5, d)
+        M = np.empty((n, n))
+        M[:d, :d], M[:d, d], M[d, :d], M[d, d] = S, -S @ c, -c @ S, c @ S @ c - 1
+        out.append(M)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_pencil_error_bounds_hold_for_rounded_symmetrisation(n):
+    # the prepared entries are rounded half sums; the bound (leaf_K = 1 constants) must cover
+    # the pencil of the EXACT symmetric part of the input
+    rng = np.random.default_rng(30 + n)
+    A, B = _numpy_built(rng, n, 50), _numpy_built(rng, n, 50)
+    prep = _Prepared(A, B)
+    assert prep.rounded.mean() > 0.5 and prep.ok.all()
+    out = _run_pencil(prep.a, prep.b, prep.rounded)
+    for i in range(len(A)):
+        ea, eb = int(prep.ea[i]), int(prep.eb[i])
+        fa = fmpq(2) ** ea if ea >= 0 else fmpq(1, 2 ** (-ea))
+        fb = fmpq(2) ** eb if eb >= 0 else fmpq(1, 2 ** (-eb))
+        sa = 1 if A[i, 0, 0] > 0 else -1
+        sb = 1 if B[i, 0, 0] > 0 else -1
+        EA = [[(_fq(A[i, r, c]) + _fq(A[i, c, r])) / 2 * fa * sa for c in range(n)] for r in range(n)]
+        EB = [[(_fq(B[i, r, c]) + _fq(B[i, c, r])) / 2 * fb * sb for c in range(n)] for r in range(n)]
+        for k, c in enumerate(pencil_coefficients(EA, EB)):
+            v, bd = out[f"c{k}"]
+            assert abs(_fq(v[i]) - c) <= _fq(bd[i])
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_certificate_kernels_bounds_hold(n):
+    """pencil_at (P(T) from a_i with radii) and form (X^T M X with entry radii) against exact
+    values for inputs anywhere inside their radii."""
+    from core import _kernels as KK
+
+    rng = np.random.default_rng(40 + n)
+    for _ in range(40):
+        c = rng.normal(size=n + 1) * 10.0 ** rng.integers(-3, 4, n + 1)
+        cr = np.abs(c) * 10.0 ** rng.uniform(-16, -8, n + 1)
+        T = float(2.0 ** rng.uniform(-10, 10))
+        v, r = getattr(KK, f"pencil_at{n}")(list(c), list(cr), T)
+        bound = r * (1 + 2.0**-40) + getattr(KK, f"PENCIL_AT{n}_FLOOR")
+        for sign in (-1, 1):  # exact coefficients at either end of their intervals
+            ct = [_fq(ci) + sign * (1 if k % 2 else -1) * _fq(ri) for k, (ci, ri) in enumerate(zip(c, cr))]
+            exact = sum(ct[k] * _fq(T) ** k for k in range(n + 1))
+            assert abs(_fq(v) - exact) <= _fq(bound)
+        M = rng.normal(size=(n, n))
+        M = (M + M.T) * 4
+        Mr = np.abs(M) * 2.0**-52 * rng.integers(0, 2)
+        x = rng.normal(size=n - 1) * 10.0 ** rng.integers(0, 6)
+        v, r = getattr(KK, f"form{n}")(M, Mr, x)
+        bound = r * (1 + 2.0**-40) + getattr(KK, f"FORM{n}_FLOOR")
+        X = [_fq(xi) for xi in x] + [fmpq(1)]
+        for sign in (-1, 1):
+            Mt = [[_fq(M[i, j]) + sign * _fq(Mr[min(i, j), max(i, j)]) for j in range(n)] for i in range(n)]
+            exact = sum(X[i] * Mt[i][j] * X[j] for i in range(n) for j in range(n))
+            assert abs(_fq(v) - exact) <= _fq(bound)
+
+
 @pytest.mark.parametrize("n", [3, 4])
 @pytest.mark.parametrize("which", ["s0", "s1", "s10"])
 def test_subresultant_error_bounds_hold(n, which):
@@ -121,6 +194,8 @@ def test_compiled_numpy_and_single_pair_paths_agree(n):
     B[6, 0, 1] += 1e-3  # not symmetric
     A[7, 1, 1] = np.nan
     B[8] = A[8]  # identical
+    A[9:60:3] *= 10.0 ** rng.integers(-150, 150, (17, 1, 1))  # scaled: the fast path rescales too
+    B[10:60:7] *= 2.0**-1040  # subnormal entries: the one-pair path rescales
     SA, SB = _structured(rng, n, 120)
     A, B = np.concatenate([A, SA]), np.concatenate([B, SB])
     a = compiled.rules(A, B, threads=1)

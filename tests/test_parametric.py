@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from core import Relation, analyse, classify
 from core.motions import matrix_at_exact
 from core.pencil import pencil_coefficients
-from core.presets import preset_arguments
+from core.presets import preset_arguments, preset_names
 
 getcontext().prec = 60
 S, T_, O = Relation.SEPARATE, Relation.TANGENT, Relation.OVERLAP
@@ -578,3 +578,21 @@ def test_qsqrt_polynomials_pickle_exactly():
     polys = r.polynomials()
     back = pickle.loads(pickle.dumps(polys))
     assert back == polys and all(back[k].d == polys[k].d for k in polys)
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_analysis_pickles_exactly(name):
+    """The result travels between processes unchanged (flint polynomials included)."""
+    import pickle
+
+    r = analyse(**preset_arguments(name))
+    r2 = pickle.loads(pickle.dumps(r))
+    assert [(e.decimal(40), e.relation, e.kind) for e in r2.events] == [(e.decimal(40), e.relation, e.kind) for e in r.events]
+    assert [str(p) for p in r2.a] == [str(p) for p in r.a] and str(r2.s0) == str(r.s0)
+    lo, hi = r.interval
+    for t in [x for x in (lo, hi, "1/3", "-7/5", "2") if x is not None]:
+        try:
+            want = r.relation_at(t)
+        except ValueError:  # outside I
+            continue
+        assert r2.relation_at(t) == want and r2.sign_row_at(t) == r.sign_row_at(t)

@@ -6,8 +6,11 @@ Golden relations are hand-checkable: unit spheres/circles whose centres are 2 ap
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
+from oracle import oracle_relation
 
 viser = pytest.importorskip("viser")
 
@@ -96,6 +99,20 @@ def test_drag_recolours_and_sends_nothing_when_unchanged(server):
     # a rotated ellipsoid: semi-axes (1,1,1) -> rotation is irrelevant, distance 4 -> separate
     assert s.apply_drag("B", (0.0, 4.0, 0.0), (0.0, 1.0, 0.0, 0.0)) == "separate"
     assert colours(s) == {GREEN}
+
+
+def test_drag_recolours_from_classify_and_the_readout_follows(server):
+    s = Session(server, unit_spheres(3, "3"))
+    calls = []
+    full = s._static_panels  # explain, readout, contact point, plane
+    s._static_panels = lambda: calls.append(1) or full()
+    assert s.apply_drag("B", (1.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) == "overlap"
+    assert colours(s) == {RED} and calls == []  # recoloured by classify, no explain yet
+    for _ in range(100):  # the full readout follows within the panel period (50 ms)
+        if calls and "OVERLAP" in s.readout.content:
+            break
+        time.sleep(0.02)
+    assert "OVERLAP" in s.readout.content and calls == [1]
 
 
 def test_drag_2d_uses_rotation_about_z(server):
@@ -234,8 +251,10 @@ def test_typed_motion_is_analysed(server):
 def test_drag_leaves_the_motion(server):
     s = motion_session(server, t=0.3)
     assert s.state.relation == "separate"
-    assert s.apply_drag("B", (4.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) in ("overlap", "tangent", "separate")
+    rel = s.apply_drag("B", (4.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
     assert s.model is None and s.preset.value == "(static shapes)"
+    # the relation drawn is the certified one of the shapes now shown (independent oracle)
+    assert rel == oracle_relation(s.state.shapes["A"].quadric(), s.state.shapes["B"].quadric())
     # the static shapes start from the motion's shapes at t = 0.3 (semi-axes 2, 1, 1)
     assert sorted(round(float(v), 9) for v in s.state.shapes["A"].semi_axes) == [1.0, 1.0, 2.0]
     s.close()

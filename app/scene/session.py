@@ -20,7 +20,7 @@ from typing import Any, ContextManager
 
 import numpy as np
 
-from core import Relation, explain
+from core import Relation, classify, explain
 
 from . import plots
 from .analysis import (
@@ -99,6 +99,7 @@ class Session(MotionPanelMixin, TimelineMixin):
         self._plot_index = -2
         self._auto_t = False
         self._panels_due = False
+        self._static_due = False
         self._plots_due = False
         self._panel_timer: threading.Timer | None = None
         self._plot_data: tuple[Any, Any, Any] | None = None
@@ -368,19 +369,42 @@ class Session(MotionPanelMixin, TimelineMixin):
 
     # ------------------------------------------------------------------ static refresh
     def _refresh_static(self, dragged: str | None = None) -> str | None:
-        """Classify the static shapes, recolour, update readout and contact point."""
+        """Classify the static shapes, recolour, update readout and contact point.
+
+        A drag (``dragged`` names the shape) recolours from :func:`core.classify` at once
+        (microseconds: the certified relation) and leaves the full readout (``explain``, the
+        contact point, the plane) to the coalesced panel refresh, at most every PANEL_PERIOD.
+        """
         shapes = self.state.shapes
         for name, sh in shapes.items():
             pos, wxyz, scale = sh.float_pose()
             self.views[name].set_pose(pos, wxyz, scale, from_drag=name == dragged)
+        if dragged is not None:
+            try:
+                relation = str(classify(shapes["A"].quadric(), shapes["B"].quadric()))
+            except ValueError as e:
+                return self._show_static_error(e)
+            self._set_relation(relation)
+            self._static_due = True
+            self._schedule_flush()
+            return relation
+        return self._static_panels()
+
+    def _show_static_error(self, e: Exception) -> None:
+        self.state.explanation = None
+        self._set_relation(None)
+        self._set_md(self.readout, readout_markdown(None, error=str(e)))
+        return None
+
+    def _static_panels(self) -> str | None:
+        """The full static readout: explain, relation, contact point, plane (what a drag defers)."""
+        self._static_due = False
+        shapes = self.state.shapes
         try:
             A, B = shapes["A"].quadric(), shapes["B"].quadric()
             expl = explain(A, B).to_dict()
         except ValueError as e:
-            self.state.explanation = None
-            self._set_relation(None)
-            self._set_md(self.readout, readout_markdown(None, error=str(e)))
-            return None
+            return self._show_static_error(e)
         self.state.explanation = expl
         self._set_relation(expl["relation"])
         view = witness_view(A, B, expl["relation"])  # margin, sentence, certified plane / point

@@ -115,6 +115,8 @@ class TimelineMixin:
             self._panel_timer = None
             if self._closed:
                 return
+            if self._static_due and self.model is None:
+                self._static_panels()
             if self._panels_due:
                 self._panels_now()
             elif self._plots_due:
