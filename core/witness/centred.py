@@ -23,6 +23,7 @@ from typing import Any
 from flint import fmpq, fmpq_mat
 
 from ..quadrics import validate_quadric
+from ..rationals import to_float
 
 __all__ = ["CentredShape", "centred_pair", "column", "dot"]
 
@@ -85,10 +86,8 @@ class CentredShape:
     def floats(self) -> tuple[list[float], list[list[float]]]:
         """(centre, S) as Python floats (for float estimates only)."""
         d = self.d
-        from ..qsqrt import _to_float
-
-        return [_to_float(self.centre[i, 0]) for i in range(d)], [
-            [_to_float(self.S[i, j]) for j in range(d)] for i in range(d)
+        return [to_float(self.centre[i, 0]) for i in range(d)], [
+            [to_float(self.S[i, j]) for j in range(d)] for i in range(d)
         ]
 
 

@@ -18,7 +18,7 @@ from flint import arb, arb_poly, fmpq, fmpq_poly
 
 from ..algebraic import RealAlgebraic, _arb_to_fmpq, _workprec
 from ..qsqrt import QSqrtPoly
-from ..qsqrt import _to_float as to_float
+from ..rationals import to_float
 from ..realroots import real_roots
 
 __all__ = ["sqrt_bounds", "simplest_between", "value_at_root", "algebraic_dict", "rational_near", "to_float"]
