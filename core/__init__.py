@@ -9,6 +9,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import analyse                              # moving pairs: events and intervals
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
     from core import warm_up, set_threads                 # build the C kernels early; threads
+    from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
 are compiled with the system's C compiler on first use, :mod:`core.compiled`).
@@ -42,12 +43,21 @@ from .quadrics import quadric_from_axes as quadric_from_axes
 from .quadrics import rotation_from_quaternion as rotation_from_quaternion
 from .quadrics import validate_quadric as validate_quadric
 from .relation import Relation as Relation
+from .witness import ContactPoint as ContactPoint
+from .witness import ContactScale as ContactScale
+from .witness import SeparatingPlane as SeparatingPlane
+from .witness import Witness as Witness
+from .witness import contact_point as contact_point
+from .witness import contact_scale as contact_scale
+from .witness import separating_plane as separating_plane
 
 __all__ = [
     "METHODS",
     "ON_INVALID",
     "Certifier",
     "Classification",
+    "ContactPoint",
+    "ContactScale",
     "classify_detailed",
     "Explanation",
     "Method",
@@ -55,11 +65,15 @@ __all__ = [
     "MotionAnalysis",
     "Quantity",
     "Relation",
+    "SeparatingPlane",
     "ShapeParams",
     "Stats",
+    "Witness",
     "analyse",
     "axes_from_quadric",
     "classify",
+    "contact_point",
+    "contact_scale",
     "explain",
     "motion_from_dict",
     "motion_to_dict",
@@ -68,6 +82,7 @@ __all__ = [
     "preset_names",
     "quadric_from_axes",
     "rotation_from_quaternion",
+    "separating_plane",
     "set_threads",
     "validate_quadric",
     "warm_up",

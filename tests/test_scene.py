@@ -315,12 +315,11 @@ def test_separating_plane_separates(server):
     # unit spheres at x = 0 and x = 3: the plane halfway is x = 1.5 with normal +-x
     np.testing.assert_allclose(s.plane.position, (1.5, 0.0, 0.0), atol=1e-6)
     s.set_shape("B", center="1, 2, 2", semi_axes="1/2, 2, 1", orientation="1, 1, 0, 1")
-    from app.scene.contact import separating_plane
+    from core.witness import separating_plane  # the certified plane the scene draws
 
     A, B = (sh.quadric() for sh in s.state.shapes.values())
-    found = separating_plane(A, B)
     if s.state.relation == "separate":
-        n, h = found
+        n, h = separating_plane(A, B).unit()
         # every sampled surface point of A is below the plane, of B above (floats, display only)
         rng = np.random.default_rng(0)
         for sh, sign in ((s.state.shapes["A"], -1), (s.state.shapes["B"], 1)):
@@ -333,7 +332,7 @@ def test_separating_plane_separates(server):
             pts = (R @ (u * np.array(scale)).T).T + np.array(pos)
             assert np.all(sign * (pts @ n - h) > 0)
     else:
-        assert found is None and not s.plane.visible
+        assert not s.plane.visible
     s.set_shape("B", center="1, 0, 0", semi_axes="1, 1, 1", orientation="1, 0, 0, 0")
     assert s.state.relation == "overlap" and not s.plane.visible
 

@@ -1,26 +1,140 @@
-"""Display-only geometry: contact point at a tangency, separating plane (floats; never decide).
+"""What the scene shows about contact: the certified witnesses, and float display helpers.
 
-At an external tangency P(T) = det(T A + B) has a positive double root beta, and the contact
-point X spans the kernel of beta A + B (then A X = -(1/beta) B X: the normals are opposite).
-The relation itself is always certified by ``core``; this module only says *where* to draw.
+:func:`witness_view` asks ``core.witness`` for the witness of a certified pair, as the readout
+and the 3D view show it: the contact scale as a margin ("1.8 % apart"), the sentence that
+explains the relation, the certified separating plane (separate), the exact contact point and
+normal (tangent) or a rational point inside both (overlap). Float shapes (gizmo drags) take the
+float forms, which are certified too (a drag costs a few tenths of a millisecond more); exact
+shapes (typed fractions) the exact ones.
+
+The float helpers below only say *where* to draw when no exact witness applies (the timeline at
+an algebraic event time, where the float matrices are not exactly tangent): at an external
+tangency P(T) = det(T A + B) has a positive double root beta, and the contact point X spans the
+kernel of beta A + B (then A X = -(1/beta) B X: the normals are opposite).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
 
-__all__ = ["contact_point"]
+__all__ = ["contact_point", "WitnessView", "witness_view"]
+
+MARGIN_RTOL = 1e-6
+"""Relative width of the contact-scale bracket the readout asks for (floats decide it)."""
+
+
+@dataclass
+class WitnessView:
+    """The witness of one certified pair, as the scene shows it."""
+
+    relation: str
+    margin: str | None
+    """"1.8 % apart", "touching", "overlapping by 3 %" (None if it could not be computed)."""
+    mu: tuple[float, float] | None
+    """Certified bracket of the contact scale."""
+    sentence: str
+    detail: str
+    """The witness's numbers, short ("n = (1, 0, 0), d = 3/2")."""
+    point: tuple[float, ...] | None = None
+    """Contact point (tangent) or a point inside both (overlap), for drawing."""
+    point_label: str = "contact"
+    normal: tuple[float, ...] | None = None
+    """Unit common normal at the contact point (out of A), for drawing."""
+    plane: tuple[np.ndarray, float] | None = None
+    """Certified separating plane (unit normal n, offset d: n.x = d), for drawing."""
+
+    def readout(self) -> str:
+        """Markdown lines for the readout panel."""
+        lines = []
+        if self.margin is not None and self.mu is not None:
+            lo, hi = self.mu
+            lines.append(f"**Margin** {self.margin} (contact scale μ ∈ [{lo:.7g}, {hi:.7g}])")
+        lines.append("")
+        lines.append(f"**Witness** {self.sentence}: {self.detail}" if self.detail else f"**Witness** {self.sentence}")
+        return "\n".join(lines)
+
+
+def _short(values: Sequence[Any]) -> str:
+    """Exact numbers as text, decimals when a fraction is long."""
+    out = []
+    for v in values:
+        text = str(v)
+        if len(text) > 14:
+            text = f"{float(v):.6g}"
+        out.append(text)
+    return "(" + ", ".join(out) + ")"
+
+
+def _is_float_matrix(M: Any) -> bool:
+    return isinstance(M, np.ndarray) and M.dtype == np.float64
+
+
+def witness_view(A: Any, B: Any, relation: str) -> WitnessView | None:
+    """The certified witness of a pair whose relation ``core`` certified (None if it fails).
+
+    Float shapes go through ``core.witness.float_witness`` (one float preparation, a few tenths
+    of a millisecond); exact shapes (typed or dragged values mixed with exact ones), and what
+    floats cannot certify (rare: gaps at rounding level), through ``core.witness.witness`` (one
+    exact preparation for the margin and the witness).
+
+    Args:
+        A: matrix of shape A (float array, or exact lists).
+        B: matrix of shape B.
+        relation: the certified relation ("separate", "tangent", "overlap").
+    """
+    from core import Relation
+    from core.witness import SENTENCES, float_witness, margin_text
+    from core.witness.witness import witness_of
+
+    rel = Relation.parse(relation)
+    try:
+        fw = float_witness(A, B, rtol=MARGIN_RTOL) if _is_float_matrix(A) and _is_float_matrix(B) else None
+        if fw is not None and math.isfinite(fw.hi) and (fw.plane is not None or fw.point is not None):
+            view = WitnessView(str(rel), margin_text(fw.lo, fw.hi, rel), (fw.lo, fw.hi), SENTENCES[rel], "")
+            if fw.plane is not None:
+                n, d = fw.plane
+                view.plane = (n, d)
+                view.detail = f"n·x = d with n ≈ {_short([f'{v:.4g}' for v in n])}, d ≈ {d:.4g}"
+            else:
+                view.point, view.point_label = fw.point, "inside both"
+                view.detail = f"≈ {_short([f'{v:.4g}' for v in fw.point or ()])}"
+            return view
+        w = witness_of(A, B, rel, MARGIN_RTOL)
+        lo, hi = float(w.scale.lo), float(w.scale.hi)
+        view = WitnessView(str(rel), margin_text(lo, hi, rel), (lo, hi), w.sentence, "")
+        if w.plane is not None:
+            view.plane = w.plane.unit()
+            view.detail = f"n·x = d with n = {_short(w.plane.normal)}, d = {_short([w.plane.offset])[1:-1]}"
+        elif w.point is not None:
+            cp = w.point
+            point, normal = cp.approx()
+            view.point = tuple(point)
+            view.normal = None if normal is None else tuple(normal)
+            exact = cp.rational_point
+            shown = _short(exact) if exact is not None else _short([c.decimal(8) for c in cp.point])
+            if rel == Relation.TANGENT:
+                kind = "exact" if exact is not None else "exact algebraic, 8 digits shown"
+                view.detail = f"at {shown} ({kind}), common normal ≈ {_short([f'{v:.4g}' for v in normal or ()])}"
+            else:
+                view.point_label = "inside both"
+                view.detail = shown
+        return view
+    except (ValueError, ArithmeticError, RuntimeError):
+        return None
 
 
 def contact_point(A: Any, B: Any, coefficients: Sequence[float]) -> np.ndarray | None:
     """Approximate contact point of two tangent shapes (floats, for drawing).
 
     Args:
-        A, B: the two matrices (3x3 or 4x4; floats or exact numbers).
+        A: one matrix (3x3 or 4x4; floats or exact numbers).
+        B: the other.
         coefficients: a_0..a_n of P(T) (floats, ascending).
 
     Returns:
@@ -48,63 +162,3 @@ def contact_point(A: Any, B: Any, coefficients: Sequence[float]) -> np.ndarray |
     if v[-1] == 0:
         return None
     return v[:-1] / v[-1] + 0.0  # + 0.0 turns -0.0 into 0.0
-
-
-def _centre_and_inverse_shape(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    d = M.shape[0] - 1
-    Q, m = M[:d, :d], M[:d, d]
-    if np.all(np.linalg.eigvalsh(Q) < 0):
-        M, Q, m = -M, -Q, -m
-    c = -np.linalg.solve(Q, m)
-    k = float(c @ Q @ c - M[d, d])
-    return c, k * np.linalg.inv(Q)  # shape (x-c)^T (Q/k) (x-c) <= 1, inverse shape matrix k Q^-1
-
-
-def separating_plane(A: Any, B: Any, start: np.ndarray | None = None, iterations: int = 60) -> tuple[np.ndarray, float] | None:
-    """A plane n.x = h with A on the side n.x < h and B on n.x > h (floats, display only).
-
-    Maximises the support gap g(n) = n.(c_B - c_A) - |n|_A - |n|_B over unit n (|n|_E =
-    sqrt(n^T S_E^-1 n) is the support width of ellipsoid E; g is concave) by projected gradient
-    ascent from ``start`` (default: the direction between the centres). The plane sits halfway
-    across the gap.
-
-    Returns:
-        (n, h) with unit normal n, or None when no positive gap was found (the certified
-        relation is not "separate", or the gap is below what floats resolve).
-
-    Examples:
-        >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
-        >>> n, h = separating_plane(circle(0), circle(3))
-        >>> n.round(6).tolist(), round(h, 6)
-        ([1.0, 0.0], 1.5)
-    """
-    Af = np.array([[float(v) for v in row] for row in A], dtype=float)
-    Bf = np.array([[float(v) for v in row] for row in B], dtype=float)
-    cA, SA = _centre_and_inverse_shape(Af)
-    cB, SB = _centre_and_inverse_shape(Bf)
-    dc = cB - cA
-    n = np.array(start, dtype=float) if start is not None and np.linalg.norm(start) > 0 else dc.copy()
-    if np.linalg.norm(n) == 0:
-        return None
-    n /= np.linalg.norm(n)
-    scale = float(np.linalg.norm(dc)) + float(np.sqrt(np.trace(SA))) + float(np.sqrt(np.trace(SB)))
-    step = 0.5
-    best_n, best_g = n, -np.inf
-    for _ in range(iterations):
-        wa, wb = np.sqrt(n @ SA @ n), np.sqrt(n @ SB @ n)
-        g = n @ dc - wa - wb
-        if g > best_g:
-            best_n, best_g = n, g
-        grad = dc - SA @ n / wa - SB @ n / wb
-        grad -= (grad @ n) * n  # tangent to the unit sphere
-        gn = np.linalg.norm(grad)
-        if gn < 1e-12 * scale:
-            break
-        n = n + step * grad / scale
-        n /= np.linalg.norm(n)
-        step *= 0.93
-    if best_g <= 0:
-        return None
-    n = best_n
-    h = 0.5 * ((n @ cA + np.sqrt(n @ SA @ n)) + (n @ cB - np.sqrt(n @ SB @ n)))
-    return n, float(h)

@@ -55,13 +55,17 @@ def _fmt(q: dict[str, Any] | None) -> str:
     return f"{val} ({sign_char(q.get('sign'))})"
 
 
-def readout_markdown(expl: dict[str, Any] | None, *, where: str = "", error: str | None = None) -> str:
+def readout_markdown(
+    expl: dict[str, Any] | None, *, where: str = "", error: str | None = None, witness: str | None = None
+) -> str:
     """Markdown readout: relation, certification, P(T) coefficients, signs, Var, rule.
 
     Args:
         expl: ``core.explain(A, B).to_dict()``, or None when no pair is classified.
         where: what the numbers refer to (e.g. "at t = 0.7").
         error: message shown instead when the shapes are invalid.
+        witness: Markdown of the witness (margin, sentence: ``WitnessView.readout()`` of
+            :mod:`app.scene.contact`), shown under the relation.
 
     Examples:
         >>> print(readout_markdown(None, error="A.semi_axes: must be positive"))
@@ -73,6 +77,8 @@ def readout_markdown(expl: dict[str, Any] | None, *, where: str = "", error: str
         return f"**Relation** {relation_badge(None)}\n\n⚠ {html.escape(error or 'no shapes')}"
     n = expl["n"]
     lines = [f"**Relation** {relation_badge(expl['relation'])} {where}".rstrip()]
+    if witness:
+        lines += ["", html.escape(witness, quote=False)]
     cert = "float filter (proven error bound)" if expl["certified_by"] == "float" else "exact arithmetic"
     lines.append("")
     lines.append(f"Certified by: {cert}")

@@ -32,7 +32,7 @@ from .analysis import (
     list_presets,
     load_motion,
 )
-from .contact import contact_point, separating_plane
+from .contact import WitnessView, contact_point, witness_view
 from .motion_panel import STATIC, MotionPanelMixin
 from .panels import readout_markdown
 from .shapes import EllipsoidView
@@ -139,7 +139,6 @@ class Session(MotionPanelMixin, TimelineMixin):
             visible=False,
         )
         self._plane_on = False
-        self._plane_n: np.ndarray | None = None
 
     def _make_views(self) -> None:
         for v in self.views.values():
@@ -407,9 +406,10 @@ class Session(MotionPanelMixin, TimelineMixin):
             return self._show_static_error(e)
         self.state.explanation = expl
         self._set_relation(expl["relation"])
-        self._set_md(self.readout, readout_markdown(expl, where="(static shapes)"))
-        self._update_contact(A, B, expl)
-        self._update_plane(A, B, expl["relation"])
+        view = witness_view(A, B, expl["relation"])  # margin, sentence, certified plane / point
+        self._set_md(self.readout, readout_markdown(expl, where="(static shapes)", witness=view and view.readout()))
+        self._update_contact(A, B, expl, view)
+        self._update_plane(A, B, expl["relation"], view)
         self._update_gizmos()
         return expl["relation"]
 
@@ -423,38 +423,76 @@ class Session(MotionPanelMixin, TimelineMixin):
         for v in self.views.values():
             v.set_relation(relation)
 
-    def _update_contact(self, A: Any, B: Any, expl: dict[str, Any] | None) -> None:
-        point = None
-        if expl is not None and expl["relation"] == str(Relation.TANGENT):
+    def _update_contact(self, A: Any, B: Any, expl: dict[str, Any] | None, view: WitnessView | None = None) -> None:
+        """Contact point: the certified witness when ``view`` has one, else a float estimate.
+
+        The witness: where they touch, with the common normal (tangent), or a point inside both
+        (overlap). Without one, at a timeline tangency: the float kernel of the pencil (display
+        only: the float matrices at an algebraic event time are not tangent).
+        """
+        point, normal, label = None, None, "contact"
+        if view is not None and view.point is not None:
+            point, normal, label = view.point, view.normal, view.point_label
+        elif expl is not None and expl["relation"] == str(Relation.TANGENT):
             point = contact_point(A, B, [q["approx"] for q in expl["coefficients"]])
         if point is None:
             if self._contact_on:
                 self.contact.visible = False
                 self.contact_label.visible = False
                 self._contact_on = False
+            self._show_normal(None)
             return
         p = tuple(float(v) for v in point) + ((0.0,) if len(point) == 2 else ())
         self.contact.position = p
+        if self.contact_label.text != label:
+            self.contact_label.text = label
         if not self._contact_on:
             self.contact.visible = True
             self.contact_label.visible = True
             self._contact_on = True
+        self._show_normal(normal)
 
-    def _update_plane(self, A: Any, B: Any, relation: str | None) -> None:
-        """Separating plane (display only) when asked for and the shapes are certified separate."""
+    def _show_normal(self, normal: Any) -> None:
+        """The common normal at the contact point: a short segment (created on first use)."""
+        line = getattr(self, "_normal_line", None)
+        if normal is None:
+            if line is not None and line.visible:
+                line.visible = False
+            return
+        n = np.array([float(v) for v in normal] + ([0.0] if len(normal) == 2 else []))
+        if line is None:
+            segment = np.array([[[0.0, 0.0, 0.0], [0.0, 0.0, 0.6]]], dtype=np.float32)
+            line = self._normal_line = self.scene.add_line_segments(
+                "/contact/point/normal", segment, (20, 20, 20), thickness=0.015
+            )
+        axis = np.cross([0.0, 0.0, 1.0], n)
+        w = 1.0 + float(n[2])
+        q = np.array([w, *axis]) if w > 1e-9 else np.array([0.0, 1.0, 0.0, 0.0])
+        line.wxyz = tuple(float(v) for v in q / np.linalg.norm(q))
+        if not line.visible:
+            line.visible = True
+
+    def _update_plane(self, A: Any, B: Any, relation: str | None, view: WitnessView | None = None) -> None:
+        """The certified separating plane (core.witness) when asked for and the shapes are separate."""
         found = None
         if self.show_plane.value and relation == str(Relation.SEPARATE):
-            try:
-                found = separating_plane(A, B, start=self._plane_n)
-            except (np.linalg.LinAlgError, ValueError, FloatingPointError):
-                found = None
+            if view is None:  # timeline: the float matrices at t, certified by core.witness
+                from core.witness import separating_plane_batch
+
+                try:
+                    pb = separating_plane_batch(np.asarray(A, dtype=float), np.asarray(B, dtype=float))
+                    if bool(pb.certified):
+                        found = (np.asarray(pb.normal, dtype=float), float(pb.offset))
+                except (ValueError, ArithmeticError):
+                    found = None
+            else:
+                found = view.plane
         if found is None:
             if self._plane_on:
                 self.plane.visible = False
                 self._plane_on = False
             return
         n, h = found
-        self._plane_n = n
         Af = np.array([[float(v) for v in row] for row in A], dtype=float)
         Bf = np.array([[float(v) for v in row] for row in B], dtype=float)
         d = Af.shape[0] - 1

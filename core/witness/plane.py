@@ -1,0 +1,180 @@
+"""A separating plane with exact rational coefficients, verified exactly before it is returned.
+
+For a separate pair the contact function (:mod:`core.witness.contact_function`) gives, at its
+maximiser lambda*, the common normal y of the two shapes scaled to touch (scale mu* > 1); the
+plane with that normal through the touching point separates the scaled shapes, hence strictly the
+original ones. A rational normal close to y (the simplest that works: (1, 0, 0) rather than
+0.99999999999999989, 1.1e-17, 0) and a rational offset between the two support values are
+checked with an independent formula, the dual quadric: the plane pi = (n, -d) misses the
+ellipsoid A iff pi^T A^-1 pi < 0, and A lies on the side n.x < d iff (A^-1 pi)_last > 0. If the
+check fails (tiny gaps), lambda* is refined exactly and the construction repeated; an unverified
+plane is never returned.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from flint import fmpq, fmpq_mat
+
+from ..classify import classify
+from ..relation import Relation
+from .centred import CentredShape, centred_pair, column, dot
+from .contact_function import Bracket, ContactFunction
+from .numbers import simplest_between, sqrt_bounds, to_float
+
+__all__ = ["SeparatingPlane", "separating_plane", "plane_separates", "plane_from"]
+
+_TOLERANCES = (fmpq(1, 2**6), fmpq(1, 2**14), fmpq(1, 2**30), fmpq(1, 2**52), fmpq(0))
+_MAX_ROUNDS = 12
+
+
+@dataclass(frozen=True)
+class SeparatingPlane:
+    """The plane n.x = d: A lies strictly in n.x < d and B strictly in n.x > d (verified exactly)."""
+
+    normal: tuple[fmpq, ...]
+    """n (not unit length; its largest component is +-1 when it could be simplified)."""
+    offset: fmpq
+    """d."""
+    support_a: fmpq
+    """An upper bound of max n.x over A (< d)."""
+    support_b: fmpq
+    """A lower bound of min n.x over B (> d)."""
+
+    @property
+    def gap(self) -> float:
+        """A lower bound of the Euclidean distance between A and B.
+
+        (support_b - support_a) / |n|, rounded down: the plane's width of empty space.
+        """
+        norm2 = sum(v * v for v in self.normal)
+        _, upper = sqrt_bounds(norm2, 64)
+        g = (self.support_b - self.support_a) / upper
+        f = to_float(g)
+        return f if not np.isfinite(f) or fmpq(*f.as_integer_ratio()) <= g else float(np.nextafter(f, -np.inf))
+
+    def unit(self) -> tuple[np.ndarray, float]:
+        """(unit normal, offset) as floats, for drawing (not certified)."""
+        big = max(abs(v) for v in self.normal)  # exact: the largest component becomes +-1
+        n = np.array([to_float(v / big) for v in self.normal])
+        s = float(np.linalg.norm(n))
+        return n / s, to_float(self.offset / big) / s
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form: exact strings and float approximations."""
+        n, d = self.unit()
+        return {
+            "normal": [str(v) for v in self.normal],
+            "offset": str(self.offset),
+            "unit_normal_approx": n.tolist(),
+            "offset_approx": d,
+            "support_a": str(self.support_a),
+            "support_b": str(self.support_b),
+            "gap_lower_bound": self.gap,
+        }
+
+
+def plane_separates(A: CentredShape, B: CentredShape, normal: fmpq_mat, offset: fmpq) -> bool:
+    """Exactly: A strictly in n.x < d and B strictly in n.x > d (dual-quadric test)."""
+    pi = fmpq_mat([[normal[i, 0]] for i in range(normal.nrows())] + [[-offset]])
+    last = normal.nrows()
+    for shape, side in ((A, -1), (B, 1)):
+        z = shape.matrix.solve(pi)
+        if not dot(pi, z) < 0 or not z[last, 0] * side < 0:
+            return False
+    return True
+
+
+def _supports(cf: ContactFunction, n: fmpq_mat, bits: int) -> tuple[fmpq, fmpq]:
+    """(upper bound of max n.x over A, lower bound of min n.x over B)."""
+    _, ua = sqrt_bounds(dot(n, cf.A.S * n), bits)
+    _, ub = sqrt_bounds(dot(n, cf.B.S * n), bits)
+    return dot(n, cf.A.centre) + ua, dot(n, cf.B.centre) - ub
+
+
+def _simplified(y: fmpq_mat, tol: fmpq) -> fmpq_mat:
+    """Y scaled to largest component +-1, each component replaced by the simplest rational within tol."""
+    d = y.nrows()
+    big = max(abs(y[i, 0]) for i in range(d))
+    v = [y[i, 0] / big for i in range(d)]
+    return column([simplest_between(x - tol, x + tol) if tol else x for x in v])
+
+
+def _try_normal(cf: ContactFunction, n: fmpq_mat, bits: int) -> SeparatingPlane | None:
+    ha, hb = _supports(cf, n, bits)
+    if not ha < hb:
+        return None
+    mid, w = (ha + hb) / 2, (hb - ha) / 4
+    d = simplest_between(mid - w, mid + w)
+    if not plane_separates(cf.A, cf.B, n, d):
+        return None
+    return SeparatingPlane(tuple(n[i, 0] for i in range(n.nrows())), d, ha, hb)
+
+
+def separating_plane(A: Any, B: Any) -> Any:
+    """A plane n.x = d with exact rational n, d: A strictly in n.x < d, B strictly in n.x > d.
+
+    Args:
+        A: one matrix (any input form of :func:`core.classify`), or a float stack (..., n, n)
+            (then :func:`core.witness.batch.separating_plane_batch`: float planes with a
+            certified flag).
+        B: the same for B.
+
+    Returns:
+        A :class:`SeparatingPlane`, verified exactly (dual quadric) before it is returned.
+
+    Raises:
+        ValueError: the pair is not separate (tangent or overlapping: no plane separates it
+            strictly), or a matrix is invalid.
+
+    Examples:
+        >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
+        >>> p = separating_plane(circle(0), circle(3))
+        >>> p.normal, p.offset
+        ((1, 0), 3/2)
+        >>> separating_plane(circle(0), circle(2))
+        Traceback (most recent call last):
+        ...
+        ValueError: A and B are tangent: they touch, so no plane separates them strictly (contact_point gives where)
+    """
+    from .scale import _is_stack
+
+    if _is_stack(A) or _is_stack(B):
+        from .batch import separating_plane_batch
+
+        return separating_plane_batch(A, B)
+    rel = classify(A, B)
+    if rel == Relation.TANGENT:
+        raise ValueError("A and B are tangent: they touch, so no plane separates them strictly (contact_point gives where)")
+    if rel == Relation.OVERLAP:
+        raise ValueError("A and B overlap: their interiors meet, so no plane separates them (contact_point gives a common point)")
+    return plane_from(ContactFunction(*centred_pair(A, B)))
+
+
+def plane_from(cf: ContactFunction, br: Bracket | None = None) -> SeparatingPlane:
+    """The verified plane of a separate pair from its contact function (and bracket, if known).
+
+    The normal at the float estimate of lambda* is tried first (no exact bracket needed when it
+    works, the usual case); then the exact bracket, refined until a plane verifies.
+    """
+    bits = 64
+    if br is None:
+        y = cf.normal(fmpq(*cf.float_guess.as_integer_ratio()))
+        for tol in _TOLERANCES:
+            plane = _try_normal(cf, _simplified(y, tol), bits)
+            if plane is not None:
+                return plane
+        br = cf.first_bracket()
+    assert br is not None  # separate shapes have distinct centres
+    for _ in range(_MAX_ROUNDS):
+        y = cf.normal(br.best)
+        for tol in _TOLERANCES:
+            plane = _try_normal(cf, _simplified(y, tol), bits)
+            if plane is not None:
+                return plane
+        bits *= 2
+        br = cf.refine(br, bits)
+    raise RuntimeError("separating_plane: no verified plane found (please report this pair)")

@@ -1,0 +1,139 @@
+"""The witness behind each answer, in one call, with the sentence that explains it.
+
+* separate: a plane that separates them (exact rationals, verified; :mod:`core.witness.plane`),
+* tangent: the point where they touch and the common normal (exact; :mod:`core.witness.point`),
+* overlap: a rational point inside both (verified; :mod:`core.witness.point`),
+
+and, for every relation, the certified contact scale mu* (:mod:`core.witness.scale`): how far
+from touching, as a margin a class can read ("1.8 % apart", "overlapping by 3 %").
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from ..classify import classify
+from ..relation import Relation
+from .numbers import to_float
+from .plane import SeparatingPlane, plane_from
+from .point import ContactPoint, overlap_point, tangent_point
+from .scale import ContactScale, scale_from, solve_pair
+
+__all__ = ["Witness", "witness", "witness_of", "margin_text", "SENTENCES"]
+
+SENTENCES = {
+    Relation.SEPARATE: "separate: this plane separates them",
+    Relation.TANGENT: "tangent: they touch here",
+    Relation.OVERLAP: "overlap: this point is inside both",
+}
+"""What each witness shows, as one sentence."""
+
+
+def margin_text(lo: float, hi: float, relation: Relation | int | str) -> str:
+    """The contact scale as a margin: "1.8 % apart", "touching", "overlapping by 3 %".
+
+    The percentage is (mu* - 1) or (1 - mu*) at the middle of the certified bracket [lo, hi]
+    with two significant digits (whole percents from 10 %): both shapes must grow (apart) or shrink (overlapping) by
+    that much about their own centres to touch.
+
+    Examples:
+        >>> margin_text(1.018, 1.018, "separate"), margin_text(0.97, 0.97, "overlap")
+        ('1.8 % apart', 'overlapping by 3 %')
+        >>> margin_text(1.0, 1.0, "tangent"), margin_text(2.0, 2.0, "separate")
+        ('touching', '100 % apart')
+        >>> margin_text(1 + 3e-9, 1 + 3e-9, "separate")
+        '3e-07 % apart'
+    """
+    rel = Relation.parse(relation) if isinstance(relation, str) else Relation(relation)
+    if rel == Relation.TANGENT:
+        return "touching"
+    mid = 0.5 * (float(lo) + float(hi))
+    pct = abs(mid - 1.0) * 100.0
+    text = f"{pct:.0f}" if pct >= 10 else f"{pct:.2g}"
+    if rel == Relation.SEPARATE:
+        return f"{text} % apart"
+    if rel == Relation.OVERLAP:
+        return f"overlapping by {text} %"
+    return "unknown"
+
+
+@dataclass
+class Witness:
+    """The certified relation, the sentence that explains it and the object that proves it."""
+
+    relation: Relation
+    sentence: str
+    scale: ContactScale
+    plane: SeparatingPlane | None = None
+    """Separate pairs: the verified separating plane."""
+    point: ContactPoint | None = None
+    """Tangent pairs: the exact contact point and normal; overlap: a rational point in both."""
+
+    @property
+    def margin(self) -> str:
+        """The contact scale as a margin ("1.8 % apart", "touching", "overlapping by 3 %")."""
+        return margin_text(to_float(self.scale.lo), to_float(self.scale.hi), self.relation)
+
+    def to_dict(self, digits: int = 20) -> dict[str, Any]:
+        """JSON form (exact values as strings)."""
+        return {
+            "relation": str(self.relation),
+            "sentence": self.sentence,
+            "margin": self.margin,
+            "contact_scale": self.scale.to_dict(digits),
+            "plane": None if self.plane is None else self.plane.to_dict(),
+            "point": None if self.point is None else self.point.to_dict(digits),
+        }
+
+
+def witness(A: Any, B: Any, *, rtol: float = 1e-12) -> Witness:
+    """The witness of the certified relation of one pair.
+
+    One validation and one bracket of the contact function serve the contact scale and the
+    plane or point.
+
+    Args:
+        A: one matrix, any input form of :func:`core.classify`.
+        B: the other.
+        rtol: relative width of the contact-scale bracket.
+
+    Returns:
+        :class:`Witness`: relation, sentence, contact scale, and the plane (separate) or
+        point (tangent, overlap).
+
+    Raises:
+        ValueError: an invalid matrix.
+
+    Examples:
+        >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
+        >>> w = witness(circle(0), circle(3))
+        >>> w.sentence, w.plane.normal, w.plane.offset, w.margin
+        ('separate: this plane separates them', (1, 0), 3/2, '50 % apart')
+        >>> witness(circle(0), circle(2)).point.rational_point
+        (1, 0)
+    """
+    if not (rtol > 0 and math.isfinite(rtol)):
+        raise ValueError(f"rtol must be a finite number > 0, got {rtol!r}")
+    return witness_of(A, B, classify(A, B), rtol)
+
+
+def witness_of(A: Any, B: Any, rel: Relation, rtol: float = 1e-12) -> Witness:
+    """:func:`witness` for a pair whose relation ``rel`` ``core`` already certified.
+
+    ``rel`` comes from ``classify`` or ``explain``: the scene's path, without classifying twice. The contact
+    scale is computed independently and must agree (RuntimeError otherwise).
+    """
+    cf, br = solve_pair(A, B, rtol)
+    scale = scale_from(cf, br, rtol)
+    if scale.relation != rel:  # two independent certified computations: never expected
+        raise RuntimeError(f"contact scale says {scale.relation}, the classifier {rel}: please report this pair")
+    out = Witness(rel, SENTENCES[rel], scale)
+    if rel == Relation.SEPARATE:
+        out.plane = plane_from(cf, br)
+    elif rel == Relation.TANGENT:
+        out.point = tangent_point(cf.A, cf.B)
+    else:
+        out.point = overlap_point(cf.A, cf.B, cf)
+    return out

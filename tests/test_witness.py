@@ -1,0 +1,642 @@
+"""Witnesses (issue 15): contact scale, separating plane, contact point; checked independently.
+
+Golden values come from closed forms (two spheres: mu = |c1 - c2| / (r1 + r2)), from the paper's
+motions (the relation on each side of its tangency events), from the independent oracle of
+tests/oracle.py (positive roots of det(T A + B) via flint's characteristic polynomial) applied
+to the pairs scaled just below and above the reported bracket, and from exact checks written
+here with ``fractions.Fraction`` and the Leibniz determinant (no code of core.witness):
+
+* a plane misses a shape iff the quadric restricted to the plane has a positive minimum
+  (Schur complement of the restricted matrix), and the shape lies on the side of its centre;
+* a point is inside a shape iff X^T A X < 0, on its boundary iff X^T A X = 0.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from fractions import Fraction as F
+from typing import Any
+
+import numpy as np
+import pytest
+from cases import CASES, axis_ellipsoid, circle, sphere
+from flint import fmpq
+from hypothesis import given
+from hypothesis import strategies as st
+from oracle import oracle_relation
+from strategies import dyadic_tangent_pair, exact_shapes, float_pairs, tangent_pairs
+
+from core import (
+    Relation,
+    analyse,
+    classify,
+    contact_point,
+    contact_scale,
+    quadric_from_axes,
+    rotation_from_quaternion,
+    separating_plane,
+)
+from core.motions import matrix_at_exact
+from core.presets import preset_arguments
+from core.witness import contact_scale_batch, distance, margin_text, witness
+
+# ------------------------------------------------------------------ independent exact helpers
+
+
+def frac(M: Any) -> list[list[F]]:
+    """Exact Fraction matrix, normalised to a positive definite quadratic block (M[0][0] > 0)."""
+    out = [[F(str(v)) if isinstance(v, str | fmpq) else F(v) for v in row] for row in (np.asarray(M, dtype=object).tolist())]
+    if out[0][0] < 0:
+        out = [[-v for v in row] for row in out]
+    n = len(out)  # the quadratic form: the exact symmetric part (floats symmetric up to rounding)
+    return [[(out[i][j] + out[j][i]) / 2 for j in range(n)] for i in range(n)]
+
+
+def q(x: Any) -> F:
+    """An exact Fraction from fmpq / float / int / Fraction."""
+    if isinstance(x, fmpq):
+        return F(int(x.p), int(x.q))
+    return F(x)
+
+
+def det(M: list[list[F]]) -> F:
+    """Leibniz formula (independent of core.pencil.determinant)."""
+    n = len(M)
+    total = F(0)
+    for perm in itertools.permutations(range(n)):
+        inv = sum(1 for i in range(n) for j in range(i + 1, n) if perm[i] > perm[j])
+        term = F(-1 if inv % 2 else 1)
+        for i in range(n):
+            term *= M[i][perm[i]]
+            if term == 0:
+                break
+        total += term
+    return total
+
+
+def form(M: list[list[F]], x: list[F]) -> F:
+    X = [*x, F(1)]
+    return sum(M[i][j] * X[i] * X[j] for i in range(len(X)) for j in range(len(X)))
+
+
+def centre(M: list[list[F]]) -> list[F]:
+    """-Q^-1 m by Cramer's rule."""
+    d = len(M) - 1
+    Q = [row[:d] for row in M[:d]]
+    rhs = [-M[i][d] for i in range(d)]
+    D = det(Q)
+    return [det([[rhs[r] if c == i else Q[r][c] for c in range(d)] for r in range(d)]) / D for i in range(d)]
+
+
+def size_k(M: list[list[F]]) -> F:
+    d = len(M) - 1
+    return -det(M) / det([row[:d] for row in M[:d]])
+
+
+def scaled(M: list[list[F]], mu: F) -> list[list[F]]:
+    """The shape scaled about its centre by mu: the last entry gains k (1 - mu^2)."""
+    out = [row[:] for row in M]
+    out[-1][-1] += size_k(M) * (1 - mu * mu)
+    return out
+
+
+def plane_misses_on_side(M: list[list[F]], n: list[F], d: F, side: int) -> bool:
+    """Plane n.x = d misses the closed shape M, which lies where sign(n.x - d) = side.
+
+    Parametrise the plane x = p + E u (E: the coordinate axes but j, with x_j solved), restrict the
+    quadric to (u, 1) and require its minimum (Schur complement) to be positive.
+    """
+    dim = len(n)
+    j = max(range(dim), key=lambda i: abs(n[i]))
+    free = [i for i in range(dim) if i != j]
+    # homogeneous embedding T: (u, 1) -> (x, 1)
+    T = [[F(0)] * dim for _ in range(dim + 1)]
+    for k, i in enumerate(free):
+        T[i][k] = F(1)
+        T[j][k] = -n[i] / n[j]
+    T[j][dim - 1] = d / n[j]
+    T[dim][dim - 1] = F(1)
+    R = [[sum(T[a][r] * M[a][b] * T[b][c] for a in range(dim + 1) for b in range(dim + 1)) for c in range(dim)] for r in range(dim)]
+    minimum = det(R) / det([row[: dim - 1] for row in R[: dim - 1]])
+    c = centre(M)
+    s = sum(a * b for a, b in zip(n, c, strict=True)) - d
+    return minimum > 0 and (s > 0) - (s < 0) == side
+
+
+def mu_side(A: list[list[F]], B: list[list[F]], mu: F) -> str:
+    """Oracle relation of the pair scaled about its centres by mu."""
+    return oracle_relation(scaled(A, mu), scaled(B, mu))
+
+
+def check_bracket(A: Any, B: Any, cs: Any) -> None:
+    """Independent check of a bracket: just below lo the scaled pair is separate, above hi overlap."""
+    fa, fb = frac(A), frac(B)
+    lo, hi = q(cs.lo), q(cs.hi)
+    assert lo <= hi
+    if lo == hi:  # exact: separate just below, overlap just above, tangent at mu itself
+        if lo > 0:
+            assert mu_side(fa, fb, lo * (1 - F(1, 10**30))) == "separate"
+            assert mu_side(fa, fb, lo) == "tangent"
+        assert mu_side(fa, fb, hi * (1 + F(1, 10**30)) + F(1, 10**30)) == "overlap"
+        return
+    assert mu_side(fa, fb, lo) in ("separate", "tangent")
+    assert mu_side(fa, fb, hi) in ("overlap", "tangent")
+
+
+# ------------------------------------------------------------------ contact scale
+
+
+def test_spheres_exact_closed_form():
+    # |c1 - c2| = 13 (5-12 in the plane z = 0 moved by 3-4-12 ... here 3, 4, 12), radii 2 and 3/2
+    cs = contact_scale(sphere(0, 0, 0, 2), sphere(3, 4, 12, F(3, 2)))
+    assert (cs.lo, cs.hi) == (fmpq(13) / fmpq(7, 2), fmpq(13) / fmpq(7, 2))
+    assert cs.relation == Relation.SEPARATE and cs.algebraic().value == fmpq(26, 7)
+
+
+@pytest.mark.parametrize(
+    ("c2", "r1", "r2"),
+    [((1, 1, 1), 1, 1), ((2, 0, 1), F(1, 3), F(5, 4)), ((0, 1, 1), 2, 3), ((7, 1, 0), F(1, 2), 2)],
+)
+def test_spheres_irrational_closed_form(c2, r1, r2):
+    dist2 = sum(F(v) ** 2 for v in c2)
+    mu2 = dist2 / (F(r1) + F(r2)) ** 2  # mu = sqrt(mu2), irrational here
+    cs = contact_scale(sphere(0, 0, 0, r1), sphere(*c2, r2))
+    assert q(cs.lo) ** 2 <= mu2 <= q(cs.hi) ** 2
+    assert float(cs.hi - cs.lo) <= 1e-12 * float(cs.hi)
+    assert cs.relation == (Relation.SEPARATE if mu2 > 1 else Relation.OVERLAP)
+    a = cs.algebraic()
+    # its defining polynomial is a multiple of the minimal polynomial x^2 - mu2
+    p = [q(c) for c in a.poly.coeffs()]
+    assert len(p) == 3 and p[1] == 0 and -p[0] / p[2] == mu2
+    assert q(a.lo) ** 2 < mu2 < q(a.hi) ** 2
+    assert a.decimal(40)[:30] == _sqrt_decimal(mu2, 40)[:30]
+
+
+def _sqrt_decimal(x: F, digits: int) -> str:
+    """sqrt(x) by integer square root (independent of core)."""
+    scale = 10 ** (2 * digits)
+    r = math.isqrt(x.numerator * scale // x.denominator)
+    s = str(r)
+    whole = len(str(math.isqrt(int(x)))) if x >= 1 else 0
+    if x < 1:
+        return "0." + s.rjust(digits, "0")
+    return s[:whole] + "." + s[whole:]
+
+
+def test_float_spheres_dyadic():
+    # radii 1/2 and 2, dyadic centres: the float matrices are exactly the spheres, mu = 5 / 2.5
+    A = quadric_from_axes([0.0, 0.0, 0.0], [0.5, 0.5, 0.5])
+    B = quadric_from_axes([3.0, 4.0, 0.0], [2.0, 2.0, 2.0])
+    cs = contact_scale(A, B)
+    assert cs.lo == cs.hi == 2
+    b = contact_scale(A[None], B[None])
+    assert float(b.lo[0]) <= 2.0 <= float(b.hi[0])
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def test_catalogue(case):
+    cs = contact_scale(case.A, case.B)
+    assert str(cs.relation) == case.relation
+    if case.relation == "tangent":
+        assert cs.lo == cs.hi == 1
+    else:
+        assert (cs.lo > 1) if case.relation == "separate" else (cs.hi < 1)
+    check_bracket(case.A, case.B, cs)
+
+
+@given(exact_shapes(3), exact_shapes(3))
+def test_random_exact_ellipsoids(A, B):
+    cs = contact_scale(A, B)
+    assert str(cs.relation) == oracle_relation(A, B)
+    assert cs.relation == classify(A, B)
+    check_bracket(A, B, cs)
+    a = cs.algebraic()
+    assert a.compare(cs.lo) >= 0 and a.compare(cs.hi) <= 0
+
+
+@given(exact_shapes(2), exact_shapes(2))
+def test_random_exact_ellipses(A, B):
+    cs = contact_scale(A, B)
+    assert str(cs.relation) == oracle_relation(A, B)
+    check_bracket(A, B, cs)
+
+
+@given(tangent_pairs())
+def test_tangent_pairs_mu_is_one(pair):
+    A, B = pair
+    cs = contact_scale(A, B)
+    assert cs.relation == Relation.TANGENT and cs.lo == cs.hi == 1
+
+
+@given(tangent_pairs(), st.sampled_from([1, -1]), st.integers(5, 40))
+def test_near_tangent_pairs(pair, sign, k):
+    # B's constant term moved by +-10^-k: it shrinks (separate) or grows (overlap) a hair
+    A, B = pair
+    B = [row[:] for row in B]
+    B[-1][-1] += sign * F(1, 10**k)
+    cs = contact_scale(A, B)
+    expected = oracle_relation(A, B)
+    assert str(cs.relation) == expected == ("separate" if sign > 0 else "overlap")
+    assert (cs.lo > 1) if sign > 0 else (cs.hi < 1)
+
+
+@given(float_pairs())
+def test_random_float_pairs(pair):
+    A, B = pair
+    cs = contact_scale(A, B)
+    assert str(cs.relation) == oracle_relation(A, B)
+    assert float(cs.hi - cs.lo) <= 1e-12 * float(cs.hi) + 1e-300
+    # flipped signs and swapped order: the same scale
+    cs2 = contact_scale(-B, A)
+    assert cs2.relation == cs.relation
+    assert cs2.lo <= cs.hi and cs.lo <= cs2.hi
+
+
+def test_copies_of_one_shape():
+    # translated copies: P(T) has the double root -1 for every translation (s0 = 0 identically)
+    q = [0.9, 0.1, -0.3, 0.2]
+    A = quadric_from_axes([0.0, 0.0, 0.0], [1.0, 2.0, 0.5], q)
+    for shift, rel in (([0.1, 0.2, 0.0], "overlap"), ([3.0, 4.0, 5.0], "separate")):
+        B = quadric_from_axes(shift, [1.0, 2.0, 0.5], q)
+        cs = contact_scale(A, B)
+        assert str(cs.relation) == oracle_relation(A, B) == rel
+        check_bracket(A, B, cs)
+    same = contact_scale(A, A.copy())
+    assert same.lo == same.hi == 0 and same.relation == Relation.OVERLAP
+
+
+def test_rtol_is_met():
+    A = quadric_from_axes([0.0, 0.0, 0.0], [1.0, 2.0, 3.0], [1.0, 0.2, 0.3, 0.1])
+    B = quadric_from_axes([3.0, 1.0, 0.5], [0.5, 1.0, 2.0], [0.3, 1.0, 0.2, 0.5])
+    for rtol in (1e-3, 1e-12, 1e-40, 1e-200):
+        cs = contact_scale(A, B, rtol=rtol)
+        assert cs.hi - cs.lo <= cs.hi * fmpq(*rtol.as_integer_ratio())
+    with pytest.raises(ValueError, match="rtol"):
+        contact_scale(A, B, rtol=0.0)
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="not an ellipse"):
+        contact_scale([[1, 0, 0], [0, -1, 0], [0, 0, -1]], circle(0, 0, 1))
+    with pytest.raises(ValueError, match="both must be ellipses or both ellipsoids"):
+        contact_scale(circle(0, 0, 1), sphere(0, 0, 0, 1))
+
+
+# ------------------------------------------------------------------ the paper's motions
+
+
+def _at(name: str, t: F) -> tuple[Any, Any]:
+    args = preset_arguments(name)
+    return matrix_at_exact(args["A_t"], t), matrix_at_exact(args["B_t"], t)
+
+
+@pytest.mark.parametrize("name", ["example-29", "example-31", "example-32", "circles-crossing", "circles-graze", "ellipse-spin"])
+def test_paper_events(name):
+    """mu = 1 exactly at rational events; on each side of every event mu is on the side of 1
+    the motion analysis says (at the ends of the event's isolating interval, narrowed)."""
+    r = analyse(**preset_arguments(name), digits=10)
+    assert r.events
+    for e in r.events:
+        if e.time.value is not None:
+            A, B = _at(name, q(e.time.value))
+            cs = contact_scale(A, B)
+            assert cs.relation == Relation.TANGENT and cs.lo == cs.hi == 1
+            cp = contact_point(A, B)
+            fa, fb = frac(A), frac(B)
+            x = [q(c.value) for c in cp.point]
+            assert form(fa, x) == 0 and form(fb, x) == 0
+        e.time.refine_to(fmpq(1, 10**12))
+        for t, rel in ((e.time.lo, e.before), (e.time.hi, e.after)):
+            if rel is None or t == e.time.value:
+                continue
+            cs = contact_scale(*_at(name, q(t)))
+            assert cs.relation == rel
+            assert (cs.lo > 1) if rel == Relation.SEPARATE else (cs.hi < 1)
+
+
+def test_example_31_margin_grows_away_from_event():
+    # touch and leave at t = 4: mu - 1 is positive on both sides, larger further away
+    m = [contact_scale(*_at("example-31", F(t))).approx for t in (3, F(39, 10), F(41, 10), 5)]
+    assert m[0] > m[1] > 1 and 1 < m[2] < m[3]
+
+
+# ------------------------------------------------------------------ separating plane
+
+
+def _check_plane(A: Any, B: Any, plane: Any) -> None:
+    n = [q(v) for v in plane.normal]
+    d = q(plane.offset)
+    assert plane_misses_on_side(frac(A), n, d, -1)
+    assert plane_misses_on_side(frac(B), n, d, 1)
+
+
+@given(exact_shapes(3), exact_shapes(3))
+def test_separating_plane_exact_pairs(A, B):
+    if classify(A, B) != Relation.SEPARATE:
+        with pytest.raises(ValueError, match="no plane separates"):
+            separating_plane(A, B)
+        return
+    _check_plane(A, B, separating_plane(A, B))
+
+
+@given(float_pairs())
+def test_separating_plane_float_pairs(pair):
+    A, B = pair
+    if classify(A, B) == Relation.SEPARATE:
+        _check_plane(A, B, separating_plane(A, B))
+
+
+@pytest.mark.parametrize("k", [3, 9, 20, 40])
+def test_separating_plane_near_tangent(k):
+    # an ellipse and a circle a hair apart (gap 10^-k)
+    A = axis_ellipsoid([0, 0], [2, 1])
+    B = circle(3 + F(1, 10**k), F(1, 10**k), 1)
+    assert classify(A, B) == Relation.SEPARATE
+    plane = separating_plane(A, B)
+    _check_plane(A, B, plane)
+    assert 0 < plane.gap < 2 * 10.0**-k
+
+
+def test_separating_plane_simple_and_float_rotated():
+    p = separating_plane(sphere(0, 0, 0, 1), sphere(0, 3, 0, 1))
+    assert p.normal == (0, 1, 0) and p.offset == fmpq(3, 2)
+    assert abs(p.gap - 1.0) < 1e-12
+    A = quadric_from_axes([0.1, -0.2, 0.3], [1.0, 0.5, 0.25], [0.3, 0.5, -0.1, 0.8])
+    B = quadric_from_axes([2.5, 1.0, -0.4], [0.7, 0.7, 1.1], [1.0, 0.0, 0.4, 0.1])
+    _check_plane(A, B, separating_plane(A, B))
+    _check_plane(-A, B, separating_plane(-A, B))  # flipped signs
+
+
+def test_independent_plane_check_can_fail():
+    A, B = circle(0, 0, 1), circle(3, 0, 1)
+    assert plane_misses_on_side(frac(A), [F(1), F(0)], F(3, 2), -1)
+    assert not plane_misses_on_side(frac(A), [F(1), F(0)], F(3, 2), 1)  # wrong side
+    assert not plane_misses_on_side(frac(A), [F(1), F(0)], F(1), -1)  # touches A at (1, 0)
+    assert not plane_misses_on_side(frac(B), [F(1), F(1)], F(3), 1)  # cuts B
+
+
+def test_separating_plane_rejects():
+    with pytest.raises(ValueError, match="tangent"):
+        separating_plane(circle(0, 0, 1), circle(2, 0, 1))
+    with pytest.raises(ValueError, match="overlap"):
+        separating_plane(circle(0, 0, 1), circle(1, 0, 1))
+
+
+# ------------------------------------------------------------------ contact point
+
+
+@given(tangent_pairs())
+def test_contact_point_tangent_exact(pair):
+    A, B = pair
+    cp = contact_point(A, B)
+    assert cp.relation == Relation.TANGENT and cp.is_rational
+    fa, fb = frac(A), frac(B)
+    x = [q(c.value) for c in cp.point]
+    assert form(fa, x) == 0 and form(fb, x) == 0
+    n = [q(c.value) for c in cp.normal]
+    d = len(x)
+    ga = [sum(fa[i][j] * x[j] for j in range(d)) + fa[i][d] for i in range(d)]
+    gb = [sum(fb[i][j] * x[j] for j in range(d)) + fb[i][d] for i in range(d)]
+    assert n == ga  # out of A
+    # B's gradient is antiparallel: gb = -t n with t > 0
+    t = next(-gb[i] / n[i] for i in range(d) if n[i] != 0)
+    assert t > 0 and all(gb[i] == -t * n[i] for i in range(d))
+
+
+def test_contact_point_tangent_decimals_and_pencil_root():
+    # circles 3-4-5: radii 2 and 3 at distance 5 touch at (6/5, 8/5)
+    cp = contact_point(circle(0, 0, 2), circle(3, 4, 3))
+    assert cp.rational_point == (fmpq(6, 5), fmpq(8, 5))
+    d = cp.to_dict(digits=12)
+    assert [c["exact"] for c in d["point"]] == ["6/5", "8/5"]
+    assert d["pencil_root"]["exact"] is not None
+
+
+@given(exact_shapes(3), exact_shapes(3))
+def test_overlap_witness_inside_both(A, B):
+    rel = classify(A, B)
+    if rel == Relation.SEPARATE:
+        with pytest.raises(ValueError, match="separate"):
+            contact_point(A, B)
+        return
+    cp = contact_point(A, B)
+    if rel == Relation.OVERLAP:
+        x = [q(c.value) for c in cp.point]
+        assert form(frac(A), x) < 0 and form(frac(B), x) < 0
+
+
+@pytest.mark.parametrize("k", [3, 15, 40])
+def test_overlap_witness_thin_lens(k):
+    A = circle(0, 0, 1)
+    B = circle(2 - F(1, 10**k), 0, 1)
+    cp = contact_point(A, B)
+    x = [q(c.value) for c in cp.point]
+    assert form(frac(A), x) < 0 and form(frac(B), x) < 0
+
+
+def test_overlap_witness_float_and_nested():
+    A = quadric_from_axes([0.0, 0.0, 0.0], [3.0, 2.0, 1.0], [0.9, 0.1, 0.2, 0.3])
+    for B in (quadric_from_axes([0.1, 0.1, 0.1], [0.2, 0.2, 0.2]), A.copy(), -quadric_from_axes([2.9, 0.0, 0.0], [1.0, 1.0, 1.0])):
+        cp = contact_point(A, B)
+        x = [q(c.value) for c in cp.point]
+        assert form(frac(A), x) < 0 and form(frac(B), x) < 0
+
+
+# ------------------------------------------------------------------ witness and margin
+
+
+def test_witness_sentences():
+    w = witness(circle(0, 0, 1), circle(3, 0, 1))
+    assert w.sentence == "separate: this plane separates them" and w.plane is not None
+    assert w.margin == "50 % apart"
+    w = witness(circle(0, 0, 1), circle(2, 0, 1))
+    assert w.sentence == "tangent: they touch here" and w.point.rational_point == (1, 0)
+    assert w.margin == "touching"
+    w = witness(circle(0, 0, 1), circle(F(194, 100), 0, 1))
+    assert w.sentence == "overlap: this point is inside both"
+    assert w.margin == "overlapping by 3 %"
+    d = w.to_dict()
+    assert d["contact_scale"]["lo"] == d["contact_scale"]["hi"] == "97/100"
+
+
+def test_margin_text():
+    assert margin_text(1.018, 1.018, Relation.SEPARATE) == "1.8 % apart"
+    assert margin_text(0.5, 0.5, "overlap") == "overlapping by 50 %"
+
+
+# ------------------------------------------------------------------ batch forms
+
+
+def _random_stack(d: int, N: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(N):
+        o = rng.uniform(0, 3) if d == 2 else rng.normal(size=4)
+        out.append(quadric_from_axes(rng.uniform(-3, 3, d), rng.uniform(0.2, 3, d), o))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_batch_equals_per_pair(d):
+    A, B = _random_stack(d, 60, d), _random_stack(d, 60, 10 + d)
+    r = contact_scale(A, B)
+    assert r.lo.shape == (60,)
+    assert np.array_equal(r.relation, classify(A, B))
+    assert np.all(r.lo <= r.approx) and np.all(r.approx <= r.hi)
+    assert np.all(r.hi - r.lo <= 1e-12 * r.hi)
+    for i in range(0, 60, 3):
+        cs = contact_scale(A[i], B[i])
+        assert cs.relation == r.relation[i]
+        # both certified: they must intersect, and the exact per-pair value lies in the batch bracket
+        assert fmpq(*float(r.lo[i]).as_integer_ratio()) <= cs.hi and cs.lo <= fmpq(*float(r.hi[i]).as_integer_ratio())
+
+
+def test_batch_brackets_checked_by_oracle():
+    A, B = _random_stack(3, 12, 5), _random_stack(3, 12, 6)
+    r = contact_scale(A, B, rtol=1e-9)
+    for i in range(12):
+        fa, fb = frac(A[i]), frac(B[i])
+        assert mu_side(fa, fb, F(float(r.lo[i]))) in ("separate", "tangent")
+        assert mu_side(fa, fb, F(float(r.hi[i]))) in ("overlap", "tangent")
+
+
+def test_batch_tangent_broadcast_and_exact_input():
+    pairs = [dyadic_tangent_pair(3, a, rr, [0.5, -1.0, 2.0]) for a, rr in ((2.0, 1.0), (0.5, 4.0), (4.0, 0.25))]
+    A = np.array([p[0] for p in pairs])
+    B = np.array([p[1] for p in pairs])
+    r = contact_scale(A, B)
+    assert r.lo.tolist() == r.hi.tolist() == [1.0, 1.0, 1.0]
+    # broadcasting one shape against a stack (2, 3)
+    A0 = quadric_from_axes([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])
+    Bs = np.array([[quadric_from_axes([x, 0.0, 0.0], [1.0, 1.0, 1.0]) for x in (1.0, 2.0, 3.0)]] * 2)
+    r = contact_scale(A0, Bs)
+    assert r.lo.shape == (2, 3)
+    assert r.relation[0].tolist() == [2, 1, 0] and r.lo[0, 2] <= 1.5 <= r.hi[0, 2]
+    # exact input stacks go pair by pair
+    r = contact_scale([circle(0, 0, 1), circle(0, 0, 1)], [circle(3, 0, 1), circle(1, 0, 1)])
+    assert r.lo.tolist() == r.hi.tolist() == [1.5, 0.5]
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_batch_planes_certified_and_checked(d):
+    A, B = _random_stack(d, 40, 20 + d), _random_stack(d, 40, 30 + d)
+    p = separating_plane(A, B)
+    sep = classify(A, B) == Relation.SEPARATE
+    assert np.array_equal(p.certified, sep)  # every separate pair got a verified float plane
+    for i in np.flatnonzero(sep):
+        n = [F(float(v)) for v in p.normal[i]]
+        assert plane_misses_on_side(frac(A[i]), n, F(float(p.offset[i])), -1)
+        assert plane_misses_on_side(frac(B[i]), n, F(float(p.offset[i])), 1)
+    assert np.isnan(p.offset[~sep]).all()
+
+
+def test_batch_one_float_pair_and_far_centres():
+    # one float pair gives 0-d arrays (the scene's drag path); centres far out compared with the
+    # sizes make the plain float k lose digits, the compensated enclosure does not
+    for shift in (0.0, 100.0, 1e4):
+        A = quadric_from_axes([shift, shift, 0.0], [0.2, 0.3, 0.25], [0.9, 0.1, 0.2, 0.3])
+        B = quadric_from_axes([shift + 0.5, shift + 0.3, 0.1], [0.1, 0.3, 0.2], [0.2, 0.8, 0.1, 0.3])
+        r = contact_scale_batch(A, B, rtol=1e-10)
+        assert r.lo.shape == ()
+        assert r.exact_pairs == (1 if shift > 1000 else 0)  # at 1e4 x the sizes the last entry loses s*
+        cs = contact_scale(A, B)
+        assert int(r.relation) == cs.relation
+        assert fmpq(*float(r.lo).as_integer_ratio()) <= cs.hi and cs.lo <= fmpq(*float(r.hi).as_integer_ratio())
+        assert float(r.hi - r.lo) <= 1e-10 * float(r.hi)
+        p = separating_plane(A[None], B[None])
+        if cs.relation == Relation.SEPARATE:
+            assert p.certified[0]
+            n = [F(float(v)) for v in p.normal[0]]
+            assert plane_misses_on_side(frac(A), n, F(float(p.offset[0])), -1)
+            assert plane_misses_on_side(frac(B), n, F(float(p.offset[0])), 1)
+
+
+def _rotated(center: list[float], axes: list[float], q: list[float]) -> np.ndarray:
+    """The way users build them: R diag(1/r^2) R^T from a float rotation (symmetric up to rounding)."""
+    R = rotation_from_quaternion(q)
+    Q = R @ np.diag([1 / r**2 for r in axes]) @ R.T
+    c = np.array(center)
+    M = np.zeros((4, 4))
+    M[:3, :3] = Q
+    M[:3, 3] = -Q @ c
+    M[3, :3] = -(c @ Q)
+    M[3, 3] = c @ Q @ c - 1
+    return M
+
+
+def test_near_symmetric_float_matrices():
+    rng = np.random.default_rng(7)
+    pairs = []
+    while len(pairs) < 12:
+        A = _rotated(list(rng.uniform(-2, 2, 3)), list(rng.uniform(0.3, 2, 3)), list(rng.normal(size=4)))
+        B = _rotated(list(rng.uniform(-2, 2, 3)), list(rng.uniform(0.3, 2, 3)), list(rng.normal(size=4)))
+        if not (np.array_equal(A, A.T) and np.array_equal(B, B.T)):
+            pairs.append((A, B))
+    A = np.array([p[0] for p in pairs])
+    B = np.array([p[1] for p in pairs])
+    r = contact_scale(A, B, rtol=1e-9)
+    p = separating_plane(A, B)
+    for i, (a, b) in enumerate(pairs):
+        cs = contact_scale(a, b)
+        assert str(cs.relation) == oracle_relation(frac(a), frac(b)) == str(Relation(int(r.relation[i])))
+        assert fmpq(*float(r.lo[i]).as_integer_ratio()) <= cs.hi and cs.lo <= fmpq(*float(r.hi[i]).as_integer_ratio())
+        if cs.relation == Relation.SEPARATE:
+            _check_plane(a, b, separating_plane(a, b))
+            if p.certified[i]:
+                n = [F(float(v)) for v in p.normal[i]]
+                assert plane_misses_on_side(frac(a), n, F(float(p.offset[i])), -1)
+                assert plane_misses_on_side(frac(b), n, F(float(p.offset[i])), 1)
+        else:
+            cp = contact_point(a, b)
+            if cs.relation == Relation.OVERLAP:
+                x = [q(c.value) for c in cp.point]
+                assert form(frac(a), x) < 0 and form(frac(b), x) < 0
+    assert p.certified[r.relation == 0].all()
+
+
+# ------------------------------------------------------------------ distance (stretch)
+
+
+def _check_distance(A: Any, B: Any, r: Any) -> None:
+    """Exactly: the two points lie in the shapes, |p - q| <= hi, lo <= hi."""
+    p, qq = [q(v) for v in r.point_a], [q(v) for v in r.point_b]
+    assert form(frac(A), p) <= 0 and form(frac(B), qq) <= 0
+    assert sum((x - y) ** 2 for x, y in zip(p, qq, strict=True)) <= q(r.hi) ** 2
+    assert 0 < q(r.lo) <= q(r.hi)
+
+
+@pytest.mark.parametrize(("c2", "r1", "r2"), [((3, 4, 12), 2, F(3, 2)), ((1, 1, 1), F(1, 3), F(1, 4)), ((5, 0, 0), 1, 2)])
+def test_distance_spheres(c2, r1, r2):
+    A, B = sphere(0, 0, 0, r1), sphere(*c2, r2)
+    dist = math.sqrt(sum(F(v) ** 2 for v in c2)) - r1 - r2  # closed form (float only for irrational |c2|)
+    r = distance(A, B)
+    _check_distance(A, B, r)
+    assert float(r.lo) <= dist + 1e-15 and dist - 1e-15 <= float(r.hi)
+    assert r.hi - r.lo <= r.hi * fmpq(1, 10**12)
+
+
+@pytest.mark.parametrize("k", [2, 9, 20, 40])
+def test_distance_ellipse_and_circle(k):
+    # ellipse x^2/4 + y^2 <= 1 and a unit circle centred at (3 + g, 0): distance exactly g
+    g = F(1, 10**k)
+    A, B = axis_ellipsoid([0, 0], [2, 1]), circle(3 + g, 0, 1)
+    r = distance(A, B)
+    _check_distance(A, B, r)
+    assert q(r.lo) <= g <= q(r.hi) and r.hi - r.lo <= r.hi * fmpq(1, 10**12)
+
+
+@given(float_pairs())
+def test_distance_random(pair):
+    A, B = pair
+    r = distance(A, B)
+    if classify(A, B) != Relation.SEPARATE:
+        assert r.lo == r.hi == 0
+        return
+    _check_distance(A, B, r)
+    assert r.hi - r.lo <= r.hi * fmpq(1, 10**12)
+    # the plane with normal n through the middle of the slab separates them (independent check)
+    n = [q(v) for v in r.normal]
+    p, qq = [q(v) for v in r.point_a], [q(v) for v in r.point_b]
+    mid = (sum(a * b for a, b in zip(n, p, strict=True)) + sum(a * b for a, b in zip(n, qq, strict=True))) / 2
+    assert plane_misses_on_side(frac(A), n, mid, -1) and plane_misses_on_side(frac(B), n, mid, 1)
