@@ -121,17 +121,22 @@ class TimelineMixin:
             self._panel_timer.start()
 
     def _flush_panels(self) -> None:
-        with self._lock, self._batch():
-            self._panel_timer = None
-            if self._closed:
-                return
-            if self._static_due and self.model is None:
-                self._static_panels()
-            if self._panels_due:
-                self._panels_now()
-            elif self._plots_due:
-                self._plots_due = False
-                self._refresh_plots()
+        try:
+            with self._lock, self._batch():
+                self._panel_timer = None
+                if self._closed:
+                    return
+                if self._static_due and self.model is None:
+                    self._static_panels()
+                if self._panels_due:
+                    self._panels_now()
+                elif self._plots_due:
+                    self._plots_due = False
+                    self._refresh_plots()
+        except RuntimeError as e:  # the tab or the server went away while the timer waited
+            if "removed" not in str(e) and "closed" not in str(e):
+                raise
+            self._closed = True
 
     def _panels_now(self, *, plots: bool = True) -> None:
         """Readout, bar, slider/t box and (with ``plots``) the plot cursor for the current t."""
