@@ -52,7 +52,7 @@ def _size(text: str) -> int:
 
 
 def _time(text: str) -> float:
-    from core.rationals import to_fmpq
+    from core.shapes.numbers import to_fmpq
 
     try:
         q = to_fmpq(text)

@@ -1,4 +1,4 @@
-"""Benchmark of the moving-shape analysis (core.parametric.analyse).
+"""Benchmark of the moving-shape analysis (core.moving.analysis.analyse).
 
 Prints a table: analyse time for each paper example and for random rational motions of growing
 degree (translation degree 1..4, rotation quaternion degree 0..4, i.e. rotation matrix entries of
@@ -19,7 +19,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from core import analyse  # noqa: E402
-from core.presets import preset_arguments  # noqa: E402
+from core.moving.presets import preset_arguments  # noqa: E402
 
 
 def _poly(rng: random.Random, deg: int) -> str:

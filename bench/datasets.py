@@ -49,7 +49,7 @@ for _p in (str(_ROOT), str(_ROOT / "tests")):
 
 from oracle import oracle_relation  # noqa: E402  (tests/oracle.py: independent ground truth)
 
-from core.rationals import to_fmpq  # noqa: E402
+from core.shapes.numbers import to_fmpq  # noqa: E402
 
 __all__ = [
     "Dataset",
@@ -153,7 +153,7 @@ def is_valid_exact(M: np.ndarray) -> bool:
     """Exact check (flint) that a float matrix is a valid ellipse/ellipsoid up to sign.
 
     The exact symmetric part has a positive definite quadratic block (leading minors > 0 after
-    normalising the sign of M[0, 0]) and det < 0. Independent of ``core.quadrics`` (its
+    normalising the sign of M[0, 0]) and det < 0. Independent of ``core.shapes.quadrics`` (its
     asymmetry tolerance is not checked here: the generators only round).
     """
     n = M.shape[0]
@@ -407,7 +407,7 @@ def _check(dim: int, N: int) -> None:
 
 
 # ------------------------------------------------------------------------------------ motions
-# Moving pairs in the JSON motion format of core.motions (exact strings), with an interval.
+# Moving pairs in the JSON motion format of core.moving.motions (exact strings), with an interval.
 
 
 def _q(x: Any) -> str:

@@ -36,8 +36,8 @@ import numpy as np
 from flint import fmpq
 
 from core import analyse, classify
-from core.motions import as_motion, matrix_at_exact
-from core.presets import preset_arguments, preset_names
+from core.moving.motions import as_motion, matrix_at_exact
+from core.moving.presets import preset_arguments, preset_names
 
 from . import datasets as D
 

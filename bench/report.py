@@ -466,7 +466,7 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
                  "'slider' = `set_t(t, defer_panels=True)` (what the slider and playback run: shapes and colours at once, panels "
                  "coalesced to 20 Hz, their messages counted); 'jump' = `set_t(t)` (what an event button or a typed t runs: the readout, "
                  "intervals bar and t box at once; the plot cursor follows within 50 ms in every mode). 'analyses run' = calls of "
-                 "`core.parametric.analyse` during the steps; 'explain() calls' = static explanations during the steps. "
+                 "`core.moving.analysis.analyse` during the steps; 'explain() calls' = static explanations during the steps. "
                  "Each row is the best of 3 runs on fresh servers (lowest median), as throughputs are best-of-3: the machine is shared.\n")
         if "scene_cost.png" in figs:
             L.append("![scene](figures/scene_cost.png)\n")

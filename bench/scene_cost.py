@@ -7,7 +7,7 @@ a typed t runs it: readout, intervals bar and t box at once, the plot cursor wit
 the server's compute plus queueing the websocket messages (counted with ``count_messages``). The
 cross-check :func:`app.scene.costs.measure_update_costs` (the scene helper's own timer) runs too.
 
-Shows that work is skipped: the number of exact analyses (``core.parametric.analyse``) and static
+Shows that work is skipped: the number of exact analyses (``core.moving.analysis.analyse``) and static
 explanations (``explain``) run during 200 t-steps (expected: 0 analyses; t only moves shapes and
 reads ``relation_at``), and the t-step cost with the live plots on and off (a closed panel).
 Targets (issue 6): drag < 2 ms, t-step < 1 ms.
@@ -85,7 +85,7 @@ def run_scene_cost(
     """
     import viser
 
-    import core.parametric as cp
+    import core.moving.analysis as cp
     from app.scene import measure_update_costs
     from app.scene import session as S
     from app.scene.state import SceneConfig

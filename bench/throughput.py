@@ -38,7 +38,7 @@ def _cold_start() -> dict[str, float]:
     """Seconds from process start to compiled kernels ready: empty cache, then warm cache."""
     code = (
         "import time; t0 = time.perf_counter(); import core; t1 = time.perf_counter(); ok = core.warm_up(wait=True); "
-        "t2 = time.perf_counter(); import numpy as np; from core import compiled; "
+        "t2 = time.perf_counter(); import numpy as np; from core.fixed import compiled; "
         "print(f'{t1 - t0} {t2 - t1} {ok}'); print(compiled.status())"
     )
     out: dict[str, float] = {}
@@ -58,7 +58,7 @@ def _cold_start() -> dict[str, float]:
 def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Measure every row; returns plain data for the report."""
     import core
-    from core.classify import Certifier, classify_detailed
+    from core.fixed.classify import Certifier, classify_detailed
 
     core.warm_up(wait=True)
     baseline.build()

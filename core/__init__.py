@@ -2,7 +2,7 @@
 
 Implements Caravantes, Diaz-Toca, Fioravanti, Gonzalez-Vega, "Solving the interference problem
 for ellipses and ellipsoids: new formulae". Conventions are documented once, in
-:mod:`core.quadrics`. Public API::
+:mod:`core.shapes.quadrics`. Public API::
 
     from core import classify, Relation, explain          # static pairs (certified)
     from core import classify_detailed                    # + which arithmetic certified each pair
@@ -12,37 +12,37 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
-are compiled with the system's C compiler on first use, :mod:`core.compiled`).
+are compiled with the system's C compiler on first use, :mod:`core.fixed.compiled`).
 """
 
-from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes)
-from .classify import METHODS as METHODS
-from .classify import ON_INVALID as ON_INVALID
-from .classify import Certifier as Certifier
-from .classify import Classification as Classification
-from .classify import Method as Method
-from .classify import Stats as Stats
-from .classify import classify as classify
-from .classify import classify_detailed as classify_detailed
-from .compiled import set_threads as set_threads
-from .compiled import warm_up as warm_up
-from .explain import Explanation as Explanation
-from .explain import Quantity as Quantity
-from .explain import explain as explain
-from .expressions import parse_expression as parse_expression
-from .motions import Motion as Motion
-from .motions import motion_from_dict as motion_from_dict
-from .motions import motion_to_dict as motion_to_dict
-from .parametric import MotionAnalysis as MotionAnalysis
-from .parametric import analyse as analyse
-from .presets import preset as preset
-from .presets import preset_names as preset_names
-from .quadrics import ShapeParams as ShapeParams
-from .quadrics import axes_from_quadric as axes_from_quadric
-from .quadrics import quadric_from_axes as quadric_from_axes
-from .quadrics import rotation_from_quaternion as rotation_from_quaternion
-from .quadrics import validate_quadric as validate_quadric
+from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes
+from .fixed.classify import METHODS as METHODS
+from .fixed.classify import ON_INVALID as ON_INVALID
+from .fixed.classify import Certifier as Certifier
+from .fixed.classify import Classification as Classification
+from .fixed.classify import Method as Method
+from .fixed.classify import Stats as Stats
+from .fixed.classify import classify as classify
+from .fixed.classify import classify_detailed as classify_detailed
+from .fixed.compiled import set_threads as set_threads
+from .fixed.compiled import warm_up as warm_up
+from .fixed.explain import explain as explain
+from .fixed.explanation import Explanation as Explanation
+from .fixed.explanation import Quantity as Quantity
+from .moving.analysis import MotionAnalysis as MotionAnalysis
+from .moving.analysis import analyse as analyse
+from .moving.expressions import parse_expression as parse_expression
+from .moving.motions import Motion as Motion
+from .moving.motions import motion_from_dict as motion_from_dict
+from .moving.motions import motion_to_dict as motion_to_dict
+from .moving.presets import preset as preset
+from .moving.presets import preset_names as preset_names
 from .relation import Relation as Relation
+from .shapes.quadrics import ShapeParams as ShapeParams
+from .shapes.quadrics import axes_from_quadric as axes_from_quadric
+from .shapes.quadrics import quadric_from_axes as quadric_from_axes
+from .shapes.quadrics import rotation_from_quaternion as rotation_from_quaternion
+from .shapes.quadrics import validate_quadric as validate_quadric
 from .witness import ContactPoint as ContactPoint
 from .witness import ContactScale as ContactScale
 from .witness import SeparatingPlane as SeparatingPlane

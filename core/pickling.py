@@ -1,7 +1,7 @@
 """Pickling of the python-flint types the results hold (``fmpq_poly``, ``fmpz_poly``).
 
 python-flint 0.9 pickles ``fmpz`` and ``fmpq`` but not its polynomials; a motion analysis
-(:class:`core.motion_result.MotionAnalysis`) holds them, and it travels from a worker process to
+(:class:`core.moving.result.MotionAnalysis`) holds them, and it travels from a worker process to
 the scene unchanged. Registering reducers with :mod:`copyreg` (coefficients in, the same
 polynomial out, exactly) is enough; importing :mod:`core` does it.
 """

@@ -13,7 +13,7 @@ from typing import Any
 
 from flint import ctx, fmpq, fmpq_mat, fmpz_poly
 
-from core.rationals import to_fmpq
+from core.shapes.numbers import to_fmpq
 
 
 def exact_matrix(M: Any) -> fmpq_mat:

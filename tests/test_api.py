@@ -20,7 +20,7 @@ from fastapi.testclient import TestClient
 from app.api import ApiSettings, create_api
 from app.api.deps import get_settings, get_workers
 from app.api.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerPool, WorkerTimeout
-from core.decision import RULES
+from core.formulae.decision import RULES
 
 
 def circle(x, r=1):

@@ -89,7 +89,7 @@ def test_static_tables(static_out):
 
 def test_moving_sampling_misses_a_touch_and_analysis_checks_out():
     from core import analyse
-    from core.presets import preset_arguments
+    from core.moving.presets import preset_arguments
 
     args = preset_arguments("example-31")  # touch and leave at t = 4
     res = analyse(args["A_t"], args["B_t"], args["interval"])

@@ -139,7 +139,7 @@ def wait_colour(page, relation: str, node: str = "/shapes/A/mesh") -> None:
     )
 
 
-@pytest.mark.skipif(not _preset_available("example-29"), reason="core.presets has no example-29 yet")
+@pytest.mark.skipif(not _preset_available("example-29"), reason="core.moving.presets has no example-29 yet")
 def test_example_29_colours(headless):
     """Paper, Example 29: separate on [0, alpha1), overlap on (alpha1, alpha2), tangent at alpha1."""
     cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.3, "gizmos": False, "show_plots": False})
@@ -160,7 +160,7 @@ def test_example_29_colours(headless):
         assert abs(hs.session.state.t - T_TANGENT) < 1e-12 and hs.session.state.event == 1
 
 
-@pytest.mark.skipif(not _preset_available("example-29"), reason="core.presets has no example-29 yet")
+@pytest.mark.skipif(not _preset_available("example-29"), reason="core.moving.presets has no example-29 yet")
 def test_screenshot_command_contract(tmp_path):
     """``python -m app screenshot --preset example-29 --t 0.7 --out shot.png`` writes the PNG."""
     import subprocess
@@ -180,7 +180,7 @@ def test_screenshot_command_contract(tmp_path):
     assert int.from_bytes(data[16:20], "big") == 800 and int.from_bytes(data[20:24], "big") == 600
 
 
-@pytest.mark.skipif(not _preset_available("example-29"), reason="core.presets has no example-29 yet")
+@pytest.mark.skipif(not _preset_available("example-29"), reason="core.moving.presets has no example-29 yet")
 def test_analysis_shows_intervals_and_jump_to_event(headless):
     cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.2, "gizmos": False})
     with headless(cfg, width=1200, height=900, timeout=60) as hs:
@@ -202,7 +202,7 @@ def test_analysis_shows_intervals_and_jump_to_event(headless):
         assert hs.session.state.event == 2
 
 
-@pytest.mark.skipif(not _preset_available("circles-crossing"), reason="core.presets has no circles-crossing yet")
+@pytest.mark.skipif(not _preset_available("circles-crossing"), reason="core.moving.presets has no circles-crossing yet")
 def test_choosing_a_preset_in_the_dropdown_shows_its_intervals(headless):
     with headless(static_config("4"), width=1200, height=900, timeout=60) as hs:
         page = hs.page

@@ -1,11 +1,11 @@
-"""Safe expression parser (core.expressions): exact values, errors with positions, limits."""
+"""Safe expression parser (core.moving.expressions): exact values, errors with positions, limits."""
 
 from fractions import Fraction
 
 import pytest
 from flint import fmpq, fmpq_poly
 
-from core.expressions import MAX_DEGREE, RationalFunction, parse_expression
+from core.moving.expressions import MAX_DEGREE, RationalFunction, parse_expression
 
 
 def poly_value(f: RationalFunction, t: Fraction) -> Fraction:
@@ -92,7 +92,7 @@ def test_errors_name_the_offender(text, fragment):
 
 
 def test_limits():
-    from core.limits import SERVER
+    from core.shapes.limits import SERVER
 
     long_text = "1+" * (SERVER.expression_chars // 2) + "1"
     with pytest.raises(ValueError, match="too long"):  # the server's edge caps the length ...

@@ -10,15 +10,23 @@ from flint import fmpq
 from strategies import dyadic_tangent_pair
 
 from core import Relation, classify, explain, quadric_from_axes
-from core import _kernels as K
-from core.errorbound import UNIT_ROUNDOFF, gamma_constant
-from core.exact import exact_pair
-from core import compiled
-from core.decision import RULE_RELATION
-from core.filters import _HAT, _relations, _PENCIL, _Prepared, _run_hat, _run_pencil, classify_float_numpy, rules_numpy
-from core.kernelgen import main as kernelgen_main
-from core.pencil import pencil_coefficients
-from core.subresultants import hat_s0, hat_s1, hat_s10
+from core.fixed import _kernels as K
+from core.fixed import compiled
+from core.fixed.errorbound import UNIT_ROUNDOFF, gamma_constant
+from core.fixed.exact import exact_pair
+from core.fixed.filters import (
+    _HAT,
+    _PENCIL,
+    _Prepared,
+    _relations,
+    _run_hat,
+    _run_pencil,
+    rules_numpy,
+)
+from core.fixed.kernelgen import main as kernelgen_main
+from core.formulae.decision import RULE_RELATION
+from core.formulae.pencil import pencil_coefficients
+from core.formulae.subresultants import hat_s0, hat_s1, hat_s10
 
 
 def test_generated_kernels_are_current():
@@ -112,7 +120,7 @@ def test_pencil_error_bounds_hold_for_rounded_symmetrisation(n):
 def test_certificate_kernels_bounds_hold(n):
     """pencil_at (P(T) from a_i with radii) and form (X^T M X with entry radii) against exact
     values for inputs anywhere inside their radii."""
-    from core import _kernels as KK
+    from core.fixed import _kernels as KK
 
     rng = np.random.default_rng(40 + n)
     for _ in range(40):
@@ -270,7 +278,7 @@ def _far_pairs(rng, n, count, centre, axes=(0.3, 3.0), gap=None):
 def test_translated_stage_is_sound_and_useful(n, centre):
     rng = np.random.default_rng(int(abs(centre)) % 1000 + n)
     A, B = _far_pairs(rng, n, 150, centre)
-    from core.filters import classify_translated
+    from core.fixed.filters import classify_translated
 
     codes = _relations(classify_translated(A, B))
     exact = classify(A, B, method="exact")
@@ -285,7 +293,7 @@ def test_translated_stage_is_sound_and_useful(n, centre):
 
 @pytest.mark.parametrize("n", [3, 4])
 def test_translated_stage_abstains_on_exact_tangency_far_away(n):
-    from core.filters import classify_translated
+    from core.fixed.filters import classify_translated
 
     A, B = dyadic_tangent_pair(n - 1, 2.0, 1.0, [2.0**20] * (n - 1))
     assert classify_translated(A[None], B[None])[0] == -1
@@ -297,7 +305,7 @@ def test_translated_stage_near_tangent_far_away(n):
     """Near-tangent pairs around 1e5 at gaps 1e-4..1e-12: labels from the independent oracle."""
     from oracle import oracle_relation
 
-    from core.filters import classify_translated
+    from core.fixed.filters import classify_translated
 
     rng = np.random.default_rng(99 + n)
     d = n - 1

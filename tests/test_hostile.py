@@ -410,12 +410,12 @@ def type_motion(s, a: str, b: str = "-t", interval: str = "-2, 2") -> float:
 
 def test_scene_reads_typed_motions_in_a_worker(scene_session, monkeypatch):
     """The scene process never parses a tab's motion: with the parser broken here, it still works."""
-    import core.motions
+    import core.moving.motions
 
     def broken(*a, **k):
         raise AssertionError("parsed in the scene process")
 
-    monkeypatch.setattr(core.motions, "parse_expression", broken)
+    monkeypatch.setattr(core.moving.motions, "parse_expression", broken)
     s = scene_session
     s.ready.clear()
     assert type_motion(s, "t") < ANSWER_S

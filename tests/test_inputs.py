@@ -19,8 +19,8 @@ from hypothesis import strategies as st
 from oracle import oracle_relation
 
 from core import Relation, analyse, classify, explain, preset, preset_names
-from core.classify import Certifier, classify_detailed
-from core.motions import as_motion
+from core.fixed.classify import Certifier, classify_detailed
+from core.moving.motions import as_motion
 
 U, INVALID = Relation.UNDECIDED, Relation.INVALID
 
@@ -101,7 +101,7 @@ def test_numpy_built_batches_stay_in_the_float_filter():
         for i in range(0, 200, 23):
             assert res.relation[i] == Relation[oracle_relation(A[i], B[i]).upper()]
         # the numpy filter (no compiler, or while the C kernels build) takes the same decisions
-        from core.filters import classify_float_numpy
+        from core.fixed.filters import classify_float_numpy
 
         codes = classify_float_numpy(A, B)
         decided = codes != U
@@ -134,7 +134,7 @@ def test_clearly_asymmetric_matrix_is_refused_with_advice():
 
 def test_tolerance_is_applied_the_same_way_by_every_path():
     # an asymmetry just below and just above the threshold, with exact and float input
-    from core.quadrics import SYMMETRY_TOLERANCE
+    from core.shapes.quadrics import SYMMETRY_TOLERANCE
 
     tol = float(SYMMETRY_TOLERANCE)
     for factor, ok in ((0.999, True), (1.001, False)):

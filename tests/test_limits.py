@@ -1,4 +1,4 @@
-"""Size limits on user text (core.limits): numbers, bounded expression arithmetic, sqrt(n).
+"""Size limits on user text (core.shapes.limits): numbers, bounded expression arithmetic, sqrt(n).
 
 Each hostile input of issue 11 is refused *before* the work (so these tests run in
 milliseconds: a test that computed the work would take minutes or gigabytes), with a message
@@ -13,11 +13,11 @@ from fractions import Fraction
 import pytest
 from flint import fmpq, fmpz
 
-from core.expressions import RationalFunction, parse_expression
-from core.limits import LIBRARY, SERVER, LimitExceeded, Limits, current, using
-from core.motions import motion_from_dict
-from core.qsqrt import squarefree_decomposition
-from core.rationals import parse_number, to_fmpq
+from core.algebra.qsqrt import squarefree_decomposition
+from core.moving.expressions import RationalFunction, parse_expression
+from core.moving.motions import motion_from_dict
+from core.shapes.limits import LIBRARY, SERVER, LimitExceeded, Limits, current, using
+from core.shapes.numbers import parse_number, to_fmpq
 
 SEMIPRIME_100 = (10**50 + 151) * (10**50 + 447)  # two 51-digit primes: factoring it takes forever
 

@@ -1,4 +1,4 @@
-"""Motions (core.motions): JSON form, exact A(t) = M^-T A0 M^-1, evaluation for drawing."""
+"""Motions (core.moving.motions): JSON form, exact A(t) = M^-T A0 M^-1, evaluation for drawing."""
 
 import math
 from fractions import Fraction
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from flint import fmpq
 
-from core.motions import (
+from core.moving.motions import (
     as_motion,
     matrix_at,
     matrix_at_exact,
@@ -15,8 +15,8 @@ from core.motions import (
     motion_to_dict,
     shape_at,
 )
-from core.presets import preset
-from core.quadrics import quadric_from_axes
+from core.moving.presets import preset
+from core.shapes.quadrics import quadric_from_axes
 
 
 def F(x):
@@ -112,8 +112,8 @@ def test_float_matrix_matches_exact_evaluation_for_every_preset():
     """matrix_at's cached float Horner agrees with the exact matrix rounded (display path)."""
     import numpy as np
 
-    from core.motions import as_motion, matrix_at, matrix_at_exact
-    from core.presets import preset_arguments, preset_names
+    from core.moving.motions import as_motion, matrix_at, matrix_at_exact
+    from core.moving.presets import preset_arguments, preset_names
 
     for name in preset_names():
         args = preset_arguments(name)

@@ -13,9 +13,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from core import Relation, analyse, classify
-from core.motions import matrix_at_exact
-from core.pencil import pencil_coefficients
-from core.presets import preset_arguments, preset_names
+from core.formulae.pencil import pencil_coefficients
+from core.moving.motions import matrix_at_exact
+from core.moving.presets import preset_arguments, preset_names
 
 getcontext().prec = 60
 S, T_, O = Relation.SEPARATE, Relation.TANGENT, Relation.OVERLAP
@@ -469,8 +469,8 @@ def test_property_rotating_ellipsoids(pair):
 
 
 def test_real_roots_of_qsqrt_polynomials():
-    from core.qsqrt import QSqrtPoly
-    from core.realroots import real_roots
+    from core.algebra.qsqrt import QSqrtPoly
+    from core.algebra.realroots import real_roots
 
     t = QSqrtPoly(fmpq_poly([0, 1]))
     r2 = QSqrtPoly(0, 1, 2)
@@ -499,8 +499,8 @@ def test_real_roots_of_qsqrt_polynomials():
 def test_signs_at_algebraic_numbers_are_exact():
     from flint import fmpz_poly
 
-    from core.algebraic import RealAlgebraic, sign_at
-    from core.qsqrt import QSqrtPoly
+    from core.algebra.algebraic import RealAlgebraic, sign_at
+    from core.algebra.qsqrt import QSqrtPoly
 
     alpha = RealAlgebraic.isolating(fmpz_poly([-2, 0, 1]), fmpq(1), fmpq(2))  # sqrt 2
     t = fmpq_poly([0, 1])
@@ -518,7 +518,7 @@ def test_signs_at_algebraic_numbers_are_exact():
 
 def test_relation_at_lookup_agrees_with_static_classifier():
     """relation_at's interval lookup against core.classify on the exact A(t), B(t)."""
-    from core.presets import preset_arguments
+    from core.moving.presets import preset_arguments
 
     for name in ("example-29", "example-31", "example-32", "example-33", "circles-crossing"):
         r = analyse(**preset_arguments(name))

@@ -1,4 +1,4 @@
-"""The float sign filter for exact polynomials (core.polysign): it may abstain, never be wrong.
+"""The float sign filter for exact polynomials (core.moving.polysign): it may abstain, never be wrong.
 
 Ground truth: exact evaluation in Q(sqrt d) (flint fmpq_poly at the exact binary value of the
 float t, sign of a + b sqrt(d) by squaring), not the code under test.
@@ -12,9 +12,9 @@ from flint import fmpq, fmpq_poly
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from core.polysign import FloatPoly
-from core.qsqrt import QSqrtPoly, sign_qsqrt
-from core.rationals import to_fmpq
+from core.algebra.qsqrt import QSqrtPoly, sign_qsqrt
+from core.moving.polysign import FloatPoly
+from core.shapes.numbers import to_fmpq
 
 rationals = st.builds(fmpq, st.integers(-10**12, 10**12), st.integers(1, 10**6))
 
@@ -77,8 +77,8 @@ def test_filter_decides_well_conditioned_cases():
 def test_qsqrt_method_falls_back_to_exact_when_the_filter_abstains():
     """QSqrtPoly.float_sign_at abstains (None) only; decide_at then evaluates exactly."""
     from core import analyse
-    from core.parametric import decide_at
-    from core.presets import preset_arguments
+    from core.moving.presets import preset_arguments
+    from core.moving.signs import decide_at
 
     r = analyse(**preset_arguments("example-30"))
     polys = r.polynomials()

@@ -1,11 +1,11 @@
-"""Built-in presets (core.presets): format, descriptions, and the answer each one promises."""
+"""Built-in presets (core.moving.presets): format, descriptions, and the answer each one promises."""
 
 import json
 
 import pytest
 
 from core import Relation, analyse, motion_from_dict, preset, preset_names
-from core.presets import PRESETS, preset_arguments
+from core.moving.presets import PRESETS, preset_arguments
 
 S, T_, O = Relation.SEPARATE, Relation.TANGENT, Relation.OVERLAP
 

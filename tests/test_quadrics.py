@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from core import axes_from_quadric, quadric_from_axes, rotation_from_quaternion, validate_quadric
-from core.rationals import to_fmpq
+from core.shapes.numbers import to_fmpq
 
 
 def test_unit_sphere_exact():

@@ -419,7 +419,7 @@ def test_relation_lookup_inside_an_isolating_interval(server):
     Example 29's alpha1 = (12 - 2 sqrt 2)/17 separates 'separate' (before) from 'overlap'."""
     from fractions import Fraction
 
-    from core.rationals import to_fmpq
+    from core.shapes.numbers import to_fmpq
 
     s = motion_session(server)
     look = s.analysis.relation_fn
@@ -436,7 +436,7 @@ def test_readout_at_t_shows_exact_signs_for_sqrt2_motion(server):
     """Example 30 has sqrt(2) entries: the readout at a float t gives that t's own signs
     (equal to core's sign_row_at), not a neighbouring sample's."""
     from core import analyse
-    from core.presets import preset_arguments
+    from core.moving.presets import preset_arguments
 
     s = motion_session(server, preset="example-30")
     r = analyse(**preset_arguments("example-30"))

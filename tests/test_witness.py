@@ -37,8 +37,8 @@ from core import (
     rotation_from_quaternion,
     separating_plane,
 )
-from core.motions import matrix_at_exact
-from core.presets import preset_arguments
+from core.moving.motions import matrix_at_exact
+from core.moving.presets import preset_arguments
 from core.witness import contact_scale_batch, distance, margin_text, witness
 
 # ------------------------------------------------------------------ independent exact helpers
@@ -61,7 +61,7 @@ def q(x: Any) -> F:
 
 
 def det(M: list[list[F]]) -> F:
-    """Leibniz formula (independent of core.pencil.determinant)."""
+    """Leibniz formula (independent of core.formulae.pencil.determinant)."""
     n = len(M)
     total = F(0)
     for perm in itertools.permutations(range(n)):

@@ -17,7 +17,7 @@ import numpy as np
 from fastapi import HTTPException
 
 from core import Relation, classify, quadric_from_axes, validate_quadric
-from core.rationals import to_fmpq
+from core.shapes.numbers import to_fmpq
 
 from .budget import Budget
 from .schemas import ClassifyOut, PairItem, ShapeIn

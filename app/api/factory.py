@@ -39,7 +39,7 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     workers = WorkerPool(
         settings.max_concurrent_analyses,
         memory_mb=settings.memory_limit_mb,
-        preload=("core", "core.parametric", "app.api.jobs"),
+        preload=("core", "core.moving.analysis", "app.api.jobs"),
     )
 
     @asynccontextmanager

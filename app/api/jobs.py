@@ -4,17 +4,17 @@ from __future__ import annotations
 
 from typing import Any
 
-from core.limits import Limits
+from core.shapes.limits import Limits
 
 __all__ = ["analyse_job"]
 
 
 def analyse_job(a: Any, b: Any, interval: list[Any], digits: int, polynomials: bool, limits: Limits) -> dict[str, Any]:
-    """Read both motions under ``limits``, then :func:`core.parametric.analyse` as a JSON-ready dict.
+    """Read both motions under ``limits``, then :func:`core.moving.analysis.analyse` as a JSON-ready dict.
 
     The request's text is parsed here, in the worker, never in the server process.
     """
-    from core.parametric import analyse
+    from core.moving.analysis import analyse
 
     from .motion_input import check_interval, check_motion
 

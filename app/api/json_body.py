@@ -17,7 +17,7 @@ from typing import Any
 from fastapi import HTTPException, Request, Response
 from fastapi.routing import APIRoute
 
-from core.limits import SERVER
+from core.shapes.limits import SERVER
 
 __all__ = ["JsonRoute", "OutOfRange", "read_json"]
 

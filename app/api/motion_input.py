@@ -4,7 +4,7 @@ Runs in the worker process (:func:`app.api.jobs.analyse_job`), never in the serv
 hostile expression costs at most the worker's time and memory budget. Every expression string
 is parsed once under the API's limits (:meth:`app.api.settings.ApiSettings.text_limits`), so a
 typo or an oversized constant is reported with its place in the request
-(``a.translation[0]: ...``) and its position in the text; then core.motions builds each motion
+(``a.translation[0]: ...``) and its position in the text; then core.moving.motions builds each motion
 (structure, symmetry, square roots) under the same limits.
 """
 
@@ -13,10 +13,10 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
-from core.expressions import parse_expression
-from core.limits import Limits
-from core.motions import Motion, motion_from_dict
-from core.rationals import parse_number
+from core.moving.expressions import parse_expression
+from core.moving.motions import Motion, motion_from_dict
+from core.shapes.limits import Limits
+from core.shapes.numbers import parse_number
 
 __all__ = ["motion_payload", "check_motion", "check_interval"]
 
@@ -24,7 +24,7 @@ _INFINITE = ("inf", "+inf", "-inf", "infinity", "-infinity", "+infinity")
 
 
 def motion_payload(m: Any) -> Any:
-    """The JSON form core.motions reads, from the pydantic model (None fields dropped)."""
+    """The JSON form core.moving.motions reads, from the pydantic model (None fields dropped)."""
     if isinstance(m, list):
         return {"matrix": m}
     return m.model_dump(exclude_none=True)

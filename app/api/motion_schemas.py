@@ -1,9 +1,9 @@
-"""Pydantic models of moving shapes (the JSON format of :mod:`core.motions`), /api/analyse and presets.
+"""Pydantic models of moving shapes (the JSON format of :mod:`core.moving.motions`), /api/analyse and presets.
 
 A motion is a bare matrix of expressions in t, ``{"matrix": ...}``, or ``{"shape": ...,
 "translation": ..., "rotation": ..., "scale": ...}``; expressions are parsed exactly by
-core.expressions (never evaluated by Python). Response models mirror
-``core.parametric.MotionAnalysis.to_dict()``.
+core.moving.expressions (never evaluated by Python). Response models mirror
+``core.moving.analysis.MotionAnalysis.to_dict()``.
 """
 
 from __future__ import annotations
@@ -24,14 +24,14 @@ from .schemas import RelationName, checked_number
 
 __all__ = ["Expr", "Motion", "AnalyseIn", "AnalyseOut", "PresetOut"]
 
-# --- motions (the JSON format of core.motions, shared with the scene and the presets) ---------
+# --- motions (the JSON format of core.moving.motions, shared with the scene and the presets) ---------
 
 MAX_EXPRESSION_SCHEMA_CHARS = 100_000
 """Static cap in the schema; the real limit is ApiSettings.max_expression_chars (checked per request)."""
 
 
 def _expression(v: Any) -> int | float | str:
-    """A number (kept as given) or an expression string in t (parsed by core.expressions)."""
+    """A number (kept as given) or an expression string in t (parsed by core.moving.expressions)."""
     if isinstance(v, str):
         if len(v) > MAX_EXPRESSION_SCHEMA_CHARS:
             raise ValueError(f"expression too long ({len(v)} characters)")

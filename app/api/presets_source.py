@@ -1,8 +1,8 @@
-"""The presets shared with the scene (:mod:`core.presets`), in the input format of /api/analyse.
+"""The presets shared with the scene (:mod:`core.moving.presets`), in the input format of /api/analyse.
 
-core.presets stores ``{"description", "A", "B", "interval"}``; the API speaks ``a``/``b``
+core.moving.presets stores ``{"description", "A", "B", "interval"}``; the API speaks ``a``/``b``
 (lower case, as in /api/classify), so a preset fetched from GET /api/presets/NAME can be posted
-to /api/analyse unchanged. If core.presets is missing the API serves no presets rather than
+to /api/analyse unchanged. If core.moving.presets is missing the API serves no presets rather than
 failing to start.
 """
 
@@ -15,7 +15,7 @@ __all__ = ["preset_summaries", "api_presets", "api_preset"]
 
 def _table() -> dict[str, dict[str, Any]]:
     try:
-        from core.presets import PRESETS
+        from core.moving.presets import PRESETS
     except ImportError:
         return {}
     return PRESETS

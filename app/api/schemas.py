@@ -22,8 +22,8 @@ from pydantic import (
     WithJsonSchema,
 )
 
-from core.limits import SERVER
-from core.rationals import parse_number
+from core.shapes.limits import SERVER
+from core.shapes.numbers import parse_number
 
 from .json_body import OutOfRange
 
@@ -46,7 +46,7 @@ __all__ = [
 ]
 
 MAX_NUMBER_CHARS = SERVER.number_chars
-"""Longest number string accepted by the API (:data:`core.limits.SERVER`; the library has none)."""
+"""Longest number string accepted by the API (:data:`core.shapes.limits.SERVER`; the library has none)."""
 MAX_INT_DIGITS = MAX_NUMBER_CHARS
 """Largest integer accepted as a JSON number, in decimal digits (as for number strings)."""
 
@@ -194,7 +194,7 @@ class ClassifyOut(BaseModel):
 
 
 class QuantityOut(BaseModel):
-    """One number of the decision (see core.explain.Quantity)."""
+    """One number of the decision (see core.fixed.explain.Quantity)."""
 
     name: str
     approx: float | None

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from core.limits import SERVER, Limits
+from core.shapes.limits import SERVER, Limits
 
 __all__ = ["ApiSettings", "default_static_dir", "default_bench_dir"]
 
@@ -49,7 +49,7 @@ class ApiSettings:
     """Most pairs in one ``{"pairs": [...]}`` classify request."""
     max_expression_chars: int = SERVER.expression_chars or 2000
     """Longest expression string in a motion (all other size limits of user text:
-    :data:`core.limits.SERVER`, e.g. number strings up to 400 characters)."""
+    :data:`core.shapes.limits.SERVER`, e.g. number strings up to 400 characters)."""
     max_degree: int = SERVER.degree
     """Highest degree in t of a numerator or denominator of one motion entry after
     simplification."""
@@ -83,6 +83,6 @@ class ApiSettings:
     def text_limits(self) -> Limits:
         """Size limits of user text in this API.
 
-        :data:`core.limits.SERVER` with this instance's expression length and degree.
+        :data:`core.shapes.limits.SERVER` with this instance's expression length and degree.
         """
         return replace(SERVER, expression_chars=self.max_expression_chars, degree=self.max_degree)

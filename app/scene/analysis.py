@@ -1,7 +1,7 @@
 """Motions in the scene: loading presets / typed motions, running the exact analysis off the GUI
 thread (cached by motion and interval), and the views the timeline draws from.
 
-This module adapts ``core``'s motion analysis (``core.analyse``, ``core.presets``) to what the
+This module adapts ``core``'s motion analysis (``core.analyse``, ``core.moving.presets``) to what the
 scene needs; it does no maths of its own beyond float evaluation for drawing.
 """
 
@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from core.limits import SERVER, Limits
-from core.quadrics import axes_from_quadric
+from core.shapes.limits import SERVER, Limits
+from core.shapes.quadrics import axes_from_quadric
 
 from .instant import SIGN_VALUE, RelationLookup, explain_at
 
@@ -45,10 +45,10 @@ class MotionError(ValueError):
 
 
 def _core_motion() -> Any:
-    """``core.presets`` when the motion API is available, else None."""
+    """``core.moving.presets`` when the motion API is available, else None."""
     try:
-        import core.parametric  # noqa: F401
-        import core.presets as presets
+        import core.moving.analysis  # noqa: F401
+        import core.moving.presets as presets
     except ImportError:
         return None
     return presets
@@ -167,7 +167,7 @@ class MotionModel:
     """A loaded motion: float evaluation for drawing, the cache key, the editor texts.
 
     Args:
-        A, B: ``core.motions.Motion`` of each shape.
+        A, B: ``core.moving.motions.Motion`` of each shape.
         interval: (lo, hi) exact ends as core reads them (None = infinite).
         preset: preset name, or None for a typed motion.
         description: one line shown under the dropdown.
@@ -205,7 +205,7 @@ class MotionModel:
         return lo + 0.45 * (hi - lo)
 
     def texts(self) -> dict[str, str]:
-        """Editor texts: "A", "B" (motions, JSON form of core.motions) and "interval"."""
+        """Editor texts: "A", "B" (motions, JSON form of core.moving.motions) and "interval"."""
         return dict(self._texts)
 
     def float_matrices(self, t: float) -> tuple[np.ndarray, np.ndarray]:
@@ -214,7 +214,7 @@ class MotionModel:
         The last t is remembered: one t-step asks for them to draw, to place the contact point
         and for the readout.
         """
-        from core.motions import matrix_at
+        from core.moving.motions import matrix_at
 
         last = self._last_matrices
         if last is not None and last[0] == t:
@@ -264,7 +264,7 @@ class MotionModel:
 def _to_float(x: Any) -> float | None:
     if x is None:
         return None
-    from core.rationals import to_fmpq
+    from core.shapes.numbers import to_fmpq
 
     q = to_fmpq(x)
     return float(q.p) / float(q.q)
@@ -277,11 +277,11 @@ def _interval_text(iv: Any) -> str:
 
 MAX_MOTION_TEXT = 32 * (SERVER.expression_chars or 2000)
 """Longest motion text (JSON) typed in one field: room for every entry of a motion at the
-longest expression length of :data:`core.limits.SERVER`."""
+longest expression length of :data:`core.shapes.limits.SERVER`."""
 
 
 def _read_interval(text: str, limits: Limits | None = None) -> tuple[Any, Any]:
-    from core.rationals import parse_number
+    from core.shapes.numbers import parse_number
 
     parts = [p.strip() for p in str(text).replace(";", ",").split(",")]
     if len(parts) != 2 or not all(parts):
@@ -318,8 +318,8 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, dim: int, 
         preset: a preset name (when ``motion`` is None).
         motion: the typed texts {"A", "B", "interval"} (or dicts).
         dim: dimension shown now (the motion's own wins).
-        limits: size limits of the text (:mod:`core.limits`); typed motions from a browser are
-            read with :data:`core.limits.SERVER` in a worker process
+        limits: size limits of the text (:mod:`core.shapes.limits`); typed motions from a browser are
+            read with :data:`core.shapes.limits.SERVER` in a worker process
             (:meth:`AnalysisCache.read_typed`).
 
     Raises:
@@ -329,7 +329,7 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, dim: int, 
     presets = _core_motion()
     if presets is None:
         raise MotionError("motion analysis is not available in this version of core", "A")
-    from core.motions import motion_from_dict
+    from core.moving.motions import motion_from_dict
 
     if motion is None:
         if preset is None:
@@ -378,7 +378,7 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, dim: int, 
 
 
 def read_motion_job(motion: dict[str, Any], dim: int) -> MotionModel | tuple[str, str]:
-    """Read a typed motion under :data:`core.limits.SERVER` (runs in a worker process).
+    """Read a typed motion under :data:`core.shapes.limits.SERVER` (runs in a worker process).
 
     Returns:
         The loaded model (it pickles with its exact matrices), or (message, field) for a
@@ -519,8 +519,8 @@ def analyse_plain(A_source: Any, B_source: Any, interval: tuple[Any, Any], digit
         {"result": MotionAnalysis.to_dict(polynomials=False), "samples": .samples(PLOT_SAMPLES),
         "polys": .polynomials()} (the exact a_i, ŝ_j: the readout evaluates them at t).
     """
-    from core.motions import motion_from_dict
-    from core.parametric import analyse
+    from core.moving.analysis import analyse
+    from core.moving.motions import motion_from_dict
 
     A, B = (motion_from_dict(m, limits=SERVER) for m in (A_source, B_source))
     an = analyse(A, B, interval, digits=digits)
@@ -592,7 +592,7 @@ def _short(decimal: str) -> str:
 def _short_rational(text: str) -> str:
     if len(text) <= 10:
         return text
-    from core.rationals import to_fmpq
+    from core.shapes.numbers import to_fmpq
 
     q = to_fmpq(text)
     return f"{float(q.p) / float(q.q):.6g}"

@@ -2,7 +2,7 @@
 
 What the timeline asks at every step, answered from the analysis data the worker sent back (its
 result dict and the exact polynomials): exact comparisons with the isolating intervals for the
-relation, exact signs of a_i(t), s_j(t) at t (``core.parametric.decide_at``) for the readout.
+relation, exact signs of a_i(t), s_j(t) at t (``core.moving.signs.decide_at``) for the readout.
 """
 
 from __future__ import annotations
@@ -24,11 +24,11 @@ class RelationLookup:
     A float t is an exact binary rational. It is compared exactly with each event's isolating
     interval and each open interval of constant relation; inside an isolating interval (only
     possible when it is wider than the float spacing) a rational event is compared with its
-    exact value, and otherwise the exact signs at t decide (``core.parametric.decide_at``).
+    exact value, and otherwise the exact signs at t decide (``core.moving.signs.decide_at``).
     """
 
     def __init__(self, result: dict[str, Any], polys: dict[str, Any]) -> None:
-        from core.rationals import to_fmpq
+        from core.shapes.numbers import to_fmpq
 
         self._n = int(result["dimension"]) + 1
         self._polys = polys
@@ -45,7 +45,7 @@ class RelationLookup:
 
     def __call__(self, t: Any) -> str:
         """Relation ("separate", "tangent", "overlap") at the exact value of t."""
-        from core.rationals import to_fmpq
+        from core.shapes.numbers import to_fmpq
 
         tq = to_fmpq(t)
         for lo, hi, exact, rel in self._events:
@@ -59,7 +59,7 @@ class RelationLookup:
         return self._direct(tq)
 
     def _direct(self, tq: Any) -> str:
-        from core.parametric import decide_at
+        from core.moving.signs import decide_at
 
         return str(decide_at(self._n, self._polys, tq)[0].relation)
 
@@ -68,15 +68,15 @@ def explain_at(model: MotionModel, result: dict[str, Any], polys: dict[str, Any]
     """Readout data at t, or at the k-th event: exact signs, float values for display.
 
     At a float t (an exact binary rational) the signs of the a_i(t) of the analysis, and of the
-    ŝ_j(t) the decision tree needs, are evaluated exactly (``core.parametric.decide_at``: tens of
+    ŝ_j(t) the decision tree needs, are evaluated exactly (``core.moving.signs.decide_at``: tens of
     microseconds, sqrt(d) motions included; unneeded s_j show as "not needed", as in the static
     readout). At an event (an algebraic time) they are the sign-table row of that instant,
     decided exactly by the analysis. The values shown are float approximations of the
     coefficients of det(T A(t) + B(t)) and of s0, s1, s1,0 from the float matrices (display
     only; a value whose float falls on the wrong side of 0 is shown as "sign only").
     """
-    from core.decision import RULES
-    from core.parametric import decide_at
+    from core.formulae.decision import RULES
+    from core.moving.signs import decide_at
 
     n = int(result["dimension"]) + 1
     if event is None:
@@ -121,8 +121,8 @@ def explain_at(model: MotionModel, result: dict[str, Any], polys: dict[str, Any]
 
 def _float_readout_values(model: MotionModel, t: float) -> dict[str, float]:
     """Float a_i, s0, s1, s1,0 of the float matrices at t (display only; {} if they fail)."""
-    from core.pencil import pencil_coefficients
-    from core.subresultants import s0_full, s1_full, s10_full
+    from core.formulae.pencil import pencil_coefficients
+    from core.formulae.subresultants import s0_full, s1_full, s10_full
 
     try:
         Af, Bf = model.float_matrices(t)

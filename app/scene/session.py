@@ -21,7 +21,7 @@ from typing import Any, ContextManager
 import numpy as np
 
 from core import Relation, classify, explain
-from core.rationals import to_fmpq
+from core.shapes.numbers import to_fmpq
 
 from . import plots
 from .analysis import (

@@ -16,8 +16,8 @@ from typing import Any
 
 from flint import fmpq
 
-from core.limits import SERVER
-from core.rationals import format_rational, parse_number, to_float, to_fmpq
+from core.shapes.limits import SERVER
+from core.shapes.numbers import format_rational, parse_number, to_float, to_fmpq
 
 __all__ = [
     "ShapeState",
@@ -78,7 +78,7 @@ def parse_vector(text: Any, count: int | tuple[int, ...], what: str) -> tuple[Nu
                 if not math.isfinite(p):
                     raise ValueError(f"not finite: {p}")
                 out.append(p)
-            elif isinstance(p, str):  # typed text: the scene's edge limits (core.limits.SERVER)
+            elif isinstance(p, str):  # typed text: the scene's edge limits (core.shapes.limits.SERVER)
                 out.append(parse_number(p, SERVER))
             else:
                 out.append(to_fmpq(p))
@@ -219,7 +219,7 @@ class SceneConfig:
     """Static shape A (None: the default for ``dim``)."""
     B: ShapeState | None = None
     preset: str | None = DEFAULT_PRESET
-    """Name of a motion preset (``core.presets``); None for a static scene."""
+    """Name of a motion preset (``core.moving.presets``); None for a static scene."""
     motion: dict[str, Any] | None = None
     """Typed motion (expression strings per shape and the interval), overrides ``preset``."""
     t: float | None = None

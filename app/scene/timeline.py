@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from core import Relation
-from core.pencil import pencil_coefficients
+from core.formulae.pencil import pencil_coefficients
 
 from . import plots
 from .analysis import AnalysisView, MotionModel

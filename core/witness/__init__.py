@@ -27,6 +27,8 @@ Modules: :mod:`~core.witness.centred` (centre, size, inverse shape matrix),
 (exact algebraic values), :mod:`~core.witness.witness`.
 """
 
+from .api import contact_scale as contact_scale
+from .api import separating_plane as separating_plane
 from .batch import ContactScaleBatch as ContactScaleBatch
 from .batch import FloatWitness as FloatWitness
 from .batch import PlaneBatch as PlaneBatch
@@ -36,11 +38,9 @@ from .batch import separating_plane_batch as separating_plane_batch
 from .distance import DistanceBracket as DistanceBracket
 from .distance import distance as distance
 from .plane import SeparatingPlane as SeparatingPlane
-from .plane import separating_plane as separating_plane
 from .point import ContactPoint as ContactPoint
 from .point import contact_point as contact_point
 from .scale import ContactScale as ContactScale
-from .scale import contact_scale as contact_scale
 from .witness import SENTENCES as SENTENCES
 from .witness import Witness as Witness
 from .witness import margin_text as margin_text

@@ -39,11 +39,13 @@ from typing import Any
 import numpy as np
 from flint import fmpq
 
-from ..classify import Stats, classify
+from ..fixed.classify import Stats, classify
 from ..relation import Relation
 from .floatdet import det_with_bound
 from .floats import centred, dot, down, is_array, lists, maximise, scaled, stacked, up, where
 from .numbers import to_float
+from .plane import separating_plane_pair
+from .scale import _contact_scale_pair
 
 __all__ = ["ContactScaleBatch", "PlaneBatch", "FloatWitness", "contact_scale_batch", "separating_plane_batch", "float_witness"]
 
@@ -407,7 +409,6 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
         mu_hi = np.asarray(mu_hi, dtype=np.float64).reshape(-1)
         need = (codes_full.reshape(-1) != Relation.TANGENT) & ~np.asarray(found).reshape(-1)
         a_obj, b_obj = (a, b) if a.ndim == 3 else (a[None], b[None])
-    from .scale import _contact_scale_pair
 
     for i in np.flatnonzero(need):
         cs = _contact_scale_pair(a_obj[i].tolist(), b_obj[i].tolist(), max(rtol, 1e-15))
@@ -597,12 +598,11 @@ def float_witness(A: np.ndarray, B: np.ndarray, *, rtol: float = 1e-6) -> FloatW
 
 def _exact_planes(a: np.ndarray, b: np.ndarray, which: np.ndarray, normal: np.ndarray, offset: np.ndarray, certified: np.ndarray, float_input: bool) -> None:
     """Exact planes for the pairs ``which``, rounded to floats (in place) and re-checked."""
-    from ..rationals import to_fmpq
-    from .plane import separating_plane
+    from ..shapes.numbers import to_fmpq
 
     idx = np.flatnonzero(which)
     for i in idx:
-        plane = separating_plane(a[i].tolist(), b[i].tolist())
+        plane = separating_plane_pair(a[i].tolist(), b[i].tolist())
         big = max(abs(v) for v in plane.normal)  # exact scaling: the largest component is +-1
         n = np.array([to_float(v / big) for v in plane.normal])
         norm = float(np.linalg.norm(n))
@@ -620,7 +620,7 @@ def _exact_planes(a: np.ndarray, b: np.ndarray, which: np.ndarray, normal: np.nd
 
 def _is_float_exact(M: Any) -> bool:
     """True when every entry of M is a binary64 value (so its float matrix is M itself)."""
-    from ..rationals import to_fmpq
+    from ..shapes.numbers import to_fmpq
 
     for row in M:
         for v in row:

@@ -1,7 +1,7 @@
 """An ellipse/ellipsoid in centred form: centre c, size k and inverse shape matrix S, exactly.
 
 A valid matrix, normalised so that its quadratic block M is positive definite
-(:func:`core.quadrics.validate_quadric`), is A = [[M, m], [m^T, a]] = k [[Q, -Q c], [-c^T Q,
+(:func:`core.shapes.quadrics.validate_quadric`), is A = [[M, m], [m^T, a]] = k [[Q, -Q c], [-c^T Q,
 c^T Q c - 1]] with
 
 * centre c = -M^-1 m,
@@ -22,8 +22,8 @@ from typing import Any
 
 from flint import fmpq, fmpq_mat
 
-from ..quadrics import validate_quadric
-from ..rationals import to_float
+from ..shapes.numbers import to_float
+from ..shapes.quadrics import validate_quadric
 
 __all__ = ["CentredShape", "centred_pair", "column", "dot"]
 

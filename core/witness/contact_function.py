@@ -32,7 +32,7 @@ from functools import cached_property
 
 from flint import fmpq, fmpq_mat, fmpq_poly
 
-from ..pencil import determinant
+from ..formulae.pencil import determinant
 from .centred import CentredShape, dot
 from .floats import maximise
 from .numbers import simplest_between

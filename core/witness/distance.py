@@ -24,8 +24,8 @@ from typing import Any
 
 from flint import arb, fmpq, fmpq_mat
 
-from ..algebraic import _workprec
-from ..classify import classify
+from ..algebra.algebraic import _workprec
+from ..fixed.classify import classify
 from ..relation import Relation
 from .centred import CentredShape, centred_pair, column, dot
 from .floats import dot as fdot

@@ -1,8 +1,8 @@
 """Certified float determinants of small stacked matrices: value, proven error bound, exact scale.
 
-A determinant is evaluated by the ring-generic Laplace formula of :func:`core.pencil.determinant`;
+A determinant is evaluated by the ring-generic Laplace formula of :func:`core.formulae.pencil.determinant`;
 its float kernel and error constant are traced from that formula by
-:func:`core.errorbound.build_kernel` (the machinery behind the filter's kernels), so
+:func:`core.fixed.errorbound.build_kernel` (the machinery behind the filter's kernels), so
 ``|computed - det| <= C * M + floor`` with M >= the permanent of |rows| (product of absolute row
 sums). Each row is first multiplied by a power of two that brings its largest entry into [1, 2)
 (exact; it keeps every leaf <= 2, so nothing overflows and the underflow floor applies), and the
@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errorbound import build_kernel
-from ..pencil import determinant
+from ..fixed.errorbound import build_kernel
+from ..formulae.pencil import determinant
 
 __all__ = ["det_with_bound"]
 

@@ -16,10 +16,10 @@ from typing import Any
 
 from flint import arb, arb_poly, fmpq, fmpq_poly
 
-from ..algebraic import RealAlgebraic, _arb_to_fmpq, _workprec
-from ..qsqrt import QSqrtPoly
-from ..rationals import to_float
-from ..realroots import real_roots
+from ..algebra.algebraic import RealAlgebraic, _arb_to_fmpq, _workprec
+from ..algebra.qsqrt import QSqrtPoly
+from ..algebra.realroots import real_roots
+from ..shapes.numbers import to_float
 
 __all__ = ["sqrt_bounds", "simplest_between", "value_at_root", "algebraic_dict", "rational_near", "to_float"]
 
@@ -27,7 +27,7 @@ __all__ = ["sqrt_bounds", "simplest_between", "value_at_root", "algebraic_dict",
 def simplest_between(lo: fmpq, hi: fmpq) -> fmpq:
     """The rational with the smallest denominator in [lo, hi] (lo <= hi).
 
-    The same continued-fraction descent as ``core.algebraic._simplest_between``, without
+    The same continued-fraction descent as ``core.algebra.algebraic._simplest_between``, without
     recursion: intervals a few thousand bits wide (exact refinements) need thousands of terms.
 
     Examples:

@@ -19,13 +19,13 @@ from typing import Any
 import numpy as np
 from flint import fmpq, fmpq_mat
 
-from ..classify import classify
+from ..fixed.classify import classify
 from ..relation import Relation
 from .centred import CentredShape, centred_pair, column, dot
 from .contact_function import Bracket, ContactFunction
 from .numbers import simplest_between, sqrt_bounds, to_float
 
-__all__ = ["SeparatingPlane", "separating_plane", "plane_separates", "plane_from"]
+__all__ = ["SeparatingPlane", "separating_plane_pair", "plane_separates", "plane_from"]
 
 _TOLERANCES = (fmpq(1, 2**6), fmpq(1, 2**14), fmpq(1, 2**30), fmpq(1, 2**52), fmpq(0))
 _MAX_ROUNDS = 12
@@ -114,46 +114,6 @@ def _try_normal(cf: ContactFunction, n: fmpq_mat, bits: int) -> SeparatingPlane 
     return SeparatingPlane(tuple(n[i, 0] for i in range(n.nrows())), d, ha, hb)
 
 
-def separating_plane(A: Any, B: Any) -> Any:
-    """A plane n.x = d with exact rational n, d: A strictly in n.x < d, B strictly in n.x > d.
-
-    Args:
-        A: one matrix (any input form of :func:`core.classify`), or a float stack (..., n, n)
-            (then :func:`core.witness.batch.separating_plane_batch`: float planes with a
-            certified flag).
-        B: the same for B.
-
-    Returns:
-        A :class:`SeparatingPlane`, verified exactly (dual quadric) before it is returned.
-
-    Raises:
-        ValueError: the pair is not separate (tangent or overlapping: no plane separates it
-            strictly), or a matrix is invalid.
-
-    Examples:
-        >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
-        >>> p = separating_plane(circle(0), circle(3))
-        >>> p.normal, p.offset
-        ((1, 0), 3/2)
-        >>> separating_plane(circle(0), circle(2))
-        Traceback (most recent call last):
-        ...
-        ValueError: A and B are tangent: they touch, so no plane separates them strictly (contact_point gives where)
-    """
-    from .scale import _is_stack
-
-    if _is_stack(A) or _is_stack(B):
-        from .batch import separating_plane_batch
-
-        return separating_plane_batch(A, B)
-    rel = classify(A, B)
-    if rel == Relation.TANGENT:
-        raise ValueError("A and B are tangent: they touch, so no plane separates them strictly (contact_point gives where)")
-    if rel == Relation.OVERLAP:
-        raise ValueError("A and B overlap: their interiors meet, so no plane separates them (contact_point gives a common point)")
-    return plane_from(ContactFunction(*centred_pair(A, B)))
-
-
 def plane_from(cf: ContactFunction, br: Bracket | None = None) -> SeparatingPlane:
     """The verified plane of a separate pair from its contact function (and bracket, if known).
 
@@ -178,3 +138,15 @@ def plane_from(cf: ContactFunction, br: Bracket | None = None) -> SeparatingPlan
         bits *= 2
         br = cf.refine(br, bits)
     raise RuntimeError("separating_plane: no verified plane found (please report this pair)")
+
+
+def separating_plane_pair(A: Any, B: Any) -> SeparatingPlane:
+    """:func:`core.witness.separating_plane` of one pair (exact plane, verified)."""
+    rel = classify(A, B)
+    if rel == Relation.TANGENT:
+        raise ValueError("A and B are tangent: they touch, so no plane separates them strictly (contact_point gives where)")
+    if rel == Relation.OVERLAP:
+        raise ValueError("A and B overlap: their interiors meet, so no plane separates them (contact_point gives a common point)")
+    return plane_from(ContactFunction(*centred_pair(A, B)))
+
+

@@ -27,11 +27,11 @@ from typing import Any
 
 from flint import fmpq, fmpq_mat, fmpq_poly
 
-from ..algebraic import RealAlgebraic
-from ..classify import classify
-from ..pencil import determinant, pencil_coefficients
-from ..qsqrt import QSqrtPoly
-from ..realroots import real_roots
+from ..algebra.algebraic import RealAlgebraic
+from ..algebra.qsqrt import QSqrtPoly
+from ..algebra.realroots import real_roots
+from ..fixed.classify import classify
+from ..formulae.pencil import determinant, pencil_coefficients
 from ..relation import Relation
 from .centred import CentredShape, column
 from .contact_function import ContactFunction

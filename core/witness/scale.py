@@ -22,16 +22,15 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
 from flint import fmpq
 
-from ..algebraic import RealAlgebraic
+from ..algebra.algebraic import RealAlgebraic
 from ..relation import Relation
 from .centred import centred_pair
 from .contact_function import Bracket, ContactFunction
 from .numbers import algebraic_dict, sqrt_bounds, to_float, value_at_root
 
-__all__ = ["ContactScale", "contact_scale", "solve_pair", "scale_from"]
+__all__ = ["ContactScale", "contact_scale_pair", "solve_pair", "scale_from"]
 
 _MAX_REFINEMENTS = 40
 
@@ -71,7 +70,7 @@ class ContactScale:
 
         Examples:
             >>> circle = lambda x, r: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - r * r]]
-            >>> contact_scale(circle(0, 1), circle(3, 0.5)).algebraic()   # 3 / (1 + 1/2)
+            >>> contact_scale_pair(circle(0, 1), circle(3, 0.5)).algebraic()   # 3 / (1 + 1/2)
             RealAlgebraic(2)
         """
         if self._algebraic is None:
@@ -158,49 +157,8 @@ def scale_from(cf: ContactFunction, br: Bracket | None, rtol: float) -> ContactS
     raise RuntimeError("contact_scale: the bracket did not converge (please report this pair)")
 
 
-def _is_stack(M: Any) -> bool:
-    if isinstance(M, np.ndarray):
-        return M.ndim > 2
-    try:
-        return isinstance(M[0][0], list | tuple | np.ndarray)
-    except (TypeError, IndexError, KeyError):
-        return False
-
-
-def contact_scale(A: Any, B: Any, *, rtol: float = 1e-12) -> Any:
-    """Certified contact scale mu* of a pair: > 1 separate, = 1 tangent, < 1 overlap.
-
-    Args:
-        A: one matrix (any input form of :func:`core.classify`), or a stack (..., n, n) of
-            float matrices (then the vectorised batch form is used).
-        B: the same for B (stacks broadcast against A).
-        rtol: relative width asked of the bracket, > 0: hi - lo <= rtol * hi (one pair: met,
-            usually far better; batch: see :func:`core.witness.batch.contact_scale_batch`). The
-            exact value is :meth:`ContactScale.algebraic`.
-
-    Returns:
-        One pair: a :class:`ContactScale` (exact rational ``lo``, ``hi``; ``approx``;
-        ``relation``; ``algebraic()`` for the exact value). Stacks: a
-        :class:`core.witness.batch.ContactScaleBatch` of float arrays ``lo <= mu* <= hi``.
-
-    Raises:
-        ValueError: a matrix is not an ellipse/ellipsoid, or the sizes differ.
-
-    Examples:
-        >>> sphere = lambda x, r: [[1, 0, 0, -x], [0, 1, 0, 0], [0, 0, 1, 0], [-x, 0, 0, x * x - r * r]]
-        >>> cs = contact_scale(sphere(0, 1), sphere(5, 1.5))      # mu = 5 / 2.5
-        >>> cs.lo, cs.hi, str(cs.relation)
-        (2, 2, 'separate')
-        >>> contact_scale(sphere(0, 1), sphere(2, 1)).relation
-        <Relation.TANGENT: 1>
-        >>> cs = contact_scale(sphere(0, 1), sphere(1, fmpq(1, 3)))    # mu = 1 / (4/3)
-        >>> cs.approx, str(cs.relation)
-        (0.75, 'overlap')
-    """
+def contact_scale_pair(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScale:
+    """:func:`core.witness.contact_scale` of one pair (exact rational bracket)."""
     if not (rtol > 0 and math.isfinite(rtol)):
         raise ValueError(f"rtol must be a finite number > 0 (the exact value is .algebraic()), got {rtol!r}")
-    if _is_stack(A) or _is_stack(B):
-        from .batch import contact_scale_batch
-
-        return contact_scale_batch(A, B, rtol=rtol)
     return _contact_scale_pair(A, B, rtol)

@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ..classify import classify
+from ..fixed.classify import classify
 from ..relation import Relation
 from .numbers import to_float
 from .plane import SeparatingPlane, plane_from

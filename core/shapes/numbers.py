@@ -21,7 +21,7 @@ from .limits import LIBRARY, LimitExceeded, Limits
 __all__ = ["to_fmpq", "to_float", "format_rational", "sign", "parse_number", "MAX_DECIMAL_EXPONENT"]
 
 MAX_DECIMAL_EXPONENT = LIBRARY.decimal_exponent
-"""Largest |e| accepted in "1.5e<e>" by the library (:data:`core.limits.LIBRARY`): "1e999999999"
+"""Largest |e| accepted in "1.5e<e>" by the library (:data:`core.shapes.limits.LIBRARY`): "1e999999999"
 would ask for a 3-billion-bit integer. A number string has no length limit here (its cost grows
 with its length, which the caller chose); the HTTP API and the scene cap it at their edge."""
 
@@ -39,7 +39,7 @@ def parse_number(text: str, limits: Limits | None = None) -> fmpq:
 
     Args:
         text: the number string (ASCII digits only; surrounding spaces are ignored).
-        limits: size limits (default :data:`core.limits.LIBRARY`): ``number_chars`` (None: any
+        limits: size limits (default :data:`core.shapes.limits.LIBRARY`): ``number_chars`` (None: any
             length) and ``decimal_exponent`` (the |e| written after "e").
 
     Raises:
@@ -48,11 +48,11 @@ def parse_number(text: str, limits: Limits | None = None) -> fmpq:
     Examples:
         >>> parse_number("2.5e-3"), parse_number(" -3/7 ")
         (1/400, -3/7)
-        >>> from core.limits import SERVER
+        >>> from core.shapes.limits import SERVER
         >>> parse_number("1e1001", SERVER)
         Traceback (most recent call last):
         ...
-        core.limits.LimitExceeded: exponent out of range in '1e1001': |e| <= 1000 after 'e'
+        core.shapes.limits.LimitExceeded: exponent out of range in '1e1001': |e| <= 1000 after 'e'
     """
     lim = limits or LIBRARY
     if lim.number_chars is not None and len(text) > lim.number_chars:

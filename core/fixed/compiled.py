@@ -1,7 +1,7 @@
-"""The compiled float filter: ``core/_kernels.c`` built once per machine and source, called by ctypes.
+"""The compiled float filter: ``core/fixed/_kernels.c`` built once per machine and source, called by ctypes.
 
 Why C: the filter's kernels are straight-line float code generated from the same trace as the
-numpy ones (:mod:`core.kernelgen`), so a C compiler turns them into the fastest code this
+numpy ones (:mod:`core.fixed.kernelgen`), so a C compiler turns them into the fastest code this
 machine can run (``-O3 -march=native``), in about half a second (numba needed 20 s), with
 no runtime dependency beyond a C compiler. Contraction into fused multiply-adds is off
 (``-ffp-contract=off``) and there is no ``-ffast-math``: every operation rounds once, as the

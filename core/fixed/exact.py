@@ -2,7 +2,7 @@
 
 Matrices are validated and normalised exactly, scaled by positive integers to ``fmpz`` (which
 leaves the relation unchanged: det(T cA + dB) has the roots of P scaled by c/d > 0), and the
-decision tree of :mod:`core.decision` runs on exact signs, computing s0, s1, s1,0 only when the
+decision tree of :mod:`core.formulae.decision` runs on exact signs, computing s0, s1, s1,0 only when the
 tree asks for them. Always decides; TANGENT exactly when the exact input is tangent.
 """
 
@@ -14,16 +14,16 @@ from typing import Any
 import numpy as np
 from flint import fmpq, fmpz
 
-from .decision import Decision, decide
-from .pencil import determinant, pencil_coefficients
-from .quadrics import (
+from ..formulae.decision import Decision, decide
+from ..formulae.pencil import determinant, pencil_coefficients
+from ..formulae.subresultants import hat_s0, hat_s1, hat_s10
+from ..shapes.numbers import sign
+from ..shapes.quadrics import (
     SYMMETRY_TOLERANCE,
     check_determinant_sign,
     interior_sign,
     normalised_quadratic_part,
 )
-from .rationals import sign
-from .subresultants import hat_s0, hat_s1, hat_s10
 
 __all__ = ["ExactPair", "classify_exact", "exact_pair", "integer_matrix"]
 
@@ -113,7 +113,7 @@ def exact_pair(A: Any, B: Any, *, scaled: bool = True) -> ExactPair:
     """Validate A and B exactly and build their pencil.
 
     Args:
-        A, B: matrices in any accepted input form (see :mod:`core.quadrics`).
+        A, B: matrices in any accepted input form (see :mod:`core.shapes.quadrics`).
         scaled: use integer-scaled matrices (faster; coefficients are positive multiples of the
             true ones). ``False`` gives the true coefficients of det(T A + B), for display.
 

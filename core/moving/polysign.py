@@ -3,7 +3,7 @@
 The timeline's readout evaluates a_i(t), ŝ_j(t) at the float t of the slider. Exact evaluation of
 Example 30's degree-84 ŝ0 in Q(sqrt 2) costs ~80 us; a float Horner step with a proven forward
 error bound decides the sign in a few microseconds and abstains (None) when it cannot, and
-the caller then evaluates exactly. Same idea as the static filter (:mod:`core.errorbound`).
+the caller then evaluates exactly. Same idea as the static filter (:mod:`core.fixed.errorbound`).
 
 Coefficients ``c_i = p_i + q_i sqrt(d)`` are enclosed once, in exact integer arithmetic, after an
 exact power-of-two scaling that brings the largest near 1: a float ``f_i`` and a float ``e_i``

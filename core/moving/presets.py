@@ -1,6 +1,6 @@
 """Built-in moving pairs: the paper's Examples 29-33 and 2D cases whose answer is known by hand.
 
-Each preset is a plain dict in the JSON motion format of :mod:`core.motions` (the HTTP API and the
+Each preset is a plain dict in the JSON motion format of :mod:`core.moving.motions` (the HTTP API and the
 scene use the same format)::
 
     {"name": ..., "description": ..., "A": <motion>, "B": <motion>,
@@ -125,6 +125,6 @@ def preset(name: str) -> dict[str, Any]:
 
 
 def preset_arguments(name: str) -> dict[str, Any]:
-    """Keyword arguments for :func:`core.parametric.analyse`: ``A_t``, ``B_t``, ``interval``."""
+    """Keyword arguments for :func:`core.moving.analysis.analyse`: ``A_t``, ``B_t``, ``interval``."""
     p = preset(name)
     return {"A_t": p["A"], "B_t": p["B"], "interval": tuple(p["interval"])}

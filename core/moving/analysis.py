@@ -1,18 +1,18 @@
 """Moving ellipses/ellipsoids: exact interference intervals and tangency events (paper 3.4, 4.4).
 
 ``analyse(A_t, B_t, interval=(lo, hi), *, digits=20)`` takes two moving shapes (see
-:mod:`core.motions`), clears denominators with a factor of constant sign on I (checked), checks
+:mod:`core.moving.motions`), clears denominators with a factor of constant sign on I (checked), checks
 that both stay ellipses/ellipsoids on I (leading principal minors and det keep their sign: no
 root in I), and computes exactly, in Q[t] or Q(sqrt d)[t]:
 
 * a_i(t), the coefficients of P(t, T) = det(T A(t) + B(t)), and the subresultants in the
   paper's hat form ŝ_j = -s_j / a_n (same signs as s_j because a_n < 0; Example 30 works with
-  these), via the ring-generic :mod:`core.pencil` and :mod:`core.subresultants`;
+  these), via the ring-generic :mod:`core.formulae.pencil` and :mod:`core.formulae.subresultants`;
 * the candidates: real roots in I of s0 if s0 is not identically zero (4.4.1; 3.4 case 1), else
   of s1 if s1 is not (4.4.2; 3.4 case 2), else none (4.4.3). Between two consecutive candidates
   no tangency can happen, so the relation is constant there (paper 3.4/4.4, continuity);
 * the relation at each candidate (exact signs at the real algebraic number, decision tree of
-  :mod:`core.decision`) and on each open interval (exact signs at a rational sample point).
+  :mod:`core.formulae.decision`) and on each open interval (exact signs at a rational sample point).
 
 Candidates where the shapes are tangent and the relation changes or is left again are the
 *events* (kind ``"change"`` or ``"touch"``; ``"endpoint"`` at a finite end of I); the other
@@ -29,20 +29,21 @@ from typing import Any
 
 from flint import fmpq, fmpq_poly
 
-from .algebraic import RealAlgebraic, _simplest_between, sign_at
-from .decision import decide, sign_variations
+from ..algebra.algebraic import RealAlgebraic, _simplest_between
+from ..algebra.qsqrt import QSqrtPoly
+from ..algebra.realroots import real_roots
+from ..formulae.decision import sign_variations
+from ..formulae.pencil import determinant, pencil_coefficients
+from ..formulae.subresultants import hat_s0, hat_s1, hat_s10, hat_scale
+from ..relation import Relation
+from ..shapes.numbers import sign, to_fmpq
+from ..shapes.quadrics import interior_sign, not_a_quadric_message
 from .expressions import RationalFunction
-from .motion_result import EVENT_KINDS, Event, Interval, MotionAnalysis, SignRow
 from .motions import as_motion
-from .pencil import determinant, pencil_coefficients
-from .qsqrt import QSqrtPoly
-from .quadrics import interior_sign, not_a_quadric_message
-from .rationals import sign, to_fmpq
-from .realroots import real_roots
-from .relation import Relation
-from .subresultants import hat_s0, hat_s1, hat_s10, hat_scale
+from .result import EVENT_KINDS, Event, Interval, MotionAnalysis, SignRow
+from .signs import Signs, decide_with, sign_row
 
-__all__ = ["analyse", "decide_at", "sign_row_at", "MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
+__all__ = ["analyse", "MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
 
 
 # -------------------------------------------------------------------------------------------
@@ -84,7 +85,7 @@ def _polynomial_matrix(
     ellipse/ellipsoid (negative interior) at every t in I. The factor that multiplies the
     normalised matrix, P / sign, is |lam| > 0 on I: the caller divides by ``abs_lam`` = lam times
     its sign on I, so a flipped or negatively scaled input gives the same pencil as its
-    normalised form (the same rule as the static :func:`core.quadrics.interior_sign`).
+    normalised form (the same rule as the static :func:`core.shapes.quadrics.interior_sign`).
     """
     den = fmpq_poly([1])
     for row in M:
@@ -190,73 +191,6 @@ def _read_end(x: Any, which: str) -> fmpq | None:
 # the analysis
 
 
-class _Signs:
-    """Exact signs of a_i, ŝ_j at one point (rational or algebraic), computed on demand."""
-
-    def __init__(self, polys: dict[str, QSqrtPoly], point: fmpq | RealAlgebraic, zero: set[str], float_point: float | None = None) -> None:
-        self.polys = polys
-        self.point = point
-        self.zero = zero  # names known to vanish at this point
-        self.float_point = float_point  # the point as a float, when it is one exactly
-        self.cache: dict[str, int] = {}
-
-    def __call__(self, name: str) -> int:
-        if name not in self.cache:
-            if name in self.zero:
-                self.cache[name] = 0
-            else:
-                p = self.polys[name]
-                if isinstance(self.point, RealAlgebraic):
-                    self.cache[name] = sign_at(p, self.point)
-                else:
-                    fs = None if self.float_point is None else p.float_sign_at(self.float_point)
-                    self.cache[name] = fs if fs is not None else p.sign_at_rational(self.point)
-        return self.cache[name]
-
-
-def _decide_at(n: int, sg: _Signs) -> Any:
-    return decide(n, [sg(f"a{i}") for i in range(n, -1, -1)], lambda: sg("s0"), lambda: sg("s1"), lambda: sg("s10"))
-
-
-def _row(where: str, t: str, n: int, sg: _Signs, dec: Any) -> SignRow:
-    a = tuple(sg(f"a{i}") for i in range(n, -1, -1))
-    return SignRow(where, t, a, sg("s0"), sg("s1"), sg("s10"), sign_variations(list(a)), dec.relation, dec.rule)
-
-
-def decide_at(n: int, polys: dict[str, QSqrtPoly], t: Any) -> tuple[Any, dict[str, int]]:
-    """Decision at one rational time t from the exact polynomials, evaluating what the tree needs.
-
-    Like the static :func:`core.explain`: the signs of a_n..a_0 always, ŝ0, ŝ1, ŝ1,0 only when
-    the decision tree asks for them (the paper's point). Signs are exact: at a float t (its
-    exact binary value) a float Horner filter with a proven bound decides first
-    (:mod:`core.polysign`), exact evaluation otherwise; so the relation agrees with
-    :meth:`MotionAnalysis.relation_at`.
-
-    Args:
-        n: 3 (ellipses) or 4 (ellipsoids).
-        polys: ``a0``..``a{n}``, ``s0``, ``s1``, ``s10`` as in :class:`MotionAnalysis`.
-        t: a rational time (float, int, Fraction, "p/q").
-
-    Returns:
-        (:class:`core.decision.Decision`, {name: sign} of the polynomials evaluated).
-    """
-    sg = _Signs(polys, to_fmpq(t), set(), t if isinstance(t, float) else None)
-    for i in (0, n):
-        sg(f"a{i}")
-    return _decide_at(n, sg), sg.cache
-
-
-def sign_row_at(n: int, polys: dict[str, QSqrtPoly], t: Any) -> SignRow:
-    """The full sign-table row at one rational time t (every a_i, ŝ_j evaluated exactly).
-
-    Same arguments as :func:`decide_at`; the relation and rule come from the same decision
-    tree as the analysis' own rows.
-    """
-    tq = to_fmpq(t)
-    sg = _Signs(polys, tq, set())
-    return _row("point", str(tq), n, sg, _decide_at(n, sg))
-
-
 def analyse(
     A_t: Any,
     B_t: Any,
@@ -270,7 +204,7 @@ def analyse(
         A_t, B_t: the moving shapes: n x n nested lists of expression strings in t (n = 3
             ellipses, 4 ellipsoids; e.g. ``[["1", "0", "-t"], ...]``), motion dicts
             (``{"matrix": ...}`` or ``{"shape": ..., "translation": ..., "rotation": ...}``, see
-            :mod:`core.motions`) or :class:`core.motions.Motion` objects.
+            :mod:`core.moving.motions`) or :class:`core.moving.motions.Motion` objects.
         interval: (lo, hi) with numbers, exact strings ("1/3", "0.5") or None for an infinite
             end. Finite ends belong to I.
         digits: significant digits of the decimal event values (1..1000; refine more later with
@@ -469,9 +403,9 @@ class _Segment:
 
 
 def _decide_point(pencil: _MotionPencil, alpha: RealAlgebraic, known_zero: set[str], digits: int) -> _Point:
-    sg = _Signs(pencil.polys, alpha, known_zero)
-    dec = _decide_at(pencil.n, sg)
-    return _Point(dec.relation, dec.rule, _row("point", alpha.decimal(digits), pencil.n, sg, dec))
+    sg = Signs(pencil.polys, alpha, known_zero)
+    dec = decide_with(pencil.n, sg)
+    return _Point(dec.relation, dec.rule, sign_row("point", alpha.decimal(digits), pencil.n, sg, dec))
 
 
 def _decide_segments(
@@ -499,9 +433,9 @@ def _decide_segments(
             if not left < right:
                 raise RuntimeError("candidate isolating intervals overlap")
         t = _strictly_between(left, right)
-        sg = _Signs(pencil.polys, t, zero)
-        dec = _decide_at(pencil.n, sg)
-        out.append(_Segment(dec.relation, t, _row("interval", str(t), pencil.n, sg, dec)))
+        sg = Signs(pencil.polys, t, zero)
+        dec = decide_with(pencil.n, sg)
+        out.append(_Segment(dec.relation, t, sign_row("interval", str(t), pencil.n, sg, dec)))
     return out
 
 

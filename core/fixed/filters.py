@@ -3,15 +3,15 @@
 For every pair it computes a_0..a_n of P(T) = det(T A + B) straight from the matrix entries (no
 inversion), the leading principal minors that certify both matrices are ellipses/ellipsoids, and,
 only for the pairs whose Descartes count Var(a_n..a_0) is 2, the sign-equivalent ``hs0`` of s0.
-Each value comes with a proven error bound (:mod:`core.errorbound`, kernels generated into
-:mod:`core._kernels` and ``core/_kernels.c``); a sign is used only when ``|value| > bound``, and
-the decision is looked up in :data:`core.decision.TABLE3` / ``TABLE4`` (the paper's tree,
-tabulated from :func:`core.decision.decide_signs`). Where s0 cannot be certified (it vanishes
+Each value comes with a proven error bound (:mod:`core.fixed.errorbound`, kernels generated into
+:mod:`core.fixed._kernels` and ``core/fixed/_kernels.c``); a sign is used only when ``|value| > bound``, and
+the decision is looked up in :data:`core.formulae.decision.TABLE3` / ``TABLE4`` (the paper's tree,
+tabulated from :func:`core.formulae.decision.decide_signs`). Where s0 cannot be certified (it vanishes
 identically for spheres and translated or homothetic copies) two certificates that do not need
 it are tried: a T* > 0 with P(T*) > 0 (separate), and a point inside both shapes (overlap).
-Otherwise the pair is UNDECIDED and :func:`core.classify.classify` sends it to exact arithmetic.
+Otherwise the pair is UNDECIDED and :func:`core.fixed.classify.classify` sends it to exact arithmetic.
 
-Two producers of the same rule ids: the compiled C kernels (:mod:`core.compiled`; fast, on every
+Two producers of the same rule ids: the compiled C kernels (:mod:`core.fixed.compiled`; fast, on every
 core) and the vectorised numpy code below (used when no C compiler is available or while the
 library builds, and by :func:`explain_float`; the tests check that both agree pair by pair).
 A float filter never certifies ``s0 = 0``: TANGENT always comes from the exact path.
@@ -25,9 +25,7 @@ from typing import Any
 import numpy as np
 from flint import fmpq
 
-from . import _kernels as K
-from . import compiled
-from .decision import (
+from ..formulae.decision import (
     NEED_S0,
     RULE_LIST,
     RULE_RELATION,
@@ -36,12 +34,14 @@ from .decision import (
     rule_by_key,
     sign_variations,
 )
-from .errorbound import LEAF_MAX, NO_SCALE_MIN, RADIUS_FACTOR, TRANSLATE_MAX
-from .kernelgen import CERT_T_MAX, CERT_T_MIN
-from .quadrics import SYMMETRY_TOLERANCE
-from .rationals import format_rational, to_fmpq
-from .relation import Relation
-from .subresultants import hat_scale
+from ..formulae.subresultants import hat_scale
+from ..relation import Relation
+from ..shapes.numbers import format_rational, to_fmpq
+from ..shapes.quadrics import SYMMETRY_TOLERANCE
+from . import _kernels as K
+from . import compiled
+from .errorbound import CERT_T_MAX, CERT_T_MIN, LEAF_MAX, NO_SCALE_MIN, RADIUS_FACTOR, TRANSLATE_MAX
+from .explanation import Explanation, Quantity
 
 __all__ = [
     "classify_float",
@@ -102,7 +102,7 @@ _TINY_RADIUS = 2.0**-1073
 
 
 def _prepare(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Vectorised ``prepare{n}`` of core/_kernels.c (the same decisions and operations).
+    """Vectorised ``prepare{n}`` of core/fixed/_kernels.c (the same decisions and operations).
 
     Returns (scaled symmetric matrices, exponents e with scaled = 2^e * sign * S, status) where
     status is 1 (exactly symmetric), 2 (symmetric up to rounding: entries are rounded half sums)
@@ -206,7 +206,7 @@ def _tree(out: dict[str, tuple[Any, Any]], ok: np.ndarray, n: int) -> tuple[np.n
 
 
 # -------------------------------------------------------------------------------------------
-# certificates that do not need s0 (same operations as certify{n} in core/_kernels.c)
+# certificates that do not need s0 (same operations as certify{n} in core/fixed/_kernels.c)
 
 
 def _w(W: np.ndarray, i: int, j: int) -> np.ndarray:
@@ -356,7 +356,7 @@ def classify_translated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     The relation is invariant under a common translation. Far from the origin (centres at 1e6)
     the entries c^T Q c dominate the first stage's bound; after moving the origin to (a float
     approximation of) A's centre, with every entry's rounding error carried as a radius
-    (:mod:`core.errorbound`, midpoint-radius), most such pairs are certified without exact
+    (:mod:`core.fixed.errorbound`, midpoint-radius), most such pairs are certified without exact
     arithmetic, by the tree or by the certificates. -1 where no sign is proven.
     """
     n = a.shape[-1]
@@ -417,7 +417,7 @@ def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False, thread
         a: float64 array (N, n, n), n = 3 or 4.
         b: the same shape as ``a``.
         scalar: N == 1 (skips the second stage).
-        threads: threads for the compiled kernels (None: :func:`core.compiled.get_threads`).
+        threads: threads for the compiled kernels (None: :func:`core.fixed.compiled.get_threads`).
 
     Returns:
         int8 codes of :class:`Relation`, shape (N,). Never a wrong label.
@@ -437,8 +437,6 @@ def explain_float(A: Any, B: Any) -> Any:
     The rule is the one the numpy first stage decides by (the compiled kernels take the same
     decisions), including the certificates that do not need s0.
     """
-    from .explain import Explanation, Quantity
-
     if not (_is_plain_floats(A) and _is_plain_floats(B)):
         return None
     a = np.asarray(A, dtype=np.float64)

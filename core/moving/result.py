@@ -1,6 +1,6 @@
 """Result of a motion analysis: events, intervals, the sign table, exact polynomials (paper 4.5).
 
-:class:`MotionAnalysis` is what :func:`core.parametric.analyse` returns: typed, JSON-ready
+:class:`MotionAnalysis` is what :func:`core.moving.analysis.analyse` returns: typed, JSON-ready
 (``to_dict``), with ``relation_at(t)`` for timeline scrubbing and lazy float ``samples`` for plots.
 """
 
@@ -14,12 +14,13 @@ from typing import Any
 import numpy as np
 from flint import fmpq
 
-from .algebraic import RealAlgebraic
-from .decision import RULES
+from ..algebra.algebraic import RealAlgebraic
+from ..algebra.qsqrt import QSqrtPoly
+from ..formulae.decision import RULES
+from ..relation import Relation
+from ..shapes.numbers import to_fmpq
 from .motions import Motion, motion_to_dict
-from .qsqrt import QSqrtPoly
-from .rationals import to_fmpq
-from .relation import Relation
+from .signs import SignRow, sign_row_at
 
 __all__ = ["MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
 
@@ -40,40 +41,6 @@ def _alg_dict(a: RealAlgebraic | None, digits: int) -> dict[str, Any] | None:
         "exact": str(a.value) if a.value is not None else None,
         "isolating": [str(a.lo), str(a.hi)],
     }
-
-
-@dataclass(frozen=True)
-class SignRow:
-    """One row of the sign table (paper's example tables): at an instant or on an interval."""
-
-    where: str
-    """"point" (a candidate root) or "interval" (an open interval, signs at its sample)."""
-    t: str
-    """Decimal value of the point, or the rational sample point of the interval."""
-    a: tuple[int, ...]
-    """Signs of a_n, ..., a_0 (descending, as the paper writes Var)."""
-    s0: int
-    s1: int
-    s10: int
-    var: int
-    """Var(a_n, ..., a_0)."""
-    relation: Relation
-    rule: str
-    """Key of :data:`core.decision.RULES` that decided."""
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON form (signs as "+", "0", "-")."""
-        return {
-            "where": self.where,
-            "t": self.t,
-            "a": [_SIGN[s] for s in self.a],
-            "s0": _SIGN[self.s0],
-            "s1": _SIGN[self.s1],
-            "s10": _SIGN[self.s10],
-            "var": self.var,
-            "relation": str(self.relation),
-            "rule": self.rule,
-        }
 
 
 @dataclass
@@ -180,7 +147,7 @@ class MotionAnalysis:
     """The denominator-free matrices (positive multiples of A(t), B(t) on I)."""
     paper_case: str = ""
     """The paper's case: "3.4(1)", "3.4(2)" for ellipses; "4.4.1", "4.4.2(1)".."4.4.2(3)",
-    "4.4.3(1)", "4.4.3(2)" for ellipsoids (see :func:`core.parametric.analyse`)."""
+    "4.4.3(1)", "4.4.3(2)" for ellipsoids (see :func:`core.moving.analysis.analyse`)."""
     _points: list[RealAlgebraic] = field(default_factory=list, repr=False)
     _point_rel: list[Relation] = field(default_factory=list, repr=False)
     _seg_rel: list[Relation] = field(default_factory=list, repr=False)
@@ -205,7 +172,7 @@ class MotionAnalysis:
         if (lo is not None and tq < lo) or (hi is not None and tq > hi):
             raise ValueError(f"t = {t} is outside the analysed interval [{lo}, {hi}]")
         if method == "classify":
-            from .classify import classify
+            from ..fixed.classify import classify
             from .motions import matrix_at_exact
 
             return classify(matrix_at_exact(self.A, tq), matrix_at_exact(self.B, tq))
@@ -235,7 +202,6 @@ class MotionAnalysis:
         Raises:
             ValueError: t outside I or not a number.
         """
-        from .parametric import sign_row_at
 
         tq = to_fmpq(t)
         lo, hi = self.interval

@@ -9,66 +9,18 @@ decided, and which arithmetic certified it.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 from flint import fmpq
 
-from .decision import RULES, sign_variations
+from ..formulae.decision import RULES, sign_variations
+from ..formulae.subresultants import hat_scale
+from ..shapes.numbers import format_rational, sign, to_float
 from .exact import exact_pair
-from .rationals import format_rational, sign, to_float
-from .relation import Relation
-from .subresultants import hat_scale
+from .explanation import Explanation, Quantity
+from .filters import explain_float
 
 __all__ = ["Quantity", "Explanation", "explain", "display_float"]
-
-
-@dataclass(frozen=True)
-class Quantity:
-    """One number of the decision: name, exact value (if known), float value, bound, sign."""
-
-    name: str
-    """"a0".."a4", "s0", "s1" or "s10"."""
-    approx: float | None
-    """Nearest float (display only), or None when the value is outside the float range
-    (|value| > 1.8e308, or nonzero and below the smallest subnormal): read ``text`` then."""
-    exact: str | None = None
-    """Exact rational as "p/q" when the exact path computed it."""
-    bound: float | None = None
-    """|exact - approx| <= bound, when the value comes from the float filter."""
-    sign: int | None = None
-    """Certified sign (-1, 0, 1), or None when the bound cannot certify it."""
-    text: str = ""
-    """The value in scientific notation at any size ("-1.23457e+612"), computed exactly."""
-
-
-@dataclass(frozen=True)
-class Explanation:
-    """Why two shapes are in the relation they are in."""
-
-    n: int
-    """3 for ellipses, 4 for ellipsoids (degree of P)."""
-    relation: Relation
-    certified_by: Literal["float", "exact"]
-    rule: str
-    """Key of :data:`core.decision.RULES` that decided."""
-    rule_text: str
-    var: int
-    """Var(a_n, ..., a_0): sign changes of the coefficients."""
-    coefficients: list[Quantity]
-    """a_0 .. a_n ascending."""
-    s0: Quantity | None = None
-    s1: Quantity | None = None
-    s10: Quantity | None = None
-    """Subresultant coefficients; None when the tree did not need them."""
-    subresultants_needed: list[str] = field(default_factory=list)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict (relation as its lower-case name)."""
-        d = asdict(self)
-        d["relation"] = str(self.relation)
-        return d
-
 
 
 def display_float(v: fmpq) -> float | None:
@@ -94,8 +46,6 @@ def explain(A: Any, B: Any) -> Explanation:
         >>> str(e.relation), e.rule, e.var, [q.exact for q in e.coefficients]
         ('tangent', '2d-s0=0', 2, ['-1', '1', '1', '-1'])
     """
-    from .filters import explain_float
-
     fl = explain_float(A, B)
     if fl is not None:
         return fl

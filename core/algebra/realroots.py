@@ -3,7 +3,7 @@
 Real roots of ``s = p + q sqrt(d)`` are among the real roots of the norm N = p^2 - d q^2 in Q[t].
 N is made squarefree and factored over Q (flint); a linear factor gives a rational root, every
 other irreducible factor is isolated by Descartes' rule of signs (Collins-Akritas bisection with
-Taylor shifts in Z[x]); the roots of N that are roots of s are kept (:func:`core.algebraic.sign_at`).
+Taylor shifts in Z[x]); the roots of N that are roots of s are kept (:func:`core.algebra.algebraic.sign_at`).
 """
 
 from __future__ import annotations

@@ -3,9 +3,9 @@
 Example 30 of the paper moves an ellipsoid by a rotation with sqrt(2) entries, so the pencil
 coefficients a_i(t) and the subresultants s0, s1, s1,0 live in Q(sqrt d)[t]. They are kept
 exactly as pairs ``p + q r`` of ``fmpq_poly`` with ``r = sqrt(d)`` (:class:`QSqrtPoly`); the class
-supports ``+ - *`` and integer multiplication, so :func:`core.pencil.pencil_coefficients` and the
-``hat_*`` functions of :mod:`core.subresultants` run on it unchanged. Signs at rational t are
-exact (:func:`sign_qsqrt`); signs at real algebraic t are in :mod:`core.algebraic`.
+supports ``+ - *`` and integer multiplication, so :func:`core.formulae.pencil.pencil_coefficients` and the
+``hat_*`` functions of :mod:`core.formulae.subresultants` run on it unchanged. Signs at rational t are
+exact (:func:`sign_qsqrt`); signs at real algebraic t are in :mod:`core.algebra.algebraic`.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ def squarefree_decomposition(n: int, trial_primes: int | None = None) -> tuple[i
     """Write a positive integer as ``k^2 * d`` with d not a perfect square; returns (k, d).
 
     Prime factors are found by trial division with ``trial_primes`` primes (default
-    :data:`core.limits.LIBRARY`'s; never a full factorisation: a 100-digit semiprime would take
+    :data:`core.shapes.limits.LIBRARY`'s; never a full factorisation: a 100-digit semiprime would take
     forever) plus what FLINT finds cheaply; a cofactor left over is tested for being a perfect
     square. So d is squarefree except for square factors of primes beyond the trial bound, and
     never a perfect square: ``sqrt(d)`` is irrational (d > 1), all that the arithmetic of
@@ -38,7 +38,7 @@ def squarefree_decomposition(n: int, trial_primes: int | None = None) -> tuple[i
     if n <= 0:
         raise ValueError(f"need a positive integer, got {n}")
     if trial_primes is None:
-        from .limits import LIBRARY
+        from ..shapes.limits import LIBRARY
 
         trial_primes = LIBRARY.sqrt_trial_primes
     k, d = fmpz(1), fmpz(1)
@@ -234,11 +234,11 @@ class QSqrtPoly:
     def float_sign_at(self, t: float) -> int | None:
         """Certified sign at the float t, or None when the float bound cannot tell.
 
-        A float Horner step with a proven error bound (:mod:`core.polysign`); on None use
+        A float Horner step with a proven error bound (:mod:`core.moving.polysign`); on None use
         :meth:`sign_at_rational`. The float enclosure is built on first use.
         """
         if self._float is None:
-            from .polysign import FloatPoly
+            from ..moving.polysign import FloatPoly
 
             self._float = FloatPoly(self.p, self.q, self.d)
         return self._float.sign_at(t)

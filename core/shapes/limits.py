@@ -2,7 +2,7 @@
 
 Exact arithmetic on text a user typed can be made arbitrarily expensive by a short input
 (``((1e1400)^64)^64``: gigabytes; ``sqrt(<100-digit semiprime>)``: a factorisation). The parser
-of numbers (:mod:`core.rationals`) and of expressions in t (:mod:`core.expressions`) check these
+of numbers (:mod:`core.shapes.numbers`) and of expressions in t (:mod:`core.moving.expressions`) check these
 limits *before* each step, so such input is refused with a message that names the limit instead
 of being computed.
 
@@ -121,7 +121,7 @@ def check_bits(bits: int, what: str = "constant") -> None:
         ...     check_bits(297_664)
         Traceback (most recent call last):
         ...
-        core.limits.LimitExceeded: constant too large: about 2^297664 (297664 bits), limit 20000 bits
+        core.shapes.limits.LimitExceeded: constant too large: about 2^297664 (297664 bits), limit 20000 bits
     """
     limit = _CURRENT.get().coefficient_bits
     if bits > limit:

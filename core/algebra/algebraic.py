@@ -8,7 +8,7 @@ arithmetic (arb) at increasing precision when it is nonzero, and an exact zero t
 v(alpha) = 0 iff alpha is a root of gcd(F, N(v)) with N(v) = p^2 - d q^2 and p(alpha) =
 -sqrt(d) q(alpha), i.e. p and q both vanish at alpha (gcd test) or have opposite signs there.
 No floating approximation of sqrt(d) ever decides a sign. Root isolation is in
-:mod:`core.realroots`.
+:mod:`core.algebra.realroots`.
 """
 
 from __future__ import annotations
@@ -27,9 +27,9 @@ from flint import (
     fmpz_poly,  # noqa: F401  (used by the doctests)
 )
 
+from ..shapes.numbers import sign as _sgn
+from ..shapes.numbers import to_float as _to_float
 from .qsqrt import QSqrtPoly, _poly
-from .rationals import sign as _sgn
-from .rationals import to_float as _to_float
 
 __all__ = ["RealAlgebraic", "sign_at"]
 

@@ -3,7 +3,7 @@
 Two input forms share one JSON format (used by the HTTP API, the scene and the presets):
 
 * ``{"matrix": [[e, ...], ...]}``: the (n+1) x (n+1) symmetric matrix, entries are expressions in
-  t (strings, see :mod:`core.expressions`) or numbers;
+  t (strings, see :mod:`core.moving.expressions`) or numbers;
 * ``{"shape": {"center": [...], "semi_axes": [...], "orientation": ...},
   "translation": [...], "rotation": {"quaternion": [w, x, y, z]} | {"matrix": [[...]]},
   "scale": [...]}``: a body shape moved by ``x_world = L(t) x_body + c(t)`` with
@@ -28,11 +28,11 @@ from typing import Any
 import numpy as np
 from flint import fmpq
 
+from ..formulae.pencil import determinant
+from ..shapes.limits import Limits, using
+from ..shapes.numbers import to_fmpq
+from ..shapes.quadrics import ShapeParams, axes_from_quadric
 from .expressions import RationalFunction, parse_expression
-from .limits import Limits, using
-from .pencil import determinant
-from .quadrics import ShapeParams, axes_from_quadric
-from .rationals import to_fmpq
 
 __all__ = [
     "Motion",
@@ -90,7 +90,7 @@ class Motion:
     source: dict[str, Any]
     """The normalised JSON form (expressions as strings); ``motion_to_dict`` returns a copy."""
     limits: Limits | None = field(default=None, repr=False, compare=False)
-    """Size limits while the matrix is built (:mod:`core.limits`; None: those in force)."""
+    """Size limits while the matrix is built (:mod:`core.shapes.limits`; None: those in force)."""
     _matrix: list[RFMatrix] = field(default_factory=list, repr=False, compare=False)
     _float_coeffs: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list, repr=False, compare=False)
 
@@ -131,7 +131,7 @@ def motion_from_dict(data: Any, *, limits: Limits | None = None) -> Motion:
     Args:
         data: the JSON form (or a Motion, returned as it is).
         limits: size limits of the text and of the arithmetic building A(t)
-            (:mod:`core.limits`; default: those in force, :data:`core.limits.LIBRARY`).
+            (:mod:`core.shapes.limits`; default: those in force, :data:`core.shapes.limits.LIBRARY`).
 
     Raises:
         ValueError: unknown keys, wrong sizes, unparsable expressions, a non-symmetric matrix,

@@ -13,7 +13,7 @@ Conventions (written once here and in the README):
   [[Q, -Q c], [-c^T Q, c^T Q c - 1]] with Q = R diag(1/r^2) R^T (body axes -> world).
 * Inputs may be floats of any width (float16/32/64, long double: the exact binary rationals they
   are), ints, Fractions, fmpq, or strings ("3/7", "0.1" exact decimal). See
-  :func:`core.rationals.to_fmpq`.
+  :func:`core.shapes.numbers.to_fmpq`.
 * The shape {X : X^T A X <= 0} depends only on the quadratic form, that is on the exact symmetric
   part (A + A^T)/2: that is what is classified, so a matrix built in floating point
   (``R @ D @ R.T``), symmetric only up to rounding, is certified for its own quadratic form. A
@@ -33,8 +33,8 @@ from typing import Any
 import numpy as np
 from flint import fmpq
 
-from .pencil import determinant
-from .rationals import to_fmpq
+from ..formulae.pencil import determinant
+from .numbers import to_fmpq
 
 __all__ = [
     "SYMMETRY_TOLERANCE",
@@ -242,7 +242,7 @@ def symmetric_part(E: ExactMatrix, name: str = "matrix") -> ExactMatrix:
         for j in range(i + 1, n):
             diff = E[i][j] - E[j][i]
             if diff != 0 and diff * diff > tol2 * m[i] * m[j]:
-                from .rationals import format_rational
+                from .numbers import format_rational
 
                 scale = math.sqrt(float(m[i]) * float(m[j])) if m[i] * m[j] > 0 else 0.0
                 rel = abs(float(diff)) / scale if scale > 0 else math.inf

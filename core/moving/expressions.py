@@ -3,7 +3,7 @@
 Users type motion entries as text (scene and HTTP API), e.g. ``"(8*t^2 - 8*t + 3)/2"`` or
 ``"sqrt(2)*(t - 1)*(3*t - 1)/(-6*t^2 + 6*t - 2)"``. The text is tokenised and parsed by
 recursive descent (never ``eval``) into a :class:`RationalFunction`: a numerator in
-Q(sqrt d)[t] (:class:`core.algebraic.QSqrtPoly`) over a monic denominator in Q[t] (a sqrt(d) in
+Q(sqrt d)[t] (:class:`core.algebra.algebraic.QSqrtPoly`) over a monic denominator in Q[t] (a sqrt(d) in
 a denominator is moved up by multiplying with the conjugate).
 
 Grammar (whitespace ignored)::
@@ -27,7 +27,8 @@ from typing import Any
 
 from flint import fmpq, fmpq_poly
 
-from .limits import (
+from ..algebra.qsqrt import QSqrtPoly, squarefree_decomposition
+from ..shapes.limits import (
     LIBRARY,
     LimitExceeded,
     Limits,
@@ -37,8 +38,7 @@ from .limits import (
     log2_ceil,
     using,
 )
-from .qsqrt import QSqrtPoly, squarefree_decomposition
-from .rationals import parse_number, to_fmpq
+from ..shapes.numbers import parse_number, to_fmpq
 
 __all__ = [
     "RationalFunction",
@@ -50,7 +50,7 @@ __all__ = [
 ]
 
 MAX_EXPRESSION_CHARS = LIBRARY.expression_chars
-"""Longest accepted expression text (library default; all limits: :mod:`core.limits`)."""
+"""Longest accepted expression text (library default; all limits: :mod:`core.shapes.limits`)."""
 MAX_DEGREE = LIBRARY.degree
 """Largest degree in t of the numerator or denominator of one entry, after simplification."""
 MAX_EXPONENT = LIBRARY.exponent
@@ -66,8 +66,8 @@ class RationalFunction:
     over Q(sqrt d) is not: ``(t - sqrt 2) / (t^2 - 2)`` keeps its denominator).
 
     Every operation first bounds the size of its result from the sizes of its operands (bits
-    of a coefficient, degree) and raises :class:`core.limits.LimitExceeded` when that bound is
-    over :func:`core.limits.current` (the work is never started), then checks the actual result.
+    of a coefficient, degree) and raises :class:`core.shapes.limits.LimitExceeded` when that bound is
+    over :func:`core.shapes.limits.current` (the work is never started), then checks the actual result.
 
     Examples:
         >>> t = RationalFunction.variable()
@@ -221,7 +221,7 @@ class RationalFunction:
 
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
         """Pickle as (num, integer pairs of den): worker processes send parsed motions back."""
-        from .qsqrt import _pairs
+        from ..algebra.qsqrt import _pairs
 
         return (_rf_from_parts, (self.num, _pairs(self.den)))
 
@@ -253,7 +253,7 @@ class RationalFunction:
     def __str__(self) -> str:
         if self.is_polynomial():
             return str(self.num)
-        from .qsqrt import _poly_str
+        from ..algebra.qsqrt import _poly_str
 
         return f"({self.num})/({_poly_str(self.den)})"
 
@@ -506,8 +506,8 @@ def parse_expression(text: Any, *, max_degree: int | None = None, limits: Limits
             floats as the exact binary rationals they are.
         max_degree: largest allowed degree of numerator and denominator after simplification
             (default ``limits.degree``).
-        limits: size limits (:mod:`core.limits`); default: those in force
-            (:data:`core.limits.LIBRARY` unless the caller set others).
+        limits: size limits (:mod:`core.shapes.limits`); default: those in force
+            (:data:`core.shapes.limits.LIBRARY` unless the caller set others).
 
     Returns:
         The reduced rational function (coefficients in Q, or Q(sqrt d) if sqrt appears).
@@ -517,7 +517,7 @@ def parse_expression(text: Any, *, max_degree: int | None = None, limits: Limits
             0-based position), unbalanced parentheses, division by zero, an exponent that is not
             a small non-negative integer, sqrt of something other than a positive constant, two
             different square roots, a degree above ``max_degree``, or a size over ``limits``
-            (:class:`core.limits.LimitExceeded`, refused before the work is done: e.g.
+            (:class:`core.shapes.limits.LimitExceeded`, refused before the work is done: e.g.
             "constant too large: about 2^297664 (297664 bits), limit 20000 bits at position 10").
 
     Examples:

@@ -1,6 +1,6 @@
 """Straight-line float kernels with proven forward error bounds, generated from the ring-generic formulas.
 
-The pencil (:mod:`core.pencil`) and subresultant (:mod:`core.subresultants`) formulas are traced once
+The pencil (:mod:`core.formulae.pencil`) and subresultant (:mod:`core.formulae.subresultants`) formulas are traced once
 with a symbolic number type (:class:`_Sym`) that records every ``+ - *``; from the trace we emit Python
 source that runs unchanged on Python floats (one pair) and on numpy float64 arrays (many pairs), and
 we derive each output's error constant from the trace itself (CGAL's ``compute_epsilon`` idea).
@@ -51,6 +51,8 @@ __all__ = [
     "NO_SCALE_MIN",
     "TRANSLATE_MAX",
     "RADIUS_FACTOR",
+    "CERT_T_MIN",
+    "CERT_T_MAX",
 ]
 
 UNIT_ROUNDOFF = Fraction(1, 2**53)
@@ -64,6 +66,9 @@ TRANSLATE_MAX = 2**30
 
 NO_SCALE_MIN = Fraction(1, 256)
 """Matrices whose largest |entry| is already in [2^-8, 2^8] are not rescaled (saves time)."""
+
+CERT_T_MIN, CERT_T_MAX = Fraction(1, 2**20), Fraction(2**20)
+"""The separation certificate evaluates P(T*) only for T* in this range (overflow-free bounds)."""
 
 RADIUS_FACTOR = 1.0 + 2.0**-40
 """Covers the rounding of a computed radius or bound (fewer than 2^12 roundings of nonneg terms)."""
@@ -174,7 +179,7 @@ class Kernel:
     """A generated kernel and the constants that make its outputs certified."""
 
     name: str
-    """Function name in the generated source (core/_kernels.py)."""
+    """Function name in the generated source (core/fixed/_kernels.py)."""
     style: str
     inputs: tuple[str, ...]
     outputs: tuple[str, ...]
@@ -261,7 +266,7 @@ def build_kernel(
             then treats the leaf as one more rounding, in the value and in its bound.
 
     Returns:
-        The :class:`Kernel`: source text (written to core/_kernels.py by core.kernelgen; no
+        The :class:`Kernel`: source text (written to core/fixed/_kernels.py by core.fixed.kernelgen; no
         ``del`` so numba can compile it) and certified constants.
     """
     t = _Trace()

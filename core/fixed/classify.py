@@ -1,7 +1,7 @@
 """``classify(A, B)``: one function for one pair or broadcast stacks of pairs (shapely-2 style).
 
-Float filter first (:mod:`core.filters`: sound, may abstain), exact rationals only for the pairs it
-could not certify (:mod:`core.exact`), in the manner of CGAL's filtered predicates.
+Float filter first (:mod:`core.fixed.filters`: sound, may abstain), exact rationals only for the pairs it
+could not certify (:mod:`core.fixed.exact`), in the manner of CGAL's filtered predicates.
 :func:`classify_detailed` is the same pipeline, reporting per pair which arithmetic certified the
 answer and, with ``on_invalid="mark"``, why a pair is invalid.
 
@@ -19,13 +19,13 @@ from typing import Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
+from ..formulae.decision import RULE_RELATION
+from ..relation import Relation
+from ..shapes.numbers import to_fmpq
+from ..shapes.quadrics import validate_quadric
 from . import compiled
-from .decision import RULE_RELATION
 from .exact import classify_exact
 from .filters import classify_float
-from .quadrics import validate_quadric
-from .rationals import to_fmpq
-from .relation import Relation
 
 __all__ = [
     "classify",
@@ -213,7 +213,7 @@ def classify(
             strings like "3/7" / "0.1" (exact decimals). Signs may be flipped (positive
             interior). The exact symmetric part (A + A^T)/2 is classified (the quadratic form);
             a matrix symmetric only up to rounding is accepted, a clearly asymmetric one is not
-            (:data:`core.quadrics.SYMMETRY_TOLERANCE`).
+            (:data:`core.shapes.quadrics.SYMMETRY_TOLERANCE`).
         method: "adaptive" (default: float filter, exact only where it abstains), "float"
             (filter only, may return UNDECIDED) or "exact" (rationals throughout).
         on_invalid: "raise" (default) a ValueError for the first invalid pair, or "mark" it

@@ -27,7 +27,7 @@ from itertools import product
 
 import numpy as np
 
-from .relation import Relation
+from ..relation import Relation
 
 __all__ = [
     "Decision",
