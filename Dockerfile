@@ -10,6 +10,11 @@ ENV PYTHONDONTWRITEBYTECODE=1 \
 
 WORKDIR /srv/ellipsoids
 
+# A C compiler: the certified float filter (core/fixed/_kernels.c) is compiled on first use for the
+# CPU it runs on (-march=native), cached in the user's ~/.cache; without it numpy serves, slower.
+RUN apt-get update && apt-get install -y --no-install-recommends gcc libc6-dev \
+    && rm -rf /var/lib/apt/lists/*
+
 # Dependencies and packages first (cached unless the code changes).
 COPY pyproject.toml README.md ./
 COPY core ./core
