@@ -143,3 +143,11 @@ def test_limits(client):
     assert r.status_code == 422 and "over the limit of 60" in r.json()["detail"]
     r = client.post("/api/contact-scale", json={"a": UNIT, "b": circle(3), "rtol": 0})
     assert r.status_code == 422
+
+
+@pytest.mark.parametrize("route", ["/api/contact-scale", "/api/separating-plane", "/api/contact-point", "/api/witness"])
+def test_witness_routes_refuse_json_edges_like_classify(client, route):
+    """The same JSON edge as /api/classify: a number that underflows is refused, not changed."""
+    text = '{"a": [[1, 0, 0], [0, 1, 0], [0, 0, -1]], "b": [[1, 0, -3], [0, 1, 0], [-3, 0, 1e-400]]}'
+    r = client.post(route, content=text, headers={"content-type": "application/json"})
+    assert r.status_code == 422 and "underflows to 0 as a float" in r.text

@@ -9,9 +9,11 @@ separate, or a point of a separate pair, is a 422 that says why.
 from __future__ import annotations
 
 import math
-from typing import Any
+import threading
+from collections.abc import Callable
+from typing import Any, TypeVar
 
-from fastapi import APIRouter, HTTPException
+from fastapi import APIRouter, HTTPException, Request
 
 from core import Relation
 from core.witness import (
@@ -25,9 +27,11 @@ from core.witness import (
 from core.witness import separating_plane as core_separating_plane
 from core.witness.numbers import algebraic_dict
 
+from ..budget import Budget, BudgetExceeded, Cancelled, budget_error, run_off_loop
 from ..convert import bad_input, checked_pair
 from ..deps import SettingsDep
-from ..schemas import ERROR_RESPONSES
+from ..json_body import JsonRoute
+from ..schemas import ERROR_RESPONSES, ErrorOut
 from ..witness_schemas import (
     AlgebraicOut,
     ContactPointOut,
@@ -38,7 +42,31 @@ from ..witness_schemas import (
     WitnessOut,
 )
 
-router = APIRouter(prefix="/api", tags=["witness"], responses=ERROR_RESPONSES)
+router = APIRouter(
+    prefix="/api",
+    tags=["witness"],
+    route_class=JsonRoute,
+    responses={**ERROR_RESPONSES, 503: {"model": ErrorOut, "description": "Over the time budget of a request"}},
+)
+
+T = TypeVar("T")
+
+
+async def _off_loop(request: Request, settings: Any, fn: Callable[[], T]) -> T:
+    """Run ``fn`` in a worker thread under the request budget, as /api/classify does: the event
+    loop stays free, and the answer of a client that went away is dropped."""
+
+    def work(cancel: threading.Event) -> T:
+        budget = Budget(settings.request_budget_s, cancel)
+        budget.check("before the witness")
+        out = fn()
+        budget.check("after the witness")
+        return out
+
+    try:
+        return await run_off_loop(request, work)
+    except (BudgetExceeded, Cancelled) as e:
+        raise budget_error(e) from None
 
 
 def _finite(x: float) -> float | None:
@@ -90,45 +118,57 @@ def _kind(a: Any) -> str:
 
 
 @router.post("/contact-scale", response_model=ContactScaleOut)
-def contact_scale_route(body: ContactScaleIn, settings: SettingsDep) -> ContactScaleOut:
+async def contact_scale_route(body: ContactScaleIn, request: Request, settings: SettingsDep) -> ContactScaleOut:
     """Certified bracket of the contact scale mu* (mu* > 1 separate, = 1 tangent, < 1 overlap).
 
     With ``exact``, mu* as an algebraic number too (polynomial, isolating interval, decimals).
     """
     _check_digits(body.digits, settings)
-    a, b = checked_pair(body)
-    with bad_input():
-        cs = contact_scale(a, b, rtol=body.rtol)
-        return _scale_out(cs, _kind(a), body.digits if body.exact else None)
+
+    def fn() -> ContactScaleOut:
+        a, b = checked_pair(body)
+        with bad_input():
+            cs = contact_scale(a, b, rtol=body.rtol)
+            return _scale_out(cs, _kind(a), body.digits if body.exact else None)
+
+    return await _off_loop(request, settings, fn)
 
 
 @router.post("/separating-plane", response_model=PlaneOut)
-def separating_plane_route(body: WitnessIn) -> PlaneOut:
+async def separating_plane_route(body: WitnessIn, request: Request, settings: SettingsDep) -> PlaneOut:
     """A separating plane n.x = d with exact rationals, verified exactly.
 
     a lies strictly on the side n.x < d and b strictly on n.x > d; 422 when the pair is tangent
     or overlapping.
     """
-    a, b = checked_pair(body)
-    with bad_input():
-        return _plane_out(core_separating_plane(a, b))
+
+    def fn() -> PlaneOut:
+        a, b = checked_pair(body)
+        with bad_input():
+            return _plane_out(core_separating_plane(a, b))
+
+    return await _off_loop(request, settings, fn)
 
 
 @router.post("/contact-point", response_model=ContactPointOut)
-def contact_point_route(body: WitnessIn, settings: SettingsDep) -> ContactPointOut:
+async def contact_point_route(body: WitnessIn, request: Request, settings: SettingsDep) -> ContactPointOut:
     """Where the pair meets.
 
     Tangent pair: the exact contact point and common normal. Overlapping pair: a rational point
     strictly inside both. 422 when the pair is separate.
     """
     _check_digits(body.digits, settings)
-    a, b = checked_pair(body)
-    with bad_input():
-        return _point_out(contact_point(a, b), body.digits)
+
+    def fn() -> ContactPointOut:
+        a, b = checked_pair(body)
+        with bad_input():
+            return _point_out(contact_point(a, b), body.digits)
+
+    return await _off_loop(request, settings, fn)
 
 
 @router.post("/witness", response_model=WitnessOut)
-def witness_route(body: WitnessIn, settings: SettingsDep) -> WitnessOut:
+async def witness_route(body: WitnessIn, request: Request, settings: SettingsDep) -> WitnessOut:
     """All of it at once.
 
     The relation, the sentence that explains it, the contact scale, and the separating plane
@@ -137,14 +177,18 @@ def witness_route(body: WitnessIn, settings: SettingsDep) -> WitnessOut:
     from core.witness import witness
 
     _check_digits(body.digits, settings)
-    a, b = checked_pair(body)
-    with bad_input():
-        w = witness(a, b)
-        return WitnessOut(
-            relation=str(w.relation),
-            sentence=w.sentence,
-            margin_text=w.margin,
-            contact_scale=_scale_out(w.scale, _kind(a), None),
-            plane=None if w.plane is None else _plane_out(w.plane),
-            point=None if w.point is None else _point_out(w.point, body.digits),
-        )
+
+    def fn() -> WitnessOut:
+        a, b = checked_pair(body)
+        with bad_input():
+            w = witness(a, b)
+            return WitnessOut(
+                relation=str(w.relation),
+                sentence=w.sentence,
+                margin_text=w.margin,
+                contact_scale=_scale_out(w.scale, _kind(a), None),
+                plane=None if w.plane is None else _plane_out(w.plane),
+                point=None if w.point is None else _point_out(w.point, body.digits),
+            )
+
+    return await _off_loop(request, settings, fn)
