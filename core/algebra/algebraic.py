@@ -31,7 +31,7 @@ from ..shapes.numbers import sign as _sgn
 from ..shapes.numbers import to_float as _to_float
 from .qsqrt import QSqrtPoly, _poly
 
-__all__ = ["RealAlgebraic", "sign_at"]
+__all__ = ["RealAlgebraic", "sign_at", "simplest_between", "working_precision", "arb_to_fmpq"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -39,7 +39,12 @@ __all__ = ["RealAlgebraic", "sign_at"]
 
 
 @contextmanager
-def _workprec(bits: int) -> Iterator[None]:
+def working_precision(bits: int) -> Iterator[None]:
+    """Run the body with arb's working precision set to ``bits``.
+
+    ctx.prec is process-global in python-flint; arb balls stay rigorous whatever the
+    precision, so a concurrent change can only cost an extra refinement round, never a sign.
+    """
     # ctx.prec is process-global in python-flint; arb balls stay rigorous whatever the
     # precision, so a concurrent change can only cost an extra refinement round, never a sign.
     old = ctx.prec
@@ -50,7 +55,8 @@ def _workprec(bits: int) -> Iterator[None]:
         ctx.prec = old
 
 
-def _arb_to_fmpq(x: arb) -> tuple[fmpq, fmpq]:
+def arb_to_fmpq(x: arb) -> tuple[fmpq, fmpq]:
+    """Exact (midpoint, radius) of an arb ball as rationals."""
     m, e = x.mid().man_exp()
     r, f = x.rad().man_exp()
     mid = fmpq(m) * (fmpq(2) ** e if e >= 0 else fmpq(1, 2 ** (-e)))
@@ -58,20 +64,40 @@ def _arb_to_fmpq(x: arb) -> tuple[fmpq, fmpq]:
     return mid, rad
 
 
-def _simplest_between(lo: fmpq, hi: fmpq) -> fmpq:
-    """Simplest rational (smallest denominator) in the closed interval [lo, hi], lo <= hi."""
+def simplest_between(lo: fmpq, hi: fmpq) -> fmpq:
+    """The rational with the smallest denominator in the closed interval [lo, hi] (lo <= hi).
+
+    Stern-Brocot descent on the continued fractions of the ends, without recursion: intervals
+    a few thousand bits wide (exact refinements) need thousands of terms.
+
+    Examples:
+        >>> simplest_between(fmpq(31, 100), fmpq(34, 100))
+        1/3
+        >>> x = fmpq(2**3000 + 1, 2**3000); simplest_between(x, x) == x
+        True
+    """
     if lo <= 0 <= hi:
         return fmpq(0)
     if hi < 0:
-        return -_simplest_between(-hi, -lo)
-    # Stern-Brocot descent on continued fractions
-    fl = lo.p // lo.q
-    if fmpq(fl) == lo:
-        return lo
-    if fl + 1 <= hi:
-        return fmpq(fl + 1)
-    # lo, hi in (fl, fl+1): recurse on the reciprocals of the fractional parts
-    return fmpq(fl) + 1 / _simplest_between(1 / (hi - fl), 1 / (lo - fl))
+        return -simplest_between(-hi, -lo)
+    terms = []
+    a, b = lo, hi
+    while True:
+        fl = a.p // a.q
+        if fmpq(fl) == a:
+            terms.append(fl)
+            break
+        if fl + 1 <= b:
+            terms.append(fl + 1)
+            break
+        terms.append(fl)
+        a, b = 1 / (b - fl), 1 / (a - fl)
+    # fold the continued fraction [t0; t1, ..., tk] with integer convergents
+    h0, h1, k0, k1 = 1, terms[0], 0, 1
+    for t in terms[1:]:
+        h0, h1 = h1, t * h1 + h0
+        k0, k1 = k1, t * k1 + k0
+    return fmpq(h1, k1)
 
 
 _ARB_POLY_CACHE: dict[tuple[int, int], tuple[fmpq_poly, arb_poly]] = {}
@@ -85,7 +111,7 @@ def _arb_poly(F: fmpq_poly, prec: int) -> arb_poly:
         return hit[1]
     if len(_ARB_POLY_CACHE) > 4096:
         _ARB_POLY_CACHE.clear()
-    with _workprec(prec):
+    with working_precision(prec):
         ap = arb_poly(F)
     _ARB_POLY_CACHE[key] = (F, ap)
     return ap
@@ -94,7 +120,7 @@ def _arb_poly(F: fmpq_poly, prec: int) -> arb_poly:
 def _poly_sign_at(F: fmpq_poly, x: fmpq) -> int:
     """Exact sign of F(x) at a rational x: ball arithmetic first, exact evaluation if unsure."""
     for prec in (64, 256, 1024):
-        with _workprec(prec):
+        with working_precision(prec):
             v = _arb_poly(F, prec)(arb(x))
             if v > 0:
                 return 1
@@ -192,7 +218,7 @@ class RealAlgebraic:
         """Test the simplest rational of the interval exactly; adopt it if it is the root."""
         if self.value is not None:
             return True
-        c = _simplest_between(self.lo, self.hi)
+        c = simplest_between(self.lo, self.hi)
         if self.lo < c < self.hi and self.poly(c) == 0:
             self._become(c)
             return True
@@ -212,7 +238,7 @@ class RealAlgebraic:
         mag = max(abs(lo), abs(hi), fmpq(1))
         ratio = mag / width if width > 0 else fmpq(2) ** 64
         bits = min(int(ratio.p // ratio.q).bit_length() + 72, 40000) + 2 * self.poly.degree()
-        with _workprec(bits):
+        with working_precision(bits):
             F = arb_poly(self.poly)
             dF = F.derivative()
             x = arb((lo + hi) / 2)
@@ -226,7 +252,7 @@ class RealAlgebraic:
                     return False
                 if abs(step) < arb(width) / 16:
                     break
-            xm, _ = _arb_to_fmpq(x)
+            xm, _ = arb_to_fmpq(x)
         w = width / 4
         a, b = max(xm - w, lo), min(xm + w, hi)
         if not a < b:
@@ -245,7 +271,7 @@ class RealAlgebraic:
 
     def enclosure(self, prec: int) -> arb:
         """An arb ball containing the number (computed at ``prec`` bits)."""
-        with _workprec(prec):
+        with working_precision(prec):
             if self.value is not None:
                 return arb(self.value)
             return arb.union(arb(self.lo), arb(self.hi))
@@ -374,7 +400,7 @@ def _exact_decimal(x: fmpq, digits: int) -> str | None:
 
 
 def _arb_sign(v: QSqrtPoly, x: arb, prec: int) -> int | None:
-    with _workprec(prec):
+    with working_precision(prec):
         val = _arb_poly(v.p, prec)(x)
         if not v.q.is_zero():
             val = val + _arb_poly(v.q, prec)(x) * arb(v.d).sqrt()

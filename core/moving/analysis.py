@@ -29,7 +29,7 @@ from typing import Any
 
 from flint import fmpq, fmpq_poly
 
-from ..algebra.algebraic import RealAlgebraic, _simplest_between
+from ..algebra.algebraic import RealAlgebraic, simplest_between
 from ..algebra.qsqrt import QSqrtPoly
 from ..algebra.realroots import real_roots
 from ..formulae.decision import sign_variations
@@ -66,7 +66,7 @@ def _strictly_between(a: fmpq | None, b: fmpq | None) -> fmpq:
     if b is None:
         f = a.p // a.q
         return fmpq(f + 1)
-    c = _simplest_between(a, b)
+    c = simplest_between(a, b)
     if c == a or c == b:
         c = (a + b) / 2
     return c

@@ -24,7 +24,7 @@ from typing import Any
 
 from flint import arb, fmpq, fmpq_mat
 
-from ..algebra.algebraic import _workprec
+from ..algebra.algebraic import working_precision
 from ..fixed.classify import classify
 from ..relation import Relation
 from .centred import CentredShape, centred_pair, column, dot
@@ -125,7 +125,7 @@ def _arb_normal(A: CentredShape, B: CentredShape, n: list[Any], prec: int) -> li
     """More Newton steps at ``prec`` bits (arb balls; only the midpoints are used)."""
     from .numbers import arb_bounds
 
-    with _workprec(prec):
+    with working_precision(prec):
         d = A.d
         SA = [[arb(A.S[i, j]) for j in range(d)] for i in range(d)]
         SB = [[arb(B.S[i, j]) for j in range(d)] for i in range(d)]

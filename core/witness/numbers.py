@@ -16,48 +16,12 @@ from typing import Any
 
 from flint import arb, arb_poly, fmpq, fmpq_poly
 
-from ..algebra.algebraic import RealAlgebraic, _arb_to_fmpq, _workprec
+from ..algebra.algebraic import RealAlgebraic, arb_to_fmpq, simplest_between, working_precision
 from ..algebra.qsqrt import QSqrtPoly
 from ..algebra.realroots import real_roots
 from ..shapes.numbers import to_float
 
 __all__ = ["sqrt_bounds", "simplest_between", "value_at_root", "algebraic_dict", "rational_near", "to_float"]
-
-
-def simplest_between(lo: fmpq, hi: fmpq) -> fmpq:
-    """The rational with the smallest denominator in [lo, hi] (lo <= hi).
-
-    The same continued-fraction descent as ``core.algebra.algebraic._simplest_between``, without
-    recursion: intervals a few thousand bits wide (exact refinements) need thousands of terms.
-
-    Examples:
-        >>> simplest_between(fmpq(31, 100), fmpq(34, 100))
-        1/3
-        >>> x = fmpq(2**3000 + 1, 2**3000); simplest_between(x, x) == x
-        True
-    """
-    if lo <= 0 <= hi:
-        return fmpq(0)
-    if hi < 0:
-        return -simplest_between(-hi, -lo)
-    terms = []
-    a, b = lo, hi
-    while True:
-        fl = a.p // a.q
-        if fmpq(fl) == a:
-            terms.append(fl)
-            break
-        if fl + 1 <= b:
-            terms.append(fl + 1)
-            break
-        terms.append(fl)
-        a, b = 1 / (b - fl), 1 / (a - fl)
-    # fold the continued fraction [t0; t1, ..., tk] with integer convergents
-    h0, h1, k0, k1 = 1, terms[0], 0, 1
-    for t in terms[1:]:
-        h0, h1 = h1, t * h1 + h0
-        k0, k1 = k1, t * k1 + k0
-    return fmpq(h1, k1)
 
 
 def rational_near(x: float, rel: float) -> fmpq:
@@ -162,13 +126,13 @@ def value_at_root(alpha: RealAlgebraic, num: fmpq_poly, den: fmpq_poly, *, squar
         R = R(fmpq_poly([0, 0, 1]))
     prec = 64
     for _ in range(64):
-        with _workprec(prec):
+        with working_precision(prec):
             x = alpha.enclosure(prec)
             ball = arb_poly(num)(x) / arb_poly(den)(x)
             if square_root:
                 ball = ball.sqrt()
             if ball.is_finite():
-                mid, rad = _arb_to_fmpq(ball)
+                mid, rad = arb_to_fmpq(ball)
                 roots = real_roots(QSqrtPoly(R), mid - rad, mid + rad)
                 if len(roots) == 1:
                     return roots[0]
@@ -202,5 +166,5 @@ def algebraic_dict(a: RealAlgebraic, digits: int = 20) -> dict[str, Any]:
 
 def arb_bounds(x: arb) -> tuple[fmpq, fmpq]:
     """Rational ends of an arb ball."""
-    mid, rad = _arb_to_fmpq(x)
+    mid, rad = arb_to_fmpq(x)
     return mid - rad, mid + rad
