@@ -24,7 +24,7 @@ from flint import (
     fmpq,
     fmpq_poly,
     fmpz,
-    fmpz_poly,  # noqa: F401  (used by the doctests)
+    fmpz_poly,  # noqa: F401  (the doctests use it)
 )
 
 from ..shapes.numbers import sign as _sgn
@@ -93,7 +93,7 @@ def simplest_between(lo: fmpq, hi: fmpq) -> fmpq:
         terms.append(fl)
         a, b = 1 / (b - fl), 1 / (a - fl)
     # fold the continued fraction [t0; t1, ..., tk] with integer convergents
-    h0, h1, k0, k1 = 1, terms[0], 0, 1
+    h0, h1, k0, k1 = fmpz(1), terms[0], fmpz(0), fmpz(1)
     for t in terms[1:]:
         h0, h1 = h1, t * h1 + h0
         k0, k1 = k1, t * k1 + k0
@@ -349,7 +349,7 @@ def _floor_log10(x: fmpq) -> int:
 
 
 def _round_decimal(x: fmpq, digits: int) -> str:
-    """x rounded to ``digits`` significant digits, as a plain or scientific decimal string."""
+    """X rounded to ``digits`` significant digits, as a plain or scientific decimal string."""
     if x == 0:
         return "0"
     neg = x < 0

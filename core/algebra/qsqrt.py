@@ -249,7 +249,7 @@ class QSqrtPoly:
         n = self.degree() + 1
         pc = list(self.p.coeffs()) + [fmpq(0)] * (n - len(self.p.coeffs()))
         qc = list(self.q.coeffs()) + [fmpq(0)] * (n - len(self.q.coeffs()))
-        return [_to_float(a) + _to_float(b) * r for a, b in zip(pc, qc)]
+        return [_to_float(a) + _to_float(b) * r for a, b in zip(pc, qc, strict=False)]
 
     def __str__(self) -> str:
         if self.q.is_zero():
@@ -272,8 +272,9 @@ class QSqrtPoly:
         return f"QSqrtPoly({self})"
 
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
-        """Pickle as integer (numerator, denominator) pairs: flint polynomials do not pickle, and
-        the scene's analysis workers send these back to the GUI process.
+        """Pickle as integer (numerator, denominator) pairs.
+
+        The analysis workers send these back to the GUI process.
         """
         return (_from_pairs, (_pairs(self.p), _pairs(self.q), self.d))
 

@@ -8,6 +8,8 @@ Taylor shifts in Z[x]); the roots of N that are roots of s are kept (:func:`core
 
 from __future__ import annotations
 
+from typing import Any
+
 from flint import fmpq, fmpq_poly, fmpz, fmpz_poly
 
 from .algebraic import RealAlgebraic, sign_at
@@ -77,7 +79,7 @@ def _positive_root_boxes(f: fmpz_poly) -> list[tuple[fmpq, fmpq]]:
     else:
         h = fmpz_poly([c * fmpz(2) ** (-k * (n - i)) for i, c in enumerate(coeffs)])
     out: list[tuple[fmpq, fmpq]] = []
-    stack = [(h, 0, 0)]
+    stack: list[tuple[fmpz_poly, Any, int]] = [(h, 0, 0)]
     while stack:
         h, c, depth = stack.pop()
         scale = B / fmpq(2) ** depth
@@ -134,7 +136,7 @@ def _sorted_disjoint(nums: list[RealAlgebraic]) -> list[RealAlgebraic]:
     while True:
         nums.sort(key=lambda a: (a.lo, a.hi))
         clash = False
-        for a, b in zip(nums, nums[1:]):
+        for a, b in zip(nums, nums[1:], strict=False):
             if not a.hi < b.lo and not (a.value is not None and a.value == b.value):
                 clash = True
                 (a if a.width >= b.width else b).bisect()

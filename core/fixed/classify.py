@@ -14,10 +14,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import Any, Literal, overload
+from typing import Any, Literal
 
 import numpy as np
-import numpy.typing as npt
 
 from ..formulae.decision import RULE_RELATION
 from ..relation import Relation
@@ -184,19 +183,6 @@ def _single_float_pair(A: Any, B: Any) -> bool:
     )
 
 
-@overload
-def classify(
-    A: Any, B: Any, *, method: Method = ..., on_invalid: OnInvalid = ..., stats: Stats | None = ...
-) -> Relation: ...
-@overload
-def classify(
-    A: npt.ArrayLike,
-    B: npt.ArrayLike,
-    *,
-    method: Method = ...,
-    on_invalid: OnInvalid = ...,
-    stats: Stats | None = ...,
-) -> npt.NDArray[np.int8]: ...
 def classify(
     A: Any,
     B: Any,
@@ -208,12 +194,13 @@ def classify(
     """Certified relative position of two ellipses (3x3) or ellipsoids (4x4).
 
     Args:
-        A, B: one matrix each (n, n), or stacks (..., n, n) that broadcast against each other.
+        A: one matrix (n, n), or a stack (..., n, n) that broadcasts against B's.
             Entries: floats of any width (exact binary rationals), ints, Fractions, fmpq, or
             strings like "3/7" / "0.1" (exact decimals). Signs may be flipped (positive
             interior). The exact symmetric part (A + A^T)/2 is classified (the quadratic form);
             a matrix symmetric only up to rounding is accepted, a clearly asymmetric one is not
             (:data:`core.shapes.quadrics.SYMMETRY_TOLERANCE`).
+        B: the same for B (both ellipses or both ellipsoids).
         method: "adaptive" (default: float filter, exact only where it abstains), "float"
             (filter only, may return UNDECIDED) or "exact" (rationals throughout).
         on_invalid: "raise" (default) a ValueError for the first invalid pair, or "mark" it
@@ -337,8 +324,9 @@ def _classify_flat(
 def _resolve(
     a: np.ndarray, b: np.ndarray, codes: np.ndarray, by: np.ndarray, method: str, scalar: bool, on_invalid: str
 ) -> dict[int, str]:
-    """Decide the UNDECIDED entries of ``codes`` in place: exactly, or (``method="float"``) only
-    validate them. Returns the invalid reasons (``on_invalid="mark"``) or raises the first.
+    """Decide the UNDECIDED entries of ``codes`` in place (exactly; "float": validate only).
+
+    Returns the invalid reasons (``on_invalid="mark"``) or raises the first.
     """
     errors: dict[int, str] = {}
     for i in np.flatnonzero(codes == Relation.UNDECIDED):

@@ -52,6 +52,7 @@ class ExactPair:
 
     @property
     def n(self) -> int:
+        """Degree of P: 3 (ellipses) or 4 (ellipsoids)."""
         return len(self.coefficients) - 1
 
     def hat(self, which: str) -> Any:
@@ -74,10 +75,12 @@ class ExactPair:
 
 
 def _float_int_matrix(M: Any) -> list[list[int]] | None:
-    """2^k * (M + M^T) as Python ints (k chosen so every entry is an integer) for a finite float64
-    (n, n) array symmetric up to rounding, sign-normalised so its quadratic block is positive
-    definite; None if M is not such an array or is invalid (the general path then produces the
-    precise error message). A positive multiple of the symmetric part: the same shape.
+    """2^k * (M + M^T) as Python ints for a float64 array symmetric up to rounding, or None.
+
+    k is chosen so every entry is an integer; the matrix is sign-normalised so its quadratic
+    block is positive definite. None if M is not such a finite (n, n) array or is invalid (the
+    general path then produces the precise error message). A positive multiple of the symmetric
+    part: the same shape.
     """
     if type(M) is not np.ndarray or M.dtype != np.float64 or M.ndim != 2 or M.shape[0] != M.shape[1]:
         return None
@@ -91,7 +94,7 @@ def _float_int_matrix(M: Any) -> list[list[int]] | None:
         return None
     emin = int(e[nz].min())
     shifts = np.where(nz, e - emin, 0).tolist()  # zero entries: any shift, keep it 0
-    ints = [[v << s for v, s in zip(row, srow)] for row, srow in zip(mi.tolist(), shifts)]
+    ints = [[v << s for v, s in zip(row, srow, strict=False)] for row, srow in zip(mi.tolist(), shifts, strict=False)]
     n = len(ints)
     if not (M == M.T).all():
         tol = SYMMETRY_TOLERANCE
@@ -113,7 +116,8 @@ def exact_pair(A: Any, B: Any, *, scaled: bool = True) -> ExactPair:
     """Validate A and B exactly and build their pencil.
 
     Args:
-        A, B: matrices in any accepted input form (see :mod:`core.shapes.quadrics`).
+        A: a matrix in any accepted input form (see :mod:`core.shapes.quadrics`).
+        B: the same for B.
         scaled: use integer-scaled matrices (faster; coefficients are positive multiples of the
             true ones). ``False`` gives the true coefficients of det(T A + B), for display.
 

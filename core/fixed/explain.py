@@ -24,8 +24,10 @@ __all__ = ["Quantity", "Explanation", "explain", "display_float"]
 
 
 def display_float(v: fmpq) -> float | None:
-    """The nearest float of an exact value, or None when it does not fit (overflow, or a nonzero
-    value that rounds to 0): a display value never misstates the sign or the size.
+    """The nearest float of an exact value, or None when it does not fit.
+
+    None on overflow, or for a nonzero value that rounds to 0: a display value never misstates
+    the sign or the size.
     """
     f = to_float(v)
     if math.isinf(f) or (f == 0 and v != 0):
@@ -56,8 +58,8 @@ def explain(A: Any, B: Any) -> Explanation:
     coeffs = [_q(f"a{i}", fmpq(a[i])) for i in range(n + 1)]
     scale = hat_scale(n)
     subs: dict[str, Quantity | None] = {"s0": None, "s1": None, "s10": None}
-    needed = [k for k in ("s0", "s1", "s10") if k in pair._cache]
-    for k, c in zip(("s0", "s1", "s10"), scale):
+    needed: list[str] = [k for k in ("s0", "s1", "s10") if k in pair._cache]
+    for k, c in zip(("s0", "s1", "s10"), scale, strict=False):
         if k in pair._cache:
             true = -fmpq(a[n]) * fmpq(c.numerator, c.denominator) * fmpq(pair._cache[k])
             subs[k] = _q(k, true)

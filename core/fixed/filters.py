@@ -147,7 +147,7 @@ class _Prepared:
 
 
 def _run_pencil(a: np.ndarray, b: np.ndarray, rounded: np.ndarray | None = None) -> dict[str, tuple[Any, Any]]:
-    """name -> (value, certified error bound) of every pencil output, for arrays (N, n, n).
+    """Name -> (value, certified error bound) of every pencil output, for arrays (N, n, n).
 
     ``rounded`` marks the pairs whose entries are rounded values (their own constants).
     """
@@ -180,8 +180,10 @@ def _digit(v: np.ndarray, bound: np.ndarray) -> np.ndarray:
 
 
 def _tree(out: dict[str, tuple[Any, Any]], ok: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Rule ids (-1 undecided) from pencil outputs with bounds, and the mask of valid pairs
-    (validity minors positive, a_n and a_0 negative: certified)."""
+    """Rule ids (-1 undecided) from pencil outputs with bounds, and the mask of valid pairs.
+
+    Valid: validity minors positive, a_n and a_0 negative, all certified.
+    """
     ok = ok.copy()
     for key in [k for k in out if k.startswith("d")]:
         v, bd = out[key]
@@ -459,7 +461,7 @@ def explain_float(A: Any, B: Any) -> Any:
     ea, eb = int(prep.ea[0]), int(prep.eb[0])
 
     def quantity(name: str, v: float, bd: float, e: int, s: int | None) -> Quantity | None:
-        """v * 2^e with bound bd * 2^e; None if either leaves the normal float range."""
+        """V * 2^e with bound bd * 2^e; None if either leaves the normal float range."""
         with np.errstate(all="ignore"):
             val, bound = float(np.ldexp(v, e)), float(np.ldexp(bd, e))
         if not (math.isfinite(val) and math.isfinite(bound)) or (val == 0.0) != (v == 0.0):
@@ -483,6 +485,7 @@ def explain_float(A: Any, B: Any) -> Any:
         vals = [float(np.asarray(out[f"c{i}"][0]).reshape(-1)[0]) for i in range(n + 1)]
         radii = [float(np.asarray(out[f"c{i}"][1]).reshape(-1)[0]) for i in range(n + 1)]
         an = coeffs[n].approx
+        assert an is not None  # a_n was certified (< 0) and fits a float: quantity() returned it
         for which, scale in zip(("s0", "s1", "s10"), hat_scale(n), strict=True):
             hv, hb = _run_hat(n, which, vals, radii)
             deg, w = HAT_DEGREE_WEIGHT[(n, which)]
@@ -494,7 +497,9 @@ def explain_float(A: Any, B: Any) -> Any:
             # s_j = -a_n c_j hs_j; a_n < 0 is certified, so sign(s_j) = sign(hs_j)
             factor = -an * float(scale)
             s = 1 if hv0 > hb0 else (-1 if hv0 < -hb0 else None)
-            rel_an = coeffs[n].bound / abs(an) if an else float("inf")
+            an_bound = coeffs[n].bound
+            assert an_bound is not None  # float-certified quantities carry their bound
+            rel_an = an_bound / abs(an) if an else float("inf")
             value = factor * hvs
             bound = abs(factor) * (hbs + abs(hvs) * rel_an) * (1 + 2.0**-40)
             if not (math.isfinite(value) and math.isfinite(bound)) or (value == 0.0) != (hv0 == 0.0):

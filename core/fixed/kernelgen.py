@@ -1,5 +1,6 @@
-"""Generate ``core/fixed/_kernels.py`` and ``core/fixed/_kernels.c``: the float kernels of the filter, traced
-from the generic formulas, with the per-pair C driver and the decision tables.
+"""Generate ``core/fixed/_kernels.py`` and ``core/fixed/_kernels.c``: the float filter's kernels.
+
+They are traced from the generic formulas, with the per-pair C driver and the decision tables.
 
 Run ``python -m core.fixed.kernelgen`` after changing :mod:`core.formulae.pencil`, :mod:`core.formulae.subresultants`,
 :mod:`core.fixed.errorbound` or :mod:`core.formulae.decision`; ``tests/test_filters.py`` fails if the committed
@@ -85,7 +86,7 @@ def pencil_kernel(n: int, leaf_K: int = 0) -> Kernel:
         A = [[L[_leaf("a", i, j)] for j in range(n)] for i in range(n)]
         B = [[L[_leaf("b", i, j)] for j in range(n)] for i in range(n)]
         out: dict[str, Any] = {}
-        for i, (c, m) in enumerate(zip(pencil_coefficients(A, B), _row_bound_poly(A, B))):
+        for i, (c, m) in enumerate(zip(pencil_coefficients(A, B), _row_bound_poly(A, B), strict=False)):
             out[f"c{i}"] = c
             out[f"c{i}_M"] = m
         for name, M in (("A", A), ("B", B)):
@@ -155,8 +156,9 @@ def translate_kernel(n: int) -> Kernel:
 
 @cache
 def pencil_radius_kernel(n: int) -> Kernel:
-    """Kernel ``pencil_radius{n}(A, Ar, B, Br)`` (midpoint-radius): a_0..a_n and the validity
-    minors from entries that carry radii (the translated matrices, rescaled to |entry| + radius <= 2).
+    """Kernel ``pencil_radius{n}(A, Ar, B, Br)`` (midpoint-radius): a_0..a_n and validity minors.
+
+    From entries that carry radii (the translated matrices, rescaled to |entry| + radius <= 2).
     """
     names = _leaf_names(n)
 
@@ -204,9 +206,11 @@ def subresultant_kernel(n: int, which: str) -> Kernel:
 
 @cache
 def pencil_at_kernel(n: int) -> Kernel:
-    """Kernel ``pencil_at{n}(c, cr, T)`` (midpoint-radius): P(T) = sum a_i T^i by Horner, from
-    a_i with radii and an exact T in [CERT_T_MIN, CERT_T_MAX]: the separation certificate
-    (P(T*) > 0 with a_n, a_0 < 0 means two positive roots)."""
+    """Kernel ``pencil_at{n}(c, cr, T)`` (midpoint-radius): P(T) = sum a_i T^i by Horner.
+
+    From a_i with radii and an exact T in [CERT_T_MIN, CERT_T_MAX]: the separation certificate
+    (P(T*) > 0 with a_n, a_0 < 0 means two positive roots).
+    """
     pk = pencil_kernel(n)
     pr = pencil_radius_kernel(n)
     names = [f"c{i}" for i in range(n + 1)]
@@ -228,9 +232,11 @@ def pencil_at_kernel(n: int) -> Kernel:
 
 @cache
 def form_kernel(n: int) -> Kernel:
-    """Kernel ``form{n}(M, Mr, x)`` (midpoint-radius): X^T M X for X = (x, 1), M the prepared
-    matrix (entries with radii), x exact with |x_i| <= TRANSLATE_MAX: the common-point
-    certificate (negative for both shapes means x is inside both)."""
+    """Kernel ``form{n}(M, Mr, x)`` (midpoint-radius): X^T M X for X = (x, 1).
+
+    M is the prepared matrix (entries with radii), x exact with |x_i| <= TRANSLATE_MAX: the
+    common-point certificate (negative for both shapes means x is inside both).
+    """
     d = n - 1
     mnames = [_leaf("m", i, j) for i in range(n) for j in range(i, n)]
     names = mnames + [f"x{i}" for i in range(d)]
@@ -259,8 +265,10 @@ def form_kernel(n: int) -> Kernel:
 
 
 def c_function(k: Kernel, n: int, scalars: Sequence[str] = (), unit: Sequence[str] = ()) -> str:
-    """The kernel's straight-line Python source rewritten as a C function (same operations in
-    the same order: the error constants carry over; compile without contraction, -ffp-contract=off).
+    """The kernel's straight-line Python source rewritten as a C function.
+
+    The same operations in the same order: the error constants carry over (compile without
+    contraction, -ffp-contract=off).
 
     Array inputs are strided (element k of X is ``X[k * s]``: ``s`` = 1 for one pair, the block
     length for the structure-of-arrays blocks of the fast path), except the ``unit`` ones (local
@@ -271,8 +279,8 @@ def c_function(k: Kernel, n: int, scalars: Sequence[str] = (), unit: Sequence[st
     params = re.match(r"def \w+\((.*)\):", lines[0]).group(1).split(", ")  # type: ignore[union-attr]
     decl = [f"double {p}" if p in scalars else f"const double *restrict {p}" for p in params]
     body = [f"static inline __attribute__((always_inline)) void {k.name}({', '.join(decl)}, const int64_t s, double *restrict out) {{"]
-    for ln in lines[1:]:
-        ln = ln.strip()
+    for raw in lines[1:]:
+        ln = raw.strip()
         if ln.startswith("return"):
             for i, v in enumerate(ln[len("return (") : -len(",)")].split(", ")):
                 body.append(f"    out[{i}] = {v};")
@@ -290,9 +298,10 @@ def c_function(k: Kernel, n: int, scalars: Sequence[str] = (), unit: Sequence[st
 
 
 def prepare_c(n: int) -> str:
-    """``prepare{n}``: the full prepare step for one pair (validate cheaply, flip to a negative
-    interior, scale by a power of two when the largest entry is outside [NO_SCALE_MIN, LEAF_MAX],
-    symmetrise). Returns 1 (exactly symmetric: exact entries), 2 (symmetric up to rounding:
+    """``prepare{n}``: the full prepare step for one pair, in C.
+
+    Validate cheaply, flip to a negative interior, scale by a power of two when the largest
+    entry is outside [NO_SCALE_MIN, LEAF_MAX], symmetrise. Returns 1 (exactly symmetric: exact entries), 2 (symmetric up to rounding:
     entries are the correctly rounded half sums, the ``leaf_K = 1`` constants apply) or 0
     (abstain: NaN/inf, M_00 = 0, or an asymmetry not clearly within
     :data:`core.shapes.quadrics.SYMMETRY_TOLERANCE`). The numpy filter's ``_prepare`` takes the same

@@ -134,7 +134,9 @@ def decide_signs(n: int, signs: Sequence[int], s0: int = PENDING, s1: int = PEND
         n: 3 for ellipses, 4 for ellipsoids.
         signs: sign codes of a_n, ..., a_0 (descending, as Var is written); a_n and a_0 must be
             certainly negative (two normalised shapes), else the outcome is UNDECIDED.
-        s0, s1, s10: sign codes (-1, 0, 1, :data:`UNKNOWN` or :data:`PENDING`).
+        s0: sign code of s0 (-1, 0, 1, :data:`UNKNOWN` or :data:`PENDING`).
+        s1: the same for s1.
+        s10: the same for s1,0.
 
     Returns:
         A rule id (>= 0, see :data:`RULE_LIST`), :data:`NEED_S0` / :data:`NEED_S1` /

@@ -61,7 +61,7 @@ def determinant(M: Matrix) -> Any:
 
 
 def _minor2(A: Matrix, B: Matrix, r0: int, r1: int, j: int, k: int) -> list[Any]:
-    """det of rows (r0, r1), columns (j, k) of T A + B, as [c0, c1, c2] in T."""
+    """Det of rows (r0, r1), columns (j, k) of T A + B, as [c0, c1, c2] in T."""
     c2 = A[r0][j] * A[r1][k] - A[r0][k] * A[r1][j]
     c1 = (A[r0][j] * B[r1][k] + B[r0][j] * A[r1][k]) - (A[r0][k] * B[r1][j] + B[r0][k] * A[r1][j])
     c0 = B[r0][j] * B[r1][k] - B[r0][k] * B[r1][j]
@@ -71,7 +71,7 @@ def _minor2(A: Matrix, B: Matrix, r0: int, r1: int, j: int, k: int) -> list[Any]
 def _add_into(acc: list[Any] | None, p: list[Any], negate: bool) -> list[Any]:
     if acc is None:
         return [-c for c in p] if negate else list(p)
-    return [a - c for a, c in zip(acc, p)] if negate else [a + c for a, c in zip(acc, p)]
+    return [a - c for a, c in zip(acc, p, strict=False)] if negate else [a + c for a, c in zip(acc, p, strict=False)]
 
 
 def pencil_coefficients(A: Matrix, B: Matrix) -> list[Any]:

@@ -201,10 +201,11 @@ def analyse(
     """Exact interference analysis of two moving ellipses/ellipsoids over a time interval.
 
     Args:
-        A_t, B_t: the moving shapes: n x n nested lists of expression strings in t (n = 3
-            ellipses, 4 ellipsoids; e.g. ``[["1", "0", "-t"], ...]``), motion dicts
+        A_t: the first moving shape: an n x n nested list of expression strings in t (n = 3
+            ellipses, 4 ellipsoids; e.g. ``[["1", "0", "-t"], ...]``), a motion dict
             (``{"matrix": ...}`` or ``{"shape": ..., "translation": ..., "rotation": ...}``, see
-            :mod:`core.moving.motions`) or :class:`core.moving.motions.Motion` objects.
+            :mod:`core.moving.motions`) or a :class:`core.moving.motions.Motion`.
+        B_t: the second moving shape, likewise.
         interval: (lo, hi) with numbers, exact strings ("1/3", "0.5") or None for an infinite
             end. Finite ends belong to I.
         digits: significant digits of the decimal event values (1..1000; refine more later with
@@ -358,12 +359,14 @@ class _Case:
 
 
 def _paper_case(pencil: _MotionPencil, lo: fmpq | None, hi: fmpq | None) -> _Case:
-    """Sections 3.4 and 4.4: the real roots of s0(t) are the only times the relation can change
-    (4.4.1, 3.4(1)); if s0 vanishes identically, those of s1(t) (4.4.2; for ellipses 3.4(2):
+    """Which case of Sections 3.4 and 4.4 applies, and which polynomial gives the candidates.
+
+    The real roots of s0(t) are the only times the relation can change (4.4.1, 3.4(1)); if s0 vanishes identically, those of s1(t) (4.4.2; for ellipses 3.4(2):
     tangent or overlapping on all of I); if s1 does too, none (4.4.3). The sub-case of 4.4.2
     (signs of s1, s1,0 at a point alpha where neither vanishes) and of 4.4.3 (Var at alpha)
     is named for the reader; the decisions below do not depend on it (each point and interval
-    is decided by the tree itself)."""
+    is decided by the tree itself).
+    """
     if not pencil.s0.is_zero():
         return _Case("s0", "4.4.1" if pencil.n == 4 else "3.4(1)", pencil.s0, set())
     alpha = _sample_in(lo, hi)
@@ -411,8 +414,10 @@ def _decide_point(pencil: _MotionPencil, alpha: RealAlgebraic, known_zero: set[s
 def _decide_segments(
     pencil: _MotionPencil, case: _Case, cands: list[RealAlgebraic], lo: fmpq | None, hi: fmpq | None
 ) -> list[_Segment]:
-    """The relation on each open interval between consecutive candidates (exact signs at a
-    rational sample point; constant there by continuity, paper 3.4/4.4)."""
+    """The relation on each open interval between consecutive candidates.
+
+    Exact signs at a rational sample point; constant there by continuity (paper 3.4/4.4).
+    """
     zero = case.identically_zero
     out: list[_Segment] = []
     for i in range(len(cands) + 1):
@@ -426,11 +431,12 @@ def _decide_segments(
         if left is not None and right is not None and not left < right:
             # I's end inside a candidate's isolating interval: narrow it (the root is inside I)
             c = cands[0] if i == 0 else cands[-1]
-            while c.value is None and not (c.lo > left if i == 0 else c.hi < right):
+            end: fmpq = left if i == 0 else right
+            while c.value is None and not (c.lo > end if i == 0 else c.hi < end):
                 c.bisect()
             left = cands[i - 1].hi if i > 0 else lo
             right = cands[i].lo if i < len(cands) else hi
-            if not left < right:
+            if left is None or right is None or not left < right:
                 raise RuntimeError("candidate isolating intervals overlap")
         t = _strictly_between(left, right)
         sg = Signs(pencil.polys, t, zero)
@@ -442,8 +448,10 @@ def _decide_segments(
 def _events(
     cands: list[RealAlgebraic], points: list[_Point], segments: list[_Segment], digits: int
 ) -> tuple[list[Event], list[Event], list[int]]:
-    """Tangency events (a candidate where the shapes touch and the relation changes or is left
-    again), the other candidates (roots), and the candidates that split intervals."""
+    """Tangency events, the other candidates (roots), and the candidates that split intervals.
+
+    An event is a candidate where the shapes touch and the relation changes or is left again.
+    """
     events: list[Event] = []
     roots: list[Event] = []
     breaks: list[int] = []

@@ -102,8 +102,10 @@ class Motion:
         return self._matrix[0]
 
     def float_coefficients(self) -> tuple[np.ndarray, np.ndarray]:
-        """Float coefficients (entries x degree, descending) of every entry's numerator (sqrt(d)
-        folded in) and denominator, cached: the scene evaluates A(t) at each t-step with them.
+        """Float coefficients of every entry's numerator and denominator, cached.
+
+        Entries x degree, descending, sqrt(d) folded in: the scene evaluates A(t) at each
+        t-step with them.
         """
         if not self._float_coeffs:
             entries = [e for row in self.matrix() for e in row]
@@ -112,7 +114,7 @@ class Motion:
                 p = [_to_float(c) for c in e.num.p.coeffs()] or [0.0]
                 q = [_to_float(c) * math.sqrt(e.num.d) for c in e.num.q.coeffs()] or [0.0]
                 size = max(len(p), len(q))
-                nums.append([a + b for a, b in zip(p + [0.0] * (size - len(p)), q + [0.0] * (size - len(q)))])
+                nums.append([a + b for a, b in zip(p + [0.0] * (size - len(p)), q + [0.0] * (size - len(q)), strict=False)])
                 dens.append([_to_float(c) for c in e.den.coeffs()] or [1.0])
             self._float_coeffs.append((_stack_descending(nums), _stack_descending(dens)))
         return self._float_coeffs[0]
@@ -155,8 +157,8 @@ def motion_from_dict(data: Any, *, limits: Limits | None = None) -> Motion:
         if isinstance(rows, str) or not isinstance(rows, Sequence) or len(rows) not in (3, 4):
             raise ValueError("'matrix' must be a 3x3 (ellipse) or 4x4 (ellipsoid) nested list")
         n = len(rows)
-        src = {"matrix": [_vector(r, n, f"matrix row {i}") for i, r in enumerate(rows)]}
-        m = Motion(n - 1, src, limits)
+        msrc: dict[str, Any] = {"matrix": [_vector(r, n, f"matrix row {i}") for i, r in enumerate(rows)]}
+        m = Motion(n - 1, msrc, limits)
         M = m.matrix()
         for i in range(n):
             for j in range(i + 1, n):

@@ -202,7 +202,6 @@ class MotionAnalysis:
         Raises:
             ValueError: t outside I or not a number.
         """
-
         tq = to_fmpq(t)
         lo, hi = self.interval
         if (lo is not None and tq < lo) or (hi is not None and tq > hi):
@@ -217,7 +216,8 @@ class MotionAnalysis:
 
         Args:
             num: number of grid points (2..10000).
-            lo, hi: window; defaults to I, or around the events when I is unbounded.
+            lo: left end of the window; defaults to I's, or around the events when I is unbounded.
+            hi: right end, likewise.
         """
         if not 2 <= int(num) <= 10000:
             raise ValueError(f"num must be in 2..10000, got {num}")
@@ -247,8 +247,10 @@ class MotionAnalysis:
         return {"s0": -(an * self.s0), "s1": -(an * self.s1), "s10": -(an * self.s10)}
 
     def degrees(self) -> dict[str, Any]:
-        """Degrees in t: ``a`` (a_0..a_n), ``s0``/``s1``/``s10`` of the hat forms ŝ_j = -s_j/a_n
-        that are stored and plotted, and ``paper_s0``/``paper_s1``/``paper_s10`` of the paper's
+        """Degrees in t of the coefficients and of both forms of the subresultants.
+
+        ``a`` (a_0..a_n), ``s0``/``s1``/``s10`` of the hat forms ŝ_j = -s_j/a_n that are stored
+        and plotted, and ``paper_s0``/``paper_s1``/``paper_s10`` of the paper's
         s_j = -a_n ŝ_j themselves (Example 32: 26, 20, 20 where the hat forms have 22, 16, 16).
         A polynomial that is identically 0 has degree -1.
         """

@@ -69,6 +69,7 @@ class Signs:
         self.cache: dict[str, int] = {}
 
     def __call__(self, name: str) -> int:
+        """Exact sign of the polynomial ``name`` ("a0".."a4", "s0", "s1", "s10") at the point."""
         if name not in self.cache:
             if name in self.zero:
                 self.cache[name] = 0

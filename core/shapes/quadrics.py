@@ -73,6 +73,10 @@ def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: bool = False) -> Any
         >>> rotation_from_quaternion([1, 0, 0, 1], exact=True)[0]   # 90 degrees about z
         [0, -1, 0]
     """
+    w: Any
+    x: Any
+    y: Any
+    z: Any
     if exact:
         w, x, y, z = (to_fmpq(v) for v in wxyz)
     else:
@@ -115,6 +119,8 @@ def quadric_from_axes(
     d = len(center)
     if d not in (2, 3) or len(semi_axes) != d:
         raise ValueError(f"need 2 or 3 centre coordinates and as many semi-axes, got {d} and {len(semi_axes)}")
+    c: list[Any]
+    r: list[Any]
     if exact:
         c = [to_fmpq(v) for v in center]
         r = [to_fmpq(v) for v in semi_axes]
@@ -260,8 +266,10 @@ def symmetric_part(E: ExactMatrix, name: str = "matrix") -> ExactMatrix:
 
 
 def interior_sign(minor_signs: Sequence[int]) -> int | None:
-    """+1 if the leading principal minors of a quadratic block are all positive (definite),
-    -1 if they alternate -, +, -, ... (negative definite: the matrix is a flipped ellipse or
+    """The sign that normalises a matrix: +1, -1, or None if no sign makes it definite.
+
+    +1 if the leading principal minors of a quadratic block are all positive (definite), -1 if
+    they alternate -, +, -, ... (negative definite: the matrix is a flipped ellipse or
     ellipsoid), None otherwise. The one normalisation rule of static and moving shapes.
 
     Examples:

@@ -1,5 +1,8 @@
-"""The public witnesses of one pair or of stacks: each dispatches to the exact one-pair form or
-to the vectorised float form (:mod:`.batch`), so that neither of those imports the other."""
+"""The public witnesses of one pair or of stacks.
+
+Each dispatches to the exact one-pair form or to the vectorised float form (:mod:`.batch`), so
+that neither of those imports the other.
+"""
 
 from __future__ import annotations
 

@@ -391,7 +391,9 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
     if floats is None:
         a_obj, b_obj = _object_pairs(A, B, codes_full.shape)
         N = a_obj.shape[0]
-        mu_lo, mu_hi, approx = np.zeros(N), np.full(N, np.inf), np.zeros(N)
+        mu_lo: Any = np.zeros(N)
+        mu_hi: Any = np.full(N, np.inf)
+        approx: Any = np.zeros(N)
         need = np.ones(N, bool)
     else:
         a, b, shape = floats
@@ -613,9 +615,11 @@ def _exact_planes(a: np.ndarray, b: np.ndarray, which: np.ndarray, normal: np.nd
     exact_floats = float_input or all(_is_float_exact(a[i]) and _is_float_exact(b[i]) for i in idx)
     if exact_floats:  # the float matrices are the input itself: their check is the pair's
         al, bl = lists(_normalised(fa)), lists(_normalised(fb))
-        n = [np.ascontiguousarray(normal[idx, i]) for i in range(normal.shape[-1])]
+        normals = [np.ascontiguousarray(normal[idx, i]) for i in range(normal.shape[-1])]
         with np.errstate(all="ignore"):
-            certified[idx] = _plane_certified(_centre(al), al, n, offset[idx], -1) & _plane_certified(_centre(bl), bl, n, offset[idx], 1)
+            certified[idx] = _plane_certified(_centre(al), al, normals, offset[idx], -1) & _plane_certified(
+                _centre(bl), bl, normals, offset[idx], 1
+            )
 
 
 def _is_float_exact(M: Any) -> bool:

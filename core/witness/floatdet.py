@@ -90,6 +90,7 @@ def det_with_bound(M: Any) -> tuple[Any, Any, Any]:
     n = len(M)
     rows = []
     total = 0
+    shift: Any
     for row in M:
         if isinstance(row[0], np.ndarray):
             mx = np.maximum.reduce([np.abs(x) for x in row])

@@ -152,7 +152,8 @@ def maximise(SA: Any, SB: Any, delta: list[Any], *, iterations: int = 60) -> tup
         if not (wa > 0 and wb > 0):
             return 0.5, 0.0, [0.0] * len(delta)
         ok: Any = True
-        ra, rb = math.sqrt(wa), math.sqrt(wb)
+        ra: Any = math.sqrt(wa)
+        rb: Any = math.sqrt(wb)
     else:
         ok = (wa > 0) & (wb > 0)
         ra, rb = np.sqrt(np.where(ok, wa, 1.0)), np.sqrt(np.where(ok, wb, 1.0))

@@ -50,7 +50,7 @@ class SeparatingPlane:
 
         (support_b - support_a) / |n|, rounded down: the plane's width of empty space.
         """
-        norm2 = sum(v * v for v in self.normal)
+        norm2 = sum((v * v for v in self.normal), fmpq(0))
         _, upper = sqrt_bounds(norm2, 64)
         g = (self.support_b - self.support_a) / upper
         f = to_float(g)
