@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from fastapi import HTTPException
 
-from core import Relation, classify, quadric_from_axes, validate_quadric
+from core import Certifier, Relation, classify_detailed, quadric_from_axes, validate_quadric
 from core.shapes.numbers import to_fmpq
 
 from .budget import Budget
@@ -89,6 +89,15 @@ def _as_float64_if_exact(m: Any) -> Any:
     return m
 
 
+def _size(m: Any) -> int | None:
+    """n for an n x n matrix (3 or 4), else None."""
+    try:
+        n = len(m)
+        return n if n in (3, 4) and all(len(row) == n for row in m) else None
+    except TypeError:
+        return None
+
+
 def _converted(pair: PairItem, where: str) -> tuple[Any, Any]:
     """Both shapes as core input (float64 arrays where exact), not validated yet."""
     out = []
@@ -132,13 +141,11 @@ def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
 def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, batch: bool = True) -> list[ClassifyOut]:
     """Certified relation of each pair, with the arithmetic that certified it.
 
-    One vectorised :func:`core.classify` call with ``method="float"`` per matrix size (3x3, 4x4)
-    on all float pairs (pairs of exact values get the filter one by one: core uses it when the
-    values are doubles), then exact rationals (``adaptive``, ``exact``) for the pairs the filter
-    leaves undecided, one by one in request order, checking ``budget`` between pairs. A pair the
-    filter decides is certified valid by it; the others are validated exactly, so an invalid
-    pair gets a 422 naming it (``pairs[i]: b: ...``, the first such pair in order).
-    (To be replaced by a core function that reports the certifier per pair.)
+    One :func:`core.classify_detailed` call per matrix size and input kind (float matrices
+    vectorised through the float filter; exact-valued ones read exactly), which reports per pair
+    which arithmetic certified it; ``budget`` is checked before every pair that needs exact
+    arithmetic. The first invalid pair in request order gets a 422 naming it
+    (``pairs[i]: b: ...``).
 
     Raises:
         HTTPException: 422 for bad input.
@@ -155,44 +162,41 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
             mats[i] = _converted(pair, where[i])
         except HTTPException as e:
             errors[i] = e
-    codes = np.full(n, int(Relation.UNDECIDED), dtype=np.int8)
+    codes = np.full(n, int(Relation.INVALID), dtype=np.int8)
     by: list[str | None] = [None] * n
-    if method != "exact":
-        groups: dict[tuple[int, int], list[int]] = {}
-        for i, m in enumerate(mats):
-            if m is not None and isinstance(m[0], np.ndarray) and isinstance(m[1], np.ndarray):
-                groups.setdefault((m[0].shape[0], m[1].shape[0]), []).append(i)
-            elif m is not None:  # exact input: core's filter runs if its values are doubles ("1/2")
-                if i % 64 == 0:
-                    budget.check(f"while filtering pair {i} of {n}")
-                try:
-                    codes[i] = classify(m[0], m[1], method="float")
-                except ValueError:  # invalid: named below
-                    continue
-                by[i] = "float" if codes[i] != Relation.UNDECIDED else None
-        for (na, nb), idx in groups.items():
-            if na != nb or na not in (3, 4):
-                continue
-            try:
-                if len(idx) == 1:  # one pair: core's per-pair kernel, no stacking
-                    got = np.array([classify(mats[idx[0]][0], mats[idx[0]][1], method="float")], dtype=np.int8)
-                else:
-                    got = classify(np.stack([mats[i][0] for i in idx]), np.stack([mats[i][1] for i in idx]), method="float")
-            except ValueError:  # some pair is invalid: the pairs below name it, one by one
-                continue
-            codes[idx] = got
-            for i in np.asarray(idx)[got != Relation.UNDECIDED]:
-                by[i] = "float"
-    for k, i in enumerate(np.flatnonzero(codes == Relation.UNDECIDED)):
-        budget.check(f"after {k} of the pairs needing exact arithmetic ({n} pairs in the request)")
+    groups: dict[tuple[int, bool], list[int]] = {}
+    for i, m in enumerate(mats):
+        if m is None:
+            continue
+        na, nb = _size(m[0]), _size(m[1])
+        if na is None or na != nb:  # not square, or an ellipse with an ellipsoid: named below
+            continue
+        floats = isinstance(m[0], np.ndarray) and isinstance(m[1], np.ndarray)
+        groups.setdefault((na, floats), []).append(i)
+    for (size, floats), idx in groups.items():
+        if floats:
+            A = np.stack([mats[i][0] for i in idx])  # type: ignore[index]
+            B = np.stack([mats[i][1] for i in idx])  # type: ignore[index]
+        else:
+            A, B = np.empty((len(idx), size, size), dtype=object), np.empty((len(idx), size, size), dtype=object)
+            for k, i in enumerate(idx):
+                A[k], B[k] = mats[i]  # type: ignore[misc]
+        budget.check(f"before the {len(idx)} pairs of {size}x{size} matrices")
+        res = classify_detailed(
+            A, B, method=method, on_invalid="mark",  # type: ignore[arg-type]
+            progress=lambda k, m: budget.check(f"after {k} of the {m} pairs needing exact arithmetic ({n} pairs in the request)"),
+        )
+        codes[idx] = res.relation
+        for k, i in enumerate(idx):
+            c = Certifier(int(res.certified_by[k]))
+            by[i] = None if c == Certifier.NONE else str(c)
+    for i in range(n):  # the first bad pair, in request order, is named with the API's names
         if i in errors:
             raise errors[i]
-        a, b = mats[i]  # type: ignore[misc]
-        _validated(a, b, where[i])
-        if method != "float":
-            with bad_input(where[i]):
-                codes[i] = classify(a, b, method="exact")
-            by[i] = "exact"
+        if codes[i] == Relation.INVALID:
+            a, b = mats[i]  # type: ignore[misc]
+            _validated(a, b, where[i])
+            raise HTTPException(status_code=422, detail=f"{where[i]}not an ellipse/ellipsoid pair")  # not reached
     return [
         ClassifyOut(
             relation=str(Relation(int(codes[i]))),

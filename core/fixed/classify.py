@@ -12,6 +12,7 @@ are integers, object arrays may hold Fractions, fmpq, ints or number strings.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import Any, Literal
@@ -254,12 +255,19 @@ def classify(
 
 
 def classify_detailed(
-    A: Any, B: Any, *, method: Method = "adaptive", on_invalid: OnInvalid = "raise"
+    A: Any,
+    B: Any,
+    *,
+    method: Method = "adaptive",
+    on_invalid: OnInvalid = "raise",
+    progress: Callable[[int, int], None] | None = None,
 ) -> Classification:
     """:func:`classify` with, per pair, the arithmetic that certified it and the invalid reasons.
 
     Same arguments and guarantee as :func:`classify`; the result's arrays have the broadcast
-    batch shape (0-d for one pair).
+    batch shape (0-d for one pair). ``progress(k, m)`` is called before the k-th of the m pairs
+    that need exact arithmetic (or exact validation): a progress bar, or a time budget (an
+    exception it raises stops the work and propagates).
 
     Examples:
         >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
@@ -285,7 +293,9 @@ def classify_detailed(
     except ValueError:
         raise ValueError(f"batch shapes {a.shape[:-2]} and {b.shape[:-2]} do not broadcast") from None
     scalar = batch_shape == ()
-    codes, by, errors = _classify_flat(_flatten(a, batch_shape, n), _flatten(b, batch_shape, n), method, scalar, on_invalid)
+    codes, by, errors = _classify_flat(
+        _flatten(a, batch_shape, n), _flatten(b, batch_shape, n), method, scalar, on_invalid, progress
+    )
     return Classification(codes.reshape(batch_shape), by.reshape(batch_shape), errors)
 
 
@@ -308,7 +318,12 @@ def _validate_pair(a: Any, b: Any) -> None:
 
 
 def _classify_flat(
-    a: np.ndarray, b: np.ndarray, method: str, scalar: bool, on_invalid: str
+    a: np.ndarray,
+    b: np.ndarray,
+    method: str,
+    scalar: bool,
+    on_invalid: str,
+    progress: Callable[[int, int], None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
     """Codes, certifiers and invalid reasons for (N, n, n) stacks."""
     N = a.shape[0]
@@ -317,19 +332,29 @@ def _classify_flat(
     if method != "exact" and a.dtype == np.float64 and b.dtype == np.float64:
         codes = classify_float(a, b, scalar=scalar)
         by[codes != Relation.UNDECIDED] = Certifier.FLOAT
-    errors = _resolve(a, b, codes, by, method, scalar, on_invalid)
+    errors = _resolve(a, b, codes, by, method, scalar, on_invalid, progress)
     return codes, by, errors
 
 
 def _resolve(
-    a: np.ndarray, b: np.ndarray, codes: np.ndarray, by: np.ndarray, method: str, scalar: bool, on_invalid: str
+    a: np.ndarray,
+    b: np.ndarray,
+    codes: np.ndarray,
+    by: np.ndarray,
+    method: str,
+    scalar: bool,
+    on_invalid: str,
+    progress: Callable[[int, int], None] | None = None,
 ) -> dict[int, str]:
     """Decide the UNDECIDED entries of ``codes`` in place (exactly; "float": validate only).
 
     Returns the invalid reasons (``on_invalid="mark"``) or raises the first.
     """
     errors: dict[int, str] = {}
-    for i in np.flatnonzero(codes == Relation.UNDECIDED):
+    todo = np.flatnonzero(codes == Relation.UNDECIDED)
+    for k, i in enumerate(todo):
+        if progress is not None:
+            progress(k, todo.size)
         try:
             if method == "float":  # no exact classification, but invalid input is still an error
                 _validate_pair(a[i], b[i])
