@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..fixed.classify import METHODS, ON_INVALID, Certifier
+from ..fixed.compiled import warm_up
 from ..relation import Relation
 from .bounds import BoundingSpheres, bounding_spheres
 from .broadphase import Candidates, candidate_pairs
@@ -65,6 +66,7 @@ def search(
     _check(method, METHODS, "method")
     _check(on_invalid, ON_INVALID, "on_invalid")
     t0 = time.perf_counter()
+    warm_up(wait=False)  # the compiled filter loads while the spheres and the grid are built
     Q = read_bodies(Q)
     L = read_box(box, Q.shape[-1] - 1)
     spheres = bounding_spheres(Q)
@@ -74,6 +76,8 @@ def search(
     if L is not None:
         check_box(spheres.centers, spheres.radii, L)
     cand = candidate_pairs(spheres.centers, spheres.radii, box=L)
+    if len(cand) > 10_000:
+        warm_up()  # a large batch waits for the compiled filter (loaded once per process)
     t2 = time.perf_counter()
     rel, by = classify_candidates(Q, cand, L, method, chunk=chunk, progress=progress)
     t3 = time.perf_counter()
