@@ -109,7 +109,7 @@ def _read_csv(data: bytes, name: str) -> BodySet:
 
 
 def _line_of(message: str) -> str:
-    """numpy's "... at row 12, column 3" as a line of the file (the header is line 1)."""
+    """The line of the file in numpy's "... at row 12, column 3" (the header is line 1)."""
     import re
 
     m = re.search(r"at row (\d+), column (\d+)", message)
