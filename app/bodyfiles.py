@@ -26,7 +26,7 @@ import numpy as np
 from core import Relation, bodies_from_axes
 from core.shapes.quadrics import axes_row_errors
 
-__all__ = ["BodySet", "COLUMNS", "read_bodies", "read_bodies_bytes", "write_pairs_csv", "read_pairs_csv"]
+__all__ = ["BodySet", "COLUMNS", "read_bodies", "read_bodies_bytes", "write_bodies_csv", "write_pairs_csv", "read_pairs_csv"]
 
 COLUMNS = {3: ("x", "y", "z", "a", "b", "c", "qw", "qx", "qy", "qz"), 2: ("x", "y", "a", "b", "angle")}
 """CSV columns of a body, by dimension."""
@@ -148,6 +148,17 @@ def _from_parameters(centers: Any, axes: Any, orient: Any, name: str) -> BodySet
     except (ValueError, TypeError) as e:
         raise ValueError(f"{name}: {e}") from None
     return BodySet(Q, c, r, o, errors, name)
+
+
+def write_bodies_csv(path: str | Path, centers: Any, semi_axes: Any, orientations: Any) -> None:
+    """Write bodies as CSV (3D: x,y,z,a,b,c,qw,qx,qy,qz; 2D: x,y,a,b,angle), floats round-trip exactly."""
+    c = np.asarray(centers, dtype=np.float64)
+    dim = c.shape[1]
+    o = np.asarray(orientations, dtype=np.float64).reshape(len(c), -1)
+    rows = np.concatenate([c, np.asarray(semi_axes, dtype=np.float64), o], axis=1)
+    with open(path, "w", newline="") as f:
+        f.write(",".join(COLUMNS[dim]) + "\n")
+        f.write("".join(",".join(repr(v) for v in row) + "\n" for row in rows.tolist()))
 
 
 def write_pairs_csv(path: str | Path, i: np.ndarray, j: np.ndarray, relation: np.ndarray) -> None:

@@ -144,7 +144,8 @@ def _serve(args: argparse.Namespace) -> int:
         from .scene.server import start_scene
 
         scene = start_scene(
-            args.host, args.port, config_from_args(args), shared=args.shared, allow_origins=args.allow_origin
+            args.host, args.port, config_from_args(args), shared=args.shared, allow_origins=args.allow_origin,
+            bodies=_bodies_model(args),
         )  # type: ignore[arg-type]
         scene_url = scene.url
         print(f"Scene (open in a browser): {scene_url}", flush=True)
@@ -188,11 +189,24 @@ def _wait_forever() -> None:
         pass
 
 
+def _bodies_model(args: argparse.Namespace) -> object:
+    """The bodies of ``--bodies FILE`` with their contacts (``--box``), or None."""
+    if getattr(args, "bodies", None) is None:
+        return None
+    from .scene.bodies_view import load_model
+
+    model = load_model(args.bodies, args.box)
+    print(f"Bodies: {model.result.summary()}", flush=True)
+    return model
+
+
 def _screenshot(args: argparse.Namespace) -> int:
     from .screenshot import screenshot
 
     cfg = config_from_args(args)
-    path = screenshot(cfg, args.out, width=args.width, height=args.height, timeout=args.timeout)  # type: ignore[arg-type]
+    path = screenshot(
+        cfg, args.out, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args)
+    )  # type: ignore[arg-type]
     print(f"wrote {path}")
     return 0
 

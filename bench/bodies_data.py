@@ -57,3 +57,24 @@ def random_bodies(n: int, *, fraction: float = 0.3, dim: int = 3, ratio: float =
     else:
         orientations = rng.uniform(-math.pi, math.pi, n)
     return Bodies(centers, axes, orientations, side)
+
+
+def demo_bodies(*, seed: int = 7) -> Bodies:
+    """A small 3D scene with every relation: a layer of touching unit-diameter spheres (tangent
+    neighbours, exactly: integer centres, radius 1/2) under a loose cloud of random ellipsoids
+    (some overlap each other or dip into the layer, most are separate).
+
+    Examples:
+        >>> b = demo_bodies()
+        >>> len(b.centers), b.centers.shape[1]
+        (244, 3)
+    """
+    rng = np.random.default_rng(seed)
+    grid = np.array([[x, y, 0.5] for x in range(12) for y in range(12)], dtype=float)
+    cloud = random_bodies(100, fraction=0.08, ratio=2.5, size=0.8, seed=seed)
+    scale = 11.0 / cloud.side
+    centres = np.concatenate([grid, cloud.centers * np.array([scale, scale, 0.35]) + np.array([0.0, 0.0, 0.9])])
+    axes = np.concatenate([np.full((len(grid), 3), 0.5), cloud.semi_axes])
+    quats = np.concatenate([np.tile([1.0, 0.0, 0.0, 0.0], (len(grid), 1)), cloud.orientations])
+    del rng
+    return Bodies(centres, axes, quats, 12.0)
