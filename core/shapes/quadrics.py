@@ -42,6 +42,7 @@ __all__ = [
     "quadric_from_axes",
     "quadrics_from_axes",
     "axes_row_errors",
+    "rotations_from_orientations",
     "origin_moved",
     "axes_from_quadric",
     "rotation_from_quaternion",
@@ -175,7 +176,7 @@ def quadrics_from_axes(centers: Any, semi_axes: Any, orientations: Any = None) -
     if errors:
         k, reason = next(iter(errors.items()))
         raise ValueError(f"row {k}: {reason}")
-    return _assemble_float(c, r, _rotations(o, *c.shape))
+    return _assemble_float(c, r, rotations_from_orientations(o, *c.shape))
 
 
 def _axes_arrays(centers: Any, semi_axes: Any, orientations: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -240,8 +241,11 @@ def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, f
     return dict(sorted(errors.items()))
 
 
-def _rotations(o: np.ndarray | None, N: int, d: int) -> np.ndarray:
-    """(N, d, d) rotation matrices of checked orientations, as :func:`quadric_from_axes` reads them.
+def rotations_from_orientations(o: np.ndarray | None, N: int, d: int) -> np.ndarray:
+    """(N, d, d) rotation matrices (body -> world) of N orientations, as :func:`quadric_from_axes` reads them.
+
+    ``o``: (N, 4) quaternions wxyz, (N,) angles (2D) or None; finite and non-zero (checked by
+    :func:`axes_row_errors`).
 
     3D: quaternions wxyz, divided by |q|^2 (the operations of :func:`rotation_from_quaternion`);
     2D: angles (``math.cos``/``math.sin``, as for one shape) or quaternions (w, 0, 0, z); None:
