@@ -108,12 +108,13 @@ def run_contacts(args: argparse.Namespace) -> int:
     invalid = dict(res.invalid)
     for k, why in bodies.errors.items():  # the reason from the file's parameters, not "NaN"
         invalid[k] = why
-    write_pairs_csv(args.out, res.i, res.j, res.relation)
     t2 = time.perf_counter()
+    write_pairs_csv(args.out, res.i, res.j, res.relation)
+    t3 = time.perf_counter()
     print(f"wrote {len(res):,} pairs to {args.out}")
     print(res.summary())
     phases = ", ".join(f"{k} {v:.2f} s" for k, v in res.seconds.items() if k != "total")
-    print(f"time: read {t1 - t0:.2f} s, {phases}, write {t2 - t0 - (t1 - t0) - res.seconds.get('total', 0):.2f} s, total {t2 - t0:.2f} s")
+    print(f"time: read {t1 - t0:.2f} s, {phases}, write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
     for k in sorted(invalid)[:10]:
         print(f"invalid {bodies.where(k)}: {invalid[k]}")
     if len(invalid) > 10:

@@ -163,7 +163,7 @@ def write_bodies_csv(path: str | Path, centers: Any, semi_axes: Any, orientation
 
 def write_pairs_csv(path: str | Path, i: np.ndarray, j: np.ndarray, relation: np.ndarray) -> None:
     """Write ``i,j,relation`` rows (relation as ``separate|tangent|overlap``; header first)."""
-    names = np.array([str(Relation(k)) if k in Relation._value2member_map_ else "" for k in range(-2, 3)], dtype=object)
+    names = np.array([str(Relation(k)) for k in range(-2, 3)], dtype=object)  # codes -2 .. 2
     text = names[relation.astype(np.int64) + 2]
     with open(path, "w", newline="") as f:
         f.write("i,j,relation\n")

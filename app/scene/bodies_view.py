@@ -17,7 +17,6 @@ The maths (contacts, picking, configurations) lives in :mod:`app.scene.bodies`.
 from __future__ import annotations
 
 import html
-import math
 import threading
 from concurrent.futures import Executor
 from functools import lru_cache
@@ -29,6 +28,7 @@ from core import Relation
 
 from ..bodyfiles import read_bodies, read_bodies_bytes
 from .bodies import BodiesModel
+from .camera import aim_at_box
 from .shapes import NEUTRAL, RELATION_COLORS, RELATION_HEX, unit_disc
 
 __all__ = ["BodiesView", "load_model", "MESH_NODE", "FADED_OPACITY"]
@@ -321,29 +321,7 @@ class BodiesView:
         if cam is None or self.model is None or len(self.model.bodies) == 0:
             return
         lo, hi = self.model.extent()
-        centre = (lo + hi) / 2
-        radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-3)
-        try:
-            fov, aspect = float(cam.fov), float(cam.aspect)
-        except Exception:  # noqa: BLE001 - camera state not known yet: typical values
-            fov, aspect = 1.3, 1.5
-        free = 0.62  # the GUI panel covers about the right third of the page
-        half_h = math.tan(fov / 2)
-        dist = 1.35 * radius / (half_h * min(1.0, free * aspect))
-        shift = (0.5 - free / 2) * 2 * dist * half_h * aspect
-        if self.model.dim == 2:
-            cam.up_direction = (0.0, 1.0, 0.0)
-            x = float(centre[0]) + shift
-            cam.position = (x, float(centre[1]) - 1e-3, dist)
-            cam.look_at = (x, float(centre[1]), 0.0)
-        else:
-            cam.up_direction = (0.0, 0.0, 1.0)
-            view = np.array([0.55, -1.0, 0.7])
-            view /= np.linalg.norm(view)
-            right = np.cross(-view, np.array([0.0, 0.0, 1.0]))
-            right /= np.linalg.norm(right)
-            cam.position = tuple(float(v) for v in centre + dist * view + shift * right)
-            cam.look_at = tuple(float(v) for v in centre + shift * right)
+        aim_at_box(cam, lo, hi, self.model.dim, fill=1.35, view=(0.55, -1.0, 0.7))
 
     def close(self) -> None:
         """The tab went away: stop the two-body view's work."""

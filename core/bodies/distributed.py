@@ -175,7 +175,7 @@ def _as_dask(Q: Any) -> Any:
     if is_dask_array(Q):
         if Q.ndim != 3 or Q.shape[1] != Q.shape[2] or Q.shape[1] not in (3, 4):
             raise ValueError(f"Q must be an (N, 3, 3) stack of ellipses or (N, 4, 4) of ellipsoids, got shape {Q.shape}")
-        return Q.astype(np.float64).rechunk({1: -1, 2: -1})
+        return Q.rechunk({1: -1, 2: -1})  # each task reads its block exactly (read_bodies)
     arr = read_bodies(Q)
     return da.from_array(arr, chunks=(min(BODY_CHUNK, max(1, arr.shape[0])), arr.shape[1], arr.shape[2]))
 

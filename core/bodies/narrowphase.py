@@ -11,16 +11,17 @@ from __future__ import annotations
 import numpy as np
 
 from ..fixed.classify import classify_detailed
+from ..fixed.lazy import PAIR_CHUNK
 from ..relation import Relation
 from .broadphase import Candidates
 from .periodic import classify_images
 
 __all__ = ["classify_candidates", "CHUNK_PAIRS"]
 
-CHUNK_PAIRS = 1 << 20
-"""Pairs per classify call: large enough that the threads of the C filter stay busy (a call
-costs ~0.05 ms of set-up against ~50 ms of work), small enough for the gathered matrices
-(2 x 128 MB for ellipsoids) to stay well inside memory."""
+CHUNK_PAIRS = PAIR_CHUNK
+"""Pairs per classify call (the same as a Dask chunk of pairs, :data:`core.fixed.lazy.PAIR_CHUNK`):
+large enough that the threads of the C filter stay busy (a call costs ~0.05 ms of set-up against
+~50 ms of work), small enough for the gathered matrices (2 x 128 MB for ellipsoids)."""
 
 
 def classify_candidates(
