@@ -332,3 +332,36 @@ def test_summary_and_rows():
         "certified by the float filter 1, by exact arithmetic 1"
     )
     assert math.isfinite(res.seconds["total"])
+
+
+# ------------------------------------------------------------------------------ the shifted filter
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_filter_on_translated_pairs_never_contradicts_exact(dim):
+    """classify_translated(A, B, s) against the exact relation of A and the exact translate of B
+    by s, on pairs that are near tangency once B is moved (gaps 1e-3 .. 1e-15, both sides)."""
+    from bench.datasets import near_tangent_pairs
+
+    from core.fixed.exact import classify_exact
+    from core.fixed.filters import classify_translated
+    from core.formulae.decision import RULE_RELATION
+    from core.shapes.quadrics import symmetric_part
+
+    rng = np.random.default_rng(dim)
+    decided = 0
+    for gap in (1e-3, 1e-9, 1e-15):
+        for sign in (1, -1):
+            ds = near_tangent_pairs(dim, 12, gap=gap, sign=sign, seed=int(gap * 1e3) + sign + dim)
+            s = rng.choice([-1.0, 1.0], size=(len(ds.A), dim)) * rng.uniform(1, 40, (len(ds.A), dim))
+            s = np.ldexp(np.round(np.ldexp(s, 8)), -8)  # lattice vectors with short mantissas, like k * L
+            # B placed one lattice vector away, so that B moved by s is the near-tangent partner
+            B = np.array([origin_moved(M.tolist(), v.tolist()) for M, v in zip(ds.B, s, strict=True)])
+            rules = classify_translated(ds.A, B, s)
+            for k in range(len(ds.A)):
+                moved = origin_moved(symmetric_part(_exact(B[k])), [-fmpq(*float(v).as_integer_ratio()) for v in s[k]])
+                truth = classify_exact(_exact(ds.A[k]), moved).relation
+                if rules[k] >= 0:
+                    decided += 1
+                    assert RULE_RELATION[rules[k]] == truth, (gap, sign, k)
+    assert decided >= 30  # the filter decides most of them (the rest go to exact arithmetic)
