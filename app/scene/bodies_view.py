@@ -321,7 +321,7 @@ class BodiesView:
         if cam is None or self.model is None or len(self.model.bodies) == 0:
             return
         lo, hi = self.model.extent()
-        aim_at_box(cam, lo, hi, self.model.dim, fill=1.35, view=(0.55, -1.0, 0.7))
+        aim_at_box(cam, lo, hi, self.model.dim, fill=1.35 if self.model.dim == 3 else 1.0, view=(0.55, -1.0, 0.7))
 
     def close(self) -> None:
         """The tab went away: stop the two-body view's work."""
