@@ -13,7 +13,8 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
-are compiled with the system's C compiler on first use, :mod:`core.fixed.compiled`).
+are compiled with the system's C compiler on first use, :mod:`core.fixed.compiled`); the Dask
+path (:mod:`core.fixed.lazy`, :mod:`core.bodies.distributed`) imports dask only when it is used.
 """
 
 from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes
