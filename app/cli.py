@@ -10,6 +10,9 @@
   (:mod:`app.lifecycle`).
 * ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png [--config file.json]
   [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly.
+* ``python -m app contacts BODIES --out PAIRS.csv [--box Lx,Ly,Lz]`` and ``python -m app
+  classify PAIRS.npz --out LABELS.npy``: many bodies and files of pairs (:mod:`app.bodies_cli`);
+  ``serve --bodies FILE`` / ``screenshot --bodies FILE`` show many bodies in the scene.
 """
 
 from __future__ import annotations
@@ -96,6 +99,12 @@ def build_parser() -> argparse.ArgumentParser:
     sh.add_argument("--no-plots", action="store_true", help="hide the live plots")
     sh.add_argument("--out", required=True, help="output PNG path")
     sh.add_argument("--timeout", type=float, default=120.0, help="seconds to wait for rendering")
+    from .bodies_cli import add_parsers, box_argument
+
+    for parser in (s, sh):  # many bodies (issue 14): the scene opens on the bodies of a file
+        parser.add_argument("--bodies", default=None, help="CSV/NPZ file of many bodies to show (app.bodyfiles)")
+        parser.add_argument("--box", type=box_argument, default=None, help="periodic box Lx,Ly[,Lz] of --bodies")
+    add_parsers(sub)
     return p
 
 
@@ -135,7 +144,8 @@ def _serve(args: argparse.Namespace) -> int:
         from .scene.server import start_scene
 
         scene = start_scene(
-            args.host, args.port, config_from_args(args), shared=args.shared, allow_origins=args.allow_origin
+            args.host, args.port, config_from_args(args), shared=args.shared, allow_origins=args.allow_origin,
+            bodies=_bodies_model(args),
         )  # type: ignore[arg-type]
         scene_url = scene.url
         print(f"Scene (open in a browser): {scene_url}", flush=True)
@@ -179,11 +189,24 @@ def _wait_forever() -> None:
         pass
 
 
+def _bodies_model(args: argparse.Namespace) -> object:
+    """The bodies of ``--bodies FILE`` with their contacts (``--box``), or None."""
+    if getattr(args, "bodies", None) is None:
+        return None
+    from .scene.bodies_view import load_model
+
+    model = load_model(args.bodies, args.box)
+    print(f"Bodies: {model.result.summary()}", flush=True)
+    return model
+
+
 def _screenshot(args: argparse.Namespace) -> int:
     from .screenshot import screenshot
 
     cfg = config_from_args(args)
-    path = screenshot(cfg, args.out, width=args.width, height=args.height, timeout=args.timeout)  # type: ignore[arg-type]
+    path = screenshot(
+        cfg, args.out, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args)
+    )  # type: ignore[arg-type]
     print(f"wrote {path}")
     return 0
 
@@ -192,12 +215,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (2 for bad arguments or input)."""
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
-    if not argv or (argv[0] not in ("serve", "screenshot") and argv[0] not in ("-h", "--help")):
+    from .bodies_cli import COMMANDS, run_classify, run_contacts
+
+    if not argv or (argv[0] not in ("serve", "screenshot", *COMMANDS) and argv[0] not in ("-h", "--help")):
         argv = ["serve", *argv]  # no sub-command: serve with the given options (or defaults)
     args = parser.parse_args(argv)
     try:
         if args.command == "screenshot":
             return _screenshot(args)
+        if args.command == "contacts":
+            return run_contacts(args)
+        if args.command == "classify":
+            return run_classify(args)
         return _serve(args)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)

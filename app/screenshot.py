@@ -58,8 +58,12 @@ class HeadlessScene:
         timeout: seconds to wait for the browser, the analysis and the final colours.
     """
 
-    def __init__(self, config: SceneConfig, *, width: int = 1400, height: int = 900, timeout: float = 120.0) -> None:
+    def __init__(
+        self, config: SceneConfig, *, width: int = 1400, height: int = 900, timeout: float = 120.0, bodies: Any = None
+    ) -> None:
         self.config = config
+        self.bodies = bodies
+        """Many bodies to show instead of ``config`` (:mod:`app.scene.bodies_view`), or None."""
         self.width = width
         self.height = height
         self.timeout = timeout
@@ -77,7 +81,7 @@ class HeadlessScene:
 
         from .scene.server import start_scene
 
-        self.scene = start_scene("127.0.0.1", 0, self.config)
+        self.scene = start_scene("127.0.0.1", 0, self.config, bodies=self.bodies)
         try:
             self._pw = sync_playwright().start()
             self._tmp = tempfile.TemporaryDirectory(prefix="app-chromium-")
@@ -123,13 +127,18 @@ class HeadlessScene:
 
     def wait_settled(self, frames: int = 2) -> None:
         """Wait for the session to be ready, the shapes in the expected colour, then frames."""
+        session = self.session
+        if hasattr(session, "show_bodies"):  # many bodies: the view of all bodies, or its open pair
+            if session.session is None:
+                return self._wait_bodies(frames)
+            session = session.session
         deadline = time.monotonic() + self.timeout
-        if not self.session.ready.wait(self.timeout):
+        if not session.ready.wait(self.timeout):
             raise TimeoutError("the scene did not finish loading/analysing its configuration")
         self.page.wait_for_function("() => (window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0) > 2")
         for name in ("A", "B"):
             self.page.wait_for_function("(n) => window.__viserMutable?.nodeRefFromName?.[n] != null", arg=f"/shapes/{name}/mesh")
-        want = RELATION_HEX.get(self.session.state.relation or "")
+        want = RELATION_HEX.get(session.state.relation or "")
         if want is not None:
             self.page.wait_for_function(
                 f"(n) => ({_MESH_COLOR_JS})(n) === {want!r}",
@@ -138,6 +147,21 @@ class HeadlessScene:
             )
         # a few more frames so the final state is on the canvas; viser renders on demand, so
         # when nothing changes no frame may come: that is fine (the colour is already applied)
+        f0 = self.frame()
+        try:
+            self.page.wait_for_function(f"() => ({_FRAME_JS})() >= {f0 + frames}", timeout=3000)
+        except Exception:  # noqa: BLE001 - playwright TimeoutError: scene idle, already drawn
+            pass
+
+    def _wait_bodies(self, frames: int) -> None:
+        """Many bodies: the view built, its batched mesh in the browser, then a few frames."""
+        from .scene.bodies_view import MESH_NODE
+
+        if not self.session.ready.wait(self.timeout):
+            raise TimeoutError("the bodies view was not built")
+        self.page.wait_for_function("() => (window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0) > 2")
+        if self.session.mesh is not None:
+            self.page.wait_for_function("(n) => window.__viserMutable?.nodeRefFromName?.[n] != null", arg=MESH_NODE)
         f0 = self.frame()
         try:
             self.page.wait_for_function(f"() => ({_FRAME_JS})() >= {f0 + frames}", timeout=3000)
@@ -180,14 +204,18 @@ class HeadlessScene:
         return out
 
 
-def screenshot(config: SceneConfig, out: str | Path, *, width: int = 1400, height: int = 900, timeout: float = 120.0) -> Path:
+def screenshot(
+    config: SceneConfig, out: str | Path, *, width: int = 1400, height: int = 900, timeout: float = 120.0, bodies: Any = None
+) -> Path:
     """Render ``config`` to a PNG as a user sees it (shapes in their relation colours).
 
     Args:
         config: the scene to show (preset, t or event, shapes, dimension).
         out: PNG path (parent directories are created).
-        width, height: viewport size in pixels.
+        width: viewport width in pixels.
+        height: viewport height in pixels.
         timeout: seconds to wait for rendering (the analysis of a preset included).
+        bodies: many bodies to show instead (``--bodies FILE``: :mod:`app.scene.bodies_view`).
 
     Returns:
         The path written.
@@ -195,5 +223,5 @@ def screenshot(config: SceneConfig, out: str | Path, *, width: int = 1400, heigh
     Raises:
         RuntimeError: chromium missing. TimeoutError: the scene never finished rendering.
     """
-    with HeadlessScene(config, width=width, height=height, timeout=timeout) as hs:
+    with HeadlessScene(config, width=width, height=height, timeout=timeout, bodies=bodies) as hs:
         return hs.save(out)

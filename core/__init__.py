@@ -10,12 +10,17 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
     from core import warm_up, set_threads                 # build the C kernels early; threads
     from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
+    from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
-are compiled with the system's C compiler on first use, :mod:`core.fixed.compiled`).
+are compiled with the system's C compiler on first use, :mod:`core.fixed.compiled`); the Dask
+path (:mod:`core.fixed.lazy`, :mod:`core.bodies.distributed`) imports dask only when it is used.
 """
 
 from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes
+from .bodies.build import bodies_from_axes as bodies_from_axes
+from .bodies.contacts import contacts as contacts
+from .bodies.result import Contacts as Contacts
 from .fixed.classify import METHODS as METHODS
 from .fixed.classify import ON_INVALID as ON_INVALID
 from .fixed.classify import Certifier as Certifier
@@ -58,6 +63,7 @@ __all__ = [
     "Classification",
     "ContactPoint",
     "ContactScale",
+    "Contacts",
     "classify_detailed",
     "Explanation",
     "Method",
@@ -71,9 +77,11 @@ __all__ = [
     "Witness",
     "analyse",
     "axes_from_quadric",
+    "bodies_from_axes",
     "classify",
     "contact_point",
     "contact_scale",
+    "contacts",
     "explain",
     "motion_from_dict",
     "motion_to_dict",

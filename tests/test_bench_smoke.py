@@ -141,3 +141,13 @@ def test_api_load_runs_end_to_end_and_reports():
     assert "API batch of 20 ellipse pairs" in table and "single-pair classify at concurrency 4 (12 requests)" in table
     rows = report.targets({"results": []}, None, d)
     assert [r[0].split(" (")[0].split(":")[0] for r in rows[-2:]] == ["API batch of 20 pairs", "single-pair classify at concurrency 4"]
+
+
+def test_bench_bodies_runs_and_misses_nothing():
+    from bench import bench_bodies
+
+    row = bench_bodies.run(3000, fraction=0.3, periodic=True)
+    assert row["candidates"] >= row["contacts"] > 0 and row["float"] + row["exact"] == row["candidates"]
+    assert bench_bodies.brute_force_check(600, fraction=0.3)[1:] == (0, 0)
+    lat = bench_bodies.lattice(4)
+    assert lat["tangent"] == lat["exact"] == 3 * 16 * 3

@@ -1,5 +1,6 @@
 """core/ is pure mathematics in subpackages without import cycles; it imports only numpy,
-python-flint (flint) and the standard library."""
+python-flint (flint) and the standard library, except the Dask path: two modules that are
+imported only when Dask is used (``pip install -e ".[dask]"``) may import dask/distributed."""
 
 from __future__ import annotations
 
@@ -10,6 +11,11 @@ from pathlib import Path
 CORE = Path(__file__).resolve().parent.parent / "core"
 ALLOWED = {"numpy", "flint"}
 FORBIDDEN = {"viser", "fastapi", "pydantic", "starlette", "uvicorn", "trimesh", "app"}
+OPTIONAL = {
+    "fixed/lazy.py": {"dask"},  # classify on dask arrays (imports dask inside its functions)
+    "bodies/distributed.py": {"dask", "distributed"},  # contacts on a cluster (imported lazily)
+}
+"""Modules of the optional Dask path and what they may import besides ALLOWED."""
 
 
 def _imports(path: Path) -> set[str]:
@@ -56,8 +62,22 @@ def test_core_imports_no_web_packages():
     for path in files:
         mods = _imports(path)
         assert not (mods & FORBIDDEN), f"{path} imports {mods & FORBIDDEN}"
-        extra = mods - stdlib - ALLOWED - {"__future__", "core"}
+        extra = mods - stdlib - ALLOWED - {"__future__", "core"} - OPTIONAL.get(path.relative_to(CORE).as_posix(), set())
         assert not extra, f"{path} imports non-core packages {extra}"
+
+
+def test_core_imports_dask_only_when_asked():
+    """``import core`` (and a contact search on one machine) never loads dask."""
+    code = (
+        "import sys, numpy as np, core; "
+        "core.contacts(core.bodies_from_axes(np.zeros((2, 3)), np.ones((2, 3)))); "
+        "core.classify(np.eye(3)[None], np.eye(3)[None] * -1.0, on_invalid='mark'); "
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('dask', 'distributed')))"
+    )
+    import subprocess
+
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=CORE.parent, check=True)
+    assert out.stdout.strip() == "[]"
 
 
 def test_no_import_cycles_in_core():

@@ -12,7 +12,7 @@ from fastapi.staticfiles import StaticFiles
 from core import warm_up
 
 from .limits import BodySizeLimit, validation_error_handler
-from .routes import classify, health, landing, motion, presets, witness
+from .routes import classify, contacts, health, landing, motion, presets, witness
 from .settings import ApiSettings
 from .workers import WorkerPool
 
@@ -58,8 +58,8 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     app.state.settings = settings
     app.state.workers = workers
     app.add_exception_handler(RequestValidationError, validation_error_handler)
-    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
-    for module in (classify, motion, presets, witness, health, landing):
+    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes, per_path={"/api/contacts": settings.max_contacts_body_bytes})
+    for module in (classify, contacts, motion, presets, witness, health, landing):
         app.include_router(module.router)
     if settings.static_dir is not None and settings.static_dir.is_dir():
         app.mount("/static", StaticFiles(directory=settings.static_dir), name="static")

@@ -47,6 +47,11 @@ class ApiSettings:
     """Largest accepted request body (413 above)."""
     max_batch: int = 1000
     """Most pairs in one ``{"pairs": [...]}`` classify request."""
+    max_contacts_bodies: int = 10_000
+    """Most bodies in one ``/api/contacts`` request (a search over 10,000 bodies takes ~20 ms;
+    larger sets: ``python -m app contacts`` or the library)."""
+    max_contacts_body_bytes: int = 4_000_000
+    """Largest ``/api/contacts`` body (10,000 rows of 10 JSON numbers are about 2 MB)."""
     max_expression_chars: int = SERVER.expression_chars or 2000
     """Longest expression string in a motion (all other size limits of user text:
     :data:`core.shapes.limits.SERVER`, e.g. number strings up to 400 characters)."""
@@ -72,7 +77,7 @@ class ApiSettings:
     def __post_init__(self) -> None:
         """Reject limits that make no sense (a ValueError naming the field)."""
         for name in ("max_body_bytes", "max_batch", "max_expression_chars", "max_degree",
-                     "max_digits", "max_concurrent_analyses"):
+                     "max_digits", "max_concurrent_analyses", "max_contacts_bodies", "max_contacts_body_bytes"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"ApiSettings.{name} must be a positive integer, got {value!r}")

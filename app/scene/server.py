@@ -26,9 +26,13 @@ __all__ = ["SceneServer", "start_scene"]
 class SceneServer:
     """A running scene: the ``ViserServer`` plus the live sessions (one per connected tab)."""
 
-    def __init__(self, server: Any, config: SceneConfig, *, processes: bool = True, shared: bool = False) -> None:
+    def __init__(
+        self, server: Any, config: SceneConfig, *, processes: bool = True, shared: bool = False, bodies: Any = None
+    ) -> None:
         self.server = server
         self.config = config
+        self.bodies = bodies
+        """Many bodies (an :class:`app.scene.bodies.BodiesModel`) each new tab shows, or None."""
         """Configuration new tabs open on (change it to change what the next tab sees)."""
         self.executor = ThreadPoolExecutor(max_workers=2, thread_name_prefix="analysis")
         self.cache = AnalysisCache(self.executor, processes=processes)
@@ -46,6 +50,10 @@ class SceneServer:
                 session = self.shared
                 session.target = client  # frame this tab's camera; the scene itself is shared
                 session._frame_camera()
+            elif self.bodies is not None:  # many bodies (issue 14): app.scene.bodies_view, one per tab
+                from .bodies_view import BodiesView
+
+                session = BodiesView(client, self.bodies, cache=self.cache, executor=self.executor)
             else:
                 session = Session(client, self.config, cache=self.cache, executor=self.executor)
                 session._frame_camera()
@@ -98,6 +106,7 @@ def start_scene(
     processes: bool = True,
     shared: bool = False,
     allow_origins: Iterable[str] = (),
+    bodies: Any = None,
 ) -> SceneServer:
     """Start the scene server (returns at once; viser serves from its own thread).
 
@@ -113,6 +122,8 @@ def start_scene(
             its own).
         allow_origins: web origins (``https://host:port``) besides the scene's own whose pages
             may open sessions (:mod:`app.scene.origin`; ``--allow-origin`` on the command line).
+        bodies: many bodies (:class:`app.scene.bodies.BodiesModel`, ``--bodies FILE``): each tab
+            opens on them (:mod:`app.scene.bodies_view`) instead of ``config``.
     """
     from core import warm_up
 
@@ -121,4 +132,4 @@ def start_scene(
     warm_up(wait=False)  # compile the float filter in the background; drags use exact meanwhile
     server = start_viser(OriginPolicy(host, allow_origins), host=host, port=port, verbose=verbose)
     server.gui.configure_theme(control_width="large", show_share_button=False)
-    return SceneServer(server, config or SceneConfig(), processes=processes, shared=shared)
+    return SceneServer(server, config or SceneConfig(), processes=processes, shared=shared, bodies=bodies)

@@ -26,6 +26,7 @@ from ..shapes.quadrics import validate_quadric
 from . import compiled
 from .exact import classify_exact
 from .filters import classify_float
+from .lazy import is_dask_array
 
 __all__ = [
     "classify",
@@ -210,7 +211,8 @@ def classify(
 
     Returns:
         A :class:`Relation` for one pair; an int8 array of Relation codes with the broadcast
-        batch shape for stacks.
+        batch shape for stacks; a lazy ``dask.array`` of those codes when A or B is a dask
+        array (computed chunk by chunk on the workers: :mod:`core.fixed.lazy`).
 
     Raises:
         ValueError: wrong shape, clearly non-symmetric, NaN/inf, not an ellipse/ellipsoid (the
@@ -234,6 +236,10 @@ def classify(
     """
     _check_choice(method, METHODS, "method")
     _check_choice(on_invalid, ON_INVALID, "on_invalid")
+    if is_dask_array(A) or is_dask_array(B):  # lazy: chunk by chunk on the dask workers
+        from .lazy import classify_lazy
+
+        return classify_lazy(_classify_block, A, B, method=method, on_invalid=on_invalid)
     if _single_float_pair(A, B) and (method == "adaptive" or (method == "float" and compiled.warm_up(wait=False))):
         # a drag in the scene: microseconds. Until the compiled kernels are loaded the adaptive
         # path goes straight to exact (~0.1 ms, faster than numpy on one pair)
@@ -252,6 +258,11 @@ def classify(
     if res.relation.ndim == 0:
         return Relation(int(res.relation))
     return res.relation
+
+
+def _classify_block(a: np.ndarray, b: np.ndarray, *, method: Method, on_invalid: OnInvalid) -> np.ndarray:
+    """Codes of one chunk of a dask computation (numpy stacks; a 0-d batch stays an array)."""
+    return classify_detailed(a, b, method=method, on_invalid=on_invalid).relation
 
 
 def classify_detailed(

@@ -49,6 +49,7 @@ __all__ = [
     "rules_numpy",
     "classify_float_numpy",
     "classify_translated",
+    "prepared",
     "explain_float",
     "HAT_DEGREE_WEIGHT",
 ]
@@ -131,19 +132,42 @@ def _prepare(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return S, 1 - e, status
 
 
+def prepared(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Matrices as the filter reads them, with the radius of each entry.
+
+    Args:
+        M: float64 stack (N, n, n).
+
+    Returns:
+        ``(S, status, radius)``: S = 2^e * sign * (symmetric part of M), scaled by an exact
+        power of two into the filter's range and flipped to a negative interior; status 1
+        (exactly symmetric), 2 (symmetric up to rounding: S holds rounded half sums, each within
+        ``radius`` of the exact one) or 0 (the filter abstains: NaN/inf, M_00 = 0, asymmetry
+        not clearly within the tolerance); radius 0 where S is exact. S describes the same
+        shape as M (a positive multiple of its quadratic form).
+    """
+    S, _, status, radius = _prepared(M)
+    return S, status, radius
+
+
+def _prepared(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_prepare` plus the radius of each entry: (S, e, status, radius)."""
+    S, e, status = _prepare(M)
+    radius = np.where((status == 2)[:, None, None], np.abs(S) * _LEAF_ROUNDING + _LEAF_UNDERFLOW, 0.0)
+    return S, e, status, radius
+
+
 class _Prepared:
     """Pairs flipped to negative interiors, symmetrised and scaled by 2^-ea, 2^-eb (exact)."""
 
     def __init__(self, a: np.ndarray, b: np.ndarray) -> None:
-        self.a, self.ea, sa = _prepare(a)
-        self.b, self.eb, sb = _prepare(b)
-        """Scaled matrix = 2^ea * (symmetric part of A) after the sign flip."""
+        self.a, self.ea, sa, self.radius_a = _prepared(a)
+        self.b, self.eb, sb, self.radius_b = _prepared(b)
+        """Scaled matrix = 2^ea * (symmetric part of A) after the sign flip; radius of each
+        prepared entry (0 when exact)."""
         self.ok = (sa > 0) & (sb > 0)
         self.rounded = (sa == 2) | (sb == 2)
         """Pairs whose entries are rounded half sums (leaf_K = 1 constants apply)."""
-        self.radius_a = np.where((sa == 2)[:, None, None], np.abs(self.a) * _LEAF_ROUNDING + _LEAF_UNDERFLOW, 0.0)
-        self.radius_b = np.where((sb == 2)[:, None, None], np.abs(self.b) * _LEAF_ROUNDING + _LEAF_UNDERFLOW, 0.0)
-        """Radius of each prepared entry (0 when exact)."""
 
 
 def _run_pencil(a: np.ndarray, b: np.ndarray, rounded: np.ndarray | None = None) -> dict[str, tuple[Any, Any]]:
@@ -352,7 +376,7 @@ def _translated(M: np.ndarray, Mr: np.ndarray, t: np.ndarray) -> tuple[np.ndarra
     return np.ldexp(V, shift), np.ldexp(R, shift) + _TINY_RADIUS
 
 
-def classify_translated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def classify_translated(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None = None) -> np.ndarray:
     """Second stage: rule ids after moving both shapes so that A is centred near the origin.
 
     The relation is invariant under a common translation. Far from the origin (centres at 1e6)
@@ -360,6 +384,13 @@ def classify_translated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     approximation of) A's centre, with every entry's rounding error carried as a radius
     (:mod:`core.fixed.errorbound`, midpoint-radius), most such pairs are certified without exact
     arithmetic, by the tree or by the certificates. -1 where no sign is proven.
+
+    Args:
+        a: float64 stack (N, n, n).
+        b: the same shape.
+        shift_b: optional (N, n - 1) float vectors s: classify A against B moved by exactly s
+            (the periodic image of B, :mod:`core.bodies.periodic`); the translated entries of B
+            carry their rounding as radii, so the answer is certified for the exact translate.
     """
     n = a.shape[-1]
     with np.errstate(all="ignore"):
@@ -367,8 +398,13 @@ def classify_translated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         centre, _, okc = _centre(prep.a)
         ok = prep.ok & okc & np.isfinite(centre).all(axis=1) & (np.abs(centre) <= TRANSLATE_MAX).all(axis=1)
         centre = np.where(ok[:, None], centre, 0.0)  # any float vector is exact: it is the chosen t
+        b_moved, radius_b = prep.b, prep.radius_b
+        if shift_b is not None:  # origin at -s: B moves by +s (s is exact, entries gain radii)
+            s = np.asarray(shift_b, dtype=np.float64)
+            ok &= np.isfinite(s).all(axis=1) & (np.abs(s) <= TRANSLATE_MAX).all(axis=1)
+            b_moved, radius_b = _translated(prep.b, prep.radius_b, np.where(ok[:, None], -s, 0.0))
         VA, RA = _translated(prep.a, prep.radius_a, centre)
-        VB, RB = _translated(prep.b, prep.radius_b, centre)
+        VB, RB = _translated(b_moved, radius_b, centre)
         fn, outputs, floor = _PENCIL_RADIUS[n]
         res = fn(*(np.moveaxis(X, 0, -1) for X in (VA, RA, VB, RB)))
         k = len(outputs)

@@ -21,7 +21,7 @@ from typing import Any
 
 from ..formulae.pencil import determinant, pencil_coefficients, poly_mul
 from ..formulae.subresultants import hat_s0, hat_s1, hat_s10
-from ..shapes.quadrics import SYMMETRY_TOLERANCE
+from ..shapes.quadrics import SYMMETRY_TOLERANCE, origin_moved
 from .errorbound import (
     CERT_T_MAX,
     CERT_T_MIN,
@@ -127,22 +127,9 @@ def translate_kernel(n: int) -> Kernel:
 
     def formula(L: dict[str, Any]) -> dict[str, Any]:
         M = [[L[_leaf("m", i, j)] for j in range(n)] for i in range(n)]
-        t = [L[f"t{i}"] for i in range(d)]
-        out: dict[str, Any] = {}
-        for i in range(d):
-            for j in range(i, d):
-                out[_leaf("m", i, j)] = M[i][j] * 1  # unchanged (exact)
-        Qt = []
-        for i in range(d):
-            acc = M[i][d]
-            for j in range(d):
-                acc = acc + M[i][j] * t[j]
-            Qt.append(acc)
-            out[_leaf("m", i, d)] = acc  # (Q t + m)_i
-        last = M[d][d]
-        for i in range(d):
-            last = last + t[i] * (Qt[i] + M[i][d])  # t^T Q t + 2 m.t + m_nn
-        out[_leaf("m", d, d)] = last
+        moved = origin_moved(M, [L[f"t{i}"] for i in range(d)])
+        out = {_leaf("m", i, j): moved[i][j] * 1 for i in range(d) for j in range(i, d)}  # Q unchanged (exact)
+        out.update({_leaf("m", i, d): moved[i][d] for i in range(n)})  # (Q t + m)_i, then the constant
         return out
 
     exprs = {nm: (f"M[{nm[1]}, {nm[2]}]", f"Mr[{nm[1]}, {nm[2]}]") for nm in names if nm[0] == "m"}

@@ -40,6 +40,10 @@ __all__ = [
     "SYMMETRY_TOLERANCE",
     "ShapeParams",
     "quadric_from_axes",
+    "quadrics_from_axes",
+    "axes_row_errors",
+    "rotations_from_orientations",
+    "origin_moved",
     "axes_from_quadric",
     "rotation_from_quaternion",
     "validate_quadric",
@@ -132,14 +136,209 @@ def quadric_from_axes(
     if any(v <= 0 for v in r):
         raise ValueError(f"semi-axes must be positive, got {[str(v) for v in r]}")
     R = _orientation_matrix(d, orientation, exact)
+    if not exact:  # the float matrix is built by the one vectorised routine (bit for bit)
+        return _assemble_float(np.array([c]), np.array([r]), np.asarray(R, dtype=float)[None])[0]
     inv_r2 = [1 / (v * v) for v in r]
-    # upper triangle, mirrored: float rounding must not make the matrix non-symmetric
     Q = [[sum(R[min(i, j)][k] * inv_r2[k] * R[max(i, j)][k] for k in range(d)) for j in range(d)] for i in range(d)]
     Qc = [sum(Q[i][j] * c[j] for j in range(d)) for i in range(d)]
     cQc = sum(c[i] * Qc[i] for i in range(d))
     M = [[Q[i][j] for j in range(d)] + [-Qc[i]] for i in range(d)]
     M.append([-v for v in Qc] + [cQc - 1])
-    return M if exact else np.array(M, dtype=float)
+    return M
+
+
+def quadrics_from_axes(centers: Any, semi_axes: Any, orientations: Any = None) -> np.ndarray:
+    """Float matrices of N shapes: :func:`quadric_from_axes` vectorised, bit for bit.
+
+    Row k of the result is exactly (every bit) ``quadric_from_axes(centers[k], semi_axes[k],
+    orientations[k])``: the same float operations in the same order, so a body of a packing and
+    the same shape opened alone (the scene's two-body view, the API) are one matrix and get one
+    certified label.
+
+    Args:
+        centers: (N, d) floats, d = 2 or 3.
+        semi_axes: (N, d) positive floats.
+        orientations: 3D: (N, 4) quaternions wxyz (need not be unit); 2D: (N,) or (N, 1) angles
+            in radians, or (N, 4) quaternions (w, 0, 0, z); None = axis-aligned.
+
+    Returns:
+        float64 array (N, d + 1, d + 1).
+
+    Raises:
+        ValueError: wrong shapes, or a row with a non-finite number, a semi-axis <= 0 or a zero
+            quaternion (the message names the first such row: :func:`axes_row_errors`).
+
+    Examples:
+        >>> M = quadrics_from_axes([[0, 0, 0], [3, 0, 0]], [[1, 1, 1], [2, 1, 1]], [[1, 0, 0, 0], [1, 0, 0, 1]])
+        >>> bool((M[1] == quadric_from_axes([3, 0, 0], [2, 1, 1], [1, 0, 0, 1])).all())
+        True
+        >>> quadrics_from_axes([[0, 0], [1, 1]], [[1, 1], [1, -1]])
+        Traceback (most recent call last):
+        ...
+        ValueError: row 1: semi-axes must be positive, got [1.0, -1.0]
+    """
+    c, r, o = _axes_arrays(centers, semi_axes, orientations)
+    errors = axes_row_errors(c, r, o, first=True)
+    if errors:
+        k, reason = next(iter(errors.items()))
+        raise ValueError(f"row {k}: {reason}")
+    return _assemble_float(c, r, rotations_from_orientations(o, *c.shape))
+
+
+def _axes_arrays(centers: Any, semi_axes: Any, orientations: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """float64 arrays (N, d), (N, d) and (N,) angles or (N, 4) quaternions (or None); shapes checked."""
+    c = np.asarray(centers, dtype=float)
+    r = np.asarray(semi_axes, dtype=float)
+    if c.ndim != 2 or c.shape[1] not in (2, 3) or r.shape != c.shape:
+        raise ValueError(f"centers and semi_axes must both be (N, 2) or (N, 3) arrays, got {c.shape} and {r.shape}")
+    if orientations is None:
+        return c, r, None
+    N, d = c.shape
+    o = np.asarray(orientations, dtype=float)
+    if d == 2 and o.shape in ((N,), (N, 1)):
+        return c, r, o.reshape(N)
+    if o.shape != (N, 4):
+        want = "(N,) angles or (N, 4) quaternions" if d == 2 else "(N, 4) quaternions wxyz"
+        raise ValueError(f"orientations must be {want} for {N} shapes, got shape {o.shape}")
+    return c, r, o
+
+
+def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, first: bool = False) -> dict[int, str]:
+    """Row -> why those parameters are no shape (the checks of :func:`quadrics_from_axes`).
+
+    Args:
+        centers: (N, d) floats, as for :func:`quadrics_from_axes`.
+        semi_axes: (N, d) floats.
+        orientations: (N, 4) quaternions, (N,) angles (2D) or None.
+        first: stop at the first bad row.
+
+    Returns:
+        ``{row: reason}`` for rows with a non-finite number, a semi-axis <= 0, a zero quaternion
+        or (2D) a quaternion that does not rotate about z; empty when all rows are shapes.
+
+    Examples:
+        >>> axes_row_errors([[0, 0], [1, float("nan")]], [[1, 1], [0, 1]])
+        {1: 'centre and semi-axes must be finite numbers, got [1.0, nan] and [0.0, 1.0]'}
+    """
+    c, r, o = _axes_arrays(centers, semi_axes, orientations)
+    N, d = c.shape
+    checks: list[tuple[Any, Any]] = [
+        (~(np.isfinite(c).all(axis=1) & np.isfinite(r).all(axis=1)),
+         lambda k: f"centre and semi-axes must be finite numbers, got {c[k].tolist()} and {r[k].tolist()}"),
+        (~(r > 0).all(axis=1), lambda k: f"semi-axes must be positive, got {r[k].tolist()}"),
+    ]
+    if o is not None and o.ndim == 1:
+        checks.append((~np.isfinite(o), lambda k: "orientation angle must be finite"))
+    elif o is not None:
+        finite = np.isfinite(o).all(axis=1)
+        checks.append((~finite, lambda k: "orientation must be finite numbers"))
+        checks.append((finite & ~(o != 0).any(axis=1), lambda k: "orientation quaternion is zero"))
+        if d == 2:
+            checks.append(((o[:, 1] != 0) | (o[:, 2] != 0), lambda k: "a 2D quaternion must rotate about z: (w, 0, 0, z)"))
+    errors: dict[int, str] = {}
+    bad_any = np.zeros(N, dtype=bool)
+    for bad, reason in checks:
+        rows = np.flatnonzero(bad & ~bad_any)
+        bad_any |= bad
+        for k in rows[:1] if first else rows:
+            errors[int(k)] = reason(int(k))
+        if first and errors:
+            break
+    return dict(sorted(errors.items()))
+
+
+def rotations_from_orientations(o: np.ndarray | None, N: int, d: int) -> np.ndarray:
+    """(N, d, d) rotation matrices (body -> world) of N orientations, as :func:`quadric_from_axes` reads them.
+
+    ``o``: (N, 4) quaternions wxyz, (N,) angles (2D) or None; finite and non-zero (checked by
+    :func:`axes_row_errors`).
+
+    3D: quaternions wxyz, divided by |q|^2 (the operations of :func:`rotation_from_quaternion`);
+    2D: angles (``math.cos``/``math.sin``, as for one shape) or quaternions (w, 0, 0, z); None:
+    identity.
+    """
+    if o is None:
+        return np.broadcast_to(np.eye(d), (N, d, d))
+    if o.ndim == 1:
+        # math.cos/sin, not np.cos: numpy's SIMD versions may differ in the last bit
+        co = np.fromiter((math.cos(t) for t in o.tolist()), dtype=float, count=N)
+        si = np.fromiter((math.sin(t) for t in o.tolist()), dtype=float, count=N)
+        return np.stack([np.stack([co, -si], axis=1), np.stack([si, co], axis=1)], axis=1)
+    w, x, y, z = o[:, 0], o[:, 1], o[:, 2], o[:, 3]
+    n = w * w + x * x + y * y + z * z
+    rows = [
+        [w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z],
+    ]
+    R = np.stack([np.stack([v / n for v in row], axis=1) for row in rows], axis=1)
+    return R[:, :2, :2] if d == 2 else R
+
+
+def origin_moved(M: Sequence[Sequence[Any]], t: Sequence[Any]) -> list[list[Any]]:
+    """G^T M G with G = [[I, t], [0, 1]]: the same shape in coordinates whose origin is the point t.
+
+    The shape moves by -t (to move a shape by s, pass t = -s). Ring-generic: it runs on
+    ``fmpq`` (an exact translate), and :mod:`core.fixed.kernelgen` traces it into the filter's
+    float kernel with certified radii, so both paths perform one formula.
+
+    Args:
+        M: (d+1) x (d+1) symmetric matrix (nested sequences; the upper triangle is read).
+        t: d numbers.
+
+    Returns:
+        Nested lists, symmetric: Q unchanged, m' = Q t + m, m'_nn = t^T Q t + 2 m.t + m_nn.
+
+    Examples:
+        >>> from flint import fmpq
+        >>> unit = quadric_from_axes([0, 0], [1, 1], exact=True)
+        >>> origin_moved(unit, [fmpq(-2), fmpq(0)]) == quadric_from_axes([2, 0], [1, 1], exact=True)
+        True
+    """
+    d = len(M) - 1
+    out = [[M[min(i, j)][max(i, j)] for j in range(d + 1)] for i in range(d + 1)]
+    Qt = []
+    for i in range(d):
+        acc = M[i][d]
+        for j in range(d):
+            acc = acc + M[min(i, j)][max(i, j)] * t[j]
+        Qt.append(acc)
+        out[i][d] = out[d][i] = acc  # (Q t + m)_i
+    last = M[d][d]
+    for i in range(d):
+        last = last + t[i] * (Qt[i] + M[i][d])  # t^T Q t + 2 m.t + m_nn
+    out[d][d] = last
+    return out
+
+
+def _assemble_float(c: np.ndarray, r: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """[[Q, -Q c], [-c^T Q, c^T Q c - 1]], Q = R diag(1/r^2) R^T, for (N, d) c, r and (N, d, d) R.
+
+    The float operations of the one-shape formula, elementwise: the upper triangle of Q is
+    summed over k in order and mirrored (rounding must not make the matrix non-symmetric).
+    """
+    N, d = c.shape
+    inv_r2 = 1 / (r * r)
+    M = np.empty((N, d + 1, d + 1))
+    for i in range(d):
+        for j in range(i, d):
+            acc = R[:, i, 0] * inv_r2[:, 0] * R[:, j, 0]
+            for k in range(1, d):
+                acc = acc + R[:, i, k] * inv_r2[:, k] * R[:, j, k]
+            M[:, i, j] = M[:, j, i] = acc
+    Qc = []
+    for i in range(d):
+        acc = M[:, i, 0] * c[:, 0]
+        for j in range(1, d):
+            acc = acc + M[:, i, j] * c[:, j]
+        Qc.append(acc)
+    cQc = c[:, 0] * Qc[0]
+    for i in range(1, d):
+        cQc = cQc + c[:, i] * Qc[i]
+    for i in range(d):
+        M[:, i, d] = M[:, d, i] = -Qc[i]
+    M[:, d, d] = cQc - 1
+    return M
 
 
 def _orientation_matrix(d: int, orientation: Any, exact: bool) -> Any:

@@ -1,0 +1,99 @@
+"""Pydantic models of ``POST /api/contacts``: many bodies in, the pairs that are not separate out.
+
+Bodies are float64 numbers (the contact search builds float matrices, as ``python -m app
+contacts`` does from a file): JSON numbers only, no number strings. One body is a row like a CSV
+row of :mod:`app.bodyfiles` (3D ``[x, y, z, a, b, c, qw, qx, qy, qz]``, 2D
+``[x, y, a, b, angle]``), or a matrix. At most ``ApiSettings.max_contacts_bodies`` bodies
+(10,000 by default) per request.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
+
+from .json_body import OutOfRange
+from .schemas import MethodName
+
+__all__ = ["ContactsIn", "ContactsOut", "PairOut", "FloatNumber"]
+
+
+def checked_float(v: Any) -> float:
+    """A finite JSON number as a float (integers beyond 2^53 and strings are refused)."""
+    if isinstance(v, bool):
+        raise ValueError(f"a boolean is not a number: {v!r}")
+    if isinstance(v, OutOfRange):
+        raise ValueError(v.message.split(";")[0] + ": bodies are float64 numbers")
+    if isinstance(v, int):
+        if abs(v) > 2**53:
+            raise ValueError("integer beyond 2^53: bodies are float64 numbers")
+        return float(v)
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            raise ValueError(f"not a finite number: {v!r}")
+        return v
+    raise ValueError(f"expected a JSON number (bodies are float64 numbers), got {type(v).__name__}")
+
+
+FloatNumber = Annotated[float, PlainValidator(checked_float), WithJsonSchema({"type": "number"})]
+"""A finite JSON number, read as the float64 it is."""
+
+BodyRow = Annotated[list[FloatNumber], Field(min_length=5, max_length=10)]
+BodyMatrix = Annotated[list[Annotated[list[FloatNumber], Field(min_length=3, max_length=4)]], Field(min_length=3, max_length=4)]
+
+
+class ContactsIn(BaseModel):
+    """Bodies (rows of parameters, or matrices), an optional periodic box and the method."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {"bodies": [[0, 0, 0.5, 0.5, 0], [1, 0, 0.5, 0.5, 0], [1.5, 0, 0.5, 0.5, 0]]},
+                {"bodies": [[0.5, 0.5, 0.5, 1, 1, 1, 1, 0, 0, 0], [3.5, 0.5, 0.5, 1, 1, 1, 1, 0, 0, 0]], "box": [4, 4, 4]},
+            ]
+        },
+    )
+
+    bodies: list[BodyRow] | None = Field(
+        default=None,
+        description="one row per body: 3D [x, y, z, a, b, c, qw, qx, qy, qz] (centre, semi-axes, quaternion wxyz), "
+        "2D [x, y, a, b, angle] (radians)",
+    )
+    matrices: list[BodyMatrix] | None = Field(
+        default=None, description="or one symmetric 4x4 (3x3) matrix per body, interior X^T A X < 0"
+    )
+    box: Annotated[list[FloatNumber], Field(min_length=2, max_length=3)] | None = Field(
+        default=None, description="periodic box sides [Lx, Ly(, Lz)]: minimum image convention"
+    )
+    method: MethodName = "adaptive"
+    on_invalid: Literal["raise", "mark"] = Field(
+        default="raise", description="raise: 422 naming the first bad body; mark: list bad bodies in 'invalid'"
+    )
+
+
+class PairOut(BaseModel):
+    """One pair of bodies that is not separate."""
+
+    i: int
+    j: int
+    """i < j; in a periodic box, j's nearest image (j + image * box)."""
+    relation: Literal["tangent", "overlap", "undecided"]
+    certified_by: Literal["float", "exact"] | None
+    image: list[int] | None = None
+    """Lattice image of j (periodic box only)."""
+
+
+class ContactsOut(BaseModel):
+    """Every pair that touches or overlaps, certified, sorted by (i, j)."""
+
+    bodies: int
+    pairs: list[PairOut]
+    counts: dict[str, int]
+    """bodies, invalid, candidates (pairs whose bounding spheres meet), float / exact (how the
+    candidates were certified), separate, tangent, overlap, undecided."""
+    invalid: dict[int, str]
+    """Body -> why it is not an ellipse/ellipsoid (on_invalid 'mark')."""
+    summary: str

@@ -1,0 +1,122 @@
+"""Benchmark of the contact search among N ellipsoids (``core.contacts``): time, scaling, misses.
+
+    python bench/bench_bodies.py            # N = 62.5k, 250k, 1M at packing fraction 0.3 (~1 min)
+    python bench/bench_bodies.py --quick    # N = 15.6k, 62.5k (a few seconds)
+
+Bodies: :func:`bench.bodies_data.random_bodies` (uniform random centres in a cube sized for the
+packing fraction, random orientations, semi-axes (1, U(0.5, 1), U(0.5, 1)) shuffled; overlaps
+allowed: a benchmark of the search, not a packing generator). Columns: build (the matrices from
+the parameters), bounds (certified bounding spheres), broad (grid), narrow (certified classify
+of the candidates), total (build + search), candidate pairs, contacts, and how the candidates
+were certified (float filter / exact arithmetic). Then the 4x scaling ratio of the last two
+sizes, and a brute-force check (every pair classified) on a smaller set: missed and extra pairs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+if __package__ in (None, ""):
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np
+
+from bench.bodies_data import random_bodies
+from core import bodies_from_axes, classify, contacts, warm_up
+from core.fixed.compiled import get_threads
+
+
+def run(n: int, *, fraction: float, periodic: bool, seed: int = 0) -> dict[str, float]:
+    """One search; returns the row of the table."""
+    b = random_bodies(n, fraction=fraction, seed=seed)
+    t0 = time.perf_counter()
+    Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
+    t1 = time.perf_counter()
+    res = contacts(Q, box=(b.side,) * 3 if periodic else None)
+    t2 = time.perf_counter()
+    return {
+        "n": n,
+        "build": t1 - t0,
+        "bounds": res.seconds["bounds"],
+        "broad": res.seconds["broad"],
+        "narrow": res.seconds["narrow"],
+        "total": t2 - t0,
+        "candidates": res.counts["candidates"],
+        "contacts": len(res),
+        "float": res.counts["float"],
+        "exact": res.counts["exact"],
+    }
+
+
+def brute_force_check(n: int, *, fraction: float) -> tuple[int, int, int]:
+    """(pairs found, missed, extra) against classifying every pair (open space)."""
+    b = random_bodies(n, fraction=fraction, seed=11)
+    Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
+    got = contacts(Q)
+    i, j = np.triu_indices(n, 1)
+    found = set(zip(got.i.tolist(), got.j.tolist(), strict=True))
+    truth: set[tuple[int, int]] = set()
+    step = 1 << 21
+    for s in range(0, i.size, step):
+        a, c = i[s : s + step], j[s : s + step]
+        rel = classify(Q[a], Q[c])
+        keep = rel != 0
+        truth.update(zip(a[keep].tolist(), c[keep].tolist(), strict=True))
+    return len(found), len(truth - found), len(found - truth)
+
+
+def lattice(n: int) -> dict[str, float]:
+    """Touching unit-diameter spheres on an n x n x n lattice: every neighbour pair is tangent,
+    which only exact arithmetic certifies (the exact path's cost per pair)."""
+    c = np.array(np.meshgrid(*(np.arange(n, dtype=float),) * 3, indexing="ij")).reshape(3, -1).T
+    Q = bodies_from_axes(c, np.full_like(c, 0.5))
+    t0 = time.perf_counter()
+    res = contacts(Q)
+    t = time.perf_counter() - t0
+    assert res.counts["tangent"] == 3 * n * n * (n - 1)
+    return {"n": len(c), "total": t, "tangent": res.counts["tangent"], "exact": res.counts["exact"]}
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--quick", action="store_true", help="small sizes (a few seconds)")
+    p.add_argument("--fraction", type=float, default=0.3, help="packing fraction (default 0.3)")
+    p.add_argument("--periodic", action="store_true", help="also run every size in a periodic box")
+    args = p.parse_args(argv)
+    sizes = [15_625, 62_500] if args.quick else [62_500, 250_000, 1_000_000]
+    warm_up()
+    print(f"# contacts among N ellipsoids, packing fraction {args.fraction}, {get_threads()} threads")
+    head = f"| {'N':>9} | box | {'build':>6} | {'bounds':>6} | {'broad':>6} | {'narrow':>6} | {'total':>6} | {'candidates':>10} | {'contacts':>9} | {'float':>9} | {'exact':>5} |"
+    print(head)
+    print("|" + "|".join("-" * (len(c)) for c in head.split("|")[1:-1]) + "|")
+    rows = []
+    for periodic in (False, True) if args.periodic else (False,):
+        for n in sizes:
+            r = run(n, fraction=args.fraction, periodic=periodic)
+            rows.append((periodic, r))
+            print(
+                f"| {n:>9,} | {'yes' if periodic else 'no':>3} | {r['build']:6.2f} | {r['bounds']:6.2f} | {r['broad']:6.2f} | "
+                f"{r['narrow']:6.2f} | {r['total']:6.2f} | {r['candidates']:>10,} | {r['contacts']:>9,} | {r['float']:>9,} | {r['exact']:>5,} |",
+                flush=True,
+            )
+    open_rows = [r for periodic, r in rows if not periodic]
+    if len(open_rows) >= 2:
+        a, b = open_rows[-2], open_rows[-1]
+        print(f"\nscaling: {b['n'] / a['n']:.0f}x the bodies costs {b['total'] / a['total']:.2f}x the time (target <= 6x)")
+        print(f"largest: {b['n']:,} ellipsoids end to end in {b['total']:.2f} s (target for 1M: <= 10 s)")
+    lat = lattice(8 if args.quick else 16)
+    print(
+        f"touching lattice: {lat['n']:,} spheres, {lat['tangent']:,} tangent pairs (all certified exactly) in "
+        f"{lat['total']:.2f} s: {1e6 * lat['total'] / lat['exact']:.0f} us per exact pair"
+    )
+    n = 2_000 if args.quick else 8_000
+    found, missed, extra = brute_force_check(n, fraction=args.fraction)
+    print(f"brute force on {n:,} bodies ({n * (n - 1) // 2:,} pairs classified): {found:,} contacts, {missed} missed, {extra} extra")
+    return 0 if missed == 0 and extra == 0 else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,364 @@
+"""Certified bounding spheres of N ellipses/ellipsoids, read off their matrices (and their validity).
+
+The broad phase (:mod:`core.bodies.broadphase`) may only drop a pair whose bounding spheres are
+disjoint, so each sphere must contain its body *as the matrix defines it* (not as the parameters
+describe it: the float matrix is what is classified). For a body with matrix
+[[Q, m], [m^T, g0]] (interior f(x) = x^T Q x + 2 m.x + g0 < 0), any float point c~ and any
+lambda with 0 < lambda <= lambda_min(Q):
+
+    x = c~ + u in the body  =>  u^T Q u + 2 g.u + f0 <= 0,   g = Q c~ + m,  f0 = f(c~)
+                            =>  lambda |u|^2 - 2 |g| |u| + f0 <= 0
+                            =>  |u| <= rho = (|g| + sqrt(|g|^2 - lambda f0)) / lambda.
+
+So the sphere (c~, rho) contains the body whatever c~ is (a float estimate of the centre makes g
+small and rho tight). Everything is computed in float64 with certified bounds:
+
+* lambda: a float estimate of lambda_min(Q) (Newton on det(Q - x I) from the lower bound
+  det Q / tr adj Q), shrunk by 2^-10; then Q - lambda I is proven positive definite (Sylvester's
+  leading minors, each with a certified error bound) so lambda <= lambda_min(Q) holds;
+* |g| from above and f0 within a certified radius (midpoint-radius arithmetic, the "radius"
+  style of :mod:`core.fixed.errorbound`: every operation's rounding, and each input entry's own
+  radius when the matrix was symmetrised, is carried);
+* rho from upper bounds of |g| and -f0, rounded up.
+
+The same proof certifies validity: Q - lambda I > 0 with lambda > 0 makes Q positive definite,
+and f0 < 0 (certified) gives det M = det Q * min f <= det Q * f0 < 0. A body the float
+computation cannot certify (NaN/inf, asymmetric beyond rounding, very ill-conditioned: axis
+ratios beyond ~10^6, entries near the float range's ends) is decided by exact rational
+arithmetic: :func:`core.shapes.quadrics.validate_quadric` names what is wrong, and the same
+bound is computed exactly (lambda then from the exact Sylvester test, or the exact lower bound
+det Q / tr adj Q).
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from flint import fmpq, fmpq_mat
+
+from ..fixed.compiled import get_threads
+from ..fixed.filters import prepared
+from ..shapes.numbers import to_float
+from ..shapes.quadrics import validate_quadric
+
+__all__ = ["BoundingSpheres", "bounding_spheres"]
+
+_U = 2.0**-52
+"""U >= u / (1 - u): relative rounding of one operation, as the radius kernels use it."""
+_TINY = 2.0**-1074
+"""Absolute error of one product in the subnormal range (sums of floats are exact there)."""
+_RADIUS_FACTOR = 1.0 + 2.0**-40
+"""Covers the rounding of the radius computations themselves (fewer than 2^12 roundings)."""
+_UP = 1.0 + 2.0**-40
+"""Covers the roundings of the final formula for rho (a handful of operations, each <= u)."""
+_SHRINK = (1.0 - 2.0**-10, 1.0 - 2.0**-4, 0.5)
+"""lambda = estimate * factor, tried in order: the first keeps spheres tight (radius + 0.05 %),
+the others rescue ill-conditioned bodies (radius + 3 %, or up to sqrt(2) larger)."""
+_CHUNK = 8192
+"""Bodies per vectorised chunk: the (chunk, n, n) temporaries stay in cache (fastest measured)."""
+
+
+@dataclass
+class BoundingSpheres:
+    """Spheres (circles in 2D) that contain the bodies, and the bodies that are not shapes."""
+
+    centers: np.ndarray
+    """(N, d) float64 centres (float estimates of the bodies' centres; NaN for invalid bodies)."""
+    radii: np.ndarray
+    """(N,) float64: the body lies in the closed ball (centers[k], radii[k]); NaN if invalid."""
+    invalid: dict[int, str]
+    """Row -> why it is not an ellipse/ellipsoid (its message names the body)."""
+    exact: int = 0
+    """Bodies whose sphere needed exact arithmetic (the float bound could not certify them)."""
+
+    @property
+    def valid(self) -> np.ndarray:
+        """(N,) bool mask of the bodies that are ellipses/ellipsoids."""
+        return np.isfinite(self.radii)
+
+
+class _Ball:
+    """Midpoint-radius float numbers over arrays: |exact - v| <= r after every operation."""
+
+    __slots__ = ("v", "r")
+
+    def __init__(self, v: Any, r: Any) -> None:
+        self.v = v
+        self.r = r
+
+    def __add__(self, o: _Ball) -> _Ball:
+        z = self.v + o.v
+        return _Ball(z, self.r + o.r + _U * np.abs(z))
+
+    def __sub__(self, o: _Ball) -> _Ball:
+        z = self.v - o.v
+        return _Ball(z, self.r + o.r + _U * np.abs(z))
+
+    def __mul__(self, o: _Ball) -> _Ball:
+        z = self.v * o.v
+        if isinstance(o.r, float) and o.r == 0.0:  # an exact factor (a float centre coordinate)
+            return _Ball(z, self.r * np.abs(o.v) + (_U * np.abs(z) + _TINY))
+        return _Ball(z, np.abs(self.v) * o.r + self.r * (np.abs(o.v) + o.r) + (_U * np.abs(z) + _TINY))
+
+
+def bounding_spheres(Q: np.ndarray) -> BoundingSpheres:
+    """Certified bounding spheres of the bodies ``Q`` (and which bodies are not shapes).
+
+    Args:
+        Q: (N, n, n) float64 matrices, n = 3 (ellipses) or 4 (ellipsoids); signs may be flipped
+            (the filter's normalisation: :func:`core.fixed.filters.prepared`).
+
+    Returns:
+        :class:`BoundingSpheres`: for every valid body k, every point x of the closed body
+        satisfies |x - centers[k]| <= radii[k] (module docstring for the proof).
+
+    Examples:
+        >>> from core.shapes.quadrics import quadric_from_axes
+        >>> b = bounding_spheres(np.array([quadric_from_axes([1, 2, 3], [2, 1, 0.5], [1, 0, 0, 0])]))
+        >>> b.centers[0].tolist(), bool(2 <= b.radii[0] <= 2.002)
+        ([1.0, 2.0, 3.0], True)
+        >>> bounding_spheres(np.array([np.diag([1.0, 1.0, 1.0])])).invalid
+        {0: 'body 0 has an empty interior: no real points (det > 0), not an ellipse'}
+    """
+    Q = np.asarray(Q, dtype=np.float64)
+    N, n = Q.shape[0], Q.shape[-1]
+    d = n - 1
+    centers = np.full((N, d), np.nan)
+    radii = np.full(N, np.nan)
+
+    def chunk(s: int) -> np.ndarray:
+        c, rho, loose = _float_spheres(Q[s : s + _CHUNK])
+        ok = np.isfinite(rho)
+        centers[s : s + _CHUNK][ok] = c[ok]
+        radii[s : s + _CHUNK][ok] = rho[ok]
+        return s + np.flatnonzero(~ok | loose)
+
+    starts = range(0, N, _CHUNK)
+    threads = min(get_threads(), len(starts))
+    if threads > 1:  # numpy releases the GIL inside each operation: chunks run side by side
+        with ThreadPoolExecutor(threads, thread_name_prefix="bounds") as pool:
+            todo = list(pool.map(chunk, starts))
+    else:
+        todo = [chunk(s) for s in starts]
+    rest = np.concatenate(todo) if todo else np.zeros(0, dtype=np.int64)
+    if rest.size:  # ill-conditioned bodies: LAPACK's estimates, still certified in floats
+        c, rho, _ = _float_spheres(Q[rest], careful=True)
+        better = np.isfinite(rho) & ~(rho >= radii[rest])  # a loose sphere is kept if not beaten
+        centers[rest[better]] = c[better]
+        radii[rest[better]] = rho[better]
+        rest = rest[~np.isfinite(radii[rest])]
+    invalid: dict[int, str] = {}
+    for k in rest.tolist():
+        try:
+            centers[k], radii[k] = _exact_sphere(Q[k], f"body {k}")
+        except ValueError as e:
+            invalid[k] = str(e)
+    return BoundingSpheres(centers, radii, invalid, exact=len(rest) - len(invalid))
+
+
+# -------------------------------------------------------------------------------------------
+# float path
+
+
+def _float_spheres(M: np.ndarray, *, careful: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(centres, radii, loose) of a chunk of bodies, certified in floats.
+
+    A radius is NaN where the float bound certifies nothing; ``loose`` marks radii that the
+    centre estimate or lambda inflate by more than 1 %.
+
+    ``careful``: estimate the centre and lambda_min with LAPACK (backward stable: good up to
+    condition numbers ~10^12) instead of the closed forms (fast, but they lose accuracy on
+    ill-conditioned bodies); the certification is the same.
+    """
+    n = M.shape[-1]
+    d = n - 1
+    with np.errstate(all="ignore"):
+        S, status, R = prepared(M)
+        ok = status > 0
+        Qv = S[:, :d, :d]
+        if careful:
+            c, lam_est = _lapack_estimates(Qv, S[:, :d, d], ok)
+        else:
+            c = _centre_estimate(Qv, S[:, :d, d])
+            lam_est = _lambda_min_estimate(Qv)
+        ok &= np.isfinite(c).all(axis=1) & np.isfinite(lam_est) & (lam_est > 0)
+        c = np.where(ok[:, None], c, 0.0)
+        lam = np.full(M.shape[0], np.nan)
+        rows = np.flatnonzero(ok)
+        for factor in _SHRINK:  # the first lambda whose Q - lambda I is proven definite
+            trial = lam_est[rows] * factor
+            good = _definite(S[rows], R[rows], trial)
+            lam[rows[good]] = trial[good]
+            rows = rows[~good]
+            if not rows.size:
+                break
+        ok &= np.isfinite(lam) & (lam > 0)
+        lam = np.where(ok, lam, 1.0)
+        # g = Q c~ + m and f0 = c~.g + m.c~ + g0 with certified radii (c~ is exact: a float)
+        g: list[_Ball] = []
+        for i in range(d):
+            acc = _entry(S, R, i, d)
+            for j in range(d):
+                acc = acc + _entry(S, R, i, j) * _Ball(c[:, j], 0.0)
+            g.append(acc)
+        f0 = _entry(S, R, d, d)
+        for i in range(d):
+            f0 = f0 + _Ball(c[:, i], 0.0) * (g[i] + _entry(S, R, i, d))
+        f0r = f0.r * _RADIUS_FACTOR
+        ok &= f0.v + f0r < 0  # the body has interior points: with Q > 0, det M < 0
+        G2 = sum((np.abs(gi.v) + gi.r * _RADIUS_FACTOR) ** 2 for gi in g) * _UP  # >= |g|^2
+        F = (-f0.v + f0r) * _UP  # >= -f0 > 0
+        rho = (np.sqrt(G2) * _UP + np.sqrt((G2 + lam * F) * _UP) * _UP) / lam * _UP
+        ok &= np.isfinite(rho)
+        # sqrt(F / lam_est) is the radius with an exact centre and lambda_min
+        loose = ok & (rho > 1.01 * np.sqrt(F / lam_est))
+    return c, np.where(ok, rho, np.nan), loose
+
+
+def _entry(S: np.ndarray, R: np.ndarray, i: int, j: int) -> _Ball:
+    i, j = min(i, j), max(i, j)
+    return _Ball(S[:, i, j], R[:, i, j])
+
+
+def _centre_estimate(Q: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Float estimate of -Q^-1 m (adjugate formula; any float vector is a valid centre)."""
+    if Q.shape[-1] == 2:
+        det = Q[:, 0, 0] * Q[:, 1, 1] - Q[:, 0, 1] * Q[:, 1, 0]
+        x = (Q[:, 1, 1] * m[:, 0] - Q[:, 0, 1] * m[:, 1]) / det
+        y = (Q[:, 0, 0] * m[:, 1] - Q[:, 1, 0] * m[:, 0]) / det
+        return -np.stack([x, y], axis=1)
+    adj = np.empty_like(Q)
+    for i in range(3):
+        for j in range(3):
+            r = [k for k in range(3) if k != j]
+            s = [k for k in range(3) if k != i]
+            minor = Q[:, r[0], s[0]] * Q[:, r[1], s[1]] - Q[:, r[0], s[1]] * Q[:, r[1], s[0]]
+            adj[:, i, j] = minor if (i + j) % 2 == 0 else -minor
+    det = (Q[:, 0, :] * adj[:, :, 0]).sum(axis=1)
+    return -np.einsum("nij,nj->ni", adj, m) / det[:, None]
+
+
+def _lapack_estimates(Q: np.ndarray, m: np.ndarray, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centres -Q^-1 m and smallest eigenvalues from LAPACK (NaN where it fails)."""
+    N, d = m.shape
+    c = np.full((N, d), np.nan)
+    lam = np.full(N, np.nan)
+    for k in np.flatnonzero(ok & np.isfinite(Q).all(axis=(1, 2)) & np.isfinite(m).all(axis=1)):
+        try:
+            c[k] = -np.linalg.solve(Q[k], m[k])
+            lam[k] = np.linalg.eigvalsh(Q[k])[0]
+        except np.linalg.LinAlgError:
+            pass
+    return c, lam
+
+
+def _lambda_min_estimate(Q: np.ndarray) -> np.ndarray:
+    """Float estimate of the smallest eigenvalue of each symmetric Q (2x2 or 3x3).
+
+    Closed forms (2x2: the quadratic formula; 3x3: the trigonometric solution of the
+    characteristic cubic, O. K. Smith 1961). Only an estimate: :func:`_definite` proves.
+    """
+    d = Q.shape[-1]
+    if d == 2:
+        h = (Q[:, 0, 0] + Q[:, 1, 1]) / 2
+        w = np.hypot((Q[:, 0, 0] - Q[:, 1, 1]) / 2, Q[:, 0, 1])
+        return h - w
+    q = np.trace(Q, axis1=1, axis2=2) / 3
+    B = Q - q[:, None, None] * np.eye(3)
+    p = np.sqrt((B * B).sum(axis=(1, 2)) / 6)
+    safe = np.where(p > 0, p, 1.0)
+    Bn = B / safe[:, None, None]
+    half_det = np.linalg.det(Bn) / 2
+    phi = np.arccos(np.clip(half_det, -1.0, 1.0)) / 3
+    return np.where(p > 0, q + 2 * p * np.cos(phi + 2 * np.pi / 3), q)
+
+
+def _definite(S: np.ndarray, R: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """Mask: Q - lam I proven positive definite (leading minors > their certified radius)."""
+    d = S.shape[-1] - 1
+    L = _Ball(lam, 0.0)
+    P = [[_entry(S, R, i, j) - L if i == j else _entry(S, R, i, j) for j in range(d)] for i in range(d)]
+    minors = [P[0][0], P[0][0] * P[1][1] - P[0][1] * P[0][1]]
+    if d == 3:
+        minors.append(
+            P[0][0] * (P[1][1] * P[2][2] - P[1][2] * P[1][2])
+            - P[0][1] * (P[0][1] * P[2][2] - P[1][2] * P[0][2])
+            + P[0][2] * (P[0][1] * P[1][2] - P[1][1] * P[0][2])
+        )
+    ok = np.isfinite(lam) & (lam > 0)
+    for m in minors:
+        ok &= m.v > m.r * _RADIUS_FACTOR
+    return ok
+
+
+# -------------------------------------------------------------------------------------------
+# exact path (rare: bodies the float bound could not certify)
+
+
+def _exact_sphere(M: np.ndarray, name: str) -> tuple[np.ndarray, float]:
+    """(float centre, float radius) of one body in exact arithmetic; ValueError if invalid."""
+    E = validate_quadric(M, name=name)  # exact, normalised; raises naming the body
+    d = len(E) - 1
+    Qm = fmpq_mat([[E[i][j] for j in range(d)] for i in range(d)])
+    m = [E[i][d] for i in range(d)]
+    centre = Qm.solve(fmpq_mat([[-v] for v in m]))
+    c_float = np.array([to_float(centre[i, 0]) for i in range(d)])
+    if not np.isfinite(c_float).all():
+        raise ValueError(f"{name}: its centre is beyond the float range")
+    c = [fmpq(*float(v).as_integer_ratio()) for v in c_float]  # the sphere's centre, exactly
+    g = [sum((E[i][j] * c[j] for j in range(d)), m[i]) for i in range(d)]
+    f0 = sum((c[i] * (g[i] + m[i]) for i in range(d)), E[d][d])
+    lam = _exact_lambda(Qm, d)
+    # rho = (|g| + sqrt(|g|^2 - lam f0)) / lam, each step rounded up
+    G2 = sum((v * v for v in g), fmpq(0))
+    G = _sqrt_up(G2)
+    inner = _sqrt_up(G2 - lam * f0)
+    rho = _up((fmpq(*G.as_integer_ratio()) + fmpq(*inner.as_integer_ratio())) / lam)
+    if not math.isfinite(rho):
+        raise ValueError(f"{name}: its size is beyond the float range")
+    return c_float, rho
+
+
+def _exact_lambda(Qm: fmpq_mat, d: int) -> fmpq:
+    """A positive rational <= lambda_min(Q), Q positive definite (exact)."""
+    Qf = np.array([[to_float(Qm[i, j]) for j in range(d)] for i in range(d)])
+    try:
+        est = float(np.linalg.eigvalsh(Qf)[0]) if np.isfinite(Qf).all() else math.nan
+    except np.linalg.LinAlgError:
+        est = math.nan
+    for factor in _SHRINK:
+        lam = est * factor
+        if math.isfinite(lam) and lam > 0:
+            q = fmpq(*lam.as_integer_ratio())
+            P = [[Qm[i, j] - (q if i == j else 0) for j in range(d)] for i in range(d)]
+            if all(fmpq_mat([row[:k] for row in P[:k]]).det() > 0 for k in range(1, d + 1)):
+                return q
+    # tr adj Q / det Q = sum 1 / lambda_i >= 1 / lambda_min
+    adj_trace = sum((_principal_minor(Qm, i, d) for i in range(d)), fmpq(0))
+    return Qm.det() / adj_trace
+
+
+def _principal_minor(Qm: fmpq_mat, i: int, d: int) -> fmpq:
+    """Determinant of Q without row and column i (a diagonal entry of adj Q)."""
+    keep = [k for k in range(d) if k != i]
+    return fmpq_mat([[Qm[r, s] for s in keep] for r in keep]).det()
+
+
+def _up(q: fmpq) -> float:
+    """The smallest float >= q (inf beyond the range)."""
+    f = to_float(q)
+    if math.isfinite(f) and fmpq(*f.as_integer_ratio()) < q:
+        f = math.nextafter(f, math.inf)
+    return f
+
+
+def _sqrt_up(q: fmpq) -> float:
+    """A float >= sqrt(q), q >= 0."""
+    s = math.sqrt(_up(q))
+    while math.isfinite(s) and fmpq(*s.as_integer_ratio()) ** 2 < q:
+        s = math.nextafter(s, math.inf)
+    return s

@@ -1,0 +1,76 @@
+"""Many bodies from their parameters: the matrices of N ellipses or ellipsoids at once.
+
+:func:`bodies_from_axes` is :func:`core.shapes.quadrics.quadric_from_axes` for N shapes: the float
+matrices are built by the one vectorised routine (:func:`core.shapes.quadrics.quadrics_from_axes`),
+bit for bit what the one-shape function gives, so a body found in a packing and the same shape
+opened alone (the scene's two-body view, the API) are the same matrix with the same certified
+label.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+
+from ..shapes.quadrics import axes_row_errors, quadrics_from_axes
+
+__all__ = ["bodies_from_axes"]
+
+
+def bodies_from_axes(
+    centers: Any,
+    semi_axes: Any,
+    orientations: Any = None,
+    *,
+    on_invalid: Literal["raise", "mark"] = "raise",
+) -> np.ndarray:
+    """Matrices (N, d+1, d+1) of N ellipses (d = 2) or ellipsoids (d = 3) from their parameters.
+
+    Args:
+        centers: (N, d) floats.
+        semi_axes: (N, d) positive floats.
+        orientations: 3D: (N, 4) unit or non-unit quaternions wxyz; 2D: (N,) angles in radians
+            (or (N, 4) quaternions (w, 0, 0, z)); None: axis-aligned.
+        on_invalid: "raise" a ValueError naming the first bad row, or "mark": such rows become
+            NaN matrices, which :func:`core.bodies.contacts` reports as invalid bodies (the
+            reasons: :func:`core.shapes.quadrics.axes_row_errors`).
+
+    Returns:
+        float64 array (N, d+1, d+1); row k equals ``quadric_from_axes(centers[k], semi_axes[k],
+        orientations[k])`` bit for bit.
+
+    Raises:
+        ValueError: wrong array shapes, an unknown ``on_invalid``, or (with "raise") a row with a
+            non-finite number, a semi-axis <= 0 or a zero quaternion.
+
+    Examples:
+        >>> Q = bodies_from_axes([[0, 0], [2, 0]], [[1, 1], [1, 1]], [0.0, 0.0])
+        >>> Q.shape
+        (2, 3, 3)
+        >>> bodies_from_axes([[0, 0], [2, 0]], [[1, 1], [1, -1]])
+        Traceback (most recent call last):
+        ...
+        ValueError: row 1: semi-axes must be positive, got [1.0, -1.0]
+        >>> bool(np.isnan(bodies_from_axes([[0, 0], [2, 0]], [[1, 1], [1, -1]], on_invalid="mark")[1]).all())
+        True
+    """
+    if on_invalid not in ("raise", "mark"):
+        raise ValueError(f"unknown on_invalid {on_invalid!r}; valid options: raise, mark")
+    if on_invalid == "raise":
+        return quadrics_from_axes(centers, semi_axes, orientations)
+    errors = axes_row_errors(centers, semi_axes, orientations)
+    if not errors:
+        return quadrics_from_axes(centers, semi_axes, orientations)
+    # bad rows get harmless stand-in parameters, then NaN: one builder for every row
+    bad = np.array(sorted(errors))
+    c = np.array(centers, dtype=float)
+    r = np.array(semi_axes, dtype=float)
+    c[bad], r[bad] = 0.0, 1.0
+    o = None
+    if orientations is not None:
+        o = np.array(orientations, dtype=float)
+        o[bad] = 0.0 if o.ndim == 1 or o.shape[-1] == 1 else (1.0, 0.0, 0.0, 0.0)
+    out = quadrics_from_axes(c, r, o)
+    out[bad] = np.nan
+    return out

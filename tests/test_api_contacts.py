@@ -1,0 +1,94 @@
+"""POST /api/contacts: many bodies in, the certified pairs out (limits, errors, periodic box)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+
+from app.api import ApiSettings, create_api
+from bench.bodies_data import random_bodies
+from core import bodies_from_axes, contacts
+
+
+@pytest.fixture(scope="module")
+def client():
+    with TestClient(create_api()) as c:
+        yield c
+
+
+def test_three_circles_exact_answer(client):
+    r = client.post("/api/contacts", json={"bodies": [[0, 0, 0.5, 0.5, 0], [1, 0, 0.5, 0.5, 0], [1.5, 0, 0.5, 0.5, 0]]})
+    assert r.status_code == 200
+    out = r.json()
+    assert out["pairs"] == [
+        {"i": 0, "j": 1, "relation": "tangent", "certified_by": "exact", "image": None},
+        {"i": 1, "j": 2, "relation": "overlap", "certified_by": "float", "image": None},
+    ]
+    assert out["bodies"] == 3 and out["invalid"] == {} and out["counts"]["candidates"] == 2
+    assert out["summary"].startswith("3 bodies, 2 candidate pairs, 2 contacts (1 tangent, 1 overlap)")
+
+
+def test_many_ellipsoids_equal_the_library(client):
+    b = random_bodies(3000, dim=3, seed=2)
+    rows = np.concatenate([b.centers, b.semi_axes, b.orientations], axis=1)
+    r = client.post("/api/contacts", json={"bodies": rows.tolist(), "box": [b.side] * 3})
+    assert r.status_code == 200, r.text
+    want = contacts(bodies_from_axes(b.centers, b.semi_axes, b.orientations), box=(b.side,) * 3)
+    got = r.json()["pairs"]
+    assert [(p["i"], p["j"]) for p in got] == list(zip(want.i.tolist(), want.j.tolist(), strict=True))
+    assert [p["image"] for p in got] == want.image.tolist()
+    assert {p["relation"] for p in got} == {"overlap"}
+
+
+def test_matrices_and_marked_invalid_bodies(client):
+    unit = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]
+    moved = [[1, 0, -2], [0, 1, 0], [-2, 0, 3]]
+    empty = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    r = client.post("/api/contacts", json={"matrices": [unit, moved, empty]})
+    assert r.status_code == 422 and r.json()["detail"].startswith("body 2 has an empty interior")
+    r = client.post("/api/contacts", json={"matrices": [unit, moved, empty], "on_invalid": "mark"})
+    assert r.status_code == 200
+    assert r.json()["invalid"] == {"2": "body 2 has an empty interior: no real points (det > 0), not an ellipse"}
+    assert [(p["i"], p["j"], p["relation"]) for p in r.json()["pairs"]] == [(0, 1, "tangent")]
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ({"bodies": [[0, 0, 0.5, -0.5, 0]]}, "bodies: row 0: semi-axes must be positive, got [0.5, -0.5]"),
+        ({"bodies": [[0, 0, 0.5, 0.5, 0], [0, 0, 0, 1, 1, 1, 1, 0, 0, 0]]}, "bodies: every row must be"),
+        ({}, "send either 'bodies' (rows of parameters) or 'matrices'"),
+        ({"bodies": [[0, 0, 2, 2, 0], [1, 0, 0.5, 0.5, 0]], "box": [5, 5]}, "body 0 is too large for the periodic box"),
+        ({"bodies": [[0, 0, 0.5, 0.5, 0]], "box": [5, 5, 5]}, "box: 3 sides for 2D bodies"),
+    ],
+)
+def test_bad_requests_say_what_is_wrong(client, body, message):
+    r = client.post("/api/contacts", json=body)
+    assert r.status_code == 422 and r.json()["detail"].startswith(message), r.text
+
+
+def test_numbers_must_be_json_floats(client):
+    r = client.post("/api/contacts", json={"bodies": [[0, 0, 0.5, 0.5, "0"]]})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["msg"].endswith("expected a JSON number (bodies are float64 numbers), got str")
+    r = client.post("/api/contacts", content='{"bodies": [[0, 0, 0.5, 0.5, 1e999]]}', headers={"content-type": "application/json"})
+    assert r.status_code == 422 and "overflows a float" in r.text
+
+
+def test_body_count_and_size_limits():
+    with TestClient(create_api(ApiSettings(max_contacts_bodies=3, max_contacts_body_bytes=2000))) as c:
+        r = c.post("/api/contacts", json={"bodies": [[k, 0, 0.5, 0.5, 0] for k in range(4)]})
+        assert (r.status_code, r.json()) == (422, {"detail": "4 bodies is over the limit of 3 per request"})
+        r = c.post("/api/contacts", json={"bodies": [[k + 0.123456789, 0, 0.5, 0.5, 0] for k in range(200)]})
+        assert (r.status_code, r.json()) == (413, {"detail": "request body too large: the limit is 2000 bytes"})
+        # the other routes keep the general limit
+        r = c.post("/api/classify", json={"a": [[1, 0, 0], [0, 1, 0], [0, 0, -1]], "b": [[1, 0, -2], [0, 1, 0], [-2, 0, 3]]})
+        assert r.status_code == 200
+
+
+def test_the_default_limit_takes_ten_thousand_bodies(client):
+    b = random_bodies(10_000, dim=3, seed=5)
+    rows = np.concatenate([b.centers, b.semi_axes, b.orientations], axis=1)
+    r = client.post("/api/contacts", json={"bodies": rows.tolist()})
+    assert r.status_code == 200 and r.json()["bodies"] == 10_000

@@ -1,0 +1,97 @@
+"""The Dask path: classify on dask arrays (lazy, chunk by chunk) and contacts on a LocalCluster.
+
+One LocalCluster with 2 worker processes (1 thread each) serves the module (~1 s to start).
+References: the same computation in numpy on this process (identical results, not just equal
+labels: the same pairs, certifiers and counts).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+distributed = pytest.importorskip("distributed")
+da = pytest.importorskip("dask.array")
+
+from bench.bodies_data import random_bodies  # noqa: E402
+from core import Relation, bodies_from_axes, classify, contacts  # noqa: E402
+from core.bodies.distributed import WarmUp  # noqa: E402
+
+pytestmark = pytest.mark.dask
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    c = distributed.Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+def _bodies(n, dim=3, seed=1):
+    b = random_bodies(n, dim=dim, fraction=0.35, seed=seed)
+    return bodies_from_axes(b.centers, b.semi_axes, b.orientations), b.side
+
+
+def _same(a, b):
+    for key in ("i", "j", "relation", "certified_by"):
+        assert np.array_equal(getattr(a, key), getattr(b, key)), key
+    assert a.counts == b.counts and a.invalid == b.invalid
+    assert (a.image is None) == (b.image is None)
+    if a.image is not None:
+        assert np.array_equal(a.image, b.image)
+
+
+def test_classify_on_dask_arrays_is_lazy_and_equals_numpy(client):
+    Q, _ = _bodies(6000)
+    A, B = Q[:3000], Q[3000:]
+    B[:40] = A[:40]  # identical shapes overlap; and some exact work: a tangent pair
+    B[40] = bodies_from_axes([[0, 0, 0]], [[1, 1, 1]])[0]
+    A[40] = bodies_from_axes([[2, 0, 0]], [[1, 1, 1]])[0]
+    lazy = classify(da.from_array(A, chunks=(700, 4, 4)), da.from_array(B, chunks=(1000, 4, 4)))
+    assert isinstance(lazy, da.Array) and lazy.dtype == np.int8 and lazy.shape == (3000,)
+    assert lazy.numblocks == (5,)  # A's chunks of pairs
+    got = lazy.compute()
+    assert np.array_equal(got, classify(A, B)) and got[40] == Relation.TANGENT
+    # a numpy operand broadcasts against a dask one
+    assert np.array_equal(classify(da.from_array(A, chunks=1000), B[0]).compute(), classify(A, B[0]))
+
+
+def test_classify_on_dask_names_the_pair_in_the_whole_batch(client):
+    Q, _ = _bodies(3000)
+    other, _ = _bodies(3000, seed=7)
+    Q[2345] = np.diag([1.0, 1.0, 1.0, 1.0])
+    lazy = classify(da.from_array(Q, chunks=(1000, 4, 4)), other)
+    with pytest.raises(ValueError, match=r"^pair 2345: A has an empty interior"):
+        lazy.compute()
+    marked = classify(da.from_array(Q, chunks=(1000, 4, 4)), other, on_invalid="mark").compute()
+    assert marked[2345] == Relation.INVALID and (marked >= 0).sum() == 2999
+
+
+def test_kernels_are_loaded_once_per_worker_by_the_plugin(client):
+    client.register_plugin(WarmUp())
+    status = client.run(lambda: __import__("core.fixed.compiled", fromlist=["status"]).status())
+    assert len(status) == 2
+    assert all(s.startswith(("compiled kernels loaded", "no C compiler")) for s in status.values())
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+def test_contacts_on_the_cluster_equal_the_local_search(client, periodic):
+    Q, side = _bodies(8000, seed=4)
+    box = (side, side, side) if periodic else None
+    local = contacts(Q, box=box)
+    assert len(local) > 1000
+    _same(contacts(Q, box=box, scheduler=client, partitions=6), local)
+    _same(contacts(da.from_array(Q, chunks=(1500, 4, 4)), box=box, partitions=3), local)  # the active client
+
+
+def test_contacts_on_the_cluster_2d_invalid_and_exact_lattice(client):
+    Q, side = _bodies(3000, dim=2, seed=2)
+    Q[17] = np.nan
+    with pytest.raises(ValueError, match=r"^body 17 entry \(0,0\): not a finite number"):
+        contacts(Q, scheduler=client)
+    _same(contacts(Q, scheduler=client, on_invalid="mark"), contacts(Q, on_invalid="mark"))
+    c = np.array([[x, y] for x in range(12) for y in range(12)], dtype=float)
+    lattice = contacts(bodies_from_axes(c, np.full_like(c, 0.5)), box=(12, 12), scheduler=client, partitions=5)
+    assert len(lattice) == 2 * 144 and np.all(lattice.relation == Relation.TANGENT)
