@@ -170,7 +170,7 @@ def is_valid_exact(M: np.ndarray) -> bool:
 
 def label(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """(N,) int8 oracle codes of stacked float pairs (exact; about 1 ms per pair)."""
-    return np.array([CODES[oracle_relation(a, b)] for a, b in zip(A, B)], dtype=np.int8)
+    return np.array([CODES[oracle_relation(a, b)] for a, b in zip(A, B, strict=False)], dtype=np.int8)
 
 
 def _finish(name: str, family: str, dim: int, A: np.ndarray, B: np.ndarray, shapes: list[tuple[Any, ...]]) -> Dataset:

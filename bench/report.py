@@ -144,7 +144,7 @@ def make_figures(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
     written = []
     res = st["results"]
     methods = list(dict.fromkeys(r.method for r in res))
-    colours = dict(zip(methods, plt.get_cmap("tab10").colors))
+    colours = dict(zip(methods, plt.get_cmap("tab10").colors, strict=False))
     markers = {"random": "o", "tangent": "*", "near": ".", "extreme": "s"}
 
     # 1. pairs/s against wrong-label rate, one point per method and data set
@@ -153,7 +153,7 @@ def make_figures(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
         for fam, mk in markers.items():
             pts = [(r.pairs_per_s, r.error_rate) for r in res if r.method == m and r.family == fam]
             if pts:
-                x, y = zip(*pts)
+                x, y = zip(*pts, strict=False)
                 ax.scatter(x, y, c=[colours[m]], marker=mk, s=40 if mk != "." else 60, alpha=0.75,
                            label=m if fam == "random" else None, edgecolors="none")
     ax.set_xscale("log")
@@ -174,7 +174,7 @@ def make_figures(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
 
     # 2. near-tangent: escalation and wrong labels per gap decade
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
-    for ax, dim in zip(axes, (2, 3)):
+    for ax, dim in zip(axes, (2, 3), strict=False):
         for m in methods:
             xs, ys = [], []
             for sign in ("+", "-"):
@@ -233,7 +233,7 @@ def make_figures(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
         pts = [(c["deg_s0"], c["time"]) for c in ok if c["deg_s0"] > 0]
         pts += [(r["deg_s0"], r["time"]) for r in mv["degree"] if "time" in r and r["deg_s0"] > 0]
         if pts:
-            x, y = zip(*pts)
+            x, y = zip(*pts, strict=False)
             ax.loglog(x, y, "o")
             ax.set_xlabel("degree of s0 in t")
             ax.set_ylabel("analyse time (s)")
@@ -252,7 +252,7 @@ def make_figures(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
         y = np.arange(len(names))
         ax.barh(y, p95, color="lightgrey", label="p95")
         ax.barh(y, med, color="tab:blue", label="median")
-        for r, yy in zip(sc["rows"], y):
+        for r, yy in zip(sc["rows"], y, strict=False):
             ax.plot([scene_cost.TARGETS_MS[r["kind"]]] * 2, [yy - 0.4, yy + 0.4], "r-")
         ax.set_yticks(y, names, fontsize=6)
         ax.set_xlabel("server time per update (ms); red: target")

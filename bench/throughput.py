@@ -46,7 +46,7 @@ def _cold_start() -> dict[str, float]:
         env = dict(os.environ, ELLIPSOID_KERNEL_CACHE=tmp)
         for key in ("empty cache", "warm cache"):
             t = time.perf_counter()
-            res = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+            res = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=300, check=False)
             total = time.perf_counter() - t
             first = res.stdout.splitlines()[0].split() if res.stdout else ["nan", "nan", "False"]
             out[f"{key}: import core (s)"] = float(first[0])
@@ -72,11 +72,11 @@ def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -
         ds = D.random_pairs(dim, n_lab, seed=11)
         A, B = _tile(ds, size)
         core.set_threads(None)
-        all_cores = baseline.best_rate(lambda: core.classify(A, B), size, reps)
+        all_cores = baseline.best_rate(lambda A=A, B=B: core.classify(A, B), size, reps)
         core.set_threads(1)
-        one = baseline.best_rate(lambda: core.classify(A, B), size, reps)
+        one = baseline.best_rate(lambda A=A, B=B: core.classify(A, B), size, reps)
         core.set_threads(None)
-        base = baseline.best_rate(lambda: baseline.baseline_codes(A, B), size, reps)
+        base = baseline.best_rate(lambda A=A, B=B: baseline.baseline_codes(A, B), size, reps)
         read = baseline.read_rate(A, B, reps)
         agree = float((baseline.baseline_codes(ds.A, ds.B) == ds.truth).mean())
         random_rate[dim] = all_cores
@@ -89,7 +89,7 @@ def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -
             ds = D.structured_pairs(dim, n_lab, kind=kind, seed=12)
             res = classify_detailed(ds.A, ds.B)
             A, B = _tile(ds, size)
-            rate = baseline.best_rate(lambda: core.classify(A, B), size, reps)
+            rate = baseline.best_rate(lambda A=A, B=B: core.classify(A, B), size, reps)
             structured.append({
                 "name": f"{kind} {dim}D", "dim": dim, "n": len(ds), "rate": rate, "ratio": rate / random_rate[dim],
                 "escalated": int(np.count_nonzero(res.certified_by == Certifier.EXACT)),

@@ -92,8 +92,8 @@ def dyadic_tangent_pair(d: int, a: float, r: float, shift: list[float]) -> tuple
     ball = axis_ellipsoid([shift[0] + a + r, *shift[1:]], [r] * d)
     Ef = np.array([[float(v) for v in row] for row in E])
     Bf = np.array([[float(v) for v in row] for row in ball])
-    assert all(F(x) == v for x, v in zip(Ef.flat, (v for row in E for v in row)))
-    assert all(F(x) == v for x, v in zip(Bf.flat, (v for row in ball for v in row)))
+    assert all(F(x) == v for x, v in zip(Ef.flat, (v for row in E for v in row), strict=False))
+    assert all(F(x) == v for x, v in zip(Bf.flat, (v for row in ball for v in row), strict=False))
     return Ef, Bf
 
 

@@ -495,7 +495,7 @@ def test_analyse_example_29_events_from_the_paper(client):
 
     getcontext().prec = 60
     root2 = Decimal(2).sqrt()
-    for e, sign in zip(got["events"], (-1, 1)):
+    for e, sign in zip(got["events"], (-1, 1), strict=False):
         lo, hi = (Fraction(x) for x in e["isolating"])
         assert lo < hi and _isolates(lo, hi, sign)
         true = (12 + sign * 2 * root2) / 17

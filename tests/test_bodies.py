@@ -342,7 +342,6 @@ def test_filter_on_translated_pairs_never_contradicts_exact(dim):
     """classify_translated(A, B, s) against the exact relation of A and the exact translate of B
     by s, on pairs that are near tangency once B is moved (gaps 1e-3 .. 1e-15, both sides)."""
     from bench.datasets import near_tangent_pairs
-
     from core.fixed.exact import classify_exact
     from core.fixed.filters import classify_translated
     from core.formulae.decision import RULE_RELATION

@@ -44,7 +44,7 @@ def test_gamma_constant_matches_formula(K_, Kb):
 def _random_matrices(rng, n, count):
     """Valid ellipses/ellipsoids, some near-degenerate, entries rounded to floats."""
     out = []
-    for k in range(count):
+    for _ in range(count):
         d = n - 1
         c = rng.uniform(-5, 5, d) * (10.0 ** rng.integers(-3, 4))
         r = rng.uniform(0.1, 3, d) * (10.0 ** rng.integers(-2, 3))
@@ -130,7 +130,7 @@ def test_certificate_kernels_bounds_hold(n):
         v, r = getattr(KK, f"pencil_at{n}")(list(c), list(cr), T)
         bound = r * (1 + 2.0**-40) + getattr(KK, f"PENCIL_AT{n}_FLOOR")
         for sign in (-1, 1):  # exact coefficients at either end of their intervals
-            ct = [_fq(ci) + sign * (1 if k % 2 else -1) * _fq(ri) for k, (ci, ri) in enumerate(zip(c, cr))]
+            ct = [_fq(ci) + sign * (1 if k % 2 else -1) * _fq(ri) for k, (ci, ri) in enumerate(zip(c, cr, strict=False))]
             exact = sum(ct[k] * _fq(T) ** k for k in range(n + 1))
             assert abs(_fq(v) - exact) <= _fq(bound)
         M = rng.normal(size=(n, n))
@@ -253,7 +253,7 @@ def test_explain_float_values_within_bounds(n):
         if e.certified_by != "float":
             continue
         pair = exact_pair(A, B, scaled=False)
-        for q, c in zip(e.coefficients, pair.coefficients):
+        for q, c in zip(e.coefficients, pair.coefficients, strict=False):
             assert q.bound is not None and abs(F(q.approx) - F(int(c.p), int(c.q))) <= F(q.bound) * (1 + F(1, 10**6))
             assert q.sign == (c > 0) - (c < 0)
 

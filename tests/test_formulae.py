@@ -15,7 +15,15 @@ from flint import fmpq, fmpz_poly
 from hypothesis import given
 from hypothesis import strategies as st
 
-from core.formulae.subresultants import hat_s0, hat_s1, hat_s10, hat_scale, s0_full, s1_full, s10_full
+from core.formulae.subresultants import (
+    hat_s0,
+    hat_s1,
+    hat_s10,
+    hat_scale,
+    s0_full,
+    s1_full,
+    s10_full,
+)
 
 coeffs = st.integers(-50, 50)
 

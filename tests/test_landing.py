@@ -116,11 +116,11 @@ def _examples(page: str) -> list[tuple[str, str | None]]:
 
 @pytest.mark.skipif(shutil.which("curl") is None or shutil.which("bash") is None, reason="needs curl and bash")
 def test_curl_examples_work_against_a_running_server(live_server):
-    page = subprocess.run(["curl", "-s", live_server + "/"], capture_output=True, text=True, timeout=30).stdout
+    page = subprocess.run(["curl", "-s", live_server + "/"], capture_output=True, text=True, timeout=30, check=True).stdout
     examples = _examples(page)
     assert len(examples) >= 6
     for cmd, expected in examples:
-        res = subprocess.run(["bash", "-c", f"set -o pipefail; API={live_server}; {cmd}"], capture_output=True, text=True, timeout=120)
+        res = subprocess.run(["bash", "-c", f"set -o pipefail; API={live_server}; {cmd}"], capture_output=True, text=True, timeout=120, check=False)
         assert res.returncode == 0, (cmd, res.stderr)
         got = res.stdout.strip()
         assert got, cmd
@@ -147,8 +147,8 @@ def _dockerfile() -> dict[str, list[str]]:
     text = (Path(__file__).resolve().parents[1] / "Dockerfile").read_text()
     text = text.replace("\\\n", " ")
     out: dict[str, list[str]] = {}
-    for line in text.splitlines():
-        line = line.strip()
+    for raw in text.splitlines():
+        line = raw.strip()
         if line and not line.startswith("#"):
             key, _, rest = line.partition(" ")
             out.setdefault(key.upper(), []).append(rest.strip())

@@ -76,8 +76,9 @@ _EXACT_FLOAT_INT = 2**53
 
 
 def _as_float64_if_exact(m: Any) -> Any:
-    """A float64 array when every entry is a JSON float or a float-exact integer (same values,
-    so the float filter can run on e.g. ``[[1, 0, -3.5], ...]``); otherwise unchanged.
+    """A float64 array when every entry is a JSON float or a float-exact integer, else unchanged.
+
+    The same values, so the float filter can run on e.g. ``[[1, 0, -3.5], ...]``.
     """
     if isinstance(m, np.ndarray):
         return m
@@ -90,7 +91,7 @@ def _as_float64_if_exact(m: Any) -> Any:
 
 
 def _size(m: Any) -> int | None:
-    """n for an n x n matrix (3 or 4), else None."""
+    """N for an n x n matrix (3 or 4), else None."""
     try:
         n = len(m)
         return n if n in (3, 4) and all(len(row) == n for row in m) else None

@@ -29,6 +29,7 @@ class BodySizeLimit:
         self.per_path = dict(per_path or {})
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Pass the request on, or answer 413 when its body is over the limit of its path."""
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return

@@ -53,8 +53,10 @@ T = TypeVar("T")
 
 
 async def _off_loop(request: Request, settings: Any, fn: Callable[[], T]) -> T:
-    """Run ``fn`` in a worker thread under the request budget, as /api/classify does: the event
-    loop stays free, and the answer of a client that went away is dropped."""
+    """Run ``fn`` in a worker thread under the request budget, as /api/classify does.
+
+    The event loop stays free, and the answer of a client that went away is dropped.
+    """
 
     def work(cancel: threading.Event) -> T:
         budget = Budget(settings.request_budget_s, cancel)
