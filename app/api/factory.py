@@ -11,10 +11,10 @@ from fastapi.staticfiles import StaticFiles
 
 from core import warm_up
 
+from ..workers import WorkerPool
 from .limits import BodySizeLimit, validation_error_handler
 from .routes import classify, health, landing, motion, presets, witness
 from .settings import ApiSettings
-from .workers import WorkerPool
 
 __all__ = ["create_api"]
 

@@ -393,7 +393,7 @@ def read_motion_job(motion: dict[str, Any], dim: int) -> MotionModel | tuple[str
 class AnalysisCache:
     """Analyses by motion key, shared by the tabs of one server; each runs once, off the GUI thread.
 
-    With ``processes=True`` each analysis runs in a child process (``app.api.workers.WorkerPool``:
+    With ``processes=True`` each analysis runs in a child process (``app.workers.WorkerPool``:
     forkserver, killed after ``budget`` seconds), so a long exact computation never holds the
     GIL of the process serving the tabs; results come back as plain data. Otherwise it runs in
     a worker thread of ``executor``.
@@ -420,7 +420,7 @@ class AnalysisCache:
         self._pool: Any = None
         if processes:
             try:
-                from app.api.workers import WorkerPool
+                from app.workers import WorkerPool
 
                 self._pool = WorkerPool(2, memory_mb=memory_mb)
             except ImportError:  # API package absent: threads only
@@ -442,7 +442,7 @@ class AnalysisCache:
         if self._pool is None:
             out = read_motion_job(motion, dim)
         else:
-            from app.api.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerTimeout
+            from app.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerTimeout
 
             try:
                 out = self._pool.run(read_motion_job, motion, dim, timeout=self.read_budget)
@@ -479,7 +479,7 @@ class AnalysisCache:
         args = (model.A.source, model.B.source, model.interval)
         try:
             if self._pool is not None:
-                from app.api.workers import WorkerBusy
+                from app.workers import WorkerBusy
 
                 while True:
                     try:
