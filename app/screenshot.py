@@ -186,7 +186,8 @@ def screenshot(config: SceneConfig, out: str | Path, *, width: int = 1400, heigh
     Args:
         config: the scene to show (preset, t or event, shapes, dimension).
         out: PNG path (parent directories are created).
-        width, height: viewport size in pixels.
+        width: viewport width in pixels.
+        height: viewport height in pixels.
         timeout: seconds to wait for rendering (the analysis of a preset included).
 
     Returns:

@@ -303,7 +303,7 @@ def profile_t_step(n: int = 200) -> str:
     try:
         s = S.Session(server, SceneConfig(preset="example-30"))
         s.ready.wait(120)
-        lo, hi = s.model.interval_floats if s.model else (0.0, 1.0)
+        lo, hi = s.state.analysis.window if s.state.analysis else (0.0, 1.0)
         pr = cProfile.Profile()
         pr.enable()
         for i in range(n):

@@ -99,7 +99,7 @@ def test_scene_loads_and_typing_a_centre_changes_colour(headless, tmp_path):
             " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
             f" return h === '{HEX['tangent']}'; }}"
         )
-        assert "TANGENT" in hs.session.readout.content
+        assert "TANGENT" in hs.session.ui.readout.content
         hs.save(tmp_path / "typed.png")
 
 
@@ -121,7 +121,7 @@ def test_two_tabs_have_their_own_shapes(headless):
 
 
 def _preset_available(name: str) -> bool:
-    from app.scene.analysis import list_presets
+    from app.scene.motion import list_presets
 
     return name in list_presets()
 
@@ -184,7 +184,7 @@ def test_screenshot_command_contract(tmp_path):
 def test_analysis_shows_intervals_and_jump_to_event(headless):
     cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.2, "gizmos": False})
     with headless(cfg, width=1200, height=900, timeout=60) as hs:
-        an = hs.session.analysis
+        an = hs.session.state.analysis
         assert [s[2] for s in an.segments] == ["separate", "overlap", "separate"]
         assert len(an.events) == 2
         assert abs(an.events[0].t - T_TANGENT) < 1e-9

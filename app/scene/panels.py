@@ -13,7 +13,15 @@ from typing import Any
 
 from .shapes import RELATION_HEX
 
-__all__ = ["relation_badge", "readout_markdown", "sign_char", "intervals_bar_html", "sign_table_markdown"]
+__all__ = [
+    "relation_badge",
+    "readout_markdown",
+    "sign_char",
+    "intervals_bar_html",
+    "sign_table_markdown",
+    "degrees_text",
+    "analysed_text",
+]
 
 _SUB = {"s0": "s<sub>0</sub>", "s1": "s<sub>1</sub>", "s10": "s<sub>1,0</sub>"}
 
@@ -118,7 +126,8 @@ def intervals_bar_html(
     """SVG bar along I = [lo, hi]: coloured segments per relation, ticks at events, a cursor.
 
     Args:
-        lo, hi: the interval I (floats, display only).
+        lo: left end of the interval I (float, display only).
+        hi: right end of I.
         segments: (a, b, relation) open intervals between events.
         events: (t, relation) of each event.
         cursor: current t (None: no cursor).
@@ -202,3 +211,16 @@ def sign_table_markdown(rows: Sequence[dict[str, Any]], degree: int) -> str:
         cells += ["" if var is None else str(var), f'<span style="color:{color}">■</span> {rel}']
         out.append("| " + " | ".join(cells) + " |")
     return "\n".join(out)
+
+
+def analysed_text(seconds: float, events: int, intervals: int, degrees: dict[str, Any]) -> str:
+    """Status line once a motion is analysed.
+
+    Examples:
+        >>> analysed_text(0.0123, 1, 2, {})
+        'Analysed in 0.01 s: 1 event, 2 intervals.'
+    """
+    return (
+        f"Analysed in {seconds:.2f} s: {events} event{'s' * (events != 1)}, "
+        f"{intervals} interval{'s' * (intervals != 1)}." + degrees_text(degrees)
+    )

@@ -37,18 +37,20 @@ class SceneServer:
         self.new_session = threading.Condition(self._lock)
         self.shared: Session | None = None
         """The one session every tab sees (presenter mode), or None (one session per tab)."""
+        self.cache.warm()
         if shared:
-            self.shared = Session(server, config, cache=self.cache, executor=self.executor)
+            self.shared = Session(
+                server, config, cache=self.cache, executor=self.executor,
+                cameras=lambda: [c.camera for c in server.get_clients().values()],
+            )
 
         @server.on_client_connect
         def _(client: Any) -> None:
             if self.shared is not None:
-                session = self.shared
-                session.target = client  # frame this tab's camera; the scene itself is shared
-                session._frame_camera()
+                session = self.shared  # the scene is shared; every tab's camera is framed
             else:
                 session = Session(client, self.config, cache=self.cache, executor=self.executor)
-                session._frame_camera()
+            session.frame_camera()
             with self._lock:
                 self.sessions[client.client_id] = session
                 self.new_session.notify_all()

@@ -324,23 +324,46 @@ class SceneConfig:
 
 @dataclass
 class AppState:
-    """Everything one tab shows; callbacks change it and call ``Session.refresh``."""
+    """Everything one tab shows: controllers change it, ``Session.refresh`` draws it.
+
+    The motion types are those of :mod:`app.scene.motion` and :mod:`app.scene.analysis`.
+    """
 
     dim: int
+    """2 or 3."""
     shapes: dict[str, ShapeState]
-    """"A" and "B"."""
+    """"A" and "B": the static shapes, or during a motion the shapes drawn at t (floats)."""
+    motion: Any = None
+    """The loaded :class:`app.scene.motion.MotionModel`, or None (static shapes)."""
+    analysis: Any = None
+    """Its :class:`app.scene.analysis.AnalysisView` once analysed (None while it runs)."""
     t: float = 0.0
     """Current time (when a motion is loaded), as drawn."""
     t_exact: Any = None
-    """The exact rational typed in the t box (e.g. 1/3), or None: the relation and the readout
-    are certified at this value; the shapes are drawn at its float ``t``."""
+    """The exact time typed in the t box (a rational such as 1/3, or an algebraic number such as
+    (12 - 2 sqrt 2)/17), or None: the relation and the readout are certified at this value; the
+    shapes are drawn at its float ``t``."""
+    t_text: str | None = None
+    """How the t box shows ``t_exact`` (the text as typed, normalised)."""
     event: int | None = None
-    """1-based index of the event shown exactly, or None when showing the float ``t``."""
-    motion_key: Any = None
-    """Cache key of the loaded motion (None: static scene)."""
-    explanation: dict[str, Any] | None = None
-    """Last ``core.explain(A, B).to_dict()`` of the static shapes (or at t)."""
+    """1-based index of the event shown exactly, or None when showing ``t``."""
+    auto_t: bool = False
+    """The start time is the analysis' default (just before the first event) until the user moves t."""
     relation: str | None = None
-    """Relation currently drawn ("separate", "tangent", "overlap")."""
+    """Relation currently drawn ("separate", "tangent", "overlap"), None when unknown."""
+    explanation: dict[str, Any] | None = None
+    """Last ``core.explain(A, B).to_dict()`` of the static shapes (None during a motion)."""
+    witness: Any = None
+    """Last :class:`app.scene.contact.WitnessView` of the static shapes."""
+    status: str = ""
+    """Status line of the motion panel (Markdown)."""
+    analysing: bool = False
+    """An analysis of ``motion`` is running."""
     errors: dict[str, str] = field(default_factory=dict)
-    """Field name -> error message shown next to that field."""
+    """Field -> message shown next to it: "A", "B", "interval" (motion editor), "shape A",
+    "shape B" (shape folders), "t" (t box)."""
+    show_plots: bool = True
+    separating_plane: bool = False
+    gizmos: bool = True
+    palette: str = "green / amber / red"
+    """Name of the relation palette (:data:`app.scene.shapes.PALETTES`)."""

@@ -1,0 +1,203 @@
+"""What the user does to the motion: pick a preset, type a motion and analyse it, leave the motion.
+
+A preset (trusted, known to be valid) is shown at once and its analysis arrives within
+milliseconds (cached, or run in the warm worker pool). A typed motion is read and analysed in
+worker processes first; the tab switches to it only once its analysis exists, so a motion that
+cannot be analysed (e.g. not an ellipsoid somewhere in I) leaves the previous scene on screen
+with the reason next to the motion field, never a panel waiting forever.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import Future
+from typing import TYPE_CHECKING
+
+from .analysis import AnalysisView
+from .gui import STATIC
+from .motion import MotionError, MotionModel
+from .panel_view import error_html
+from .panels import analysed_text
+from .state import SceneConfig
+
+if TYPE_CHECKING:
+    from .session import Session
+
+__all__ = ["MotionControl"]
+
+EDITOR_FIELDS = ("A", "B", "interval")
+
+
+class MotionControl:
+    """Callbacks of the Motion folder and the life cycle of a session's motion."""
+
+    def __init__(self, session: Session) -> None:
+        self.s = session
+        ui = session.ui.motion
+        ui.preset.on_update(lambda _ev: self.on_preset())
+        ui.analyse.on_click(lambda _ev: self.on_analyse())
+        self._pending: object = None
+
+    # ------------------------------------------------------------------ callbacks
+    def on_preset(self) -> None:
+        """Preset dropdown: load it (or leave the motion for "(static shapes)")."""
+        s = self.s
+        if s.syncing.active:
+            return
+        name = str(s.ui.motion.preset.value)
+        if name == STATIC:
+            with s.lock:
+                self.leave()
+                s.refresh()
+            return
+        st = s.state
+        s.load(SceneConfig(dim=st.dim, preset=name, gizmos=st.gizmos, show_plots=st.show_plots, separating_plane=st.separating_plane))
+        s.frame_camera()
+
+    def on_analyse(self) -> None:
+        """"Analyse motion": read the typed texts in a worker, analyse, then show."""
+        s = self.s
+        texts = {k: str(h.value) for k, h in s.ui.motion.fields.items()}
+        try:  # typed text is read in a worker process, never in the one serving every tab
+            model = s.cache.read_typed(texts)
+        except MotionError as e:
+            self._show_error(e)
+            return
+        self.analyse_pending(model)
+
+    # ------------------------------------------------------------------ life cycle
+    def analyse_pending(self, model: MotionModel) -> None:
+        """Analyse ``model`` while the tab keeps showing what it shows; switch when it is done."""
+        s = self.s
+        with s.lock:
+            st = s.state
+            for key in EDITOR_FIELDS:
+                st.errors.pop(key, None)
+            cached = s.cache.get(model.key)
+            if cached is not None:
+                self.show(model, cached)
+                return
+            self._pending = model.key
+            st.analysing = True
+            st.status = "Analysing the motion (exact)…"
+            s.refresh()
+            fut = s.cache.submit(model, s.executor)
+        fut.add_done_callback(lambda f: self._pending_done(model, f))
+
+    def _pending_done(self, model: MotionModel, fut: Future[AnalysisView]) -> None:
+        s = self.s
+        with s.lock:
+            if s.closed or self._pending != model.key:
+                return
+            self._pending = None
+            s.state.analysing = False
+            try:
+                an = fut.result()
+            except Exception as e:  # noqa: BLE001 - shown next to the field, never a crash
+                self._show_error(e)
+                return
+            self.show(model, an)
+
+    def start(self, model: MotionModel, *, t: float | None, event: int | None) -> None:
+        """Show a known-valid motion now (a preset, a configuration); its analysis follows."""
+        s = self.s
+        with s.lock:
+            st = s.state
+            self._pending = None
+            st.motion = model
+            st.analysis = None
+            st.event = event
+            st.t_exact = st.t_text = None
+            st.auto_t = t is None and event is None
+            lo, hi = model.interval_floats
+            st.t = float(t) if t is not None else lo + 0.45 * (hi - lo)
+            s.set_dimension(model.dim)
+            cached = s.cache.get(model.key)
+            if cached is not None:
+                self._arrived(model, cached)
+                return
+            st.analysing = True
+            st.status = "Analysing the motion (exact)…"
+            s.refresh()
+            fut = s.cache.submit(model, s.executor)
+        fut.add_done_callback(lambda f: self._start_done(model, f))
+
+    def _start_done(self, model: MotionModel, fut: Future[AnalysisView]) -> None:
+        s = self.s
+        with s.lock:
+            st = s.state
+            if s.closed or st.motion is not model:
+                return
+            st.analysing = False
+            try:
+                an = fut.result()
+            except Exception as e:  # noqa: BLE001 - shown next to the field, never a crash
+                st.errors[getattr(e, "field", "A")] = str(e)
+                st.status = error_html(f"analysis failed: {e}")
+                s.refresh()
+                s.ready.set()
+                return
+            self._arrived(model, an)
+
+    def show(self, model: MotionModel, an: AnalysisView) -> None:
+        """Switch the tab to an analysed motion (a typed motion once its analysis exists)."""
+        s = self.s
+        with s.lock:
+            st = s.state
+            st.motion = model
+            st.event = None
+            st.t_exact = st.t_text = None
+            st.auto_t = True
+            s.set_dimension(model.dim)
+            self._arrived(model, an)
+
+    def _arrived(self, model: MotionModel, an: AnalysisView) -> None:
+        """The analysis of the shown motion is known: timeline, t, the picture."""
+        s = self.s
+        st = s.state
+        st.analysis = an
+        st.analysing = False
+        st.status = analysed_text(an.seconds, len(an.events), len(an.segments), an.result.degrees())
+        lo, hi = an.window
+        event = st.event
+        if event is not None and not 1 <= event <= len(an.events):
+            st.errors["t"] = f"there are {len(an.events)} events (α1..α{len(an.events)})"
+            event = st.event = None
+        if st.auto_t:
+            st.t = an.default_t
+        elif event is None:
+            st.t = min(max(st.t, lo), hi)
+        if event is not None:
+            st.t = an.events[event - 1].t
+        s.refresh()
+        s.frame_camera()
+        s.ready.set()
+
+    def leave(self) -> None:
+        """Turn the scene static (a drag, a typed shape, "(static shapes)").
+
+        The shapes stay where they are drawn.
+        """
+        s = self.s
+        st = s.state
+        self._pending = None
+        st.motion = None
+        st.analysis = None
+        st.analysing = False
+        st.event = None
+        st.t_exact = st.t_text = None
+        for key in (*EDITOR_FIELDS, "t"):
+            st.errors.pop(key, None)
+        st.status = "Static shapes: drag them or type their parameters."
+        s.timeline_ctl.stop_playing()
+
+    def _show_error(self, e: Exception) -> None:
+        s = self.s
+        with s.lock:
+            st = s.state
+            field = getattr(e, "field", None) or "A"
+            for key in EDITOR_FIELDS:
+                st.errors.pop(key, None)
+            st.errors[field] = str(e)
+            st.analysing = False
+            st.status = error_html("the motion was not analysed: see the message next to its field")
+            s.refresh()

@@ -1,0 +1,209 @@
+"""What the user does to time: scrub the slider, type an exact t, play, jump to an event.
+
+:meth:`TimelineControl.set_t` is the hot path of scrubbing (one t-step): the session redraws
+the shapes at once with the relation looked up in the analysis; the panels follow at most every
+``Session.PANEL_PERIOD`` while scrubbing or playing. The t box takes exact values: a number or a
+fraction ("2/3" is certified at 2/3 itself, not at its float), a closed form with square roots
+("(12-2*sqrt(2))/17", certified at that algebraic number, which is the event there if there is
+one), or "α1" / "alpha1"; a t outside I is refused with a message, never clamped silently.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import threading
+import time
+from typing import TYPE_CHECKING, Any
+
+from flint import fmpq
+
+from core.algebra.algebraic import RealAlgebraic
+from core.algebra.closedform import algebraic_from_quadratic
+from core.moving.expressions import parse_expression
+from core.shapes.limits import SERVER
+from core.shapes.numbers import to_fmpq
+
+if TYPE_CHECKING:
+    from .session import Session
+
+__all__ = ["TimelineControl", "read_time"]
+
+_EVENT = re.compile(r"(?:α|alpha)\s*([0-9]+)", flags=re.IGNORECASE)
+
+
+def read_time(text: str) -> fmpq | RealAlgebraic:
+    """An exact time from text: a number, a fraction, or an expression with sqrt of constants.
+
+    Parsed by the bounded expression parser (:mod:`core.moving.expressions`, the scene's limits);
+    the value must not depend on t.
+
+    Raises:
+        ValueError: unreadable, or not a constant.
+
+    Examples:
+        >>> read_time("2/3"), read_time("1e-3")
+        (2/3, 1/1000)
+        >>> read_time("(12-2*sqrt(2))/17").decimal(10)
+        '0.5395042868'
+        >>> read_time("t + 1")
+        Traceback (most recent call last):
+        ...
+        ValueError: t must be a number, not an expression in t
+    """
+    rf = parse_expression(text.strip(), limits=SERVER)
+    if rf.den.degree() > 0 or rf.num.p.degree() > 0 or rf.num.q.degree() > 0:
+        raise ValueError("t must be a number, not an expression in t")
+    a = rf.num.p[0] if rf.num.p.degree() == 0 else fmpq(0)
+    b = rf.num.q[0] if rf.num.q.degree() == 0 else fmpq(0)
+    if b == 0:
+        return fmpq(a)
+    return algebraic_from_quadratic(fmpq(a), fmpq(b), int(rf.num.d))
+
+
+def _float(t: Any) -> float:
+    try:
+        return float(t)
+    except OverflowError:
+        return math.inf if t > 0 else -math.inf
+
+
+class TimelineControl:
+    """Callbacks of the Timeline folder of one session, and its playback thread."""
+
+    def __init__(self, session: Session) -> None:
+        self.s = session
+        tg = session.ui.timeline
+        tg.slider.on_update(lambda _ev: self.on_slider())
+        tg.t_box.on_update(lambda _ev: self.on_t_text())
+        tg.play.on_update(lambda _ev: self.on_play())
+        self._thread: threading.Thread | None = None
+
+    # ------------------------------------------------------------------ time
+    def set_t(self, t: Any, *, event: int | None = None, defer_panels: bool = False, text: str | None = None) -> str | None:
+        """Move the motion to time t (one timeline step: hot path, no analysis).
+
+        Args:
+            t: a float (its exact binary value), or an exact rational / RealAlgebraic (the
+                relation and readout are then certified at that value; the shapes drawn at its
+                float). A float outside the window is clamped (slider, playback).
+            event: show the exact event k instead (set by "jump to").
+            defer_panels: coalesce the panel updates (slider and playback).
+            text: how the t box shows an exact t.
+
+        Returns:
+            The certified relation drawn at t (None while the analysis is running).
+        """
+        s = self.s
+        with s.lock:
+            st = s.state
+            model = st.motion
+            if model is None:
+                return None
+            exact = None if isinstance(t, float) else t
+            tf = _float(t)
+            lo, hi = st.analysis.window if st.analysis is not None else model.interval_floats
+            if exact is None and not lo <= tf <= hi:
+                tf = min(max(tf, lo), hi)
+            st.t, st.t_exact, st.event = tf, exact, event
+            st.t_text = text if exact is not None else None
+            st.errors.pop("t", None)
+            return s.refresh(defer=defer_panels)
+
+    def jump_to_event(self, k: int) -> str | None:
+        """Show the k-th event (1-based) exactly: shapes at alpha_k, relation of the event."""
+        s = self.s
+        with s.lock:
+            an = s.state.analysis
+            if an is None or not 1 <= k <= len(an.events):
+                return None
+            s.state.auto_t = False
+            ev = an.events[k - 1]
+            self.set_t(ev.t, event=k)
+            return ev.relation
+
+    # ------------------------------------------------------------------ callbacks
+    def on_slider(self) -> None:
+        """The slider moved (a float t)."""
+        s = self.s
+        if s.syncing.active:
+            return
+        s.state.auto_t = False
+        self.set_t(float(s.ui.timeline.slider.value), defer_panels=True)
+
+    def on_t_text(self) -> None:
+        """The t box: an event name, or an exact time inside I (else an error next to the box)."""
+        s = self.s
+        if s.syncing.active or s.state.motion is None:
+            return
+        text = str(s.ui.timeline.t_box.value).strip()
+        with s.lock:
+            an = s.state.analysis
+            if an is None:
+                self._error("t: the motion is being analysed; try again in a moment")
+                return
+            m = _EVENT.fullmatch(text)
+            if m is not None:  # "α1" / "alpha1": the exact event
+                n_ev = len(an.events)
+                if not 1 <= int(m.group(1)) <= n_ev:
+                    self._error(f"t: there are {n_ev} events (α1..α{n_ev})" if n_ev else "t: this motion has no events")
+                    return
+                self.jump_to_event(int(m.group(1)))
+                return
+            try:
+                t = read_time(text)
+            except ValueError as e:
+                shown = text if len(text) <= 40 else text[:40] + "…"
+                why = f"not a number: {shown!r}" if "unexpected" in str(e) or "empty" in str(e) else str(e)
+                self._error(f"t: {why}; expected e.g. 0.7, 2/3, (12-2*sqrt(2))/17, or α1, α2, … for an event")
+                return
+            if not an.contains(t):
+                lo, hi = an.result.interval
+                shown = text if len(text) <= 40 else text[:40] + "…"
+                self._error(f"t = {shown} is outside I = [{'-∞' if lo is None else lo}, {'∞' if hi is None else hi}]")
+                return
+            s.state.auto_t = False
+            k = an.event_at(t)
+            if k is not None:  # exactly an event: show it as the event
+                self.jump_to_event(k)
+                return
+            if isinstance(t, fmpq) and math.isfinite(_float(t)) and to_fmpq(_float(t)) == t:
+                self.set_t(_float(t))  # a float's exact value typed: the float path
+                return
+            self.set_t(t, text=text if len(text) <= 40 else text[:40] + "…")
+
+    def _error(self, message: str) -> None:
+        with self.s.lock:
+            self.s.state.errors["t"] = message
+            self.s.refresh()
+
+    # ------------------------------------------------------------------ playback
+    def on_play(self) -> None:
+        """Play checkbox: start the playback thread (it stops when unchecked)."""
+        s = self.s
+        if s.syncing.active or not s.ui.timeline.play.value:
+            return
+        if self._thread is not None and self._thread.is_alive():
+            return
+        self._thread = threading.Thread(target=self._play_loop, name="play", daemon=True)
+        self._thread.start()
+
+    def stop_playing(self) -> None:
+        """Uncheck Play (the thread ends at its next step)."""
+        play = self.s.ui.timeline.play
+        if play.value:
+            with self.s.syncing():
+                play.value = False
+
+    def _play_loop(self) -> None:
+        s = self.s
+        dt = 0.05
+        while s.ui.timeline.play.value and not s.closed and s.state.motion is not None:
+            an = s.state.analysis
+            lo, hi = an.window if an is not None else s.state.motion.interval_floats
+            t = s.state.t + (hi - lo) * float(s.ui.timeline.speed.value) * dt / 10.0
+            if t > hi:
+                t = lo
+            s.state.auto_t = False
+            self.set_t(t, defer_panels=True)
+            time.sleep(dt)
