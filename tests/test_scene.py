@@ -7,6 +7,7 @@ Golden relations are hand-checkable: unit spheres/circles whose centres are 2 ap
 from __future__ import annotations
 
 import time
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -364,12 +365,20 @@ def test_play_advances_t_and_stops(server):
 
 
 def test_dimension_switch_rebuilds_shapes(server):
+    """View -> Dimension shows the other dimension's default shapes, drawn where they are: 2D
+    A = ellipse (2, 1) at the origin, B = ellipse (3/2, 1/2) at (3, 3/2) turned by 0.6 rad."""
     s = Session(server, unit_spheres(3, "3"))
     s.ui.view.dimension.value = "2D ellipses"  # runs the GUI callback
-    assert s.state.dim == 2 and len(s.state.shapes["A"].center) == 2
-    assert s.state.relation in ("separate", "tangent", "overlap")
+    a, b = s.state.shapes["A"], s.state.shapes["B"]
+    assert s.state.dim == 2 and [v.dim for v in s.views.values()] == [2, 2]
+    assert [str(v) for v in (*a.center, *a.semi_axes, *b.center)] == ["0", "0", "2", "1", "3", "3/2"]
+    assert s.state.relation == oracle_relation(a.quadric(), b.quadric())
+    np.testing.assert_allclose(s.views["A"].control.position, (0.0, 0.0, 0.0))
+    np.testing.assert_allclose(s.views["B"].control.position, (3.0, 1.5, 0.01))  # B lifted a hair
+    np.testing.assert_allclose(s.views["A"].mesh.scale, (2.0, 1.0, 1.0))
     s.ui.view.dimension.value = "3D ellipsoids"
-    assert s.state.dim == 3
+    assert s.state.dim == 3 and len(s.state.shapes["A"].center) == 3
+    assert s.state.relation == oracle_relation(s.state.shapes["A"].quadric(), s.state.shapes["B"].quadric())
 
 
 def test_t_box_accepts_fractions_and_event_names(server):

@@ -69,40 +69,19 @@ class MotionControl:
         """Analyse ``model`` while the tab keeps showing what it shows; switch when it is done."""
         s = self.s
         with s.lock:
-            st = s.state
             for key in EDITOR_FIELDS:
-                st.errors.pop(key, None)
+                s.state.errors.pop(key, None)
             cached = s.cache.get(model.key)
             if cached is not None:
                 self.show(model, cached)
                 return
-            self._pending = model.key
-            st.analysing = True
-            st.status = "Analysing the motion (exact)…"
-            s.refresh()
-            fut = s.cache.submit(model, s.executor)
-        fut.add_done_callback(lambda f: self._pending_done(model, f))
-
-    def _pending_done(self, model: MotionModel, fut: Future[AnalysisView]) -> None:
-        s = self.s
-        with s.lock:
-            if s.closed or self._pending != model.key:
-                return
-            self._pending = None
-            s.state.analysing = False
-            try:
-                an = fut.result()
-            except Exception as e:  # noqa: BLE001 - shown next to the field, never a crash
-                self._show_error(e)
-                return
-            self.show(model, an)
+            self._analyse(model, switch=True)
 
     def start(self, model: MotionModel, *, t: float | None, event: int | None) -> None:
         """Show a known-valid motion now (a preset, a configuration); its analysis follows."""
         s = self.s
         with s.lock:
             st = s.state
-            self._pending = None
             st.motion = model
             st.analysis = None
             st.event = event
@@ -113,30 +92,38 @@ class MotionControl:
             s.set_dimension(model.dim)
             cached = s.cache.get(model.key)
             if cached is not None:
+                self._pending = None
                 self._arrived(model, cached)
                 return
-            st.analysing = True
-            st.status = "Analysing the motion (exact)…"
-            s.refresh()
-            fut = s.cache.submit(model, s.executor)
-        fut.add_done_callback(lambda f: self._start_done(model, f))
+            self._analyse(model, switch=False)
 
-    def _start_done(self, model: MotionModel, fut: Future[AnalysisView]) -> None:
+    def _analyse(self, model: MotionModel, *, switch: bool) -> None:
+        """Run the analysis (lock held); ``switch``: show the motion only once it is analysed."""
+        s = self.s
+        self._pending = model.key
+        s.state.analysing = True
+        s.state.status = "Analysing the motion (exact)…"
+        s.refresh()
+        fut = s.cache.submit(model, s.executor)
+        fut.add_done_callback(lambda f: self._analysed(model, f, switch))
+
+    def _analysed(self, model: MotionModel, fut: Future[AnalysisView], switch: bool) -> None:
         s = self.s
         with s.lock:
-            st = s.state
-            if s.closed or st.motion is not model:
-                return
-            st.analysing = False
+            if s.closed or self._pending != model.key:
+                return  # left, or another motion was asked for meanwhile
+            self._pending = None
+            s.state.analysing = False
             try:
                 an = fut.result()
             except Exception as e:  # noqa: BLE001 - shown next to the field, never a crash
-                st.errors[getattr(e, "field", "A")] = str(e)
-                st.status = error_html(f"analysis failed: {e}")
-                s.refresh()
+                self._show_error(e)
                 s.ready.set()
                 return
-            self._arrived(model, an)
+            if switch:
+                self.show(model, an)
+            else:
+                self._arrived(model, an)
 
     def show(self, model: MotionModel, an: AnalysisView) -> None:
         """Switch the tab to an analysed motion (a typed motion once its analysis exists)."""

@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
+import viser
+
 from core.shapes.numbers import to_fmpq
 
 from .gui import DIM_LABELS
@@ -62,7 +64,7 @@ class ShapeControl:
             view.control.on_update(lambda ev, n=name: self.on_gizmo(n, ev))
 
     # ------------------------------------------------------------------ callbacks
-    def on_gizmo(self, name: str, ev: Any) -> None:
+    def on_gizmo(self, name: str, ev: viser.TransformControlsEvent) -> None:
         """A gizmo moved: the drag path (recolour now, readout within the panel period)."""
         if self.s.syncing.active:
             return

@@ -17,6 +17,7 @@ times both and counts the websocket messages they queue.
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable, Iterable
 from concurrent.futures import Executor
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any
@@ -64,7 +65,7 @@ class Session:
         cache: AnalysisCache | None = None,
         executor: Executor | None = None,
         count_messages: bool = False,
-        cameras: Any = None,
+        cameras: Callable[[], Iterable[viser.CameraHandle]] | None = None,
     ) -> None:
         self.target = target
         self.scene: viser.SceneApi = target.scene

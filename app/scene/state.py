@@ -12,7 +12,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from flint import fmpq
 
@@ -27,6 +27,11 @@ __all__ = [
     "format_number",
     "DEFAULT_PRESET",
 ]
+
+if TYPE_CHECKING:
+    from .analysis import AnalysisView
+    from .contact import WitnessView
+    from .motion import MotionModel
 
 Number = float | fmpq
 
@@ -324,19 +329,16 @@ class SceneConfig:
 
 @dataclass
 class AppState:
-    """Everything one tab shows: controllers change it, ``Session.refresh`` draws it.
-
-    The motion types are those of :mod:`app.scene.motion` and :mod:`app.scene.analysis`.
-    """
+    """Everything one tab shows: controllers change it, ``Session.refresh`` draws it."""
 
     dim: int
     """2 or 3."""
     shapes: dict[str, ShapeState]
     """"A" and "B": the static shapes, or during a motion the shapes drawn at t (floats)."""
-    motion: Any = None
-    """The loaded :class:`app.scene.motion.MotionModel`, or None (static shapes)."""
-    analysis: Any = None
-    """Its :class:`app.scene.analysis.AnalysisView` once analysed (None while it runs)."""
+    motion: MotionModel | None = None
+    """The loaded motion, or None (static shapes)."""
+    analysis: AnalysisView | None = None
+    """Its analysis once done (None while it runs)."""
     t: float = 0.0
     """Current time (when a motion is loaded), as drawn."""
     t_exact: Any = None
@@ -353,8 +355,8 @@ class AppState:
     """Relation currently drawn ("separate", "tangent", "overlap"), None when unknown."""
     explanation: dict[str, Any] | None = None
     """Last ``core.explain(A, B).to_dict()`` of the static shapes (None during a motion)."""
-    witness: Any = None
-    """Last :class:`app.scene.contact.WitnessView` of the static shapes."""
+    witness: WitnessView | None = None
+    """Last witness of the static shapes (margin, sentence, plane or point)."""
     status: str = ""
     """Status line of the motion panel (Markdown)."""
     analysing: bool = False
