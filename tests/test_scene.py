@@ -436,7 +436,6 @@ def test_typed_text_is_escaped_in_messages(server):
 def test_relation_lookup_inside_an_isolating_interval(server):
     """A t inside an irrational event's isolating interval is decided by the exact signs at t:
     Example 29's alpha1 = (12 - 2 sqrt 2)/17 separates 'separate' (before) from 'overlap'."""
-    from fractions import Fraction
 
     s = motion_session(server)
     an = s.state.analysis
@@ -522,7 +521,6 @@ def test_t_box_certifies_the_exact_fraction_typed(server, tmp_path):
     """Unit circles at (0, 0) and (3t, 0) touch at t = 2/3 exactly (distance 3t = 2). The float
     nearest 2/3 is below it (overlap there); typing "2/3" must show the tangency of 2/3 itself."""
     import json
-    from fractions import Fraction
 
     assert Fraction(2 / 3) < Fraction(2, 3)  # the float is on the overlap side
     cfg_file = tmp_path / "two_thirds.json"
