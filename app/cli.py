@@ -9,7 +9,9 @@
   (:mod:`app.scene.origin`). SIGTERM/SIGINT stop the running analyses and exit within seconds
   (:mod:`app.lifecycle`).
 * ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png [--config file.json]
-  [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly.
+  [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly;
+  several ``--t``/``--event``/``--config`` render one image each in one browser session
+  (``--out`` a folder).
 """
 
 from __future__ import annotations
@@ -85,29 +87,38 @@ def build_parser() -> argparse.ArgumentParser:
         "(repeatable; default: only the scene's own pages, and clients that send no Origin)",
     )
 
-    sh = sub.add_parser("screenshot", help="render a configuration to PNG with headless Chromium")
+    sh = sub.add_parser(
+        "screenshot", help="render a configuration to PNG with headless Chromium (several --t/--event/--config: "
+        "one browser, one image each, --out a folder)",
+    )
     sh.add_argument("--preset", default=None, help="motion preset, e.g. example-29 ('none' for static shapes)")
-    sh.add_argument("--t", type=_time, default=None, help="time to show (number or fraction)")
-    sh.add_argument("--event", type=int, default=None, help="show the K-th event (1-based) exactly")
-    sh.add_argument("--config", default=None, help="JSON configuration file (any scene)")
+    sh.add_argument("--t", type=_time, action="append", default=None, help="time to show (number or fraction); repeatable")
+    sh.add_argument("--event", type=int, action="append", default=None, help="show the K-th event (1-based) exactly; repeatable")
+    sh.add_argument("--config", action="append", default=None, help="JSON configuration file (any scene); repeatable")
     sh.add_argument("--dim", type=int, choices=(2, 3), default=None, help="2 (ellipses) or 3 (ellipsoids)")
     sh.add_argument("--width", type=_size, default=1400, help="image width in px (default 1400)")
     sh.add_argument("--height", type=_size, default=900, help="image height in px (default 900)")
     sh.add_argument("--no-plots", action="store_true", help="hide the live plots")
-    sh.add_argument("--out", required=True, help="output PNG path")
+    sh.add_argument("--out", required=True, help="output PNG path, or a folder for several images")
     sh.add_argument("--timeout", type=float, default=120.0, help="seconds to wait for rendering")
     return p
 
 
-def config_from_args(args: argparse.Namespace) -> object:
+def config_from_args(args: argparse.Namespace, path: str | None = None) -> object:
     """SceneConfig from ``--config``/``--preset``/``--t``/``--event``/``--dim`` (later override earlier).
+
+    Args:
+        args: the parsed command line.
+        path: the configuration file to start from (default: the first ``--config``).
 
     Raises:
         ValueError: unreadable config file or bad values.
     """
     from .scene.state import SceneConfig
 
-    cfg = SceneConfig.from_json_file(args.config) if getattr(args, "config", None) else SceneConfig()
+    configs = _listed(getattr(args, "config", None))
+    path = path or (configs[0] if configs else None)
+    cfg = SceneConfig.from_json_file(path) if path else SceneConfig()
     if getattr(args, "dim", None) is not None and args.dim != cfg.dim:
         d = cfg.to_dict()
         d.update(dim=args.dim, A=None, B=None, preset=None)
@@ -115,15 +126,24 @@ def config_from_args(args: argparse.Namespace) -> object:
     if getattr(args, "preset", None) is not None:
         cfg.preset = None if args.preset.lower() in ("none", "static") else args.preset
         cfg.motion = None
-    if getattr(args, "t", None) is not None:
-        cfg.t = args.t
-    if getattr(args, "event", None) is not None:
-        if args.event < 1:
-            raise ValueError("--event is 1-based")
-        cfg.event = args.event
+    ts, events = _listed(getattr(args, "t", None)), _listed(getattr(args, "event", None))
+    if any(k < 1 for k in events):
+        raise ValueError("--event is 1-based")
+    if len(ts) + len(events) == 1:  # one image: the configuration itself shows it
+        if ts:
+            cfg.t = ts[0]
+        else:
+            cfg.event = events[0]
     if getattr(args, "no_plots", False):
         cfg.show_plots = False
     return cfg
+
+
+def _listed(value: object) -> list:
+    """A repeatable option as a list (None: empty; a single value from older callers: [value])."""
+    if value is None:
+        return []
+    return list(value) if isinstance(value, list | tuple) else [value]
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -180,11 +200,23 @@ def _wait_forever() -> None:
 
 
 def _screenshot(args: argparse.Namespace) -> int:
-    from .screenshot import screenshot
+    from pathlib import Path
 
-    cfg = config_from_args(args)
-    path = screenshot(cfg, args.out, width=args.width, height=args.height, timeout=args.timeout)  # type: ignore[arg-type]
-    print(f"wrote {path}")
+    from .screenshot import screenshots, shots_for
+
+    configs = _listed(args.config)
+    ts, events = _listed(args.t), _listed(args.event)
+    if len(configs) > 1:  # a list of configurations: one image each, named after the file
+        shots = []
+        for path in configs:
+            cfg = config_from_args(args, path)
+            shots += shots_for(cfg, Path(args.out) / Path(path).stem, ts, events) if ts or events else \
+                shots_for(cfg, Path(args.out) / f"{Path(path).stem}.png", [], [])
+    else:
+        cfg = config_from_args(args)
+        shots = shots_for(cfg, args.out, ts if len(ts) + len(events) > 1 else [], events if len(ts) + len(events) > 1 else [])  # type: ignore[arg-type]
+    for path in screenshots(shots, width=args.width, height=args.height, timeout=args.timeout):
+        print(f"wrote {path}")
     return 0
 
 

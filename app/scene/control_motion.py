@@ -17,7 +17,7 @@ from .gui import STATIC
 from .motion import MotionError, MotionModel
 from .panel_view import error_html
 from .panels import analysed_text
-from .state import SceneConfig
+from .state import SceneConfig, read_time, time_float
 
 if TYPE_CHECKING:
     from .session import Session
@@ -36,6 +36,8 @@ class MotionControl:
         ui.preset.on_update(lambda _ev: self.on_preset())
         ui.analyse.on_click(lambda _ev: self.on_analyse())
         self._pending: object = None
+        self._then: tuple[float | str | None, int | None] = (None, None)
+        """Time or event to show once the motion being analysed is known."""
 
     # ------------------------------------------------------------------ callbacks
     def on_preset(self) -> None:
@@ -60,25 +62,38 @@ class MotionControl:
         try:  # typed text is read in a worker process, never in the one serving every tab
             model = s.cache.read_typed(texts)
         except MotionError as e:
-            self._show_error(e)
+            self.show_error(e)
             return
         self.analyse_pending(model)
 
     # ------------------------------------------------------------------ life cycle
-    def analyse_pending(self, model: MotionModel) -> None:
-        """Analyse ``model`` while the tab keeps showing what it shows; switch when it is done."""
+    def analyse_pending(self, model: MotionModel, *, t: float | str | None = None, event: int | None = None) -> None:
+        """Analyse ``model`` while the tab keeps showing what it shows; switch when it is done.
+
+        Args:
+            model: the motion (read in a worker).
+            t: time to show once analysed (a number or exact text; None: the default).
+            event: event to show instead (1-based).
+        """
         s = self.s
         with s.lock:
             for key in EDITOR_FIELDS:
                 s.state.errors.pop(key, None)
+            self._then = (t, event)
             cached = s.cache.get(model.key)
             if cached is not None:
                 self.show(model, cached)
                 return
             self._analyse(model, switch=True)
 
-    def start(self, model: MotionModel, *, t: float | None, event: int | None) -> None:
-        """Show a known-valid motion now (a preset, a configuration); its analysis follows."""
+    def start(self, model: MotionModel, *, t: float | str | None, event: int | None) -> None:
+        """Show a known-valid motion now (a preset, a configuration); its analysis follows.
+
+        Args:
+            model: the motion.
+            t: time to show (a number, or exact text applied once the analysis is known).
+            event: event to show instead (1-based).
+        """
         s = self.s
         with s.lock:
             st = s.state
@@ -87,8 +102,11 @@ class MotionControl:
             st.event = event
             st.t_exact = st.t_text = None
             st.auto_t = t is None and event is None
+            self._then = (t, event)
             lo, hi = model.interval_floats
-            st.t = float(t) if t is not None else lo + 0.45 * (hi - lo)
+            if isinstance(t, str):
+                t = time_float(read_time(t))
+            st.t = min(max(float(t), lo), hi) if t is not None else lo + 0.45 * (hi - lo)
             s.set_dimension(model.dim)
             cached = s.cache.get(model.key)
             if cached is not None:
@@ -117,7 +135,7 @@ class MotionControl:
             try:
                 an = fut.result()
             except Exception as e:  # noqa: BLE001 - shown next to the field, never a crash
-                self._show_error(e)
+                self.show_error(e)
                 s.ready.set()
                 return
             if switch:
@@ -130,10 +148,13 @@ class MotionControl:
         s = self.s
         with s.lock:
             st = s.state
+            t, event = self._then
             st.motion = model
-            st.event = None
+            st.event = event
             st.t_exact = st.t_text = None
-            st.auto_t = True
+            st.auto_t = t is None and event is None
+            if isinstance(t, int | float):
+                st.t = float(t)
             s.set_dimension(model.dim)
             self._arrived(model, an)
 
@@ -155,6 +176,12 @@ class MotionControl:
             st.t = min(max(st.t, lo), hi)
         if event is not None:
             st.t = an.events[event - 1].t
+        t_text = self._then[0]
+        self._then = (None, None)
+        if isinstance(t_text, str) and event is None:  # an exact time from a configuration
+            error = s.timeline_ctl.apply_text(t_text)
+            if error is not None:
+                st.errors["t"] = error
         s.refresh()
         s.frame_camera()
         s.ready.set()
@@ -177,7 +204,8 @@ class MotionControl:
         st.status = "Static shapes: drag them or type their parameters."
         s.timeline_ctl.stop_playing()
 
-    def _show_error(self, e: Exception) -> None:
+    def show_error(self, e: Exception) -> None:
+        """Show why a motion was not read or analysed, next to its field."""
         s = self.s
         with s.lock:
             st = s.state

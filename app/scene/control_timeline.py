@@ -18,54 +18,20 @@ from typing import TYPE_CHECKING, Any
 
 from flint import fmpq
 
-from core.algebra.algebraic import RealAlgebraic
-from core.algebra.closedform import algebraic_from_quadratic
-from core.moving.expressions import parse_expression
-from core.shapes.limits import SERVER
 from core.shapes.numbers import to_fmpq
+
+from .state import read_time, time_float
 
 if TYPE_CHECKING:
     from .session import Session
 
-__all__ = ["TimelineControl", "read_time"]
+__all__ = ["TimelineControl"]
 
 _EVENT = re.compile(r"(?:α|alpha)\s*([0-9]+)", flags=re.IGNORECASE)
 
 
-def read_time(text: str) -> fmpq | RealAlgebraic:
-    """An exact time from text: a number, a fraction, or an expression with sqrt of constants.
-
-    Parsed by the bounded expression parser (:mod:`core.moving.expressions`, the scene's limits);
-    the value must not depend on t.
-
-    Raises:
-        ValueError: unreadable, or not a constant.
-
-    Examples:
-        >>> read_time("2/3"), read_time("1e-3")
-        (2/3, 1/1000)
-        >>> read_time("(12-2*sqrt(2))/17").decimal(10)
-        '0.5395042868'
-        >>> read_time("t + 1")
-        Traceback (most recent call last):
-        ...
-        ValueError: t must be a number, not an expression in t
-    """
-    rf = parse_expression(text.strip(), limits=SERVER)
-    if rf.den.degree() > 0 or rf.num.p.degree() > 0 or rf.num.q.degree() > 0:
-        raise ValueError("t must be a number, not an expression in t")
-    a = rf.num.p[0] if rf.num.p.degree() == 0 else fmpq(0)
-    b = rf.num.q[0] if rf.num.q.degree() == 0 else fmpq(0)
-    if b == 0:
-        return fmpq(a)
-    return algebraic_from_quadratic(fmpq(a), fmpq(b), int(rf.num.d))
-
-
 def _float(t: Any) -> float:
-    try:
-        return float(t)
-    except OverflowError:
-        return math.inf if t > 0 else -math.inf
+    return time_float(t)
 
 
 class TimelineControl:
@@ -136,41 +102,47 @@ class TimelineControl:
         s = self.s
         if s.syncing.active or s.state.motion is None:
             return
-        text = str(s.ui.timeline.t_box.value).strip()
+        error = self.apply_text(str(s.ui.timeline.t_box.value))
+        if error is not None:
+            self._error(error)
+
+    def apply_text(self, text: str) -> str | None:
+        """Go to the time ``text`` names exactly; returns the error message instead, if any.
+
+        "α2"/"alpha2" is the event; a number, fraction or closed form inside I is certified at
+        that exact value (the event, if it is one); a float's exact value takes the float path.
+        """
+        s = self.s
+        text = text.strip()
+        shown = text if len(text) <= 40 else text[:40] + "…"
         with s.lock:
             an = s.state.analysis
             if an is None:
-                self._error("t: the motion is being analysed; try again in a moment")
-                return
+                return "t: the motion is being analysed; try again in a moment"
             m = _EVENT.fullmatch(text)
             if m is not None:  # "α1" / "alpha1": the exact event
                 n_ev = len(an.events)
                 if not 1 <= int(m.group(1)) <= n_ev:
-                    self._error(f"t: there are {n_ev} events (α1..α{n_ev})" if n_ev else "t: this motion has no events")
-                    return
+                    return f"t: there are {n_ev} events (α1..α{n_ev})" if n_ev else "t: this motion has no events"
                 self.jump_to_event(int(m.group(1)))
-                return
+                return None
             try:
                 t = read_time(text)
             except ValueError as e:
-                shown = text if len(text) <= 40 else text[:40] + "…"
                 why = f"not a number: {shown!r}" if "unexpected" in str(e) or "empty" in str(e) else str(e)
-                self._error(f"t: {why}; expected e.g. 0.7, 2/3, (12-2*sqrt(2))/17, or α1, α2, … for an event")
-                return
+                return f"t: {why}; expected e.g. 0.7, 2/3, (12-2*sqrt(2))/17, or α1, α2, … for an event"
             if not an.contains(t):
                 lo, hi = an.result.interval
-                shown = text if len(text) <= 40 else text[:40] + "…"
-                self._error(f"t = {shown} is outside I = [{'-∞' if lo is None else lo}, {'∞' if hi is None else hi}]")
-                return
+                return f"t = {shown} is outside I = [{'-∞' if lo is None else lo}, {'∞' if hi is None else hi}]"
             s.state.auto_t = False
             k = an.event_at(t)
             if k is not None:  # exactly an event: show it as the event
                 self.jump_to_event(k)
-                return
-            if isinstance(t, fmpq) and math.isfinite(_float(t)) and to_fmpq(_float(t)) == t:
+            elif isinstance(t, fmpq) and math.isfinite(_float(t)) and to_fmpq(_float(t)) == t:
                 self.set_t(_float(t))  # a float's exact value typed: the float path
-                return
-            self.set_t(t, text=text if len(text) <= 40 else text[:40] + "…")
+            else:
+                self.set_t(t, text=shown)
+            return None
 
     def _error(self, message: str) -> None:
         with self.s.lock:

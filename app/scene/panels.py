@@ -96,7 +96,7 @@ def readout_markdown(
     lines.append("")
     lines.append("| | value | sign |")
     lines.append("|---|---|---|")
-    for q in coeffs:
+    for q in reversed(coeffs):  # a_n .. a_0, the order of Var and of the sign table
         text = _fmt(q).rsplit(" (", 1)[0]
         lines.append(f"| a<sub>{q['name'][1:]}</sub> | {text} | {sign_char(q.get('sign'))} |")
     for key in ("s0", "s1", "s10"):

@@ -16,6 +16,7 @@ times both and counts the websocket messages they queue.
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from collections.abc import Callable, Iterable
 from concurrent.futures import Executor
@@ -52,6 +53,7 @@ class Session:
         count_messages: count queued websocket messages in :attr:`messages` (benchmarks).
         cameras: the cameras to frame (presenter mode: every connected tab's); default the
             target's own camera, if it has one.
+        defer_load: build the scene but load nothing yet (the caller loads, e.g. a link).
     """
 
     PANEL_PERIOD = 0.05
@@ -66,6 +68,7 @@ class Session:
         executor: Executor | None = None,
         count_messages: bool = False,
         cameras: Callable[[], Iterable[viser.CameraHandle]] | None = None,
+        defer_load: bool = False,
     ) -> None:
         self.target = target
         self.scene: viser.SceneApi = target.scene
@@ -102,7 +105,8 @@ class Session:
         self._build_views()
         self._timer: threading.Timer | None = None
         self._panels_due = self._plots_due = self._witness_due = False
-        self.load(self.config)
+        if not defer_load:
+            self.load(self.config)
 
     # ------------------------------------------------------------------ building
     @property
@@ -141,6 +145,7 @@ class Session:
             st.errors.clear()
             st.status = ""
             st.show_plots, st.separating_plane, st.gizmos = config.show_plots, config.separating_plane, config.gizmos
+            st.palette = config.palette or next(iter(PALETTES))
             a, b = config.shapes()
             st.shapes = {"A": a, "B": b}
             if config.motion is not None or config.preset is not None:
@@ -161,6 +166,70 @@ class Session:
                 self.set_dimension(config.dim)
                 self.refresh()
                 self.ready.set()
+
+    def load_untrusted(self, data: dict[str, Any]) -> None:
+        """Show a configuration from a link or an uploaded file (user input).
+
+        It is checked first (an error is shown, the tab keeps what it shows); a typed motion in
+        it is read and analysed in worker processes, as if typed in the motion editor.
+        """
+        try:
+            if set(data) == {"error"}:
+                raise ValueError(str(data["error"]))
+            config = SceneConfig.from_dict(data)
+        except ValueError as e:
+            with self.lock:
+                if not self.ready.is_set() and self.state.motion is None and not self.state.explanation:
+                    self.load(self.config)  # a tab opened on a bad link: the default, with the message
+                self.state.errors["config"] = str(e)
+                self.refresh()
+            return
+        motion, config.motion = config.motion, None
+        if motion is None:
+            self.load(config)
+            return
+        static = dataclasses.replace(config, preset=None)
+        self.load(static)
+        self.ready.clear()
+
+        def read() -> None:  # in a worker process, off the thread that called
+            try:
+                model = self.cache.read_typed(motion)
+            except MotionError as e:
+                self.motion_ctl.show_error(e)
+                self.ready.set()
+                return
+            self.motion_ctl.analyse_pending(model, t=config.t, event=config.event)
+
+        threading.Thread(target=read, name="read-config", daemon=True).start()
+
+    def snapshot(self) -> SceneConfig:
+        """What the tab shows, as a configuration (kept for a reload; the file to download)."""
+        with self.lock:
+            st = self.state
+            cfg = SceneConfig(
+                dim=st.dim,
+                A=st.shapes["A"],
+                B=st.shapes["B"],
+                preset=None,
+                show_plots=st.show_plots,
+                separating_plane=st.separating_plane,
+                gizmos=st.gizmos,
+                palette=st.palette if st.palette != next(iter(PALETTES)) else None,
+            )
+            model = st.motion
+            if model is not None:
+                if model.preset is not None:
+                    cfg.preset = model.preset
+                else:
+                    cfg.motion = model.texts()
+                if st.event is not None:
+                    cfg.event = st.event
+                elif st.t_exact is not None and st.t_text is not None:
+                    cfg.t = st.t_text
+                else:
+                    cfg.t = st.t
+            return cfg
 
     # ------------------------------------------------------------------ the one refresh
     def refresh(self, *, dragged: str | None = None, defer: bool = False) -> str | None:
@@ -216,6 +285,10 @@ class Session:
             st.explanation = st.witness = None
         self.markers.show_point(pic.point, pic.point_label, pic.normal)
         self.markers.show_plane(pic.plane, *(pic.matrices or (None, None)))
+
+    def pending(self) -> bool:
+        """True while a coalesced refresh (panel, witnesses, plot cursor) is due."""
+        return self._timer is not None
 
     def _schedule(self) -> None:
         if self._timer is None and (self._panels_due or self._plots_due or self._witness_due):

@@ -16,6 +16,9 @@ from typing import TYPE_CHECKING, Any
 
 from flint import fmpq
 
+from core.algebra.algebraic import RealAlgebraic
+from core.algebra.closedform import algebraic_from_quadratic
+from core.moving.expressions import parse_expression
 from core.shapes.limits import SERVER
 from core.shapes.numbers import format_rational, parse_number, to_float, to_fmpq
 
@@ -25,6 +28,8 @@ __all__ = [
     "AppState",
     "parse_vector",
     "format_number",
+    "read_time",
+    "time_float",
     "DEFAULT_PRESET",
 ]
 
@@ -90,6 +95,48 @@ def parse_vector(text: Any, count: int | tuple[int, ...], what: str) -> tuple[Nu
         except ValueError as e:
             raise ValueError(f"{what}: component {i}: {e}") from None
     return tuple(out)
+
+
+def read_time(text: str) -> fmpq | RealAlgebraic:
+    """An exact time from text: a number, a fraction, or an expression with sqrt of constants.
+
+    Parsed by the bounded expression parser (:mod:`core.moving.expressions`, the scene's limits);
+    the value must not depend on t.
+
+    Raises:
+        ValueError: unreadable, or not a constant.
+
+    Examples:
+        >>> read_time("2/3"), read_time("1e-3")
+        (2/3, 1/1000)
+        >>> read_time("(12-2*sqrt(2))/17").decimal(10)
+        '0.5395042868'
+        >>> read_time("t + 1")
+        Traceback (most recent call last):
+        ...
+        ValueError: t must be a number, not an expression in t
+    """
+    rf = parse_expression(text.strip(), limits=SERVER)
+    if rf.den.degree() > 0 or rf.num.p.degree() > 0 or rf.num.q.degree() > 0:
+        raise ValueError("t must be a number, not an expression in t")
+    a = rf.num.p[0] if rf.num.p.degree() == 0 else fmpq(0)
+    b = rf.num.q[0] if rf.num.q.degree() == 0 else fmpq(0)
+    if b == 0:
+        return fmpq(a)
+    return algebraic_from_quadratic(fmpq(a), fmpq(b), int(rf.num.d))
+
+
+def time_float(t: Any) -> float:
+    """A time as a float for drawing (+-inf beyond the float range).
+
+    Examples:
+        >>> time_float(fmpq(1, 4)), time_float(fmpq(10) ** 400)
+        (0.25, inf)
+    """
+    try:
+        return float(t)
+    except OverflowError:
+        return math.inf if t > 0 else -math.inf
 
 
 def format_number(v: Number, digits: int = 6) -> str:
@@ -227,8 +274,8 @@ class SceneConfig:
     """Name of a motion preset (``core.moving.presets``); None for a static scene."""
     motion: dict[str, Any] | None = None
     """Typed motion (expression strings per shape and the interval), overrides ``preset``."""
-    t: float | None = None
-    """Time to show (None: the motion's default)."""
+    t: float | str | None = None
+    """Time to show: a number, or exact text ("2/3", "(12-2*sqrt(2))/17"); None: the motion's default."""
     event: int | None = None
     """Show the k-th event (1-based) exactly instead of ``t``."""
     show_plots: bool = True
@@ -237,6 +284,8 @@ class SceneConfig:
     """Draw a separating plane when the shapes are separate."""
     gizmos: bool = True
     """Show the transform gizmos."""
+    palette: str | None = None
+    """Relation palette name (:data:`app.scene.shapes.PALETTES`; None: the default)."""
 
     def shapes(self) -> tuple[ShapeState, ShapeState]:
         """The static shapes, defaults filled in."""
@@ -256,7 +305,7 @@ class SceneConfig:
             >>> SceneConfig.from_dict({"dimension": 2})
             Traceback (most recent call last):
             ...
-            ValueError: config: unknown keys ['dimension']; allowed: A, B, dim, event, gizmos, motion, preset, separating_plane, show_plots, t
+            ValueError: config: unknown keys ['dimension']; allowed: A, B, dim, event, gizmos, motion, palette, preset, separating_plane, show_plots, t
         """
         if not isinstance(d, dict):
             raise ValueError("config: expected a JSON object")
@@ -280,18 +329,32 @@ class SceneConfig:
             raise ValueError("config: motion must be an object")
         cfg.motion = motion
         if d.get("t") is not None:
-            try:
-                t = float(d["t"])
-            except (TypeError, ValueError):
-                raise ValueError(f"config: t must be a number, got {d['t']!r}") from None
-            if not math.isfinite(t):
-                raise ValueError("config: t must be finite")
-            cfg.t = t
+            t = d["t"]
+            if isinstance(t, str):
+                try:
+                    read_time(t)
+                except ValueError as e:
+                    raise ValueError(f"config: t: {e}") from None
+                cfg.t = t
+            else:
+                try:
+                    t = float(t)
+                except (TypeError, ValueError):
+                    raise ValueError(f"config: t must be a number or exact text, got {d['t']!r}") from None
+                if not math.isfinite(t):
+                    raise ValueError("config: t must be finite")
+                cfg.t = t
         if d.get("event") is not None:
             ev = d["event"]
             if not isinstance(ev, int) or isinstance(ev, bool) or ev < 1:
                 raise ValueError(f"config: event must be a positive integer (1-based), got {ev!r}")
             cfg.event = ev
+        if d.get("palette") is not None:
+            from .shapes import PALETTES
+
+            if d["palette"] not in PALETTES:
+                raise ValueError(f"config: palette must be one of {', '.join(PALETTES)}")
+            cfg.palette = d["palette"]
         for key in ("show_plots", "separating_plane", "gizmos"):
             if key in d:
                 if not isinstance(d[key], bool):
@@ -324,6 +387,7 @@ class SceneConfig:
             "show_plots": self.show_plots,
             "separating_plane": self.separating_plane,
             "gizmos": self.gizmos,
+            "palette": self.palette,
         }
 
 

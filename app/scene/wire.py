@@ -11,7 +11,8 @@ move, they fall back to the public setters: slower, never wrong.
 This is the only module of the scene that touches viser's private attributes: also
 :func:`force_pose` (a node re-added under a name the browser has seen keeps the browser's old
 pose unless the new one is sent explicitly, even when it equals the new handle's default) and
-:class:`MessageCounter` (the benchmark's count of queued websocket messages).
+:class:`MessageCounter` (the benchmark's count of queued websocket messages) and
+:func:`handshake_path` (the page path a tab connected from: its tab address).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["set_uplot_data", "set_position", "set_wxyz", "force_pose", "MessageCounter"]
+__all__ = ["set_uplot_data", "set_position", "set_wxyz", "force_pose", "MessageCounter", "handshake_path"]
 
 
 def set_uplot_data(handle: Any, data: Sequence[np.ndarray]) -> None:
@@ -99,3 +100,16 @@ class MessageCounter:
             orig(message)
 
         iface.queue_message = counting
+
+
+def handshake_path(server: Any, client: Any) -> str | None:
+    """The path of the websocket handshake of ``client`` (the page's path, e.g. ``/s/<tab id>``).
+
+    viser keeps each client's ``websockets`` connection, whose ``request`` is the handshake;
+    None if that is not available (an older or newer viser: tabs then open the default).
+    """
+    try:
+        connection = server._websock_server._live_connections[client.client_id]
+        return str(connection.request.path)
+    except (AttributeError, KeyError, TypeError):
+        return None
