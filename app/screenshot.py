@@ -159,8 +159,11 @@ class HeadlessScene:
         return f"http://127.0.0.1:{self.scene.port}/?fixedDpr=1&hideViserLogo"
 
     def goto(self, path: str, page: Any = None) -> Any:
-        """Open ``path`` of the scene (``/``, a ``/c/<config>/`` link, a ``/s/<tab>/`` address) in
-        ``page`` (default: the tab) and return the new tab's session once it shows its state."""
+        """Open ``path`` of the scene in ``page`` (default: the tab); return the new tab's session.
+
+        ``path`` is ``/``, a ``/c/<config>/`` link or a ``/s/<tab>/`` address; the tab's session
+        is returned once the browser shows its state.
+        """
         page = page or self.page
         before = max(self.scene.sessions, default=-1)
         page.goto(f"http://127.0.0.1:{self.scene.port}{path}{'&' if '?' in path else '?'}fixedDpr=1&hideViserLogo")

@@ -136,7 +136,7 @@ def test_busy_scene_port_is_an_error_not_a_move(tmp_path):
         busy.listen()
         r = subprocess.run(
             [sys.executable, "-m", "app", "serve", "--port", str(scene_port), "--api-port", str(api_port), "--preset", "none"],
-            cwd=ROOT, capture_output=True, text=True, timeout=60, env={**os.environ, "PYTHONPATH": str(ROOT)},
+            cwd=ROOT, capture_output=True, text=True, timeout=60, env={**os.environ, "PYTHONPATH": str(ROOT)}, check=False,
         )
     assert r.returncode == 1
     assert f"the scene's port {scene_port} on 127.0.0.1 is already in use" in r.stderr

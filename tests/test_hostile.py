@@ -304,8 +304,8 @@ def test_scene_websocket_origin_rule(server):
     assert handshake(p, f"http://localhost:{p + 1}") == 403  # another local service's page
     assert handshake(p, "https://example.org:8443") == 403
     assert handshake(p, "null") == 403
-    page = httpx.get(f"http://127.0.0.1:{p}/", timeout=10)
-    assert page.status_code == 200  # plain HTTP (the page itself) is unaffected
+    page = httpx.get(f"http://127.0.0.1:{p}/", timeout=10, follow_redirects=True)
+    assert page.status_code == 200  # plain HTTP (the page itself, at the tab's own address) is unaffected
 
 
 # --- lifecycle -----------------------------------------------------------------------------------------
