@@ -174,6 +174,10 @@ class HeadlessScene:
             self.wait_settled()
         return session
 
+    def server_clients(self) -> list[Any]:
+        """The connected tabs' ``viser.ClientHandle`` objects."""
+        return list(self.scene.server.get_clients().values())
+
     # -------------------------------------------------------------- what is shown
     def show(self, config: SceneConfig | None = None, *, t: float | str | None = None, event: int | None = None) -> None:
         """Show ``config`` in the same tab (no reload), then t or an event of its motion; wait for it."""

@@ -244,3 +244,26 @@ def test_shared_presenter_scene_is_seen_by_every_tab(tmp_path):
             browser.close()
     finally:
         scene.stop()
+
+
+def test_presenter_mode_dimension_switch_and_every_camera_browser():
+    """Defects 1 and 5 in presenter mode (see test_browser_scene.py for the helpers)."""
+    from test_browser_scene import assert_pose, choose, until
+
+    from app.screenshot import HeadlessScene
+
+    cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.3})
+    with HeadlessScene(cfg, width=1100, height=800, timeout=90, shared=True) as h:
+        second = h.page.context.new_page()
+        h.goto("/", page=second)
+        s = h.scene.shared
+        until(lambda: len(h.server_clients()) == 2, what="two tabs")
+        choose(h.page, "Preset", "circles-crossing")
+        until(lambda: s.state.dim == 2 and s.state.analysis is not None, what="2D preset")
+        h.wait_settled()
+        a, _ = s.state.motion.shapes_at(s.state.t)
+        assert_pose(h, "/shapes/A", (a.center[0], a.center[1], 0.0), scale=(1, 1, 1))
+        for cam in (c.camera for c in h.server_clients()):  # every tab looks down the z axis
+            until(lambda cam=cam: np.allclose(cam.up_direction, (0, 1, 0), atol=1e-6), what="camera up")
+            until(lambda cam=cam: abs(cam.position[0] - cam.look_at[0]) < 1e-6 and cam.position[2] > 1, what="from above")
+        second.close()

@@ -143,8 +143,8 @@ def format_number(v: Number, digits: int = 6) -> str:
     """Short text of a number: exact "p/q" for small rationals, else a rounded decimal.
 
     Examples:
-        >>> format_number(fmpq(3, 7)), format_number(0.25), format_number(1 / 3)
-        ('3/7', '0.25', '0.333333')
+        >>> format_number(fmpq(3, 7)), format_number(0.25), format_number(1 / 3), format_number(-0.0)
+        ('3/7', '0.25', '0.333333', '0')
     """
     if isinstance(v, fmpq):
         if len(str(v)) <= 24:
@@ -153,7 +153,7 @@ def format_number(v: Number, digits: int = 6) -> str:
         if not math.isfinite(f) or (f == 0 and v != 0):  # beyond the float range: exact digits
             return format_rational(v, digits)
         v = f
-    return f"{float(v):.{digits}g}"
+    return f"{float(v) + 0.0:.{digits}g}"  # + 0.0: a float -0.0 (from a motion) shows as 0
 
 
 @dataclass
