@@ -234,13 +234,10 @@ class HeadlessScene:
         self.page.wait_for_function(
             _DRAWN_JS, arg=list(self.expected()), timeout=max(1.0, deadline - time.monotonic()) * 1000
         )
-        # a few more frames so the final state is on the canvas; viser renders on demand, so
-        # when nothing changes no frame may come: that is fine (the state is already applied)
-        f0 = self.frame()
-        try:
-            self.page.wait_for_function(f"() => ({_FRAME_JS})() >= {f0 + frames}", timeout=1000)
-        except Exception:  # noqa: BLE001 - playwright TimeoutError: scene idle, already drawn
-            pass
+        # two animation frames: the browser has rendered and painted the state just applied
+        # (viser renders on demand: a frame counter may not move when nothing changes)
+        for _ in range(frames):
+            self.page.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")
 
     def canvas_pixels(self, every: int = 6) -> Any:
         """RGBA samples of the WebGL canvas on a grid of every ``every``-th pixel: (N, 4) uint8.

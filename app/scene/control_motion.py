@@ -182,7 +182,9 @@ class MotionControl:
             error = s.timeline_ctl.apply_text(t_text)
             if error is not None:
                 st.errors["t"] = error
-        s.refresh()
+        # the picture at once; the panel (event list, sign table, plots: the heavy part for the
+        # browser) follows within the panel period, so the certified shapes are drawn first
+        s.refresh(defer=True)
         s.frame_camera()
         s.ready.set()
 
