@@ -543,3 +543,17 @@ def test_t_box_certifies_the_exact_fraction_typed(server, tmp_path):
     assert s.state.relation == "overlap" and colours(s) == {RED}
     assert s.set_t(2 / 3) == "overlap"
     s.close()
+
+
+def test_palette_legend_and_plain_words(server):
+    """The colour-blind safe palette recolours shapes, badge, legend and bar; the relation is also
+    text on each shape; "What am I seeing?" says which theorem decided."""
+    s = Session(server, unit_spheres(3, "2"))
+    assert {v.label.text for v in s.views.values()} == {"A · tangent", "B · tangent"}
+    assert "#ffbf00" in s.ui.legend.content
+    s.ui.view.palette.value = "colour-blind safe"
+    assert colours(s) == {(0xE6, 0x9F, 0x00)}  # Okabe-Ito orange for tangent
+    assert "#e69f00" in s.ui.legend.content and "#e69f00" in s.ui.readout.content
+    assert "Theorem 24.1" in s.ui.words.content and "Var = 2" in s.ui.words.content
+    assert s.set_shape("B", center="3, 0, 0") == "separate" and colours(s) == {(0x00, 0x72, 0xB2)}
+    assert "apart" in s.ui.words.content

@@ -91,7 +91,10 @@ class Gui:
     """Every handle of the panel."""
 
     title: viser.GuiMarkdownHandle
+    legend: viser.GuiHtmlHandle
     readout: viser.GuiMarkdownHandle
+    words: viser.GuiMarkdownHandle
+    """"What am I seeing?": the decision in plain words."""
     timeline: TimelineGui
     plots: PlotsGui
     motion: MotionGui
@@ -104,7 +107,10 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
     """Lay out the panel of one tab (or of the shared scene) and return its handles."""
     gui.configure_theme(control_width="large", show_share_button=False)
     title = gui.add_markdown("**Ellipse / ellipsoid interference** (certified)")
+    legend = gui.add_html("")
     readout = gui.add_markdown("")
+    with gui.add_folder("What am I seeing?", expand_by_default=False):
+        words = gui.add_markdown("")
     with gui.add_folder("Timeline", visible=False) as tl_folder:
         timeline = TimelineGui(
             folder=tl_folder,
@@ -159,4 +165,4 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             plane=gui.add_checkbox("Separating plane (when separate)", plane),
             palette=gui.add_dropdown("Palette", list(PALETTES), initial_value=next(iter(PALETTES))),
         )
-    return Gui(title, readout, timeline, plots, motion, shapes, sign_table, view)
+    return Gui(title, legend, readout, words, timeline, plots, motion, shapes, sign_table, view)

@@ -19,9 +19,11 @@ import viser
 
 from .analysis import AnalysisView
 from .gui import DIM_LABELS, STATIC, Gui
-from .panels import intervals_bar_html, readout_markdown, sign_table_markdown
+from .panels import intervals_bar_html, legend_html, readout_markdown, sign_table_markdown
 from .plots import PlotsView
+from .shapes import PALETTES
 from .state import AppState, format_number
+from .words import plain_words
 
 __all__ = ["PanelView", "Syncing", "error_html"]
 
@@ -74,6 +76,8 @@ class PanelView:
         self._last: dict[int, str] = {}
         self._motion_shown: object = None
         self._analysis_shown: object = None
+        self._palette_shown: str | None = None
+        self.palette: dict[str, str] = next(iter(PALETTES.values()))
 
     # ------------------------------------------------------------------ primitives
     def set_value(self, handle: Any, value: Any) -> None:
@@ -111,6 +115,11 @@ class PanelView:
         g = self.gui
         self.set_value(g.view.dimension, DIM_LABELS[state.dim])
         self.set_value(g.view.palette, state.palette)
+        self.palette = PALETTES.get(state.palette, next(iter(PALETTES.values())))
+        if self._palette_shown != state.palette:  # colours of the analysis panels too
+            self._palette_shown = state.palette
+            self._analysis_shown = None
+            self.set_text(g.legend, legend_html(self.palette))
         self._show_readout(state)
         self._show_shapes(state)
         self._show_motion(state)
@@ -121,12 +130,14 @@ class PanelView:
     def _show_readout(self, state: AppState) -> None:
         g = self.gui
         model, an = state.motion, state.analysis
+        expl: dict | None = None
         if model is None:
             if state.explanation is None:
                 text = readout_markdown(None, error=state.errors.get("shapes", "no shapes"))
             else:
                 w = state.witness
-                text = readout_markdown(state.explanation, where="(static shapes)", witness=w and w.readout())
+                expl = state.explanation
+                text = readout_markdown(expl, where="(static shapes)", witness=w and w.readout(), palette=self.palette)
         elif an is None:
             text = readout_markdown(None, error="analysing the motion…" if state.analysing else state.status or "no analysis")
         else:
@@ -141,8 +152,9 @@ class PanelView:
             expl = an.readout_at(model, at, state.t, event)
             if expl is None:
                 expl = {"n": an.n, "relation": state.relation, "certified_by": "exact", "coefficients": [], "var": 0, "rule_text": ""}
-            text = readout_markdown(expl, where=where)
+            text = readout_markdown(expl, where=where, palette=self.palette)
         self.set_text(g.readout, text)
+        self.set_text(g.words, plain_words(expl))
 
     def _show_shapes(self, state: AppState) -> None:
         for name, sg in self.gui.shapes.items():
@@ -192,7 +204,7 @@ class PanelView:
         else:
             self.set_value(tg.t_box, repr(t) if len(repr(t)) < 12 else f"{t:.6g}")
         self.set_error(tg.t_error, state.errors.get("t"))
-        self.set_text(tg.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t))
+        self.set_text(tg.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t, palette=self.palette))
 
     def _rebuild_analysis(self, an: AnalysisView | None) -> None:
         """What belongs to one analysis: slider range, event list and buttons, sign table."""
@@ -218,7 +230,7 @@ class PanelView:
             btn.on_click(lambda _e, k=ev.k: self._on_event(k))
             tg.event_buttons.append(btn)
         self.set_text(tg.events_md, "<br>".join(lines) if lines else "No events: one relation on all of I.")
-        self.set_text(self.gui.sign_table, sign_table_markdown(an.sign_rows(), an.n))
+        self.set_text(self.gui.sign_table, sign_table_markdown(an.sign_rows(), an.n, self.palette))
 
     def show_plots(self, state: AppState) -> None:
         """The plots of the analysis with the cursor at t (removed when off or no analysis)."""

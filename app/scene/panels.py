@@ -8,7 +8,7 @@ text changed. No maths here.
 from __future__ import annotations
 
 import html
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from .shapes import RELATION_HEX
@@ -21,6 +21,7 @@ __all__ = [
     "sign_table_markdown",
     "degrees_text",
     "analysed_text",
+    "legend_html",
 ]
 
 _SUB = {"s0": "s<sub>0</sub>", "s1": "s<sub>1</sub>", "s10": "s<sub>1,0</sub>"}
@@ -36,11 +37,11 @@ def sign_char(s: int | None) -> str:
     return {1: "+", -1: "-", 0: "0"}.get(s, "?") if s is not None else "?"
 
 
-def relation_badge(relation: str | None) -> str:
+def relation_badge(relation: str | None, palette: Mapping[str, str] = RELATION_HEX) -> str:
     """HTML badge of a relation in its colour (grey "unknown" for None)."""
     if relation is None:
         return '<span style="background:#999;color:#fff;padding:1px 6px;border-radius:4px">unknown</span>'
-    color = RELATION_HEX[relation]
+    color = palette[relation]
     fg = "#000" if relation == "tangent" else "#fff"
     return (
         f'<span style="background:{color};color:{fg};padding:1px 6px;border-radius:4px;'
@@ -64,7 +65,12 @@ def _fmt(q: dict[str, Any] | None) -> str:
 
 
 def readout_markdown(
-    expl: dict[str, Any] | None, *, where: str = "", error: str | None = None, witness: str | None = None
+    expl: dict[str, Any] | None,
+    *,
+    where: str = "",
+    error: str | None = None,
+    witness: str | None = None,
+    palette: Mapping[str, str] = RELATION_HEX,
 ) -> str:
     """Markdown readout: relation, certification, P(T) coefficients, signs, Var, rule.
 
@@ -74,6 +80,7 @@ def readout_markdown(
         error: message shown instead when the shapes are invalid.
         witness: Markdown of the witness (margin, sentence: ``WitnessView.readout()`` of
             :mod:`app.scene.contact`), shown under the relation.
+        palette: relation -> colour.
 
     Examples:
         >>> print(readout_markdown(None, error="A.semi_axes: must be positive"))
@@ -84,7 +91,7 @@ def readout_markdown(
     if expl is None:
         return f"**Relation** {relation_badge(None)}\n\n⚠ {html.escape(error or 'no shapes')}"
     n = expl["n"]
-    lines = [f"**Relation** {relation_badge(expl['relation'])} {where}".rstrip()]
+    lines = [f"**Relation** {relation_badge(expl['relation'], palette)} {where}".rstrip()]
     if witness:
         lines += ["", html.escape(witness, quote=False)]
     cert = "float filter (proven error bound)" if expl["certified_by"] == "float" else "exact arithmetic"
@@ -122,6 +129,7 @@ def intervals_bar_html(
     cursor: float | None,
     *,
     width: int = 300,
+    palette: Mapping[str, str] = RELATION_HEX,
 ) -> str:
     """SVG bar along I = [lo, hi]: coloured segments per relation, ticks at events, a cursor.
 
@@ -132,6 +140,7 @@ def intervals_bar_html(
         events: (t, relation) of each event.
         cursor: current t (None: no cursor).
         width: drawing width in px (the SVG scales to the panel).
+        palette: relation -> colour.
     """
     span = (hi - lo) or 1.0
     x = lambda t: 6 + (width - 12) * (min(max(t, lo), hi) - lo) / span
@@ -142,7 +151,7 @@ def intervals_bar_html(
     for a, b, rel in segments:
         parts.append(
             f'<rect x="{x(a):.1f}" y="6" width="{max(x(b) - x(a), 0.5):.1f}" height="14" '
-            f'fill="{RELATION_HEX.get(rel, "#999")}"/>'
+            f'fill="{palette.get(rel, "#999")}"/>'
         )
     last_label = {0: -1e9, 1: -1e9}
     for k, (t, rel) in enumerate(events, start=1):
@@ -151,7 +160,7 @@ def intervals_bar_html(
         last_label[row] = xe
         parts.append(
             f'<line x1="{xe:.1f}" y1="2" x2="{xe:.1f}" y2="{24 + 10 * row}" stroke="#000" stroke-width="1.5"/>'
-            f'<circle cx="{xe:.1f}" cy="13" r="3.5" fill="{RELATION_HEX.get(rel, "#999")}" stroke="#000"/>'
+            f'<circle cx="{xe:.1f}" cy="13" r="3.5" fill="{palette.get(rel, "#999")}" stroke="#000"/>'
             f'<text x="{xe:.1f}" y="{34 + 10 * row}" text-anchor="middle">α{k}</text>'
         )
     parts.append(f'<text x="6" y="53">{lo:.4g}</text>')
@@ -192,12 +201,13 @@ def degrees_text(degrees: dict[str, Any]) -> str:
     )
 
 
-def sign_table_markdown(rows: Sequence[dict[str, Any]], degree: int) -> str:
+def sign_table_markdown(rows: Sequence[dict[str, Any]], degree: int, palette: Mapping[str, str] = RELATION_HEX) -> str:
     """The paper's table: one row per event/interval sample, signs of a_i, s0, s1, s1,0, Var.
 
     Args:
         rows: dicts with "where" (label), "signs" (dict name -> sign), "var", "relation".
         degree: n (3 or 4): which a_i columns to show.
+        palette: relation -> colour.
     """
     names = [f"a{i}" for i in range(degree, -1, -1)] + ["s0", "s1", "s10"]
     head = ["t"] + [f"a<sub>{n[1:]}</sub>" if n[0] == "a" else _SUB[n] for n in names] + ["Var", "relation"]
@@ -207,7 +217,7 @@ def sign_table_markdown(rows: Sequence[dict[str, Any]], degree: int) -> str:
         cells = [r["where"]] + [sign_char(signs.get(n)) if n in signs else "" for n in names]
         var = r.get("var")
         rel = r.get("relation") or ""
-        color = RELATION_HEX.get(rel, "#999")
+        color = palette.get(rel, "#999")
         cells += ["" if var is None else str(var), f'<span style="color:{color}">■</span> {rel}']
         out.append("| " + " | ".join(cells) + " |")
     return "\n".join(out)
@@ -224,3 +234,23 @@ def analysed_text(seconds: float, events: int, intervals: int, degrees: dict[str
         f"Analysed in {seconds:.2f} s: {events} event{'s' * (events != 1)}, "
         f"{intervals} interval{'s' * (intervals != 1)}." + degrees_text(degrees)
     )
+
+
+def legend_html(palette: Mapping[str, str] = RELATION_HEX) -> str:
+    """The colour key: each relation's colour, its name and how the 3D view marks it besides colour.
+
+    Examples:
+        >>> "separate" in legend_html() and "#ffbf00" in legend_html()
+        True
+    """
+    marks = {
+        "separate": "apart (a plane fits between)",
+        "tangent": "touching (opaque, contact point)",
+        "overlap": "interiors meet (point inside both)",
+    }
+    items = "".join(
+        f'<span style="white-space:nowrap;margin-right:10px"><span style="display:inline-block;width:11px;height:11px;'
+        f'background:{palette[rel]};border:1px solid #333;vertical-align:-1px"></span> <b>{rel}</b>: {marks[rel]}</span> '
+        for rel in ("separate", "tangent", "overlap")
+    )
+    return f'<div style="font-size:12px;line-height:1.6">{items}</div>'
