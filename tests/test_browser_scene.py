@@ -336,3 +336,80 @@ def test_preset_appears_from_the_warm_pool(hs):
     hs.wait_settled()
     assert time.perf_counter() - t0 < 30  # generous: the speed itself is a benchmark
     assert math.isclose(s.state.analysis.events[0].t, 4.0)
+
+
+# ---------------------------------------------------------------------------- share and keep
+def test_reload_keeps_the_tab_and_a_link_opens_the_same_view(hs):
+    """A reload reopens the tab as it was (its own address /s/<id>/); "Link to this view" opens a
+    new tab on the same view."""
+    s = open_on(hs, {"preset": None, "A": {"center": [0, 0, 0], "semi_axes": [1, 1, 1]},
+                     "B": {"center": [3, 0, 0], "semi_axes": [1, 1, 1]}})
+    page = hs.page
+    assert "/s/" in page.url
+    open_folder(page, "Shape B")
+    type_into(page, "3, 0, 0", "2, 0, 0")
+    until(lambda: s.state.relation == "tangent", what="tangent")
+    before = max(hs.scene.sessions)
+    page.reload()
+    s2 = hs.scene.wait_for_session(60, after=before)
+    hs.session = s2
+    hs.wait_settled()
+    assert s2 is not s and s2.state.relation == "tangent" and str(s2.state.shapes["B"].center[0]) == "2"
+    assert_pose(hs, "/shapes/B", (2, 0, 0))
+    open_folder(page, "Share and keep")
+    page.get_by_role("button", name="Link to this view").click()
+    link = page.locator("a", has_text="Open this view in a new tab")
+    link.wait_for()
+    href = link.get_attribute("href")
+    assert href.startswith("/c/")
+    s3 = hs.goto(href)
+    assert s3.state.relation == "tangent" and str(s3.state.shapes["B"].center[0]) == "2"
+
+
+def test_configuration_and_analysis_files(hs, tmp_path):
+    """Download the configuration, open it again; download the exact analysis (JSON, CSV)."""
+    import json
+
+    s = open_on(hs, {"preset": "example-29", "t": "2/3"})
+    page = hs.page
+    assert s.state.t_text == "2/3"
+    open_folder(page, "Share and keep")
+    with page.expect_download() as d:
+        page.get_by_role("button", name="Download configuration (JSON)").click()
+    data = json.loads(open(d.value.path()).read())
+    assert data["preset"] == "example-29" and data["t"] == "2/3"
+    with page.expect_download() as d:
+        page.get_by_role("button", name="Download analysis (JSON)").click()
+    an = json.loads(open(d.value.path()).read())
+    assert [e["closed_form"] for e in an["events"]] == ["(12 - 2*sqrt(2))/17", "(12 + 2*sqrt(2))/17"]
+    assert an["polynomials"]["degrees"]["s0"] == -1  # Example 29: s0 vanishes identically
+    with page.expect_download() as d:
+        page.get_by_role("button", name="Download analysis (CSV)").click()
+    rows = open(d.value.path()).read().splitlines()
+    assert rows[0].startswith("table,index,t,exact") and rows[1].startswith("event,1,0.5395042867796358766")
+    # open a configuration file: unit circles 2 apart (tangent)
+    cfg = tmp_path / "circles.json"
+    cfg.write_text(json.dumps({"dim": 2, "preset": None, "A": {"center": [0, 0], "semi_axes": [1, 1]},
+                               "B": {"center": [2, 0], "semi_axes": [1, 1]}}))
+    page.locator("input[type=file]").set_input_files(str(cfg))
+    until(lambda: s.state.dim == 2 and s.state.relation == "tangent", what="uploaded configuration")
+    hs.wait_settled()
+    assert_pose(hs, "/shapes/B", (2, 0, 0.01))
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"dim": 4}')
+    page.locator("input[type=file]").set_input_files(str(bad))
+    text_shown(page, "config: dim must be 2 or 3")
+
+
+def test_exact_event_forms_and_copy_button(hs):
+    """Each event's exact form (closed form, or minimal polynomial and interval) has a copy button."""
+    hs.page.context.grant_permissions(["clipboard-read", "clipboard-write"])
+    open_on(hs, {"preset": "example-29", "t": 0.3})
+    text_shown(hs.page, "α1 = (12 − 2√2)/17")
+    hs.page.locator("button[data-copy]").first.click()
+    hs.page.wait_for_function("() => document.querySelector('button[data-copy]').textContent === 'copied'")
+    assert hs.page.evaluate("() => navigator.clipboard.readText()") == "(12 - 2*sqrt(2))/17"
+    open_on(hs, {"preset": "example-30", "t": 0.3})  # events of degree 166: polynomial and interval
+    text_shown(hs.page, "(root of a degree-166 polynomial)")
+    copied = hs.page.locator("button[data-copy]").first.get_attribute("data-copy")
+    assert copied.startswith("root of ") and " in (" in copied

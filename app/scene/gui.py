@@ -17,7 +17,7 @@ import viser
 
 from .shapes import PALETTES
 
-__all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "build_gui", "STATIC", "DIM_LABELS"]
+__all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "ShareGui", "build_gui", "STATIC", "DIM_LABELS"]
 
 STATIC = "(static shapes)"
 """Preset dropdown entry for no motion."""
@@ -37,7 +37,8 @@ class TimelineGui:
     t_error: viser.GuiMarkdownHandle
     play: viser.GuiCheckboxHandle
     speed: viser.GuiSliderHandle
-    events_md: viser.GuiMarkdownHandle
+    events_md: viser.GuiHtmlHandle
+    """The exact events (closed forms, copy buttons)."""
     events_folder: viser.GuiFolderHandle
     event_buttons: list[viser.GuiButtonHandle] = field(default_factory=list)
 
@@ -87,6 +88,21 @@ class ViewGui:
 
 
 @dataclass(repr=False)
+class ShareGui:
+    """Share and keep: a link to this view, the configuration as a JSON file (download, open)."""
+
+    folder: viser.GuiFolderHandle
+    link: viser.GuiButtonHandle
+    link_html: viser.GuiHtmlHandle
+    download: viser.GuiButtonHandle
+    upload: viser.GuiUploadButtonHandle
+    error: viser.GuiMarkdownHandle
+    analysis_json: viser.GuiButtonHandle
+    """The analysis of the motion shown, exact (JSON)."""
+    analysis_csv: viser.GuiButtonHandle
+
+
+@dataclass(repr=False)
 class Gui:
     """Every handle of the panel."""
 
@@ -101,6 +117,7 @@ class Gui:
     shapes: dict[str, ShapeGui]
     sign_table: viser.GuiMarkdownHandle
     view: ViewGui
+    share: ShareGui
 
 
 def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bool, gizmos: bool, plane: bool) -> Gui:
@@ -120,7 +137,7 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             t_error=gui.add_markdown("", visible=False),
             play=gui.add_checkbox("Play", False),
             speed=gui.add_slider("Speed (I per 10 s)", min=0.1, max=5.0, step=0.1, initial_value=1.0),
-            events_md=gui.add_markdown(""),
+            events_md=gui.add_html(""),
             events_folder=gui.add_folder("Events (jump to)"),
         )
     with gui.add_folder("Plots", visible=False) as pl_folder:
@@ -165,4 +182,15 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             plane=gui.add_checkbox("Separating plane (when separate)", plane),
             palette=gui.add_dropdown("Palette", list(PALETTES), initial_value=next(iter(PALETTES))),
         )
-    return Gui(title, legend, readout, words, timeline, plots, motion, shapes, sign_table, view)
+    with gui.add_folder("Share and keep", expand_by_default=False) as sh_folder:
+        share = ShareGui(
+            folder=sh_folder,
+            link=gui.add_button("Link to this view"),
+            link_html=gui.add_html("", visible=False),
+            download=gui.add_button("Download configuration (JSON)"),
+            upload=gui.add_upload_button("Open a configuration (JSON)", mime_type="application/json"),
+            error=gui.add_markdown("", visible=False),
+            analysis_json=gui.add_button("Download analysis (JSON)", visible=False),
+            analysis_csv=gui.add_button("Download analysis (CSV)", visible=False),
+        )
+    return Gui(title, legend, readout, words, timeline, plots, motion, shapes, sign_table, view, share)

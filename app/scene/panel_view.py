@@ -19,7 +19,13 @@ import viser
 
 from .analysis import AnalysisView
 from .gui import DIM_LABELS, STATIC, Gui
-from .panels import intervals_bar_html, legend_html, readout_markdown, sign_table_markdown
+from .panels import (
+    events_html,
+    intervals_bar_html,
+    legend_html,
+    readout_markdown,
+    sign_table_markdown,
+)
 from .plots import PlotsView
 from .shapes import PALETTES
 from .state import AppState, format_number
@@ -121,6 +127,9 @@ class PanelView:
             self._analysis_shown = None
             self.set_text(g.legend, legend_html(self.palette))
         self._show_readout(state)
+        self.set_error(g.share.error, state.errors.get("config"))
+        self.set_visible(g.share.analysis_json, state.analysis is not None)
+        self.set_visible(g.share.analysis_csv, state.analysis is not None)
         self._show_shapes(state)
         self._show_motion(state)
         self._show_timeline(state)
@@ -222,14 +231,12 @@ class PanelView:
         with self._syncing():
             tg.slider.min, tg.slider.max = lo, hi
             tg.slider.step = (hi - lo) / 1000 or 1e-3
-        lines = []
         for ev in an.events:
-            lines.append(f"α{ev.k} = {html.escape(ev.exact)} ({ev.relation}, {ev.kind})")
             with tg.events_folder:
                 btn = self._api.add_button(f"Jump to α{ev.k} ≈ {ev.t:.6f}")
             btn.on_click(lambda _e, k=ev.k: self._on_event(k))
             tg.event_buttons.append(btn)
-        self.set_text(tg.events_md, "<br>".join(lines) if lines else "No events: one relation on all of I.")
+        self.set_text(tg.events_md, events_html(an.events, self.palette))
         self.set_text(self.gui.sign_table, sign_table_markdown(an.sign_rows(), an.n, self.palette))
 
     def show_plots(self, state: AppState) -> None:

@@ -22,6 +22,8 @@ __all__ = [
     "degrees_text",
     "analysed_text",
     "legend_html",
+    "copy_button",
+    "events_html",
 ]
 
 _SUB = {"s0": "s<sub>0</sub>", "s1": "s<sub>1</sub>", "s10": "s<sub>1,0</sub>"}
@@ -254,3 +256,54 @@ def legend_html(palette: Mapping[str, str] = RELATION_HEX) -> str:
         for rel in ("separate", "tangent", "overlap")
     )
     return f'<div style="font-size:12px;line-height:1.6">{items}</div>'
+
+
+_COPY_JS = (
+    "(function(b){const t=b.dataset.url?new URL(b.dataset.copy,location.href).href:b.dataset.copy;"
+    "const done=()=>{b.textContent='copied'};"
+    "if(navigator.clipboard&&window.isSecureContext){navigator.clipboard.writeText(t).then(done,done)}"
+    "else{const a=document.createElement('textarea');a.value=t;document.body.appendChild(a);a.select();"
+    "document.execCommand('copy');a.remove();done()}})(this)"
+)
+
+
+def copy_button(text: str, label: str = "copy", *, url: bool = False) -> str:
+    """A small HTML button that copies ``text`` to the clipboard (for ``add_html``; the text is escaped).
+
+    With ``url``, ``text`` is a path and the absolute address (the page's origin) is copied.
+
+    Examples:
+        >>> 'data-copy="(12 - 2*sqrt(2))/17"' in copy_button("(12 - 2*sqrt(2))/17")
+        True
+    """
+    mark = ' data-url="1"' if url else ""
+    return (
+        f'<button type="button" data-copy="{html.escape(text, quote=True)}"{mark} onclick="{_COPY_JS}" '
+        'style="font-size:11px;padding:0 5px;margin-left:4px;cursor:pointer">'
+        f"{html.escape(label)}</button>"
+    )
+
+
+def events_html(events: Sequence[Any], palette: Mapping[str, str] = RELATION_HEX) -> str:
+    """The event list: each alpha_k exactly, its relation and kind, a button copying its exact form.
+
+    The exact form is the closed form when the defining factor has degree <= 2, else the minimal
+    polynomial with the isolating interval.
+
+    Args:
+        events: :class:`app.scene.analysis.EventView` objects.
+        palette: relation -> colour.
+    """
+    if not events:
+        return "No events: one relation on all of I."
+    rows = []
+    for ev in events:
+        swatch = f'<span style="color:{palette.get(ev.relation, "#999")}">■</span>'
+        exact = html.escape(ev.exact)
+        if not ev.closed:
+            exact += f' <span style="color:#666">(root of a degree-{ev.event.time.poly.degree()} polynomial)</span>'
+        rows.append(
+            f'<div style="margin:2px 0">α{ev.k} = {exact} {swatch} {ev.relation}, {ev.kind}'
+            f"{copy_button(ev.definition)}</div>"
+        )
+    return '<div style="font-size:13px">' + "".join(rows) + "</div>"

@@ -30,6 +30,7 @@ from .analysis import AnalysisCache
 from .camera import Framing, extent_of, frame_cameras
 from .control_motion import MotionControl
 from .control_shapes import ShapeControl
+from .control_share import ShareControl
 from .control_timeline import TimelineControl
 from .gui import build_gui
 from .markers import WitnessMarkers
@@ -102,6 +103,7 @@ class Session:
         self.views: dict[str, EllipsoidView] = {}
         self.shapes_ctl = ShapeControl(self)
         self.motion_ctl = MotionControl(self)
+        self.share_ctl = ShareControl(self)
         self._build_views()
         self._timer: threading.Timer | None = None
         self._panels_due = self._plots_due = self._witness_due = False
