@@ -413,3 +413,38 @@ def test_exact_event_forms_and_copy_button(hs):
     text_shown(hs.page, "(root of a degree-166 polynomial)")
     copied = hs.page.locator("button[data-copy]").first.get_attribute("data-copy")
     assert copied.startswith("root of ") and " in (" in copied
+
+
+# ---------------------------------------------------------------------------- keyboard and camera
+def test_keyboard_play_step_and_events(hs):
+    """Space plays/pauses, N / P jump between events, the arrows step t; F frames."""
+    s = open_on(hs, {"preset": "example-29", "t": 0.3})
+    page = hs.page
+    page.mouse.click(300, 300)  # focus the scene (keys typed in a field are text, not commands)
+    page.keyboard.press("n")
+    until(lambda: s.state.event == 1, what="next event")
+    hs.wait_settled()
+    assert s.state.relation == "tangent" and hs.mesh_color("A") == HEX["tangent"]
+    page.keyboard.press("n")
+    until(lambda: s.state.event == 2, what="second event")
+    page.keyboard.press("p")
+    until(lambda: s.state.event == 1, what="back to the first")
+    page.keyboard.press("ArrowRight")
+    until(lambda: s.state.event is None and s.state.relation == "overlap", what="a step past alpha_1")
+    page.keyboard.press(" ")
+    until(lambda: s.ui.timeline.play.value, what="playing")
+    page.keyboard.press(" ")
+    until(lambda: not s.ui.timeline.play.value, what="paused")
+
+
+def test_camera_follows_the_shapes(hs):
+    """With "Camera follows the shapes", the camera looks at the shapes as t moves."""
+    s = open_on(hs, {"preset": "example-29", "t": 0.1})
+    cam = hs.server_clients()[-1].camera
+    page = hs.page
+    page.get_by_text("View", exact=True).click()
+    page.get_by_text("Camera follows the shapes", exact=True).click()
+    until(lambda: s.state.follow, what="follow on")
+    before = np.array(cam.look_at)
+    s.set_t(0.9)  # A moves from x = 9.8 to x = 0.2
+    until(lambda: np.linalg.norm(np.array(cam.look_at) - before) > 2, what="camera moved")

@@ -557,3 +557,36 @@ def test_palette_legend_and_plain_words(server):
     assert "Theorem 24.1" in s.ui.words.content and "Var = 2" in s.ui.words.content
     assert s.set_shape("B", center="3, 0, 0") == "separate" and colours(s) == {(0x00, 0x72, 0xB2)}
     assert "apart" in s.ui.words.content
+
+
+def test_play_pauses_exactly_at_each_event(server):
+    """With "Pause at each event", playback stops on alpha_1 exactly (tangent), then on alpha_2."""
+    s = motion_session(server, t=0.45)
+    s.ui.timeline.pause_at_events.value = True
+    s.ui.timeline.speed.value = 5.0
+    for k in (1, 2):
+        s.ui.timeline.play.value = True
+        for _ in range(300):
+            if not s.ui.timeline.play.value:
+                break
+            time.sleep(0.02)
+        assert not s.ui.timeline.play.value and s.state.event == k and s.state.relation == "tangent"
+        assert colours(s) == {AMBER}
+    s.close()
+
+
+def test_keys_step_and_jump_to_events(server):
+    s = motion_session(server, t=0.3)
+    s.keys_ctl.event(+1)
+    assert s.state.event == 1 and s.state.relation == "tangent"
+    s.keys_ctl.event(+1)
+    assert s.state.event == 2
+    s.keys_ctl.event(-1)
+    assert s.state.event == 1
+    s.keys_ctl.step(+1)  # one step past alpha_1 (1/200 of I): overlap
+    assert s.state.event is None and abs(s.state.t - (ALPHA1 + 1 / 200)) < 1e-12 and s.state.relation == "overlap"
+    s.keys_ctl.play_pause()
+    assert s.ui.timeline.play.value
+    s.keys_ctl.play_pause()
+    assert not s.ui.timeline.play.value
+    s.close()

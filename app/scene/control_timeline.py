@@ -173,7 +173,15 @@ class TimelineControl:
         while s.ui.timeline.play.value and not s.closed and s.state.motion is not None:
             an = s.state.analysis
             lo, hi = an.window if an is not None else s.state.motion.interval_floats
-            t = s.state.t + (hi - lo) * float(s.ui.timeline.speed.value) * dt / 10.0
+            t0 = s.state.t
+            t = t0 + (hi - lo) * float(s.ui.timeline.speed.value) * dt / 10.0
+            if an is not None and s.ui.timeline.pause_at_events.value:
+                after = s.state.event or 0  # sitting on an event: the next one
+                hit = next((e for e in an.events if e.k > after and t0 <= e.t <= min(t, hi)), None)
+                if hit is not None:  # stop exactly on it (its exact relation, drawn at its float)
+                    self.stop_playing()
+                    self.jump_to_event(hit.k)
+                    return
             if t > hi:
                 t = lo
             s.state.auto_t = False

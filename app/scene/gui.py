@@ -36,6 +36,7 @@ class TimelineGui:
     t_box: viser.GuiTextHandle
     t_error: viser.GuiMarkdownHandle
     play: viser.GuiCheckboxHandle
+    pause_at_events: viser.GuiCheckboxHandle
     speed: viser.GuiSliderHandle
     events_md: viser.GuiHtmlHandle
     """The exact events (closed forms, copy buttons)."""
@@ -85,6 +86,9 @@ class ViewGui:
     gizmos: viser.GuiCheckboxHandle
     plane: viser.GuiCheckboxHandle
     palette: viser.GuiDropdownHandle
+    follow: viser.GuiCheckboxHandle
+    """The camera follows the moving shapes."""
+    frame: viser.GuiButtonHandle
 
 
 @dataclass(repr=False)
@@ -135,7 +139,8 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             slider=gui.add_slider("t", min=0.0, max=1.0, step=0.001, initial_value=0.0),
             t_box=gui.add_text("t (exact)", "0", hint="a number, fraction (3/4) or closed form ((12-2*sqrt(2))/17), or α1, α2, … for an event"),
             t_error=gui.add_markdown("", visible=False),
-            play=gui.add_checkbox("Play", False),
+            play=gui.add_checkbox("Play", False, hint="space: play / pause; arrows: step; N / P: next / previous event"),
+            pause_at_events=gui.add_checkbox("Pause at each event", False),
             speed=gui.add_slider("Speed (I per 10 s)", min=0.1, max=5.0, step=0.1, initial_value=1.0),
             events_md=gui.add_html(""),
             events_folder=gui.add_folder("Events (jump to)"),
@@ -181,6 +186,8 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             gizmos=gui.add_checkbox("Transform gizmos", gizmos),
             plane=gui.add_checkbox("Separating plane (when separate)", plane),
             palette=gui.add_dropdown("Palette", list(PALETTES), initial_value=next(iter(PALETTES))),
+            follow=gui.add_checkbox("Camera follows the shapes", False),
+            frame=gui.add_button("Frame the shapes (F)"),
         )
     with gui.add_folder("Share and keep", expand_by_default=False) as sh_folder:
         share = ShareGui(

@@ -28,6 +28,7 @@ import viser
 from . import wire
 from .analysis import AnalysisCache
 from .camera import Framing, extent_of, frame_cameras
+from .control_keys import KeyControl
 from .control_motion import MotionControl
 from .control_shapes import ShapeControl
 from .control_share import ShareControl
@@ -104,6 +105,7 @@ class Session:
         self.shapes_ctl = ShapeControl(self)
         self.motion_ctl = MotionControl(self)
         self.share_ctl = ShareControl(self)
+        self.keys_ctl = KeyControl(self)
         self._build_views()
         self._timer: threading.Timer | None = None
         self._panels_due = self._plots_due = self._witness_due = False
@@ -275,6 +277,8 @@ class Session:
         for v in self.views.values():
             v.set_relation(pic.relation, palette)
             v.set_gizmo(st.gizmos and st.motion is None)
+        if st.follow and st.motion is not None and pic.poses is not None:
+            self.keys_ctl.follow()
         if pic.quick:
             return
         if st.motion is None:
@@ -354,18 +358,28 @@ class Session:
         cam = getattr(self.target, "camera", None)
         return [cam] if cam is not None else []
 
-    def frame_camera(self) -> None:
-        """Point the camera(s) at the shapes (2D: from above); a motion: around t."""
+    def frame_camera(self, *, grid: bool = True, around_shapes: bool = False) -> None:
+        """Point the camera(s) at the shapes (2D: from above); a motion: where it goes around t.
+
+        Args:
+            grid: lay the grid under them anew.
+            around_shapes: frame the shapes drawn now only (following a motion).
+        """
         with self.lock:
             st = self.state
-            if st.motion is not None:
+            if st.motion is not None and not around_shapes:
                 an = st.analysis
                 lo, hi = an.window if an is not None else st.motion.interval_floats
                 half = 0.05 * (hi - lo)
                 pts = st.motion.extent_points((max(lo, st.t - half), min(hi, st.t + half)))
             else:
                 pts = extent_of((sh.float_pose() for sh in st.shapes.values()), st.dim)
-            self.grid = frame_cameras(self.scene, self.cameras(), Framing(pts, st.dim))
+            framing = Framing(pts, st.dim)
+            if grid:
+                self.grid = frame_cameras(self.scene, self.cameras(), framing)
+            else:
+                for cam in self.cameras():
+                    framing.aim(cam)
 
     def close(self) -> None:
         """Stop playback and ignore pending analyses (the tab went away)."""

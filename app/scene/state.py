@@ -433,3 +433,5 @@ class AppState:
     gizmos: bool = True
     palette: str = "green / amber / red"
     """Name of the relation palette (:data:`app.scene.shapes.PALETTES`)."""
+    follow: bool = False
+    """The camera follows the moving shapes."""
