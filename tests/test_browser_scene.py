@@ -448,3 +448,27 @@ def test_camera_follows_the_shapes(hs):
     before = np.array(cam.look_at)
     s.set_t(0.9)  # A moves from x = 9.8 to x = 0.2
     until(lambda: np.linalg.norm(np.array(cam.look_at) - before) > 2, what="camera moved")
+
+
+# ---------------------------------------------------------------------------- motion form
+def test_motion_form_is_filled_from_a_preset_and_analysed(hs):
+    """The form shows Example 29 field by field; editing the translation of B and analysing the
+    form gives the typed motion's own analysis (unit circles crossing: events at -1 and 1)."""
+    s = open_on(hs, {"preset": "example-29", "t": 0.3})
+    page = hs.page
+    page.get_by_text("Motion form (instead of JSON)", exact=True).click()
+    page.wait_for_function("() => Array.from(document.querySelectorAll('input')).some(e => e.value === '11 - 12*t, 0, 0')")
+    assert s.ui.motion.form["A"]["semi_axes"].value == "2, 1, 1"
+    # a 2D motion typed in the form: unit circles at (t, 0) and (-t, 0) on [-2, 2]
+    for name, tr in (("A", "t, 0"), ("B", "-t, 0")):
+        page.get_by_role("tab", name=f"Shape {name}").click()
+        f = s.ui.motion.form[name]
+        for key, text in (("center", "0, 0"), ("semi_axes", "1, 1"), ("translation", tr)):
+            current = f[key].value
+            type_into(page, current, text)
+            until(lambda f=f, key=key, text=text: f[key].value == text, what=f"{name}.{key}")
+    set_field(page, "Interval I", "-2, 2")
+    page.get_by_role("button", name="Analyse the form").click()
+    until(lambda: s.state.analysis is not None and s.state.motion.preset is None and s.state.dim == 2, what="form analysed")
+    assert [e.t for e in s.state.analysis.events] == [-1.0, 1.0]
+    hs.wait_settled()

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 from .analysis import AnalysisView
 from .gui import STATIC
 from .motion import MotionError, MotionModel
+from .motion_form import form_text
 from .panel_view import error_html
 from .panels import analysed_text
 from .state import SceneConfig, read_time, time_float
@@ -35,6 +36,7 @@ class MotionControl:
         ui = session.ui.motion
         ui.preset.on_update(lambda _ev: self.on_preset())
         ui.analyse.on_click(lambda _ev: self.on_analyse())
+        ui.form_analyse.on_click(lambda _ev: self.on_form())
         self._pending: object = None
         self._then: tuple[float | str | None, int | None] = (None, None)
         """Time or event to show once the motion being analysed is known."""
@@ -65,6 +67,24 @@ class MotionControl:
             self.show_error(e)
             return
         self.analyse_pending(model)
+
+    def on_form(self) -> None:
+        """"Analyse the form": write the form's motion into the JSON boxes, then analyse them."""
+        s = self.s
+        ui = s.ui.motion
+        try:
+            texts = {name: form_text({k: str(h.value) for k, h in fields.items()}) for name, fields in ui.form.items()}
+        except ValueError as e:
+            with s.lock:
+                s.state.errors["form"] = str(e)
+                s.refresh()
+            return
+        with s.lock:
+            s.state.errors.pop("form", None)
+            with s.syncing():
+                for name, text in texts.items():
+                    ui.fields[name].value = text
+        self.on_analyse()
 
     # ------------------------------------------------------------------ life cycle
     def analyse_pending(self, model: MotionModel, *, t: float | str | None = None, event: int | None = None) -> None:

@@ -19,6 +19,16 @@ from .shapes import PALETTES
 
 __all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "ShareGui", "build_gui", "STATIC", "DIM_LABELS"]
 
+FORM_LABELS = (
+    ("center", "Body centre", "x, y[, z] (expressions in t allowed)"),
+    ("semi_axes", "Body semi-axes", "a, b[, c]"),
+    ("orientation", "Body orientation", "2D: w, z or an angle; 3D: quaternion w, x, y, z (empty: none)"),
+    ("translation", "Translation x(t), y(t)[, z(t)]", "e.g. 11 - 12*t, 0, 0 (empty: none)"),
+    ("rotation", "Rotation quaternion", "2D: w, z (e.g. 1, t); 3D: w, x, y, z (empty: none)"),
+    ("scale", "Scale per axis", "e.g. 1 + t, 1, 1 (empty: none)"),
+)
+"""Fields of the motion form: key, label, hint."""
+
 STATIC = "(static shapes)"
 """Preset dropdown entry for no motion."""
 
@@ -65,6 +75,10 @@ class MotionGui:
     analyse: viser.GuiButtonHandle
     progress: viser.GuiProgressBarHandle
     status: viser.GuiMarkdownHandle
+    form: dict[str, dict[str, viser.GuiTextHandle]]
+    """The motion form: "A", "B" -> field -> text (:mod:`app.scene.motion_form`)."""
+    form_analyse: viser.GuiButtonHandle
+    form_error: viser.GuiMarkdownHandle
 
 
 @dataclass(repr=False)
@@ -155,15 +169,32 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
         for key, label in (("A", "Motion of A"), ("B", "Motion of B"), ("interval", "Interval I")):
             fields[key] = gui.add_text(label, "", multiline=key != "interval")
             errors[key] = gui.add_markdown("", visible=False)
+        analyse = gui.add_button("Analyse motion")
+        progress = gui.add_progress_bar(0.0, visible=False, animated=True)
+        status = gui.add_markdown("")
+        form: dict[str, dict[str, viser.GuiTextHandle]] = {}
+        with gui.add_folder("Motion form (instead of JSON)", expand_by_default=False):
+            tabs = gui.add_tab_group()
+            for name in ("A", "B"):
+                with tabs.add_tab(f"Shape {name}"):
+                    form[name] = {
+                        key: gui.add_text(label, "", hint=hint)
+                        for key, label, hint in FORM_LABELS
+                    }
+            form_analyse = gui.add_button("Analyse the form")
+            form_error = gui.add_markdown("", visible=False)
         motion = MotionGui(
             folder=mo_folder,
             preset=preset,
             description=description,
             fields=fields,
             errors=errors,
-            analyse=gui.add_button("Analyse motion"),
-            progress=gui.add_progress_bar(0.0, visible=False, animated=True),
-            status=gui.add_markdown(""),
+            analyse=analyse,
+            progress=progress,
+            status=status,
+            form=form,
+            form_analyse=form_analyse,
+            form_error=form_error,
         )
     shapes: dict[str, ShapeGui] = {}
     for name in ("A", "B"):

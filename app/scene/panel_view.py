@@ -19,6 +19,7 @@ import viser
 
 from .analysis import AnalysisView
 from .gui import DIM_LABELS, STATIC, Gui
+from .motion_form import form_from_source
 from .panels import (
     events_html,
     intervals_bar_html,
@@ -185,9 +186,14 @@ class PanelView:
             if model is not None:
                 for key, text in model.texts().items():
                     self.set_value(mg.fields[key], text)
+                for name in ("A", "B"):  # the form too, when the motion has the "shape" form
+                    form = form_from_source(getattr(model, name).source)
+                    for key, handle in mg.form[name].items():
+                        self.set_value(handle, "" if form is None else form[key])
             self.set_text(mg.description, model.description if model is not None else "")
         for key, md in mg.errors.items():
             self.set_error(md, state.errors.get(key))
+        self.set_error(mg.form_error, state.errors.get("form"))
         self.set_visible(mg.progress, state.analysing)
         if state.analysing and mg.progress.value != 10.0:
             mg.progress.value = 10.0
