@@ -472,3 +472,21 @@ def test_motion_form_is_filled_from_a_preset_and_analysed(hs):
     until(lambda: s.state.analysis is not None and s.state.motion.preset is None and s.state.dim == 2, what="form analysed")
     assert [e.t for e in s.state.analysis.events] == [-1.0, 1.0]
     hs.wait_settled()
+
+
+# ---------------------------------------------------------------------------- snap to contact
+def test_touch_button_shows_the_certified_tangency(hs):
+    """"Touch" slides B to the exact contact with A: TANGENT, drawn touching, contact point shown
+    (a float drag never lands there)."""
+    s = open_on(hs, {"dim": 2, "preset": None, "A": {"center": [0, 0], "semi_axes": [2, 1]},
+                     "B": {"center": [3, "3/2"], "semi_axes": [1, 1]}})
+    assert s.state.relation == "separate"
+    hs.page.get_by_role("button", name="Touch: slide B to A").click()
+    until(lambda: s.state.relation == "tangent" and s.state.event is not None, what="touch")
+    hs.wait_settled()
+    text_shown(hs.page, "TANGENT")
+    assert hs.mesh_color("A") == hs.mesh_color("B") == HEX["tangent"]
+    assert node(hs, "/contact/point")["visible"]
+    ev = s.state.analysis.events[s.state.event - 1]
+    b = node(hs, "/shapes/B")["p"]  # B on the line of centres at t = alpha (its float, drawn)
+    np.testing.assert_allclose(b[:2], (3 * ev.t, 1.5 * ev.t), atol=1e-9)

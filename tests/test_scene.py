@@ -590,3 +590,47 @@ def test_keys_step_and_jump_to_events(server):
     s.keys_ctl.play_pause()
     assert not s.ui.timeline.play.value
     s.close()
+
+
+@pytest.mark.parametrize("dim, dx, want", [(2, "3", 2.0), (3, "5/2", 2.0), (3, "1", 2.0)])
+def test_touch_slides_b_to_the_exact_contact(server, dim, dx, want):
+    """Unit spheres/circles: "Touch" slides B along the line of centres to distance 2 exactly
+    (from outside, or out of an overlap), certified TANGENT at that exact event."""
+    s = Session(server, unit_spheres(dim, dx))
+    s.ready.clear()
+    s.motion_ctl.on_touch()
+    assert s.ready.wait(60)
+    an = s.state.analysis
+    k = s.state.event
+    assert k is not None and s.state.relation == "tangent" and colours(s) == {AMBER}
+    ev = an.events[k - 1]
+    # B's centre is t * (dx, 0...): tangent where t * dx = 2, an exact rational
+    assert str(ev.event.time.value) == ev.exact == str(Fraction(2) / Fraction(dx))
+    assert abs(float(s.state.shapes["B"].center[0]) - want) < 1e-12
+    for _ in range(200):  # the panel follows the picture within the panel period
+        if not s.pending():
+            break
+        time.sleep(0.01)
+    assert "TANGENT" in s.ui.readout.content
+
+
+def test_touch_of_ellipses_is_an_exact_algebraic_contact(server):
+    """Ellipse (2, 1) at the origin and a circle at (3, 3/2): the contact along the line of centres
+    is an algebraic t; the picture is certified tangent there (not a float drag's near miss)."""
+    cfg = SceneConfig.from_dict({"dim": 2, "preset": None,
+                                 "A": {"center": ["0", "0"], "semi_axes": ["2", "1"], "orientation": ["0"]},
+                                 "B": {"center": ["3", "3/2"], "semi_axes": ["1", "1"], "orientation": ["0"]}})
+    s = Session(server, cfg)
+    s.ready.clear()
+    s.motion_ctl.on_touch()
+    assert s.ready.wait(60) and s.state.relation == "tangent"
+    from core import classify
+
+    from flint import fmpq
+
+    t = s.state.analysis.events[s.state.event - 1].event.time
+    assert t.value is None  # irrational: no float drag lands on it
+    # just before the contact B overlaps A, just after it is separate (exact rationals around t)
+    t.refine_to(fmpq(1, 10**12))
+    for q, rel in ((t.lo - fmpq(1, 10**9), "overlap"), (t.hi + fmpq(1, 10**9), "separate")):
+        assert s.state.analysis.relation_at(q) == rel

@@ -19,6 +19,7 @@ from .motion_form import form_text
 from .panel_view import error_html
 from .panels import analysed_text
 from .state import SceneConfig, read_time, time_float
+from .touch import touch_event, touch_motion
 
 if TYPE_CHECKING:
     from .session import Session
@@ -37,8 +38,9 @@ class MotionControl:
         ui.preset.on_update(lambda _ev: self.on_preset())
         ui.analyse.on_click(lambda _ev: self.on_analyse())
         ui.form_analyse.on_click(lambda _ev: self.on_form())
+        session.ui.touch.on_click(lambda _ev: self.on_touch())
         self._pending: object = None
-        self._then: tuple[float | str | None, int | None] = (None, None)
+        self._then: tuple[float | str | None, int | str | None] = (None, None)
         """Time or event to show once the motion being analysed is known."""
 
     # ------------------------------------------------------------------ callbacks
@@ -68,6 +70,30 @@ class MotionControl:
             return
         self.analyse_pending(model)
 
+    def on_touch(self) -> None:
+        """"Touch": slide B along the line of centres to the exact external tangency with A."""
+        s = self.s
+        with s.lock:
+            s.state.errors.pop("touch", None)
+            try:
+                texts = touch_motion(s.state.shapes["A"], s.state.shapes["B"])
+            except ValueError as e:
+                s.state.errors["touch"] = str(e)
+                s.refresh()
+                return
+        try:  # built and analysed in worker processes (the shapes may carry long exact numbers)
+            model = s.cache.read_typed(texts)
+        except MotionError as e:
+            with s.lock:
+                s.state.errors["touch"] = f"Touch: {e}"
+                s.refresh()
+            return
+        model.description = (
+            "Touch: B slides along the line of centres, from A's centre (t = 0) to where it was (t = 1) and "
+            "beyond; the event shown is the exact external contact."
+        )
+        self.analyse_pending(model, event="touch")
+
     def on_form(self) -> None:
         """"Analyse the form": write the form's motion into the JSON boxes, then analyse them."""
         s = self.s
@@ -87,13 +113,14 @@ class MotionControl:
         self.on_analyse()
 
     # ------------------------------------------------------------------ life cycle
-    def analyse_pending(self, model: MotionModel, *, t: float | str | None = None, event: int | None = None) -> None:
+    def analyse_pending(self, model: MotionModel, *, t: float | str | None = None, event: int | str | None = None) -> None:
         """Analyse ``model`` while the tab keeps showing what it shows; switch when it is done.
 
         Args:
             model: the motion (read in a worker).
             t: time to show once analysed (a number or exact text; None: the default).
-            event: event to show instead (1-based).
+            event: event to show instead (1-based), or "touch": the external tangency
+                (:func:`app.scene.touch.touch_event`).
         """
         s = self.s
         with s.lock:
@@ -169,8 +196,12 @@ class MotionControl:
         with s.lock:
             st = s.state
             t, event = self._then
+            if event == "touch":
+                event = touch_event(an.result.events)
+                if event is None:
+                    st.errors["touch"] = "Touch: no external contact along the line of centres"
             st.motion = model
-            st.event = event
+            st.event = event  # type: ignore[assignment]
             st.t_exact = st.t_text = None
             st.auto_t = t is None and event is None
             if isinstance(t, int | float):

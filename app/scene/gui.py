@@ -127,6 +127,9 @@ class Gui:
     title: viser.GuiMarkdownHandle
     legend: viser.GuiHtmlHandle
     readout: viser.GuiMarkdownHandle
+    touch: viser.GuiButtonHandle
+    """Slide B along the line of centres to the exact contact with A."""
+    touch_error: viser.GuiMarkdownHandle
     words: viser.GuiMarkdownHandle
     """"What am I seeing?": the decision in plain words."""
     timeline: TimelineGui
@@ -144,6 +147,8 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
     title = gui.add_markdown("**Ellipse / ellipsoid interference** (certified)")
     legend = gui.add_html("")
     readout = gui.add_markdown("")
+    touch = gui.add_button("Touch: slide B to A", hint="B slides along the line of centres to the exact contact (certified)")
+    touch_error = gui.add_markdown("", visible=False)
     with gui.add_folder("What am I seeing?", expand_by_default=False):
         words = gui.add_markdown("")
     with gui.add_folder("Timeline", visible=False) as tl_folder:
@@ -231,4 +236,4 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             analysis_json=gui.add_button("Download analysis (JSON)", visible=False),
             analysis_csv=gui.add_button("Download analysis (CSV)", visible=False),
         )
-    return Gui(title, legend, readout, words, timeline, plots, motion, shapes, sign_table, view, share)
+    return Gui(title, legend, readout, touch, touch_error, words, timeline, plots, motion, shapes, sign_table, view, share)

@@ -129,6 +129,7 @@ class PanelView:
             self.set_text(g.legend, legend_html(self.palette))
         self._show_readout(state)
         self.set_error(g.share.error, state.errors.get("config"))
+        self.set_error(g.touch_error, state.errors.get("touch"))
         self.set_visible(g.share.analysis_json, state.analysis is not None)
         self.set_visible(g.share.analysis_csv, state.analysis is not None)
         self._show_shapes(state)
