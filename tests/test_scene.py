@@ -634,3 +634,27 @@ def test_touch_of_ellipses_is_an_exact_algebraic_contact(server):
     t.refine_to(fmpq(1, 10**12))
     for q, rel in ((t.lo - fmpq(1, 10**9), "overlap"), (t.hi + fmpq(1, 10**9), "separate")):
         assert s.state.analysis.relation_at(q) == rel
+
+
+def test_static_shapes_from_typed_matrices(server):
+    """A shape typed as its exact matrix is classified exactly as typed: the unit circle at (2, 0)
+    as the matrix [[1, 0, -2], [0, 1, 0], [-2, 0, 3]] touches the unit circle at the origin."""
+    s = Session(server, unit_spheres(2, "3"))
+    s.ui.shapes["B"].fields["matrix"].value = "1, 0, -2; 0, 1, 0; -2, 0, 3"
+    assert s.state.relation == "tangent" and colours(s) == {AMBER}
+    b = s.state.shapes["B"]
+    assert b.matrix is not None and [str(v) for v in b.matrix[2]] == ["-2", "0", "3"]
+    np.testing.assert_allclose(s.views["B"].control.position, (2.0, 0.0, 0.01))  # drawn at its centre
+    assert s.ui.shapes["B"].fields["center"].value == "2, 0"
+    # a sign-flipped matrix is the same ellipse; a hyperbola is refused next to the field
+    s.ui.shapes["B"].fields["matrix"].value = "-1, 0, 2; 0, -1, 0; 2, 0, -3"
+    assert s.state.relation == "tangent"
+    s.ui.shapes["B"].fields["matrix"].value = "1, 0, 0; 0, -1, 0; 0, 0, -1"
+    assert s.ui.shapes["B"].error.visible and "not an ellipse" in s.ui.shapes["B"].error.content
+    # editing the centre turns the matrix back into parameters
+    s.ui.shapes["B"].fields["center"].value = "3, 0"
+    assert s.state.relation == "separate" and s.state.shapes["B"].matrix is None
+    # the configuration keeps the exact matrix
+    s.set_shape("B", matrix=[["1", "0", "-2"], ["0", "1", "0"], ["-2", "0", "3"]])
+    again = SceneConfig.from_dict(s.snapshot().to_dict())
+    assert [str(v) for v in again.B.matrix[0]] == ["1", "0", "-2"]

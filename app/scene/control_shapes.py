@@ -109,7 +109,8 @@ class ShapeControl:
         s = self.s
         with s.lock:
             st = s.state
-            d = st.shapes[name].to_dict()
+            # a new matrix replaces the shape; a new centre (etc.) edits the shape's parameters
+            d = {} if "matrix" in fields else st.shapes[name].params_dict()
             d.update(fields)
             new = drawable(ShapeState.from_dict(d, st.dim, name))
             if st.motion is not None:

@@ -87,7 +87,7 @@ class ShapeGui:
 
     folder: viser.GuiFolderHandle
     fields: dict[str, viser.GuiTextHandle]
-    """"center", "semi_axes", "orientation"."""
+    """"center", "semi_axes", "orientation", "matrix"."""
     error: viser.GuiMarkdownHandle
 
 
@@ -210,6 +210,9 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
                     "center": gui.add_text("Centre", ""),
                     "semi_axes": gui.add_text("Semi-axes", ""),
                     "orientation": gui.add_text("Orientation", ""),
+                    "matrix": gui.add_text(
+                        "Matrix", "", hint="or the exact matrix: rows separated by ';', e.g. 1, 0, -2; 0, 1, 0; -2, 0, 3"
+                    ),
                 },
                 error=gui.add_markdown("", visible=False),
             )

@@ -177,6 +177,8 @@ class PanelView:
             self.set_value(sg.fields["center"], ", ".join(format_number(v) for v in sh.center))
             self.set_value(sg.fields["semi_axes"], ", ".join(format_number(v) for v in sh.semi_axes))
             self.set_value(sg.fields["orientation"], ", ".join(format_number(v) for v in sh.orientation))
+            matrix = "" if sh.matrix is None else "; ".join(", ".join(str(v) for v in row) for row in sh.matrix)
+            self.set_value(sg.fields["matrix"], matrix)
 
     def _show_motion(self, state: AppState) -> None:
         mg = self.gui.motion

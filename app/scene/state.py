@@ -30,6 +30,7 @@ __all__ = [
     "format_number",
     "read_time",
     "time_float",
+    "parse_matrix",
     "DEFAULT_PRESET",
 ]
 
@@ -126,6 +127,34 @@ def read_time(text: str) -> fmpq | RealAlgebraic:
     return algebraic_from_quadratic(fmpq(a), fmpq(b), int(rf.num.d))
 
 
+def parse_matrix(text: Any, dim: int, what: str) -> list[list[Number]]:
+    """Read a (dim+1) x (dim+1) matrix: rows separated by ";" or new lines, or a JSON-like list.
+
+    Raises:
+        ValueError: wrong size or an unreadable entry (the message names the field).
+
+    Examples:
+        >>> parse_matrix("1, 0, -2; 0, 1, 0; -2, 0, 3", 2, "A.matrix")[2]
+        [-2, 0, 3]
+        >>> parse_matrix("1 0; 0 1", 2, "A.matrix")
+        Traceback (most recent call last):
+        ...
+        ValueError: A.matrix: expected 3 rows (a 3x3 matrix for an ellipse), got 2
+    """
+    n = dim + 1
+    kind = "an ellipse" if dim == 2 else "an ellipsoid"
+    if isinstance(text, str):
+        cleaned = text.strip().replace("[[", "").replace("]]", "").replace("],", ";").replace("[", "").replace("]", "")
+        rows: list[Any] = [r for r in cleaned.replace("\n", ";").split(";") if r.strip()]
+    elif isinstance(text, list | tuple):
+        rows = list(text)
+    else:
+        raise ValueError(f"{what}: expected rows of numbers")
+    if len(rows) != n:
+        raise ValueError(f"{what}: expected {n} rows (a {n}x{n} matrix for {kind}), got {len(rows)}")
+    return [list(parse_vector(r, n, f"{what} row {i + 1}")) for i, r in enumerate(rows)]
+
+
 def time_float(t: Any) -> float:
     """A time as a float for drawing (+-inf beyond the float range).
 
@@ -166,6 +195,31 @@ class ShapeState:
     """Positive semi-axis lengths along the body axes."""
     orientation: tuple[Number, ...]
     """2D: (angle,) in radians or a quaternion (w, 0, 0, z); 3D: quaternion (w, x, y, z)."""
+    matrix: tuple[tuple[fmpq, ...], ...] | None = None
+    """The exact matrix when the shape was typed as one (then centre, semi-axes and orientation
+    are its float decomposition, for drawing and for the fields)."""
+
+    @classmethod
+    def from_matrix(cls, M: Any, name: str = "matrix") -> ShapeState:
+        """A shape typed as its matrix: checked and normalised exactly (symmetric part, interior
+        X^T M X < 0), drawn from its float decomposition.
+
+        Raises:
+            ValueError: not an ellipse/ellipsoid, or unreadable (the message names ``name``).
+
+        Examples:
+            >>> s = ShapeState.from_matrix([["1", "0", "-2"], ["0", "1", "0"], ["-2", "0", "3"]])
+            >>> s.center, s.semi_axes, str(s.matrix[0][2])
+            ((2.0, 0.0), (1.0, 1.0), '-2')
+        """
+        import numpy as np
+
+        from core.shapes.quadrics import axes_from_quadric, validate_quadric
+
+        E = validate_quadric(M, name=name)
+        exact = tuple(tuple(fmpq(v) for v in row) for row in E)
+        p = axes_from_quadric(np.array([[to_float(v) for v in row] for row in exact]), validate=False)
+        return cls(tuple(v + 0.0 for v in p.center), tuple(p.semi_axes), tuple(p.orientation), matrix=exact)
 
     @property
     def dim(self) -> int:
@@ -180,6 +234,9 @@ class ShapeState:
     def quadric(self) -> Any:
         """Matrix of the shape (exact ``fmpq`` lists when any entry is exact, else floats)."""
         from core import quadric_from_axes
+
+        if self.matrix is not None:
+            return [list(row) for row in self.matrix]
 
         o: Any = self.orientation
         if len(o) == 1:
@@ -210,8 +267,17 @@ class ShapeState:
             return pos, wxyz, scale
         return (c[0], c[1], c[2]), _unit(tuple(float(v) for v in self.orientation)), (r[0], r[1], r[2])
 
-    def to_dict(self) -> dict[str, list[str]]:
-        """JSON form (numbers as exact strings; floats as their shortest round-trip repr)."""
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (numbers as exact strings; floats as their shortest round-trip repr).
+
+        A shape typed as a matrix is written as its exact matrix.
+        """
+        if self.matrix is not None:
+            return {"matrix": [[str(v) for v in row] for row in self.matrix]}
+        return self.params_dict()
+
+    def params_dict(self) -> dict[str, list[str]]:
+        """Centre, semi-axes and orientation as JSON (also of a shape typed as a matrix)."""
         return {
             "center": [_num_text(v) for v in self.center],
             "semi_axes": [_num_text(v) for v in self.semi_axes],
@@ -222,10 +288,13 @@ class ShapeState:
     def from_dict(cls, d: Any, dim: int, name: str) -> ShapeState:
         """Read and check a shape from its JSON form (see :meth:`to_dict`)."""
         if not isinstance(d, dict):
-            raise ValueError(f"shape {name}: expected an object with center, semi_axes, orientation")
-        unknown = set(d) - {"center", "semi_axes", "orientation"}
+            raise ValueError(f"shape {name}: expected an object with center, semi_axes, orientation (or matrix)")
+        unknown = set(d) - {"center", "semi_axes", "orientation", "matrix"}
         if unknown:
             raise ValueError(f"shape {name}: unknown keys {sorted(unknown)}")
+        if d.get("matrix") is not None:
+            shape = cls.from_matrix(parse_matrix(d["matrix"], dim, f"{name}.matrix"), f"{name}.matrix")
+            return shape
         center = parse_vector(d.get("center", [0] * dim), dim, f"{name}.center")
         axes = parse_vector(d.get("semi_axes", [1] * dim), dim, f"{name}.semi_axes")
         if any(v <= 0 for v in axes):
