@@ -490,3 +490,15 @@ def test_touch_button_shows_the_certified_tangency(hs):
     ev = s.state.analysis.events[s.state.event - 1]
     b = node(hs, "/shapes/B")["p"]  # B on the line of centres at t = alpha (its float, drawn)
     np.testing.assert_allclose(b[:2], (3 * ev.t, 1.5 * ev.t), atol=1e-9)
+
+
+def test_plot_scale_choice_and_axis_labels(hs):
+    """The plots say what they show (asinh by default, explained) and can switch to a linear scale."""
+    s = open_on(hs, {"preset": "example-29", "t": 0.3})
+    wait_charts(hs, s.state.analysis.window, 5)
+    axis = "() => Object.values(window.__viserTestpoints.uplots).filter(u => document.body.contains(u.chart.root)).map(u => u.chart.axes[1].label)"
+    assert hs.page.evaluate(axis) == ["asinh(y / s)", "asinh(y / s)"]
+    choose(hs.page, "Plot scale", "linear")
+    until(lambda: s.state.plot_scale == "linear", what="linear")
+    hs.page.wait_for_function(f"() => ({axis})().length == 2 && ({axis})().every(l => l === 'y / max|y|')")
+    text_shown(hs.page, "y / max |y| on I")

@@ -57,6 +57,7 @@ class ShapeControl:
         ui.view.plane.on_update(lambda _ev: self.on_option("separating_plane", bool(ui.view.plane.value)))
         ui.view.palette.on_update(lambda _ev: self.on_option("palette", str(ui.view.palette.value)))
         ui.plots.live.on_update(lambda _ev: self.on_option("show_plots", bool(ui.plots.live.value)))
+        ui.plots.scale.on_update(lambda _ev: self.on_option("plot_scale", str(ui.plots.scale.value)))
 
     def attach_gizmos(self) -> None:
         """Listen to the gizmos of the current shape views (after they are (re)built)."""

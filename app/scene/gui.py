@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import viser
 
+from .plots import SCALES
 from .shapes import PALETTES
 
 __all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "ShareGui", "build_gui", "STATIC", "DIM_LABELS"]
@@ -60,6 +61,10 @@ class PlotsGui:
 
     folder: viser.GuiFolderHandle
     live: viser.GuiCheckboxHandle
+    scale: viser.GuiDropdownHandle
+    """"asinh" or "linear" (:data:`app.scene.plots.SCALES`)."""
+    about: viser.GuiMarkdownHandle
+    """What the y axis shows."""
 
 
 @dataclass(repr=False)
@@ -165,7 +170,12 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             events_folder=gui.add_folder("Events (jump to)"),
         )
     with gui.add_folder("Plots", visible=False) as pl_folder:
-        plots = PlotsGui(folder=pl_folder, live=gui.add_checkbox("Live plots", show_plots))
+        plots = PlotsGui(
+            folder=pl_folder,
+            live=gui.add_checkbox("Live plots", show_plots),
+            scale=gui.add_dropdown("Plot scale", list(SCALES), initial_value="asinh"),
+            about=gui.add_markdown(""),
+        )
     with gui.add_folder("Motion") as mo_folder:
         preset = gui.add_dropdown("Preset", [STATIC, *presets], initial_value=STATIC)
         description = gui.add_markdown("")

@@ -27,7 +27,7 @@ from .panels import (
     readout_markdown,
     sign_table_markdown,
 )
-from .plots import PlotsView
+from .plots import SCALES, PlotsView
 from .shapes import PALETTES
 from .state import AppState, format_number
 from .words import plain_words
@@ -251,6 +251,10 @@ class PanelView:
     def show_plots(self, state: AppState) -> None:
         """The plots of the analysis with the cursor at t (removed when off or no analysis)."""
         an = state.analysis
+        self.set_value(self.gui.plots.scale, state.plot_scale)
+        self.set_text(self.gui.plots.about, f"y axis: {SCALES[state.plot_scale]}. Only signs and zeros carry meaning "
+                      "(each curve is known up to a positive factor); the dots on y = 0 are the events, the "
+                      "vertical line is t.")
         if an is None or not state.show_plots:
             self.plots.clear()
             return
@@ -261,4 +265,5 @@ class PanelView:
             an.subres_series(),
             [e.t for e in an.events],
             state.t,
+            scale="linear" if state.plot_scale == "linear" else "asinh",
         )

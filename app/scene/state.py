@@ -201,8 +201,9 @@ class ShapeState:
 
     @classmethod
     def from_matrix(cls, M: Any, name: str = "matrix") -> ShapeState:
-        """A shape typed as its matrix: checked and normalised exactly (symmetric part, interior
-        X^T M X < 0), drawn from its float decomposition.
+        """A shape typed as its matrix, checked and normalised exactly.
+
+        The symmetric part, with the interior X^T M X < 0; drawn from its float decomposition.
 
         Raises:
             ValueError: not an ellipse/ellipsoid, or unreadable (the message names ``name``).
@@ -504,3 +505,5 @@ class AppState:
     """Name of the relation palette (:data:`app.scene.shapes.PALETTES`)."""
     follow: bool = False
     """The camera follows the moving shapes."""
+    plot_scale: str = "asinh"
+    """Scale of the plots' y axis (:data:`app.scene.plots.SCALES`)."""
