@@ -12,6 +12,8 @@
   [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly;
   several ``--t``/``--event``/``--config`` render one image each in one browser session
   (``--out`` a folder).
+* ``python -m app export --preset example-29 --out ex29.html [--config file.json]``: a
+  self-contained HTML replay of the motion (viser's scene recording and player; no server).
 """
 
 from __future__ import annotations
@@ -67,7 +69,7 @@ def _time(text: str) -> float:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser (sub-commands ``serve`` and ``screenshot``)."""
+    """The argument parser (sub-commands ``serve``, ``screenshot`` and ``export``)."""
     p = argparse.ArgumentParser(
         prog="python -m app",
         description="Certified ellipse/ellipsoid interference: viser scene, HTTP API, screenshots.",
@@ -100,6 +102,14 @@ def build_parser() -> argparse.ArgumentParser:
     sh.add_argument("--height", type=_size, default=900, help="image height in px (default 900)")
     sh.add_argument("--no-plots", action="store_true", help="hide the live plots")
     sh.add_argument("--out", required=True, help="output PNG path, or a folder for several images")
+
+    ex = sub.add_parser("export", help="write a self-contained HTML replay of a scene (a motion played through)")
+    ex.add_argument("--preset", default=None, help="motion preset, e.g. example-29 ('none' for static shapes)")
+    ex.add_argument("--config", action="append", default=None, help="JSON configuration file (any scene)")
+    ex.add_argument("--dim", type=int, choices=(2, 3), default=None, help="2 (ellipses) or 3 (ellipsoids)")
+    ex.add_argument("--seconds", type=float, default=12.0, help="playing time of the sweep over I (default 12)")
+    ex.add_argument("--frames", type=int, default=240, help="time steps recorded (default 240)")
+    ex.add_argument("--out", required=True, help="output HTML path")
     sh.add_argument("--timeout", type=float, default=120.0, help="seconds to wait for rendering")
     return p
 
@@ -220,16 +230,33 @@ def _screenshot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _export(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .scene.replay import replay_html
+
+    if not 0 < args.seconds <= 600 or not 2 <= args.frames <= 5000:
+        raise ValueError("--seconds must be in (0, 600] and --frames in 2..5000")
+    html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames)  # type: ignore[arg-type]
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(html, encoding="utf-8")
+    print(f"wrote {out} ({len(html) // 1024} kB; open it in a browser, no server needed)")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (2 for bad arguments or input)."""
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
-    if not argv or (argv[0] not in ("serve", "screenshot") and argv[0] not in ("-h", "--help")):
+    if not argv or (argv[0] not in ("serve", "screenshot", "export") and argv[0] not in ("-h", "--help")):
         argv = ["serve", *argv]  # no sub-command: serve with the given options (or defaults)
     args = parser.parse_args(argv)
     try:
         if args.command == "screenshot":
             return _screenshot(args)
+        if args.command == "export":
+            return _export(args)
         return _serve(args)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)

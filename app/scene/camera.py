@@ -52,15 +52,20 @@ class Framing:
             position=(float(c[0]), float(c[1]), floor),
         )
 
-    def aim(self, cam: viser.CameraHandle) -> None:
-        """Point one camera at the box."""
+    def aim(self, cam: viser.CameraHandle, *, free: float = FREE) -> None:
+        """Point one camera at the box.
+
+        Args:
+            cam: the camera (a tab's, or anything with the same attributes).
+            free: share of the width not covered by a panel (1: the whole view).
+        """
         try:
             fov, aspect = float(cam.fov), float(cam.aspect)
         except Exception:  # noqa: BLE001 - camera state not known yet: typical values
             fov, aspect = 1.3, 1.5
         half_h = math.tan(fov / 2)
-        dist = 0.9 * self.radius / (half_h * min(1.0, FREE * aspect))
-        shift = (0.5 - FREE / 2) * 2 * dist * half_h * aspect
+        dist = 0.9 * self.radius / (half_h * min(1.0, free * aspect))
+        shift = (0.5 - free / 2) * 2 * dist * half_h * aspect
         c = self.centre
         if self.dim == 2:
             cam.up_direction = (0.0, 1.0, 0.0)
