@@ -1,4 +1,6 @@
-"""The applications on top of :mod:`core`: the viser scene (:mod:`app.scene`), the HTTP API
-(:mod:`app.api`), headless screenshots (:mod:`app.screenshot`) and the command line
-(``python -m app``, :mod:`app.cli`). Nothing starts at import.
+"""The applications on top of :mod:`core`; nothing starts at import.
+
+The viser scene (:mod:`app.scene`), the HTTP API (:mod:`app.api`), the worker processes both use
+(:mod:`app.workers`), headless screenshots (:mod:`app.screenshot`), the scene in a notebook
+(:mod:`app.notebook`) and the command line (``python -m app``, :mod:`app.cli`).
 """
