@@ -201,6 +201,7 @@ class MotionControl:
                 if event is None:
                     st.errors["touch"] = "Touch: no external contact along the line of centres"
             st.motion = model
+            st.analysis = None  # the new motion's arrives below (never the old one with the new motion)
             st.event = event  # type: ignore[assignment]
             st.t_exact = st.t_text = None
             st.auto_t = t is None and event is None

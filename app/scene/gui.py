@@ -191,7 +191,7 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
         with gui.add_folder("Motion form (instead of JSON)", expand_by_default=False):
             tabs = gui.add_tab_group()
             for name in ("A", "B"):
-                with tabs.add_tab(f"Shape {name}"):
+                with tabs.add_tab(f"Form {name}"):
                     form[name] = {
                         key: gui.add_text(label, "", hint=hint)
                         for key, label, hint in FORM_LABELS
