@@ -122,6 +122,10 @@ class PanelView:
         g = self.gui
         self.set_value(g.view.dimension, DIM_LABELS[state.dim])
         self.set_value(g.view.palette, state.palette)
+        self.set_value(g.view.gizmos, state.gizmos)
+        self.set_value(g.view.plane, state.separating_plane)
+        self.set_value(g.view.follow, state.follow)
+        self.set_value(g.plots.live, state.show_plots)
         self.palette = PALETTES.get(state.palette, next(iter(PALETTES.values())))
         if self._palette_shown != state.palette:  # colours of the analysis panels too
             self._palette_shown = state.palette
