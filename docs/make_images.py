@@ -15,6 +15,9 @@ TO_TOP = "() => document.querySelectorAll('*').forEach((e) => { if (e.scrollTop)
 
 
 def main() -> None:
+    """Write every image (README: docs/img/; landing page: static/img/, static/scene/)."""
+    import shutil
+
     from app.scene.state import SceneConfig
     from app.screenshot import HeadlessScene
 
@@ -54,6 +57,8 @@ def main() -> None:
             hs.session.frame_camera()
             hs.wait_settled()
             hs.save(ROOT / f"static/img/{name}.png")
+    for src, dst in (("scene-what-am-i-seeing", "what-am-i-seeing"), ("scene-touch", "touch")):
+        shutil.copyfile(ROOT / f"docs/img/{src}.png", ROOT / f"static/scene/{dst}.png")
     print(f"images written in {time.perf_counter() - t0:.1f} s")
 
 
