@@ -78,15 +78,12 @@ class MotionControl:
             try:
                 texts = touch_motion(s.state.shapes["A"], s.state.shapes["B"])
             except ValueError as e:
-                s.state.errors["touch"] = str(e)
-                s.refresh()
+                s.field_error("touch", str(e))
                 return
         try:  # built and analysed in worker processes (the shapes may carry long exact numbers)
             model = s.cache.read_typed(texts)
         except MotionError as e:
-            with s.lock:
-                s.state.errors["touch"] = f"Touch: {e}"
-                s.refresh()
+            s.field_error("touch", f"Touch: {e}")
             return
         model.description = (
             "Touch: B slides along the line of centres, from A's centre (t = 0) to where it was (t = 1) and "
@@ -101,9 +98,7 @@ class MotionControl:
         try:
             texts = {name: form_text({k: str(h.value) for k, h in fields.items()}) for name, fields in ui.form.items()}
         except ValueError as e:
-            with s.lock:
-                s.state.errors["form"] = str(e)
-                s.refresh()
+            s.field_error("form", str(e))
             return
         with s.lock:
             s.state.errors.pop("form", None)

@@ -97,9 +97,7 @@ class ShapeControl:
         try:
             self.set_shape(name, **{key: value})
         except ValueError as e:
-            with self.s.lock:
-                self.s.state.errors[f"shape {name}"] = str(e)
-                self.s.refresh()
+            self.s.field_error(f"shape {name}", str(e))
 
     def set_shape(self, name: str, **fields: Any) -> str | None:
         """Set shape parameters from text/numbers (as the GUI fields do); returns the relation.

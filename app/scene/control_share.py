@@ -71,9 +71,7 @@ class ShareControl:
             if not isinstance(data, dict):
                 raise ValueError(f"{file.name}: expected a JSON object (a scene configuration)")
         except ValueError as e:
-            with s.lock:
-                s.state.errors["config"] = str(e)
-                s.refresh()
+            s.field_error("config", str(e))
             return
         with s.lock:
             s.state.errors.pop("config", None)

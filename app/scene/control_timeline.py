@@ -104,7 +104,7 @@ class TimelineControl:
             return
         error = self.apply_text(str(s.ui.timeline.t_box.value))
         if error is not None:
-            self._error(error)
+            s.field_error("t", error)
 
     def apply_text(self, text: str) -> str | None:
         """Go to the time ``text`` names exactly; returns the error message instead, if any.
@@ -143,11 +143,6 @@ class TimelineControl:
             else:
                 self.set_t(t, text=shown)
             return None
-
-    def _error(self, message: str) -> None:
-        with self.s.lock:
-            self.s.state.errors["t"] = message
-            self.s.refresh()
 
     # ------------------------------------------------------------------ playback
     def on_play(self) -> None:

@@ -235,6 +235,12 @@ class Session:
                     cfg.t = st.t
             return cfg
 
+    def field_error(self, field: str, message: str) -> None:
+        """Show ``message`` next to ``field`` (a key of :attr:`AppState.errors`) and redraw."""
+        with self.lock:
+            self.state.errors[field] = message
+            self.refresh()
+
     # ------------------------------------------------------------------ the one refresh
     def refresh(self, *, dragged: str | None = None, defer: bool = False) -> str | None:
         """Draw the state: the picture now, the panel now or (``defer``, drags) within PANEL_PERIOD.
