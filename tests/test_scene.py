@@ -19,7 +19,8 @@ from app.scene.costs import measure_update_costs  # noqa: E402
 from app.scene.panels import intervals_bar_html, readout_markdown, sign_table_markdown  # noqa: E402
 from app.scene.plots import compress  # noqa: E402
 from app.scene.session import Session  # noqa: E402
-from app.scene.state import SceneConfig, ShapeState, parse_vector  # noqa: E402
+from app.scene.state import SceneConfig, ShapeState  # noqa: E402
+from app.scene.texts import parse_vector  # noqa: E402
 
 GREEN, AMBER, RED = (0x2C, 0xA0, 0x2C), (0xFF, 0xBF, 0x00), (0xD6, 0x27, 0x28)
 
@@ -624,7 +625,6 @@ def test_touch_of_ellipses_is_an_exact_algebraic_contact(server):
     s.ready.clear()
     s.motion_ctl.on_touch()
     assert s.ready.wait(60) and s.state.relation == "tangent"
-    from core import classify
 
     from flint import fmpq
 

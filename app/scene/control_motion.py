@@ -18,7 +18,8 @@ from .motion import MotionError, MotionModel
 from .motion_form import form_text
 from .panel_view import error_html
 from .panels import analysed_text
-from .state import SceneConfig, read_time, time_float
+from .state import SceneConfig
+from .texts import read_time, time_float
 from .touch import touch_event, touch_motion
 
 if TYPE_CHECKING:

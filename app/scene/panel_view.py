@@ -29,7 +29,8 @@ from .panels import (
 )
 from .plots import SCALES, PlotsView
 from .shapes import PALETTES
-from .state import AppState, format_number
+from .state import AppState
+from .texts import format_number
 from .words import plain_words
 
 __all__ = ["PanelView", "Syncing", "error_html"]
