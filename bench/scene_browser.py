@@ -62,7 +62,8 @@ def run_scene_browser(*, quick: bool = False) -> dict[str, Any]:
             ms = (time.perf_counter() - t0) * 1e3
             hs.page.wait_for_function(_DRAWN_JS, arg=[poses, colours, word], polling="raf")
             panel_ms = (time.perf_counter() - t0) * 1e3
-            rows.append({"preset": name, "ms": ms, "panel_ms": panel_ms, "analysis_ms": s.state.analysis.seconds * 1e3})
+            rows.append({"preset": name, "ms": ms, "panel_ms": panel_ms, "analysis_ms": s.state.analysis.seconds * 1e3,
+                         "server_ms": (s.motion_ctl.last_to_picture_s or 0.0) * 1e3})
             # back to static shapes (the next preset is analysed afresh: nothing is cached yet)
             _choose(hs.page, "Preset", "(static shapes)")
             hs.wait_settled()
@@ -92,10 +93,11 @@ def run_scene_browser(*, quick: bool = False) -> dict[str, Any]:
 def format_browser(out: dict[str, Any]) -> str:
     """Markdown tables of the browser measurements against the targets."""
     lines = ["| preset | on screen: shapes drawn in the certified colour | panel complete (readout, timeline, plots) "
-             "| of which analysis (worker) | target |", "|---|---:|---:|---:|---:|"]
+             "| server: choice -> picture sent | of which analysis (worker) | target (on screen) |", "|---|---:|---:|---:|---:|---:|"]
     for r in out["presets"]:
         ok = "meets" if r["ms"] < TARGETS_MS["preset to screen"] else "**misses**"
-        lines.append(f"| {r['preset']} | {r['ms']:.0f} ms | {r['panel_ms']:.0f} ms | {r['analysis_ms']:.0f} ms | < 300 ms ({ok}) |")
+        lines.append(f"| {r['preset']} | {r['ms']:.0f} ms | {r['panel_ms']:.0f} ms | {r.get('server_ms', 0):.0f} ms "
+                     f"| {r['analysis_ms']:.0f} ms | < 300 ms ({ok}) |")
     sh = out["screenshots"]
     lines += ["", "| screenshots (one browser, one server) | time |", "|---|---:|",
               f"| first image (server + browser start + first frame) | {sh['first_s']:.2f} s |",

@@ -9,6 +9,8 @@ with the reason next to the motion field, never a panel waiting forever.
 
 from __future__ import annotations
 
+import threading
+import time
 from concurrent.futures import Future
 from typing import TYPE_CHECKING
 
@@ -42,6 +44,9 @@ class MotionControl:
         session.ui.touch.on_click(lambda _ev: self.on_touch())
         self._pending: object = None
         self._then: tuple[float | str | None, int | str | None] = (None, None)
+        self._started = 0.0
+        self.last_to_picture_s: float | None = None
+        """Seconds from the last :meth:`start` to its certified picture sent (the benchmark's)."""
         """Time or event to show once the motion being analysed is known."""
 
     # ------------------------------------------------------------------ callbacks
@@ -138,6 +143,7 @@ class MotionControl:
             event: event to show instead (1-based).
         """
         s = self.s
+        self._started = time.perf_counter()
         with s.lock:
             st = s.state
             st.motion = model
@@ -150,23 +156,48 @@ class MotionControl:
             if isinstance(t, str):
                 t = time_float(read_time(t))
             st.t = min(max(float(t), lo), hi) if t is not None else lo + 0.45 * (hi - lo)
+            same_views = s.views["A"].dim == model.dim and s.views["A"].drawn
             s.set_dimension(model.dim)
             cached = s.cache.get(model.key)
             if cached is not None:
                 self._pending = None
                 self._arrived(model, cached)
                 return
-            self._analyse(model, switch=False)
+            # the old picture and readout stay together on screen until the analysis arrives,
+            # unless the shapes were rebuilt for another dimension (then draw at once)
+            self._analyse(model, switch=False, quiet=same_views)
 
-    def _analyse(self, model: MotionModel, *, switch: bool) -> None:
-        """Run the analysis (lock held); ``switch``: show the motion only once it is analysed."""
+    QUIET = 0.15
+    """Seconds an analysis may take before the tab shows "Analysing…" (the warm pool answers a
+    preset within tens of milliseconds: the browser then draws once, the analysed motion)."""
+
+    def _analyse(self, model: MotionModel, *, switch: bool, quiet: bool = False) -> None:
+        """Run the analysis (lock held).
+
+        Args:
+            model: the motion.
+            switch: show the motion only once it is analysed (the tab keeps its scene meanwhile).
+            quiet: the picture on screen stays consistent until the analysis arrives (same
+                shapes, same readout): show "Analysing…" only if it takes over :attr:`QUIET`.
+        """
         s = self.s
         self._pending = model.key
         s.state.analysing = True
         s.state.status = "Analysing the motion (exact)…"
-        s.refresh()
+        if quiet:
+            timer = threading.Timer(self.QUIET, self._still_analysing, (model.key,))
+            timer.daemon = True
+            timer.start()
+        else:
+            s.refresh()
         fut = s.cache.submit(model, s.executor)
         fut.add_done_callback(lambda f: self._analysed(model, f, switch))
+
+    def _still_analysing(self, key: object) -> None:
+        s = self.s
+        with s.lock:
+            if not s.closed and self._pending == key:
+                s.refresh()
 
     def _analysed(self, model: MotionModel, fut: Future[AnalysisView], switch: bool) -> None:
         s = self.s
@@ -233,6 +264,7 @@ class MotionControl:
         # the picture at once; the panel (event list, sign table, plots: the heavy part for the
         # browser) follows within the panel period, so the certified shapes are drawn first
         s.refresh(defer=True)
+        self.last_to_picture_s = time.perf_counter() - self._started
         s.frame_camera()
         s.ready.set()
 

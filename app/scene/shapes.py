@@ -147,6 +147,11 @@ class EllipsoidView:
         self._gizmo = True
         self.set_gizmo(gizmo)
 
+    @property
+    def drawn(self) -> bool:
+        """True once the view's pose has been sent (the browser shows this node)."""
+        return not self._fresh
+
     def remove(self) -> None:
         """Remove the node (gizmo, mesh and label) from the scene."""
         self.control.remove()
