@@ -119,10 +119,12 @@ def targets(st: dict[str, Any], sc: dict[str, Any] | None, api: dict[str, Any] |
         br = sc["browser"]
         worst = max(r["ms"] for r in br["presets"])
         goal = scene_browser.TARGETS_MS["preset to screen"]
+        server = [r.get("server_ms", 0.0) for r in br["presets"]]
         rows.append((f"a preset on screen < {goal:g} ms (pick in the dropdown -> shapes drawn in the certified colour; headless "
                      "Chromium, software WebGL)", f"{min(r['ms'] for r in br['presets']):.0f}-{worst:.0f} ms over "
-                     f"{len(br['presets'])} presets (analysis {min(r['analysis_ms'] for r in br['presets']):.0f}-"
-                     f"{max(r['analysis_ms'] for r in br['presets']):.0f} ms of it)", "met" if worst < goal else "missed", worst < goal))
+                     f"{len(br['presets'])} presets; of it the server, choice -> certified picture sent: "
+                     f"{min(server):.0f}-{max(server):.0f} ms (analysis {min(r['analysis_ms'] for r in br['presets']):.0f}-"
+                     f"{max(r['analysis_ms'] for r in br['presets']):.0f} ms)", "met" if worst < goal else "missed", worst < goal))
         sh = br["screenshots"]
         ok = sh["further_ms_max"] < scene_browser.TARGETS_MS["further screenshot"]
         rows.append(("screenshots: one browser for many images, each further image well under 1 s",

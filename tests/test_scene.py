@@ -558,6 +558,8 @@ def test_palette_legend_and_plain_words(server):
     assert "Theorem 24.1" in s.ui.words.content and "Var = 2" in s.ui.words.content
     assert s.set_shape("B", center="3, 0, 0") == "separate" and colours(s) == {(0x00, 0x72, 0xB2)}
     assert "apart" in s.ui.words.content
+    s.ui.view.dimension.value = "2D ellipses"  # the palette stays through a dimension switch
+    assert s.state.palette == "colour-blind safe" and "#0072b2" in s.ui.legend.content
 
 
 def test_play_pauses_exactly_at_each_event(server):

@@ -44,10 +44,10 @@ class MotionControl:
         session.ui.touch.on_click(lambda _ev: self.on_touch())
         self._pending: object = None
         self._then: tuple[float | str | None, int | str | None] = (None, None)
+        """Time or event to show once the motion being analysed is known."""
         self._started = 0.0
         self.last_to_picture_s: float | None = None
         """Seconds from the last :meth:`start` to its certified picture sent (the benchmark's)."""
-        """Time or event to show once the motion being analysed is known."""
 
     # ------------------------------------------------------------------ callbacks
     def on_preset(self) -> None:
@@ -62,7 +62,8 @@ class MotionControl:
                 s.refresh()
             return
         st = s.state
-        s.load(SceneConfig(dim=st.dim, preset=name, gizmos=st.gizmos, show_plots=st.show_plots, separating_plane=st.separating_plane))
+        s.load(SceneConfig(dim=st.dim, preset=name, gizmos=st.gizmos, show_plots=st.show_plots,
+                           separating_plane=st.separating_plane, palette=st.palette))
         s.frame_camera()
 
     def on_analyse(self) -> None:

@@ -126,7 +126,8 @@ class ShapeControl:
         dim = 3 if str(s.ui.view.dimension.value) == DIM_LABELS[3] else 2
         if dim != s.state.dim:
             st = s.state
-            s.load(SceneConfig(dim=dim, preset=None, gizmos=st.gizmos, show_plots=st.show_plots, separating_plane=st.separating_plane))
+            s.load(SceneConfig(dim=dim, preset=None, gizmos=st.gizmos, show_plots=st.show_plots,
+                               separating_plane=st.separating_plane, palette=st.palette))
             s.frame_camera()
 
     def on_option(self, key: str, value: Any) -> None:

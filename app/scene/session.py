@@ -108,6 +108,8 @@ class Session:
         self.keys_ctl = KeyControl(self)
         self._build_views()
         self._timer: threading.Timer | None = None
+        self.grid: viser.GridHandle | None = None
+        """The grid under the shapes (laid anew when the camera frames them)."""
         self._panels_due = self._plots_due = self._witness_due = False
         if not defer_load:
             self.load(self.config)
