@@ -9,7 +9,11 @@
   (:mod:`app.scene.origin`). SIGTERM/SIGINT stop the running analyses and exit within seconds
   (:mod:`app.lifecycle`).
 * ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png [--config file.json]
-  [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly.
+  [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly;
+  several ``--t``/``--event``/``--config`` render one image each in one browser session
+  (``--out`` a folder).
+* ``python -m app export --preset example-29 --out ex29.html [--config file.json]``: a
+  self-contained HTML replay of the motion (viser's scene recording and player; no server).
 * ``python -m app contacts BODIES --out PAIRS.csv [--box Lx,Ly,Lz]`` and ``python -m app
   classify PAIRS.npz --out LABELS.npy``: many bodies and files of pairs (:mod:`app.bodies_cli`);
   ``serve --bodies FILE`` / ``screenshot --bodies FILE`` show many bodies in the scene.
@@ -68,7 +72,7 @@ def _time(text: str) -> float:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser (sub-commands ``serve`` and ``screenshot``)."""
+    """The argument parser (sub-commands ``serve``, ``screenshot`` and ``export``)."""
     p = argparse.ArgumentParser(
         prog="python -m app",
         description="Certified ellipse/ellipsoid interference: viser scene, HTTP API, screenshots.",
@@ -88,17 +92,28 @@ def build_parser() -> argparse.ArgumentParser:
         "(repeatable; default: only the scene's own pages, and clients that send no Origin)",
     )
 
-    sh = sub.add_parser("screenshot", help="render a configuration to PNG with headless Chromium")
+    sh = sub.add_parser(
+        "screenshot", help="render a configuration to PNG with headless Chromium (several --t/--event/--config: "
+        "one browser, one image each, --out a folder)",
+    )
     sh.add_argument("--preset", default=None, help="motion preset, e.g. example-29 ('none' for static shapes)")
-    sh.add_argument("--t", type=_time, default=None, help="time to show (number or fraction)")
-    sh.add_argument("--event", type=int, default=None, help="show the K-th event (1-based) exactly")
-    sh.add_argument("--config", default=None, help="JSON configuration file (any scene)")
+    sh.add_argument("--t", type=_time, action="append", default=None, help="time to show (number or fraction); repeatable")
+    sh.add_argument("--event", type=int, action="append", default=None, help="show the K-th event (1-based) exactly; repeatable")
+    sh.add_argument("--config", action="append", default=None, help="JSON configuration file (any scene); repeatable")
     sh.add_argument("--dim", type=int, choices=(2, 3), default=None, help="2 (ellipses) or 3 (ellipsoids)")
     sh.add_argument("--width", type=_size, default=1400, help="image width in px (default 1400)")
     sh.add_argument("--height", type=_size, default=900, help="image height in px (default 900)")
     sh.add_argument("--no-plots", action="store_true", help="hide the live plots")
-    sh.add_argument("--out", required=True, help="output PNG path")
+    sh.add_argument("--out", required=True, help="output PNG path, or a folder for several images")
     sh.add_argument("--timeout", type=float, default=120.0, help="seconds to wait for rendering")
+
+    ex = sub.add_parser("export", help="write a self-contained HTML replay of a scene (a motion played through)")
+    ex.add_argument("--preset", default=None, help="motion preset, e.g. example-29 ('none' for static shapes)")
+    ex.add_argument("--config", action="append", default=None, help="JSON configuration file (any scene)")
+    ex.add_argument("--dim", type=int, choices=(2, 3), default=None, help="2 (ellipses) or 3 (ellipsoids)")
+    ex.add_argument("--seconds", type=float, default=12.0, help="playing time of the sweep over I (default 12)")
+    ex.add_argument("--frames", type=int, default=240, help="time steps recorded (default 240)")
+    ex.add_argument("--out", required=True, help="output HTML path")
     from .bodies_cli import add_parsers, box_argument
 
     for parser in (s, sh):  # many bodies (issue 14): the scene opens on the bodies of a file
@@ -108,15 +123,21 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def config_from_args(args: argparse.Namespace) -> object:
+def config_from_args(args: argparse.Namespace, path: str | None = None) -> object:
     """SceneConfig from ``--config``/``--preset``/``--t``/``--event``/``--dim`` (later override earlier).
+
+    Args:
+        args: the parsed command line.
+        path: the configuration file to start from (default: the first ``--config``).
 
     Raises:
         ValueError: unreadable config file or bad values.
     """
     from .scene.state import SceneConfig
 
-    cfg = SceneConfig.from_json_file(args.config) if getattr(args, "config", None) else SceneConfig()
+    configs = _listed(getattr(args, "config", None))
+    path = path or (configs[0] if configs else None)
+    cfg = SceneConfig.from_json_file(path) if path else SceneConfig()
     if getattr(args, "dim", None) is not None and args.dim != cfg.dim:
         d = cfg.to_dict()
         d.update(dim=args.dim, A=None, B=None, preset=None)
@@ -124,15 +145,24 @@ def config_from_args(args: argparse.Namespace) -> object:
     if getattr(args, "preset", None) is not None:
         cfg.preset = None if args.preset.lower() in ("none", "static") else args.preset
         cfg.motion = None
-    if getattr(args, "t", None) is not None:
-        cfg.t = args.t
-    if getattr(args, "event", None) is not None:
-        if args.event < 1:
-            raise ValueError("--event is 1-based")
-        cfg.event = args.event
+    ts, events = _listed(getattr(args, "t", None)), _listed(getattr(args, "event", None))
+    if any(k < 1 for k in events):
+        raise ValueError("--event is 1-based")
+    if len(ts) + len(events) == 1:  # one image: the configuration itself shows it
+        if ts:
+            cfg.t = ts[0]
+        else:
+            cfg.event = events[0]
     if getattr(args, "no_plots", False):
         cfg.show_plots = False
     return cfg
+
+
+def _listed(value: object) -> list:
+    """A repeatable option as a list (None: empty; a single value from older callers: [value])."""
+    if value is None:
+        return []
+    return list(value) if isinstance(value, list | tuple) else [value]
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -201,13 +231,38 @@ def _bodies_model(args: argparse.Namespace) -> object:
 
 
 def _screenshot(args: argparse.Namespace) -> int:
-    from .screenshot import screenshot
+    from pathlib import Path
 
-    cfg = config_from_args(args)
-    path = screenshot(
-        cfg, args.out, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args)
-    )  # type: ignore[arg-type]
-    print(f"wrote {path}")
+    from .screenshot import screenshots, shots_for
+
+    configs = _listed(args.config)
+    ts, events = _listed(args.t), _listed(args.event)
+    if len(configs) > 1:  # a list of configurations: one image each, named after the file
+        shots = []
+        for path in configs:
+            cfg = config_from_args(args, path)
+            shots += shots_for(cfg, Path(args.out) / Path(path).stem, ts, events) if ts or events else \
+                shots_for(cfg, Path(args.out) / f"{Path(path).stem}.png", [], [])
+    else:
+        cfg = config_from_args(args)
+        shots = shots_for(cfg, args.out, ts if len(ts) + len(events) > 1 else [], events if len(ts) + len(events) > 1 else [])  # type: ignore[arg-type]
+    for path in screenshots(shots, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args)):
+        print(f"wrote {path}")
+    return 0
+
+
+def _export(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .scene.replay import replay_html
+
+    if not 0 < args.seconds <= 600 or not 2 <= args.frames <= 5000:
+        raise ValueError("--seconds must be in (0, 600] and --frames in 2..5000")
+    html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames)  # type: ignore[arg-type]
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(html, encoding="utf-8")
+    print(f"wrote {out} ({len(html) // 1024} kB; open it in a browser, no server needed)")
     return 0
 
 
@@ -217,12 +272,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     from .bodies_cli import COMMANDS, run_classify, run_contacts
 
-    if not argv or (argv[0] not in ("serve", "screenshot", *COMMANDS) and argv[0] not in ("-h", "--help")):
+    if not argv or (argv[0] not in ("serve", "screenshot", "export", *COMMANDS) and argv[0] not in ("-h", "--help")):
         argv = ["serve", *argv]  # no sub-command: serve with the given options (or defaults)
     args = parser.parse_args(argv)
     try:
         if args.command == "screenshot":
             return _screenshot(args)
+        if args.command == "export":
+            return _export(args)
         if args.command == "contacts":
             return run_contacts(args)
         if args.command == "classify":

@@ -2,9 +2,14 @@
 
 ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png`` starts a scene server on
 a free loopback port in this process, opens it in headless Chromium (SwiftShader WebGL), waits
-until the tab's session has loaded and analysed its configuration *and* the browser shows the
-shapes in their relation colour, then saves the page (scene and GUI, as a user sees it).
-The same machinery (:class:`HeadlessScene`) drives the browser tests.
+until the tab shows exactly its state (the session has loaded and analysed it, the browser
+draws both shapes at their poses in their relation colour and the readout names the relation),
+then saves the page (scene and GUI, as a user sees it).
+
+Many images cost one browser and one server: :class:`HeadlessScene` keeps the tab open and
+:meth:`HeadlessScene.show` loads the next configuration into the same session (or moves t), so
+each further image costs the redraw, not a browser start. :func:`screenshots` renders a list of
+shots into a folder. The same machinery drives the browser tests.
 """
 
 from __future__ import annotations
@@ -12,13 +17,15 @@ from __future__ import annotations
 import os
 import tempfile
 import time
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .scene.shapes import RELATION_HEX
+from .scene.shapes import PALETTES, RELATION_HEX
 from .scene.state import SceneConfig
 
-__all__ = ["CHROMIUM", "CHROMIUM_FLAGS", "HeadlessScene", "screenshot"]
+__all__ = ["CHROMIUM", "CHROMIUM_FLAGS", "HeadlessScene", "Shot", "screenshot", "screenshots"]
 
 CHROMIUM = "/usr/bin/chromium"
 """Debian's chromium (installed by apt; never a Playwright browser download)."""
@@ -46,7 +53,41 @@ _MESH_COLOR_JS = """(n) => {
   return hex;
 }"""
 
+_POSE_JS = """(n) => {
+  const r = window.__viserMutable?.nodeRefFromName?.[n];
+  if (!r) return null;
+  return [r.position.x, r.position.y, r.position.z, r.quaternion.w, r.quaternion.x, r.quaternion.y, r.quaternion.z];
+}"""
+
 _FRAME_JS = "() => window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0"
+
+_DRAWN_JS = """([poses, colours, word]) => {
+  const m = window.__viserMutable?.nodeRefFromName;
+  if (!m) return false;
+  for (const [name, p] of Object.entries(poses)) {
+    const r = m[name];
+    if (!r) return false;
+    const q = [r.position.x, r.position.y, r.position.z, r.quaternion.w, r.quaternion.x, r.quaternion.y, r.quaternion.z];
+    for (let i = 0; i < 7; i++) if (Math.abs(q[i] - p[i]) > 1e-6 * (1 + Math.abs(p[i]))) return false;
+  }
+  for (const [name, want] of Object.entries(colours)) {
+    const r = m[name];
+    let hex = null;
+    r.traverse((o) => { if (hex === null && o.material && o.material.color) hex = '#' + o.material.color.getHexString(); });
+    if (hex !== want) return false;
+  }
+  return word === null || document.body.innerText.includes(word);
+}"""
+
+
+@dataclass
+class Shot:
+    """One image: a configuration, optionally a time or an event of its motion, and the file."""
+
+    config: SceneConfig
+    out: Path
+    t: float | str | None = None
+    event: int | None = None
 
 
 class HeadlessScene:
@@ -54,12 +95,21 @@ class HeadlessScene:
 
     Args:
         config: what the tab opens on.
-        width, height: viewport in CSS pixels (device pixel ratio fixed to 1).
-        timeout: seconds to wait for the browser, the analysis and the final colours.
+        width: viewport width in CSS pixels (device pixel ratio fixed to 1).
+        height: viewport height.
+        timeout: seconds to wait for the browser, the analysis and the final picture.
+        shared: presenter mode (one scene for every tab).
     """
 
     def __init__(
-        self, config: SceneConfig, *, width: int = 1400, height: int = 900, timeout: float = 120.0, bodies: Any = None
+        self,
+        config: SceneConfig,
+        *,
+        width: int = 1400,
+        height: int = 900,
+        timeout: float = 120.0,
+        shared: bool = False,
+        bodies: Any = None,
     ) -> None:
         self.config = config
         self.bodies = bodies
@@ -67,6 +117,7 @@ class HeadlessScene:
         self.width = width
         self.height = height
         self.timeout = timeout
+        self.shared = shared
         self.scene: Any = None
         self.session: Any = None
         self.page: Any = None
@@ -81,7 +132,7 @@ class HeadlessScene:
 
         from .scene.server import start_scene
 
-        self.scene = start_scene("127.0.0.1", 0, self.config, bodies=self.bodies)
+        self.scene = start_scene("127.0.0.1", 0, self.config, shared=self.shared, bodies=self.bodies)
         try:
             self._pw = sync_playwright().start()
             self._tmp = tempfile.TemporaryDirectory(prefix="app-chromium-")
@@ -95,10 +146,7 @@ class HeadlessScene:
             )
             self.page = self._browser.pages[0] if self._browser.pages else self._browser.new_page()
             self.page.set_default_timeout(self.timeout * 1000)
-            self.page.goto(f"http://127.0.0.1:{self.scene.port}/?fixedDpr=1&hideViserLogo")
-            self.page.add_style_tag(content=_HIDE_TOAST)
-            self.session = self.scene.wait_for_session(self.timeout)
-            self.wait_settled()
+            self.session = self.goto("/")
         except BaseException:
             self.__exit__(None, None, None)
             raise
@@ -116,6 +164,48 @@ class HeadlessScene:
             except Exception:  # noqa: BLE001 - best-effort teardown
                 pass
 
+    @property
+    def url(self) -> str:
+        """The scene's root URL (with the flags a headless capture needs)."""
+        return f"http://127.0.0.1:{self.scene.port}/?fixedDpr=1&hideViserLogo"
+
+    def goto(self, path: str, page: Any = None) -> Any:
+        """Open ``path`` of the scene in ``page`` (default: the tab); return the new tab's session.
+
+        ``path`` is ``/``, a ``/c/<config>/`` link or a ``/s/<tab>/`` address; the tab's session
+        is returned once the browser shows its state.
+        """
+        page = page or self.page
+        before = max(self.scene.sessions, default=-1)
+        page.goto(f"http://127.0.0.1:{self.scene.port}{path}{'&' if '?' in path else '?'}fixedDpr=1&hideViserLogo")
+        page.add_style_tag(content=_HIDE_TOAST)
+        session = self.scene.wait_for_session(self.timeout, after=before) if not self.shared else self.scene.shared
+        if page is self.page:
+            self.session = session
+            self.wait_settled()
+        return session
+
+    def server_clients(self) -> list[Any]:
+        """The connected tabs' ``viser.ClientHandle`` objects."""
+        return list(self.scene.server.get_clients().values())
+
+    # -------------------------------------------------------------- what is shown
+    def show(self, config: SceneConfig | None = None, *, t: float | str | None = None, event: int | None = None) -> None:
+        """Show ``config`` in the same tab (no reload), then t or an event of its motion; wait for it."""
+        s = self.session
+        if config is not None:
+            s.load_untrusted(config.to_dict())
+            if not s.ready.wait(self.timeout):
+                raise TimeoutError("the scene did not finish loading/analysing its configuration")
+        if event is not None:
+            if s.jump_to_event(event) is None:
+                raise ValueError(f"this motion has no event {event}")
+        elif t is not None:
+            error = s.timeline_ctl.apply_text(str(t))
+            if error is not None:
+                raise ValueError(error)
+        self.wait_settled()
+
     # -------------------------------------------------------------- waiting and reading
     def frame(self) -> int:
         """Frames rendered so far by the tab's WebGL renderer."""
@@ -125,33 +215,44 @@ class HeadlessScene:
         """Material colour "#rrggbb" of a mesh node as three.js has it, or None if absent."""
         return self.page.evaluate(_MESH_COLOR_JS, f"/shapes/{name}/mesh")
 
+    def drawn_pose(self, name: str) -> list[float] | None:
+        """[x, y, z, w, qx, qy, qz] of node ``/shapes/<name>`` as three.js has it (None if absent)."""
+        return self.page.evaluate(_POSE_JS, f"/shapes/{name}")
+
+    def expected(self, session: Any = None) -> tuple[dict[str, list[float]], dict[str, str], str | None]:
+        """What the browser must show for a two-body session (default: the tab's): poses, colours, word."""
+        s = session if session is not None else self.session
+        with s.lock:
+            poses = {}
+            for name, view in s.views.items():
+                p = view.control.position
+                q = view.control.wxyz
+                poses[f"/shapes/{name}"] = [float(v) for v in (*p, *q)]
+            relation = s.state.relation
+            palette = PALETTES.get(s.state.palette, RELATION_HEX)
+        colours = {f"/shapes/{n}/mesh": palette[relation] for n in ("A", "B")} if relation else {}
+        return poses, colours, relation.upper() if relation else None
+
     def wait_settled(self, frames: int = 2) -> None:
-        """Wait for the session to be ready, the shapes in the expected colour, then frames."""
-        session = self.session
-        if hasattr(session, "show_bodies"):  # many bodies: the view of all bodies, or its open pair
-            if session.session is None:
-                return self._wait_bodies(frames)
-            session = session.session
+        """Wait until the tab shows the session's state: loaded, poses, colours, readout, frames."""
         deadline = time.monotonic() + self.timeout
-        if not session.ready.wait(self.timeout):
+        s = self.session
+        if hasattr(s, "show_bodies"):  # many bodies: the view of all bodies, or its open pair
+            if s.session is None:
+                return self._wait_bodies(frames)
+            s = s.session
+        if not s.ready.wait(self.timeout):
             raise TimeoutError("the scene did not finish loading/analysing its configuration")
+        while s.pending() and time.monotonic() < deadline:  # the coalesced panel refresh
+            time.sleep(0.01)
         self.page.wait_for_function("() => (window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0) > 2")
-        for name in ("A", "B"):
-            self.page.wait_for_function("(n) => window.__viserMutable?.nodeRefFromName?.[n] != null", arg=f"/shapes/{name}/mesh")
-        want = RELATION_HEX.get(session.state.relation or "")
-        if want is not None:
-            self.page.wait_for_function(
-                f"(n) => ({_MESH_COLOR_JS})(n) === {want!r}",
-                arg="/shapes/B/mesh",
-                timeout=max(1.0, deadline - time.monotonic()) * 1000,
-            )
-        # a few more frames so the final state is on the canvas; viser renders on demand, so
-        # when nothing changes no frame may come: that is fine (the colour is already applied)
-        f0 = self.frame()
-        try:
-            self.page.wait_for_function(f"() => ({_FRAME_JS})() >= {f0 + frames}", timeout=3000)
-        except Exception:  # noqa: BLE001 - playwright TimeoutError: scene idle, already drawn
-            pass
+        self.page.wait_for_function(
+            _DRAWN_JS, arg=list(self.expected(s)), timeout=max(1.0, deadline - time.monotonic()) * 1000
+        )
+        # two animation frames: the browser has rendered and painted the state just applied
+        # (viser renders on demand: a frame counter may not move when nothing changes)
+        for _ in range(frames):
+            self.page.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")
 
     def _wait_bodies(self, frames: int) -> None:
         """Many bodies: the view built, its batched mesh in the browser, then a few frames."""
@@ -162,11 +263,8 @@ class HeadlessScene:
         self.page.wait_for_function("() => (window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0) > 2")
         if self.session.mesh is not None:
             self.page.wait_for_function("(n) => window.__viserMutable?.nodeRefFromName?.[n] != null", arg=MESH_NODE)
-        f0 = self.frame()
-        try:
-            self.page.wait_for_function(f"() => ({_FRAME_JS})() >= {f0 + frames}", timeout=3000)
-        except Exception:  # noqa: BLE001 - playwright TimeoutError: scene idle, already drawn
-            pass
+        for _ in range(frames):  # painted (see wait_settled)
+            self.page.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")
 
     def canvas_pixels(self, every: int = 6) -> Any:
         """RGBA samples of the WebGL canvas on a grid of every ``every``-th pixel: (N, 4) uint8.
@@ -223,5 +321,68 @@ def screenshot(
     Raises:
         RuntimeError: chromium missing. TimeoutError: the scene never finished rendering.
     """
-    with HeadlessScene(config, width=width, height=height, timeout=timeout, bodies=bodies) as hs:
-        return hs.save(out)
+    return screenshots([Shot(config, Path(out))], width=width, height=height, timeout=timeout, bodies=bodies)[0]
+
+
+def screenshots(
+    shots: Iterable[Shot],
+    *,
+    width: int = 1400,
+    height: int = 900,
+    timeout: float = 120.0,
+    timings: list[float] | None = None,
+    bodies: Any = None,
+) -> list[Path]:
+    """Render many shots with one browser and one server (one tab, reloaded for nothing).
+
+    Args:
+        shots: what to render, in order (consecutive shots of one configuration only move t).
+        width: viewport width in pixels.
+        height: viewport height in pixels.
+        timeout: seconds to wait for each image.
+        timings: if given, receives the seconds each image took (the first includes the start).
+        bodies: many bodies to show instead of the shots' configurations (``--bodies FILE``).
+
+    Returns:
+        The paths written, in order.
+    """
+    shots = list(shots)
+    if not shots:
+        return []
+    out: list[Path] = []
+    t0 = time.perf_counter()
+    with HeadlessScene(shots[0].config, width=width, height=height, timeout=timeout, bodies=bodies) as hs:
+        shown: SceneConfig | None = shots[0].config
+        for shot in shots:
+            if shot.config is not shown:
+                hs.show(shot.config)
+                shown = shot.config
+            if shot.t is not None or shot.event is not None:
+                hs.show(t=shot.t, event=shot.event)
+            out.append(hs.save(shot.out))
+            if timings is not None:
+                now = time.perf_counter()
+                timings.append(now - t0)
+                t0 = now
+    return out
+
+
+def shots_for(config: SceneConfig, out: str | Path, ts: Sequence[float | str], events: Sequence[int]) -> list[Shot]:
+    """The shots of ``python -m app screenshot``: one image, or one per --t/--event in a folder.
+
+    Args:
+        config: the scene.
+        out: a PNG path (one image), or a folder (several: ``t-<value>.png``, ``event-<k>.png``).
+        ts: times (each an image).
+        events: events (each an image).
+    """
+    out = Path(out)
+    if len(ts) + len(events) <= 1 and out.suffix.lower() == ".png":
+        return [Shot(config, out, ts[0] if ts else None, events[0] if events else None)]
+    shots = [Shot(config, out / f"t-{_safe(t)}.png", t=t) for t in ts]
+    shots += [Shot(config, out / f"event-{k}.png", event=k) for k in events]
+    return shots or [Shot(config, out / "scene.png")]
+
+
+def _safe(t: float | str) -> str:
+    return "".join(c if c.isalnum() or c in ".-" else "_" for c in str(t))

@@ -87,6 +87,7 @@ def run_scene_cost(
 
     import core.moving.analysis as cp
     from app.scene import measure_update_costs
+    from app.scene import picture as P
     from app.scene import session as S
     from app.scene.state import SceneConfig
 
@@ -124,12 +125,12 @@ def run_scene_cost(
             with _counting(cp, "analyse") as n_an:
                 s = S.Session(server, SceneConfig(preset=preset, show_plots=plots_on), count_messages=True)
                 s.ready.wait(120)
-                lo, hi = s.model.interval_floats if s.model else (0.0, 1.0)
+                lo, hi = s.state.analysis.window if s.state.analysis else (0.0, 1.0)
                 s.set_t(lo)  # warm-up
                 time.sleep(0.12)
                 m0 = s.messages
                 loaded = n_an[0]  # analyses so far (loading); none may follow
-                with _counting(S, "explain") as n_ex:
+                with _counting(P, "explain") as n_ex:
                     ts = _time_calls(lambda i: s.set_t(lo + (hi - lo) * (i + 0.5) / repeats, defer_panels=defer), repeats)
                     time.sleep(0.12)  # let a coalesced panel refresh fire: its messages count too
             mode = "slider (panels at 20 Hz)" if defer else "jump: readout, bar, t box at once"

@@ -19,7 +19,7 @@ from fastapi.testclient import TestClient
 
 from app.api import ApiSettings, create_api
 from app.api.deps import get_settings, get_workers
-from app.api.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerPool, WorkerTimeout
+from app.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerPool, WorkerTimeout
 from core.formulae.decision import RULES
 
 
@@ -765,7 +765,7 @@ def test_shutdown_pool_refuses_and_releases_waiters():
 
 
 def test_cancelled_job_is_killed():
-    from app.api.workers import WorkerCancelled
+    from app.workers import WorkerCancelled
 
     pool = WorkerPool(1)
     cancel = threading.Event()

@@ -99,7 +99,7 @@ def test_scene_loads_and_typing_a_centre_changes_colour(headless, tmp_path):
             " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
             f" return h === '{HEX['tangent']}'; }}"
         )
-        assert "TANGENT" in hs.session.readout.content
+        assert "TANGENT" in hs.session.ui.readout.content
         hs.save(tmp_path / "typed.png")
 
 
@@ -121,7 +121,7 @@ def test_two_tabs_have_their_own_shapes(headless):
 
 
 def _preset_available(name: str) -> bool:
-    from app.scene.analysis import list_presets
+    from app.scene.motion import list_presets
 
     return name in list_presets()
 
@@ -172,7 +172,7 @@ def test_screenshot_command_contract(tmp_path):
     r = subprocess.run(
         [sys.executable, "-m", "app", "screenshot", "--preset", "example-29", "--t", "0.7", "--out", str(out),
          "--width", "800", "--height", "600"],
-        cwd=root, capture_output=True, text=True, timeout=180,
+        check=False, cwd=root, capture_output=True, text=True, timeout=180,
     )
     assert r.returncode == 0, r.stderr
     data = out.read_bytes()
@@ -184,7 +184,7 @@ def test_screenshot_command_contract(tmp_path):
 def test_analysis_shows_intervals_and_jump_to_event(headless):
     cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.2, "gizmos": False})
     with headless(cfg, width=1200, height=900, timeout=60) as hs:
-        an = hs.session.analysis
+        an = hs.session.state.analysis
         assert [s[2] for s in an.segments] == ["separate", "overlap", "separate"]
         assert len(an.events) == 2
         assert abs(an.events[0].t - T_TANGENT) < 1e-9
@@ -244,3 +244,26 @@ def test_shared_presenter_scene_is_seen_by_every_tab(tmp_path):
             browser.close()
     finally:
         scene.stop()
+
+
+def test_presenter_mode_dimension_switch_and_every_camera_browser():
+    """Defects 1 and 5 in presenter mode (see test_browser_scene.py for the helpers)."""
+    from test_browser_scene import assert_pose, choose, until
+
+    from app.screenshot import HeadlessScene
+
+    cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.3})
+    with HeadlessScene(cfg, width=1100, height=800, timeout=90, shared=True) as h:
+        second = h.page.context.new_page()
+        h.goto("/", page=second)
+        s = h.scene.shared
+        until(lambda: len(h.server_clients()) == 2, what="two tabs")
+        choose(h.page, "Preset", "circles-crossing")
+        until(lambda: s.state.dim == 2 and s.state.analysis is not None, what="2D preset")
+        h.wait_settled()
+        a, _ = s.state.motion.shapes_at(s.state.t)
+        assert_pose(h, "/shapes/A", (a.center[0], a.center[1], 0.0), scale=(1, 1, 1))
+        for cam in (c.camera for c in h.server_clients()):  # every tab looks down the z axis
+            until(lambda cam=cam: np.allclose(cam.up_direction, (0, 1, 0), atol=1e-6), what="camera up")
+            until(lambda cam=cam: abs(cam.position[0] - cam.look_at[0]) < 1e-6 and cam.position[2] > 1, what="from above")
+        second.close()

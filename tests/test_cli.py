@@ -98,7 +98,9 @@ def test_serve_starts_scene_and_api():
             time.sleep(0.3)
             assert p.poll() is None, p.stdout.read() if p.stdout else ""
             try:
-                ok_scene = ok_scene or httpx.get(f"http://127.0.0.1:{scene_port}/", timeout=2).status_code == 200
+                r = httpx.get(f"http://127.0.0.1:{scene_port}/", timeout=2, follow_redirects=True)
+                # the root redirects each new tab to an address of its own, /s/<tab id>/
+                ok_scene = ok_scene or (r.status_code == 200 and r.url.path.startswith("/s/") and "<html" in r.text)
                 ok_api = ok_api or httpx.get(f"http://127.0.0.1:{api_port}/healthz", timeout=2).status_code == 200
             except httpx.HTTPError:
                 pass
@@ -123,3 +125,18 @@ def test_no_subcommand_means_serve():
     with pytest.raises(SystemExit) as e:
         main(["--port", "not-a-port"])
     assert e.value.code == 2
+
+
+def test_busy_scene_port_is_an_error_not_a_move(tmp_path):
+    """A taken scene port stops the start with a message; viser must not drift onto the next
+    port (which may be the API's: start-up then failed with a confusing error)."""
+    scene_port, api_port = free_port(), free_port()
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", scene_port))
+        busy.listen()
+        r = subprocess.run(
+            [sys.executable, "-m", "app", "serve", "--port", str(scene_port), "--api-port", str(api_port), "--preset", "none"],
+            cwd=ROOT, capture_output=True, text=True, timeout=60, env={**os.environ, "PYTHONPATH": str(ROOT)}, check=False,
+        )
+    assert r.returncode == 1
+    assert f"the scene's port {scene_port} on 127.0.0.1 is already in use" in r.stderr

@@ -304,8 +304,8 @@ def test_scene_websocket_origin_rule(server):
     assert handshake(p, f"http://localhost:{p + 1}") == 403  # another local service's page
     assert handshake(p, "https://example.org:8443") == 403
     assert handshake(p, "null") == 403
-    page = httpx.get(f"http://127.0.0.1:{p}/", timeout=10)
-    assert page.status_code == 200  # plain HTTP (the page itself) is unaffected
+    page = httpx.get(f"http://127.0.0.1:{p}/", timeout=10, follow_redirects=True)
+    assert page.status_code == 200  # plain HTTP (the page itself, at the tab's own address) is unaffected
 
 
 # --- lifecycle -----------------------------------------------------------------------------------------
@@ -400,11 +400,11 @@ def scene_session():
 
 
 def type_motion(s, a: str, b: str = "-t", interval: str = "-2, 2") -> float:
-    s.motion_fields["A"].value = json.dumps(circle_moving(a))
-    s.motion_fields["B"].value = json.dumps(circle_moving(b))
-    s.motion_fields["interval"].value = interval
+    s.ui.motion.fields["A"].value = json.dumps(circle_moving(a))
+    s.ui.motion.fields["B"].value = json.dumps(circle_moving(b))
+    s.ui.motion.fields["interval"].value = interval
     t0 = time.monotonic()
-    s._on_analyse_click()
+    s.motion_ctl.on_analyse()
     return time.monotonic() - t0
 
 
@@ -419,8 +419,8 @@ def test_scene_reads_typed_motions_in_a_worker(scene_session, monkeypatch):
     s = scene_session
     s.ready.clear()
     assert type_motion(s, "t") < ANSWER_S
-    assert not s.motion_errors["A"].visible
-    assert s.ready.wait(60) and [e.t for e in s.analysis.events] == [-1.0, 1.0]
+    assert not s.ui.motion.errors["A"].visible
+    assert s.ready.wait(60) and [e.t for e in s.state.analysis.events] == [-1.0, 1.0]
 
 
 @pytest.mark.parametrize(
@@ -438,13 +438,13 @@ def test_scene_hostile_typed_motion_gets_a_message(scene_session, a, interval, f
     s = scene_session
     seconds = type_motion(s, a, interval=interval)
     assert seconds < ANSWER_S
-    assert s.motion_errors[field].visible, {k: m.content for k, m in s.motion_errors.items()}
-    assert fragment in s.motion_errors[field].content
+    assert s.ui.motion.errors[field].visible, {k: m.content for k, m in s.ui.motion.errors.items()}
+    assert fragment in s.ui.motion.errors[field].content
 
 
 def test_scene_sqrt_of_a_semiprime(scene_session):
     s = scene_session
     s.ready.clear()
     assert type_motion(s, f"sqrt({SEMIPRIME_100})*t - 3", interval="-inf, inf") < ANSWER_S
-    assert not s.motion_errors["A"].visible
-    assert s.ready.wait(60) and len(s.analysis.events) == 2
+    assert not s.ui.motion.errors["A"].visible
+    assert s.ready.wait(60) and len(s.state.analysis.events) == 2

@@ -7,6 +7,7 @@ Golden relations are hand-checkable: unit spheres/circles whose centres are 2 ap
 from __future__ import annotations
 
 import time
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -18,7 +19,8 @@ from app.scene.costs import measure_update_costs  # noqa: E402
 from app.scene.panels import intervals_bar_html, readout_markdown, sign_table_markdown  # noqa: E402
 from app.scene.plots import compress  # noqa: E402
 from app.scene.session import Session  # noqa: E402
-from app.scene.state import SceneConfig, ShapeState, parse_vector  # noqa: E402
+from app.scene.state import SceneConfig, ShapeState  # noqa: E402
+from app.scene.texts import parse_vector  # noqa: E402
 
 GREEN, AMBER, RED = (0x2C, 0xA0, 0x2C), (0xFF, 0xBF, 0x00), (0xD6, 0x27, 0x28)
 
@@ -57,15 +59,15 @@ def test_static_relation_and_colour(server, dim, dx, relation, colour):
     s = Session(server, unit_spheres(dim, dx))
     assert s.state.relation == relation
     assert colours(s) == {colour}
-    assert relation.upper() in s.readout.content
+    assert relation.upper() in s.ui.readout.content
 
 
 def test_contact_point_at_tangency(server):
     s = Session(server, unit_spheres(3, "2"))
-    assert s.contact.visible
-    np.testing.assert_allclose(s.contact.position, (1.0, 0.0, 0.0), atol=1e-6)
+    assert s.markers.point.visible
+    np.testing.assert_allclose(s.markers.point.position, (1.0, 0.0, 0.0), atol=1e-6)
     s.set_shape("B", center="3, 0, 0")
-    assert not s.contact.visible
+    assert not s.markers.point.visible
 
 
 def test_typed_exact_centre_changes_relation(server):
@@ -79,12 +81,12 @@ def test_typed_exact_centre_changes_relation(server):
 def test_bad_typed_value_is_shown_not_raised(server):
     s = Session(server, unit_spheres(3, "3"))
     before = s.state.shapes["B"]
-    s.shape_fields["B"]["semi_axes"].value = "1, -2, 1"  # runs the GUI callback synchronously
-    assert s.shape_errors["B"].visible
-    assert "positive" in s.shape_errors["B"].content
+    s.ui.shapes["B"].fields["semi_axes"].value = "1, -2, 1"  # runs the GUI callback synchronously
+    assert s.ui.shapes["B"].error.visible
+    assert "positive" in s.ui.shapes["B"].error.content
     assert s.state.shapes["B"] == before
-    s.shape_fields["B"]["center"].value = "1, two, 3"
-    assert "not a number" in s.shape_errors["B"].content
+    s.ui.shapes["B"].fields["center"].value = "1, two, 3"
+    assert "not a number" in s.ui.shapes["B"].error.content
     with pytest.raises(ValueError, match="semi_axes"):
         s.set_shape("B", semi_axes="1, 0, 1")
 
@@ -100,10 +102,10 @@ def test_typed_values_beyond_the_drawing_range_are_refused(server):
         ("1" * 401 + ", 0, 0", "number string too long (401 &gt; 400 characters)"),
         ("\uff13, 0, 0", "not a number"),
     ]:
-        s.shape_fields["B"]["center"].value = text
-        assert s.shape_errors["B"].visible and fragment in s.shape_errors["B"].content, s.shape_errors["B"].content
-    s.shape_fields["B"]["semi_axes"].value = "1e-13, 1, 1"
-    assert "semi-axes out of the scene&#x27;s range [1e-12, 1e+12]" in s.shape_errors["B"].content
+        s.ui.shapes["B"].fields["center"].value = text
+        assert s.ui.shapes["B"].error.visible and fragment in s.ui.shapes["B"].error.content, s.ui.shapes["B"].error.content
+    s.ui.shapes["B"].fields["semi_axes"].value = "1e-13, 1, 1"
+    assert "semi-axes out of the scene&#x27;s range [1e-12, 1e+12]" in s.ui.shapes["B"].error.content
     assert s.state.shapes["B"] == before and s.state.relation == "separate"
     assert s.set_shape("B", center="1e12, 0, 0") == "separate"  # the edge of the range is accepted
 
@@ -120,18 +122,23 @@ def test_drag_recolours_and_sends_nothing_when_unchanged(server):
     assert colours(s) == {GREEN}
 
 
-def test_drag_recolours_from_classify_and_the_readout_follows(server):
+def test_drag_recolours_from_classify_and_the_readout_follows(server, monkeypatch):
+    import app.scene.picture as picture
+
     s = Session(server, unit_spheres(3, "3"))
+    time.sleep(0.15)  # sessions of earlier tests on this server finish their coalesced refreshes
     calls = []
-    full = s._static_panels  # explain, readout, contact point, plane
-    s._static_panels = lambda: calls.append(1) or full()
+    full = picture.explain  # explain, readout, contact point, plane
+    monkeypatch.setattr(picture, "explain", lambda A, B: calls.append(1) or full(A, B))
     assert s.apply_drag("B", (1.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) == "overlap"
     assert colours(s) == {RED} and calls == []  # recoloured by classify, no explain yet
+    assert "SEPARATE" in s.ui.readout.content  # the readout follows, not yet there
     for _ in range(100):  # the full readout follows within the panel period (50 ms)
-        if calls and "OVERLAP" in s.readout.content:
+        if calls and "OVERLAP" in s.ui.readout.content:
             break
         time.sleep(0.02)
-    assert "OVERLAP" in s.readout.content and calls == [1]
+    assert "OVERLAP" in s.ui.readout.content and calls == [1]
+    assert "overlapping by 25 %" in s.ui.readout.content  # unit spheres 1.5 apart: mu = 3/4
 
 
 def test_drag_2d_uses_rotation_about_z(server):
@@ -204,7 +211,7 @@ def motion_session(server, **cfg) -> Session:
 
 def test_example_29_timeline(server):
     s = motion_session(server)
-    an = s.analysis
+    an = s.state.analysis
     assert [round(e.t, 9) for e in an.events] == [round(ALPHA1, 9), round(ALPHA2, 9)]
     assert [seg[2] for seg in an.segments] == ["separate", "overlap", "separate"]
     # the paper: collision free on [0, alpha1), overlap on (alpha1, alpha2), free on (alpha2, 1]
@@ -213,76 +220,92 @@ def test_example_29_timeline(server):
         assert colours(s) == {dict(separate=GREEN, overlap=RED)[rel]}
     assert s.jump_to_event(1) == "tangent"
     assert colours(s) == {AMBER}
-    assert s.contact.visible
-    assert "α1" in s.readout.content and "TANGENT" in s.readout.content
+    assert s.markers.point.visible
+    assert "α1" in s.ui.readout.content and "TANGENT" in s.ui.readout.content
     # paper: Var(-, a3, a2, a1, -) = Var(-, 0, 1/2, 0, -) = 2 at alpha_i, Theorem 24 (1)
-    assert "Var(-, 0, +, 0, -) = **2**" in s.readout.content
-    assert "| a<sub>2</sub> | 0.5 | + |" in s.readout.content
-    assert "Th. 24.1" in s.readout.content
+    assert "Var(-, 0, +, 0, -) = **2**" in s.ui.readout.content
+    assert "| a<sub>2</sub> | 0.5 | + |" in s.ui.readout.content
+    assert "Th. 24.1" in s.ui.readout.content
     # contact point of Example 29 at alpha1: by symmetry of the two equal shapes it is the
     # midpoint of the centres, (c_A + c_B) / 2 with c_A = (11 - 12 t, 0, 0), c_B = (3, 4t - 2, 4t - 4)
     mid = np.array([(11 - 12 * ALPHA1 + 3) / 2, (4 * ALPHA1 - 2) / 2, (4 * ALPHA1 - 4) / 2])
-    np.testing.assert_allclose(s.contact.position, mid, atol=1e-6)
-    assert "| α1" in s.sign_table.content
+    np.testing.assert_allclose(s.markers.point.position, mid, atol=1e-6)
+    assert "| α1" in s.ui.sign_table.content
     s.close()
 
 
 def test_t_step_does_not_reanalyse_and_sends_few_messages(server):
     s = motion_session(server)
-    key = s.state.motion_key
+    key = s.state.motion.key
     calls = []
     s.cache.submit = lambda *a, **k: calls.append(a)  # any new analysis would go through here
     m0 = s.messages
     for i in range(50):
         s.set_t(0.01 + i / 60, defer_panels=True)
-    assert calls == [] and s.state.motion_key == key
+    assert calls == [] and s.state.motion.key == key
     assert (s.messages - m0) / 50 <= 6
     s.close()
 
 
 def test_typed_motion_errors_are_shown_next_to_the_field(server):
     s = motion_session(server)
-    s.motion_fields["A"].value = '{"shape": {"center": [0, 0, 0], "semi_axes": [2, 1, 1]}, "translation": ["11 - 12*t", "0"]}'
-    s._on_analyse_click()
-    assert s.motion_errors["A"].visible and "translation" in s.motion_errors["A"].content
-    s.motion_fields["A"].value = '{"shape": '
-    s._on_analyse_click()
-    assert "not valid JSON" in s.motion_errors["A"].content
-    assert s.analysis is not None  # the previous analysis is still shown
+    s.ui.motion.fields["A"].value = '{"shape": {"center": [0, 0, 0], "semi_axes": [2, 1, 1]}, "translation": ["11 - 12*t", "0"]}'
+    s.motion_ctl.on_analyse()
+    assert s.ui.motion.errors["A"].visible and "translation" in s.ui.motion.errors["A"].content
+    s.ui.motion.fields["A"].value = '{"shape": '
+    s.motion_ctl.on_analyse()
+    assert "not valid JSON" in s.ui.motion.errors["A"].content
+    assert s.state.analysis is not None  # the previous analysis is still shown
     s.close()
 
 
 def test_typed_motion_is_analysed(server):
     s = motion_session(server)
     # unit circles at (t, 0) and (-t, 0): tangent at t = -1 and t = 1 (centre distance 2|t| = 2)
-    s.motion_fields["A"].value = '{"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["t", "0"]}'
-    s.motion_fields["B"].value = '{"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["-t", "0"]}'
-    s.motion_fields["interval"].value = "-2, 2"
+    s.ui.motion.fields["A"].value = '{"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["t", "0"]}'
+    s.ui.motion.fields["B"].value = '{"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["-t", "0"]}'
+    s.ui.motion.fields["interval"].value = "-2, 2"
     s.ready.clear()
-    s._on_analyse_click()
+    s.motion_ctl.on_analyse()
     assert s.ready.wait(60)
     assert s.state.dim == 2
-    assert [e.t for e in s.analysis.events] == [-1.0, 1.0]
+    assert [e.t for e in s.state.analysis.events] == [-1.0, 1.0]
     assert s.set_t(0.5) == "overlap" and s.set_t(1.5) == "separate"
     s.close()
 
 
 def test_drag_leaves_the_motion(server):
+    """Example 29 at t = 3/10: A is centred at (11 - 12t, 0, 0) = (7.4, 0, 0), B at
+    (3, 4t - 2, 4t - 4) = (3, -0.8, -2.8), both with semi-axes (2, 1, 1) along x. A drag of B
+    turns the scene static with A where it was drawn and B where it was dropped."""
     s = motion_session(server, t=0.3)
     assert s.state.relation == "separate"
-    rel = s.apply_drag("B", (4.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
-    assert s.model is None and s.preset.value == "(static shapes)"
-    # the relation drawn is the certified one of the shapes now shown (independent oracle)
-    assert rel == oracle_relation(s.state.shapes["A"].quadric(), s.state.shapes["B"].quadric())
-    # the static shapes start from the motion's shapes at t = 0.3 (semi-axes 2, 1, 1)
-    assert sorted(round(float(v), 9) for v in s.state.shapes["A"].semi_axes) == [1.0, 1.0, 2.0]
+    rel = s.apply_drag("B", (4.0, 0.5, 0.0), (1.0, 0.0, 0.0, 0.0))
+    assert s.state.motion is None and s.state.analysis is None
+    a, b = s.state.shapes["A"], s.state.shapes["B"]
+    np.testing.assert_allclose([float(v) for v in a.center], [7.4, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(sorted(float(v) for v in a.semi_axes), [1.0, 1.0, 2.0], atol=1e-12)
+    assert tuple(float(v) for v in b.center) == (4.0, 0.5, 0.0)
+    # B keeps its semi-axes (2, 1, 1) and takes the dropped orientation (identity: long axis along x)
+    assert tuple(round(float(v), 12) for v in b.semi_axes) == (2.0, 1.0, 1.0)
+    # the relation drawn is the certified one of the shapes now shown (independent oracle):
+    # centres 3.4 apart along x with half-lengths 2 + 2 along x, 0.5 apart in y: overlap
+    assert rel == oracle_relation(a.quadric(), b.quadric()) == "overlap"
+    assert colours(s) == {RED}
+    time.sleep(0.2)  # the panel follows: timeline hidden, fields show the static shapes
+    assert not s.ui.timeline.folder.visible and not s.ui.plots.folder.visible
+    assert s.ui.motion.preset.value == "(static shapes)"
+    assert s.ui.shapes["B"].fields["center"].value == "4, 0.5, 0"
+    assert s.ui.shapes["A"].fields["center"].value.startswith("7.4, ")
+    assert "OVERLAP" in s.ui.readout.content and "(static shapes)" in s.ui.readout.content
     s.close()
 
 
 def test_analysis_in_a_child_process_matches_threads():
-    from app.scene.analysis import AnalysisCache, load_motion
+    from app.scene.analysis import AnalysisCache
+    from app.scene.motion import load_motion
 
-    model = load_motion(preset="example-30", motion=None, dim=3)
+    model = load_motion(preset="example-30", motion=None)
     cache = AnalysisCache(processes=True)
     try:
         view = cache.submit(model).result(timeout=120)
@@ -296,24 +319,13 @@ def test_analysis_in_a_child_process_matches_threads():
     assert view.relation_at(0.25) == "separate" and view.relation_at(0.75) == "overlap"
 
 
-@pytest.mark.parametrize(
-    "module", ["app.scene.state", "app.scene.panels", "app.scene.contact", "app.scene.plots", "app.scene.shapes"]
-)
-def test_docstring_examples(module):
-    import doctest
-    import importlib
-
-    result = doctest.testmod(importlib.import_module(module))
-    assert result.failed == 0
-
-
 def test_separating_plane_separates(server):
     cfg = unit_spheres(3, "3")
     cfg.separating_plane = True
     s = Session(server, cfg)
-    assert s.plane.visible
+    assert s.markers.plane.visible
     # unit spheres at x = 0 and x = 3: the plane halfway is x = 1.5 with normal +-x
-    np.testing.assert_allclose(s.plane.position, (1.5, 0.0, 0.0), atol=1e-6)
+    np.testing.assert_allclose(s.markers.plane.position, (1.5, 0.0, 0.0), atol=1e-6)
     s.set_shape("B", center="1, 2, 2", semi_axes="1/2, 2, 1", orientation="1, 1, 0, 1")
     from core.witness import separating_plane  # the certified plane the scene draws
 
@@ -332,19 +344,19 @@ def test_separating_plane_separates(server):
             pts = (R @ (u * np.array(scale)).T).T + np.array(pos)
             assert np.all(sign * (pts @ n - h) > 0)
     else:
-        assert not s.plane.visible
+        assert not s.markers.plane.visible
     s.set_shape("B", center="1, 0, 0", semi_axes="1, 1, 1", orientation="1, 0, 0, 0")
-    assert s.state.relation == "overlap" and not s.plane.visible
+    assert s.state.relation == "overlap" and not s.markers.plane.visible
 
 
 def test_play_advances_t_and_stops(server):
     import time
 
     s = motion_session(server, t=0.1)
-    s.speed.value = 5.0  # half of I per second
-    s.play.value = True  # runs the GUI callback: starts the playback thread
+    s.ui.timeline.speed.value = 5.0  # half of I per second
+    s.ui.timeline.play.value = True  # runs the GUI callback: starts the playback thread
     time.sleep(0.5)
-    s.play.value = False
+    s.ui.timeline.play.value = False
     time.sleep(0.15)
     t_stopped = s.state.t
     assert 0.15 < t_stopped < 0.6
@@ -354,29 +366,37 @@ def test_play_advances_t_and_stops(server):
 
 
 def test_dimension_switch_rebuilds_shapes(server):
+    """View -> Dimension shows the other dimension's default shapes, drawn where they are: 2D
+    A = ellipse (2, 1) at the origin, B = ellipse (3/2, 1/2) at (3, 3/2) turned by 0.6 rad."""
     s = Session(server, unit_spheres(3, "3"))
-    s.dim_choice.value = "2D ellipses"  # runs the GUI callback
-    assert s.state.dim == 2 and len(s.state.shapes["A"].center) == 2
-    assert s.state.relation in ("separate", "tangent", "overlap")
-    s.dim_choice.value = "3D ellipsoids"
-    assert s.state.dim == 3
+    s.ui.view.dimension.value = "2D ellipses"  # runs the GUI callback
+    a, b = s.state.shapes["A"], s.state.shapes["B"]
+    assert s.state.dim == 2 and [v.dim for v in s.views.values()] == [2, 2]
+    assert [str(v) for v in (*a.center, *a.semi_axes, *b.center)] == ["0", "0", "2", "1", "3", "3/2"]
+    assert s.state.relation == oracle_relation(a.quadric(), b.quadric())
+    np.testing.assert_allclose(s.views["A"].control.position, (0.0, 0.0, 0.0))
+    np.testing.assert_allclose(s.views["B"].control.position, (3.0, 1.5, 0.01))  # B lifted a hair
+    np.testing.assert_allclose(s.views["A"].mesh.scale, (2.0, 1.0, 1.0))
+    s.ui.view.dimension.value = "3D ellipsoids"
+    assert s.state.dim == 3 and len(s.state.shapes["A"].center) == 3
+    assert s.state.relation == oracle_relation(s.state.shapes["A"].quadric(), s.state.shapes["B"].quadric())
 
 
 def test_t_box_accepts_fractions_and_event_names(server):
     s = motion_session(server)
-    s.t_number.value = "3/4"
+    s.ui.timeline.t_box.value = "3/4"
     assert s.state.t == 0.75 and s.state.relation == "overlap"
-    s.t_number.value = "alpha2"
+    s.ui.timeline.t_box.value = "alpha2"
     assert s.state.event == 2 and s.state.relation == "tangent"
-    s.t_number.value = "α7"
-    assert s.t_error.visible and "2 events" in s.t_error.content
-    s.t_number.value = "soon"
-    assert "not a number" in s.t_error.content
+    s.ui.timeline.t_box.value = "α7"
+    assert s.ui.timeline.t_error.visible and "2 events" in s.ui.timeline.t_error.content
+    s.ui.timeline.t_box.value = "soon"
+    assert "not a number" in s.ui.timeline.t_error.content
     assert s.state.relation == "tangent"  # unchanged by bad input
-    s.t_number.value = "α\u0662"  # Arabic-Indic 2: not an event number, not a number
-    assert s.state.event == 2 and "not a number" in s.t_error.content
-    s.t_number.value = "1e400"  # beyond every float: clamped to the window like any t outside it
-    assert not s.t_error.visible and s.state.t == s.model.interval_floats[1]
+    s.ui.timeline.t_box.value = "α\u0662"  # Arabic-Indic 2: not an event number, not a number
+    assert s.state.event == 2 and "not a number" in s.ui.timeline.t_error.content
+    s.ui.timeline.t_box.value = "1e400"  # outside I = [0, 1]: refused with a message, never clamped
+    assert "outside I = [0, 1]" in s.ui.timeline.t_error.content and s.state.event == 2
     s.close()
 
 
@@ -401,7 +421,7 @@ def test_config_with_a_typed_motion(server, tmp_path):
     s = Session(server, SceneConfig.from_json_file(cfg_file))
     assert s.ready.wait(60)
     assert s.state.dim == 2 and s.state.relation == "separate"
-    assert [e.t for e in s.analysis.events] == [0.5]
+    assert [e.t for e in s.state.analysis.events] == [0.5]
     assert s.set_t(1.0) == "overlap"
     assert s.jump_to_event(1) == "tangent"
     s.close()
@@ -409,26 +429,23 @@ def test_config_with_a_typed_motion(server, tmp_path):
 
 def test_typed_text_is_escaped_in_messages(server):
     s = Session(server, unit_spheres(3, "3"))
-    s.shape_fields["B"]["center"].value = "1, <b>x</b>, 0"
-    assert s.shape_errors["B"].visible
-    assert "<b>" not in s.shape_errors["B"].content and "&lt;b&gt;" in s.shape_errors["B"].content
+    s.ui.shapes["B"].fields["center"].value = "1, <b>x</b>, 0"
+    assert s.ui.shapes["B"].error.visible
+    assert "<b>" not in s.ui.shapes["B"].error.content and "&lt;b&gt;" in s.ui.shapes["B"].error.content
 
 
 def test_relation_lookup_inside_an_isolating_interval(server):
     """A t inside an irrational event's isolating interval is decided by the exact signs at t:
     Example 29's alpha1 = (12 - 2 sqrt 2)/17 separates 'separate' (before) from 'overlap'."""
-    from fractions import Fraction
-
-    from core.shapes.numbers import to_fmpq
 
     s = motion_session(server)
-    look = s.analysis.relation_fn
-    lo, hi = (to_fmpq(x) for x in look._events[0][:2])
+    an = s.state.analysis
+    lo, hi = an.result.events[0].lo, an.result.events[0].hi
     assert lo < hi
-    assert look(Fraction(int(lo.p), int(lo.q))) == "separate"
-    assert look(Fraction(int(hi.p), int(hi.q))) == "overlap"
+    assert an.relation_at(Fraction(int(lo.p), int(lo.q))) == "separate"
+    assert an.relation_at(Fraction(int(hi.p), int(hi.q))) == "overlap"
     for t in np.linspace(0.0, 1.0, 23):
-        assert look(float(t)) == ("overlap" if ALPHA1 < t < ALPHA2 else "separate")
+        assert an.relation_at(float(t)) == ("overlap" if ALPHA1 < t < ALPHA2 else "separate")
     s.close()
 
 
@@ -444,8 +461,8 @@ def test_readout_at_t_shows_exact_signs_for_sqrt2_motion(server):
         s.set_t(t)
         row = r.sign_row_at(t)
         signs = "".join("+" if x > 0 else "-" if x < 0 else "0" for x in row.a)
-        assert f"Var({', '.join(signs)}) = **{row.var}**" in s.readout.content
-        assert str(row.relation).upper() in s.readout.content
+        assert f"Var({', '.join(signs)}) = **{row.var}**" in s.ui.readout.content
+        assert str(row.relation).upper() in s.ui.readout.content
     s.close()
 
 
@@ -453,7 +470,7 @@ def test_wire_setters_match_viser_public_setters(server):
     """app.scene.wire queues the same messages and stores the same values as viser's setters."""
     import dataclasses
 
-    from app.scene import plots, wire
+    from app.scene import wire
 
     iface = server.scene._websock_interface
     sent: list = []
@@ -482,8 +499,8 @@ def test_wire_setters_match_viser_public_setters(server):
         wire.set_position(b, (1.0, 2.0, 3.5 + 1e-12))  # viser's allclose would drop this move
         assert len(sent) == 1 and sent[0].position[2] == 3.5 + 1e-12
 
-        p = plots.add_plot(server.gui, "wire", 2)
         data = tuple(np.linspace(0, 1, 5) * k for k in range(1, 6))
+        p = server.gui.add_uplot(data, tuple(viser.uplot.Series(label=f"y{k}") for k in range(5)))
         sent.clear()
         wire.set_uplot_data(p, data)
         assert len(sent) == 1 and type(sent[0]).__name__ == "GuiUpdateMessage"
@@ -505,7 +522,6 @@ def test_t_box_certifies_the_exact_fraction_typed(server, tmp_path):
     """Unit circles at (0, 0) and (3t, 0) touch at t = 2/3 exactly (distance 3t = 2). The float
     nearest 2/3 is below it (overlap there); typing "2/3" must show the tangency of 2/3 itself."""
     import json
-    from fractions import Fraction
 
     assert Fraction(2 / 3) < Fraction(2, 3)  # the float is on the overlap side
     cfg_file = tmp_path / "two_thirds.json"
@@ -520,11 +536,127 @@ def test_t_box_certifies_the_exact_fraction_typed(server, tmp_path):
     }))
     s = Session(server, SceneConfig.from_json_file(cfg_file))
     assert s.ready.wait(60)
-    s.t_number.value = "2/3"
-    assert s.state.relation == "tangent" and colours(s) == {AMBER}
-    assert "at t = 2/3" in s.readout.content and "TANGENT" in s.readout.content
-    assert s.t_number.value == "2/3"
-    s.t_number.value = repr(2 / 3)  # the float: certified overlap
+    s.ui.timeline.t_box.value = "2/3"  # exactly the event: shown as the event
+    assert s.state.relation == "tangent" and colours(s) == {AMBER} and s.state.event == 1
+    assert "at t = α1 = 2/3" in s.ui.readout.content and "TANGENT" in s.ui.readout.content
+    assert s.ui.timeline.t_box.value == "2/3"
+    s.ui.timeline.t_box.value = repr(2 / 3)  # the float: certified overlap
     assert s.state.relation == "overlap" and colours(s) == {RED}
     assert s.set_t(2 / 3) == "overlap"
     s.close()
+
+
+def test_palette_legend_and_plain_words(server):
+    """The colour-blind safe palette recolours shapes, badge, legend and bar; the relation is also
+    text on each shape; "What am I seeing?" says which theorem decided."""
+    s = Session(server, unit_spheres(3, "2"))
+    assert {v.label.text for v in s.views.values()} == {"A · tangent", "B · tangent"}
+    assert "#ffbf00" in s.ui.legend.content
+    s.ui.view.palette.value = "colour-blind safe"
+    assert colours(s) == {(0xE6, 0x9F, 0x00)}  # Okabe-Ito orange for tangent
+    assert "#e69f00" in s.ui.legend.content and "#e69f00" in s.ui.readout.content
+    assert "Theorem 24.1" in s.ui.words.content and "Var = 2" in s.ui.words.content
+    assert s.set_shape("B", center="3, 0, 0") == "separate" and colours(s) == {(0x00, 0x72, 0xB2)}
+    assert "apart" in s.ui.words.content
+    s.ui.view.dimension.value = "2D ellipses"  # the palette stays through a dimension switch
+    assert s.state.palette == "colour-blind safe" and "#0072b2" in s.ui.legend.content
+
+
+def test_play_pauses_exactly_at_each_event(server):
+    """With "Pause at each event", playback stops on alpha_1 exactly (tangent), then on alpha_2."""
+    s = motion_session(server, t=0.45)
+    s.ui.timeline.pause_at_events.value = True
+    s.ui.timeline.speed.value = 5.0
+    for k in (1, 2):
+        s.ui.timeline.play.value = True
+        for _ in range(300):
+            if not s.ui.timeline.play.value:
+                break
+            time.sleep(0.02)
+        assert not s.ui.timeline.play.value and s.state.event == k and s.state.relation == "tangent"
+        assert colours(s) == {AMBER}
+    s.close()
+
+
+def test_keys_step_and_jump_to_events(server):
+    s = motion_session(server, t=0.3)
+    s.keys_ctl.event(+1)
+    assert s.state.event == 1 and s.state.relation == "tangent"
+    s.keys_ctl.event(+1)
+    assert s.state.event == 2
+    s.keys_ctl.event(-1)
+    assert s.state.event == 1
+    s.keys_ctl.step(+1)  # one step past alpha_1 (1/200 of I): overlap
+    assert s.state.event is None and abs(s.state.t - (ALPHA1 + 1 / 200)) < 1e-12 and s.state.relation == "overlap"
+    s.keys_ctl.play_pause()
+    assert s.ui.timeline.play.value
+    s.keys_ctl.play_pause()
+    assert not s.ui.timeline.play.value
+    s.close()
+
+
+@pytest.mark.parametrize("dim, dx, want", [(2, "3", 2.0), (3, "5/2", 2.0), (3, "1", 2.0)])
+def test_touch_slides_b_to_the_exact_contact(server, dim, dx, want):
+    """Unit spheres/circles: "Touch" slides B along the line of centres to distance 2 exactly
+    (from outside, or out of an overlap), certified TANGENT at that exact event."""
+    s = Session(server, unit_spheres(dim, dx))
+    s.ready.clear()
+    s.motion_ctl.on_touch()
+    assert s.ready.wait(60)
+    an = s.state.analysis
+    k = s.state.event
+    assert k is not None and s.state.relation == "tangent" and colours(s) == {AMBER}
+    ev = an.events[k - 1]
+    # B's centre is t * (dx, 0...): tangent where t * dx = 2, an exact rational
+    assert str(ev.event.time.value) == ev.exact == str(Fraction(2) / Fraction(dx))
+    assert abs(float(s.state.shapes["B"].center[0]) - want) < 1e-12
+    for _ in range(200):  # the panel follows the picture within the panel period
+        if not s.pending():
+            break
+        time.sleep(0.01)
+    assert "TANGENT" in s.ui.readout.content
+
+
+def test_touch_of_ellipses_is_an_exact_algebraic_contact(server):
+    """Ellipse (2, 1) at the origin and a circle at (3, 3/2): the contact along the line of centres
+    is an algebraic t; the picture is certified tangent there (not a float drag's near miss)."""
+    cfg = SceneConfig.from_dict({"dim": 2, "preset": None,
+                                 "A": {"center": ["0", "0"], "semi_axes": ["2", "1"], "orientation": ["0"]},
+                                 "B": {"center": ["3", "3/2"], "semi_axes": ["1", "1"], "orientation": ["0"]}})
+    s = Session(server, cfg)
+    s.ready.clear()
+    s.motion_ctl.on_touch()
+    assert s.ready.wait(60) and s.state.relation == "tangent"
+
+    from flint import fmpq
+
+    t = s.state.analysis.events[s.state.event - 1].event.time
+    assert t.value is None  # irrational: no float drag lands on it
+    # just before the contact B overlaps A, just after it is separate (exact rationals around t)
+    t.refine_to(fmpq(1, 10**12))
+    for q, rel in ((t.lo - fmpq(1, 10**9), "overlap"), (t.hi + fmpq(1, 10**9), "separate")):
+        assert s.state.analysis.relation_at(q) == rel
+
+
+def test_static_shapes_from_typed_matrices(server):
+    """A shape typed as its exact matrix is classified exactly as typed: the unit circle at (2, 0)
+    as the matrix [[1, 0, -2], [0, 1, 0], [-2, 0, 3]] touches the unit circle at the origin."""
+    s = Session(server, unit_spheres(2, "3"))
+    s.ui.shapes["B"].fields["matrix"].value = "1, 0, -2; 0, 1, 0; -2, 0, 3"
+    assert s.state.relation == "tangent" and colours(s) == {AMBER}
+    b = s.state.shapes["B"]
+    assert b.matrix is not None and [str(v) for v in b.matrix[2]] == ["-2", "0", "3"]
+    np.testing.assert_allclose(s.views["B"].control.position, (2.0, 0.0, 0.01))  # drawn at its centre
+    assert s.ui.shapes["B"].fields["center"].value == "2, 0"
+    # a sign-flipped matrix is the same ellipse; a hyperbola is refused next to the field
+    s.ui.shapes["B"].fields["matrix"].value = "-1, 0, 2; 0, -1, 0; 2, 0, -3"
+    assert s.state.relation == "tangent"
+    s.ui.shapes["B"].fields["matrix"].value = "1, 0, 0; 0, -1, 0; 0, 0, -1"
+    assert s.ui.shapes["B"].error.visible and "not an ellipse" in s.ui.shapes["B"].error.content
+    # editing the centre turns the matrix back into parameters
+    s.ui.shapes["B"].fields["center"].value = "3, 0"
+    assert s.state.relation == "separate" and s.state.shapes["B"].matrix is None
+    # the configuration keeps the exact matrix
+    s.set_shape("B", matrix=[["1", "0", "-2"], ["0", "1", "0"], ["-2", "0", "3"]])
+    again = SceneConfig.from_dict(s.snapshot().to_dict())
+    assert [str(v) for v in again.B.matrix[0]] == ["1", "0", "-2"]

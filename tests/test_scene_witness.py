@@ -44,46 +44,46 @@ def server():
 @pytest.mark.parametrize("dim", [2, 3])
 def test_separate_margin_sentence_and_certified_plane(server, dim):
     s = Session(server, spheres(dim, "3", plane=True))
-    text = s.readout.content
+    text = s.ui.readout.content
     assert "50 % apart" in text and "separate: this plane separates them" in text
     assert "d = 3/2" in text  # the exact plane x = 3/2
-    assert s.plane.visible
-    np.testing.assert_allclose(s.plane.position, (1.5, 0.0, 0.0), atol=1e-12)
+    assert s.markers.plane.visible
+    np.testing.assert_allclose(s.markers.plane.position, (1.5, 0.0, 0.0), atol=1e-12)
 
 
 def test_tangent_contact_point_and_normal(server):
     s = Session(server, spheres(3, "2"))
-    text = s.readout.content
+    text = s.ui.readout.content
     assert "touching" in text and "tangent: they touch here" in text and "(1, 0, 0) (exact)" in text
-    assert s.contact.visible and s.contact_label.text == "contact"
-    np.testing.assert_allclose(s.contact.position, (1.0, 0.0, 0.0), atol=0)
+    assert s.markers.point.visible and s.markers.label.text == "contact"
+    np.testing.assert_allclose(s.markers.point.position, (1.0, 0.0, 0.0), atol=0)
     # the normal segment points along +x: its rotation maps z to x
-    w, x, y, z = s._normal_line.wxyz
+    w, x, y, z = s.markers.normal.wxyz
     R = np.array(
         [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
          [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
          [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
     )
     np.testing.assert_allclose(R @ [0, 0, 1], [1, 0, 0], atol=1e-12)
-    assert s._normal_line.visible
+    assert s.markers.normal.visible
 
 
 def test_overlap_point_inside_both(server):
     s = Session(server, spheres(3, "1"))
-    text = s.readout.content
+    text = s.ui.readout.content
     assert "overlapping by 50 %" in text and "overlap: this point is inside both" in text
-    assert s.contact.visible and s.contact_label.text == "inside both"
-    p = [Fraction(v) for v in s.contact.position]
+    assert s.markers.point.visible and s.markers.label.text == "inside both"
+    p = [Fraction(v) for v in s.markers.point.position]
     assert sum(v * v for v in p) < 1 and (p[0] - 1) ** 2 + p[1] ** 2 + p[2] ** 2 < 1
-    assert not s._normal_line.visible if hasattr(s, "_normal_line") else True
+    assert s.markers.normal is None or not s.markers.normal.visible
     s.set_shape("B", center="3, 0, 0")
-    assert not s.contact.visible
+    assert not s.markers.point.visible
 
 
 def _readout_shows(s: Session, text: str) -> bool:
     """A drag recolours at once; the readout follows within the panel period (polled, 2 s cap)."""
     for _ in range(100):
-        if text in s.readout.content:
+        if text in s.ui.readout.content:
             return True
         time.sleep(0.02)
     return False

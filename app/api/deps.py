@@ -10,8 +10,8 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 
+from ..workers import WorkerPool
 from .settings import ApiSettings
-from .workers import WorkerPool
 
 __all__ = ["get_settings", "get_workers", "SettingsDep", "WorkersDep"]
 

@@ -11,12 +11,15 @@ from fastapi.staticfiles import StaticFiles
 
 from core import warm_up
 
+from ..workers import WorkerPool
 from .limits import BodySizeLimit, validation_error_handler
 from .routes import classify, contacts, health, landing, motion, presets, witness
 from .settings import ApiSettings
-from .workers import WorkerPool
 
-__all__ = ["create_api"]
+__all__ = ["create_api", "DOCS_ASSETS"]
+
+DOCS_ASSETS = "/docs-assets"
+"""Where Swagger UI's and ReDoc's scripts are served from (the ``fastapi-offline`` package's copies)."""
 
 DESCRIPTION = """Certified interference of two ellipses or ellipsoids (Caravantes, Diaz-Toca,
 Fioravanti, Gonzalez-Vega, *Solving the interference problem for ellipses and ellipsoids: new
@@ -54,7 +57,10 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
         version="0.1.0",
         description=DESCRIPTION,
         lifespan=lifespan,
+        docs_url=None,  # served below with local assets: the docs work without internet
+        redoc_url=None,
     )
+    _offline_docs(app)
     app.state.settings = settings
     app.state.workers = workers
     app.add_exception_handler(RequestValidationError, validation_error_handler)
@@ -66,3 +72,40 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     if settings.bench_dir is not None:  # may be written later by python -m bench.report
         app.mount("/bench/figures", StaticFiles(directory=settings.bench_dir, check_dir=False), name="bench")
     return app
+
+
+def _offline_docs(app: FastAPI) -> None:
+    """/docs (Swagger UI) and /redoc from local copies of their assets, not a CDN.
+
+    FastAPI's default pages load their scripts from a CDN, so without internet /docs was blank.
+    The ``fastapi-offline`` package ships the same assets; they are mounted at :data:`DOCS_ASSETS`.
+    """
+    from pathlib import Path
+
+    import fastapi_offline
+    from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
+    from fastapi.responses import HTMLResponse
+
+    static = Path(fastapi_offline.__file__).parent / "static"
+    app.mount(DOCS_ASSETS, StaticFiles(directory=static), name="docs-assets")
+    title = app.title
+
+    @app.get("/docs", include_in_schema=False)
+    def swagger() -> HTMLResponse:
+        return get_swagger_ui_html(
+            openapi_url=app.openapi_url or "/openapi.json",
+            title=f"{title} - Swagger UI",
+            swagger_js_url=f"{DOCS_ASSETS}/swagger-ui-bundle.js",
+            swagger_css_url=f"{DOCS_ASSETS}/swagger-ui.css",
+            swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png",
+        )
+
+    @app.get("/redoc", include_in_schema=False)
+    def redoc() -> HTMLResponse:
+        return get_redoc_html(
+            openapi_url=app.openapi_url or "/openapi.json",
+            title=f"{title} - ReDoc",
+            redoc_js_url=f"{DOCS_ASSETS}/redoc.standalone.js",
+            redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png",
+            with_google_fonts=False,
+        )

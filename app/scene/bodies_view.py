@@ -28,7 +28,7 @@ from core import Relation
 
 from ..bodyfiles import read_bodies, read_bodies_bytes
 from .bodies import BodiesModel
-from .camera import aim_at_box
+from .camera import Framing
 from .shapes import NEUTRAL, RELATION_COLORS, RELATION_HEX, unit_disc
 
 __all__ = ["BodiesView", "load_model", "MESH_NODE", "FADED_OPACITY"]
@@ -309,9 +309,7 @@ class BodiesView:
             self.gui.add_markdown(note, order=-999.0)
             back.on_click(lambda ev: self.show_bodies())
             self.session = Session(self.target, cfg, cache=self.cache, executor=self.executor)
-            frame = getattr(self.session, "_frame_camera", None)
-            if frame is not None:
-                frame()
+            self.session.frame_camera()
             self.ready.set()
             return self.session
 
@@ -321,7 +319,7 @@ class BodiesView:
         if cam is None or self.model is None or len(self.model.bodies) == 0:
             return
         lo, hi = self.model.extent()
-        aim_at_box(cam, lo, hi, self.model.dim, fill=1.35 if self.model.dim == 3 else 1.0, view=(0.55, -1.0, 0.7))
+        Framing(np.array([lo, hi]), self.model.dim).aim(cam, fill=1.35 if self.model.dim == 3 else 1.0, view=(0.55, -1.0, 0.7))
 
     def close(self) -> None:
         """The tab went away: stop the two-body view's work."""

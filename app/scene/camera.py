@@ -1,49 +1,109 @@
-"""Aiming a tab's camera at a box of the scene, leaving room for the GUI panel."""
+"""Framing: point a tab's camera at the shapes (2D: from above) and lay a grid under them.
+
+The GUI panel covers about the right third of the page, so the shapes are fitted in the left
+part and the camera aims right of them by the matching offset. In presenter mode every tab's
+camera is framed (each tab has its own camera even though the scene is shared).
+"""
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from collections.abc import Iterable
 
 import numpy as np
+import viser
 
-__all__ = ["aim_at_box", "PANEL_FREE"]
+__all__ = ["Framing", "frame_cameras", "extent_of"]
 
-PANEL_FREE = 0.62
-"""Fraction of the page width left of the GUI panel (which covers about the right third)."""
+FREE = 0.62
+"""Share of the page width left of the GUI panel."""
 
 
-def aim_at_box(cam: Any, lo: np.ndarray, hi: np.ndarray, dim: int, *, fill: float = 0.9, view: Any = (0.3, -1.05, 0.6)) -> None:
-    """Point ``cam`` (a viser camera handle) at the box [lo, hi] so that it fills the free page.
+class Framing:
+    """Where the shapes are: an axis-aligned box (lo, hi corners in 3D) and the dimension."""
 
-    Args:
-        cam: ``client.camera``.
-        lo: lower corner (3,).
-        hi: upper corner (3,).
-        dim: 2 (look down the z axis, y up) or 3 (``view`` direction, z up).
-        fill: distance factor (larger: the box looks smaller).
-        view: 3D direction from the box's centre to the camera.
-    """
-    centre = (np.asarray(lo, dtype=float) + np.asarray(hi, dtype=float)) / 2
-    radius = max(float(np.linalg.norm(np.asarray(hi, dtype=float) - np.asarray(lo, dtype=float))) / 2, 1e-3)
-    try:
-        fov, aspect = float(cam.fov), float(cam.aspect)
-    except Exception:  # noqa: BLE001 - camera state not known yet: typical values
-        fov, aspect = 1.3, 1.5
-    half_h = math.tan(fov / 2)
-    dist = fill * radius / (half_h * min(1.0, PANEL_FREE * aspect))
-    shift = (0.5 - PANEL_FREE / 2) * 2 * dist * half_h * aspect  # aim right of the box: it sits left
-    if dim == 2:
-        cam.up_direction = (0.0, 1.0, 0.0)
-        x = float(centre[0]) + shift
-        cam.position = (x, float(centre[1]) - 1e-3, dist)
-        cam.look_at = (x, float(centre[1]), 0.0)
-        return
-    cam.up_direction = (0.0, 0.0, 1.0)
-    v = np.asarray(view, dtype=float)
-    v /= np.linalg.norm(v)
-    right = np.cross(-v, np.array([0.0, 0.0, 1.0]))
-    right /= np.linalg.norm(right)
-    # viser keeps the orientation when the position is set: position first, then look_at
-    cam.position = tuple(float(x) for x in centre + dist * v + shift * right)
-    cam.look_at = tuple(float(x) for x in centre + shift * right)
+    def __init__(self, points: np.ndarray, dim: int) -> None:
+        pts = np.asarray(points, dtype=float).reshape(-1, 3)
+        self.lo, self.hi = np.min(pts, axis=0), np.max(pts, axis=0)
+        self.dim = dim
+
+    @property
+    def centre(self) -> np.ndarray:
+        """Centre of the box."""
+        return (self.lo + self.hi) / 2
+
+    @property
+    def radius(self) -> float:
+        """Half the diagonal of the box (at least 1)."""
+        return max(float(np.linalg.norm(self.hi - self.lo)) / 2, 1.0)
+
+    def grid(self, scene: viser.SceneApi) -> viser.GridHandle:
+        """A grid under the shapes (z = 0 plane in 2D, the bottom of the box in 3D)."""
+        size = float(2 ** math.ceil(math.log2(4 * self.radius)))
+        c = self.centre
+        floor = -0.02 if self.dim == 2 else float(self.lo[2])
+        return scene.add_grid(
+            "/grid",
+            width=size,
+            height=size,
+            plane="xy",
+            cell_size=size / 16,
+            section_size=size / 4,
+            position=(float(c[0]), float(c[1]), floor),
+        )
+
+    def aim(
+        self,
+        cam: viser.CameraHandle,
+        *,
+        free: float = FREE,
+        fill: float = 0.9,
+        view: tuple[float, float, float] = (0.3, -1.05, 0.6),
+    ) -> None:
+        """Point one camera at the box (the one framing arithmetic of the scene and the bodies view).
+
+        Args:
+            cam: the camera (a tab's, or anything with the same attributes).
+            free: share of the width not covered by a panel (1: the whole view).
+            fill: distance factor (larger: the box looks smaller).
+            view: 3D direction from the box's centre to the camera.
+        """
+        try:
+            fov, aspect = float(cam.fov), float(cam.aspect)
+        except Exception:  # noqa: BLE001 - camera state not known yet: typical values
+            fov, aspect = 1.3, 1.5
+        half_h = math.tan(fov / 2)
+        dist = fill * self.radius / (half_h * min(1.0, free * aspect))
+        shift = (0.5 - free / 2) * 2 * dist * half_h * aspect
+        c = self.centre
+        if self.dim == 2:
+            cam.up_direction = (0.0, 1.0, 0.0)
+            x = float(c[0]) + shift
+            cam.position = (x, float(c[1]) - 1e-3, dist)
+            cam.look_at = (x, float(c[1]), 0.0)
+        else:
+            cam.up_direction = (0.0, 0.0, 1.0)
+            v = np.asarray(view, dtype=float)
+            v /= np.linalg.norm(v)
+            right = np.cross(-v, np.array([0.0, 0.0, 1.0]))
+            right /= np.linalg.norm(right)
+            # viser keeps the orientation when the position is set: position first, then look_at
+            cam.position = tuple(float(x) for x in c + dist * v + shift * right)
+            cam.look_at = tuple(float(v) for v in c + shift * right)
+
+
+def extent_of(poses: Iterable[tuple[tuple[float, float, float], object, tuple[float, float, float]]], dim: int) -> np.ndarray:
+    """Corner points of the boxes around shapes given as (position, wxyz, scale) poses."""
+    pts = []
+    for pos, _, scale in poses:
+        r = max(scale[:2] if dim == 2 else scale)
+        pts += [np.array(pos) + r, np.array(pos) - r]
+    return np.array(pts)
+
+
+def frame_cameras(scene: viser.SceneApi, cameras: Iterable[viser.CameraHandle], framing: Framing) -> viser.GridHandle:
+    """Aim every camera at the shapes and draw the grid under them."""
+    grid = framing.grid(scene)
+    for cam in cameras:
+        framing.aim(cam)
+    return grid

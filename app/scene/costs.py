@@ -32,7 +32,7 @@ def measure_update_costs(repeats: int = 200, *, preset: str | None = "example-29
         if preset is not None:
             s = Session(server, SceneConfig(preset=preset), count_messages=True)
             s.ready.wait(120)
-            lo, hi = s.model.interval_floats if s.model else (0.0, 1.0)
+            lo, hi = s.state.analysis.window if s.state.analysis else (0.0, 1.0)
             for key, defer in (("t_step", True), ("t_step_full", False)):
                 times = []
                 m0 = s.messages
@@ -54,6 +54,7 @@ def measure_update_costs(repeats: int = 200, *, preset: str | None = "example-29
             times.append(time.perf_counter() - t0)
         out["drag_ms"] = float(np.median(times) * 1e3)
         out["drag_messages"] = (s.messages - m0) / repeats
+        s.close()
         return out
     finally:
         server.stop()

@@ -171,8 +171,10 @@ class OriginPolicy:
         return check
 
 
-def start_viser(policy: OriginPolicy, **kwargs: Any) -> Any:
+def start_viser(policy: OriginPolicy, router: Any = None, **kwargs: Any) -> Any:
     """``viser.ViserServer(**kwargs)`` whose websocket handshake applies ``policy``.
+
+    ``router`` (an :class:`app.scene.links.Router`) also routes the HTTP requests (tab addresses).
 
     Raises:
         RuntimeError: viser started its server some other way, so the check is not in place
@@ -188,6 +190,8 @@ def start_viser(policy: OriginPolicy, **kwargs: Any) -> Any:
 
     def serve(*args: Any, process_request: Callable[..., Any] | None = None, **kw: Any) -> Any:
         installed.append(True)
+        if router is not None:
+            process_request = router.process_request(process_request)
         return original(*args, process_request=policy.process_request(process_request), **kw)
 
     with _PATCH_LOCK:  # viser calls serve() from its thread before ViserServer() returns

@@ -1,72 +1,119 @@
 """The viser scene server: one :class:`~app.scene.session.Session` per browser tab.
 
-``start_scene(host, port)`` returns a running ``viser.ViserServer`` (its own thread). Every tab
-that connects gets a private scene and GUI (``client.scene``/``client.gui``) built from the
-server's configuration, so a classroom of students never fights over one scene; analyses are
-shared through one cache and run in worker processes, so a slow analysis never blocks other tabs.
-``shared=True`` (``python -m app serve --shared``) is the presenter mode: one scene for all tabs.
-Only the scene's own pages (and clients without an Origin header) may connect
+``start_scene(host, port)`` returns a running :class:`SceneServer` (viser serves from its own
+thread). Every tab that connects gets a private scene and GUI (``client.scene``/``client.gui``),
+so a classroom of students never fights over one scene; analyses are shared through one cache
+and run in warm worker processes, so a slow analysis never blocks other tabs. Each tab has its
+own address (``/s/<tab id>/``, :mod:`app.scene.links`): a reload reopens it as it was, and a
+link ``/c/<configuration>/`` opens a new tab on a shared configuration. ``shared=True``
+(``python -m app serve --shared``) is the presenter mode: one scene for all tabs, every tab's
+camera framed. Only the scene's own pages (and clients without an Origin header) may connect
 (:mod:`app.scene.origin`).
 """
 
 from __future__ import annotations
 
+import socket
 import threading
 from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
+import viser
+
+from . import wire
 from .analysis import AnalysisCache
+from .links import Router, TabStore, tab_id_of
 from .session import Session
 from .state import SceneConfig
 
-__all__ = ["SceneServer", "start_scene"]
+__all__ = ["SceneServer", "start_scene", "PortBusy"]
+
+
+class PortBusy(RuntimeError):
+    """The scene's port is taken by another program."""
 
 
 class SceneServer:
-    """A running scene: the ``ViserServer`` plus the live sessions (one per connected tab)."""
+    """A running scene: the ``ViserServer`` plus the live sessions (one per connected tab).
+
+    Args:
+        server: the running viser server.
+        config: what a new tab opens on.
+        processes: run analyses in worker processes (else threads).
+        shared: presenter mode (one scene for every tab).
+        store: the tabs' configurations (reloads, links).
+        bodies: many bodies (an :class:`app.scene.bodies.BodiesModel`, ``--bodies FILE``): each
+            tab opens on them (:mod:`app.scene.bodies_view`) instead of ``config``.
+    """
 
     def __init__(
-        self, server: Any, config: SceneConfig, *, processes: bool = True, shared: bool = False, bodies: Any = None
+        self,
+        server: viser.ViserServer,
+        config: SceneConfig,
+        *,
+        processes: bool = True,
+        shared: bool = False,
+        store: TabStore | None = None,
+        bodies: Any = None,
     ) -> None:
         self.server = server
         self.config = config
         self.bodies = bodies
-        """Many bodies (an :class:`app.scene.bodies.BodiesModel`) each new tab shows, or None."""
+        """Many bodies each new tab shows, or None."""
         """Configuration new tabs open on (change it to change what the next tab sees)."""
+        self.store = store or TabStore()
         self.executor = ThreadPoolExecutor(max_workers=2, thread_name_prefix="analysis")
         self.cache = AnalysisCache(self.executor, processes=processes)
         self.sessions: dict[int, Session] = {}
+        self._tabs: dict[int, str] = {}
         self._lock = threading.Lock()
         self.new_session = threading.Condition(self._lock)
         self.shared: Session | None = None
         """The one session every tab sees (presenter mode), or None (one session per tab)."""
+        self.cache.warm()
         if shared:
-            self.shared = Session(server, config, cache=self.cache, executor=self.executor)
+            self.shared = Session(
+                server, config, cache=self.cache, executor=self.executor,
+                cameras=lambda: [c.camera for c in server.get_clients().values()],
+            )
+        server.on_client_connect(self._connect)
+        server.on_client_disconnect(self._disconnect)
 
-        @server.on_client_connect
-        def _(client: Any) -> None:
-            if self.shared is not None:
-                session = self.shared
-                session.target = client  # frame this tab's camera; the scene itself is shared
-                session._frame_camera()
-            elif self.bodies is not None:  # many bodies (issue 14): app.scene.bodies_view, one per tab
-                from .bodies_view import BodiesView
+    def _connect(self, client: viser.ClientHandle) -> None:
+        if self.bodies is not None and self.shared is None:  # many bodies (issue 14): one view per tab
+            from .bodies_view import BodiesView
 
-                session = BodiesView(client, self.bodies, cache=self.cache, executor=self.executor)
-            else:
-                session = Session(client, self.config, cache=self.cache, executor=self.executor)
-                session._frame_camera()
+            view = BodiesView(client, self.bodies, cache=self.cache, executor=self.executor)
             with self._lock:
-                self.sessions[client.client_id] = session
+                self.sessions[client.client_id] = view  # type: ignore[assignment]
                 self.new_session.notify_all()
+            return
+        if self.shared is not None:
+            session = self.shared  # the scene is shared; every tab's camera is framed
+        else:
+            tab = tab_id_of(wire.handshake_path(self.server, client))
+            saved = self.store.get(tab) if tab is not None else None
+            session = Session(client, self.config if isinstance(saved, dict) or saved is None else saved,
+                              cache=self.cache, executor=self.executor, defer_load=isinstance(saved, dict))
+            if isinstance(saved, dict):  # a link: user input, read like an uploaded file
+                session.load_untrusted(saved)
+            if tab is not None:
+                with self._lock:
+                    self._tabs[client.client_id] = tab
+        session.frame_camera()
+        with self._lock:
+            self.sessions[client.client_id] = session
+            self.new_session.notify_all()
 
-        @server.on_client_disconnect
-        def _(client: Any) -> None:
-            with self._lock:
-                s = self.sessions.pop(client.client_id, None)
-            if s is not None and s is not self.shared:
-                s.close()
+    def _disconnect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            s = self.sessions.pop(client.client_id, None)
+            tab = self._tabs.pop(client.client_id, None)
+        if s is not None and s is not self.shared:
+            if tab is not None:
+                self.store.put(tab, s.snapshot())  # a reload of this tab reopens it as it is
+            s.close()
 
     @property
     def port(self) -> int:
@@ -80,13 +127,18 @@ class SceneServer:
         shown = "127.0.0.1" if host in ("0.0.0.0", "::", "") else host
         return f"http://{shown}:{self.port}/"
 
-    def wait_for_session(self, timeout: float = 30.0) -> Session:
-        """Block until a tab has connected; return its session (the newest one)."""
+    def wait_for_session(self, timeout: float = 30.0, *, after: int = -1) -> Session:
+        """Block until a tab has connected; return its session (the newest one).
+
+        Args:
+            timeout: seconds to wait.
+            after: only a session of a client id above this (a tab that connects after a given one).
+        """
         with self._lock:
-            ok = self.new_session.wait_for(lambda: bool(self.sessions), timeout=timeout)
+            ok = self.new_session.wait_for(lambda: any(k > after for k in self.sessions), timeout=timeout)
             if not ok:
                 raise TimeoutError("no browser tab connected to the scene")
-            return list(self.sessions.values())[-1]
+            return self.sessions[max(self.sessions)]
 
     def stop(self) -> None:
         """Stop the server and the analysis workers."""
@@ -95,6 +147,18 @@ class SceneServer:
         self.server.stop()
         self.cache.shutdown()
         self.executor.shutdown(wait=False, cancel_futures=True)
+
+
+def _port_free(host: str, port: int) -> bool:
+    """True if nothing listens on (host, port) (viser would otherwise move to the next port)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            s.bind((host if host not in ("", "0.0.0.0", "::") else host or "0.0.0.0", port))
+        except OSError:
+            return False
+    return True
 
 
 def start_scene(
@@ -112,8 +176,7 @@ def start_scene(
 
     Args:
         host: interface to bind ("127.0.0.1" loopback by default; "0.0.0.0" to share).
-        port: TCP port; 0 picks a free one (read it from ``.port``). A busy port makes viser
-            move to the next free one.
+        port: TCP port; 0 picks a free one (read it from ``.port``).
         config: what each new tab opens on (default: :class:`SceneConfig` defaults).
         verbose: let viser print its own banner.
         processes: run analyses in child processes (a long analysis never holds the GIL of
@@ -124,12 +187,22 @@ def start_scene(
             may open sessions (:mod:`app.scene.origin`; ``--allow-origin`` on the command line).
         bodies: many bodies (:class:`app.scene.bodies.BodiesModel`, ``--bodies FILE``): each tab
             opens on them (:mod:`app.scene.bodies_view`) instead of ``config``.
+
+    Raises:
+        PortBusy: ``port`` is taken (viser would silently take the next port, perhaps the API's).
     """
     from core import warm_up
 
     from .origin import OriginPolicy, start_viser
 
+    if port and not _port_free(host, port):
+        raise PortBusy(f"the scene's port {port} on {host} is already in use: stop the program using it or choose another with --port")
     warm_up(wait=False)  # compile the float filter in the background; drags use exact meanwhile
-    server = start_viser(OriginPolicy(host, allow_origins), host=host, port=port, verbose=verbose)
+    store = TabStore()
+    router = Router(store, enabled=not shared)
+    server = start_viser(OriginPolicy(host, allow_origins), router, host=host, port=port, verbose=verbose)
+    if port and server.get_port() != port:  # taken between the check and the start
+        server.stop()
+        raise PortBusy(f"the scene's port {port} on {host} is already in use: choose another with --port")
     server.gui.configure_theme(control_width="large", show_share_button=False)
-    return SceneServer(server, config or SceneConfig(), processes=processes, shared=shared, bodies=bodies)
+    return SceneServer(server, config or SceneConfig(), processes=processes, shared=shared, store=store, bodies=bodies)

@@ -3,34 +3,66 @@
 An ellipsoid is a unit icosphere (``trimesh.creation.icosphere``) scaled by its semi-axes; an
 ellipse is a unit disc in the z = 0 plane scaled by (a, b, 1). The mesh hangs under a transform
 gizmo node ``/shapes/<name>`` so that dragging moves it in the browser at once; Python only
-recolours. Every setter compares with the last value sent, so unchanged nodes are not re-sent.
+recolours. Every setter compares with the last value sent, so unchanged nodes are not re-sent;
+a view that is (re)built sends its whole state once, explicitly (the browser may remember the
+pose of an earlier node with the same name). The relation shows three ways: the colour, the
+label ("B · tangent") and, for a tangency, a brighter, opaque surface.
 """
 
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any
 
 import numpy as np
+import viser
 
 from . import wire
 
-__all__ = ["RELATION_COLORS", "RELATION_HEX", "EllipsoidView", "unit_sphere", "unit_disc"]
+__all__ = [
+    "RELATION_COLORS",
+    "RELATION_HEX",
+    "PALETTES",
+    "NEUTRAL",
+    "EllipsoidView",
+    "unit_sphere",
+    "unit_disc",
+    "rgb",
+]
 
 RELATION_HEX: dict[str, str] = {
     "separate": "#2ca02c",
     "tangent": "#ffbf00",
     "overlap": "#d62728",
 }
-"""Relation -> colour (the one mapping used by shapes, bars and the readout)."""
+"""Relation -> colour of the default palette (shapes, bars, the readout, the legend)."""
 
-RELATION_COLORS: dict[str, tuple[int, int, int]] = {
-    k: (int(v[1:3], 16), int(v[3:5], 16), int(v[5:7], 16)) for k, v in RELATION_HEX.items()
+PALETTES: dict[str, dict[str, str]] = {
+    "green / amber / red": RELATION_HEX,
+    # Okabe & Ito's colour-blind safe set: blue, orange, vermillion differ in lightness and
+    # hue for deuteranopes, protanopes and tritanopes alike
+    "colour-blind safe": {"separate": "#0072b2", "tangent": "#e69f00", "overlap": "#d55e00"},
 }
-"""Relation -> RGB 0..255."""
+"""Named palettes (View -> Palette); the first is the default."""
+
+
+def rgb(hex_colour: str) -> tuple[int, int, int]:
+    """"#rrggbb" -> (r, g, b) in 0..255.
+
+    Examples:
+        >>> rgb("#ffbf00")
+        (255, 191, 0)
+    """
+    return int(hex_colour[1:3], 16), int(hex_colour[3:5], 16), int(hex_colour[5:7], 16)
+
+
+RELATION_COLORS: dict[str, tuple[int, int, int]] = {k: rgb(v) for k, v in RELATION_HEX.items()}
+"""Relation -> RGB 0..255 (default palette)."""
 
 NEUTRAL = (150, 150, 150)
-"""Colour while no certified relation is known (e.g. an invalid typed shape)."""
+"""Colour while no certified relation is known (e.g. an invalid typed shape, an analysis running)."""
+
+Pose = tuple[tuple[float, float, float], tuple[float, float, float, float], tuple[float, float, float]]
+"""(position, wxyz, scale) of a shape, in 3D (2D shapes live in z = 0)."""
 
 
 @lru_cache(maxsize=1)
@@ -44,7 +76,13 @@ def unit_sphere() -> tuple[np.ndarray, np.ndarray]:
 
 @lru_cache(maxsize=1)
 def unit_disc(segments: int = 96) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and faces of a unit disc in the z = 0 plane (both sides drawn by the material)."""
+    """Vertices and faces of a unit disc in the z = 0 plane (both sides drawn by the material).
+
+    Examples:
+        >>> v, f = unit_disc(8)
+        >>> v.shape, f.shape, round(float(np.linalg.norm(v[1:], axis=1).min()), 6)
+        ((9, 3), (8, 3), 1.0)
+    """
     ang = np.linspace(0, 2 * np.pi, segments, endpoint=False)
     v = np.zeros((segments + 1, 3), np.float32)
     v[1:, 0], v[1:, 1] = np.cos(ang), np.sin(ang)
@@ -61,12 +99,19 @@ class EllipsoidView:
         name: "A" or "B" (node ``/shapes/<name>``, label text).
         dim: 2 (flat disc in z = 0, gizmo limited to the plane) or 3.
         opacity: mesh opacity (semi-transparent so the other shape shows through).
+        gizmo: show the transform gizmo.
     """
 
-    def __init__(self, scene: Any, name: str, dim: int, *, opacity: float = 0.6, gizmo: bool = True) -> None:
+    OPACITY = 0.6
+    """Mesh opacity when separate or overlapping (the other shape shows through)."""
+    TANGENT_OPACITY = 0.85
+    """Mesh opacity at a tangency (the relation shows by more than its colour)."""
+
+    def __init__(self, scene: viser.SceneApi, name: str, dim: int, *, gizmo: bool = True) -> None:
         self.name = name
         self.dim = dim
         root = f"/shapes/{name}"
+        self.control: viser.TransformControlsHandle
         if dim == 2:
             self.control = scene.add_transform_controls(
                 root,
@@ -81,24 +126,35 @@ class EllipsoidView:
         else:
             self.control = scene.add_transform_controls(root, scale=1.2, depth_test=False)
             v, f = unit_sphere()
-        self.mesh = scene.add_mesh_simple(
+        self.mesh: viser.MeshHandle = scene.add_mesh_simple(
             f"{root}/mesh",
             v,
             f,
             color=NEUTRAL,
-            opacity=opacity,
+            opacity=self.OPACITY,
             side="double" if dim == 2 else "front",
             cast_shadow=False,
             receive_shadow=False,
         )
-        self.label = scene.add_label(f"{root}/label", name, position=(0.0, 0.0, 0.0), anchor="bottom-center")
-        self._pose: tuple[Any, ...] | None = None
+        self.label: viser.LabelHandle = scene.add_label(f"{root}/label", name, position=(0.0, 0.0, 0.0), anchor="bottom-center")
+        self._pose: tuple[tuple[float, ...], tuple[float, ...]] | None = None
         self._scale: tuple[float, ...] | None = None
-        self._color: tuple[int, int, int] | None = NEUTRAL
+        self._color: tuple[int, int, int] = NEUTRAL
+        self._relation: str | None = None
+        self._fresh = True  # nothing of this node's pose reached the browser yet: send it all
         self.sent = 0
         """Number of property assignments sent (for the cost measurement)."""
         self._gizmo = True
         self.set_gizmo(gizmo)
+
+    @property
+    def drawn(self) -> bool:
+        """True once the view's pose has been sent (the browser shows this node)."""
+        return not self._fresh
+
+    def remove(self) -> None:
+        """Remove the node (gizmo, mesh and label) from the scene."""
+        self.control.remove()
 
     def set_pose(
         self,
@@ -109,12 +165,17 @@ class EllipsoidView:
         from_drag: bool = False,
     ) -> None:
         """Move/resize the shape; after a drag the browser already shows the pose (not re-sent)."""
-        if (position, wxyz) != self._pose:
+        if self.dim == 2 and self.name == "B":
+            # two discs in one plane z-fight where they overlap: lift B a hair (display)
+            position = (position[0], position[1], position[2] + 0.01)
+        if self._fresh:
+            wire.force_pose(self.control, position, wxyz)
+            self._pose = (position, wxyz)
+            self._fresh = False
+            self.sent += 2
+        elif (position, wxyz) != self._pose:
             self._pose = (position, wxyz)
             if not from_drag:
-                if self.dim == 2 and self.name == "B":
-                    # two discs in one plane z-fight where they overlap: lift B a hair (display)
-                    position = (position[0], position[1], position[2] + 0.01)
                 wire.set_position(self.control, position)
                 wire.set_wxyz(self.control, wxyz)
                 self.sent += 2
@@ -128,13 +189,18 @@ class EllipsoidView:
             self.label.position = (0.0, 0.0, scale[2] if self.dim == 3 else 0.0)
             self.sent += 2
 
-    def set_relation(self, relation: str | None) -> None:
-        """Colour of the relation (grey when unknown); sent only when it changes."""
-        color = RELATION_COLORS.get(relation or "", NEUTRAL)
+    def set_relation(self, relation: str | None, palette: dict[str, str] = RELATION_HEX) -> None:
+        """Colour, label text and opacity of the relation (grey when unknown); sent on change."""
+        color = rgb(palette[relation]) if relation in palette else NEUTRAL
         if color != self._color:
             self._color = color
             self.mesh.color = color
             self.sent += 1
+        if relation != self._relation:
+            self._relation = relation
+            self.label.text = self.name if relation is None else f"{self.name} · {relation}"
+            self.mesh.opacity = self.TANGENT_OPACITY if relation == "tangent" else self.OPACITY
+            self.sent += 2
 
     def set_gizmo(self, visible: bool) -> None:
         """Show or hide the transform gizmo (hidden while a motion drives the shape).

@@ -12,96 +12,24 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from flint import fmpq
 
-from core.shapes.limits import SERVER
-from core.shapes.numbers import format_rational, parse_number, to_float, to_fmpq
+from core.shapes.numbers import to_float
 
-__all__ = [
-    "ShapeState",
-    "SceneConfig",
-    "AppState",
-    "parse_vector",
-    "format_number",
-    "DEFAULT_PRESET",
-]
+from .texts import Number, parse_matrix, parse_vector, read_time
 
-Number = float | fmpq
+__all__ = ["ShapeState", "SceneConfig", "AppState", "DEFAULT_PRESET"]
+
+if TYPE_CHECKING:
+    from .analysis import AnalysisView
+    from .contact import WitnessView
+    from .motion import MotionModel
+
 
 DEFAULT_PRESET = "example-29"
 """Preset loaded when the scene opens with no configuration (two ellipsoids about to touch)."""
-
-
-def parse_vector(text: Any, count: int | tuple[int, ...], what: str) -> tuple[Number, ...]:
-    """Read ``count`` numbers from "1, 2/3, 0.5" (or a JSON list); exact for typed text.
-
-    Args:
-        text: a string of comma/space separated numbers, or a sequence of numbers/strings.
-        count: accepted number(s) of components.
-        what: field name for the error message.
-
-    Returns:
-        A tuple of floats (for float input) or ``fmpq`` (for strings and ints).
-
-    Raises:
-        ValueError: wrong count or an unreadable component (the message names the field).
-
-    Examples:
-        >>> parse_vector("1, 3/7  0.5", 3, "centre")
-        (1, 3/7, 1/2)
-        >>> parse_vector([1.5, "2"], 2, "centre")
-        (1.5, 2)
-        >>> parse_vector("1, x", 2, "centre")
-        Traceback (most recent call last):
-        ...
-        ValueError: centre: component 2: not a number: 'x' (expected e.g. '3', '-0.25', '1e-3' or '3/7')
-    """
-    counts = (count,) if isinstance(count, int) else count
-    if isinstance(text, str):
-        parts: list[Any] = [p for p in text.replace(",", " ").replace(";", " ").split() if p]
-    elif isinstance(text, int | float):
-        parts = [text]
-    else:
-        try:
-            parts = list(text)
-        except TypeError:
-            raise ValueError(f"{what}: expected numbers, got {text!r}") from None
-    if len(parts) not in counts:
-        want = " or ".join(str(c) for c in counts)
-        raise ValueError(f"{what}: expected {want} numbers, got {len(parts)}")
-    out: list[Number] = []
-    for i, p in enumerate(parts, start=1):
-        try:
-            if isinstance(p, float):
-                if not math.isfinite(p):
-                    raise ValueError(f"not finite: {p}")
-                out.append(p)
-            elif isinstance(p, str):  # typed text: the scene's edge limits (core.shapes.limits.SERVER)
-                out.append(parse_number(p, SERVER))
-            else:
-                out.append(to_fmpq(p))
-        except ValueError as e:
-            raise ValueError(f"{what}: component {i}: {e}") from None
-    return tuple(out)
-
-
-def format_number(v: Number, digits: int = 6) -> str:
-    """Short text of a number: exact "p/q" for small rationals, else a rounded decimal.
-
-    Examples:
-        >>> format_number(fmpq(3, 7)), format_number(0.25), format_number(1 / 3)
-        ('3/7', '0.25', '0.333333')
-    """
-    if isinstance(v, fmpq):
-        if len(str(v)) <= 24:
-            return str(v)
-        f = to_float(v)
-        if not math.isfinite(f) or (f == 0 and v != 0):  # beyond the float range: exact digits
-            return format_rational(v, digits)
-        v = f
-    return f"{float(v):.{digits}g}"
 
 
 @dataclass
@@ -114,6 +42,32 @@ class ShapeState:
     """Positive semi-axis lengths along the body axes."""
     orientation: tuple[Number, ...]
     """2D: (angle,) in radians or a quaternion (w, 0, 0, z); 3D: quaternion (w, x, y, z)."""
+    matrix: tuple[tuple[fmpq, ...], ...] | None = None
+    """The exact matrix when the shape was typed as one (then centre, semi-axes and orientation
+    are its float decomposition, for drawing and for the fields)."""
+
+    @classmethod
+    def from_matrix(cls, M: Any, name: str = "matrix") -> ShapeState:
+        """A shape typed as its matrix, checked and normalised exactly.
+
+        The symmetric part, with the interior X^T M X < 0; drawn from its float decomposition.
+
+        Raises:
+            ValueError: not an ellipse/ellipsoid, or unreadable (the message names ``name``).
+
+        Examples:
+            >>> s = ShapeState.from_matrix([["1", "0", "-2"], ["0", "1", "0"], ["-2", "0", "3"]])
+            >>> s.center, s.semi_axes, str(s.matrix[0][2])
+            ((2.0, 0.0), (1.0, 1.0), '-2')
+        """
+        import numpy as np
+
+        from core.shapes.quadrics import axes_from_quadric, validate_quadric
+
+        E = validate_quadric(M, name=name)
+        exact = tuple(tuple(fmpq(v) for v in row) for row in E)
+        p = axes_from_quadric(np.array([[to_float(v) for v in row] for row in exact]), validate=False)
+        return cls(tuple(v + 0.0 for v in p.center), tuple(p.semi_axes), tuple(p.orientation), matrix=exact)
 
     @property
     def dim(self) -> int:
@@ -128,6 +82,9 @@ class ShapeState:
     def quadric(self) -> Any:
         """Matrix of the shape (exact ``fmpq`` lists when any entry is exact, else floats)."""
         from core import quadric_from_axes
+
+        if self.matrix is not None:
+            return [list(row) for row in self.matrix]
 
         o: Any = self.orientation
         if len(o) == 1:
@@ -158,8 +115,17 @@ class ShapeState:
             return pos, wxyz, scale
         return (c[0], c[1], c[2]), _unit(tuple(float(v) for v in self.orientation)), (r[0], r[1], r[2])
 
-    def to_dict(self) -> dict[str, list[str]]:
-        """JSON form (numbers as exact strings; floats as their shortest round-trip repr)."""
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (numbers as exact strings; floats as their shortest round-trip repr).
+
+        A shape typed as a matrix is written as its exact matrix.
+        """
+        if self.matrix is not None:
+            return {"matrix": [[str(v) for v in row] for row in self.matrix]}
+        return self.params_dict()
+
+    def params_dict(self) -> dict[str, list[str]]:
+        """Centre, semi-axes and orientation as JSON (also of a shape typed as a matrix)."""
         return {
             "center": [_num_text(v) for v in self.center],
             "semi_axes": [_num_text(v) for v in self.semi_axes],
@@ -170,10 +136,13 @@ class ShapeState:
     def from_dict(cls, d: Any, dim: int, name: str) -> ShapeState:
         """Read and check a shape from its JSON form (see :meth:`to_dict`)."""
         if not isinstance(d, dict):
-            raise ValueError(f"shape {name}: expected an object with center, semi_axes, orientation")
-        unknown = set(d) - {"center", "semi_axes", "orientation"}
+            raise ValueError(f"shape {name}: expected an object with center, semi_axes, orientation (or matrix)")
+        unknown = set(d) - {"center", "semi_axes", "orientation", "matrix"}
         if unknown:
             raise ValueError(f"shape {name}: unknown keys {sorted(unknown)}")
+        if d.get("matrix") is not None:
+            shape = cls.from_matrix(parse_matrix(d["matrix"], dim, f"{name}.matrix"), f"{name}.matrix")
+            return shape
         center = parse_vector(d.get("center", [0] * dim), dim, f"{name}.center")
         axes = parse_vector(d.get("semi_axes", [1] * dim), dim, f"{name}.semi_axes")
         if any(v <= 0 for v in axes):
@@ -222,8 +191,8 @@ class SceneConfig:
     """Name of a motion preset (``core.moving.presets``); None for a static scene."""
     motion: dict[str, Any] | None = None
     """Typed motion (expression strings per shape and the interval), overrides ``preset``."""
-    t: float | None = None
-    """Time to show (None: the motion's default)."""
+    t: float | str | None = None
+    """Time to show: a number, or exact text ("2/3", "(12-2*sqrt(2))/17"); None: the motion's default."""
     event: int | None = None
     """Show the k-th event (1-based) exactly instead of ``t``."""
     show_plots: bool = True
@@ -232,6 +201,8 @@ class SceneConfig:
     """Draw a separating plane when the shapes are separate."""
     gizmos: bool = True
     """Show the transform gizmos."""
+    palette: str | None = None
+    """Relation palette name (:data:`app.scene.shapes.PALETTES`; None: the default)."""
 
     def shapes(self) -> tuple[ShapeState, ShapeState]:
         """The static shapes, defaults filled in."""
@@ -251,7 +222,7 @@ class SceneConfig:
             >>> SceneConfig.from_dict({"dimension": 2})
             Traceback (most recent call last):
             ...
-            ValueError: config: unknown keys ['dimension']; allowed: A, B, dim, event, gizmos, motion, preset, separating_plane, show_plots, t
+            ValueError: config: unknown keys ['dimension']; allowed: A, B, dim, event, gizmos, motion, palette, preset, separating_plane, show_plots, t
         """
         if not isinstance(d, dict):
             raise ValueError("config: expected a JSON object")
@@ -275,18 +246,32 @@ class SceneConfig:
             raise ValueError("config: motion must be an object")
         cfg.motion = motion
         if d.get("t") is not None:
-            try:
-                t = float(d["t"])
-            except (TypeError, ValueError):
-                raise ValueError(f"config: t must be a number, got {d['t']!r}") from None
-            if not math.isfinite(t):
-                raise ValueError("config: t must be finite")
-            cfg.t = t
+            t = d["t"]
+            if isinstance(t, str):
+                try:
+                    read_time(t)
+                except ValueError as e:
+                    raise ValueError(f"config: t: {e}") from None
+                cfg.t = t
+            else:
+                try:
+                    t = float(t)
+                except (TypeError, ValueError):
+                    raise ValueError(f"config: t must be a number or exact text, got {d['t']!r}") from None
+                if not math.isfinite(t):
+                    raise ValueError("config: t must be finite")
+                cfg.t = t
         if d.get("event") is not None:
             ev = d["event"]
             if not isinstance(ev, int) or isinstance(ev, bool) or ev < 1:
                 raise ValueError(f"config: event must be a positive integer (1-based), got {ev!r}")
             cfg.event = ev
+        if d.get("palette") is not None:
+            from .shapes import PALETTES
+
+            if d["palette"] not in PALETTES:
+                raise ValueError(f"config: palette must be one of {', '.join(PALETTES)}")
+            cfg.palette = d["palette"]
         for key in ("show_plots", "separating_plane", "gizmos"):
             if key in d:
                 if not isinstance(d[key], bool):
@@ -319,28 +304,53 @@ class SceneConfig:
             "show_plots": self.show_plots,
             "separating_plane": self.separating_plane,
             "gizmos": self.gizmos,
+            "palette": self.palette,
         }
 
 
 @dataclass
 class AppState:
-    """Everything one tab shows; callbacks change it and call ``Session.refresh``."""
+    """Everything one tab shows: controllers change it, ``Session.refresh`` draws it."""
 
     dim: int
+    """2 or 3."""
     shapes: dict[str, ShapeState]
-    """"A" and "B"."""
+    """"A" and "B": the static shapes, or during a motion the shapes drawn at t (floats)."""
+    motion: MotionModel | None = None
+    """The loaded motion, or None (static shapes)."""
+    analysis: AnalysisView | None = None
+    """Its analysis once done (None while it runs)."""
     t: float = 0.0
     """Current time (when a motion is loaded), as drawn."""
     t_exact: Any = None
-    """The exact rational typed in the t box (e.g. 1/3), or None: the relation and the readout
-    are certified at this value; the shapes are drawn at its float ``t``."""
+    """The exact time typed in the t box (a rational such as 1/3, or an algebraic number such as
+    (12 - 2 sqrt 2)/17), or None: the relation and the readout are certified at this value; the
+    shapes are drawn at its float ``t``."""
+    t_text: str | None = None
+    """How the t box shows ``t_exact`` (the text as typed, normalised)."""
     event: int | None = None
-    """1-based index of the event shown exactly, or None when showing the float ``t``."""
-    motion_key: Any = None
-    """Cache key of the loaded motion (None: static scene)."""
-    explanation: dict[str, Any] | None = None
-    """Last ``core.explain(A, B).to_dict()`` of the static shapes (or at t)."""
+    """1-based index of the event shown exactly, or None when showing ``t``."""
+    auto_t: bool = False
+    """The start time is the analysis' default (just before the first event) until the user moves t."""
     relation: str | None = None
-    """Relation currently drawn ("separate", "tangent", "overlap")."""
+    """Relation currently drawn ("separate", "tangent", "overlap"), None when unknown."""
+    explanation: dict[str, Any] | None = None
+    """Last ``core.explain(A, B).to_dict()`` of the static shapes (None during a motion)."""
+    witness: WitnessView | None = None
+    """Last witness of the static shapes (margin, sentence, plane or point)."""
+    status: str = ""
+    """Status line of the motion panel (Markdown)."""
+    analysing: bool = False
+    """An analysis of ``motion`` is running."""
     errors: dict[str, str] = field(default_factory=dict)
-    """Field name -> error message shown next to that field."""
+    """Field -> message shown next to it: "A", "B", "interval" (motion editor), "shape A",
+    "shape B" (shape folders), "t" (t box)."""
+    show_plots: bool = True
+    separating_plane: bool = False
+    gizmos: bool = True
+    palette: str = "green / amber / red"
+    """Name of the relation palette (:data:`app.scene.shapes.PALETTES`)."""
+    follow: bool = False
+    """The camera follows the moving shapes."""
+    plot_scale: str = "asinh"
+    """Scale of the plots' y axis (:data:`app.scene.plots.SCALES`)."""

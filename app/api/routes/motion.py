@@ -7,6 +7,7 @@ from typing import Any
 
 from fastapi import APIRouter, HTTPException, Request
 
+from ...workers import WorkerBusy, WorkerCancelled, WorkerDied, WorkerFailed, WorkerTimeout
 from ..budget import run_off_loop
 from ..convert import bad_input
 from ..deps import SettingsDep, WorkersDep
@@ -15,7 +16,6 @@ from ..json_body import JsonRoute
 from ..motion_input import motion_payload
 from ..motion_schemas import AnalyseIn, AnalyseOut
 from ..schemas import ERROR_RESPONSES, ErrorOut
-from ..workers import WorkerBusy, WorkerCancelled, WorkerDied, WorkerFailed, WorkerTimeout
 
 router = APIRouter(
     prefix="/api",

@@ -1,6 +1,7 @@
 """Run CPU-bound work (motion analysis) in a separate process with a time budget.
 
-The API shares its process with the viser scene, so a long exact computation must neither hold
+Used by both the HTTP API (:mod:`app.api`) and the scene (:mod:`app.scene`): they share one
+server process, so a long exact computation on a user's input must neither hold
 the GIL nor outlive its budget. Each job runs in a fresh child process (``forkserver``: forked
 from a clean single-threaded server, never from the threaded web process); the caller waits on
 a pipe and kills the child when the budget is spent. A semaphore bounds the jobs running at once;

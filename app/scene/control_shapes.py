@@ -1,0 +1,140 @@
+"""What the user does to the shapes and the view: drag a gizmo, type a centre, switch 2D/3D, toggles.
+
+Each callback changes the tab's :class:`~app.scene.state.AppState` and calls the session's one
+``refresh()``; a bad value is stored as the error of its field (shown next to it) and changes
+nothing else. A drag or a typed shape during a motion leaves the motion: the shapes stay where
+they were drawn and become static.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import viser
+
+from core.shapes.numbers import to_fmpq
+
+from .gui import DIM_LABELS
+from .state import SceneConfig, ShapeState
+
+if TYPE_CHECKING:
+    from .session import Session
+
+__all__ = ["ShapeControl", "drawable", "DRAWABLE"]
+
+DRAWABLE = 10**12
+"""Largest |coordinate| and semi-axis (and 1 / smallest semi-axis) of a shape typed in the
+scene: entries of its matrix stay below 1e48 and the readout's floats finite."""
+
+
+def drawable(shape: ShapeState) -> ShapeState:
+    """The shape if it is valid and inside the scene's drawing range, else ValueError.
+
+    A typed centre of 1e300 is exact, but its matrix, its drawing and the readout's floats
+    would overflow: the scene takes |centre| <= 1e12 and semi-axes in [1e-12, 1e12].
+    """
+    shape.quadric()
+    big = to_fmpq(DRAWABLE)
+    if any(abs(to_fmpq(v)) > big for v in shape.center):
+        raise ValueError(f"centre too far for the scene (|x| <= {DRAWABLE:g})")
+    if any(not 1 / big <= to_fmpq(v) <= big for v in shape.semi_axes):
+        raise ValueError(f"semi-axes out of the scene's range [{1 / DRAWABLE:g}, {DRAWABLE:g}]")
+    return shape
+
+
+class ShapeControl:
+    """Callbacks of the shape folders, the gizmos and the View folder of one session."""
+
+    def __init__(self, session: Session) -> None:
+        self.s = session
+        ui = session.ui
+        for name, sg in ui.shapes.items():
+            for key, handle in sg.fields.items():
+                handle.on_update(lambda _ev, n=name, k=key: self.on_shape_text(n, k))
+        ui.view.dimension.on_update(lambda _ev: self.on_dimension())
+        ui.view.gizmos.on_update(lambda _ev: self.on_option("gizmos", bool(ui.view.gizmos.value)))
+        ui.view.plane.on_update(lambda _ev: self.on_option("separating_plane", bool(ui.view.plane.value)))
+        ui.view.palette.on_update(lambda _ev: self.on_option("palette", str(ui.view.palette.value)))
+        ui.plots.live.on_update(lambda _ev: self.on_option("show_plots", bool(ui.plots.live.value)))
+        ui.plots.scale.on_update(lambda _ev: self.on_option("plot_scale", str(ui.plots.scale.value)))
+
+    def attach_gizmos(self) -> None:
+        """Listen to the gizmos of the current shape views (after they are (re)built)."""
+        for name, view in self.s.views.items():
+            view.control.on_update(lambda ev, n=name: self.on_gizmo(n, ev))
+
+    # ------------------------------------------------------------------ callbacks
+    def on_gizmo(self, name: str, ev: viser.TransformControlsEvent) -> None:
+        """A gizmo moved: the drag path (recolour now, readout within the panel period)."""
+        if self.s.syncing.active:
+            return
+        tc = ev.target
+        self.drag(name, tuple(tc.position), tuple(tc.wxyz))
+
+    def drag(self, name: str, position: tuple[float, ...], wxyz: tuple[float, ...]) -> str | None:
+        """Shape ``name`` now has this pose (floats): classify, recolour (the hot path)."""
+        s = self.s
+        with s.lock:
+            st = s.state
+            if st.motion is not None:
+                s.motion_ctl.leave()
+            sh = st.shapes[name]
+            if st.dim == 2:
+                angle = 2.0 * math.atan2(float(wxyz[3]), float(wxyz[0]))
+                new = ShapeState((float(position[0]), float(position[1])), sh.semi_axes, (angle,))
+            else:
+                new = ShapeState(tuple(float(v) for v in position), sh.semi_axes, tuple(float(v) for v in wxyz))
+            st.shapes[name] = new
+            st.errors.pop(f"shape {name}", None)
+            return s.refresh(dragged=name)
+
+    def on_shape_text(self, name: str, key: str) -> None:
+        """A Shape field was edited: read it exactly; an error stays next to the field."""
+        if self.s.syncing.active:
+            return
+        value = self.s.ui.shapes[name].fields[key].value
+        try:
+            self.set_shape(name, **{key: value})
+        except ValueError as e:
+            self.s.field_error(f"shape {name}", str(e))
+
+    def set_shape(self, name: str, **fields: Any) -> str | None:
+        """Set shape parameters from text/numbers (as the GUI fields do); returns the relation.
+
+        Raises:
+            ValueError: a bad value (the same message the GUI shows next to the field).
+        """
+        s = self.s
+        with s.lock:
+            st = s.state
+            # a new matrix replaces the shape; a new centre (etc.) edits the shape's parameters
+            d = {} if "matrix" in fields else st.shapes[name].params_dict()
+            d.update(fields)
+            new = drawable(ShapeState.from_dict(d, st.dim, name))
+            if st.motion is not None:
+                s.motion_ctl.leave()
+            st.shapes[name] = new
+            st.errors.pop(f"shape {name}", None)
+            return s.refresh()
+
+    def on_dimension(self) -> None:
+        """View -> Dimension: the other dimension's default static shapes."""
+        s = self.s
+        if s.syncing.active:
+            return
+        dim = 3 if str(s.ui.view.dimension.value) == DIM_LABELS[3] else 2
+        if dim != s.state.dim:
+            st = s.state
+            s.load(SceneConfig(dim=dim, preset=None, gizmos=st.gizmos, show_plots=st.show_plots,
+                               separating_plane=st.separating_plane, palette=st.palette))
+            s.frame_camera()
+
+    def on_option(self, key: str, value: Any) -> None:
+        """A display option (gizmos, plane, palette, plots): stored and drawn."""
+        s = self.s
+        if s.syncing.active:
+            return
+        with s.lock:
+            setattr(s.state, key, value)
+            s.refresh()
