@@ -25,6 +25,10 @@ import argparse
 import math
 import sys
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # imported where used: the command line starts without viser
+    from .scene.state import SceneConfig
 
 __all__ = ["main", "build_parser", "config_from_args"]
 
@@ -123,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def config_from_args(args: argparse.Namespace, path: str | None = None) -> object:
+def config_from_args(args: argparse.Namespace, path: str | None = None) -> SceneConfig:
     """SceneConfig from ``--config``/``--preset``/``--t``/``--event``/``--dim`` (later override earlier).
 
     Args:
@@ -176,7 +180,7 @@ def _serve(args: argparse.Namespace) -> int:
         scene = start_scene(
             args.host, args.port, config_from_args(args), shared=args.shared, allow_origins=args.allow_origin,
             bodies=_bodies_model(args),
-        )  # type: ignore[arg-type]
+        )
         scene_url = scene.url
         print(f"Scene (open in a browser): {scene_url}", flush=True)
     try:
@@ -245,7 +249,7 @@ def _screenshot(args: argparse.Namespace) -> int:
                 shots_for(cfg, Path(args.out) / f"{Path(path).stem}.png", [], [])
     else:
         cfg = config_from_args(args)
-        shots = shots_for(cfg, args.out, ts if len(ts) + len(events) > 1 else [], events if len(ts) + len(events) > 1 else [])  # type: ignore[arg-type]
+        shots = shots_for(cfg, args.out, ts if len(ts) + len(events) > 1 else [], events if len(ts) + len(events) > 1 else [])
     for path in screenshots(shots, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args)):
         print(f"wrote {path}")
     return 0
@@ -258,7 +262,7 @@ def _export(args: argparse.Namespace) -> int:
 
     if not 0 < args.seconds <= 600 or not 2 <= args.frames <= 5000:
         raise ValueError("--seconds must be in (0, 600] and --frames in 2..5000")
-    html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames)  # type: ignore[arg-type]
+    html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(html, encoding="utf-8")

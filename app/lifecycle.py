@@ -18,8 +18,9 @@ import uvicorn
 
 __all__ = ["StoppableServer", "serve", "GRACE_S"]
 
-GRACE_S = 2.0
-"""Longest wait for requests in flight after a stop signal (their work is already stopped)."""
+GRACE_S = 2
+"""Longest wait for requests in flight after a stop signal (their work is already stopped), in
+whole seconds (uvicorn's ``timeout_graceful_shutdown`` is an int)."""
 
 
 class StoppableServer(uvicorn.Server):

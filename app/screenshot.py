@@ -157,7 +157,7 @@ class HeadlessScene:
             lambda: self._browser and self._browser.close(),
             lambda: self._pw and self._pw.stop(),
             lambda: self.scene and self.scene.stop(),
-            lambda: self._tmp and self._tmp.cleanup(),
+            lambda: None if self._tmp is None else self._tmp.cleanup(),
         ):
             try:
                 closer()

@@ -22,7 +22,10 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
+
+if TYPE_CHECKING:
+    from multiprocessing.context import ForkContext, ForkServerContext, SpawnContext
 
 __all__ = ["WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
 
@@ -61,10 +64,11 @@ def _release_forkserver() -> None:
     try:
         from multiprocessing import forkserver
 
-        fs = forkserver._forkserver  # type: ignore[attr-defined]
-        fd = fs._forkserver_alive_fd
+        # ignored: private state of the fork server on purpose (not in typeshed)
+        fs = forkserver._forkserver
+        fd = fs._forkserver_alive_fd  # type: ignore[attr-defined]
         if fd is not None:
-            fs._forkserver_alive_fd = None
+            fs._forkserver_alive_fd = None  # type: ignore[attr-defined]
             os.close(fd)
     except (AttributeError, ImportError, OSError):  # another start method: nothing to release
         pass
@@ -152,7 +156,8 @@ class WorkerPool:
     ) -> None:
         if start_method is None:
             start_method = "forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn"
-        self._ctx = mp.get_context(start_method)
+        # every context get_context returns for a method name has .Process (typeshed's BaseContext has not)
+        self._ctx = cast("ForkServerContext | SpawnContext | ForkContext", mp.get_context(start_method))
         if start_method == "forkserver" and preload:
             self._ctx.set_forkserver_preload(list(preload))
         self._slots = threading.BoundedSemaphore(max_jobs)

@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-RUFF_PATHS = ["core"]
+RUFF_PATHS = ["core", "app", "tests", "bench"]
 """Ruff-clean (pyproject's [tool.ruff] config)."""
-MYPY_PATHS = ["core"]
+MYPY_PATHS = ["core", "app"]
 """mypy-clean."""
 
 

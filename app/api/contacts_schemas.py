@@ -15,7 +15,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
 
 from .json_body import OutOfRange
-from .schemas import MethodName
+from .schemas import CertifiedBy, MethodName
 
 __all__ = ["ContactsIn", "ContactsOut", "PairOut", "FloatNumber"]
 
@@ -74,14 +74,18 @@ class ContactsIn(BaseModel):
     )
 
 
+PairRelation = Literal["tangent", "overlap", "undecided"]
+"""The relation of a listed pair (separate pairs are not listed)."""
+
+
 class PairOut(BaseModel):
     """One pair of bodies that is not separate."""
 
     i: int
     j: int
     """i < j; in a periodic box, j's nearest image (j + image * box)."""
-    relation: Literal["tangent", "overlap", "undecided"]
-    certified_by: Literal["float", "exact"] | None
+    relation: PairRelation
+    certified_by: CertifiedBy | None
     image: list[int] | None = None
     """Lattice image of j (periodic box only)."""
 

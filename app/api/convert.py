@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from fastapi import HTTPException
@@ -20,7 +20,7 @@ from core import Certifier, Relation, classify_detailed, quadric_from_axes, vali
 from core.shapes.numbers import to_fmpq
 
 from .budget import Budget
-from .schemas import ClassifyOut, PairItem, ShapeIn
+from .schemas import ClassifyOut, PairItem, RelationName, ShapeIn
 
 __all__ = ["bad_input", "quadric_input", "checked_pair", "classify_items", "is_plain_pair"]
 
@@ -200,7 +200,7 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
             raise HTTPException(status_code=422, detail=f"{where[i]}not an ellipse/ellipsoid pair")  # not reached
     return [
         ClassifyOut(
-            relation=str(Relation(int(codes[i]))),
+            relation=cast(RelationName, str(Relation(int(codes[i])))),  # INVALID was raised above
             certified_by=by[i],  # type: ignore[arg-type]
             kind="ellipse" if len(mats[i][0]) == 3 else "ellipsoid",  # type: ignore[index]
             method=method,  # type: ignore[arg-type]

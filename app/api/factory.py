@@ -63,7 +63,8 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     _offline_docs(app)
     app.state.settings = settings
     app.state.workers = workers
-    app.add_exception_handler(RequestValidationError, validation_error_handler)
+    # ignored: starlette types every handler as taking any Exception; this one is registered for its class only
+    app.add_exception_handler(RequestValidationError, validation_error_handler)  # type: ignore[arg-type]
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes, per_path={"/api/contacts": settings.max_contacts_body_bytes})
     for module in (classify, contacts, motion, presets, witness, health, landing):
         app.include_router(module.router)

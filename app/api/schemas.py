@@ -45,7 +45,8 @@ __all__ = [
     "ERROR_RESPONSES",
 ]
 
-MAX_NUMBER_CHARS = SERVER.number_chars
+assert SERVER.number_chars is not None  # the server caps number strings (core.shapes.limits.SERVER)
+MAX_NUMBER_CHARS: int = SERVER.number_chars
 """Longest number string accepted by the API (:data:`core.shapes.limits.SERVER`; the library has none)."""
 MAX_INT_DIGITS = MAX_NUMBER_CHARS
 """Largest integer accepted as a JSON number, in decimal digits (as for number strings)."""
@@ -179,6 +180,7 @@ ClassifyIn = Annotated[
 ]
 
 RelationName = Literal["separate", "tangent", "overlap", "undecided"]
+CertifiedBy = Literal["float", "exact"]
 
 
 class ClassifyOut(BaseModel):
@@ -186,7 +188,7 @@ class ClassifyOut(BaseModel):
 
     relation: RelationName
     """'undecided' only with method 'float'."""
-    certified_by: Literal["float", "exact"] | None
+    certified_by: CertifiedBy | None
     """Arithmetic that certified the relation: the float filter (with its proven error bound)
     or exact rationals; None when undecided."""
     kind: Literal["ellipse", "ellipsoid"]
@@ -212,7 +214,7 @@ class ExplainOut(BaseModel):
 
     n: Literal[3, 4]
     relation: RelationName
-    certified_by: Literal["float", "exact"]
+    certified_by: CertifiedBy
     rule: str
     rule_text: str
     var: int

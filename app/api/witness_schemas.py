@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
+from pydantic.config import JsonValue
 
 from .schemas import PairItem
 
@@ -24,8 +25,10 @@ __all__ = [
 ]
 
 Kind = Literal["ellipse", "ellipsoid"]
+Decided = Literal["separate", "tangent", "overlap"]
+"""The relation of a pair that has a witness (never undecided)."""
 
-_EXAMPLES = [
+_EXAMPLES: list[JsonValue] = [
     {"a": [[1, 0, 0], [0, 1, 0], [0, 0, -1]], "b": [[1, 0, -3], [0, 1, 0], [-3, 0, 8]]},
     {"a": {"center": [0, 0, 0], "semi_axes": [2, 1, 1]}, "b": {"center": [3, 0, 0], "semi_axes": [1, 1, 1]}},
 ]
@@ -74,7 +77,7 @@ class ContactScaleOut(BaseModel):
     < 1 overlap.
     """
 
-    relation: Literal["separate", "tangent", "overlap"]
+    relation: Decided
     kind: Kind
     lo: str
     """Exact rational lower bound."""
@@ -124,7 +127,7 @@ class ContactPointOut(BaseModel):
 class WitnessOut(BaseModel):
     """The certified relation, the sentence that explains it and the object that proves it."""
 
-    relation: Literal["separate", "tangent", "overlap"]
+    relation: Decided
     sentence: str
     margin_text: str
     contact_scale: ContactScaleOut

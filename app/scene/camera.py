@@ -9,14 +9,38 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
+from typing import Protocol
 
 import numpy as np
 import viser
 
-__all__ = ["Framing", "frame_cameras", "extent_of"]
+from .markers import vec3
+
+__all__ = ["Framing", "Camera", "frame_cameras", "extent_of"]
 
 FREE = 0.62
 """Share of the page width left of the GUI panel."""
+
+
+class Camera(Protocol):
+    """What :meth:`Framing.aim` reads and sets of a camera.
+
+    A tab's :class:`viser.CameraHandle`, or an adapter with the same attributes.
+    """
+
+    @property
+    def fov(self) -> float:
+        """Vertical field of view, radians."""
+        ...
+
+    @property
+    def aspect(self) -> float:
+        """Width over height of the view."""
+        ...
+
+    position: tuple[float, float, float] | np.ndarray
+    look_at: tuple[float, float, float] | np.ndarray
+    up_direction: tuple[float, float, float] | np.ndarray
 
 
 class Framing:
@@ -54,7 +78,7 @@ class Framing:
 
     def aim(
         self,
-        cam: viser.CameraHandle,
+        cam: Camera,
         *,
         free: float = FREE,
         fill: float = 0.9,
@@ -88,8 +112,8 @@ class Framing:
             right = np.cross(-v, np.array([0.0, 0.0, 1.0]))
             right /= np.linalg.norm(right)
             # viser keeps the orientation when the position is set: position first, then look_at
-            cam.position = tuple(float(x) for x in c + dist * v + shift * right)
-            cam.look_at = tuple(float(v) for v in c + shift * right)
+            cam.position = vec3(c + dist * v + shift * right)
+            cam.look_at = vec3(c + shift * right)
 
 
 def extent_of(poses: Iterable[tuple[tuple[float, float, float], object, tuple[float, float, float]]], dim: int) -> np.ndarray:

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 
 import viser
 
+from .gui import ignoring_event
+
 if TYPE_CHECKING:
     from .session import Session
 
@@ -43,7 +45,7 @@ class KeyControl:
             ("Frame the shapes", "F", session.frame_camera),
         ):
             cmd = gui.add_command(label, hotkey=key)  # type: ignore[arg-type]
-            cmd.on_trigger(lambda _ev, action=action: action())
+            cmd.on_trigger(ignoring_event(action))
             self.commands.append(cmd)
         session.ui.view.frame.on_click(lambda _ev: session.frame_camera())
         session.ui.view.follow.on_update(lambda _ev: self.on_follow())
@@ -54,7 +56,8 @@ class KeyControl:
         s = self.s
         if s.state.motion is None:
             return
-        s.ui.timeline.play.value = not s.ui.timeline.play.value  # runs the Play callback
+        # runs the Play callback; ignored: writable, viser defines the setter apart from the getter (mypy sees read-only)
+        s.ui.timeline.play.value = not s.ui.timeline.play.value  # type: ignore[misc]
 
     def step(self, direction: int) -> None:
         """Move t by 1/STEPS_PER_WINDOW of the window."""

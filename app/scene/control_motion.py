@@ -111,7 +111,7 @@ class MotionControl:
             s.state.errors.pop("form", None)
             with s.syncing():
                 for name, text in texts.items():
-                    ui.fields[name].value = text
+                    ui.fields[name].value = text  # type: ignore[misc]  # writable: viser defines the setter apart from the getter, mypy sees read-only
         self.on_analyse()
 
     # ------------------------------------------------------------------ life cycle

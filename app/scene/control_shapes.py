@@ -9,13 +9,14 @@ they were drawn and become static.
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import viser
 
 from core.shapes.numbers import to_fmpq
 
-from .gui import DIM_LABELS
+from .gui import DIM_LABELS, ignoring_event
 from .state import SceneConfig, ShapeState
 
 if TYPE_CHECKING:
@@ -51,7 +52,7 @@ class ShapeControl:
         ui = session.ui
         for name, sg in ui.shapes.items():
             for key, handle in sg.fields.items():
-                handle.on_update(lambda _ev, n=name, k=key: self.on_shape_text(n, k))
+                handle.on_update(ignoring_event(partial(self.on_shape_text, name, key)))
         ui.view.dimension.on_update(lambda _ev: self.on_dimension())
         ui.view.gizmos.on_update(lambda _ev: self.on_option("gizmos", bool(ui.view.gizmos.value)))
         ui.view.plane.on_update(lambda _ev: self.on_option("separating_plane", bool(ui.view.plane.value)))
@@ -62,7 +63,7 @@ class ShapeControl:
     def attach_gizmos(self) -> None:
         """Listen to the gizmos of the current shape views (after they are (re)built)."""
         for name, view in self.s.views.items():
-            view.control.on_update(lambda ev, n=name: self.on_gizmo(n, ev))
+            view.control.on_update(partial(self.on_gizmo, name))
 
     # ------------------------------------------------------------------ callbacks
     def on_gizmo(self, name: str, ev: viser.TransformControlsEvent) -> None:

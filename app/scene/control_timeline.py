@@ -160,7 +160,7 @@ class TimelineControl:
         play = self.s.ui.timeline.play
         if play.value:
             with self.s.syncing():
-                play.value = False
+                play.value = False  # type: ignore[misc]  # writable: viser defines the setter apart from the getter, mypy sees read-only
 
     def _play_loop(self) -> None:
         s = self.s

@@ -11,14 +11,19 @@ contents.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import viser
 
 from .plots import SCALES
 from .shapes import PALETTES
 
-__all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "ShareGui", "build_gui", "STATIC", "DIM_LABELS"]
+if TYPE_CHECKING:  # what GuiApi.add_progress_bar returns; viser 1.1.1 does not export it at the top level
+    from viser._gui_handles import GuiProgressBarHandle
+
+__all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "ShareGui", "build_gui", "ignoring_event", "STATIC", "DIM_LABELS"]
 
 FORM_LABELS = (
     ("center", "Body centre", "x, y[, z] (expressions in t allowed)"),
@@ -78,7 +83,7 @@ class MotionGui:
     """"A", "B", "interval"."""
     errors: dict[str, viser.GuiMarkdownHandle]
     analyse: viser.GuiButtonHandle
-    progress: viser.GuiProgressBarHandle
+    progress: GuiProgressBarHandle
     status: viser.GuiMarkdownHandle
     form: dict[str, dict[str, viser.GuiTextHandle]]
     """The motion form: "A", "B" -> field -> text (:mod:`app.scene.motion_form`)."""
@@ -144,6 +149,19 @@ class Gui:
     sign_table: viser.GuiMarkdownHandle
     view: ViewGui
     share: ShareGui
+
+
+def ignoring_event(fn: Callable[[], object]) -> Callable[[object], None]:
+    """A viser callback that calls ``fn()`` and drops the event (and what ``fn`` returns).
+
+    ``fn`` is bound when the callback is made: in a loop, pass ``functools.partial(f, name)``
+    rather than a lambda over the loop variable.
+    """
+
+    def callback(_event: object) -> None:
+        fn()
+
+    return callback
 
 
 def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bool, gizmos: bool, plane: bool) -> Gui:

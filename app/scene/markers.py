@@ -8,15 +8,26 @@ assignment; every setter sends only changes.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 import viser
 
-__all__ = ["WitnessMarkers", "rotation_to"]
+__all__ = ["WitnessMarkers", "rotation_to", "vec3"]
 
 
-def rotation_to(n: Sequence[float]) -> tuple[float, float, float, float]:
+def vec3(values: Iterable[float]) -> tuple[float, float, float]:
+    """The three values as floats: a position or scale for viser (exactly three, else ValueError).
+
+    Examples:
+        >>> vec3(np.array([1, 2, 3]))
+        (1.0, 2.0, 3.0)
+    """
+    x, y, z = (float(v) for v in values)
+    return (x, y, z)
+
+
+def rotation_to(n: Sequence[float] | np.ndarray) -> tuple[float, float, float, float]:
     """Unit quaternion wxyz turning +z into the unit vector n (3D).
 
     Examples:
@@ -75,7 +86,7 @@ class WitnessMarkers:
                 self._point_on = False
             self._show_normal(None)
             return
-        self.point.position = tuple(float(v) for v in point) + ((0.0,) if len(point) == 2 else ())
+        self.point.position = vec3((*point, 0.0) if len(point) == 2 else point)
         if self.label.text != label:
             self.label.text = label
         if not self._point_on:
@@ -114,7 +125,7 @@ class WitnessMarkers:
         n3 = np.append(n, 0.0) if d == 2 else n
         p3 = np.append(p, 0.0) if d == 2 else p
         size = 0.75 * float(np.linalg.norm(cB - cA)) + 1.0
-        self.plane.position = tuple(float(v) for v in p3)
+        self.plane.position = vec3(p3)
         self.plane.wxyz = rotation_to(n3)
         self.plane.scale = (size, size, 1.0)
         if not self._plane_on:

@@ -195,7 +195,7 @@ def start_viser(policy: OriginPolicy, router: Any = None, **kwargs: Any) -> Any:
         return original(*args, process_request=policy.process_request(process_request), **kw)
 
     with _PATCH_LOCK:  # viser calls serve() from its thread before ViserServer() returns
-        ws_server.serve = serve  # type: ignore[assignment]
+        ws_server.serve = serve  # type: ignore[assignment,misc]  # patched on purpose: serve is a class in websockets
         try:
             server = viser.ViserServer(**kwargs)
         finally:

@@ -13,12 +13,13 @@ import html
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import partial
 from typing import Any
 
 import viser
 
 from .analysis import AnalysisView
-from .gui import DIM_LABELS, STATIC, Gui
+from .gui import DIM_LABELS, STATIC, Gui, ignoring_event
 from .motion_form import form_from_source
 from .panels import (
     events_html,
@@ -75,7 +76,7 @@ class PanelView:
         on_event: called with k when the "Jump to α_k" button is clicked.
     """
 
-    def __init__(self, gui: Gui, gui_api: viser.GuiApi, syncing: Syncing, on_event: Callable[[int], None]) -> None:
+    def __init__(self, gui: Gui, gui_api: viser.GuiApi, syncing: Syncing, on_event: Callable[[int], object]) -> None:
         self.gui = gui
         self._api = gui_api
         self._syncing = syncing
@@ -153,7 +154,7 @@ class PanelView:
             else:
                 w = state.witness
                 expl = state.explanation
-                text = readout_markdown(expl, where="(static shapes)", witness=w and w.readout(), palette=self.palette)
+                text = readout_markdown(expl, where="(static shapes)", witness=None if w is None else w.readout(), palette=self.palette)
         elif an is None:
             text = readout_markdown(None, error="analysing the motion…" if state.analysing else state.status or "no analysis")
         else:
@@ -204,7 +205,7 @@ class PanelView:
         self.set_error(mg.form_error, state.errors.get("form"))
         self.set_visible(mg.progress, state.analysing)
         if state.analysing and mg.progress.value != 10.0:
-            mg.progress.value = 10.0
+            mg.progress.value = 10.0  # type: ignore[misc]  # writable: viser defines the setter apart from the getter, mypy sees read-only
         self.set_text(mg.status, state.status)
 
     def _show_timeline(self, state: AppState) -> None:
@@ -248,7 +249,7 @@ class PanelView:
         for ev in an.events:
             with tg.events_folder:
                 btn = self._api.add_button(f"Jump to α{ev.k} ≈ {ev.t:.6f}")
-            btn.on_click(lambda _e, k=ev.k: self._on_event(k))
+            btn.on_click(ignoring_event(partial(self._on_event, ev.k)))
             tg.event_buttons.append(btn)
         self.set_text(tg.events_md, events_html(an.events, self.palette))
         self.set_text(self.gui.sign_table, sign_table_markdown(an.sign_rows(), an.n, self.palette))

@@ -17,6 +17,7 @@ import numpy as np
 
 from .analysis import AnalysisCache
 from .camera import Framing, extent_of
+from .markers import vec3
 from .session import Session
 from .state import SceneConfig
 
@@ -25,6 +26,13 @@ __all__ = ["replay_html"]
 
 class _InitialCamera:
     """Adapter: :meth:`app.scene.camera.Framing.aim` on viser's initial camera of a server."""
+
+    fov: float
+    aspect: float
+    # set through __setattr__ on viser's initial camera (written by Framing.aim, never read here)
+    position: tuple[float, float, float] | np.ndarray
+    look_at: tuple[float, float, float] | np.ndarray
+    up_direction: tuple[float, float, float] | np.ndarray
 
     def __init__(self, initial: Any) -> None:
         self._c = initial
@@ -78,7 +86,7 @@ def replay_html(config: SceneConfig, *, seconds: float = 12.0, frames: int = 240
         top = framing.hi + np.array([0.0, 0.0, 0.25 * framing.radius])
         if st.dim == 2:
             top = np.array([float(framing.centre[0]), float(framing.hi[1] + 0.15 * framing.radius), 0.0])
-        caption = server.scene.add_label("/replay/caption", "", position=tuple(float(v) for v in top), anchor="bottom-center")
+        caption = server.scene.add_label("/replay/caption", "", position=vec3(top), anchor="bottom-center")
         rec = server.get_scene_serializer()
         if an is None:
             caption.text = f"static shapes · {(st.relation or 'unknown').upper()}"

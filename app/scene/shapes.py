@@ -17,6 +17,7 @@ import numpy as np
 import viser
 
 from . import wire
+from .markers import vec3
 
 __all__ = [
     "RELATION_COLORS",
@@ -181,7 +182,7 @@ class EllipsoidView:
                 self.sent += 2
         # semi-axes from a float eigen-decomposition jitter in the last bits under a rigid
         # motion: compare at display precision so an unchanged size sends nothing
-        scale = tuple(float(f"{v:.9g}") for v in scale)
+        scale = vec3(float(f"{v:.9g}") for v in scale)
         if scale != self._scale:
             self._scale = scale
             self.mesh.scale = scale

@@ -49,8 +49,8 @@ def touch_motion(a: ShapeState, b: ShapeState) -> dict[str, str]:
     norm = math.sqrt(sum(float(v) ** 2 for v in d))
     reach = max(float(v) for v in a.semi_axes) + max(float(v) for v in b.semi_axes)
     end = max(2, math.ceil(reach / norm) + 1)  # beyond it the centres are farther apart than any two points
-    body_b = {"center": [0] * len(cb), "semi_axes": _exact(b.semi_axes)}
-    body_a = {"center": _exact(a.center), "semi_axes": _exact(a.semi_axes)}
+    body_b: dict[str, object] = {"center": [0] * len(cb), "semi_axes": _exact(b.semi_axes)}
+    body_a: dict[str, object] = {"center": _exact(a.center), "semi_axes": _exact(a.semi_axes)}
     for body, sh in ((body_a, a), (body_b, b)):
         o = sh.orientation
         if len(o) == 1:

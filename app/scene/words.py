@@ -32,6 +32,8 @@ RULE_WORDS: dict[str, str] = {
 """Rule key (:data:`core.formulae.decision.RULES`) -> the conclusion in plain words."""
 
 _SIGN_WORD = {1: "positive", -1: "negative", 0: "zero"}
+_SIGN_CHAR: dict[int | None, str] = {1: "+", -1: "−", 0: "0"}
+"""Sign -> the character in the list of signs (None: sign unknown, shown "?")."""
 
 
 def plain_words(expl: dict[str, Any] | None) -> str:
@@ -49,7 +51,7 @@ def plain_words(expl: dict[str, Any] | None) -> str:
     n = expl["n"]
     shapes = "ellipses" if n == 3 else "ellipsoids"
     coeffs = expl["coefficients"]
-    signs = ", ".join({1: "+", -1: "−", 0: "0"}.get(q.get("sign") if q else None, "?") for q in reversed(coeffs))
+    signs = ", ".join(_SIGN_CHAR.get(q.get("sign") if q else None, "?") for q in reversed(coeffs))
     var = expl["var"]
     lines = [
         f"**P(T) = det(T·A + B)** is a polynomial of degree {n} in T made from the two matrices. "

@@ -9,12 +9,16 @@ Coefficients are returned in ascending order ``[a_0, ..., a_n]``; a_n = det A, a
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = ["determinant", "pencil_coefficients", "poly_mul"]
 
 R = TypeVar("R")
-Matrix = Sequence[Sequence[Any]]
+Matrix: TypeAlias = "Sequence[Sequence[Any]] | np.ndarray"
+"""Square matrix indexable as ``M[i][j]``: nested sequences or a numpy array."""
 
 
 def poly_mul(p: Sequence[Any], q: Sequence[Any]) -> list[Any]:

@@ -8,6 +8,7 @@ that names it ("body 7: ...").
 from __future__ import annotations
 
 import threading
+from typing import cast
 
 import numpy as np
 from fastapi import APIRouter, HTTPException, Request
@@ -15,11 +16,11 @@ from fastapi import APIRouter, HTTPException, Request
 from core import Certifier, Relation, bodies_from_axes, contacts
 
 from ..budget import Budget, BudgetExceeded, Cancelled, budget_error, run_off_loop
-from ..contacts_schemas import ContactsIn, ContactsOut, PairOut
+from ..contacts_schemas import ContactsIn, ContactsOut, PairOut, PairRelation
 from ..convert import bad_input
 from ..deps import SettingsDep
 from ..json_body import JsonRoute
-from ..schemas import ERROR_RESPONSES, ErrorOut
+from ..schemas import ERROR_RESPONSES, CertifiedBy, ErrorOut
 
 router = APIRouter(
     prefix="/api",
@@ -42,11 +43,11 @@ async def contacts_route(body: ContactsIn, request: Request, settings: SettingsD
 
         with bad_input():
             res = contacts(Q, box=body.box, method=body.method, on_invalid=body.on_invalid, progress=progress)
-        names = {int(r): str(r) for r in Relation}
-        by_name = {int(Certifier.FLOAT): "float", int(Certifier.EXACT): "exact"}
+        names = {int(r): str(r) for r in Relation}  # core lists the non-separate pairs of valid bodies
+        by_name: dict[int, CertifiedBy] = {int(Certifier.FLOAT): "float", int(Certifier.EXACT): "exact"}
         images = res.image.tolist() if res.image is not None else None
         pairs = [
-            PairOut(i=a, j=b, relation=names[r], certified_by=by_name.get(c), image=None if images is None else images[k])
+            PairOut(i=a, j=b, relation=cast(PairRelation, names[r]), certified_by=by_name.get(c), image=None if images is None else images[k])
             for k, (a, b, r, c) in enumerate(zip(res.i.tolist(), res.j.tolist(), res.relation.tolist(), res.certified_by.tolist(), strict=True))
         ]
         return ContactsOut(bodies=res.n_bodies, pairs=pairs, counts=res.counts, invalid=res.invalid, summary=res.summary())

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 from fastapi import APIRouter, HTTPException, Request
 
@@ -37,6 +37,8 @@ from ..witness_schemas import (
     ContactPointOut,
     ContactScaleIn,
     ContactScaleOut,
+    Decided,
+    Kind,
     PlaneOut,
     WitnessIn,
     WitnessOut,
@@ -84,9 +86,14 @@ def _check_digits(digits: int, settings: Any) -> None:
         raise HTTPException(422, f"digits = {digits} is over the limit of {settings.max_digits}")
 
 
-def _scale_out(cs: ContactScale, kind: str, digits: int | None) -> ContactScaleOut:
+def _decided(relation: Relation) -> Decided:
+    """The API name of a witnessed relation (core's witnesses are of decided pairs only)."""
+    return cast(Decided, str(relation))
+
+
+def _scale_out(cs: ContactScale, kind: Kind, digits: int | None) -> ContactScaleOut:
     return ContactScaleOut(
-        relation=str(cs.relation),
+        relation=_decided(cs.relation),
         kind=kind,
         lo=str(cs.lo),
         hi=str(cs.hi),
@@ -115,7 +122,7 @@ def _plane_out(plane: Any) -> PlaneOut:
     return PlaneOut(relation="separate", sentence=SENTENCES[Relation.SEPARATE], **d)
 
 
-def _kind(a: Any) -> str:
+def _kind(a: Any) -> Kind:
     return "ellipse" if len(a) == 3 else "ellipsoid"
 
 
@@ -185,7 +192,7 @@ async def witness_route(body: WitnessIn, request: Request, settings: SettingsDep
         with bad_input():
             w = witness(a, b)
             return WitnessOut(
-                relation=str(w.relation),
+                relation=_decided(w.relation),
                 sentence=w.sentence,
                 margin_text=w.margin,
                 contact_scale=_scale_out(w.scale, _kind(a), None),
