@@ -319,6 +319,29 @@ def test_analysis_in_a_child_process_matches_threads():
     assert view.relation_at(0.25) == "separate" and view.relation_at(0.75) == "overlap"
 
 
+def test_presets_are_prefetched_and_kept():
+    """A server analyses every preset once at start; a flood of other motions does not evict them."""
+    from app.scene.analysis import AnalysisCache
+    from app.scene.motion import list_presets, load_motion
+
+    models = [load_motion(preset=name, motion=None) for name in list_presets()]
+    cache = AnalysisCache(processes=False)
+    cache.max_entries = 2
+    try:
+        cache.prefetch(lambda: models).join(timeout=120)
+        assert all(cache.get(m.key) is not None for m in models)
+        # the other motions: the presets under new keys (same work, other identities)
+        for m in models[:4]:
+            other = load_motion(preset=m.preset, motion=None)
+            other.key = ("other", m.key)
+            cache.submit(other).result(timeout=120)
+        assert all(cache.get(m.key) is not None for m in models)
+        assert cache.get(("other", models[0].key)) is None  # the oldest unpinned one went
+        assert cache.get(("other", models[3].key)) is not None
+    finally:
+        cache.shutdown()
+
+
 def test_separating_plane_separates(server):
     cfg = unit_spheres(3, "3")
     cfg.separating_plane = True

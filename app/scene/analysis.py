@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Hashable
+from collections.abc import Callable, Hashable, Iterable
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
@@ -254,7 +254,10 @@ class AnalysisCache:
         self.read_budget = read_budget
         """Seconds a worker may spend reading one typed motion."""
         self.max_entries = 64
-        """Analyses kept (the oldest is dropped first)."""
+        """Analyses kept besides the prefetched ones (the oldest is dropped first)."""
+        self._pinned: set[Hashable] = set()
+        self.closed = False
+        """Set by :meth:`shutdown`: background prefetching stops."""
         self._pool: Any = None
         if processes:
             from app.workers import WorkerPool
@@ -277,6 +280,34 @@ class AnalysisCache:
                 pass
 
         threading.Thread(target=run, name="warm-workers", daemon=True).start()
+
+    def prefetch(self, models: Callable[[], Iterable[MotionModel]]) -> threading.Thread:
+        """Analyse ``models()`` into the cache in the background, one at a time.
+
+        For the presets: their analyses are fixed, so they are computed once when the server
+        starts (well under a second in all) and a tab's pick is drawn without waiting. One at a
+        time, so a tab's own analysis always finds a free worker; a failure is left for the tab
+        that asks (it gets the error then).
+        """
+
+        def run() -> None:
+            try:
+                todo = list(models())
+            except Exception:  # noqa: BLE001 - the tab that picks it reports the error
+                return
+            for model in todo:
+                if self.closed:
+                    return
+                with self._lock:
+                    self._pinned.add(model.key)
+                try:
+                    self.submit(model).result()
+                except Exception:  # noqa: BLE001 - same: reported to the tab that asks
+                    pass
+
+        thread = threading.Thread(target=run, name="prefetch-analyses", daemon=True)
+        thread.start()
+        return thread
 
     def read_typed(self, motion: dict[str, Any]) -> MotionModel:
         """A typed motion, read (matrices built) in a worker process under a time and memory budget.
@@ -339,8 +370,9 @@ class AnalysisCache:
             view = AnalysisView.of(result, time.perf_counter() - t0)
             with self._lock:
                 self._done[model.key] = view
-                while len(self._done) > self.max_entries:  # oldest first (dicts keep order)
-                    self._done.pop(next(iter(self._done)))
+                evictable = [k for k in self._done if k not in self._pinned]  # oldest first
+                for old in evictable[: max(0, len(evictable) - self.max_entries)]:
+                    self._done.pop(old)
             return view
         finally:
             with self._lock:
@@ -371,5 +403,6 @@ class AnalysisCache:
 
     def shutdown(self) -> None:
         """Kill running analysis processes."""
+        self.closed = True
         if self._pool is not None:
             self._pool.shutdown()

@@ -59,9 +59,9 @@ class SceneServer:
     ) -> None:
         self.server = server
         self.config = config
+        """Configuration new tabs open on (change it to change what the next tab sees)."""
         self.bodies = bodies
         """Many bodies each new tab shows, or None."""
-        """Configuration new tabs open on (change it to change what the next tab sees)."""
         self.store = store or TabStore()
         self.executor = ThreadPoolExecutor(max_workers=2, thread_name_prefix="analysis")
         self.cache = AnalysisCache(self.executor, processes=processes)
@@ -72,6 +72,8 @@ class SceneServer:
         self.shared: Session | None = None
         """The one session every tab sees (presenter mode), or None (one session per tab)."""
         self.cache.warm()
+        self.prefetched = self.cache.prefetch(_preset_models)
+        """The thread analysing the presets at start (joined: every preset is in the cache)."""
         if shared:
             self.shared = Session(
                 server, config, cache=self.cache, executor=self.executor,
@@ -206,3 +208,10 @@ def start_scene(
         raise PortBusy(f"the scene's port {port} on {host} is already in use: choose another with --port")
     server.gui.configure_theme(control_width="large", show_share_button=False)
     return SceneServer(server, config or SceneConfig(), processes=processes, shared=shared, store=store, bodies=bodies)
+
+
+def _preset_models() -> list[Any]:
+    """The motions of the presets (fixed inputs): analysed once at start, so a pick shows at once."""
+    from .motion import list_presets, load_motion
+
+    return [load_motion(preset=name, motion=None) for name in list_presets()]
