@@ -43,6 +43,12 @@ CHROMIUM_FLAGS = [
 ]
 """Flags verified to give WebGL2 on SwiftShader on a machine with no GPU and no display."""
 
+_TWO_FRAMES_JS = (
+    "() => new Promise((r) => { requestAnimationFrame(() => requestAnimationFrame(r)); setTimeout(r, 5000); })"
+)
+"""Two painted animation frames, or 5 s (page.evaluate has no timeout: a tab that stops
+rendering must not hang the caller)."""
+
 _HIDE_TOAST = ".mantine-Notifications-root{display:none!important}"
 
 _MESH_COLOR_JS = """(n) => {
@@ -252,7 +258,7 @@ class HeadlessScene:
         # two animation frames: the browser has rendered and painted the state just applied
         # (viser renders on demand: a frame counter may not move when nothing changes)
         for _ in range(frames):
-            self.page.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")
+            self.page.evaluate(_TWO_FRAMES_JS)
 
     def _wait_bodies(self, frames: int) -> None:
         """Many bodies: the view built, its batched mesh in the browser, then a few frames."""
@@ -264,7 +270,7 @@ class HeadlessScene:
         if self.session.mesh is not None:
             self.page.wait_for_function("(n) => window.__viserMutable?.nodeRefFromName?.[n] != null", arg=MESH_NODE)
         for _ in range(frames):  # painted (see wait_settled)
-            self.page.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")
+            self.page.evaluate(_TWO_FRAMES_JS)
 
     def canvas_pixels(self, every: int = 6) -> Any:
         """RGBA samples of the WebGL canvas on a grid of every ``every``-th pixel: (N, 4) uint8.
