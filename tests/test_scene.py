@@ -19,6 +19,7 @@ from app.scene.costs import measure_update_costs  # noqa: E402
 from app.scene.panels import intervals_bar_html, readout_markdown, sign_table_markdown  # noqa: E402
 from app.scene.plots import compress  # noqa: E402
 from app.scene.session import Session  # noqa: E402
+from app.scene.shapes import RELATION_HEX, rgb, unit_disc, unit_sphere  # noqa: E402
 from app.scene.state import SceneConfig, ShapeState  # noqa: E402
 from app.scene.texts import parse_vector  # noqa: E402
 
@@ -385,6 +386,27 @@ def test_play_advances_t_and_stops(server):
     assert 0.15 < t_stopped < 0.6
     time.sleep(0.2)
     assert s.state.t == t_stopped
+    s.close()
+
+
+def test_dimension_switch_keeps_the_gizmo_and_swaps_the_mesh(server):
+    """A dimension switch changes the shapes in place: same gizmo node (rebuilding one costs the
+    browser about half a second), a disc or an icosphere mesh, the plane's axes only in 2D, and
+    the whole pose sent again (the new mesh starts at viser's defaults)."""
+    s = Session(server, unit_spheres(3, "3"))
+    controls = {n: v.control for n, v in s.views.items()}
+    spheres = {n: v.mesh for n, v in s.views.items()}
+    s.ui.view.dimension.value = "2D ellipses"
+    for n, v in s.views.items():
+        assert v.control is controls[n] and v.mesh is not spheres[n] and v.drawn
+        assert tuple(v.control.active_axes) == (True, True, False)
+        assert len(v.mesh.vertices) == len(unit_disc()[0]) and v.mesh.side == "double"
+        assert tuple(int(c) for c in v.mesh.color) == tuple(rgb(RELATION_HEX[s.state.relation]))
+    s.ui.view.dimension.value = "3D ellipsoids"
+    for n, v in s.views.items():
+        assert v.control is controls[n] and tuple(v.control.active_axes) == (True, True, True)
+        assert len(v.mesh.vertices) == len(unit_sphere()[0]) and v.mesh.side == "front"
+        np.testing.assert_allclose(v.control.position, [float(x) for x in s.state.shapes[n].center])
     s.close()
 
 

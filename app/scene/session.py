@@ -128,10 +128,10 @@ class Session:
         self.shapes_ctl.attach_gizmos()
 
     def set_dimension(self, dim: int) -> None:
-        """Show ``dim`` (2 or 3): the shape views are rebuilt when it changes."""
-        if dim != self.state.dim or next(iter(self.views.values())).dim != dim:
-            self.state.dim = dim
-            self._build_views()
+        """Show ``dim`` (2 or 3): the shape views turn into discs or solids in place."""
+        self.state.dim = dim
+        for v in self.views.values():
+            v.set_dim(dim)
 
     def batch(self) -> AbstractContextManager[None]:
         """One websocket batch for an update (viser's ``atomic``).

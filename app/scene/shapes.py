@@ -12,6 +12,7 @@ label ("B · tangent") and, for a tangency, a brighter, opaque surface.
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 import viser
@@ -92,6 +93,21 @@ def unit_disc(segments: int = 96) -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
+_GIZMO_LIMITS: dict[int, dict[str, Any]] = {
+    2: {
+        "active_axes": (True, True, False),
+        "translation_limits": ((-1000.0, 1000.0), (-1000.0, 1000.0), (0.0, 0.0)),
+        "rotation_limits": ((0.0, 0.0), (0.0, 0.0), (-1000.0, 1000.0)),
+    },
+    3: {
+        "active_axes": (True, True, True),
+        "translation_limits": ((-1000.0, 1000.0),) * 3,
+        "rotation_limits": ((-1000.0, 1000.0),) * 3,
+    },
+}
+"""Gizmo axes and limits by dimension: a 2D shape moves in its plane and turns about z."""
+
+
 class EllipsoidView:
     """One shape in the scene: gizmo node, mesh (scaled unit sphere or disc) and its label.
 
@@ -112,31 +128,11 @@ class EllipsoidView:
         self.name = name
         self.dim = dim
         root = f"/shapes/{name}"
-        self.control: viser.TransformControlsHandle
-        if dim == 2:
-            self.control = scene.add_transform_controls(
-                root,
-                scale=1.2,
-                active_axes=(True, True, False),
-                disable_rotations=False,
-                rotation_limits=((0.0, 0.0), (0.0, 0.0), (-1000.0, 1000.0)),
-                translation_limits=((-1000.0, 1000.0), (-1000.0, 1000.0), (0.0, 0.0)),
-                depth_test=False,
-            )
-            v, f = unit_disc()
-        else:
-            self.control = scene.add_transform_controls(root, scale=1.2, depth_test=False)
-            v, f = unit_sphere()
-        self.mesh: viser.MeshHandle = scene.add_mesh_simple(
-            f"{root}/mesh",
-            v,
-            f,
-            color=NEUTRAL,
-            opacity=self.OPACITY,
-            side="double" if dim == 2 else "front",
-            cast_shadow=False,
-            receive_shadow=False,
+        self._scene = scene
+        self.control: viser.TransformControlsHandle = scene.add_transform_controls(
+            root, scale=1.2, depth_test=False, **_GIZMO_LIMITS[dim]
         )
+        self.mesh: viser.MeshHandle = self._add_mesh(dim, NEUTRAL, self.OPACITY)
         self.label: viser.LabelHandle = scene.add_label(f"{root}/label", name, position=(0.0, 0.0, 0.0), anchor="bottom-center")
         self._pose: tuple[tuple[float, ...], tuple[float, ...]] | None = None
         self._scale: tuple[float, ...] | None = None
@@ -156,6 +152,42 @@ class EllipsoidView:
     def remove(self) -> None:
         """Remove the node (gizmo, mesh and label) from the scene."""
         self.control.remove()
+
+    def set_dim(self, dim: int) -> None:
+        """Turn the shape into a disc (2) or a solid (3) in place.
+
+        The gizmo node and its label stay (building a gizmo anew costs the browser about half a
+        second); its axes and limits change, the mesh is replaced, and the whole pose is sent
+        again with the next :meth:`set_pose` (the new mesh starts at viser's defaults).
+        """
+        if dim == self.dim:
+            return
+        self.dim = dim
+        c = self.control
+        limits = _GIZMO_LIMITS[dim]
+        c.active_axes = limits["active_axes"]
+        c.translation_limits = limits["translation_limits"]
+        c.rotation_limits = limits["rotation_limits"]
+        opacity = self.mesh.opacity
+        self.mesh.remove()
+        self.mesh = self._add_mesh(dim, self._color, opacity)
+        self._fresh = True
+        self._scale = None
+        self.sent += 5
+
+    def _add_mesh(self, dim: int, color: tuple[int, int, int], opacity: float | None) -> viser.MeshHandle:
+        """The shape's mesh: a unit disc (2D, both sides drawn) or a unit icosphere (3D)."""
+        v, f = unit_disc() if dim == 2 else unit_sphere()
+        return self._scene.add_mesh_simple(
+            f"/shapes/{self.name}/mesh",
+            v,
+            f,
+            color=color,
+            opacity=opacity,
+            side="double" if dim == 2 else "front",
+            cast_shadow=False,
+            receive_shadow=False,
+        )
 
     def set_pose(
         self,
