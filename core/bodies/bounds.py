@@ -41,7 +41,7 @@ import numpy as np
 from flint import fmpq, fmpq_mat
 
 from ..fixed.compiled import get_threads
-from ..fixed.filters import prepared
+from ..fixed.filters import centres, prepared
 from ..shapes.numbers import to_float
 from ..shapes.quadrics import validate_quadric
 
@@ -183,7 +183,7 @@ def _float_spheres(M: np.ndarray, *, careful: bool = False) -> tuple[np.ndarray,
         if careful:
             c, lam_est = _lapack_estimates(Qv, S[:, :d, d], ok)
         else:
-            c = _centre_estimate(Qv, S[:, :d, d])
+            c = centres(S)[0]
             lam_est = _lambda_min_estimate(Qv)
         ok &= np.isfinite(c).all(axis=1) & np.isfinite(lam_est) & (lam_est > 0)
         c = np.where(ok[:, None], c, 0.0)
@@ -222,24 +222,6 @@ def _float_spheres(M: np.ndarray, *, careful: bool = False) -> tuple[np.ndarray,
 def _entry(S: np.ndarray, R: np.ndarray, i: int, j: int) -> _Ball:
     i, j = min(i, j), max(i, j)
     return _Ball(S[:, i, j], R[:, i, j])
-
-
-def _centre_estimate(Q: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Float estimate of -Q^-1 m (adjugate formula; any float vector is a valid centre)."""
-    if Q.shape[-1] == 2:
-        det = Q[:, 0, 0] * Q[:, 1, 1] - Q[:, 0, 1] * Q[:, 1, 0]
-        x = (Q[:, 1, 1] * m[:, 0] - Q[:, 0, 1] * m[:, 1]) / det
-        y = (Q[:, 0, 0] * m[:, 1] - Q[:, 1, 0] * m[:, 0]) / det
-        return -np.stack([x, y], axis=1)
-    adj = np.empty_like(Q)
-    for i in range(3):
-        for j in range(3):
-            r = [k for k in range(3) if k != j]
-            s = [k for k in range(3) if k != i]
-            minor = Q[:, r[0], s[0]] * Q[:, r[1], s[1]] - Q[:, r[0], s[1]] * Q[:, r[1], s[0]]
-            adj[:, i, j] = minor if (i + j) % 2 == 0 else -minor
-    det = (Q[:, 0, :] * adj[:, :, 0]).sum(axis=1)
-    return -np.einsum("nij,nj->ni", adj, m) / det[:, None]
 
 
 def _lapack_estimates(Q: np.ndarray, m: np.ndarray, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -50,6 +50,7 @@ __all__ = [
     "classify_float_numpy",
     "classify_translated",
     "prepared",
+    "centres",
     "explain_float",
     "HAT_DEGREE_WEIGHT",
 ]
@@ -239,8 +240,12 @@ def _w(W: np.ndarray, i: int, j: int) -> np.ndarray:
     return W[:, min(i, j), max(i, j)]
 
 
-def _centre(W: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Centres (Q c = -m, adjugate), scales k = -m.c - M_dd and the mask det Q > 0."""
+def centres(W: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Float centres (Q c = -m, adjugate), scales k = -m.c - M_dd and the mask det Q > 0.
+
+    ``W``: a stack (N, n, n) of symmetric matrices (upper triangle read). Estimates: the
+    certificates and the bounding spheres of :mod:`core.bodies.bounds` hold for any float centre.
+    """
     n = W.shape[-1]
     d = n - 1
     w = lambda i, j: _w(W, i, j)  # noqa: E731
@@ -297,8 +302,8 @@ def _certify(
     n = WA.shape[-1]
     d = n - 1
     with np.errstate(all="ignore"):
-        ca, ka, oka = _centre(WA)
-        cb, kb, okb = _centre(WB)
+        ca, ka, oka = centres(WA)
+        cb, kb, okb = centres(WB)
         ok = oka & okb & (ka > 0) & (kb > 0)
         u = cb - ca
         qa, qb = _quad(WA, u), _quad(WB, u)
@@ -395,7 +400,7 @@ def classify_translated(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None
     n = a.shape[-1]
     with np.errstate(all="ignore"):
         prep = _Prepared(a, b)
-        centre, _, okc = _centre(prep.a)
+        centre, _, okc = centres(prep.a)
         ok = prep.ok & okc & np.isfinite(centre).all(axis=1) & (np.abs(centre) <= TRANSLATE_MAX).all(axis=1)
         centre = np.where(ok[:, None], centre, 0.0)  # any float vector is exact: it is the chosen t
         b_moved, radius_b = prep.b, prep.radius_b
