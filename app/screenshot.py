@@ -105,6 +105,8 @@ class HeadlessScene:
         height: viewport height.
         timeout: seconds to wait for the browser, the analysis and the final picture.
         shared: presenter mode (one scene for every tab).
+        prefetch: analyse every preset when the server starts, as ``serve`` does (off: only
+            what is shown is analysed, the right thing for screenshots).
     """
 
     def __init__(
@@ -116,8 +118,10 @@ class HeadlessScene:
         timeout: float = 120.0,
         shared: bool = False,
         bodies: Any = None,
+        prefetch: bool = False,
     ) -> None:
         self.config = config
+        self.prefetch = prefetch
         self.bodies = bodies
         """Many bodies to show instead of ``config`` (:mod:`app.scene.bodies_view`), or None."""
         self.width = width
@@ -138,7 +142,9 @@ class HeadlessScene:
 
         from .scene.server import start_scene
 
-        self.scene = start_scene("127.0.0.1", 0, self.config, shared=self.shared, bodies=self.bodies)
+        self.scene = start_scene(
+            "127.0.0.1", 0, self.config, shared=self.shared, bodies=self.bodies, prefetch=self.prefetch
+        )
         try:
             self._pw = sync_playwright().start()
             self._tmp = tempfile.TemporaryDirectory(prefix="app-chromium-")

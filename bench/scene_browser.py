@@ -46,7 +46,7 @@ def run_scene_browser(*, quick: bool = False) -> dict[str, Any]:
 
     presets = PRESETS[:4] if quick else PRESETS
     rows = []
-    with HeadlessScene(SceneConfig(preset=None), width=1200, height=800, timeout=120) as hs:
+    with HeadlessScene(SceneConfig(preset=None), width=1200, height=800, timeout=120, prefetch=True) as hs:
         hs.scene.prefetched.join(120)  # the presets are analysed when the server starts
         s = hs.session
         for name in presets:

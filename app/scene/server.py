@@ -45,6 +45,8 @@ class SceneServer:
         store: the tabs' configurations (reloads, links).
         bodies: many bodies (an :class:`app.scene.bodies.BodiesModel`, ``--bodies FILE``): each
             tab opens on them (:mod:`app.scene.bodies_view`) instead of ``config``.
+        prefetch: analyse every preset at start, so a pick in the dropdown shows at once (an
+            interactive server); off for one-shot uses (screenshots) that show one motion.
     """
 
     def __init__(
@@ -56,6 +58,7 @@ class SceneServer:
         shared: bool = False,
         store: TabStore | None = None,
         bodies: Any = None,
+        prefetch: bool = True,
     ) -> None:
         self.server = server
         self.config = config
@@ -72,8 +75,8 @@ class SceneServer:
         self.shared: Session | None = None
         """The one session every tab sees (presenter mode), or None (one session per tab)."""
         self.cache.warm()
-        self.prefetched = self.cache.prefetch(_preset_models)
-        """The thread analysing the presets at start (joined: every preset is in the cache)."""
+        self.prefetched = self.cache.prefetch(_preset_models) if prefetch else None
+        """The thread analysing the presets at start (joined: every preset is in the cache), or None."""
         if shared:
             self.shared = Session(
                 server, config, cache=self.cache, executor=self.executor,
@@ -173,6 +176,7 @@ def start_scene(
     shared: bool = False,
     allow_origins: Iterable[str] = (),
     bodies: Any = None,
+    prefetch: bool = True,
 ) -> SceneServer:
     """Start the scene server (returns at once; viser serves from its own thread).
 
@@ -189,6 +193,7 @@ def start_scene(
             may open sessions (:mod:`app.scene.origin`; ``--allow-origin`` on the command line).
         bodies: many bodies (:class:`app.scene.bodies.BodiesModel`, ``--bodies FILE``): each tab
             opens on them (:mod:`app.scene.bodies_view`) instead of ``config``.
+        prefetch: analyse every preset at start (see :class:`SceneServer`).
 
     Raises:
         PortBusy: ``port`` is taken (viser would silently take the next port, perhaps the API's).
@@ -207,7 +212,9 @@ def start_scene(
         server.stop()
         raise PortBusy(f"the scene's port {port} on {host} is already in use: choose another with --port")
     server.gui.configure_theme(control_width="large", show_share_button=False)
-    return SceneServer(server, config or SceneConfig(), processes=processes, shared=shared, store=store, bodies=bodies)
+    return SceneServer(
+        server, config or SceneConfig(), processes=processes, shared=shared, store=store, bodies=bodies, prefetch=prefetch
+    )
 
 
 def _preset_models() -> list[Any]:
