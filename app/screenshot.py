@@ -209,6 +209,10 @@ class HeadlessScene:
             s.load_untrusted(config.to_dict())
             if not s.ready.wait(self.timeout):
                 raise TimeoutError("the scene did not finish loading/analysing its configuration")
+        if (event is not None or t is not None) and s.state.motion is not None and s.state.analysis is None:
+            # the tab's own message (e.g. the analysis failed), not the t box's "being analysed"
+            why = "; ".join(s.state.errors.values()) or s.state.status or "no analysis"
+            raise RuntimeError(f"the motion has no analysis to take t or an event from: {why}")
         if event is not None:
             if s.jump_to_event(event) is None:
                 raise ValueError(f"this motion has no event {event}")
