@@ -339,6 +339,16 @@ def test_preset_appears_from_the_warm_pool(hs):
     assert math.isclose(s.state.analysis.events[0].t, 4.0)
 
 
+def test_no_shadow_pass_in_the_page(hs):
+    """Defect 7: no shape casts a shadow, so no light may render shadow maps (in software WebGL
+    they were half of every frame's time, for nothing on screen)."""
+    open_on(hs, {"preset": "example-31"})
+    lights = hs.page.evaluate("""() => { const out = []; window.__viserMutable.scene.traverse((o) => {
+      if (o.isLight) out.push({type: o.type, cast: !!o.castShadow}); }); return out; }""")
+    assert lights, "the page has no light at all"
+    assert not [light for light in lights if light["cast"]], lights
+
+
 # ---------------------------------------------------------------------------- share and keep
 def test_reload_keeps_the_tab_and_a_link_opens_the_same_view(hs):
     """A reload reopens the tab as it was (its own address /s/<id>/); "Link to this view" opens a

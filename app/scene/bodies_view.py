@@ -29,6 +29,7 @@ from core import Relation
 from ..bodyfiles import read_bodies, read_bodies_bytes
 from .bodies import BodiesModel
 from .camera import Framing
+from .lighting import light_scene
 from .shapes import NEUTRAL, RELATION_COLORS, RELATION_HEX, unit_disc
 
 __all__ = ["BodiesView", "load_model", "MESH_NODE", "FADED_OPACITY"]
@@ -104,8 +105,7 @@ class BodiesView:
 
     def _build_scene(self) -> None:
         scene = self.scene
-        scene.configure_environment_map(hdri=None)
-        scene.set_up_direction("+z")
+        light_scene(scene)
         self.mesh = None
         self.labels: list[Any] = []
         m = self.model

@@ -34,6 +34,7 @@ from .control_shapes import ShapeControl
 from .control_share import ShareControl
 from .control_timeline import TimelineControl
 from .gui import build_gui
+from .lighting import light_scene
 from .markers import WitnessMarkers
 from .motion import MotionError, list_presets, load_motion
 from .panel_view import PanelView, Syncing
@@ -88,8 +89,7 @@ class Session:
         """Set when the configuration is loaded and (for a motion) analysed and drawn."""
         a, b = self.config.shapes()
         self.state = AppState(dim=self.config.dim, shapes={"A": a, "B": b})
-        self.scene.configure_environment_map(hdri=None)
-        self.scene.set_up_direction("+z")
+        light_scene(self.scene)
         self.ui = build_gui(
             self.gui_api,
             dim=self.config.dim,
