@@ -343,6 +343,48 @@ def test_presets_are_prefetched_and_kept():
         cache.shutdown()
 
 
+def test_preset_pick_sends_one_grid_and_the_panel_after_the_picture(server):
+    """A pick of an analysed preset: the picture first, one grid (not one per framing), and the
+    readout only PICTURE_FIRST later, so the browser draws the shapes before the panel's work."""
+    from app.scene.analysis import AnalysisCache
+    from app.scene.motion import load_motion
+
+    cache = AnalysisCache(processes=False)
+    cache.submit(load_motion(preset="example-31", motion=None)).result(timeout=120)
+    s = Session(server, SceneConfig.from_dict({"preset": None}), cache=cache)
+    try:
+        until_idle(s)
+        sent: list[tuple[float, str, str]] = []
+        iface = s.scene._websock_interface
+        orig = iface.queue_message
+
+        def record(m):
+            sent.append((time.perf_counter(), type(m).__name__, str(getattr(m, "name", None) or getattr(m, "uuid", ""))))
+            orig(m)
+
+        iface.queue_message = record
+        s.ready.clear()
+        s.ui.motion.preset.value = "example-31"  # the analysis is cached: shown at once
+        assert s.ready.wait(60)
+        until_idle(s)
+        iface.queue_message = orig
+        assert [k for _, k, _ in sent].count("GridMessage") == 1, sent
+        shapes = [t for t, k, n in sent if n.startswith("/shapes/") and k in ("SetPositionMessage", "SceneNodeUpdateMessage")]
+        readout = [t for t, k, n in sent if k == "GuiUpdateMessage" and n == s.ui.readout._impl.uuid]
+        assert shapes and readout
+        assert min(readout) - max(shapes) >= 0.9 * s.PICTURE_FIRST
+    finally:
+        s.close()
+        cache.shutdown()
+
+
+def until_idle(s: Session, timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while s.pending():
+        assert time.monotonic() < deadline, "the deferred panel never came"
+        time.sleep(0.01)
+
+
 def test_separating_plane_separates(server):
     cfg = unit_spheres(3, "3")
     cfg.separating_plane = True

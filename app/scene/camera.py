@@ -61,11 +61,15 @@ class Framing:
         """Half the diagonal of the box (at least 1)."""
         return max(float(np.linalg.norm(self.hi - self.lo)) / 2, 1.0)
 
-    def grid(self, scene: viser.SceneApi) -> viser.GridHandle:
-        """A grid under the shapes (z = 0 plane in 2D, the bottom of the box in 3D)."""
+    def grid_key(self) -> tuple[float, float, float, float]:
+        """Side, centre (x, y) and height of the grid: equal keys, equal grids."""
         size = float(2 ** math.ceil(math.log2(4 * self.radius)))
         c = self.centre
-        floor = -0.02 if self.dim == 2 else float(self.lo[2])
+        return size, float(c[0]), float(c[1]), -0.02 if self.dim == 2 else float(self.lo[2])
+
+    def grid(self, scene: viser.SceneApi) -> viser.GridHandle:
+        """A grid under the shapes (z = 0 plane in 2D, the bottom of the box in 3D)."""
+        size, cx, cy, floor = self.grid_key()
         return scene.add_grid(
             "/grid",
             width=size,
@@ -73,7 +77,7 @@ class Framing:
             plane="xy",
             cell_size=size / 16,
             section_size=size / 4,
-            position=(float(c[0]), float(c[1]), floor),
+            position=(cx, cy, floor),
         )
 
     def aim(
@@ -125,9 +129,20 @@ def extent_of(poses: Iterable[tuple[tuple[float, float, float], object, tuple[fl
     return np.array(pts)
 
 
-def frame_cameras(scene: viser.SceneApi, cameras: Iterable[viser.CameraHandle], framing: Framing) -> viser.GridHandle:
-    """Aim every camera at the shapes and draw the grid under them."""
-    grid = framing.grid(scene)
+def frame_cameras(
+    scene: viser.SceneApi,
+    cameras: Iterable[viser.CameraHandle],
+    framing: Framing,
+    laid: tuple[float, float, float, float] | None = None,
+) -> tuple[float, float, float, float]:
+    """Aim every camera at the shapes and lay the grid under them; return the grid's key.
+
+    ``laid`` is the key of the grid already in the scene: an equal grid is not sent again (the
+    browser rebuilds a re-added grid, and a preset pick frames twice: loaded, then analysed).
+    """
+    key = framing.grid_key()
+    if key != laid:
+        framing.grid(scene)
     for cam in cameras:
         framing.aim(cam)
-    return grid
+    return key

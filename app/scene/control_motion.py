@@ -263,8 +263,8 @@ class MotionControl:
             if error is not None:
                 st.errors["t"] = error
         # the picture at once; the panel (event list, sign table, plots: the heavy part for the
-        # browser) follows within the panel period, so the certified shapes are drawn first
-        s.refresh(defer=True)
+        # browser) follows once the browser has had time to draw the certified shapes
+        s.refresh(defer=True, panel_delay=s.PICTURE_FIRST)
         self.last_to_picture_s = time.perf_counter() - self._started
         s.frame_camera()
         s.ready.set()

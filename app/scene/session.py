@@ -62,6 +62,15 @@ class Session:
     PANEL_PERIOD = 0.05
     """Seconds between panel refreshes while dragging, scrubbing or playing."""
 
+    PICTURE_FIRST = 0.15
+    """Seconds the panel waits after a new motion's picture (a preset, a link, an analysis).
+
+    The browser applies a picture in two frames (the update, then the committed mesh props);
+    the panel's update is 40-90 ms of page work, and landing between those frames it pushed
+    the certified shapes back by as much. Two frames are ~100 ms in software WebGL
+    (headless Chromium at 1200x800), ~30 ms with a GPU.
+    """
+
     def __init__(
         self,
         target: viser.ClientHandle | viser.ViserServer,
@@ -108,8 +117,8 @@ class Session:
         self.keys_ctl = KeyControl(self)
         self._build_views()
         self._timer: threading.Timer | None = None
-        self.grid: viser.GridHandle | None = None
-        """The grid under the shapes (laid anew when the camera frames them)."""
+        self.grid: tuple[float, float, float, float] | None = None
+        """Key of the grid laid under the shapes (:meth:`Framing.grid_key`; None before the first framing)."""
         self._panels_due = self._plots_due = self._witness_due = False
         if not defer_load:
             self.load(self.config)
@@ -244,13 +253,15 @@ class Session:
             self.refresh()
 
     # ------------------------------------------------------------------ the one refresh
-    def refresh(self, *, dragged: str | None = None, defer: bool = False) -> str | None:
+    def refresh(self, *, dragged: str | None = None, defer: bool = False, panel_delay: float | None = None) -> str | None:
         """Draw the state: the picture now, the panel now or (``defer``, drags) within PANEL_PERIOD.
 
         Args:
             dragged: the shape a gizmo is dragging (its pose is already in the browser; the
                 relation comes from ``classify`` at once, explanation and witnesses follow).
             defer: coalesce the panel update (slider, playback).
+            panel_delay: seconds before a deferred panel update (default PANEL_PERIOD), if none
+                is pending already.
 
         Returns:
             The certified relation drawn (None: unknown).
@@ -270,7 +281,7 @@ class Session:
                 self._panels_due = False
                 self.panel.show(st, plots=False)
                 self._plots_due = True  # the plot cursor (the heaviest message) follows at 20 Hz
-            self._schedule()
+            self._schedule(self.PANEL_PERIOD if panel_delay is None else panel_delay)
             return st.relation
 
     def _draw(self, pic: Picture, dragged: str | None = None) -> None:
@@ -304,9 +315,9 @@ class Session:
         """True while a coalesced refresh (panel, witnesses, plot cursor) is due."""
         return self._timer is not None
 
-    def _schedule(self) -> None:
+    def _schedule(self, delay: float) -> None:
         if self._timer is None and (self._panels_due or self._plots_due or self._witness_due):
-            self._timer = threading.Timer(self.PANEL_PERIOD, self._flush)
+            self._timer = threading.Timer(delay, self._flush)
             self._timer.daemon = True
             self._timer.start()
 
@@ -384,7 +395,7 @@ class Session:
                 pts = extent_of((sh.float_pose() for sh in st.shapes.values()), st.dim)
             framing = Framing(pts, st.dim)
             if grid:
-                self.grid = frame_cameras(self.scene, self.cameras(), framing)
+                self.grid = frame_cameras(self.scene, self.cameras(), framing, self.grid)
             else:
                 for cam in self.cameras():
                     framing.aim(cam)
