@@ -3,8 +3,10 @@
 * **Preset to screen**: in one tab of a server that has started (the presets' analyses are
   computed once at start, in the worker pool: ``SceneServer.prefetched``), the time from
   picking a preset in the dropdown to the browser drawing its shapes at their poses in the
-  certified colour, with the readout naming the relation. Target (issue 16): < 300 ms. The
-  analysis column is the worker time the prefetch spent on it.
+  certified colour, with the readout naming the relation. Target (issue 16): < 300 ms, held by
+  the worst of several rounds over all presets (one pick is a handful of software-WebGL frames
+  of ~50 ms each: a single sample says little). The analysis column is the worker time the
+  prefetch spent on it.
 * **Screenshots**: ``app.screenshot.screenshots`` with one browser and one server: the first
   image (server, browser and first frame included) and each further one (another t of the same
   motion, or another configuration), PNG written.
@@ -39,17 +41,22 @@ def _choose(page: Any, label: str, option: str) -> None:
     page.get_by_role("option", name=option, exact=True).click()
 
 
-def run_scene_browser(*, quick: bool = False) -> dict[str, Any]:
-    """Measure preset time to screen and screenshot times; returns {"presets": [...], "screenshots": {...}}."""
+def run_scene_browser(*, quick: bool = False, rounds: int | None = None) -> dict[str, Any]:
+    """Measure preset time to screen and screenshot times; returns {"presets": [...], "screenshots": {...}}.
+
+    Each preset is picked ``rounds`` times (default 3, quick 1), in turns; its row holds the
+    worst ("ms", "panel_ms", "server_ms") and the median ("ms_median") of its picks.
+    """
     from app.scene.state import SceneConfig
     from app.screenshot import _DRAWN_JS, HeadlessScene, Shot, screenshots
 
     presets = PRESETS[:4] if quick else PRESETS
-    rows = []
+    rounds = rounds if rounds is not None else (1 if quick else 3)
+    picks: dict[str, list[dict[str, float]]] = {name: [] for name in presets}
     with HeadlessScene(SceneConfig(preset=None), width=1200, height=800, timeout=120, prefetch=True) as hs:
         hs.scene.prefetched.join(120)  # the presets are analysed when the server starts
         s = hs.session
-        for name in presets:
+        for name in [p for _ in range(rounds) for p in presets]:
             hs.page.get_by_text("Preset", exact=True).click()
             option = hs.page.get_by_role("option", name=name, exact=True)
             option.wait_for()
@@ -63,11 +70,15 @@ def run_scene_browser(*, quick: bool = False) -> dict[str, Any]:
             ms = (time.perf_counter() - t0) * 1e3
             hs.page.wait_for_function(_DRAWN_JS, arg=[poses, colours, word], polling="raf")
             panel_ms = (time.perf_counter() - t0) * 1e3
-            rows.append({"preset": name, "ms": ms, "panel_ms": panel_ms, "analysis_ms": s.state.analysis.seconds * 1e3,
-                         "server_ms": (s.motion_ctl.last_to_picture_s or 0.0) * 1e3})
+            picks[name].append({"ms": ms, "panel_ms": panel_ms, "analysis_ms": s.state.analysis.seconds * 1e3,
+                                "server_ms": (s.motion_ctl.last_to_picture_s or 0.0) * 1e3})
             # back to static shapes
             _choose(hs.page, "Preset", "(static shapes)")
             hs.wait_settled()
+    rows = [{"preset": name, "rounds": len(ps), "ms": max(p["ms"] for p in ps),
+             "ms_median": statistics.median(p["ms"] for p in ps), "ms_all": [p["ms"] for p in ps],
+             "panel_ms": max(p["panel_ms"] for p in ps), "server_ms": max(p["server_ms"] for p in ps),
+             "analysis_ms": ps[0]["analysis_ms"]} for name, ps in picks.items()]
     shots_out: dict[str, Any] = {}
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
@@ -93,12 +104,14 @@ def run_scene_browser(*, quick: bool = False) -> dict[str, Any]:
 
 def format_browser(out: dict[str, Any]) -> str:
     """Markdown tables of the browser measurements against the targets."""
-    lines = ["| preset | on screen: shapes drawn in the certified colour | panel complete (readout, timeline, plots) "
-             "| server: choice -> picture sent | analysis at server start (worker) | target (on screen) |", "|---|---:|---:|---:|---:|---:|"]
+    rounds = max(r.get("rounds", 1) for r in out["presets"])
+    lines = [f"| preset | on screen: shapes drawn in the certified colour, median / worst of {rounds} | panel complete "
+             "(readout, timeline, plots), worst | server: choice -> picture sent, worst | analysis at server start (worker) "
+             "| target (on screen, worst) |", "|---|---:|---:|---:|---:|---:|"]
     for r in out["presets"]:
         ok = "meets" if r["ms"] < TARGETS_MS["preset to screen"] else "**misses**"
-        lines.append(f"| {r['preset']} | {r['ms']:.0f} ms | {r['panel_ms']:.0f} ms | {r.get('server_ms', 0):.0f} ms "
-                     f"| {r['analysis_ms']:.0f} ms | < 300 ms ({ok}) |")
+        lines.append(f"| {r['preset']} | {r.get('ms_median', r['ms']):.0f} / {r['ms']:.0f} ms | {r['panel_ms']:.0f} ms "
+                     f"| {r.get('server_ms', 0):.0f} ms | {r['analysis_ms']:.0f} ms | < 300 ms ({ok}) |")
     sh = out["screenshots"]
     lines += ["", "| screenshots (one browser, one server) | time |", "|---|---:|",
               f"| first image (server + browser start + first frame) | {sh['first_s']:.2f} s |",
@@ -125,9 +138,10 @@ def run_in_subprocess(*, quick: bool = False, timeout: float = 600.0) -> dict[st
 def main() -> None:
     ap = argparse.ArgumentParser(description="Preset time to screen and screenshot times in headless Chromium.")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--rounds", type=int, default=None, help="picks of each preset (default 3, quick 1)")
     ap.add_argument("--json", action="store_true", help="print one JSON line (for bench.report)")
     a = ap.parse_args()
-    out = run_scene_browser(quick=a.quick)
+    out = run_scene_browser(quick=a.quick, rounds=a.rounds)
     if a.json:
         print(json.dumps(out))
     else:
