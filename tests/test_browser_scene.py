@@ -154,6 +154,31 @@ def test_dimension_switch_then_tangent_circles_are_drawn_where_certified(hs):
     np.testing.assert_allclose(contact["p"], (1, 0, 0), atol=1e-12)  # exactly where they touch
 
 
+LINK_HOOK = """() => { window.__links = 0; const P = WebGL2RenderingContext.prototype; if (P.__counted) return;
+  P.__counted = true; const orig = P.linkProgram; P.linkProgram = function (p) { window.__links++; return orig.call(this, p); }; }"""
+
+
+def test_dimension_switch_compiles_no_shader_once_both_were_shown(hs):
+    """Defect 7: the shapes' shader variants (disc: back and front pass; solid) stay compiled,
+    so switching 2D <-> 3D again links no WebGL program (software WebGL spent ~100 ms of a
+    frame compiling them again at every switch)."""
+    s = open_on(hs, {"preset": None, "gizmos": False})
+    page = hs.page
+    page.evaluate(LINK_HOOK)
+
+    def switch(dim: int, label: str) -> None:
+        choose(page, "Dimension", label, folder="View")
+        until(lambda: s.state.dim == dim and s.ready.is_set(), what=label)
+        hs.wait_settled()
+
+    switch(2, "2D ellipses")  # both variants shown once (this round may compile)
+    switch(3, "3D ellipsoids")
+    page.evaluate("() => { window.__links = 0; }")
+    switch(2, "2D ellipses")
+    switch(3, "3D ellipsoids")
+    assert page.evaluate("() => window.__links") == 0
+
+
 @pytest.mark.parametrize("preset", ["circles-crossing", "ellipse-spin"])
 def test_2d_preset_after_3d_preset_is_drawn_at_its_poses(hs, preset):
     """Defect 1: picking a 2D preset after a 3D one draws the 2D motion's shapes at t (not a

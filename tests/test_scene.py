@@ -433,14 +433,14 @@ def test_play_advances_t_and_stops(server):
 
 def test_dimension_switch_keeps_the_gizmo_and_swaps_the_mesh(server):
     """A dimension switch changes the shapes in place: same gizmo node (rebuilding one costs the
-    browser about half a second), a disc or an icosphere mesh, the plane's axes only in 2D, and
-    the whole pose sent again (the new mesh starts at viser's defaults)."""
+    browser about half a second), the same mesh node with a disc or an icosphere, the plane's
+    axes only in 2D, and the whole pose sent again."""
     s = Session(server, unit_spheres(3, "3"))
     controls = {n: v.control for n, v in s.views.items()}
     spheres = {n: v.mesh for n, v in s.views.items()}
     s.ui.view.dimension.value = "2D ellipses"
     for n, v in s.views.items():
-        assert v.control is controls[n] and v.mesh is not spheres[n] and v.drawn
+        assert v.control is controls[n] and v.mesh is spheres[n] and v.drawn
         assert tuple(v.control.active_axes) == (True, True, False)
         assert len(v.mesh.vertices) == len(unit_disc()[0]) and v.mesh.side == "double"
         assert tuple(int(c) for c in v.mesh.color) == tuple(rgb(RELATION_HEX[s.state.relation]))

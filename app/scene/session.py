@@ -117,8 +117,8 @@ class Session:
         self.keys_ctl = KeyControl(self)
         self._build_views()
         self._timer: threading.Timer | None = None
-        self.grid: tuple[float, float, float, float] | None = None
-        """Key of the grid laid under the shapes (:meth:`Framing.grid_key`; None before the first framing)."""
+        self.grid: tuple[viser.GridHandle, tuple[float, float, float, float]] | None = None
+        """The grid under the shapes and its :meth:`Framing.grid_key` (None before the first framing)."""
         self._panels_due = self._plots_due = self._witness_due = False
         if not defer_load:
             self.load(self.config)

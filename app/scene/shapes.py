@@ -12,7 +12,7 @@ label ("B · tangent") and, for a tangency, a brighter, opaque surface.
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import viser
@@ -107,6 +107,28 @@ _GIZMO_LIMITS: dict[int, dict[str, Any]] = {
 }
 """Gizmo axes and limits by dimension: a 2D shape moves in its plane and turns about z."""
 
+_SIDE: dict[int, Literal["front", "double"]] = {2: "double", 3: "front"}
+"""Faces drawn by dimension: a disc from both sides, a closed solid from outside."""
+
+
+_POINT = (np.zeros((3, 3), np.float32), np.array([[0, 1, 2]], np.uint32))
+"""A triangle of zero area: drawn (so its material stays compiled), covers no pixel."""
+
+
+def _shape_mesh(
+    scene: viser.SceneApi,
+    name: str,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    color: tuple[int, int, int],
+    opacity: float | None,
+    side: Literal["front", "double"],
+) -> viser.MeshHandle:
+    """A mesh with the shapes' material (the one place its flags are chosen)."""
+    return scene.add_mesh_simple(
+        name, vertices, faces, color=color, opacity=opacity, side=side, cast_shadow=False, receive_shadow=False
+    )
+
 
 class EllipsoidView:
     """One shape in the scene: gizmo node, mesh (scaled unit sphere or disc) and its label.
@@ -133,6 +155,10 @@ class EllipsoidView:
             root, scale=1.2, depth_test=False, **_GIZMO_LIMITS[dim]
         )
         self.mesh: viser.MeshHandle = self._add_mesh(dim, NEUTRAL, self.OPACITY)
+        # a point-sized double-sided twin: keeps both shader variants (disc: back and front
+        # pass; solid: front) compiled in the browser, so a 2D <-> 3D switch compiles nothing
+        # (SwiftShader took ~100 ms per switch to compile them again)
+        _shape_mesh(scene, f"{root}/shaders", *_POINT, NEUTRAL, self.OPACITY, "double")
         self.label: viser.LabelHandle = scene.add_label(f"{root}/label", name, position=(0.0, 0.0, 0.0), anchor="bottom-center")
         self._pose: tuple[tuple[float, ...], tuple[float, ...]] | None = None
         self._scale: tuple[float, ...] | None = None
@@ -156,9 +182,9 @@ class EllipsoidView:
     def set_dim(self, dim: int) -> None:
         """Turn the shape into a disc (2) or a solid (3) in place.
 
-        The gizmo node and its label stay (building a gizmo anew costs the browser about half a
-        second); its axes and limits change, the mesh is replaced, and the whole pose is sent
-        again with the next :meth:`set_pose` (the new mesh starts at viser's defaults).
+        The gizmo node, its mesh and label stay (building a gizmo anew costs the browser about
+        half a second); the gizmo's axes and limits and the mesh's geometry and sides change,
+        and the whole pose is sent again with the next :meth:`set_pose`.
         """
         if dim == self.dim:
             return
@@ -168,9 +194,10 @@ class EllipsoidView:
         c.active_axes = limits["active_axes"]
         c.translation_limits = limits["translation_limits"]
         c.rotation_limits = limits["rotation_limits"]
-        opacity = self.mesh.opacity
-        self.mesh.remove()
-        self.mesh = self._add_mesh(dim, self._color, opacity)
+        v, f = unit_disc() if dim == 2 else unit_sphere()
+        self.mesh.vertices = v
+        self.mesh.faces = f
+        self.mesh.side = _SIDE[dim]
         self._fresh = True
         self._scale = None
         self.sent += 5
@@ -178,16 +205,7 @@ class EllipsoidView:
     def _add_mesh(self, dim: int, color: tuple[int, int, int], opacity: float | None) -> viser.MeshHandle:
         """The shape's mesh: a unit disc (2D, both sides drawn) or a unit icosphere (3D)."""
         v, f = unit_disc() if dim == 2 else unit_sphere()
-        return self._scene.add_mesh_simple(
-            f"/shapes/{self.name}/mesh",
-            v,
-            f,
-            color=color,
-            opacity=opacity,
-            side="double" if dim == 2 else "front",
-            cast_shadow=False,
-            receive_shadow=False,
-        )
+        return _shape_mesh(self._scene, f"/shapes/{self.name}/mesh", v, f, color, opacity, _SIDE[dim])
 
     def set_pose(
         self,
