@@ -70,9 +70,8 @@ class Framing:
     def grid(self, scene: viser.SceneApi, into: viser.GridHandle | None = None) -> viser.GridHandle:
         """Lay the grid under the shapes (z = 0 plane in 2D, the bottom of the box in 3D).
 
-        ``into``: a grid already in the scene, changed in place. A grid added anew is built
-        anew by the browser, its shader program included: the frame that shows it took
-        ~150 ms instead of ~50 in software WebGL (a 2D <-> 3D switch).
+        ``into``: a grid already in the scene, changed in place (a grid added anew is a new
+        node and material for the browser to build, where a few numbers change).
         """
         size, cx, cy, floor = self.grid_key()
         if into is None:
