@@ -111,6 +111,11 @@ _SIDE: dict[int, Literal["front", "double"]] = {2: "double", 3: "front"}
 """Faces drawn by dimension: a disc from both sides, a closed solid from outside."""
 
 
+def _geometry(dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and faces of a shape's unit mesh: a disc (2D) or an icosphere (3D)."""
+    return unit_disc() if dim == 2 else unit_sphere()
+
+
 _POINT = (np.zeros((3, 3), np.float32), np.array([[0, 1, 2]], np.uint32))
 """A triangle of zero area: drawn (so its material stays compiled), covers no pixel."""
 
@@ -194,18 +199,15 @@ class EllipsoidView:
         c.active_axes = limits["active_axes"]
         c.translation_limits = limits["translation_limits"]
         c.rotation_limits = limits["rotation_limits"]
-        v, f = unit_disc() if dim == 2 else unit_sphere()
-        self.mesh.vertices = v
-        self.mesh.faces = f
+        self.mesh.vertices, self.mesh.faces = _geometry(dim)
         self.mesh.side = _SIDE[dim]
         self._fresh = True
         self._scale = None
-        self.sent += 5
+        self.sent += 6
 
     def _add_mesh(self, dim: int, color: tuple[int, int, int], opacity: float | None) -> viser.MeshHandle:
         """The shape's mesh: a unit disc (2D, both sides drawn) or a unit icosphere (3D)."""
-        v, f = unit_disc() if dim == 2 else unit_sphere()
-        return _shape_mesh(self._scene, f"/shapes/{self.name}/mesh", v, f, color, opacity, _SIDE[dim])
+        return _shape_mesh(self._scene, f"/shapes/{self.name}/mesh", *_geometry(dim), color, opacity, _SIDE[dim])
 
     def set_pose(
         self,
