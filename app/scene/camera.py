@@ -150,7 +150,10 @@ def frame_cameras(
     preset pick frames twice: loaded, then analysed); another one is changed in place.
     """
     key = framing.grid_key()
-    grid = laid[0] if laid is not None and laid[1] == key else framing.grid(scene, laid[0] if laid else None)
+    if laid is not None and laid[1] == key:
+        grid = laid[0]
+    else:
+        grid = framing.grid(scene, None if laid is None else laid[0])
     for cam in cameras:
         framing.aim(cam)
     return grid, key

@@ -155,11 +155,10 @@ class EllipsoidView:
         self.name = name
         self.dim = dim
         root = f"/shapes/{name}"
-        self._scene = scene
         self.control: viser.TransformControlsHandle = scene.add_transform_controls(
             root, scale=1.2, depth_test=False, **_GIZMO_LIMITS[dim]
         )
-        self.mesh: viser.MeshHandle = self._add_mesh(dim, NEUTRAL, self.OPACITY)
+        self.mesh: viser.MeshHandle = _shape_mesh(scene, f"{root}/mesh", *_geometry(dim), NEUTRAL, self.OPACITY, _SIDE[dim])
         # a point-sized double-sided twin: keeps both shader variants (disc: back and front
         # pass; solid: front) compiled in the browser, so a 2D <-> 3D switch compiles nothing
         # (SwiftShader took ~100 ms per switch to compile them again)
@@ -204,10 +203,6 @@ class EllipsoidView:
         self._fresh = True
         self._scale = None
         self.sent += 6
-
-    def _add_mesh(self, dim: int, color: tuple[int, int, int], opacity: float | None) -> viser.MeshHandle:
-        """The shape's mesh: a unit disc (2D, both sides drawn) or a unit icosphere (3D)."""
-        return _shape_mesh(self._scene, f"/shapes/{self.name}/mesh", *_geometry(dim), color, opacity, _SIDE[dim])
 
     def set_pose(
         self,
