@@ -77,8 +77,8 @@ def write_pairs_csv(
             strings), or None.
     """
     if not hasattr(out, "write"):
-        with open(out, "w", newline="") as f:  # type: ignore[arg-type]
-            return write_pairs_csv(f, i, j, relation, certified_by, image, details)
+        with open(out, "w", newline="") as opened:  # type: ignore[arg-type]
+            return write_pairs_csv(opened, i, j, relation, certified_by, image, details)
     f: Any = out
     names = np.array([str(Relation(k)) for k in range(-2, 3)], dtype=object)  # codes -2 .. 2
     rel = names[relation.astype(np.int64) + 2]

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:  # imported where used: the command line starts without viser
     from .scene.state import SceneConfig
 
-__all__ = ["main", "build_parser", "config_from_args", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
+__all__ = ["main", "run", "build_parser", "config_from_args", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_TERMINATED, EXIT_PIPE = 0, 1, 2, 130, 143, 141
 """Exit statuses (module docstring)."""
@@ -111,7 +111,7 @@ def _time(text: str) -> float:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (sub-commands ``serve``, ``screenshot`` and ``export``)."""
     p = _Parser(
-        prog="python -m app",
+        prog="ellipsoids" if os.path.basename(sys.argv[0]) == "ellipsoids" else "python -m app",
         description="Certified ellipse/ellipsoid interference: viser scene, HTTP API, screenshots, contacts among many bodies.",
         epilog="Exit status: 0 done, 1 could not be done here, 2 bad arguments or input, 130 interrupted (Ctrl+C).",
     )
@@ -299,7 +299,11 @@ def _screenshot(args: argparse.Namespace) -> int:
     else:
         cfg = config_from_args(args)
         shots = shots_for(cfg, args.out, ts if len(ts) + len(events) > 1 else [], events if len(ts) + len(events) > 1 else [])
-    for path in screenshots(shots, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args)):
+    import contextlib
+
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # the scene server's banner: not for a screenshot
+        written = screenshots(shots, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args))
+    for path in written:
         print(f"wrote {path}", file=sys.stderr)
     return 0
 
@@ -360,6 +364,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return EXIT_PIPE
+
+
+def run() -> None:
+    """Entry point of the ``ellipsoids`` console script: :func:`main`, then exit with its status."""
+    raise SystemExit(main())
 
 
 def _fail(message: str, status: int) -> int:

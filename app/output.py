@@ -84,7 +84,7 @@ class Output:
 
     Args:
         path: the file to write, or ``-``.
-        binary: bytes (True) or text (False, UTF-8, ``\\n`` line ends).
+        binary: bytes (True) or text (False, UTF-8, Unix line ends).
         option: the option's name for messages.
 
     Raises:
@@ -104,7 +104,7 @@ class Output:
             fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".part", dir=self.path.parent)
         except OSError as e:
             raise ValueError(f"{option} {path}: cannot write in {self.path.parent}: {e.strerror}") from None
-        self._file = os.fdopen(fd, "wb" if binary else "w", **({} if binary else {"encoding": "utf-8", "newline": "\n"}))
+        self._file = os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8", newline="\n")
 
     @property
     def temporary(self) -> str | None:

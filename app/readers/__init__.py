@@ -45,10 +45,10 @@ _TRAJECTORIES = ("gsd", "lammps", "xyz")
 
 
 def format_of(name: str, head: bytes = b"") -> str:
-    """The format of a file from its name, else from its first bytes ("csv" when unsure).
+    r"""The format of a file from its name, else from its first bytes ("csv" when unsure).
 
     Examples:
-        >>> format_of("run.lammpstrj"), format_of("x.bin", b"PK\\x03\\x04"), format_of("-", b"x,y,a")
+        >>> format_of("run.lammpstrj"), format_of("x.bin", b"PK\x03\x04"), format_of("-", b"x,y,a")
         ('lammps', 'npz', 'csv')
     """
     suffix = Path(name).suffix.lower()

@@ -44,10 +44,8 @@ def read_extxyz(path: str, name: str, *, frame: int | None = None) -> BodySet:
     n = 0
     try:
         if frame is not None and frame >= 0:
-            for f in extxyz.iread_dicts(path, index=frame):
-                n = frame + 1
-            if f is None:
-                n = sum(1 for _ in extxyz.iread_dicts(path))
+            f = next(iter(extxyz.iread_dicts(path, index=frame)), None)
+            n = frame + 1 if f is not None else sum(1 for _ in extxyz.iread_dicts(path))
         else:  # from the end: every frame is read once, the wanted one kept
             frames = list(extxyz.iread_dicts(path))
             n = len(frames)

@@ -101,7 +101,7 @@ def _check_widths(lines: list[str], width: int, start: int, name: str) -> None:
 
 
 def _line_of(message: str, start: int, header: list[str], cols: list[int]) -> str:
-    """numpy's "... at row 12, column 3" (row from 0 in the block) as the file's line and column."""
+    """Numpy's "... at row 12, column 3" (row from 0 in the block) as the file's line and column."""
     m = re.search(r"at row (\d+), column (\d+)", message)
     if not m:
         return message
