@@ -91,7 +91,7 @@ def test_gsd_spheres_2d_and_refusals(tmp_path, capsys):
     s = read_bodies(tmp_path / "s.gsd")
     assert s.dim == 2 and s.box == (10.0, 10.0)
     c = contacts(s.Q, box=s.box)
-    assert list(zip(c.i.tolist(), c.j.tolist(), c.relation.tolist())) == [(0, 1, Relation.TANGENT)]
+    assert list(zip(c.i.tolist(), c.j.tolist(), c.relation.tolist(), strict=True)) == [(0, 1, Relation.TANGENT)]
     with gsd_hoomd.open(str(tmp_path / "poly.gsd"), "w") as t:
         f = gsd_hoomd.Frame()
         f.particles.N = 1
