@@ -181,13 +181,13 @@ def run_contacts(args: argparse.Namespace) -> int:
         finally:
             if scheduler is not None:
                 scheduler.close()
-        details = None
+        details: dict[str, np.ndarray] | None = None
         if "scale" in args.extras:
             from core.bodies.details import pair_details
 
             ts = time.perf_counter()
             d = pair_details(bodies.Q, res)
-            details = {"scale_lo": d.scale_lo, "scale_hi": d.scale_hi, "contained": d.contained_names()}
+            details = {"scale_lo": d.scale_lo, "scale_hi": d.scale_hi, "contained": np.array(d.contained_names())}
             _say(args, f"contact scales and containment of {len(res):,} pairs in {time.perf_counter() - ts:.1f} s")
         t2 = time.perf_counter()
         if as_npz:

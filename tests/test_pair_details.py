@@ -10,7 +10,7 @@ import numpy as np
 from flint import arb, ctx, fmpq
 
 from app.cli import main
-from core import Relation, bodies_from_axes, contacts
+from core import bodies_from_axes, contacts
 from core.bodies.details import EQUAL, I_IN_J, J_IN_I, NO, UNCERTAIN, pair_details
 
 

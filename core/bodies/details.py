@@ -206,7 +206,7 @@ def _form_signs(A: np.ndarray, X: np.ndarray) -> np.ndarray:
 def _sticks_out(inner: np.ndarray, outer: np.ndarray) -> np.ndarray:
     """(P,) bool: a point certified in ``inner`` and certified outside ``outer`` was found."""
     X = _points(inner, outer)
-    return ((_form_signs(inner, X) < 0) & (_form_signs(outer, X) > 0)).any(axis=1)
+    return np.asarray(((_form_signs(inner, X) < 0) & (_form_signs(outer, X) > 0)).any(axis=1))
 
 
 def _containment_float(A: np.ndarray, B: np.ndarray) -> np.ndarray:
