@@ -364,6 +364,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return EXIT_PIPE
+    except OSError as e:  # the machine's, not the input's: a full disk, a vanished file system...
+        return _fail(f"error: {e.strerror or e}" + (f": {e.filename}" if e.filename else ""), EXIT_FAILED)
 
 
 def run() -> None:
