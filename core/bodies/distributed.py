@@ -39,7 +39,7 @@ from distributed.diagnostics.plugin import WorkerPlugin
 
 from ..fixed.lazy import PAIR_CHUNK, is_dask_array
 from .bounds import BoundingSpheres, bounding_spheres
-from .broadphase import _CELL_SLACK, _PAD, Candidates, candidate_pairs
+from .broadphase import _CELL_SLACK, _PAD, BroadPhase, Candidates, TooManyPairs, candidate_pairs
 from .narrowphase import classify_candidates
 from .periodic import check_box, read_box
 from .result import Contacts
@@ -89,6 +89,7 @@ def contacts_distributed(
     scheduler: Any = None,
     partitions: int | None = None,
     chunk: int = PAIR_CHUNK,
+    max_pairs: int | None = None,
 ) -> Contacts:
     """:func:`core.contacts` on Dask (same arguments; see the module docstring).
 
@@ -102,6 +103,8 @@ def contacts_distributed(
             current default, e.g. the active Client).
         partitions: number of spatial partitions (default: 2 per worker thread, at least 2).
         chunk: candidate pairs per classify batch inside a task.
+        max_pairs: most pairs the broad phase may examine (counted first, here, on the bounding
+            spheres): :class:`~core.bodies.broadphase.TooManyPairs` over it.
 
     Returns:
         The same :class:`Contacts` as the local search (``seconds`` aside).
@@ -124,6 +127,8 @@ def contacts_distributed(
             raise ValueError(next(iter(spheres.invalid.values())))
         if L is not None:
             check_box(spheres.centers, spheres.radii, L)
+        if max_pairs is not None and (pairs := BroadPhase(spheres.centers, spheres.radii, box=L).pairs) > max_pairs:
+            raise TooManyPairs(pairs, max_pairs)
         t1 = time.perf_counter()
         parts = _partitions(spheres, L, partitions or _default_partitions(client))
         tasks = []
