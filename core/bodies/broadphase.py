@@ -208,10 +208,11 @@ class BroadPhase:
         self.pairs = sum(b.total for b in self.blocks)
         """Pairs of bodies the broad phase examines: every candidate is among them."""
 
-    def chunks(self, size: int = _PAIRS_PER_CHUNK) -> Generator[tuple[Candidates, int], None, None]:
+    def chunks(self, size: int | None = None) -> Generator[tuple[Candidates, int], None, None]:
         """The candidates, chunk by chunk, with the pairs examined so far.
 
-        Each chunk comes from at most ``size`` pairs examined (built, sphere-tested, dropped).
+        Each chunk comes from at most ``size`` pairs examined (built, sphere-tested, dropped;
+        default ``_PAIRS_PER_CHUNK``).
         Chunks are built in rounds on every core (:func:`core.fixed.compiled.get_threads`), a
         round of at most ``threads x size`` pairs at a time, and nothing is built while the
         consumer works on a round's chunks (the narrow phase then has the cores to itself): the
@@ -221,6 +222,7 @@ class BroadPhase:
         Yields:
             (candidates of the chunk, pairs examined so far); the last count is :attr:`pairs`.
         """
+        size = size or _PAIRS_PER_CHUNK
         units = [(b, g, min(g + size, b.total)) for b in self.blocks for g in range(0, b.total, size)]
         threads = min(get_threads(), len(units))
         examined = 0
