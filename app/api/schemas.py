@@ -254,4 +254,8 @@ class HealthOut(BaseModel):
 
     status: Literal["ok"]
     analyses_running: int
+    """Jobs running in the worker processes (analyses, explanations, witnesses, contacts...)."""
     max_concurrent_analyses: int
+    analyses_waiting: int = 0
+    """Requests waiting in the queue for a worker."""
+    max_queued_analyses: int = 0

@@ -17,4 +17,6 @@ async def healthz(settings: SettingsDep, workers: WorkersDep) -> HealthOut:
         status="ok",
         analyses_running=workers.running,
         max_concurrent_analyses=settings.max_concurrent_analyses,
+        analyses_waiting=workers.waiting,
+        max_queued_analyses=settings.max_queued_analyses,
     )
