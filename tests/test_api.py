@@ -474,7 +474,7 @@ def unit_circle_moving(x):
 
 
 def alg(v):
-    return {"value": str(v), "approx": float(v), "exact": str(v), "isolating": [str(v), str(v)]}
+    return {"value": str(v), "approx": float(v), "exact": str(v), "isolating": [str(v), str(v)], "polynomial": None}
 
 
 def row(where, t, a, s0, s1, s10, var, relation, rule):
@@ -583,6 +583,10 @@ def test_analyse_example_29_events_from_the_paper(client):
         true = (12 + sign * 2 * root2) / 17
         assert len(e["value"].replace("0.", "", 1)) == 20  # 20 significant digits (first digit nonzero)
         assert abs(Decimal(e["value"]) - true) <= Decimal("1e-20")
+        # the one JSON form of an algebraic number (as witnesses): (17 t - 12)^2 = 8, i.e. 17 t^2 - 24 t + 8 = 0
+        coeffs = [int(c) for c in e["polynomial"]]
+        assert coeffs[0] * 17 == coeffs[2] * 8 and coeffs[1] * 17 == coeffs[2] * -24 and len(coeffs) == 3, coeffs
+        assert e["exact"] is None and abs(e["approx"] - float(true)) <= 1e-15
     assert got["polynomials"]["a"][1] == "17*t^2 - 24*t + 8"  # a3 = a1 (paper)
     assert got["polynomials"]["s0"] == "0"
 

@@ -118,7 +118,7 @@ async def run_job(
     Args:
         request: the request (its disconnect cancels the job).
         workers: the app's pool.
-        fn: a module-level job (:mod:`app.api.jobs`).
+        fn: a module-level job (:mod:`app.jobs`).
         *args: its arguments (picklable).
         seconds: its time budget.
         checks_budget: the job checks a budget of ``seconds`` itself and says where it stopped

@@ -13,7 +13,8 @@ from core import Relation
 from core.witness import SENTENCES, ContactPoint, ContactScale, margin_text
 from core.witness.numbers import algebraic_dict
 
-from .witness_schemas import AlgebraicOut, ContactPointOut, ContactScaleOut, Decided, Kind, PlaneOut
+from .schemas import AlgebraicOut
+from .witness_schemas import ContactPointOut, ContactScaleOut, Decided, Kind, PlaneOut
 
 __all__ = ["scale_out", "point_out", "plane_out", "kind_of", "decided"]
 

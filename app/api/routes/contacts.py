@@ -1,6 +1,6 @@
 """POST /api/contacts: certified contacts among many bodies, under the request's limits.
 
-The search runs in a budgeted worker process (:func:`app.api.contacts_job`): at most
+The search runs in a budgeted worker process (:func:`app.jobs.contacts_job`): at most
 ``max_contacts_bodies`` bodies; the broad phase counts the pairs it would examine before building
 any (over ``max_contacts_candidates``: 422 saying how many and the limit); the time budget is
 checked between its chunks and the narrow phase's batches (503 with Retry-After); the pairs found
@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from fastapi import APIRouter, HTTPException, Request, Response
 
+from ...jobs import contacts_job
 from ..budget import run_job
 from ..contacts_schemas import ContactsIn, ContactsOut
 from ..deps import SettingsDep, WorkersDep
-from ..jobs import contacts_job
 from ..json_body import JsonRoute
 from ..schemas import ERROR_RESPONSES, ErrorOut
 

@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import threading
+from typing import Any
+
 from fastapi import APIRouter, HTTPException, Request
 
-from ..budget import run_job
+from core.moving.result import MotionAnalysis
+
+from ...jobs import analyse_job
+from ..budget import run_job, run_off_loop
 from ..deps import SettingsDep, WorkersDep
-from ..jobs import analyse_job
 from ..json_body import JsonRoute
 from ..motion_input import motion_payload
 from ..motion_schemas import AnalyseIn, AnalyseOut
@@ -32,9 +37,21 @@ async def analyse(body: AnalyseIn, request: Request, settings: SettingsDep, work
     if body.digits > settings.max_digits:
         raise HTTPException(422, f"digits = {body.digits} is over the limit of {settings.max_digits}")
     a, b = motion_payload(body.a), motion_payload(body.b)
-    out = await run_job(
-        request, workers, analyse_job, a, b, body.interval, body.digits, body.polynomials, settings.text_limits(),
+    result = await run_job(
+        request, workers, analyse_job, a, b, body.interval, body.digits, settings.text_limits(), ("a", "b"),
         seconds=settings.time_budget_s, stopped="analysis stopped: ", hint="narrow the interval or simplify the motion",
         memory_mb=settings.memory_limit_mb,
     )
-    return AnalyseOut(**out)
+
+    def write(cancel: threading.Event) -> AnalyseOut:  # exact numbers to text: bounded, but not for the event loop
+        return AnalyseOut(**_json(result, body.polynomials))
+
+    return await run_off_loop(request, write)
+
+
+def _json(result: MotionAnalysis, polynomials: bool) -> dict[str, Any]:
+    """The analysis as the API's JSON (core's ``to_dict``, with the motions named "a" and "b")."""
+    out = result.to_dict(polynomials=polynomials)
+    out["a"] = out.pop("A")
+    out["b"] = out.pop("B")
+    return out

@@ -1,39 +1,53 @@
-"""What the API runs in worker processes: work that grows with the user's numbers.
+"""What the worker processes run: the one module of jobs for the scene and the HTTP API.
 
-Module-level functions for :class:`app.workers.WorkerPool` (picklable by reference; their
-arguments and results are the request and response models). Each runs under the request's time
-budget in its own process, so a job can be killed when its client leaves, when its budget is
-spent (:data:`app.api.budget.JOB_GRACE_S` after its own check had the chance to say where) or
-when the server stops; its memory is capped. Inside, a :class:`~app.api.budget.Budget` is
-checked between steps, and a stop is reported as :class:`app.workers.WorkerTimeout` saying
-where; bad input is a ValueError with the message the route answers 422 with.
+Module-level functions for :class:`app.workers.WorkerPool` (picklable by reference). Each runs
+in its own process under a time budget and a memory cap, so a job can be killed when its client
+leaves, when its budget is spent or when the server stops. Every text a user typed is read here,
+in the worker, by core's readers (:func:`core.moving.motions.read_motion`,
+:func:`core.moving.motions.read_interval`: one grammar, each expression parsed once), never in
+the process serving the tabs and the requests.
+
+* :func:`analyse_job`: read two motions and I under the server's limits, analyse; the
+  :class:`core.moving.result.MotionAnalysis` pickles back as it is (the scene keeps it, the API
+  writes its JSON). :func:`read_motion_job`: the scene's typed motion, read and built.
+* The API's request jobs (``classify_job`` with number strings, ``explain_job``, the witness
+  jobs, ``contacts_job``): their arguments and results are the request and response models;
+  inside, a budget (:class:`app.api.budget.Budget`) is checked between steps and a stop is
+  reported as :class:`app.workers.WorkerTimeout` saying where; bad input is a ValueError with
+  the message the route answers 422 with. They import the API's modules when called, so the
+  scene's workers never load FastAPI.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from fastapi import HTTPException
+from core.moving.analysis import analyse
+from core.moving.motions import read_interval, read_motion
+from core.moving.result import MotionAnalysis
+from core.shapes.limits import SERVER, Limits
 
-from core.shapes.limits import Limits
+from .workers import WorkerTimeout
 
-from ..workers import WorkerTimeout
-from .budget import Budget, BudgetExceeded
-from .contacts_schemas import ContactsIn
-from .schemas import ClassifyOut, ExplainOut, PairItem
-from .witness_schemas import (
-    ContactPointOut,
-    ContactScaleIn,
-    ContactScaleOut,
-    PlaneOut,
-    WitnessIn,
-    WitnessOut,
-)
+if TYPE_CHECKING:
+    from .api.budget import Budget
+    from .api.contacts_schemas import ContactsIn
+    from .api.schemas import ClassifyOut, ExplainOut, PairItem
+    from .api.witness_schemas import (
+        ContactPointOut,
+        ContactScaleIn,
+        ContactScaleOut,
+        PlaneOut,
+        WitnessIn,
+        WitnessOut,
+    )
+    from .scene.motion import MotionModel
 
 __all__ = [
     "analyse_job",
+    "read_motion_job",
     "classify_job",
     "explain_job",
     "contact_scale_job",
@@ -44,9 +58,64 @@ __all__ = [
 ]
 
 
+def analyse_job(
+    a: Any,
+    b: Any,
+    interval: Any,
+    digits: int = 20,
+    limits: Limits = SERVER,
+    names: tuple[str, str] = ("a", "b"),
+) -> MotionAnalysis:
+    """Read both motions and I under ``limits``, then :func:`core.moving.analysis.analyse` them.
+
+    The same contract for the scene and the HTTP API.
+
+    Args:
+        a: the first motion: a motion dict, an n x n nested list of expressions, or a
+            :class:`core.moving.motions.Motion` already read (the scene's).
+        b: the second, likewise.
+        interval: I as a pair (lo, hi) or the text "lo, hi" (:func:`core.moving.motions.read_interval`).
+        digits: significant digits of the event values.
+        limits: size limits of the text (:data:`core.shapes.limits.SERVER`, or the API's
+            :meth:`app.api.settings.ApiSettings.text_limits`).
+        names: the motions' names in error messages ("a.translation[0]: ...").
+
+    Raises:
+        ValueError: unreadable text (its place named), or a motion that cannot be analysed on I
+            (core's message).
+    """
+    ma, mb = read_motion(a, limits=limits, name=names[0]), read_motion(b, limits=limits, name=names[1])
+    return analyse(ma, mb, read_interval(interval, limits), digits=digits)
+
+
+def read_motion_job(motion: dict[str, Any]) -> MotionModel | tuple[str, str]:
+    """Read a scene's typed motion under :data:`core.shapes.limits.SERVER` and build its exact matrices.
+
+    Returns:
+        The loaded model (it pickles with its exact matrices), or (message, field) for a
+        :class:`app.scene.motion.MotionError` (an exception would lose its field on the way back).
+    """
+    from .scene.motion import MotionError, load_motion
+
+    try:
+        return load_motion(preset=None, motion=motion, limits=SERVER)
+    except MotionError as e:
+        return str(e), e.field
+
+
+def _budget(seconds: float) -> Budget:
+    from .api.budget import Budget
+
+    return Budget(seconds)
+
+
 @contextmanager
 def _as_job_errors() -> Iterator[None]:
     """The route's errors as the worker carries them: 422 -> ValueError, a budget stop -> WorkerTimeout."""
+    from fastapi import HTTPException
+
+    from .api.budget import BudgetExceeded
+
     try:
         yield
     except HTTPException as e:  # raised by app.api.convert for bad input (always 422), place named
@@ -55,41 +124,26 @@ def _as_job_errors() -> Iterator[None]:
         raise WorkerTimeout(str(e)) from None
 
 
-def analyse_job(a: Any, b: Any, interval: list[Any], digits: int, polynomials: bool, limits: Limits) -> dict[str, Any]:
-    """Read both motions under ``limits``, then :func:`core.moving.analysis.analyse` as a JSON-ready dict.
-
-    The request's text is parsed here, in the worker, never in the server process.
-    """
-    from core.moving.analysis import analyse
-
-    from .motion_input import check_interval, check_motion
-
-    ma, mb = check_motion(a, "a", limits), check_motion(b, "b", limits)
-    check_interval(interval, limits)
-    out = analyse(ma, mb, tuple(interval), digits=digits).to_dict(polynomials=polynomials)
-    out["a"] = out.pop("A")
-    out["b"] = out.pop("B")
-    return out
-
-
 def classify_job(pairs: Sequence[PairItem], method: str, seconds: float, batch: bool) -> list[ClassifyOut]:
     """:func:`app.api.convert.classify_items` under a budget of ``seconds`` (pairs with number strings)."""
-    from .convert import classify_items
+    from .api.convert import classify_items
 
     with _as_job_errors():
-        return classify_items(pairs, method, Budget(seconds), batch=batch)
+        return classify_items(pairs, method, _budget(seconds), batch=batch)
 
 
 def explain_job(pair: PairItem, seconds: float) -> ExplainOut:
     """:func:`core.explain` of one pair: P(T), s0, s1, s1,0, their signs, Var and the rule."""
     from core import explain
 
-    from .convert import bad_input, checked_pair
+    from .api.convert import bad_input, checked_pair
 
     with _as_job_errors():
         a, b = checked_pair(pair)
-        Budget(seconds).check("after reading the pair")
+        _budget(seconds).check("after reading the pair")
         with bad_input():
+            from .api.schemas import ExplainOut
+
             return ExplainOut(**explain(a, b).to_dict())
 
 
@@ -97,8 +151,8 @@ def contact_scale_job(body: ContactScaleIn) -> ContactScaleOut:
     """Certified bracket of the contact scale (with ``exact``: mu* as an algebraic number)."""
     from core.witness import contact_scale
 
-    from .convert import bad_input, checked_pair
-    from .witness_out import kind_of, scale_out
+    from .api.convert import bad_input, checked_pair
+    from .api.witness_out import kind_of, scale_out
 
     with _as_job_errors():
         a, b = checked_pair(body)
@@ -110,8 +164,8 @@ def separating_plane_job(body: WitnessIn) -> PlaneOut:
     """A separating plane, exact and verified (ValueError unless the pair is separate)."""
     from core.witness import separating_plane
 
-    from .convert import bad_input, checked_pair
-    from .witness_out import plane_out
+    from .api.convert import bad_input, checked_pair
+    from .api.witness_out import plane_out
 
     with _as_job_errors():
         a, b = checked_pair(body)
@@ -123,8 +177,8 @@ def contact_point_job(body: WitnessIn) -> ContactPointOut:
     """The contact point of a tangent pair, or a point inside both (ValueError if separate)."""
     from core.witness import contact_point
 
-    from .convert import bad_input, checked_pair
-    from .witness_out import point_out
+    from .api.convert import bad_input, checked_pair
+    from .api.witness_out import point_out
 
     with _as_job_errors():
         a, b = checked_pair(body)
@@ -136,13 +190,15 @@ def witness_job(body: WitnessIn) -> WitnessOut:
     """The relation, its sentence, the contact scale and the plane or the point."""
     from core.witness import witness
 
-    from .convert import bad_input, checked_pair
-    from .witness_out import decided, kind_of, plane_out, point_out, scale_out
+    from .api.convert import bad_input, checked_pair
+    from .api.witness_out import decided, kind_of, plane_out, point_out, scale_out
 
     with _as_job_errors():
         a, b = checked_pair(body)
         with bad_input():
             w = witness(a, b)
+            from .api.witness_schemas import WitnessOut
+
             return WitnessOut(
                 relation=decided(w.relation),
                 sentence=w.sentence,
@@ -166,12 +222,12 @@ def contacts_job(body: ContactsIn, seconds: float, max_candidates: int, max_pair
     from core import Certifier, Relation, contacts
     from core.bodies.broadphase import TooManyPairs
 
-    from .contacts_schemas import ContactsOut, PairOut, PairRelation
-    from .convert import bad_input, contacts_matrices
-    from .limits import contacts_answer_message, contacts_limit_message
-    from .schemas import CertifiedBy
+    from .api.contacts_schemas import ContactsOut, PairOut, PairRelation
+    from .api.convert import bad_input, contacts_matrices
+    from .api.limits import contacts_answer_message, contacts_limit_message
+    from .api.schemas import CertifiedBy
 
-    budget = Budget(seconds)
+    budget = _budget(seconds)
     with _as_job_errors():
         Q = contacts_matrices(body)
         n = int(Q.shape[0])
