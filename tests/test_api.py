@@ -272,13 +272,27 @@ def err(loc, msg, type_="value_error"):
          [err(["body", "pair", "method"], "Input should be 'adaptive', 'exact' or 'float'", "literal_error")]),
         ('{"a": [[1,0,0],[0,1,0],[0,0,-1]]}', [err(["body", "pair", "b"], "Field required", "missing")]),
         ('{"pairs": []}', [err(["body", "batch", "pairs"], "List should have at least 1 item after validation, not 0", "too_short")]),
-        ('{"a": [[1,0,0],[0,1,0],[0,0,-1]], "b": ', [err(["body", 39], "JSON decode error: Expecting value", "json_invalid")]),
         ('[1, 2]', [err(["body", "pair"], "Input should be a valid dictionary or object to extract fields from", "model_attributes_type")]),
     ],
 )
 def test_malformed_bodies_are_422(client, text, detail):
     r = post_raw(client, "/api/classify", text)
     assert (r.status_code, r.json()) == (422, {"detail": detail})
+
+
+@pytest.mark.parametrize(
+    "text, detail",
+    [
+        ('{"a": [[1,0,0],[0,1,0],[0,0,-1]], "b": ', [err(["body", 39], "JSON decode error: Expecting value", "json_invalid")]),
+        ('{"a": 1,}', [err(["body", 8], "JSON decode error: Expecting property name enclosed in double quotes", "json_invalid")]),
+        ("", [err(["body"], "Field required", "missing")]),
+    ],
+)
+def test_unreadable_bodies_are_400_as_the_schema_declares(client, text, detail):
+    """400 "Unreadable body": no JSON to validate; 422 is for JSON that does not fit (above)."""
+    r = post_raw(client, "/api/classify", text)
+    assert (r.status_code, r.json()) == (400, {"detail": detail})
+    assert "400" in client.get("/openapi.json").json()["paths"]["/api/classify"]["post"]["responses"]
 
 
 def test_body_without_json_content_type_is_415(client):
@@ -991,3 +1005,43 @@ def test_pair_batcher_gives_each_request_its_own_answer():
             assert answer.detail.startswith("b is not an ellipse: "), answer.detail
         else:
             assert answer.relation == ["tangent", None, "separate", "overlap"][k % 4], answer
+
+
+# --- HTTP conventions (issue 26, item 7): HEAD /healthz, opt-in CORS ------------------------------
+
+def test_head_healthz_is_the_status_alone(client):
+    r = client.head("/healthz")
+    assert (r.status_code, r.content, r.headers["content-type"]) == (200, b"", "application/json")
+
+
+def test_cors_is_off_unless_asked(client):
+    preflight = {"origin": "https://example.org", "access-control-request-method": "POST", "access-control-request-headers": "content-type"}
+    assert client.options("/api/classify", headers=preflight).status_code == 405
+    r = client.get("/healthz", headers={"origin": "https://example.org"})
+    assert not [h for h in r.headers if h.startswith("access-control-")]
+
+
+def test_cors_for_the_listed_origins_only():
+    preflight = {"access-control-request-method": "POST", "access-control-request-headers": "content-type"}
+    with TestClient(create_api(ApiSettings(cors_origins=("https://example.org",)))) as c:
+        r = c.options("/api/classify", headers={**preflight, "origin": "https://example.org"})
+        assert r.status_code == 200 and r.headers["access-control-allow-origin"] == "https://example.org"
+        assert set(r.headers["access-control-allow-methods"].split(", ")) == {"GET", "HEAD", "POST"}
+        r = c.post("/api/classify", json={"a": UNIT, "b": UNIT_AT_2}, headers={"origin": "https://example.org"})
+        assert r.status_code == 200 and r.headers["access-control-allow-origin"] == "https://example.org"
+        assert r.headers["access-control-expose-headers"] == "retry-after"  # a page can honour Retry-After
+        r = c.options("/api/classify", headers={**preflight, "origin": "https://evil.example"})
+        assert r.status_code == 400 and "access-control-allow-origin" not in r.headers
+        r = c.post("/api/classify", json={"a": UNIT, "b": UNIT_AT_2}, headers={"origin": "https://evil.example"})
+        assert r.status_code == 200 and "access-control-allow-origin" not in r.headers
+
+
+def test_cors_origin_option_of_serve():
+    from app.cli import build_parser
+
+    args = build_parser().parse_args(["serve", "--cors-origin", "HTTPS://Example.org:443/", "--cors-origin", "*"])
+    assert args.cors_origin == ["https://example.org", "*"]
+    assert build_parser().parse_args(["serve"]).cors_origin == []
+    with pytest.raises(SystemExit) as e:
+        build_parser().parse_args(["serve", "--cors-origin", "example.org/path"])
+    assert e.value.code == 2

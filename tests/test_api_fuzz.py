@@ -1,7 +1,8 @@
 """Property-based fuzz of the API's own OpenAPI schema (schemathesis): never an undocumented 5xx.
 
 Bounded (30 examples per operation, no deadline) so it stays well under a minute on 2 cores.
-Successful answers must also match the documented response schema. The one 5xx the API
+Every answer must match the documented response schema, with a status code the schema declares
+for that operation (400 unreadable body, 413, 415, 422 invalid input, 503...). The one 5xx the API
 documents is 503 (with ``Retry-After``): a request over its time budget, a busy server or a
 server stopping. A loaded machine can send a fuzzed request over its budget, so a 503 passes
 when, and only when, the operation documents it, it carries Retry-After and its detail is one of
@@ -15,7 +16,7 @@ import re
 import schemathesis
 from hypothesis import HealthCheck, settings
 from schemathesis.checks import not_a_server_error
-from schemathesis.specs.openapi.checks import response_schema_conformance
+from schemathesis.specs.openapi.checks import response_schema_conformance, status_code_conformance
 
 from app.api import ApiSettings, create_api
 from app.api.budget import RETRY_AFTER_S
@@ -44,10 +45,10 @@ def test_no_server_error(case):
     response = case.call()
     if response.status_code == 503:
         check_unavailable(case, response)
-        case.validate_response(response, checks=[response_schema_conformance])
+        case.validate_response(response, checks=[response_schema_conformance, status_code_conformance])
         return
     assert response.status_code < 500, f"{response.status_code}: {response.text[:500]}\n{case.as_curl_command()}"
-    case.validate_response(response, checks=[not_a_server_error, response_schema_conformance])
+    case.validate_response(response, checks=[not_a_server_error, response_schema_conformance, status_code_conformance])
 
 
 def test_the_503_check_accepts_only_the_documented_answer():

@@ -115,7 +115,7 @@ class Probes:
 
 @pytest.fixture(scope="module")
 def server():
-    s = Server()
+    s = Server("--cors-origin", "https://example.org")
     yield s
     below = descendants(s.proc.pid)
     s.kill()
@@ -264,6 +264,17 @@ def test_beyond_the_queue_is_503_at_once_and_clients_that_leave_empty_it(server)
     assert refused.json() == {"detail": "all 2 workers are busy and 16 requests are waiting; retry in a moment"}
     probes.check()
     assert wait_gone(job_processes(server.proc.pid), 10) == set()
+
+
+def test_serve_cors_origin_and_head_healthz(server):
+    """``--cors-origin`` reaches the API (opt-in CORS), and HEAD /healthz answers (issue 26)."""
+    pre = {"access-control-request-method": "POST", "access-control-request-headers": "content-type"}
+    r = httpx.options(f"{server.api}/api/analyse", headers={**pre, "origin": "https://example.org"}, timeout=30)
+    assert (r.status_code, r.headers.get("access-control-allow-origin")) == (200, "https://example.org")
+    r = httpx.options(f"{server.api}/api/analyse", headers={**pre, "origin": "https://other.example"}, timeout=30)
+    assert r.status_code == 400 and "access-control-allow-origin" not in r.headers
+    r = httpx.head(f"{server.api}/healthz", timeout=30)
+    assert (r.status_code, r.content) == (200, b"")
 
 
 # --- SIGTERM with heavy work in flight ---------------------------------------------------------------

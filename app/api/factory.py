@@ -73,6 +73,17 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     # ignored: starlette types every handler as taking any Exception; this one is registered for its class only
     app.add_exception_handler(RequestValidationError, validation_error_handler)  # type: ignore[arg-type]
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes, per_path={"/api/contacts": settings.max_contacts_body_bytes})
+    if settings.cors_origins:  # opt-in (--cors-origin): pages at these origins may call the API
+        from fastapi.middleware.cors import CORSMiddleware
+
+        app.add_middleware(
+            CORSMiddleware,
+            allow_origins=list(settings.cors_origins),
+            allow_methods=["GET", "HEAD", "POST"],
+            allow_headers=["content-type"],
+            expose_headers=["retry-after"],
+            max_age=600,
+        )
     for module in (classify, contacts, motion, presets, witness, health, landing):
         app.include_router(module.router)
     if settings.static_dir is not None and settings.static_dir.is_dir():

@@ -127,6 +127,9 @@ def _is_json(content_type: str) -> bool:
 async def validation_error_handler(request: Request, exc: RequestValidationError) -> JSONResponse:
     """422 with ``{"detail": [{"loc", "msg", "type"}, ...]}`` (no echo of the input).
 
+    As the OpenAPI schema declares: 400 when there is no JSON to validate (malformed JSON, or
+    an empty body), 422 when the JSON does not fit the schema or a value is invalid.
+
     A body sent without a JSON content type (``curl -d`` sends a form type) is not read as JSON
     by FastAPI; say so (415) instead of reporting a missing object.
     """
@@ -138,4 +141,7 @@ async def validation_error_handler(request: Request, exc: RequestValidationError
             status_code=415,
             content={"detail": f"send the body as JSON with the header 'content-type: application/json' ({got})"},
         )
+    unreadable = [e for e in errors if e.get("type") == "json_invalid" or (tuple(e.get("loc", ())) == ("body",) and e.get("type") == "missing")]
+    if unreadable:  # the schema's 400: no JSON to validate (malformed, or no body at all)
+        return JSONResponse(status_code=400, content={"detail": [_clean(e) for e in unreadable]})
     return JSONResponse(status_code=422, content={"detail": [_clean(e) for e in errors]})

@@ -43,6 +43,9 @@ class ApiSettings:
 
     scene_url: str | None = None
     """Link to the 3D scene shown on the landing page; None when serving ``--api-only``."""
+    cors_origins: tuple[str, ...] = ()
+    """Web origins (``https://example.org``) whose pages may call the API from a browser (CORS,
+    ``--cors-origin``); empty: none (the default: no CORS headers at all)."""
     max_body_bytes: int = 1_000_000
     """Largest accepted request body (413 above)."""
     max_batch: int = 1000

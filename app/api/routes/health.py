@@ -1,4 +1,4 @@
-"""GET /healthz: liveness and analysis load."""
+"""GET /healthz (and HEAD, for load balancers): liveness and the load of the worker processes."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ from ..schemas import HealthOut
 router = APIRouter(tags=["health"])
 
 
-@router.get("/healthz", response_model=HealthOut)
+@router.api_route("/healthz", methods=["GET", "HEAD"], response_model=HealthOut)
 async def healthz(settings: SettingsDep, workers: WorkersDep) -> HealthOut:
-    """Answers at once (runs on the event loop, never waits on a worker)."""
+    """Answers at once (runs on the event loop, never waits on a worker); HEAD: the status alone."""
     return HealthOut(
         status="ok",
         analyses_running=workers.running,
