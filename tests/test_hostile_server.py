@@ -13,7 +13,7 @@ processes (under 3 GB together); afterwards the server is alive and no worker pr
   client that leaves has its work stopped before the budget runs out.
 * A burst of 6 ordinary analyses: all 200 (queued, not refused); beyond the queue (2 running,
   16 waiting): 503 with Retry-After at once; clients that leave empty the queue.
-* SIGTERM with heavy work in flight (contacts, an exact contact scale, queued analyses): every
+* SIGTERM with heavy work in flight (contacts, an analysis, a queued analysis): every
   in-flight client gets 503, the server exits 0 within 5 s, no process is left.
 
 Waits are on states (``/healthz`` counts, process tables); times are failure guards only,
@@ -191,18 +191,31 @@ def test_contacts_heavy_exact_work_is_answered_or_stopped_by_the_budget(server):
 
 # --- witnesses: work that grows with the numbers ---------------------------------------------------
 
-def test_exact_contact_scale_on_huge_numbers_is_stopped_by_the_budget(server):
-    """Was: a server thread still running 6 minutes after the client left; SIGTERM could not stop it."""
+def test_exact_contact_scale_on_huge_numbers_is_answered_or_stopped_by_the_budget(server):
+    """Was: a server thread still running 6 minutes after the client left; SIGTERM could not stop it.
+
+    Today this pair takes far longer than the budget (the precision grows with the size of the
+    numbers); a faster witness answers it, which is as good.
+    """
     r = attack(server, "/api/contact-scale", HUGE_WORK)
-    assert (r.status_code, r.headers.get("retry-after")) == (503, "2"), r.text[:300]
-    assert r.json() == {"detail": "stopped: the job exceeded its time budget of 5 s and was stopped"}
+    if r.status_code == 200:
+        assert r.json()["relation"] == "separate"
+    else:
+        assert (r.status_code, r.headers.get("retry-after")) == (503, "2"), r.text[:300]
+        assert r.json() == {"detail": "stopped: the job exceeded its time budget of 5 s and was stopped"}
 
 
 def test_work_of_a_witness_client_that_went_away_is_stopped(server):
-    """The client gives up after 1 s: its worker is killed then, not at the 5 s budget."""
+    """The client gives up after 1 s: its worker is killed then, not at the 5 s budget.
+
+    (The worker is gone within 5 s either way; while the pair takes longer than the budget, as
+    today, only the disconnect can end it that early.)
+    """
     t0 = time.monotonic()
-    with pytest.raises(httpx.ReadTimeout):
+    try:
         httpx.post(f"{server.api}/api/contact-scale", json=HUGE_WORK, timeout=httpx.Timeout(30, read=1.0))
+    except httpx.ReadTimeout:  # the client leaves (a witness fast enough to answer in 1 s is fine too)
+        pass
     wait_until(lambda: health(server)["analyses_running"] == 0, "the worker to be stopped")
     assert time.monotonic() - t0 < 5.0, "the worker ran to its budget: the disconnect did not stop it"
     assert wait_gone(job_processes(server.proc.pid), 5) == set()
@@ -294,8 +307,8 @@ def test_sigterm_with_heavy_work_in_flight_answers_503_and_exits_within_5_s():
     c = np.array(np.meshgrid(np.arange(21.0), np.arange(21.0), np.arange(22.0), indexing="ij")).reshape(3, -1).T
     lattice = {"bodies": [[*p, 0.5, 0.5, 0.5, 1.0, 0.0, 0.0, 0.0] for p in c.tolist()]}
     requests = [
-        ("contacts", "/api/contacts", lattice),
-        ("contact-scale", "/api/contact-scale", HUGE_WORK),
+        ("contacts", "/api/contacts", lattice),  # seconds of exact arithmetic
+        ("analysis", "/api/analyse", slow_motion()),  # ~9 s here
         ("queued analysis", "/api/analyse", slow_motion()),
     ]
     try:
