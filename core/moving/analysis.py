@@ -293,19 +293,43 @@ def _read_interval(interval: Any) -> tuple[fmpq | None, fmpq | None]:
     return lo, hi
 
 
-@dataclass
 class _MotionPencil:
-    """P(t, T) of the pair on I: its coefficients a_i(t) and the hat subresultants ŝ_j(t)."""
+    """P(t, T) of the pair on I: its coefficients a_i(t) and the hat subresultants ŝ_j(t).
 
-    n: int
-    a: list[QSqrtPoly]
-    s0: QSqrtPoly
-    s1: QSqrtPoly
-    s10: QSqrtPoly
-    sqrt_d: int
-    A: Any
-    B: Any
-    matrices: tuple[Any, Any]
+    ŝ0, ŝ1, ŝ1,0 are computed on first use (the full analysis uses all three; the first
+    contact, :mod:`core.moving.first_contact`, often needs only ŝ0).
+    """
+
+    def __init__(self, n: int, a: list[QSqrtPoly], sqrt_d: int, A: Any, B: Any, matrices: tuple[Any, Any]) -> None:
+        self.n = n
+        self.a = a
+        self.sqrt_d = sqrt_d
+        self.A = A
+        self.B = B
+        self.matrices = matrices
+        self._hats: dict[str, QSqrtPoly] = {}
+
+    def _hat(self, name: str) -> QSqrtPoly:
+        if name not in self._hats:
+            c0, c1, c10 = hat_scale(self.n)
+            fn, c = {"s0": (hat_s0, c0), "s1": (hat_s1, c1), "s10": (hat_s10, c10)}[name]
+            self._hats[name] = fn(self.a).scale_positive(fmpq(c.numerator, c.denominator))
+        return self._hats[name]
+
+    @property
+    def s0(self) -> QSqrtPoly:
+        """ŝ0 = -s0 / a_n (exact)."""
+        return self._hat("s0")
+
+    @property
+    def s1(self) -> QSqrtPoly:
+        """ŝ1 = -s1 / a_n (exact)."""
+        return self._hat("s1")
+
+    @property
+    def s10(self) -> QSqrtPoly:
+        """ŝ1,0 = -s1,0 / a_n (exact)."""
+        return self._hat("s10")
 
     @property
     def polys(self) -> dict[str, QSqrtPoly]:
@@ -315,7 +339,7 @@ class _MotionPencil:
 
 
 def _motion_pencil(A_t: Any, B_t: Any, lo: fmpq | None, hi: fmpq | None) -> _MotionPencil:
-    """Read both motions, clear denominators, check validity on I, build a_i(t) and ŝ_j(t)."""
+    """Read both motions, clear denominators, check validity on I, build a_i(t) (ŝ_j(t) lazily)."""
     mA, mB = as_motion(A_t), as_motion(B_t)
     if mA.dim != mB.dim:
         raise ValueError(f"A is {mA.dim + 1}x{mA.dim + 1} but B is {mB.dim + 1}x{mB.dim + 1}: both ellipses or both ellipsoids")
@@ -325,19 +349,7 @@ def _motion_pencil(A_t: Any, B_t: Any, lo: fmpq | None, hi: fmpq | None) -> _Mot
     PA, lamA = _polynomial_matrix(mA.matrix(), lo, hi, "A")
     PB, lamB = _polynomial_matrix(mB.matrix(), lo, hi, "B")
     a = _canonical_pencil(pencil_coefficients(PA, PB), lamA, lamB, _sample_in(lo, hi))
-    n = len(a) - 1
-    c0, c1, c10 = hat_scale(n)
-    return _MotionPencil(
-        n=n,
-        a=a,
-        s0=hat_s0(a).scale_positive(fmpq(c0.numerator, c0.denominator)),
-        s1=hat_s1(a).scale_positive(fmpq(c1.numerator, c1.denominator)),
-        s10=hat_s10(a).scale_positive(fmpq(c10.numerator, c10.denominator)),
-        sqrt_d=max(dA, dB),
-        A=mA,
-        B=mB,
-        matrices=(PA, PB),
-    )
+    return _MotionPencil(n=len(a) - 1, a=a, sqrt_d=max(dA, dB), A=mA, B=mB, matrices=(PA, PB))
 
 
 @dataclass
