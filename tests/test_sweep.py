@@ -272,7 +272,7 @@ def test_bad_rows_are_named_or_marked():
 
 def test_2d_angles_are_half_angle_numbers():
     # an angle theta is the half-angle number (cos(theta/2), sin(theta/2)), i.e. the quaternion (w, 0, 0, s)
-    m = random_pairs(10, dim=2, rotate=True, seed=5)
+    m = random_pairs(20, dim=2, rotate=True, seed=5)
     a = sweep_contacts(*m.arguments())
 
     def quat(theta):
