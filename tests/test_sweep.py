@@ -153,6 +153,20 @@ def test_without_the_compiled_filter_exact_arithmetic_answers(monkeypatch):
         assert got.time(k).compare(q(want.t_lo[k])) >= 0 and got.time(k).compare(q(want.t_hi[k])) <= 0
 
 
+def test_exact_motions_are_the_parsed_expressions():
+    # the directly built A(t) equals the one the motion's own expressions give (parser path)
+    from core.moving.motions import motion_from_dict, motion_to_dict
+
+    for m in (random_pairs(3, rotate=True, seed=1), random_pairs(3, dim=2, rotate=True, seed=3), grazing_pairs(2, seed=1)):
+        bodies, _ = read_linear_motions(*m.arguments())
+        for k in range(len(bodies)):
+            for shift in (None, [10.0] * bodies.dim):
+                fast = bodies.motion(k, shift)
+                parsed = motion_from_dict(motion_to_dict(fast))
+                assert all(x == y for a, b in zip(fast.matrix(), parsed.matrix(), strict=True) for x, y in zip(a, b, strict=True))
+                assert bodies.matrix_at_start(k, shift) == matrix_at_exact(parsed, 0)
+
+
 # ------------------------------------------------------------------------ broad phase
 
 

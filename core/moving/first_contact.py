@@ -31,6 +31,7 @@ from ..algebra.algebraic import RealAlgebraic
 from ..algebra.qsqrt import QSqrtPoly
 from ..algebra.realroots import roots_in_order
 from ..fixed.classify import Certifier
+from ..fixed.exact import classify_exact
 from ..relation import Relation
 from .analysis import (
     _Case,
@@ -222,9 +223,10 @@ def first_contacts(
     """Certified first contact of each pair (i[k], j[k]) of bodies in linear motion over [0, 1].
 
     The certified float filter (:mod:`core.moving.sweep_filter`) brackets t* or proves that the
-    pair never meets; where it abstains, :func:`first_contact` decides with exact arithmetic on
-    the pair's exact motions (:meth:`core.moving.linear.LinearMotions.motion`), and its exact t*
-    is bracketed by the floats just below and above.
+    pair never meets; where it abstains, exact arithmetic decides on the pair's exact motions
+    (:meth:`core.moving.linear.LinearMotions.motion`): the static exact classifier at t = 0 first
+    (touching or overlapping there: t* = 0, no motion analysis needed), else
+    :func:`first_contact`; the exact t* is bracketed by the floats just below and above.
 
     Args:
         bodies: the bodies.
@@ -258,10 +260,23 @@ def first_contacts(
     rel[status == CONTACT] = Relation.TANGENT
     rel[status == OVERLAP_AT_START] = Relation.OVERLAP
     out = FirstContacts(rel, lo, hi, by)
+    at_start: dict[int, list[list[fmpq]]] = {}
     for k in np.flatnonzero(status == UNDECIDED).tolist():
-        e = first_contact(bodies.motion(int(i[k])), bodies.motion(int(j[k]), None if shift is None else shift[k]), (0, 1))
+        a, b, sh = int(i[k]), int(j[k]), None if shift is None else shift[k]
         by[k] = Certifier.EXACT
-        if e is not None:
+        if a not in at_start:
+            at_start[a] = bodies.matrix_at_start(a)
+        if sh is not None and np.any(sh):
+            B0 = bodies.matrix_at_start(b, sh)
+        else:
+            if b not in at_start:
+                at_start[b] = bodies.matrix_at_start(b)
+            B0 = at_start[b]
+        start = classify_exact(at_start[a], B0).relation  # touching or overlapping at t = 0: t* = 0 (cheap)
+        if start != Relation.SEPARATE:
+            rel[k], lo[k], hi[k] = start, 0.0, 0.0
+            out.times[k] = RealAlgebraic.rational(fmpq(0))
+        elif (e := first_contact(bodies.motion(a), bodies.motion(b, sh), (0, 1))) is not None:
             rel[k] = e.relation
             lo[k], hi[k] = bracket(e.time)
             out.times[k] = e.time

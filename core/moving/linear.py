@@ -28,8 +28,12 @@ from fractions import Fraction
 from typing import Any
 
 import numpy as np
+from flint import fmpq, fmpq_poly
 
-from .motions import Motion, motion_from_dict
+from ..algebra.qsqrt import QSqrtPoly
+from ..shapes.quadrics import quadric_from_axes
+from .expressions import RationalFunction
+from .motions import Motion
 
 __all__ = ["LinearMotions", "read_linear_motions"]
 
@@ -61,6 +65,10 @@ class LinearMotions:
     def motion(self, k: int, shift: Any = None) -> Motion:
         """Body k's exact motion (optionally moved by the float vector ``shift``, exactly).
 
+        Its JSON form (``motion_to_dict``) is the expressions above; its matrix A(t) is built
+        directly in Q[t] (:func:`_exact_matrix`: the same rational functions the expressions
+        give, without parsing them).
+
         Examples:
             >>> m = read_linear_motions([[0, 0]], [[1, 0]], [[1, 1]])[0]
             >>> [str(e) for e in m.motion(0).matrix()[0]]
@@ -70,8 +78,9 @@ class LinearMotions:
         s = [Fraction(0)] * d if shift is None else [_q(v) for v in shift]
         c0 = [_q(v) + s[a] for a, v in enumerate(self.centers0[k])]
         c1 = [_q(v) + s[a] for a, v in enumerate(self.centers1[k])]
+        r = [_q(v) for v in self.semi_axes[k]]
         src: dict[str, Any] = {
-            "shape": {"center": ["0"] * d, "semi_axes": [str(_q(v)) for v in self.semi_axes[k]]},
+            "shape": {"center": ["0"] * d, "semi_axes": [str(v) for v in r]},
             "translation": [_line(a, b) for a, b in zip(c0, c1, strict=True)],
         }
         q0 = [_q(v) for v in self.q0[k]]
@@ -80,7 +89,22 @@ class LinearMotions:
             src["shape"]["orientation"] = [str(v) for v in q0]
         else:
             src["rotation"] = {"quaternion": [_line(a, b) for a, b in zip(q0, q1, strict=True)]}
-        return motion_from_dict(src)
+        return Motion(d, src, None, [_exact_matrix(c0, c1, r, q0, q1)])
+
+    def matrix_at_start(self, k: int, shift: Any = None) -> list[list[fmpq]]:
+        """Body k's exact matrix at t = 0 (optionally moved by ``shift``), without the motion.
+
+        Examples:
+            >>> b, _ = read_linear_motions([[1.0, 0.0]], [[5.0, 0.0]], [[1.0, 1.0]])
+            >>> b.matrix_at_start(0)
+            [[1, 0, -1], [0, 1, 0], [-1, 0, 0]]
+        """
+        c = [_q(v) for v in self.centers0[k]]
+        if shift is not None:
+            c = [a + _q(v) for a, v in zip(c, shift, strict=True)]
+        q0 = [float(v) for v in self.q0[k]]
+        orientation = q0 if self.dim == 3 else [q0[0], 0.0, 0.0, q0[1]]
+        return quadric_from_axes(c, [float(v) for v in self.semi_axes[k]], orientation, exact=True)  # type: ignore[no-any-return]
 
     def packed(self) -> np.ndarray:
         """(N, 17) rows c0, c1, r, q0, q1 (3D) or (N, 10) (2D), float64, C order (the filter's input; kept)."""
@@ -229,6 +253,45 @@ def _through_zero(q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
         parallel = all(x[i] * y[j] == x[j] * y[i] for i in range(len(x)) for j in range(i + 1, len(x)))
         out[k] = parallel and sum(u * v for u, v in zip(x, y, strict=True)) < 0
     return out
+
+
+def _exact_matrix(c0: list[Fraction], c1: list[Fraction], r: list[Fraction], q0: list[Fraction], q1: list[Fraction]) -> list[list[RationalFunction]]:
+    """A(t) of one body, exactly: [[Q, -Q c], [-c^T Q, c^T Q c - 1]] with Q = R~ D R~^T / N^2.
+
+    c(t) = c0 + t (c1 - c0), q(t) = q0 + t (q1 - q0), R~ the rotation numerator of q (R = R~ / N,
+    N = |q|^2), D = diag(1 / r^2): the matrix :func:`core.moving.motions.motion_from_dict` builds
+    from the same motion's expressions (one canonical form: reduced, monic denominator).
+    """
+    d = len(c0)
+    c = [fmpq_poly([_f(a), _f(b - a)]) for a, b in zip(c0, c1, strict=True)]
+    q = [fmpq_poly([_f(a), _f(b - a)]) for a, b in zip(q0, q1, strict=True)]
+    if d == 3:
+        w, x, y, z = q
+        R = [
+            [w * w + x * x - y * y - z * z, (x * y - w * z) * 2, (x * z + w * y) * 2],
+            [(x * y + w * z) * 2, w * w - x * x + y * y - z * z, (y * z - w * x) * 2],
+            [(x * z - w * y) * 2, (y * z + w * x) * 2, w * w - x * x - y * y + z * z],
+        ]
+    else:
+        w, s = q
+        R = [[w * w - s * s, -(w * s) * 2], [(w * s) * 2, w * w - s * s]]
+    N = sum((v * v for v in q), fmpq_poly([0]))
+    D = [fmpq(1) / (_f(v) * _f(v)) for v in r]
+    Q = [[sum((R[i][k] * R[j][k] * D[k] for k in range(d)), fmpq_poly([0])) for j in range(d)] for i in range(d)]
+    den = N * N
+    Qc = [sum((Q[i][j] * c[j] for j in range(d)), fmpq_poly([0])) for i in range(d)]
+    cQc = sum((c[i] * Qc[i] for i in range(d)), fmpq_poly([0]))
+
+    def rf(num: fmpq_poly) -> RationalFunction:
+        return RationalFunction(QSqrtPoly(num), den)
+
+    M = [[rf(Q[i][j]) for j in range(d)] + [rf(-Qc[i])] for i in range(d)]
+    M.append([rf(-v) for v in Qc] + [rf(cQc - den)])
+    return M
+
+
+def _f(x: Fraction) -> fmpq:
+    return fmpq(x.numerator, x.denominator)
 
 
 def _q(v: float) -> Fraction:
