@@ -587,9 +587,18 @@ static int common_point(const pair *p, double t) {
     }
     double Bc[3];
     for (int i = 0; i < d; i++) { Bc[i] = 0; for (int j = 0; j < d; j++) Bc[i] += B[i][j] * c[j]; }
-    double lo = 0.0, hi = 1.0;
-    for (int it = 0; it < 44; it++) {
-        double lam = 0.5 * (lo + hi), M[3][3], rhs[3];
+    /* h(lambda) = f_A(x) - f_B(x) decreases from d^T A d > 0 (lambda = 0) to -d^T B d < 0
+     * (lambda = 1): regula falsi with the Illinois rule, then x at the root */
+    double lo = 0.0, hi = 1.0, hlo = 0.0, hhi = 0.0, lam = 0.5;
+    int side = 0;
+    for (int it = 0; it < 40; it++) {
+        if (it == 0) lam = 0.0;
+        else if (it == 1) lam = 1.0;
+        else if (hlo > 0.0 && hhi < 0.0) {
+            lam = (lo * hhi - hi * hlo) / (hhi - hlo);
+            if (!(lam > lo && lam < hi)) lam = 0.5 * (lo + hi);
+        } else lam = 0.5 * (lo + hi);
+        double M[3][3], rhs[3];
         for (int i = 0; i < d; i++) {
             rhs[i] = (1 - lam) * Bc[i];
             for (int j = 0; j < d; j++) M[i][j] = lam * A[i][j] + (1 - lam) * B[i][j];
@@ -618,7 +627,17 @@ static int common_point(const pair *p, double t) {
                 fb += B[i][j] * (x[i] - c[i]) * (x[j] - c[j]);
             }
         if (!isfinite(fa) || !isfinite(fb)) return 0;
-        if (fa > fb) lo = lam; else hi = lam;
+        double h = fa - fb;
+        if (it >= 2 && (fabs(h) <= 1e-13 * (fabs(fa) + fabs(fb)) || hi - lo <= 1e-15)) break;
+        if (h > 0.0) {
+            lo = lam; hlo = h;
+            if (side == 1 && it >= 2) hhi *= 0.5;  /* Illinois: the stale end is halved */
+            side = 1;
+        } else {
+            hi = lam; hhi = h;
+            if (side == -1 && it >= 2) hlo *= 0.5;
+            side = -1;
+        }
     }
     /* certify f_A(x) = x^T Q~_A x - N_A^2 < 0 and f_B(x) = (x - d)^T Q~_B (x - d) - N_B^2 < 0 */
     ball fa = (ball){-NA2.v, NA2.r}, fb = (ball){-NB2.v, NB2.r}, u[3];
