@@ -661,8 +661,11 @@ static double certify_prefix(const form *f, double ta, double tb) {
         if (tb >= 1.0) {
             if (f_positive(&g)) return 1.0;
         } else {
-            /* u >= (tb - ta) / (1 - ta): the piece [ta, ta + u (1 - ta)] covers [ta, tb] */
-            double u = nextafter(nextafter((tb - ta) / span, 2.0), 2.0);
+            /* u >= (tb - ta) / (1 - ta) exactly: the piece [ta, ta + u (1 - ta)] covers [ta, tb].
+             * Two subtractions and a division leave the quotient >= (1 - 3u) times the exact one;
+             * four steps up add at least 4u of it (an ulp is at least u times the value). */
+            double u = (tb - ta) / span;
+            for (int up = 0; up < 4; up++) u = nextafter(u, 2.0);
             if (u >= 1.0) { if (f_positive(&g)) return tb; }
             else {
                 f_split(&g, u, &h, NULL);
