@@ -31,6 +31,11 @@
  * <= t_a + 9.5e-10: then t* is in (t_a, t_h]. Touching without crossing, tangency at 0,
  * degenerate or extreme pairs: the filter abstains and exact arithmetic decides.
  *
+ * Speed: the forms of LANES = 8 pairs of the same shape (which bodies rotate, whether they
+ * move) are built at once, one pair per vector lane (each lane performs one pair's operations
+ * in the same order, so the results are those of one pair at a time); the search that follows
+ * runs pair by pair.
+ *
  * Radii: each operation's rounding (<= U |result|, U = 2^-52 >= u / (1 - u)) and underflow
  * (<= 2^-1075 per product; ETA = 2^-1022 per product is added, generously: a normal number,
  * so no operation ever runs on subnormals, which are slow) is added; the radius formulas are
@@ -41,6 +46,7 @@
  */
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define U 2.220446049250313e-16          /* 2^-52 */
@@ -80,94 +86,118 @@ static inline int bneg(ball x) { return isfinite(x.v) && isfinite(x.r) && x.v < 
 
 /* ------------------------------------------------------------ forms in (1 - t, t), with radii */
 
-static void f_const(form *f, ball b) { f->n = 0; f->v[0] = b.v; f->r[0] = b.r; }
-static void f_line(form *f, ball b0, ball b1) { f->n = 1; f->v[0] = b0.v; f->r[0] = b0.r; f->v[1] = b1.v; f->r[1] = b1.r; }
+/* The construction runs on LANES pairs at once ("lane forms": the same degree, one coefficient
+ * per pair in each lane), so that every loop below runs over lanes and vectorises; each lane
+ * performs exactly the operations of one pair, in the same order (so the bounds are per lane). */
+#define LANES 8
+typedef struct { int n; double v[MAXF][LANES]; double r[MAXF][LANES]; } lform;
+typedef struct { double v[LANES], r[LANES]; } lball;
 
-/* z = a * (1 - t + t)^(n - a.n): the same polynomial as a form of degree n (z may be a) */
-static void f_elevate(form *z, const form *a, int n) {
-    int m = a->n;
-    double v[MAXF], r[MAXF];
-    for (int k = 0; k <= m; k++) { v[k] = a->v[k]; r[k] = a->r[k]; }
-    for (; m < n; m++) {  /* degree m -> m + 1, in place from the top */
-        v[m + 1] = v[m];
-        r[m + 1] = r[m];
-        for (int k = m; k >= 1; k--) {
-            double x = v[k] + v[k - 1];
-            v[k] = x;
-            r[k] = r[k] + r[k - 1] + U * fabs(x) + ETA;
-        }
-    }
-    z->n = n > a->n ? n : a->n;
-    for (int k = 0; k <= z->n; k++) { z->v[k] = v[k]; z->r[k] = r[k]; }
+static void lf_const(lform *f, const lball *b) {
+    f->n = 0;
+    for (int l = 0; l < LANES; l++) { f->v[0][l] = b->v[l]; f->r[0][l] = b->r[l]; }
+}
+static void lf_line(lform *f, const lball *b0, const lball *b1) {
+    f->n = 1;
+    for (int l = 0; l < LANES; l++) { f->v[0][l] = b0->v[l]; f->r[0][l] = b0->r[l]; f->v[1][l] = b1->v[l]; f->r[1][l] = b1->r[l]; }
 }
 
-/* z = a + sa * b with sa = +1 or -1 (degrees raised to the larger; z may be a or b) */
-static void f_addsub(form *z, const form *a, const form *b, double sa) {
-    form x;
-    if (a->n < b->n) { f_elevate(&x, a, b->n); a = &x; }
-    else if (b->n < a->n) { f_elevate(&x, b, a->n); b = &x; }
-    int n = a->n;
-    for (int k = 0; k <= n; k++) {
-        double s = a->v[k] + sa * b->v[k];
-        double rr = a->r[k] + b->r[k] + U * fabs(s) + ETA;
-        z->v[k] = s;
-        z->r[k] = rr;
+/* z = a (1 - t + t)^(n - a.n): the same polynomial as a form of degree n (z may be a) */
+static void lf_elevate(lform *z, const lform *a, int n) {
+    int m = a->n;
+    if (z != a) {
+        z->n = m;
+        memcpy(z->v, a->v, sizeof(double) * LANES * (m + 1));
+        memcpy(z->r, a->r, sizeof(double) * LANES * (m + 1));
     }
+    for (; m < n; m++) {  /* degree m -> m + 1, in place from the top */
+        for (int l = 0; l < LANES; l++) { z->v[m + 1][l] = z->v[m][l]; z->r[m + 1][l] = z->r[m][l]; }
+        for (int k = m; k >= 1; k--)
+            for (int l = 0; l < LANES; l++) {
+                double x = z->v[k][l] + z->v[k - 1][l];
+                z->r[k][l] = z->r[k][l] + z->r[k - 1][l] + U * fabs(x) + ETA;
+                z->v[k][l] = x;
+            }
+        z->n = m + 1;
+    }
+}
+
+/* z = a + sa * b, sa = +1 or -1 (degrees raised to the larger; z may be a or b) */
+static void lf_addsub(lform *z, const lform *a, const lform *b, double sa) {
+    lform tmp;
+    if (a->n < b->n) { lf_elevate(&tmp, a, b->n); a = &tmp; }
+    else if (b->n < a->n) { lf_elevate(&tmp, b, a->n); b = &tmp; }
+    int n = a->n;
+    for (int k = 0; k <= n; k++)
+        for (int l = 0; l < LANES; l++) {
+            double x = a->v[k][l] + sa * b->v[k][l];
+            z->r[k][l] = a->r[k][l] + b->r[k][l] + U * fabs(x) + ETA;
+            z->v[k][l] = x;
+        }
     z->n = n;
 }
-static void f_add(form *z, const form *a, const form *b) { f_addsub(z, a, b, 1.0); }
-static void f_sub(form *z, const form *a, const form *b) { f_addsub(z, a, b, -1.0); }
+static void lf_add(lform *z, const lform *a, const lform *b) { lf_addsub(z, a, b, 1.0); }
+static void lf_sub(lform *z, const lform *a, const lform *b) { lf_addsub(z, a, b, -1.0); }
 
-/* z = c * a for an exact c in {-2, -1, 2} (no rounding beyond overflow) */
-static void f_times(form *z, const form *a, double c) {
+/* z = c a for an exact c in {-2, -1, 2} */
+static void lf_times(lform *z, const lform *a, double c) {
     z->n = a->n;
-    for (int k = 0; k <= a->n; k++) { z->v[k] = c * a->v[k]; z->r[k] = fabs(c) * a->r[k] + ETA; }
+    for (int k = 0; k <= a->n; k++)
+        for (int l = 0; l < LANES; l++) { z->v[k][l] = c * a->v[k][l]; z->r[k][l] = fabs(c) * a->r[k][l] + ETA; }
 }
 
-/* z = a * b (ball b): each coefficient times a ball */
-static void f_scale(form *z, const form *a, ball b) {
+/* z = a b for a ball b per lane (each coefficient times the lane's ball, as bmul) */
+static void lf_scale(lform *z, const lform *a, const lball *b) {
     z->n = a->n;
-    for (int k = 0; k <= a->n; k++) {
-        ball o = bmul((ball){a->v[k], a->r[k]}, b);
-        z->v[k] = o.v; z->r[k] = o.r;
-    }
+    for (int k = 0; k <= a->n; k++)
+        for (int l = 0; l < LANES; l++) {
+            double x = a->v[k][l], rx = a->r[k][l], y = b->v[l], ry = b->r[l], p = x * y;
+            z->r[k][l] = fabs(x) * ry + rx * (fabs(y) + ry) + U * fabs(p) + 5 * ETA;
+            z->v[k][l] = p;
+        }
 }
 
-/* z = a * b: convolution. Coefficient k is a sum of m products, accumulated in order of i: it
+/* z = a b: convolution. Coefficient k is a sum of m products, accumulated in order of i: it
  * rounds by <= m U sum|a_i b_j| (plus underflow, <= ETA per product); the inputs' radii add
- * sum |a_i| rb_j + ra_i (|b_j| + rb_j). */
-static void f_mul(form *z, const form *a, const form *b) {
+ * sum |a_i| rb_j + ra_i (|b_j| + rb_j). z must not be a or b. */
+static void lf_mul(lform *z, const lform *a, const lform *b) {
     int na = a->n, nb = b->n, n = na + nb;
-    double av[MAXF], aa[MAXF], ar[MAXF], bv[MAXF], ab[MAXF], br[MAXF], bb[MAXF], v[MAXF], r[MAXF];
-    for (int i = 0; i <= na; i++) { av[i] = a->v[i]; aa[i] = fabs(av[i]); ar[i] = a->r[i]; }
-    for (int j = 0; j <= nb; j++) { bv[j] = b->v[j]; ab[j] = fabs(bv[j]); br[j] = b->r[j]; bb[j] = ab[j] + br[j]; }
     for (int k = 0; k <= n; k++) {
-        int lo = k > nb ? k - nb : 0, hi = k < na ? k : na;
-        double s = 0.0, S = 0.0, R = 0.0;
+        int lo = k > nb ? k - nb : 0, hi = k < na ? k : na, m = hi - lo + 1;
+        double sv[LANES] = {0}, S[LANES] = {0}, R[LANES] = {0};
         for (int i = lo; i <= hi; i++) {
             int j = k - i;
-            s += av[i] * bv[j];
-            S += aa[i] * ab[j];
-            R += aa[i] * br[j] + ar[i] * bb[j];
+            for (int l = 0; l < LANES; l++) {
+                double x = a->v[i][l], y = b->v[j][l], ax = fabs(x), ay = fabs(y);
+                sv[l] += x * y;
+                S[l] += ax * ay;
+                R[l] += ax * b->r[j][l] + a->r[i][l] * (ay + b->r[j][l]);
+            }
         }
-        int m = hi - lo + 1;
-        v[k] = s;
-        r[k] = R + m * U * S + (8 * m + 2) * ETA;
+        for (int l = 0; l < LANES; l++) {
+            z->v[k][l] = sv[l];
+            z->r[k][l] = R[l] + m * U * S[l] + (8 * m + 2) * ETA;
+        }
     }
     z->n = n;
-    for (int k = 0; k <= n; k++) { z->v[k] = v[k]; z->r[k] = r[k]; }
 }
 
-/* Bernstein coefficients on [0, 1]: b_k = c_k / C(n, k) (C exact: n <= 19) */
-static void f_bernstein(form *z, const form *a) {
+/* lane l of a, divided by the binomials: Bernstein coefficients on [0, 1] (C(n, k) exact) */
+static void lf_bernstein(form *z, const lform *a, int l) {
     double C = 1.0;
     z->n = a->n;
     for (int k = 0; k <= a->n; k++) {
-        double x = a->v[k] / C;
+        double x = a->v[k][l] / C;
         z->v[k] = x;
-        z->r[k] = a->r[k] / C + U * fabs(x) + ETA;
+        z->r[k] = a->r[k][l] / C + U * fabs(x) + ETA;
         C = C * (a->n - k) / (k + 1);
     }
+}
+
+static int lf_finite(const lform *b, int l) {
+    for (int k = 0; k <= b->n; k++)
+        if (!(isfinite(b->v[k][l]) && isfinite(b->r[k][l]) && fabs(b->v[k][l]) < 0x1p+900 && b->r[k][l] < 0x1p+900)) return 0;
+    return 1;
 }
 
 /* de Casteljau at tau (Bernstein form b on [0,1]): left = b on [0, tau], right = b on [tau, 1]
@@ -194,12 +224,6 @@ static void f_split(const form *b, double tau, form *left, form *right) {
 static int f_positive(const form *b) {
     for (int k = 0; k <= b->n; k++)
         if (!(isfinite(b->v[k]) && isfinite(b->r[k]) && b->v[k] > b->r[k] * RF)) return 0;
-    return 1;
-}
-
-static int f_finite(const form *b) {
-    for (int k = 0; k <= b->n; k++)
-        if (!(isfinite(b->v[k]) && isfinite(b->r[k]) && fabs(b->v[k]) < 0x1p+900 && b->r[k] < 0x1p+900)) return 0;
     return 1;
 }
 
@@ -238,53 +262,63 @@ static int load_body(body *b, const double *row, int d, double inv_len) {
     return 1;
 }
 
-/* rotation numerator R~(q) (d x d forms) and N = |q|^2, for a quaternion/half-angle form q */
-static void rotation_forms(const form *q, int d, form R[3][3], form *N) {
+/* Temporaries of the construction, per batch (heap: a lane form is 2.5 KB) */
+typedef struct {
+    lform q[4], R[3][3], RD[3][3], N, sq[10], t1, t2, tmp;
+    lform QA[3][3], QB[3][3], NA2, NB2, dd[3], X[3][3][2], y[3], z[2], dQd, acc, yy;
+    lform adj[3][3][3], m1[3], m2[3], part[4], detX[4], w[3], zd[5], ak;
+} workspace;
+
+/* rotation numerator R~(q) (d x d lane forms) and N = |q|^2, for the lane forms q */
+static void rotation_forms(workspace *ws, int d, lform R[3][3], lform *N) {
+    lform *q = ws->q, *sq = ws->sq, *t1 = &ws->t1, *t2 = &ws->t2;
     if (d == 2) {
-        form ww, ss, ws;
-        f_mul(&ww, &q[0], &q[0]); f_mul(&ss, &q[1], &q[1]); f_mul(&ws, &q[0], &q[1]);
-        f_sub(&R[0][0], &ww, &ss); R[1][1] = R[0][0];
-        f_times(&R[1][0], &ws, 2.0); f_times(&R[0][1], &ws, -2.0);
-        f_add(N, &ww, &ss);
+        lf_mul(&sq[0], &q[0], &q[0]); lf_mul(&sq[1], &q[1], &q[1]); lf_mul(&sq[2], &q[0], &q[1]);
+        lf_sub(&R[0][0], &sq[0], &sq[1]); R[1][1] = R[0][0];
+        lf_times(&R[1][0], &sq[2], 2.0); lf_times(&R[0][1], &sq[2], -2.0);
+        lf_add(N, &sq[0], &sq[1]);
         return;
     }
-    form ww, xx, yy, zz, xy, wz, xz, wy, yz, wx, t1, t2;
-    f_mul(&ww, &q[0], &q[0]); f_mul(&xx, &q[1], &q[1]); f_mul(&yy, &q[2], &q[2]); f_mul(&zz, &q[3], &q[3]);
-    f_mul(&xy, &q[1], &q[2]); f_mul(&wz, &q[0], &q[3]); f_mul(&xz, &q[1], &q[3]);
-    f_mul(&wy, &q[0], &q[2]); f_mul(&yz, &q[2], &q[3]); f_mul(&wx, &q[0], &q[1]);
+    /* ww xx yy zz xy wz xz wy yz wx */
+    const int f[10][2] = {{0, 0}, {1, 1}, {2, 2}, {3, 3}, {1, 2}, {0, 3}, {1, 3}, {0, 2}, {2, 3}, {0, 1}};
+    for (int k = 0; k < 10; k++) lf_mul(&sq[k], &q[f[k][0]], &q[f[k][1]]);
+    lform *ww = &sq[0], *xx = &sq[1], *yy = &sq[2], *zz = &sq[3], *xy = &sq[4], *wz = &sq[5], *xz = &sq[6], *wy = &sq[7], *yz = &sq[8], *wx = &sq[9];
     /* R00 = w2 + x2 - y2 - z2, R11 = w2 - x2 + y2 - z2, R22 = w2 - x2 - y2 + z2 */
-    f_add(&t1, &ww, &xx); f_add(&t2, &yy, &zz); f_sub(&R[0][0], &t1, &t2);
-    f_sub(&t1, &ww, &xx); f_sub(&t2, &yy, &zz); f_add(&R[1][1], &t1, &t2);
-    f_sub(&t1, &ww, &xx); f_sub(&t2, &zz, &yy); f_add(&R[2][2], &t1, &t2);
-    f_sub(&t1, &xy, &wz); f_times(&R[0][1], &t1, 2.0);
-    f_add(&t1, &xz, &wy); f_times(&R[0][2], &t1, 2.0);
-    f_add(&t1, &xy, &wz); f_times(&R[1][0], &t1, 2.0);
-    f_sub(&t1, &yz, &wx); f_times(&R[1][2], &t1, 2.0);
-    f_sub(&t1, &xz, &wy); f_times(&R[2][0], &t1, 2.0);
-    f_add(&t1, &yz, &wx); f_times(&R[2][1], &t1, 2.0);
-    f_add(&t1, &ww, &xx); f_add(&t2, &yy, &zz); f_add(N, &t1, &t2);
+    lf_add(t1, ww, xx); lf_add(t2, yy, zz); lf_sub(&R[0][0], t1, t2);
+    lf_sub(t1, ww, xx); lf_sub(t2, yy, zz); lf_add(&R[1][1], t1, t2);
+    lf_sub(t1, ww, xx); lf_sub(t2, zz, yy); lf_add(&R[2][2], t1, t2);
+    lf_sub(t1, xy, wz); lf_times(&R[0][1], t1, 2.0);
+    lf_add(t1, xz, wy); lf_times(&R[0][2], t1, 2.0);
+    lf_add(t1, xy, wz); lf_times(&R[1][0], t1, 2.0);
+    lf_sub(t1, yz, wx); lf_times(&R[1][2], t1, 2.0);
+    lf_sub(t1, xz, wy); lf_times(&R[2][0], t1, 2.0);
+    lf_add(t1, yz, wx); lf_times(&R[2][1], t1, 2.0);
+    lf_add(t1, ww, xx); lf_add(t2, yy, zz); lf_add(N, t1, t2);
 }
 
-/* Q~ = R~ D R~^T (upper triangle, forms) and N^2, for one body over [0, 1] */
-static void body_forms(const body *b, form Q[3][3], form *N2) {
-    int d = b->d;
-    form q[4], R[3][3], N, RD[3][3];
-    for (int c = 0; c < b->nq; c++) {
-        if (b->rotates) f_line(&q[c], bx(b->q0[c]), bx(b->q1[c]));
-        else f_const(&q[c], bx(b->q0[c]));
+/* Q~ = R~ D R~^T (lane forms, symmetric) and N^2 of one body of every lane's pair (A or B) */
+static void body_forms(workspace *ws, const body *const bodies[LANES], lform Q[3][3], lform *N2) {
+    const body *b0 = bodies[0];
+    int d = b0->d;
+    lball x0, x1;
+    for (int c = 0; c < b0->nq; c++) {
+        for (int l = 0; l < LANES; l++) { x0.v[l] = bodies[l]->q0[c]; x1.v[l] = bodies[l]->q1[c]; x0.r[l] = x1.r[l] = 0.0; }
+        if (b0->rotates) lf_line(&ws->q[c], &x0, &x1);
+        else lf_const(&ws->q[c], &x0);
     }
-    rotation_forms(q, d, R, &N);
-    for (int i = 0; i < d; i++)
-        for (int k = 0; k < d; k++) f_scale(&RD[i][k], &R[i][k], b->D[k]);
+    rotation_forms(ws, d, ws->R, &ws->N);
+    for (int k = 0; k < d; k++) {
+        lball D;
+        for (int l = 0; l < LANES; l++) { D.v[l] = bodies[l]->D[k].v; D.r[l] = bodies[l]->D[k].r; }
+        for (int i = 0; i < d; i++) lf_scale(&ws->RD[i][k], &ws->R[i][k], &D);
+    }
     for (int i = 0; i < d; i++)
         for (int j = i; j < d; j++) {
-            form acc, p;
-            f_mul(&acc, &RD[i][0], &R[j][0]);
-            for (int k = 1; k < d; k++) { f_mul(&p, &RD[i][k], &R[j][k]); f_add(&acc, &acc, &p); }
-            Q[i][j] = acc;
-            Q[j][i] = acc;
+            lf_mul(&Q[i][j], &ws->RD[i][0], &ws->R[j][0]);
+            for (int k = 1; k < d; k++) { lf_mul(&ws->tmp, &ws->RD[i][k], &ws->R[j][k]); lf_add(&Q[i][j], &Q[i][j], &ws->tmp); }
+            if (j != i) Q[j][i] = Q[i][j];
         }
-    f_mul(N2, &N, &N);
+    lf_mul(N2, &ws->N, &ws->N);
 }
 
 /* The same at one time t, as balls: Q~(t) (full, symmetric) and N(t)^2 */
@@ -356,63 +390,62 @@ static int load_pair(pair *p, int d, const double *ra, const double *rb, const d
     return 1;
 }
 
-/* T-polynomials of forms: P[k] is the coefficient of T^k */
-static void tl_mul(form *out, const form *x, int nx, const form *y, int ny) {
-    form tmp;
+/* T-polynomials of lane forms: out[k] is the coefficient of T^k (out of length nx + ny + 1) */
+static void tl_mul(workspace *ws, lform *out, const lform *x, int nx, const lform *y, int ny) {
     for (int k = 0; k <= nx + ny; k++) out[k].n = -1;
     for (int i = 0; i <= nx; i++)
         for (int j = 0; j <= ny; j++) {
-            f_mul(&tmp, &x[i], &y[j]);
-            if (out[i + j].n < 0) out[i + j] = tmp;
-            else f_add(&out[i + j], &out[i + j], &tmp);
+            if (out[i + j].n < 0) lf_mul(&out[i + j], &x[i], &y[j]);
+            else { lf_mul(&ws->tmp, &x[i], &y[j]); lf_add(&out[i + j], &out[i + j], &ws->tmp); }
         }
 }
 
-/* a_i(t), i = 0..n, as Bernstein forms on [0, 1] (module docstring) */
-static int pencil_forms(pair *p) {
-    int d = p->d;
-    form QA[3][3], QB[3][3], NA2, NB2, dd[3];
-    body_forms(&p->A, QA, &NA2);
-    body_forms(&p->B, QB, &NB2);
+/* a_i(t), i = 0..n, as Bernstein forms on [0, 1], for the pairs of the lanes (module
+ * docstring); all lanes have the same degrees (the caller groups pairs by which bodies rotate
+ * and whether they move). Returns a mask of the lanes whose forms are finite. */
+static int pencil_forms(workspace *ws, pair *const P[LANES]) {
+    pair *p0 = P[0];
+    int d = p0->d, g = p0->moves;
+    const body *A[LANES], *B[LANES];
+    for (int l = 0; l < LANES; l++) { A[l] = &P[l]->A; B[l] = &P[l]->B; }
+    body_forms(ws, A, ws->QA, &ws->NA2);
+    body_forms(ws, B, ws->QB, &ws->NB2);
     for (int a = 0; a < d; a++) {
-        if (p->moves) f_line(&dd[a], p->d0[a], p->d1[a]);
-        else f_const(&dd[a], p->d0[a]);
+        lball x0, x1;
+        for (int l = 0; l < LANES; l++) { x0.v[l] = P[l]->d0[a].v; x0.r[l] = P[l]->d0[a].r; x1.v[l] = P[l]->d1[a].v; x1.r[l] = P[l]->d1[a].r; }
+        if (g) lf_line(&ws->dd[a], &x0, &x1);
+        else lf_const(&ws->dd[a], &x0);
     }
-    int E = QA[0][0].n > QB[0][0].n ? QA[0][0].n : QB[0][0].n, g = p->moves;
+    int E = ws->QA[0][0].n > ws->QB[0][0].n ? ws->QA[0][0].n : ws->QB[0][0].n;
     /* X = T Q~_A + Q~_B (T-linear), y = -Q~_B d, z = T (-N_A^2) + (d^T Q~_B d - N_B^2) */
-    form X[3][3][2], y[3], z[2], tmp;
     for (int i = 0; i < d; i++)
-        for (int j = 0; j < d; j++) {
-            f_elevate(&X[i][j][0], &QB[i][j], E);
-            f_elevate(&X[i][j][1], &QA[i][j], E);
+        for (int j = i; j < d; j++) {
+            lf_elevate(&ws->X[i][j][0], &ws->QB[i][j], E);
+            lf_elevate(&ws->X[i][j][1], &ws->QA[i][j], E);
         }
-    form dQd;
     for (int i = 0; i < d; i++) {
-        form acc;
-        f_mul(&acc, &QB[i][0], &dd[0]);
-        for (int j = 1; j < d; j++) { f_mul(&tmp, &QB[i][j], &dd[j]); f_add(&acc, &acc, &tmp); }
-        f_times(&y[i], &acc, -1.0);
-        if (i == 0) f_mul(&dQd, &acc, &dd[0]);
-        else { f_mul(&tmp, &acc, &dd[i]); f_add(&dQd, &dQd, &tmp); }
-        f_elevate(&y[i], &y[i], E + g);
+        lf_mul(&ws->acc, &ws->QB[i][0], &ws->dd[0]);
+        for (int j = 1; j < d; j++) { lf_mul(&ws->tmp, &ws->QB[i][j], &ws->dd[j]); lf_add(&ws->acc, &ws->acc, &ws->tmp); }
+        lf_times(&ws->y[i], &ws->acc, -1.0);
+        if (i == 0) lf_mul(&ws->dQd, &ws->acc, &ws->dd[0]);
+        else { lf_mul(&ws->tmp, &ws->acc, &ws->dd[i]); lf_add(&ws->dQd, &ws->dQd, &ws->tmp); }
+        lf_elevate(&ws->y[i], &ws->y[i], E + g);
     }
-    f_sub(&z[0], &dQd, &NB2);
-    f_elevate(&z[0], &z[0], E + 2 * g);
-    f_times(&z[1], &NA2, -1.0);
-    f_elevate(&z[1], &z[1], E + 2 * g);
-    form adj[3][3][3], detX[4], w[3], zd[5];
+    lf_sub(&ws->z[0], &ws->dQd, &ws->NB2);
+    lf_elevate(&ws->z[0], &ws->z[0], E + 2 * g);
+    lf_times(&ws->z[1], &ws->NA2, -1.0);
+    lf_elevate(&ws->z[1], &ws->z[1], E + 2 * g);
     int nadj;
     if (d == 2) {
         nadj = 1;
         for (int k = 0; k < 2; k++) {
-            adj[0][0][k] = X[1][1][k];
-            adj[1][1][k] = X[0][0][k];
-            f_times(&adj[0][1][k], &X[0][1][k], -1.0);
+            ws->adj[0][0][k] = ws->X[1][1][k];
+            ws->adj[1][1][k] = ws->X[0][0][k];
+            lf_times(&ws->adj[0][1][k], &ws->X[0][1][k], -1.0);
         }
-        form m1[3], m2[3];
-        tl_mul(m1, X[0][0], 1, X[1][1], 1);
-        tl_mul(m2, X[0][1], 1, X[0][1], 1);
-        for (int k = 0; k <= 2; k++) f_sub(&detX[k], &m1[k], &m2[k]);
+        tl_mul(ws, ws->m1, ws->X[0][0], 1, ws->X[1][1], 1);
+        tl_mul(ws, ws->m2, ws->X[0][1], 1, ws->X[0][1], 1);
+        for (int k = 0; k <= 2; k++) lf_sub(&ws->detX[k], &ws->m1[k], &ws->m2[k]);
     } else {
         nadj = 2;
         const int spec[6][10] = {
@@ -423,48 +456,45 @@ static int pencil_forms(pair *p) {
             {1, 2, 0, 1, 0, 2, 0, 0, 1, 2}, /* adj12 = X01 X02 - X00 X12 */
             {2, 2, 0, 0, 1, 1, 0, 1, 0, 1}, /* adj22 = X00 X11 - X01 X01 */
         };
-        for (int s = 0; s < 6; s++) {
-            const int *c = spec[s];
-            form m1[3], m2[3];
-            tl_mul(m1, X[c[2]][c[3]], 1, X[c[4]][c[5]], 1);
-            tl_mul(m2, X[c[6]][c[7]], 1, X[c[8]][c[9]], 1);
-            for (int k = 0; k <= 2; k++) {
-                f_sub(&adj[c[0]][c[1]][k], &m1[k], &m2[k]);
-                adj[c[1]][c[0]][k] = adj[c[0]][c[1]][k];
-            }
+        for (int sp = 0; sp < 6; sp++) {
+            const int *c = spec[sp];
+            tl_mul(ws, ws->m1, ws->X[c[2]][c[3]], 1, ws->X[c[4]][c[5]], 1);
+            tl_mul(ws, ws->m2, ws->X[c[6]][c[7]], 1, ws->X[c[8]][c[9]], 1);
+            for (int k = 0; k <= 2; k++) lf_sub(&ws->adj[c[0]][c[1]][k], &ws->m1[k], &ws->m2[k]);
         }
-        form part[4];
-        tl_mul(detX, X[0][0], 1, adj[0][0], 2);
+        /* det X = X00 adj00 + X01 adj01 + X02 adj02 (the adjugate's first column, by symmetry) */
+        tl_mul(ws, ws->detX, ws->X[0][0], 1, ws->adj[0][0], 2);
         for (int j = 1; j < 3; j++) {
-            tl_mul(part, X[0][j], 1, adj[j][0], 2);
-            for (int k = 0; k <= 3; k++) f_add(&detX[k], &detX[k], &part[k]);
+            tl_mul(ws, ws->part, ws->X[0][j], 1, ws->adj[0][j], 2);
+            for (int k = 0; k <= 3; k++) lf_add(&ws->detX[k], &ws->detX[k], &ws->part[k]);
         }
     }
-    /* w = y^T adj(X) y (T-polynomial of degree nadj) */
-    for (int k = 0; k <= nadj; k++) w[k].n = -1;
+    /* w = y^T adj(X) y (T-polynomial of degree nadj); off-diagonal terms twice */
+    for (int k = 0; k <= nadj; k++) ws->w[k].n = -1;
     for (int a = 0; a < d; a++)
         for (int c = a; c < d; c++) {
-            form yy;
-            f_mul(&yy, &y[a], &y[c]);
-            if (c != a) f_times(&yy, &yy, 2.0);
+            lf_mul(&ws->yy, &ws->y[a], &ws->y[c]);
+            if (c != a) lf_times(&ws->yy, &ws->yy, 2.0);
             for (int k = 0; k <= nadj; k++) {
-                f_mul(&tmp, &adj[a][c][k], &yy);
-                if (w[k].n < 0) w[k] = tmp;
-                else f_add(&w[k], &w[k], &tmp);
+                if (ws->w[k].n < 0) lf_mul(&ws->w[k], &ws->adj[a][c][k], &ws->yy);
+                else { lf_mul(&ws->tmp, &ws->adj[a][c][k], &ws->yy); lf_add(&ws->w[k], &ws->w[k], &ws->tmp); }
             }
         }
-    tl_mul(zd, z, 1, detX, d);
-    p->deg = zd[0].n;
-    for (int k = 0; k <= p->n; k++) {
-        form ak;
-        if (k <= nadj) f_sub(&ak, &zd[k], &w[k]);
-        else ak = zd[k];
-        f_elevate(&ak, &ak, p->deg);
-        if (!f_finite(&ak)) return 0;
-        f_bernstein(&p->b[k], &ak);
-        for (int j = 0; j <= ak.n; j++) p->c[k][j] = ak.v[j];
+    tl_mul(ws, ws->zd, ws->z, 1, ws->detX, d);
+    int deg = ws->zd[0].n, ok = 0;
+    for (int l = 0; l < LANES; l++) P[l]->deg = deg;
+    for (int l = 0; l < LANES; l++) ok |= 1 << l;
+    for (int k = 0; k <= p0->n; k++) {
+        if (k <= nadj) lf_sub(&ws->ak, &ws->zd[k], &ws->w[k]);
+        else ws->ak = ws->zd[k];
+        lf_elevate(&ws->ak, &ws->ak, deg);
+        for (int l = 0; l < LANES; l++) {
+            if (!lf_finite(&ws->ak, l)) { ok &= ~(1 << l); continue; }
+            lf_bernstein(&P[l]->b[k], &ws->ak, l);
+            for (int j = 0; j <= deg; j++) P[l]->c[k][j] = ws->ak.v[j][l];
+        }
     }
-    return 1;
+    return ok;
 }
 
 /* ------------------------------------------------------------------ float helpers (search) */
@@ -679,27 +709,21 @@ static double certify_prefix(const form *f, double ta, double tb) {
     return ta;
 }
 
-/* One pair: status and bracket (module docstring). */
-static int8_t first_contact_pair(int d, const double *ra, const double *rb, const double *shift, double *tlo, double *thi, int32_t *iters) {
-    pair p;
-    *tlo = *thi = NAN;
-    *iters = 0;
-    if (!load_pair(&p, d, ra, rb, shift)) return UNDECIDED;
-    if (common_point(&p, 0.0)) { *tlo = *thi = 0.0; return OVERLAP_AT_START; }
-    if (!pencil_forms(&p)) return UNDECIDED;
-    int n = p.n;
+/* One pair after its forms are built: status and bracket (module docstring). */
+static int8_t search_pair(pair *p, double *tlo, double *thi, int32_t *iters) {
+    int n = p->n;
     double a[5], T;
-    for (int k = 0; k <= n; k++) a[k] = p.b[k].v[0];
+    for (int k = 0; k <= n; k++) a[k] = p->b[k].v[0];
     T = best_T(a, n, 0.0, 1);
     if (T == 0.0) return UNDECIDED;
     form f;
-    combine(&p, T, &f);
+    combine(p, T, &f);
     if (!(f.v[0] > f.r[0] * RF)) return UNDECIDED;   /* not certified separate at 0 */
     double ta = 0.0;
     int misses = 0, stalls = 0;
     for (int it = 0; it < MAXIT; it++) {
         *iters = it + 1;
-        double tr = predict_root(&p, T, ta);
+        double tr = predict_root(p, T, ta);
         double tb = tr > 1.0 ? 1.0 : ta + (tr - ta) * STEP_MARGIN;
         double c = tb > ta ? certify_prefix(&f, ta, tb) : ta;
         if (c >= 1.0) return NEVER;
@@ -707,23 +731,66 @@ static int8_t first_contact_pair(int d, const double *ra, const double *rb, cons
         else if (++stalls >= 3) return UNDECIDED;
         if (tr <= 1.0 && tr - ta <= NEAR) {
             double th = fmin(ta + BRACKET, 1.0);
-            if (common_point(&p, th)) { *tlo = ta; *thi = th; return CONTACT; }
+            if (common_point(p, th)) { *tlo = ta; *thi = th; return CONTACT; }
             if (++misses >= 3) return UNDECIDED;
         }
-        for (int k = 0; k <= n; k++) a[k] = form_value(p.c[k], p.deg, ta);
+        for (int k = 0; k <= n; k++) a[k] = form_value(p->c[k], p->deg, ta);
         double Tn = best_T(a, n, T, 0);
         if (Tn == 0.0) return UNDECIDED;
-        if (Tn != T) { T = Tn; combine(&p, T, &f); }
+        if (Tn != T) { T = Tn; combine(p, T, &f); }
     }
     return UNDECIDED;
 }
 
-/* Batch entry point: pairs (pi[k], pj[k]) of the bodies' rows (stride doubles each: c0, c1, r,
- * q0, q1), j moved by shift[k] (d floats, or NULL); writes status, t_lo, t_hi, iterations. */
-void sweep_pairs(int32_t d, const double *bodies, int64_t stride, const int64_t *pi, const int64_t *pj,
-                 const double *shift, int64_t m, int8_t *status, double *tlo, double *thi, int32_t *iters) {
-    for (int64_t k = 0; k < m; k++) {
-        status[k] = first_contact_pair(d, bodies + pi[k] * stride, bodies + pj[k] * stride,
-                                       shift ? shift + k * d : NULL, tlo + k, thi + k, iters + k);
+/* Pairs wait in a queue per shape of their forms (which bodies rotate, whether they move) until
+ * LANES of them can be built at once. */
+typedef struct {
+    pair pairs[8][LANES];
+    int64_t index[8][LANES];
+    int count[8];
+    workspace ws;
+} batch;
+
+static void run_group(batch *bt, int key, int8_t *status, double *tlo, double *thi, int32_t *iters) {
+    int count = bt->count[key];
+    pair *P[LANES];
+    for (int l = 0; l < LANES; l++) P[l] = &bt->pairs[key][l < count ? l : 0];  /* spare lanes repeat lane 0 */
+    int ok = pencil_forms(&bt->ws, P);
+    for (int l = 0; l < count; l++) {
+        int64_t k = bt->index[key][l];
+        status[k] = (ok >> l) & 1 ? search_pair(P[l], tlo + k, thi + k, iters + k) : UNDECIDED;
     }
+    bt->count[key] = 0;
+}
+
+/* Batch entry point: pairs (pi[k], pj[k]) of the bodies' rows (stride doubles each: c0, c1, r,
+ * q0, q1), j moved by shift[k] (d floats, or NULL); writes status, t_lo, t_hi, iterations.
+ * Returns 0, or -1 when out of memory (nothing written). */
+int32_t sweep_pairs(int32_t d, const double *bodies, int64_t stride, const int64_t *pi, const int64_t *pj,
+                    const double *shift, int64_t m, int8_t *status, double *tlo, double *thi, int32_t *iters) {
+    batch *bt = malloc(sizeof(batch));
+    if (!bt) return -1;
+    memset(bt->count, 0, sizeof(bt->count));
+    for (int64_t k = 0; k < m; k++) {
+        tlo[k] = thi[k] = NAN;
+        iters[k] = 0;
+        pair p;
+        if (!load_pair(&p, d, bodies + pi[k] * stride, bodies + pj[k] * stride, shift ? shift + k * d : NULL)) {
+            status[k] = UNDECIDED;
+            continue;
+        }
+        if (common_point(&p, 0.0)) {
+            tlo[k] = thi[k] = 0.0;
+            status[k] = OVERLAP_AT_START;
+            continue;
+        }
+        int key = p.A.rotates + 2 * p.B.rotates + 4 * p.moves;
+        bt->pairs[key][bt->count[key]] = p;
+        bt->index[key][bt->count[key]] = k;
+        if (++bt->count[key] == LANES) run_group(bt, key, status, tlo, thi, iters);
+    }
+    for (int key = 0; key < 8; key++)
+        if (bt->count[key]) run_group(bt, key, status, tlo, thi, iters);
+    free(bt);
+    return 0;
 }

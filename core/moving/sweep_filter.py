@@ -77,7 +77,7 @@ def _library() -> ctypes.CDLL | None:
                 fn = lib.sweep_pairs
                 args: list[Any] = [ctypes.c_int32, ctypes.c_void_p, ctypes.c_int64] + [ctypes.c_void_p] * 3 + [ctypes.c_int64] + [ctypes.c_void_p] * 4
                 fn.argtypes = args
-                fn.restype = None
+                fn.restype = ctypes.c_int32
             _state["lib"] = lib
             _state["status"] = status
     return _state["lib"]  # type: ignore[return-value]
@@ -123,7 +123,7 @@ def first_contacts_float(
     fn = lib.sweep_pairs
 
     def run(lo: int, hi: int) -> None:
-        fn(
+        failed = fn(
             d,
             rows.ctypes.data,
             stride,
@@ -136,6 +136,8 @@ def first_contacts_float(
             out.t_hi.ctypes.data + 8 * lo,
             out.iterations.ctypes.data + 4 * lo,
         )
+        if failed:
+            raise MemoryError("the sweep filter could not allocate its workspace (400 kB)")
 
     k = min(threads or get_threads(), max(1, M // _MIN_CHUNK))
     if k <= 1:
