@@ -118,7 +118,8 @@ def sweep_contacts(
     t3 = time.perf_counter()
     keep = np.flatnonzero(fc.relation != Relation.SEPARATE)
     order = keep[np.lexsort((cand.j[keep], cand.i[keep]))]
-    where = {int(k): n for n, k in enumerate(order.tolist())}
+    where = np.full(len(cand), -1, dtype=np.int64)  # candidate -> its row in the result
+    where[order] = np.arange(order.size)
     counts = {
         "bodies": N,
         "invalid": len(bad),
@@ -144,7 +145,7 @@ def sweep_contacts(
         image=None if cand.image is None else cand.image[order],
         invalid=dict(sorted(bad.items())),
         counts=counts,
-        _times={where[k]: t for k, t in fc.times.items() if k in where},
+        _times={int(where[k]): t for k, t in fc.times.items() if where[k] >= 0},
     )
     out.seconds = {"read": t1 - t0, "broad": t2 - t1, "narrow": t3 - t2, "total": time.perf_counter() - t0}
     return out

@@ -87,18 +87,21 @@ def swept_pairs(bodies: LinearMotions, spheres: SweptSpheres, box: np.ndarray | 
         d1 = (c1[j] + s) - c1[i]
         e = d1 - d0
         size = np.abs(c0[i]) + np.abs(c0[j]) + np.abs(c1[i]) + np.abs(c1[j]) + np.abs(s)
-        eps = 4 * _U * np.sqrt((size * size).sum(axis=1)) + 2.0**-1000
-        n0 = np.sqrt((d0 * d0).sum(axis=1))
-        n1 = np.sqrt((d1 * d1).sum(axis=1))
-        ne = np.sqrt((e * e).sum(axis=1))
+        eps = 4 * _U * np.sqrt(np.einsum("ij,ij->i", size, size)) + 2.0**-1000
+        n0 = np.sqrt(np.einsum("ij,ij->i", d0, d0))
+        n1 = np.sqrt(np.einsum("ij,ij->i", d1, d1))
+        ne = np.sqrt(np.einsum("ij,ij->i", e, e))
         if d0.shape[1] == 3:
-            cross = np.sqrt((np.cross(d0, e) ** 2).sum(axis=1))
+            cx = d0[:, 1] * e[:, 2] - d0[:, 2] * e[:, 1]
+            cy = d0[:, 2] * e[:, 0] - d0[:, 0] * e[:, 2]
+            cz = d0[:, 0] * e[:, 1] - d0[:, 1] * e[:, 0]
+            cross = np.sqrt(cx * cx + cy * cy + cz * cz)
         else:
             cross = np.abs(d0[:, 0] * e[:, 1] - d0[:, 1] * e[:, 0])
         line = np.where(ne > 0, cross / np.where(ne > 0, ne, 1.0), n0) - _MARGIN * (n0 + ne)
         tol = _MARGIN * (n0 + n1 + ne) * ne
-        away0 = (d0 * e).sum(axis=1) > tol  # |d(t)| increases on [0, 1]: the minimum is |d0|
-        toward1 = (d1 * e).sum(axis=1) < -tol  # decreases: the minimum is |d1|
+        away0 = np.einsum("ij,ij->i", d0, e) > tol  # |d(t)| increases on [0, 1]: the minimum is |d0|
+        toward1 = np.einsum("ij,ij->i", d1, e) < -tol  # decreases: the minimum is |d1|
         low = np.where(away0, n0, np.where(toward1, n1, line)) * (1 - _MARGIN) - eps
         reach = (spheres.reach[i] + spheres.reach[j]) * (1 + _MARGIN)
         keep = ~(low > reach)  # NaN (overflow) keeps the pair
