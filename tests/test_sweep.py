@@ -87,6 +87,12 @@ def test_contract_shapes_order_and_exact_time():
         assert t.compare(q(res.t_lo[k])) >= 0 and t.compare(q(res.t_hi[k])) <= 0
     with pytest.raises(IndexError):
         res.time(len(res))
+    order = res.order()  # the event list of the step: by t_lo
+    assert sorted(order.tolist()) == list(range(len(res))) and (np.diff(res.t_lo[order]) >= 0).all()
+    first = res.first_time()
+    assert first.shape == (res.n_bodies,) and first[res.i[order[0]]] == res.t_lo[order[0]]
+    alone = np.setdiff1d(np.arange(res.n_bodies), np.concatenate([res.i, res.j]))
+    assert np.isinf(first[alone]).all() and len(res.pairs_of(int(res.i[0]))) >= 1
     rows = res.to_rows()
     assert rows[0][:2] == (int(res.i[0]), int(res.j[0])) and rows[0][4] in ("tangent", "overlap")
     assert "moving bodies" in res.summary()
