@@ -22,8 +22,8 @@ def test_three_circles_exact_answer(client):
     assert r.status_code == 200
     out = r.json()
     assert out["pairs"] == [
-        {"i": 0, "j": 1, "relation": "tangent", "certified_by": "exact", "image": None},
-        {"i": 1, "j": 2, "relation": "overlap", "certified_by": "float", "image": None},
+        {"i": 0, "j": 1, "relation": "tangent", "certified_by": "exact", "image": None, "image_x": 0, "image_y": 0, "image_z": 0},
+        {"i": 1, "j": 2, "relation": "overlap", "certified_by": "float", "image": None, "image_x": 0, "image_y": 0, "image_z": 0},
     ]
     assert out["bodies"] == 3 and out["invalid"] == {} and out["counts"]["candidates"] == 2
     assert out["summary"].startswith("3 bodies, 2 candidate pairs, 2 contacts (1 tangent, 1 overlap)")
@@ -38,6 +38,8 @@ def test_many_ellipsoids_equal_the_library(client):
     got = r.json()["pairs"]
     assert [(p["i"], p["j"]) for p in got] == list(zip(want.i.tolist(), want.j.tolist(), strict=True))
     assert [p["image"] for p in got] == want.image.tolist()
+    assert [[p["image_x"], p["image_y"], p["image_z"]] for p in got] == want.image.tolist()
+    assert any(p["image_x"] or p["image_y"] or p["image_z"] for p in got)
     assert {p["relation"] for p in got} == {"overlap"}
 
 

@@ -44,9 +44,20 @@ def test_sweep_command_writes_exact_brackets(tmp_path, capsys):
     assert (rel == Relation.TANGENT).all() and (hi - lo <= 1e-9).all()
     for k, t in enumerate(m.t_exact):
         assert Fraction(lo[k]) <= t <= Fraction(hi[k])  # exactly, after the round trip through the file
-    text = capsys.readouterr().out
+    text = capsys.readouterr().err  # messages on stderr; stdout carries only data
     assert "wrote 6 first contacts" in text and "certified by" in text
     assert not list(tmp_path.glob(".events.csv.*"))  # no temporary file left
+
+
+def test_sweep_command_to_stdout(tmp_path, capsys):
+    m = grazing_pairs(2, seed=4)
+    start, end = write_pair(tmp_path, m)
+    assert main(["sweep", str(start), str(end), "--out", "-", "--quiet"]) == 0
+    captured = capsys.readouterr()
+    lines = captured.out.splitlines()
+    assert lines[0] == "i,j,t_lo,t_hi,relation" and len(lines) == 3 and captured.err == ""
+    i, j, lo, hi, rel = lines[1].split(",")  # pair 0
+    assert Fraction(float(lo)) <= m.t_exact[0] <= Fraction(float(hi))
 
 
 def test_sweep_command_equals_the_library(tmp_path):
@@ -94,7 +105,7 @@ def test_sweep_command_errors(tmp_path, capsys):
     assert main(args) == 2
     assert "body 2 (line 4)" in capsys.readouterr().err and not (tmp_path / "x.csv").exists()
     assert main([*args, "--on-invalid", "mark", "--quiet"]) == 0
-    assert "invalid body 2 (line 4)" in capsys.readouterr().out
+    assert "invalid body 2 (line 4)" in capsys.readouterr().err
     i, j, *_ = read_events_csv(tmp_path / "x.csv")
     assert (i.tolist(), j.tolist()) == ([0], [1])  # pair 1 (bodies 2, 3) left out
     assert main(["sweep", str(start), str(tmp_path / "missing.csv"), "--out", str(tmp_path / "y.csv")]) == 2
@@ -103,7 +114,8 @@ def test_sweep_command_errors(tmp_path, capsys):
 
 def test_events_file_round_trip(tmp_path):
     t = np.array([0.1, 1 / 3, 0.0])
-    write_events_csv(tmp_path / "e.csv", np.array([0, 1, 2]), np.array([1, 2, 3]), t, np.nextafter(t, 1), np.array([1, 1, 2], np.int8))
+    with open(tmp_path / "e.csv", "w") as f:
+        write_events_csv(f, np.array([0, 1, 2]), np.array([1, 2, 3]), t, np.nextafter(t, 1), np.array([1, 1, 2], np.int8))
     i, j, lo, hi, rel = read_events_csv(tmp_path / "e.csv")
     assert lo.tolist() == t.tolist() and hi.tolist() == np.nextafter(t, 1).tolist() and rel.tolist() == [1, 1, 2]
     with pytest.raises(ValueError, match="header"):
@@ -119,4 +131,4 @@ def test_sweep_command_progress_on_stderr(tmp_path):
         cwd=ROOT, capture_output=True, text=True, timeout=300, check=False,
     )
     assert res.returncode == 0, res.stderr
-    assert "read 8 moving ellipsoids" in res.stderr and "wrote" in res.stdout
+    assert "read 8 moving ellipsoids" in res.stderr and "wrote" in res.stderr and res.stdout == ""

@@ -21,7 +21,7 @@ def contacts(
     scheduler: Any = None,
     partitions: int | None = None,
     chunk: int = CHUNK_PAIRS,
-    progress: Progress | None = None,
+    progress: Progress | bool | None = None,
 ) -> Contacts:
     """Every pair of bodies that is not separate, with its certified relation.
 
@@ -46,7 +46,8 @@ def contacts(
             is a dask array). Spatial partitions with a halo: :mod:`core.bodies.distributed`.
         partitions: number of spatial partitions for Dask (default: 2 per worker).
         chunk: candidate pairs per classify batch (memory: 256 bytes per ellipsoid pair).
-        progress: optional ``progress(done, total)`` called after each batch of pairs.
+        progress: optional ``progress(done, total)`` called after each batch of pairs (Dask: as
+            the partition tasks finish); on Dask, True draws Dask's own progress bars on stderr.
 
     Returns:
         :class:`Contacts` with ``.i``, ``.j`` (int64, i < j, sorted by (i, j)), ``.relation``
@@ -77,9 +78,10 @@ def contacts(
         from .distributed import contacts_distributed
 
         return contacts_distributed(
-            Q, box=box, method=method, on_invalid=on_invalid, scheduler=scheduler, partitions=partitions, chunk=chunk
+            Q, box=box, method=method, on_invalid=on_invalid, scheduler=scheduler, partitions=partitions, chunk=chunk,
+            progress=progress,
         )
-    return search(Q, box=box, method=method, on_invalid=on_invalid, chunk=chunk, progress=progress)
+    return search(Q, box=box, method=method, on_invalid=on_invalid, chunk=chunk, progress=None if progress is True else progress or None)
 
 
 def _is_dask(x: Any) -> bool:

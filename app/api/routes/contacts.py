@@ -47,7 +47,8 @@ async def contacts_route(body: ContactsIn, request: Request, settings: SettingsD
         by_name: dict[int, CertifiedBy] = {int(Certifier.FLOAT): "float", int(Certifier.EXACT): "exact"}
         images = res.image.tolist() if res.image is not None else None
         pairs = [
-            PairOut(i=a, j=b, relation=cast(PairRelation, names[r]), certified_by=by_name.get(c), image=None if images is None else images[k])
+            PairOut(i=a, j=b, relation=cast(PairRelation, names[r]), certified_by=by_name.get(c), image=None if images is None else images[k],
+                    **({} if images is None else dict(zip(("image_x", "image_y", "image_z"), images[k], strict=False))))
             for k, (a, b, r, c) in enumerate(zip(res.i.tolist(), res.j.tolist(), res.relation.tolist(), res.certified_by.tolist(), strict=True))
         ]
         return ContactsOut(bodies=res.n_bodies, pairs=pairs, counts=res.counts, invalid=res.invalid, summary=res.summary())
