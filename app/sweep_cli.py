@@ -8,7 +8,9 @@ with the columns ``x,y,z,a,b,c,qw,qx,qy,qz`` or ``x,y,a,b,angle``, Parquet, NPZ,
 LAMMPS dump, extended XYZ): row k of START is body k at t = 0, row k of END the same body at
 t = 1 (same semi-axes, row by row). They may be two frames of one trajectory (``--frame``,
 ``--end-frame``). Each body moves on the straight line between its centres and turns along
-q(t) = (1 - t) q0 + t q1 (:func:`core.sweep_contacts`). The box is ``--box``, else START's.
+q(t) = (1 - t) q0 + t q1 (:func:`core.sweep_contacts`). The box is ``--box``, else START's; in a
+box, a body whose end centre is more than half a side away on an axis (a wrapped trajectory:
+it crossed a face) is taken at the nearest image of its end centre (:func:`unwrapped`).
 
 EVENTS is CSV ``i,j,t_lo,t_hi,relation`` (or ``-``: standard output): every pair that touches or
 overlaps during the step, t_lo <= t* <= t_hi (floats written so that they read back exactly),
@@ -27,7 +29,7 @@ from typing import IO, Any
 
 import numpy as np
 
-__all__ = ["add_parser", "run_sweep", "write_events_csv", "read_events_csv", "EVENTS_HEADER"]
+__all__ = ["add_parser", "run_sweep", "unwrapped", "write_events_csv", "read_events_csv", "EVENTS_HEADER"]
 
 EVENTS_HEADER = "i,j,t_lo,t_hi,relation"
 
@@ -96,12 +98,17 @@ def run_sweep(args: argparse.Namespace) -> int:
         box = usable_box(box, start.dim, names[0])
         if box is not None and len(box) == 6:
             raise ValueError(f"{names[0]}: sweep takes orthogonal boxes only (Lx, Ly, Lz); give --box Lx,Ly,Lz")
+        centers1 = end.centers
+        if box is not None:
+            centers1, moved = unwrapped(start.centers, end.centers, np.asarray(box, dtype=np.float64))
+            if moved:
+                _say(args, f"{moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
         t1 = time.perf_counter()
         kind = "ellipsoids" if start.dim == 3 else "ellipses"
         _say(args, f"read {len(start):,} moving {kind} from {names[0]} and {names[1]} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
         progress = None if args.quiet else ProgressBar(sys.stderr, "first contacts", min_total=50_000)
         res = sweep_contacts(
-            start.centers, end.centers, start.semi_axes, start.orientations, end.orientations,
+            start.centers, centers1, start.semi_axes, start.orientations, end.orientations,
             box=box, on_invalid=args.on_invalid, progress=progress,
         )
         t2 = time.perf_counter()
@@ -118,6 +125,25 @@ def run_sweep(args: argparse.Namespace) -> int:
     if len(invalid) > 10:
         print(f"... and {len(invalid) - 10} more invalid bodies", file=sys.stderr)
     return 0
+
+
+def unwrapped(c0: np.ndarray, c1: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, int]:
+    """END's centres moved by whole box sides so that each body moves by its minimum image.
+
+    Trajectories in a periodic box store wrapped positions: a body that crosses a face between
+    two frames jumps by about one side. Its end centre is taken as c1 - k L, k = round((c1 - c0) / L)
+    (computed in float64: the nearest float to that image). Returns (centres, how many moved).
+
+    Examples:
+        >>> c, n = unwrapped(np.array([[9.5, 5.0]]), np.array([[0.25, 5.0]]), np.array([10.0, 10.0]))
+        >>> c.tolist(), n
+        ([[10.25, 5.0]], 1)
+    """
+    k = np.rint((c1 - c0) / box)
+    moved = np.flatnonzero((k != 0).any(axis=1))
+    out = c1.copy()
+    out[moved] = c1[moved] - k[moved] * box
+    return out, int(moved.size)
 
 
 def write_events_csv(f: IO[str], i: np.ndarray, j: np.ndarray, t_lo: np.ndarray, t_hi: np.ndarray, relation: np.ndarray) -> None:

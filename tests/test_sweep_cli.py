@@ -85,6 +85,21 @@ def test_sweep_command_2d_and_box(tmp_path):
     assert lo[0] == hi[0] == 0.0 and rel[0] == Relation.TANGENT
 
 
+def test_sweep_command_unwraps_a_periodic_trajectory(tmp_path, capsys):
+    # body 1 crosses the face x = 10 between the frames (stored wrapped, as simulations do)
+    c0 = np.array([[9.0, 5.0, 5.0], [9.75, 5.0, 5.0], [5.0, 2.0, 5.0]])
+    c1 = np.array([[9.0, 5.0, 5.0], [0.25, 5.0, 5.0], [5.0, 2.0, 5.0]])
+    r = np.array([[0.5, 0.5, 0.5]] * 3)
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (3, 1))
+    write_bodies_csv(tmp_path / "s.csv", c0, r, q)
+    write_bodies_csv(tmp_path / "e.csv", c1, r, q)
+    out = tmp_path / "ev.csv"
+    assert main(["sweep", str(tmp_path / "s.csv"), str(tmp_path / "e.csv"), "--out", str(out), "--box", "10,10,10"]) == 0
+    assert "1 bodies crossed a face" in capsys.readouterr().err
+    i, j, lo, hi, rel = read_events_csv(out)
+    assert (i.tolist(), j.tolist(), rel.tolist()) == ([0], [1], [Relation.OVERLAP])  # 0.75 apart at t = 0
+
+
 def test_sweep_command_errors(tmp_path, capsys):
     m = grazing_pairs(2, seed=1)
     start, end = write_pair(tmp_path, m)
