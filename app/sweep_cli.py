@@ -98,14 +98,14 @@ def run_sweep(args: argparse.Namespace) -> int:
         box = usable_box(box, start.dim, names[0])
         if box is not None and len(box) == 6:
             raise ValueError(f"{names[0]}: sweep takes orthogonal boxes only (Lx, Ly, Lz); give --box Lx,Ly,Lz")
+        t1 = time.perf_counter()
+        kind = "ellipsoids" if start.dim == 3 else "ellipses"
+        _say(args, f"read {len(start):,} moving {kind} from {names[0]} and {names[1]} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
         centers1 = end.centers
         if box is not None:
             centers1, moved = unwrapped(start.centers, end.centers, np.asarray(box, dtype=np.float64))
             if moved:
                 _say(args, f"{moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
-        t1 = time.perf_counter()
-        kind = "ellipsoids" if start.dim == 3 else "ellipses"
-        _say(args, f"read {len(start):,} moving {kind} from {names[0]} and {names[1]} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
         progress = None if args.quiet else ProgressBar(sys.stderr, "first contacts", min_total=50_000)
         res = sweep_contacts(
             start.centers, centers1, start.semi_axes, start.orientations, end.orientations,
@@ -119,7 +119,7 @@ def run_sweep(args: argparse.Namespace) -> int:
     _say(args, f"wrote {len(res):,} first contacts to {'<stdout>' if args.out == '-' else args.out}")
     _say(args, res.summary())
     phases = ", ".join(f"{k} {v:.2f} s" for k, v in res.seconds.items() if k != "total")
-    _say(args, f"time: read files {t1 - t0:.2f} s, {phases}, write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
+    _say(args, f"time: read files {t1 - t0:.2f} s, sweep ({phases}), write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
     for k in sorted(invalid)[:10]:  # warnings about the answer: shown even with --quiet
         print(f"invalid {start.where(k)}: {invalid[k]}", file=sys.stderr)
     if len(invalid) > 10:
