@@ -16,6 +16,7 @@ import argparse
 import math
 import os
 import platform
+import re
 import sys
 import time
 from collections.abc import Callable
@@ -517,7 +518,9 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
     if not figs:
         L.append("_matplotlib is not installed (`pip install -e .[bench]`): no figures._\n")
     path = outdir / "REPORT.md"
-    path.write_text("\n".join(L) + "\n")
+    # sections written by other scripts (bench_sweep.py --report) are kept as they are
+    blocks = re.findall(r"<!-- \w+:begin -->.*?<!-- \w+:end -->", path.read_text(), re.S) if path.exists() else []
+    path.write_text("\n".join(L) + "\n" + "".join("\n" + b + "\n" for b in blocks))
     return path
 
 
