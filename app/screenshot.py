@@ -293,13 +293,22 @@ class HeadlessScene:
             raise TimeoutError("the bodies view was not built")
         self.page.wait_for_function("() => (window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0) > 2")
         layers = view.layers
-        if layers is not None:
-            while layers.pose is None or view.settling():  # the camera settles, the solids follow
+        while layers is not None:  # the camera settles, the solids follow; the browser draws them
+            version = layers.version
+            if layers.pose is None or view.settling():
                 if time.monotonic() > deadline:
                     raise TimeoutError("the tab never reported its camera")
                 time.sleep(0.02)
-            self.page.wait_for_function(_BODIES_DRAWN_JS, arg=layers.expected_in_browser(),
-                                        timeout=max(1.0, deadline - time.monotonic()) * 1000)
+                continue
+            try:
+                self.page.wait_for_function(_BODIES_DRAWN_JS, arg=layers.expected_in_browser(),
+                                            timeout=max(0.1, min(5.0, deadline - time.monotonic())) * 1000)
+            except Exception:  # noqa: BLE001 - a newer choice of solids replaced the one waited for
+                if time.monotonic() > deadline:
+                    raise TimeoutError("the browser never drew the bodies") from None
+                continue
+            if layers.version == version and not view.settling():
+                break
         for _ in range(frames):  # painted (see wait_settled)
             self.page.evaluate(_TWO_FRAMES_JS)
 
