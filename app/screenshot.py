@@ -268,7 +268,7 @@ class HeadlessScene:
         deadline = time.monotonic() + self.timeout
         s = self.session
         if hasattr(s, "show_bodies"):  # many bodies: the view of all bodies, or its open pair
-            if s.session is None:
+            if s.pair is None:
                 return self._wait_bodies(frames)
             s = s.session
         if not s.ready.wait(self.timeout):

@@ -96,7 +96,7 @@ def measure(n: int, folder: Path, *, steps: int = 8) -> dict[str, Any]:
             button = page.get_by_role("button", name="Open pair").bounding_box()
             t0 = time.perf_counter()  # a user's click: no Playwright actionability wait (it spans frames)
             page.mouse.click(button["x"] + button["width"] / 2, button["y"] + button["height"] / 2)
-            while view.session is None or not view.session.ready.is_set():
+            while view.pair is None or not view.session.ready.is_set():
                 time.sleep(0.002)
             s = view.session
             k = view.pair
@@ -109,7 +109,7 @@ def measure(n: int, folder: Path, *, steps: int = 8) -> dict[str, Any]:
             button = page.get_by_role("button", name="← All bodies").bounding_box()
             t0 = time.perf_counter()
             page.mouse.click(button["x"] + button["width"] / 2, button["y"] + button["height"] / 2)
-            while view.session is not None or not view.ready.is_set():
+            while view.pair is not None or not view.ready.is_set():
                 time.sleep(0.002)
             hs.wait_settled()
             backs.append(time.perf_counter() - t0)

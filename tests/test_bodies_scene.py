@@ -234,12 +234,19 @@ def test_view_pages_filters_selects_opens_and_back(server, demo_file):
     i, j = int(m.result.i[k]), int(m.result.j[k])
     assert view.select(i) is None and f"Body **{i}**" in view.body_md.content and view.body_text.value == str(i)
     assert all(i in (m.result.i[e.index], m.result.j[e.index]) for e in view.listing.entries)
-    assert view.select(j) == k and view.pair == k and view.layers is None
+    assert view.select(j) == k and view.pair == k and not view.layers.frame.visible
     session = view.session
     assert session is not None and session.ready.wait(30)
     assert session.state.relation == "tangent"  # the same certified relation as in the search
     view.show_bodies()
-    assert view.session is None and view.pair is None and view.layers is not None
+    assert view.pair is None and view.layers is not None and view.layers.frame.visible
+    registry = server.scene._handle_from_node_name
+    assert not view.pair_folder.visible and view._session_nodes  # the two-body view: hidden, not gone
+    assert all(registry[name].visible is False for name in view._session_nodes)
+    k2 = next(e.index for e in m.page("overlap").entries)
+    assert view.open_pair(k2) is session and session.ready.wait(30)  # the same two-body view, loaded anew
+    assert session.state.relation == "overlap" and view.pair_folder.visible and not view.layers.frame.visible
+    view.show_bodies()
     view.set_network(True)
     assert view.layers.network is not None and len(view.layers.network.points) == total
     view.set_network(False)
@@ -261,6 +268,18 @@ def test_view_upload_and_box(server, tmp_path):
 
 
 needs_chromium = pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian chromium at /usr/bin/chromium")
+
+@pytest.mark.browser
+@needs_chromium
+def test_screenshot_command_with_bodies(demo_file, tmp_path):
+    """The command launches its own browser: it runs before the module's browser is started
+    (Playwright's sync API cannot nest)."""
+    from app.cli import main
+
+    out = tmp_path / "shot.png"
+    assert main(["screenshot", "--bodies", str(demo_file), "--out", str(out), "--width", "900", "--height", "600"]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 20_000
+
 
 NODE_JS = """(n) => {
   const r = window.__viserMutable?.nodeRefFromName?.[n];
@@ -429,12 +448,15 @@ def test_browser_open_pair_shows_the_label_core_contacts_certified(bodies_page):
     assert hs.mesh_color("B") == "#ffbf00"  # amber: tangent
     hs.save(ARTIFACTS / "bodies-pair.png")
     page.get_by_role("button", name="← All bodies").click()
-    until(lambda: view.session is None and view.ready.is_set(), what="back to all bodies")
+    until(lambda: view.pair is None and view.ready.is_set(), what="back to all bodies")
     hs.wait_settled()
+    assert view.relation == "tangent"  # the list kept its filter
+    choose(page, "Relation", "all")
     k = int(np.flatnonzero(m.result.relation == Relation.OVERLAP)[0])
     body = int(m.result.i[k])
     set_field(page, "Body", str(body))
-    until(lambda: view.body == body, what="body filter")
+    until(lambda: view.body == body and view.relation == "all", what="body filter")
+    text_shown(page, f"pairs of body {body}")  # the browser has the body's pairs
     label = m.pair_label(k)
     if view.pairs.value == label:  # the body's first pair: "Open pair" opens it
         page.get_by_role("button", name="Open pair").click()
@@ -445,16 +467,6 @@ def test_browser_open_pair_shows_the_label_core_contacts_certified(bodies_page):
     assert view.session.state.relation == str(Relation(int(m.result.relation[k]))) == "overlap"
     text_shown(page, "OVERLAP")
     page.get_by_role("button", name="← All bodies").click()
-    until(lambda: view.session is None and view.ready.is_set(), what="back to all bodies")
+    until(lambda: view.pair is None and view.ready.is_set(), what="back to all bodies")
     hs.wait_settled()
     assert view.layers is not None and view.body == body  # the list kept its filter
-
-
-@pytest.mark.browser
-@needs_chromium
-def test_screenshot_command_with_bodies(demo_file, tmp_path):
-    from app.cli import main
-
-    out = tmp_path / "shot.png"
-    assert main(["screenshot", "--bodies", str(demo_file), "--out", str(out), "--width", "900", "--height", "600"]) == 0
-    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 20_000

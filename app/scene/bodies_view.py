@@ -68,9 +68,11 @@ class BodiesView:
         self.cache = cache
         self.executor = executor
         self.session: Any = None
-        """The two-body :class:`~app.scene.session.Session` while a pair is open, else None."""
+        """The two-body :class:`~app.scene.session.Session` (built at the first "Open pair", then
+        kept, hidden, while all bodies are shown: a pair opens like a preset, with no shader to
+        compile), or None."""
         self.pair: int | None = None
-        """Index (in the contacts) of the open pair."""
+        """Index (in the contacts) of the open pair, or None when all bodies are shown."""
         self.selected: int | None = None
         self.layers: BodyLayers | None = None
         """The bodies' scene nodes (None: no bodies, or a pair is open)."""
@@ -91,21 +93,33 @@ class BodiesView:
         self._timer: threading.Timer | None = None
         self._last_pose = 0.0
         self.labels: list[Any] = []
+        self._bodies_gui: list[Any] = []
+        self._pair_gui: list[Any] = []
+        self._session_nodes: dict[str, bool] = {}
+        self._bodies_camera: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self.scene.on_click()(self._on_scene_click)
         cam = getattr(target, "camera", None)
         if cam is not None:
             cam.on_update(self._on_camera)
-        self.show_bodies()
+        self._build_all()
 
     # ------------------------------------------------------------------ all bodies
     def show_bodies(self) -> None:
-        """Build (or rebuild, coming back from a pair) the view of all bodies."""
+        """Show all bodies: back from a pair (nothing is rebuilt), or build the view anew."""
+        with self._lock:
+            if self.pair is not None and self.session is not None:
+                return self._back_from_pair()
+            self._build_all()
+
+    def _build_all(self) -> None:
+        """Build the view of all bodies (a new file or box: the two-body view goes too)."""
         with self._lock:
             self.ready.clear()
             if self.session is not None:
                 self.session.close()
                 self.session = None
             self.pair = None
+            self._session_nodes = {}
             self.gui.reset()
             self.scene.reset()
             self.labels = []
@@ -132,7 +146,7 @@ class BodiesView:
     def set_pose(self, pose: ViewPose | None) -> None:
         """Choose the solids for this camera pose (the tab's camera calls it when it stops)."""
         with self._lock:
-            if self.layers is None or self.session is not None or pose is None:
+            if self.layers is None or self.pair is not None or pose is None:
                 return
             self.layers.set_pose(pose)
             self._last_pose = time.monotonic()
@@ -150,11 +164,17 @@ class BodiesView:
     def _build_gui(self) -> None:
         gui = self.gui
         gui.configure_theme(control_width="large", show_share_button=False)
-        gui.add_markdown("**Many bodies** — certified contacts")
+        self.back_button = gui.add_button("← All bodies", order=-1000.0, visible=False)
+        self.pair_note = gui.add_markdown("", order=-999.0, visible=False)
+        self._pair_gui = [self.back_button, self.pair_note]
+        self.back_button.on_click(lambda ev: self.show_bodies())
+        title = gui.add_markdown("**Many bodies** — certified contacts")
         m = self.model
         self.summary = gui.add_markdown(m.summary() if m is not None else "Open a file of bodies (CSV or NPZ).")
-        gui.add_html(_legend())
-        with gui.add_folder("Contacts"):
+        legend = gui.add_html(_legend())
+        contacts_folder = gui.add_folder("Contacts")
+        self._bodies_gui = [title, self.summary, legend, contacts_folder]
+        with contacts_folder:
             filters = list(m.relation_filters()) if m is not None else ["all"]
             self.relation_box = gui.add_dropdown("Relation", filters, initial_value=self.relation if self.relation in filters else "all",
                                                  hint="list only the pairs of this relation")
@@ -166,12 +186,15 @@ class BodiesView:
             self.next_button = gui.add_button("Next page ▶", disabled=True)
             self.open_button = gui.add_button("Open pair", disabled=True)
             self.body_md = gui.add_markdown("Click a body to list its contacts; click one it touches to open the pair.")
-        with gui.add_folder("View"):
+        view_folder = gui.add_folder("View")
+        with view_folder:
             self.separate_box = gui.add_dropdown("Separate bodies", list(SEPARATE_MODES), initial_value=self.separate,
                                                  hint="faded: pale; hidden: only bodies in contact are drawn")
             self.network_box = gui.add_checkbox("Contact network", self.network, hint="a line between the centres of each contact pair")
             self.drawn_md = gui.add_markdown("")
-        with gui.add_folder("File", expand_by_default=m is None):
+        file_folder = gui.add_folder("File", expand_by_default=m is None)
+        self._bodies_gui += [view_folder, file_folder]
+        with file_folder:
             self.upload = gui.add_upload_button("Open a file of bodies", mime_type=".csv,.npz", hint="CSV (x,y,z,a,b,c,qw,qx,qy,qz or x,y,a,b,angle) or NPZ")
             self.box_text = gui.add_text("Periodic box", "" if m is None or m.box is None else ", ".join(f"{v:g}" for v in m.box), hint="Lx, Ly(, Lz); empty: open space")
             self.file_md = gui.add_markdown("")
@@ -292,7 +315,7 @@ class BodiesView:
 
     def _on_camera(self, cam: Any) -> None:
         """A camera message: choose the solids when the camera stops (or every CAMERA_MAX_WAIT s)."""
-        if self._closed or self.session is not None or self.layers is None:
+        if self._closed or self.pair is not None or self.layers is None:
             return
         with self._lock:
             if self._timer is not None:
@@ -311,7 +334,7 @@ class BodiesView:
         return t is not None and t.is_alive()
 
     def _on_scene_click(self, ev: Any) -> None:
-        if self.model is None or self.session is not None:
+        if self.model is None or self.pair is not None:
             return
         k = self.model.pick(ev.ray_origin, ev.ray_direction)
         if k is not None:
@@ -325,7 +348,7 @@ class BodiesView:
         """
         with self._lock:
             m = self.model
-            if m is None or self.session is not None:
+            if m is None or self.pair is not None:
                 return None
             previous, self.selected = self.selected, body
             if previous is not None and previous != body:
@@ -386,7 +409,7 @@ class BodiesView:
             self.model = model
             self.selected = self.body = None
             self.relation, self.page_no = "all", 0
-            self.show_bodies()
+            self._build_all()
         return None
 
     def _on_box(self, ev: Any) -> None:
@@ -401,11 +424,16 @@ class BodiesView:
         with self._lock:
             self.model = model
             self.page_no = 0
-            self.show_bodies()
+            self._build_all()
 
     # ------------------------------------------------------------------ one pair
     def open_pair(self, k: int) -> Any:
-        """Open pair k (index in the contacts) in the two-body view of this tab."""
+        """Open pair k (index in the contacts) in the two-body view of this tab.
+
+        The bodies, their GUI and the two-body view's nodes are hidden or shown, never rebuilt:
+        the first pair builds the two-body :class:`~app.scene.session.Session`, later pairs are
+        loaded into it (no shader to compile in the browser: that was most of a second).
+        """
         from .session import Session
 
         with self._lock:
@@ -414,18 +442,65 @@ class BodiesView:
                 self._timer.cancel()
             cfg, note = self.model.pair_config(k)
             self.ready.clear()
-            self.gui.reset()
-            self.scene.reset()
-            self.layers = None
-            self.labels = []
+            self._bodies_camera = _camera_of(getattr(self.target, "camera", None)) if self.pair is None else self._bodies_camera
             self.pair = k
-            back = self.gui.add_button("← All bodies", order=-1000.0)
-            self.gui.add_markdown(note, order=-999.0)
-            back.on_click(lambda ev: self.show_bodies())
-            self.session = Session(self.target, cfg, cache=self.cache, executor=self.executor)
+            for h in self._bodies_gui + self.labels:
+                h.visible = False
+            if self.layers is not None:
+                self.layers.frame.visible = False
+            self.pair_note.content = note
+            for h in self._pair_gui:
+                h.visible = True
+            if self.session is None:
+                self.pair_folder = self.gui.add_folder("Two-body view", order=-998.0)
+                with self.pair_folder:
+                    self.session = Session(self.target, cfg, cache=self.cache, executor=self.executor)
+            else:
+                self.pair_folder.visible = True
+                self._show_session_nodes(True)
+                self.session.load(cfg)
             self.session.frame_camera()
             self.ready.set()
             return self.session
+
+    def _back_from_pair(self) -> None:
+        with self._lock:
+            self.ready.clear()
+            self._show_session_nodes(False)
+            self.pair_folder.visible = False
+            for h in self._pair_gui:
+                h.visible = False
+            self.pair = None
+            for h in self._bodies_gui + self.labels:
+                h.visible = True
+            if self.layers is not None:
+                self.layers.frame.visible = True
+            cam = getattr(self.target, "camera", None)
+            if cam is not None and self._bodies_camera is not None:  # the bodies as the user left them
+                position, look_at, up = self._bodies_camera
+                cam.up_direction, cam.position, cam.look_at = up, position, look_at
+            self.ready.set()
+
+    def _show_session_nodes(self, shown: bool) -> None:
+        """Hide the two-body view's scene nodes (remembering which were visible), or show them again.
+
+        Its nodes are found in viser's registry of the tab's scene (viser 1.1.1 has no public
+        listing): every node outside ``/bodies`` whose parent is not itself a node.
+        """
+        registry: dict[str, Any] = getattr(self.scene, "_handle_from_node_name", {})
+        if not shown:
+            self._session_nodes = {}
+            for name, h in list(registry.items()):
+                parent = name.rsplit("/", 1)[0]
+                if name.startswith(("/bodies", "/selected")) or name == "/WorldAxes" or parent in registry:
+                    continue
+                self._session_nodes[name] = bool(h.visible)
+                h.visible = False
+        else:
+            for name, was in self._session_nodes.items():
+                h = registry.get(name)
+                if h is not None:
+                    h.visible = was
 
     # ------------------------------------------------------------------ camera, lifecycle
     def _frame_camera(self) -> None:
@@ -442,6 +517,14 @@ class BodiesView:
             self._timer.cancel()
         if self.session is not None:
             self.session.close()
+
+
+def _camera_of(cam: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Position, look-at point and up direction of a tab's camera (None if it never reported)."""
+    try:
+        return np.array(cam.position), np.array(cam.look_at), np.array(cam.up_direction)
+    except Exception:  # noqa: BLE001 - no camera, or no camera message yet
+        return None
 
 
 def _parse_box(text: str, dim: int) -> tuple[float, ...] | None:
