@@ -96,8 +96,9 @@ def measure(n: int, folder: Path, *, steps: int = 8) -> dict[str, Any]:
             button = page.get_by_role("button", name="Open pair").bounding_box()
             t0 = time.perf_counter()  # a user's click: no Playwright actionability wait (it spans frames)
             page.mouse.click(button["x"] + button["width"] / 2, button["y"] + button["height"] / 2)
-            while view.pair is None or not view.session.ready.is_set():
+            while view.pair is None or not view.ready.is_set() or not view.session.ready.is_set():
                 time.sleep(0.002)
+            out.setdefault("open_server_ms", []).append((time.perf_counter() - t0) * 1e3)
             s = view.session
             k = view.pair
             poses, colours, word = hs.expected(s)

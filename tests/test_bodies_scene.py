@@ -440,7 +440,7 @@ def test_browser_open_pair_shows_the_label_core_contacts_certified(bodies_page):
     until(lambda: view.relation == "tangent" and view.listing is not None, what="tangent filter")
     entry = view.listing.entries[3]
     choose(page, "Pair", entry.label)
-    until(lambda: view.session is not None and view.pair == entry.index, what="the pair opened")
+    until(lambda: view.pair == entry.index and view.ready.is_set(), what="the pair opened")
     hs.wait_settled()
     k = entry.index
     assert view.session.state.relation == str(Relation(int(m.result.relation[k]))) == "tangent"
@@ -462,7 +462,7 @@ def test_browser_open_pair_shows_the_label_core_contacts_certified(bodies_page):
         page.get_by_role("button", name="Open pair").click()
     else:
         choose(page, "Pair", label)
-    until(lambda: view.session is not None and view.pair == k, what="the overlap pair opened")
+    until(lambda: view.pair == k and view.ready.is_set(), what="the overlap pair opened")
     hs.wait_settled()
     assert view.session.state.relation == str(Relation(int(m.result.relation[k]))) == "overlap"
     text_shown(page, "OVERLAP")
