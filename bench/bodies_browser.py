@@ -132,8 +132,8 @@ def measure(n: int, folder: Path, *, steps: int = 8) -> dict[str, Any]:
 
 
 def run_bodies_browser(*, quick: bool = False, sizes: list[int] | None = None, keep: Path | None = None) -> dict[str, Any]:
-    """Measure every size (default 20,000 and 100,000 bodies; quick: 20,000); PNGs kept in ``keep``."""
-    sizes = sizes or ([20_000] if quick else [20_000, 100_000])
+    """Measure every size (default 20,000 and 100,000 bodies; quick: 2,000); PNGs kept in ``keep``."""
+    sizes = sizes or ([2_000] if quick else [20_000, 100_000])
     load = os.getloadavg()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -199,7 +199,7 @@ def run_in_subprocess(*, quick: bool = False, timeout: float = 1800.0) -> dict[s
 
 def main() -> None:
     ap = argparse.ArgumentParser(description="Many bodies in headless Chromium: orbit frame time, open pair, screenshots.")
-    ap.add_argument("--quick", action="store_true", help="20,000 bodies only, fewer steps")
+    ap.add_argument("--quick", action="store_true", help="2,000 bodies only, fewer steps")
     ap.add_argument("--sizes", default=None, help="comma-separated numbers of bodies (default 20000,100000)")
     ap.add_argument("--keep", default=None, help="folder to keep the bodies files and screenshots in")
     ap.add_argument("--json", action="store_true", help="print one JSON line (for bench.report)")
