@@ -285,8 +285,11 @@ class HeadlessScene:
             self.page.evaluate(_TWO_FRAMES_JS)
 
     def _wait_bodies(self, frames: int) -> None:
-        """Many bodies: the view built, the tab's camera reported, its solids chosen for that
-        camera and in the browser with every instance, then a few painted frames."""
+        """Many bodies: the view built and drawn as it is for the tab's camera.
+
+        The tab's camera reported, its solids chosen for that camera and in the browser with
+        every instance (a newer choice restarts the wait), then a few painted frames.
+        """
         view = self.session
         deadline = time.monotonic() + self.timeout
         if not view.ready.wait(self.timeout):
