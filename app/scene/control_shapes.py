@@ -79,13 +79,21 @@ class ShapeControl:
         with s.lock:
             st = s.state
             if st.motion is not None:
-                s.motion_ctl.leave()
+                s.motion_ctl.freeze()
             sh = st.shapes[name]
+            axes = sh.semi_axes
             if st.dim == 2:
                 angle = 2.0 * math.atan2(float(wxyz[3]), float(wxyz[0]))
-                new = ShapeState((float(position[0]), float(position[1])), sh.semi_axes, (angle,))
+                new = ShapeState((float(position[0]), float(position[1])), axes, (angle,))
             else:
-                new = ShapeState(tuple(float(v) for v in position), sh.semi_axes, tuple(float(v) for v in wxyz))
+                new = ShapeState(tuple(float(v) for v in position), axes, tuple(float(v) for v in wxyz))
+            try:  # the shape becomes exactly the decimals its fields show (SHOWN_DIGITS)
+                new = new.rationalised()
+                if sh.matrix is None and "semi_axes" in sh.typed:  # unchanged by a drag: still as typed
+                    new.typed = {"semi_axes": sh.typed["semi_axes"]}
+            except ValueError as e:
+                s.field_error(f"shape {name}", str(e))
+                return st.relation
             st.shapes[name] = new
             st.errors.pop(f"shape {name}", None)
             return s.refresh(dragged=name)
@@ -109,12 +117,25 @@ class ShapeControl:
         s = self.s
         with s.lock:
             st = s.state
-            # a new matrix replaces the shape; a new centre (etc.) edits the shape's parameters
-            d = {} if "matrix" in fields else st.shapes[name].params_dict()
+            if st.motion is not None:  # the shapes drawn at t become the decimals shown, exactly
+                s.motion_ctl.freeze()
+            old = st.shapes[name]
+            # a new matrix replaces the shape; a new centre (etc.) edits the shape's parameters,
+            # the others as their fields show them (a computed float: the decimals shown)
+            typed: dict[str, str] = {}
+            if "matrix" in fields:
+                d: dict[str, Any] = {}
+            else:
+                base = old if old.matrix is None else ShapeState(old.center, old.semi_axes, old.orientation)
+                base = base.rationalised()
+                d = base.params_dict()
+                typed = {k: v for k, v in old.typed.items() if k != "matrix"} if old.matrix is None else {}
             d.update(fields)
             new = drawable(ShapeState.from_dict(d, st.dim, name))
-            if st.motion is not None:
-                s.motion_ctl.leave()
+            for key, value in fields.items():
+                if isinstance(value, str):
+                    typed[key] = value.strip()
+            new.typed = typed
             st.shapes[name] = new
             st.errors.pop(f"shape {name}", None)
             return s.refresh()

@@ -23,7 +23,7 @@ from .shapes import PALETTES
 if TYPE_CHECKING:  # what GuiApi.add_progress_bar returns; viser 1.1.1 does not export it at the top level
     from viser._gui_handles import GuiProgressBarHandle
 
-__all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "ShareGui", "build_gui", "ignoring_event", "STATIC", "DIM_LABELS"]
+__all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "ShareGui", "build_gui", "ignoring_event", "STATIC", "TYPED", "TOUCH", "DIM_LABELS"]
 
 FORM_LABELS = (
     ("center", "Body centre", "x, y[, z] (expressions in t allowed)"),
@@ -37,6 +37,12 @@ FORM_LABELS = (
 
 STATIC = "(static shapes)"
 """Preset dropdown entry for no motion."""
+
+TYPED = "(typed motion)"
+"""Preset dropdown entry shown while a typed motion (editor, form, link) runs."""
+
+TOUCH = "(Touch: B slides to A)"
+"""Preset dropdown entry shown while the motion of "Touch: slide B to A" runs."""
 
 DIM_LABELS = {3: "3D ellipsoids", 2: "2D ellipses"}
 """Dimension dropdown entries."""
@@ -78,6 +84,8 @@ class MotionGui:
 
     folder: viser.GuiFolderHandle
     preset: viser.GuiDropdownHandle
+    presets: list[str]
+    """The presets' names (the dropdown also lists STATIC, and TYPED / TOUCH while one runs)."""
     description: viser.GuiMarkdownHandle
     fields: dict[str, viser.GuiTextHandle]
     """"A", "B", "interval"."""
@@ -219,6 +227,7 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
         motion = MotionGui(
             folder=mo_folder,
             preset=preset,
+            presets=list(presets),
             description=description,
             fields=fields,
             errors=errors,

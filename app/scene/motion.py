@@ -62,6 +62,8 @@ class MotionModel:
         self.A, self.B = A, B
         self.interval = interval
         self.preset = preset
+        self.kind = "preset" if preset is not None else "typed"
+        """"preset", "typed" (editor, form, link) or "touch" (set by "Touch: slide B to A")."""
         self.description = description
         self._texts = dict(texts)
         self.dim = int(A.dim)
@@ -204,7 +206,9 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, limits: Li
         except ValueError as e:
             raise MotionError(str(e), "A") from None
         raw: dict[str, Any] = {"A": p["A"], "B": p["B"], "interval": _interval_text(p["interval"])}
-        description = p.get("description", "")
+        from .preset_notes import preset_notes
+
+        description = p.get("description", "") + preset_notes(preset)
     else:
         raw = dict(motion)
         description = "Typed motion."

@@ -19,7 +19,7 @@ from typing import Any
 import viser
 
 from .analysis import AnalysisView
-from .gui import DIM_LABELS, STATIC, Gui, ignoring_event
+from .gui import DIM_LABELS, STATIC, TOUCH, TYPED, Gui, ignoring_event
 from .motion_form import form_from_source
 from .panels import (
     events_html,
@@ -31,7 +31,6 @@ from .panels import (
 from .plots import SCALES, PlotsView
 from .shapes import PALETTES
 from .state import AppState
-from .texts import format_number
 from .words import plain_words
 
 __all__ = ["PanelView", "Syncing", "error_html"]
@@ -161,7 +160,7 @@ class PanelView:
             event = state.event
             if event is not None:
                 ev = an.events[event - 1]
-                where, at = f"at t = α{event} = {ev.exact}", None
+                where, at = f"at t = α{event} {ev.shown}", None
             elif state.t_exact is not None:
                 where, at = f"at t = {state.t_text or state.t_exact}", state.t_exact
             else:
@@ -179,19 +178,24 @@ class PanelView:
             self.set_error(sg.error, err)
             if err is not None:
                 continue  # keep the text the user is correcting
-            sh = state.shapes[name]
-            self.set_value(sg.fields["center"], ", ".join(format_number(v) for v in sh.center))
-            self.set_value(sg.fields["semi_axes"], ", ".join(format_number(v) for v in sh.semi_axes))
-            self.set_value(sg.fields["orientation"], ", ".join(format_number(v) for v in sh.orientation))
-            matrix = "" if sh.matrix is None else "; ".join(", ".join(str(v) for v in row) for row in sh.matrix)
-            self.set_value(sg.fields["matrix"], matrix)
+            for key, text in state.shapes[name].field_texts().items():
+                self.set_value(sg.fields[key], text)
 
     def _show_motion(self, state: AppState) -> None:
         mg = self.gui.motion
         model = state.motion
         if model is not self._motion_shown:
             self._motion_shown = model
-            self.set_value(mg.preset, model.preset if model is not None and model.preset else STATIC)
+            # the dropdown says what the tab shows: a preset, a typed motion, Touch's, or static shapes
+            if model is None or model.preset:
+                label, options = (model.preset if model is not None else STATIC), (STATIC, *mg.presets)
+            else:
+                label = TOUCH if model.kind == "touch" else TYPED
+                options = (STATIC, label, *mg.presets)
+            with self._syncing():
+                if tuple(mg.preset.options) != options:
+                    mg.preset.options = options
+            self.set_value(mg.preset, label)
             if model is not None:
                 for key, text in model.texts().items():
                     self.set_value(mg.fields[key], text)
