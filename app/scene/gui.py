@@ -116,6 +116,8 @@ class ViewGui:
     folder: viser.GuiFolderHandle
     dimension: viser.GuiDropdownHandle
     gizmos: viser.GuiCheckboxHandle
+    gizmo_note: viser.GuiMarkdownHandle
+    """Shown while a motion runs: the gizmos are hidden, and how to get them back."""
     plane: viser.GuiCheckboxHandle
     palette: viser.GuiDropdownHandle
     follow: viser.GuiCheckboxHandle
@@ -260,6 +262,10 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             folder=v_folder,
             dimension=gui.add_dropdown("Dimension", list(DIM_LABELS.values()), initial_value=DIM_LABELS[dim]),
             gizmos=gui.add_checkbox("Transform gizmos", gizmos),
+            gizmo_note=gui.add_markdown(
+                "*A motion drives the shapes: the gizmos are hidden. Pick “(static shapes)” as the Preset to drag them.*",
+                visible=False,
+            ),
             plane=gui.add_checkbox("Separating plane (when separate)", plane),
             palette=gui.add_dropdown("Palette", list(PALETTES), initial_value=next(iter(PALETTES))),
             follow=gui.add_checkbox("Camera follows the shapes", False),

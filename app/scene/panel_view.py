@@ -124,6 +124,7 @@ class PanelView:
         self.set_value(g.view.dimension, DIM_LABELS[state.dim])
         self.set_value(g.view.palette, state.palette)
         self.set_value(g.view.gizmos, state.gizmos)
+        self.set_visible(g.view.gizmo_note, state.motion is not None and state.gizmos)
         self.set_value(g.view.plane, state.separating_plane)
         self.set_value(g.view.follow, state.follow)
         self.set_value(g.plots.live, state.show_plots)

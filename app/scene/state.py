@@ -130,10 +130,9 @@ class ShapeState:
             ((2, 0), (1.0, 1.0), '-2')
         """
         import numpy as np
+        from flint import fmpq_mat
 
         from core.shapes.quadrics import axes_from_quadric, validate_quadric
-
-        from flint import fmpq_mat
 
         E = validate_quadric(M, name=name)
         exact = tuple(tuple(fmpq(v) for v in row) for row in E)
