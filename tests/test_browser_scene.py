@@ -18,7 +18,6 @@ import numpy as np
 import pytest
 
 from app.scene.links import link_path
-from app.scene.state import SceneConfig
 
 pytestmark = [
     pytest.mark.browser,
@@ -46,12 +45,10 @@ CHARTS_JS = """() => Object.values(window.__viserTestpoints?.uplots ?? {}).filte
 }))"""
 
 
-@pytest.fixture(scope="module")
-def hs():
-    from app.screenshot import HeadlessScene
-
-    with HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1300, height=950, timeout=90) as h:
-        yield h
+@pytest.fixture
+def hs(headless_scene):
+    """The session's one browser and scene (tests/conftest.py)."""
+    return headless_scene
 
 
 def until(cond: Callable[[], object], timeout: float = 60.0, what: str = "") -> None:

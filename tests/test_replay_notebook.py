@@ -7,6 +7,7 @@ it plays the motion: the caption names t and the certified relation, each event 
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -139,7 +140,7 @@ class NotebookProxy:
         ready.wait(10)
 
     def page(self) -> str:
-        cfg = '{"baseUrl": "%s"}' % self.base_url
+        cfg = json.dumps({"baseUrl": self.base_url})
         return (f'<!doctype html><html><head><script id="jupyter-config-data" type="application/json">{cfg}</script>'
                 f"</head><body><div class=\"cell-output\">{self.cell_html}</div></body></html>")
 

@@ -263,8 +263,8 @@ def _num_text(v: Number) -> str:
 def _default_shapes(dim: int) -> tuple[ShapeState, ShapeState]:
     if dim == 2:
         return (
-            ShapeState((fmpq(0), fmpq(0)), (fmpq(2), fmpq(1)), (0.0,)),
-            ShapeState((fmpq(3), fmpq(3, 2)), (fmpq(3, 2), fmpq(1, 2)), (0.6,)),
+            ShapeState((fmpq(0), fmpq(0)), (fmpq(2), fmpq(1)), (fmpq(0),)),
+            ShapeState((fmpq(3), fmpq(3, 2)), (fmpq(3, 2), fmpq(1, 2)), (fmpq(3, 5),)),
         )
     one, zero = fmpq(1), fmpq(0)
     return (
