@@ -23,6 +23,7 @@ import re
 from decimal import Decimal
 from fractions import Fraction
 
+import numpy as np
 import pytest
 from oracle import oracle_relation
 from test_browser_scene import choose, until
@@ -278,3 +279,54 @@ def test_fields_always_show_what_is_certified(headless_scene):
         rng.choice(actions)()
         d.check()
     assert {"separate", "overlap"} <= d.seen, d.log  # the sequence went through different relations
+
+
+ARROW_JS = """([name, dx]) => {
+  const m = window.__viserMutable, root = m.nodeRefFromName[name], cam = m.camera, canvas = m.canvas;
+  const V = root.position.constructor;
+  let best = null;  // the visible cone of the gizmo's x arrow: in the node's own frame, farthest along +x
+  root.traverse((o) => {
+    if (o.type !== 'Mesh' || !o.visible || o.parent === root) return;
+    const w = new V(); o.getWorldPosition(w);
+    const p = root.worldToLocal(w.clone());
+    if (Math.abs(p.y) < 1e-6 && Math.abs(p.z) < 1e-6 && p.x > 0.5 && (!best || p.x > best.p.x)) best = {p, w};
+  });
+  if (!best) return null;
+  const rect = canvas.getBoundingClientRect();
+  const screen = (v) => { const q = v.clone().project(cam); return [rect.left + (q.x + 1) / 2 * rect.width, rect.top + (1 - q.y) / 2 * rect.height]; };
+  const to = root.localToWorld(new V(best.p.x + dx, 0, 0));
+  return {from: screen(best.w), to: screen(to)};
+}"""
+"""Screen points of the x arrow of a gizmo and of where it is after moving it by dx along x."""
+
+
+def test_dragging_a_gizmo_certifies_the_shape_the_fields_show(headless_scene):
+    """Issue 22.4: a drag in the browser (mouse on B's gizmo arrow) moves B; afterwards the label on
+    B and the readout name the certified relation, and the fields show B's new centre exactly
+    (decimals, no "≈") with the exact oracle on that text equal to the readout."""
+    hs = headless_scene
+    cfg = {"preset": None, "A": {"center": ["0", "0", "0"], "semi_axes": ["1", "1", "1"]},
+           "B": {"center": ["3", "0", "0"], "semi_axes": ["1", "1", "1"]}}
+    s = hs.goto(link_path(cfg))
+    page = hs.page
+    d = Driver(hs, random.Random(0))
+    d.open_shape_folders()
+    assert readout_relation(page) == "separate"
+    pts = page.evaluate(ARROW_JS, ["/shapes/B", -1.6])
+    assert pts is not None, "no gizmo arrow on B"
+    page.mouse.move(*pts["from"])
+    page.mouse.down()
+    for k in range(1, 11):  # a user's drag: several pointer moves
+        x = pts["from"][0] + (pts["to"][0] - pts["from"][0]) * k / 10
+        y = pts["from"][1] + (pts["to"][1] - pts["from"][1]) * k / 10
+        page.mouse.move(x, y)
+    page.mouse.up()
+    until(lambda: s.state.shapes["B"].center[0] < 2, what="B dragged towards A")
+    d.log.append("drag B")
+    d.check()  # fields exact, oracle on their text = readout
+    centre = field_text(page, s.ui.shapes["B"].fields["center"])
+    assert not centre.startswith("≈") and float(numbers(centre)[0]) < 2, centre
+    assert readout_relation(page) == "overlap"
+    assert s.views["B"].label.text == "B · overlap"  # the label sent to the page (viser keeps no ref to read it back)
+    np.testing.assert_allclose(hs.drawn_pose("B")[:3], [float(v) for v in numbers(centre)], atol=1e-12)  # drawn as shown
+    assert hs.mesh_color("B") == "#d62728"

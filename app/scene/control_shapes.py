@@ -72,6 +72,9 @@ class ShapeControl:
             return
         tc = ev.target
         self.drag(name, tuple(tc.position), tuple(tc.wxyz))
+        if getattr(ev, "phase", None) == "end":  # the drag is over: draw the shape certified (the
+            with self.s.lock:                   # decimals its fields show), not the pointer's float pose
+                self.s.views[name].resend_pose()
 
     def drag(self, name: str, position: tuple[float, ...], wxyz: tuple[float, ...]) -> str | None:
         """Shape ``name`` now has this pose (floats): classify, recolour (the hot path)."""

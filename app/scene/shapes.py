@@ -264,6 +264,16 @@ class EllipsoidView:
             self.label.position = (0.0, 0.0, scale[2] if self.dim == 3 else 0.0)
             self.sent += 2
 
+    def resend_pose(self) -> None:
+        """Send the pose last set again, explicitly.
+
+        After a drag the browser's gizmo holds the pointer's float pose; the certified shape is
+        the rounded one (:meth:`app.scene.state.ShapeState.rationalised`), drawn from here on.
+        """
+        if self._pose is not None:
+            wire.force_pose(self.control, *self._pose)
+            self.sent += 2
+
     def set_relation(self, relation: str | None, palette: dict[str, str] = RELATION_HEX) -> None:
         """Colour, label text and opacity of the relation (grey when unknown); sent on change."""
         color = rgb(palette[relation]) if relation in palette else NEUTRAL
