@@ -19,7 +19,7 @@ from app.scene.costs import measure_update_costs  # noqa: E402
 from app.scene.panels import intervals_bar_html, readout_markdown, sign_table_markdown  # noqa: E402
 from app.scene.plots import compress  # noqa: E402
 from app.scene.session import Session  # noqa: E402
-from app.scene.shapes import RELATION_HEX, rgb, unit_disc, unit_sphere  # noqa: E402
+from app.scene.shapes import DISC_SEGMENTS, RELATION_HEX, rgb, unit_disc, unit_sphere  # noqa: E402
 from app.scene.state import SceneConfig, ShapeState  # noqa: E402
 from app.scene.texts import parse_vector  # noqa: E402
 
@@ -442,7 +442,7 @@ def test_dimension_switch_keeps_the_gizmo_and_swaps_the_mesh(server):
     for n, v in s.views.items():
         assert v.control is controls[n] and v.mesh is spheres[n] and v.drawn
         assert tuple(v.control.active_axes) == (True, True, False)
-        assert len(v.mesh.vertices) == len(unit_disc()[0]) and v.mesh.side == "double"
+        assert len(v.mesh.vertices) == len(unit_disc(DISC_SEGMENTS)[0]) and v.mesh.side == "double"
         assert tuple(int(c) for c in v.mesh.color) == tuple(rgb(RELATION_HEX[s.state.relation]))
     s.ui.view.dimension.value = "3D ellipsoids"
     for n, v in s.views.items():

@@ -59,6 +59,7 @@ class ShapeControl:
         ui.view.palette.on_update(lambda _ev: self.on_option("palette", str(ui.view.palette.value)))
         ui.plots.live.on_update(lambda _ev: self.on_option("show_plots", bool(ui.plots.live.value)))
         ui.plots.scale.on_update(lambda _ev: self.on_option("plot_scale", str(ui.plots.scale.value)))
+        ui.roots.show_roots.on_update(lambda _ev: self.on_roots())
 
     def attach_gizmos(self) -> None:
         """Listen to the gizmos of the current shape views (after they are (re)built)."""
@@ -154,6 +155,14 @@ class ShapeControl:
             s.load(SceneConfig(dim=dim, preset=None, gizmos=st.gizmos, show_plots=st.show_plots,
                                separating_plane=st.separating_plane, palette=st.palette))
             s.frame_camera()
+
+    def on_roots(self) -> None:
+        """"Show the roots of P(T)" switched: the panel draws (or removes) the roots' plots."""
+        s = self.s
+        if s.syncing.active:
+            return
+        with s.lock:
+            s.refresh()
 
     def on_option(self, key: str, value: Any) -> None:
         """A display option (gizmos, plane, palette, plots): stored and drawn."""

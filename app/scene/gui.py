@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import viser
 
 from .plots import SCALES
+from .roots_view import RootsView
 from .shapes import PALETTES
 
 if TYPE_CHECKING:  # what GuiApi.add_progress_bar returns; viser 1.1.1 does not export it at the top level
@@ -154,6 +155,8 @@ class Gui:
     """"What am I seeing?": the decision in plain words."""
     timeline: TimelineGui
     plots: PlotsGui
+    roots: RootsView
+    """The roots of P(T): the paper's picture (:mod:`app.scene.roots_view`)."""
     motion: MotionGui
     shapes: dict[str, ShapeGui]
     sign_table: viser.GuiMarkdownHandle
@@ -204,6 +207,7 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             scale=gui.add_dropdown("Plot scale", list(SCALES), initial_value="asinh"),
             about=gui.add_markdown(""),
         )
+    roots = RootsView(gui)
     with gui.add_folder("Motion") as mo_folder:
         preset = gui.add_dropdown("Preset", [STATIC, *presets], initial_value=STATIC)
         description = gui.add_markdown("")
@@ -282,4 +286,4 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             analysis_json=gui.add_button("Download analysis (JSON)", visible=False),
             analysis_csv=gui.add_button("Download analysis (CSV)", visible=False),
         )
-    return Gui(title, legend, readout, touch, touch_error, words, timeline, plots, motion, shapes, sign_table, view, share)
+    return Gui(title, legend, readout, touch, touch_error, words, timeline, plots, roots, motion, shapes, sign_table, view, share)

@@ -86,6 +86,8 @@ class PanelView:
         self._analysis_shown: object = None
         self._palette_shown: str | None = None
         self.palette: dict[str, str] = next(iter(PALETTES.values()))
+        self.expl: dict[str, Any] | None = None
+        """The readout's data last shown (the roots panel names the same Var, signs and rule)."""
 
     # ------------------------------------------------------------------ primitives
     def set_value(self, handle: Any, value: Any) -> None:
@@ -141,6 +143,7 @@ class PanelView:
         self._show_shapes(state)
         self._show_motion(state)
         self._show_timeline(state)
+        g.roots.show(state, self.expl, "linear" if state.plot_scale == "linear" else "asinh")
         if plots:
             self.show_plots(state)
 
@@ -172,6 +175,7 @@ class PanelView:
             text = readout_markdown(expl, where=where, palette=self.palette)
         self.set_text(g.readout, text)
         self.set_text(g.words, plain_words(expl))
+        self.expl = expl
 
     def _show_shapes(self, state: AppState) -> None:
         for name, sg in self.gui.shapes.items():

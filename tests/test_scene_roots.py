@@ -1,0 +1,121 @@
+"""The roots of P(T) (issue 22.2): what is drawn is decided by certified computations.
+
+Golden values are independent of the code under test: tests/oracle.py's P(T) (characteristic
+polynomial with flint) and its certified positive roots, and the paper's Example 29 (P(T) at
+the tangency α1 = (12 - 2√2)/17 has a positive double root, Th. 19).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from oracle import pencil_oracle, positive_roots
+
+from app.scene.jobs import analyse_job
+from app.scene.motion import load_motion
+from app.scene.roots import locus, roots_at, roots_of_pencil
+from app.scene.roots_view import locus_data, plane_data, roots_words
+from core import quadric_from_axes
+from core.formulae.pencil import pencil_coefficients
+
+
+def circle_pair(dx: str):
+    return quadric_from_axes([0, 0], [1, 1], exact=True), quadric_from_axes([dx, 0], ["1/2", 2], exact=True)
+
+
+@pytest.mark.parametrize("dx, want", [("3/2", [2]), ("1.5000000000000001", [1, 1]), ("1.4999999999999999", [])])
+def test_static_roots_match_the_independent_oracle(dx, want):
+    """A unit circle and an ellipse (1/2, 2) whose centres are dx apart touch at dx = 3/2: a positive
+    double root; 1e-16 farther: two distinct positive roots; nearer: none (overlap)."""
+    A, B = circle_pair(dx)
+    pic = roots_of_pencil(pencil_coefficients(A, B))
+    assert [r.mult for r in pic.positive] == positive_roots(pencil_oracle(A, B)) == want
+    for r in pic.positive:  # certified enclosures, disjoint
+        assert r.interval[0] < r.re < r.interval[1]
+    assert sum(r.mult for r in pic.roots) == 3
+
+
+@pytest.fixture(scope="module")
+def ex29():
+    m = load_motion(preset="example-29", motion=None)
+    return analyse_job(m.A, m.B, m.interval)
+
+
+@pytest.fixture(scope="module")
+def ex30():
+    m = load_motion(preset="example-30", motion=None)
+    return analyse_job(m.A, m.B, m.interval)
+
+
+def test_example_29_tangency_is_an_exact_double_root(ex29):
+    """At α1 (a closed form in Q(√2)) P(T) is evaluated exactly: a certified positive double root."""
+    ev = ex29.events[0]
+    pic = roots_at(list(ex29.a), ev.time, float(ev.time), "tangent")
+    assert pic.how.startswith("exact")
+    assert [r.mult for r in pic.positive] == [2]
+    assert pic.summary().startswith("a positive double root")
+
+
+def test_example_29_locus_two_positive_roots_merge_at_alpha_1(ex29):
+    """Before α1 two distinct positive roots (separate), after it none (overlap): on the locus and
+    exactly at rational times on either side."""
+    a1 = float(ex29.events[0].time)
+    ts = np.array([a1 - 0.02, a1 + 0.02])
+    L = locus(list(ex29.a), ts)
+    assert (L[0] > 0).sum() == 2 and (np.nan_to_num(L[1], nan=-1) > 0).sum() == 0
+    for t, want in ((a1 - 0.02, 2), (a1 + 0.02, 0)):
+        pic = roots_at(list(ex29.a), t, t, None)
+        assert pic.how.startswith("exact") and len(pic.positive) == want
+    data, yr = locus_data(ts, L, [(a1, 1.0)], a1, "asinh")
+    assert len(data) == 1 + 4 + 4 and yr[0] < 0 < yr[1]
+
+
+def test_example_30_over_q_sqrt2_and_at_an_event_without_closed_form(ex30):
+    """Example 30 has √2 in its coefficients: at a rational t the real roots are isolated over
+    Q(√2) exactly; at α4 (a root of a degree-166 polynomial) the certified tangency decides that a
+    double positive root is drawn, and the picture says so."""
+    t = -0.3  # separate (the paper: δ1 = -0.3)
+    pic = roots_at(list(ex30.a), t, t, None)
+    assert pic.how.startswith("exact over Q(√2)") and len(pic.positive) == 2
+    ev = ex30.events[-1]
+    pic = roots_at(list(ex30.a), ev.time, float(ev.time), "tangent")
+    assert [r.mult for r in pic.positive] == [2] and any("Th. 7/19" in n for n in pic.notes)
+    words = roots_words(pic, None, "at t = α4")
+    assert "positive double root" in words and "Th. 7/19" in words
+
+
+def test_plane_picture_marks_the_double_root_and_the_positive_axis():
+    A, B = circle_pair("3/2")
+    pic = roots_of_pencil(pencil_coefficients(A, B))
+    data, xr, yr = plane_data(pic, "linear")
+    x, axis, simple, double, cplx = data
+    assert list(np.flatnonzero(~np.isnan(double))) == [int(np.flatnonzero(np.isclose(x, pic.positive[0].re))[0])]
+    assert np.all(axis[x >= 0] == 0) and np.all(np.isnan(axis[x < 0]))
+    assert xr[0] < min(x) and xr[1] >= max(x) and yr[0] < 0 < yr[1]
+
+
+def test_roots_panel_in_a_session_only_when_switched_on():
+    """The panel computes nothing while off; on, the words name Var and the rule, and the plots exist
+    (the locus only during a motion)."""
+    import viser
+
+    from app.scene.session import Session
+    from app.scene.state import SceneConfig
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        s = Session(server, SceneConfig.from_dict({"preset": "example-29", "event": 1}))
+        assert s.ready.wait(120)
+        r = s.ui.roots
+        s.panel.show(s.state)
+        assert r.plane is None and r.locus_plot is None and not r._cache
+        r.show_roots.value = True
+        s.panel.show(s.state)
+        assert r.plane is not None and r.locus_plot is not None
+        assert "a positive double root" in r.words.content and "Var(" in r.words.content and "Rule:" in r.words.content
+        r.show_roots.value = False
+        s.panel.show(s.state)
+        assert r.plane is None and r.locus_plot is None
+        s.close()
+    finally:
+        server.stop()
