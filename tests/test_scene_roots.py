@@ -67,7 +67,8 @@ def test_example_29_locus_two_positive_roots_merge_at_alpha_1(ex29):
         pic = roots_at(list(ex29.a), t, t, None)
         assert pic.how.startswith("exact") and len(pic.positive) == want
     data, yr = locus_data(ts, L, [(a1, 1.0)], a1, "asinh")
-    assert len(data) == 1 + 4 + 4 and yr[0] < 0 < yr[1]
+    assert len(data) == 1 + 4 + 1 + 1 + 2 and yr[0] < 0 < yr[1]  # t, roots, T = 0, one event, double root, t now
+    assert np.count_nonzero(~np.isnan(data[6])) == 2  # the event: a vertical line of its own
 
 
 def test_example_30_over_q_sqrt2_and_at_an_event_without_closed_form(ex30):

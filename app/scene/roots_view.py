@@ -81,7 +81,11 @@ def plane_data(pic: RootsPicture, scale: str = "asinh") -> tuple[tuple[np.ndarra
 def locus_data(
     ts: np.ndarray, real_roots: np.ndarray, events: Sequence[tuple[float, float | None]], t: float, scale: str = "asinh"
 ) -> tuple[tuple[np.ndarray, ...], tuple[float, float]]:
-    """The uPlot data of the root locus: (t, root_1..root_n, T = 0, events, double roots, t now).
+    """The uPlot data of the root locus: (t, root_1..root_n, T = 0, α_1..α_k, double roots, t now).
+
+    uPlot joins the points of a series across NaN (it only breaks lines at null), so the roots
+    are drawn as sample points and each event is a series of its own: a vertical line made of
+    the only two values of its series.
 
     Args:
         ts: sample times (ascending).
@@ -98,9 +102,11 @@ def locus_data(
     top, bot = max(top, 0.5), min(bot, -0.5)
     pad = 0.08 * (top - bot)
     zero = np.zeros(n_t)
-    ev = np.full(n_t, np.nan)
+    lines = []
     dbl = np.full(n_t, np.nan)
     for te, pos in events:
+        ev = np.full(n_t, np.nan)
+        lines.append(ev)
         if not ts[0] <= te <= ts[-1]:
             continue
         i = min(int(np.searchsorted(ts, te)), n_t - 2)
@@ -110,7 +116,7 @@ def locus_data(
     cur = np.full(n_t, np.nan)
     i = min(max(int(np.searchsorted(ts, t)), 0), n_t - 2)
     cur[i], cur[i + 1] = top + pad, bot - pad
-    return (ts, *ys, zero, ev, dbl, cur), (bot - pad, top + pad)
+    return (ts, *ys, zero, *lines, dbl, cur), (bot - pad, top + pad)
 
 
 def _sign_word(sign: int | None) -> str:
@@ -125,7 +131,12 @@ def roots_words(pic: RootsPicture, expl: dict[str, Any] | None, where: str) -> s
         parts = []
         for r in reals:
             what = "double root" if r.mult == 2 else ("triple root" if r.mult == 3 else "root")
-            enc = f" ∈ [{r.interval[0]:.10g}, {r.interval[1]:.10g}]" if r.interval else f" ≈ {r.re:.6g}"
+            if r.interval is None:
+                enc = f" ≈ {r.re:.6g}"
+            elif f"{r.interval[0]:.10g}" == f"{r.interval[1]:.10g}":  # a ball of radius 0: exact
+                enc = f" = {r.re:.10g}"
+            else:
+                enc = f" ∈ [{r.interval[0]:.10g}, {r.interval[1]:.10g}]"
             parts.append(f"{what} T{enc}")
         lines.append("Real roots: " + "; ".join(parts) + ".")
     if expl is not None and expl.get("coefficients"):
@@ -295,9 +306,12 @@ class RootsView:
                     data,
                     (
                         uplot.Series(label="t"),
-                        *(uplot.Series(label=f"real root {k + 1}", stroke=ROOT_COLOURS[k % 4], width=2, points={"show": False}) for k in range(n)),
+                        *(uplot.Series(label=f"real root {k + 1}", stroke="rgba(0,0,0,0)", width=0,
+                                       points={"show": True, "size": 3, "fill": ROOT_COLOURS[k % 4], "stroke": ROOT_COLOURS[k % 4]})
+                          for k in range(n)),
                         uplot.Series(label="T = 0", stroke="#999", width=1, points={"show": False}),
-                        uplot.Series(label="events (certified)", stroke="#000", width=1.5, points={"show": False}),
+                        *(uplot.Series(label=f"α{k + 1}" + (" (certified)" if k == 0 else ""), stroke="#000", width=1.5,
+                                       points={"show": False}) for k in range(len(evs))),
                         uplot.Series(label="double root", stroke="rgba(0,0,0,0)", width=0,
                                      points={"show": True, "size": 14, "fill": "#ffbf00", "stroke": "#000", "width": 2}),
                         uplot.Series(label="t now", stroke="#1f4e9c", width=2, points={"show": False}),
