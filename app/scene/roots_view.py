@@ -51,13 +51,13 @@ def plane_data(pic: RootsPicture, scale: str = "asinh") -> tuple[tuple[np.ndarra
     Examples:
         >>> from app.scene.roots import roots_of_pencil
         >>> data, xr, yr = plane_data(roots_of_pencil([-1, 0, 2, 0, -1]), "linear")
-        >>> [np.nan_to_num(a, nan=9).tolist() for a in data][:4]
-        [[-1.0, 0.0, 1.0, 1.5], [9.0, 0.0, 0.0, 0.0], [9.0, 9.0, 9.0, 9.0], [0.0, 9.0, 0.0, 9.0]]
+        >>> [np.nan_to_num(a, nan=9).tolist() for a in data][:4]   # T = -1 (double), T = 1 (double)
+        [[-1.0, 0.0, 1.0, 1.5], [9.0, 0.0, 0.0, 0.0], [0.0, 9.0, 9.0, 9.0], [9.0, 9.0, 0.0, 9.0]]
     """
     pts: list[tuple[float, float, int]] = []
     for r in pic.roots:
         rx, ry = float(_f(r.re, scale)), float(_f(r.im, scale))
-        kind = 3 if not r.real else (2 if r.mult >= 2 else 1)
+        kind = 3 if not r.real else (2 if r.mult >= 2 and r.re > 0 else 1)  # 2: the tangency's positive double root
         pts.append((rx, ry, kind))
     xs = [p[0] for p in pts] or [0.0]
     span = max([1.0, *(abs(v) for v in xs)])
@@ -250,7 +250,7 @@ class RootsView:
                         uplot.Series(label="Re T" if scale == "linear" else "asinh Re T"),
                         uplot.Series(label="T > 0 (positive real axis)", stroke=AXIS_COLOUR, width=7, points={"show": False}),
                         uplot.Series(label="real root", stroke="rgba(0,0,0,0)", width=0, points={"show": True, "size": 11, "fill": ROOT_COLOURS[0]}),
-                        uplot.Series(label="double root (tangency)", stroke="rgba(0,0,0,0)", width=0,
+                        uplot.Series(label="positive double root (tangency)", stroke="rgba(0,0,0,0)", width=0,
                                      points={"show": True, "size": 20, "fill": "#ffbf00", "stroke": "#000", "width": 2}),
                         uplot.Series(label="complex pair", stroke="rgba(0,0,0,0)", width=0, points={"show": True, "size": 10, "fill": "#d62728"}),
                     ),
