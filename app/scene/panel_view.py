@@ -143,7 +143,6 @@ class PanelView:
         self._show_shapes(state)
         self._show_motion(state)
         self._show_timeline(state)
-        g.roots.show(state, self.expl, "linear" if state.plot_scale == "linear" else "asinh")
         if plots:
             self.show_plots(state)
 
@@ -264,7 +263,12 @@ class PanelView:
         self.set_text(self.gui.sign_table, sign_table_markdown(an.sign_rows(), an.n, self.palette))
 
     def show_plots(self, state: AppState) -> None:
-        """The plots of the analysis with the cursor at t (removed when off or no analysis)."""
+        """The plots of the analysis with the cursor at t (removed when off or no analysis).
+
+        Also the roots of P(T) (when switched on): like the plot cursor, never on the hot path of
+        a jump or a drag, but with the coalesced part of the refresh (within PANEL_PERIOD).
+        """
+        self.gui.roots.show(state, self.expl, "linear" if state.plot_scale == "linear" else "asinh")
         an = state.analysis
         self.set_value(self.gui.plots.scale, state.plot_scale)
         self.set_text(self.gui.plots.about, f"y axis: {SCALES[state.plot_scale]}. Only signs and zeros carry meaning "
