@@ -120,3 +120,32 @@ def test_roots_panel_in_a_session_only_when_switched_on():
         s.close()
     finally:
         server.stop()
+
+
+def test_rounded_fields_give_the_exact_matrix_one_click_away():
+    """Issue 22.1: during a motion the Shape fields are rounded ("≈") and a button under them copies
+    the exact matrix at the exact t: at t = 1/5 it is core's exact A(1/5), entry by entry."""
+    import html
+    import re
+    from fractions import Fraction
+
+    import viser
+
+    from app.scene.session import Session
+    from app.scene.state import SceneConfig
+    from core.moving.motions import matrix_at_exact
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        s = Session(server, SceneConfig.from_dict({"preset": "example-29", "t": "1/5"}))
+        assert s.ready.wait(120)
+        s.panel.show(s.state)
+        sg = s.ui.shapes["A"]
+        assert sg.fields["center"].value.startswith("≈ ") and sg.exact.visible
+        copied = html.unescape(re.search(r'data-copy="([^"]*)"', sg.exact.content).group(1))
+        rows = [[Fraction(v) for v in r.split(",")] for r in copied.split(";")]
+        want = matrix_at_exact(s.state.motion.A, Fraction(1, 5))
+        assert rows == [[Fraction(int(v.p), int(v.q)) for v in r] for r in want]
+        s.close()
+    finally:
+        server.stop()

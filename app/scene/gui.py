@@ -108,6 +108,8 @@ class ShapeGui:
     fields: dict[str, viser.GuiTextHandle]
     """"center", "semi_axes", "orientation", "matrix"."""
     error: viser.GuiMarkdownHandle
+    exact: viser.GuiHtmlHandle
+    """Under "≈" fields: what is rounded and a button copying the exact matrix certified."""
 
 
 @dataclass(repr=False)
@@ -258,6 +260,7 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
                     ),
                 },
                 error=gui.add_markdown("", visible=False),
+                exact=gui.add_html("", visible=False),
             )
     with gui.add_folder("Sign table", expand_by_default=False):
         sign_table = gui.add_markdown("")

@@ -113,6 +113,32 @@ class MotionModel:
             out.append(ShapeState(tuple(p.center), tuple(p.semi_axes), tuple(p.orientation)))
         return out[0], out[1]
 
+    def exact_matrix_text(self, name: str, t: Any) -> str:
+        """The exact matrix of shape ``name`` at the exact time t, as text to copy.
+
+        t rational (a float is its binary value): each entry exactly, "p/q" or "(a + b*sqrt(d))/c"
+        over Q(√d). t algebraic (an event, a closed form): the entries as functions of t with the
+        exact definition of t. Rows separated by ";" (the Matrix field's form).
+        """
+        from core.algebra.algebraic import RealAlgebraic
+        from core.algebra.closedform import closed_form, polynomial_text
+
+        rows = getattr(self, name).matrix()
+        if isinstance(t, RealAlgebraic) and t.value is None:
+            entries = "; ".join(", ".join(str(e) for e in row) for row in rows)
+            definition = closed_form(t) or polynomial_text(t)
+            return f"[{entries}] at t = {definition}"
+        tq = to_fmpq(t.value if isinstance(t, RealAlgebraic) else t)
+        out = []
+        for row in rows:
+            cells = []
+            for e in row:
+                den = e.den(tq)
+                a, b = e.num.at(tq)
+                cells.append(str(a / den) if b == 0 else f"({a / den} + ({b / den})*sqrt({e.num.d}))")
+            out.append(", ".join(cells))
+        return "; ".join(out)
+
     def extent_points(self, window: tuple[float, float]) -> np.ndarray:
         """Points spanning where the shapes go on ``window`` (for framing the camera), (k, 3)."""
         pts = []

@@ -22,6 +22,7 @@ from .analysis import AnalysisView
 from .gui import DIM_LABELS, STATIC, TOUCH, TYPED, Gui, ignoring_event
 from .motion_form import form_from_source
 from .panels import (
+    copy_button,
     events_html,
     intervals_bar_html,
     legend_html,
@@ -30,7 +31,8 @@ from .panels import (
 )
 from .plots import SCALES, PlotsView
 from .shapes import PALETTES
-from .state import AppState
+from .state import AppState, ShapeState
+from .texts import APPROX
 from .words import plain_words
 
 __all__ = ["PanelView", "Syncing", "error_html"]
@@ -182,8 +184,40 @@ class PanelView:
             self.set_error(sg.error, err)
             if err is not None:
                 continue  # keep the text the user is correcting
-            for key, text in state.shapes[name].field_texts().items():
+            texts = state.shapes[name].field_texts()
+            for key, text in texts.items():
                 self.set_value(sg.fields[key], text)
+            self._show_exact(state, name, sg, any(t.startswith(APPROX) for t in texts.values()))
+
+    def _show_exact(self, state: AppState, name: str, sg: Any, rounded: bool) -> None:
+        """Under rounded ("≈") fields: what they are rounded from, and the exact value one click away."""
+        if not rounded:
+            self.set_visible(sg.exact, False)
+            return
+        model, an = state.motion, state.analysis
+        if model is not None and an is not None:
+            if state.event is not None:
+                t: Any = an.events[state.event - 1].event.time
+            else:
+                t = state.t_exact if state.t_exact is not None else an.inside(state.t)
+            try:
+                exact = model.exact_matrix_text(name, t)
+            except (ValueError, ArithmeticError):
+                exact = None
+            why = "≈: the pose drawn at t, rounded; the relation is certified at the exact t."
+        elif model is None and state.shapes[name].matrix is not None:
+            exact, why = None, "≈: the float decomposition of the typed matrix; the Matrix field is what is certified."
+        elif model is None:
+            sh = state.shapes[name]
+            exact = None if sh.matrix is not None else "; ".join(", ".join(str(v) for v in row) for row in _exact_rows(sh))
+            why = "≈: float64 numbers (read as floats); the float64 matrix they give is what is certified."
+        else:
+            exact, why = None, "≈: the pose drawn at t, rounded (the motion is being analysed)."
+        html_ = f'<span style="font-size:11px;color:#555">{html.escape(why)}</span>'
+        if exact is not None:
+            html_ += copy_button(exact, "copy the exact matrix")
+        self.set_text(sg.exact, html_)
+        self.set_visible(sg.exact, True)
 
     def _show_motion(self, state: AppState) -> None:
         mg = self.gui.motion
@@ -286,3 +320,10 @@ class PanelView:
             state.t,
             scale="linear" if state.plot_scale == "linear" else "asinh",
         )
+
+
+def _exact_rows(shape: ShapeState) -> list[list[Any]]:
+    """The exact matrix a shape with float parameters is certified as (its float64 matrix, exactly)."""
+    from core.shapes.numbers import to_fmpq
+
+    return [[to_fmpq(v) for v in row] for row in shape.quadric()]
