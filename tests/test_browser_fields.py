@@ -330,3 +330,21 @@ def test_dragging_a_gizmo_certifies_the_shape_the_fields_show(headless_scene):
     assert s.views["B"].label.text == "B · overlap"  # the label sent to the page (viser keeps no ref to read it back)
     np.testing.assert_allclose(hs.drawn_pose("B")[:3], [float(v) for v in numbers(centre)], atol=1e-12)  # drawn as shown
     assert hs.mesh_color("B") == "#d62728"
+
+
+def test_field_labels_are_tied_to_their_inputs(headless_scene):
+    """Issue 22.4 (accessibility): every text field's label names its input, so a screen reader reads
+    "Centre" for it and get_by_label finds it (viser's labels pointed at ids no input had)."""
+    hs = headless_scene
+    s = hs.goto(link_path({"preset": "example-29", "t": 0.3}))
+    page = hs.page
+    Driver(hs, random.Random(0)).open_shape_folders()
+    page.wait_for_function("() => document.querySelectorAll('[aria-labelledby]').length > 10")
+    assert page.get_by_label("t (exact)", exact=True).input_value() == s.ui.timeline.t_box.value
+    centres = page.get_by_label("Centre", exact=True)
+    assert centres.count() == 2
+    assert [centres.nth(i).input_value() for i in range(2)] == [s.ui.shapes[n].fields["center"].value for n in "AB"]
+    untied = page.evaluate("""() => Array.from(document.querySelectorAll('label[for]')).filter(l => l.offsetParent !== null
+      && l.closest('.mantine-Flex-root')?.querySelector('input:not([type=file]), textarea')
+      && !document.querySelector(`[aria-labelledby="${l.id}"]`)).map(l => l.textContent)""")
+    assert untied == []
