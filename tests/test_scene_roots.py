@@ -149,3 +149,45 @@ def test_rounded_fields_give_the_exact_matrix_one_click_away():
         s.close()
     finally:
         server.stop()
+
+
+def test_touch_then_static_shapes_the_controls_say_the_state():
+    """Issue 22.1: after Touch the Preset says the Touch motion runs (not "(static shapes)"), the
+    event is shown in closed form (two circles: a quadratic), and picking "(static shapes)" leaves
+    the motion for the exact decimals the fields show, whose exact relation the readout states."""
+    import time
+
+    import viser
+    from oracle import oracle_relation
+
+    from app.scene.gui import STATIC, TOUCH
+    from app.scene.session import Session
+    from app.scene.state import SceneConfig
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        s = Session(server, SceneConfig.from_dict({"dim": 2, "preset": None, "A": {"center": [0, 0], "semi_axes": [1, 1]},
+                                                   "B": {"center": [3, "1/2"], "semi_axes": ["1/2", "1/2"]}}))
+        s.motion_ctl.on_touch()
+        deadline = time.monotonic() + 60
+        while not (s.state.motion is not None and s.state.analysis is not None and s.state.event is not None):
+            assert time.monotonic() < deadline, "no touch motion"
+            time.sleep(0.02)
+        s.panel.show(s.state)
+        assert s.state.relation == "tangent"
+        assert s.ui.motion.preset.value == TOUCH and TOUCH in s.ui.motion.preset.options
+        ev = s.state.analysis.events[s.state.event - 1]
+        assert ev.closed and "√" in ev.exact  # |c_B(t)| = 3/2: t = 3/sqrt(37) is a closed form
+        assert s.ui.view.gizmo_note.visible
+        s.ui.motion.preset.value = STATIC  # re-picking "(static shapes)" works
+        assert s.state.motion is None and s.ui.motion.preset.value == STATIC
+        s.panel.show(s.state)
+        texts = {n: {k: h.value for k, h in s.ui.shapes[n].fields.items()} for n in "AB"}
+        assert not any(v.startswith("≈") for t in texts.values() for k, v in t.items() if k != "matrix"), texts
+        from test_browser_fields import shape_matrix
+
+        want = oracle_relation(shape_matrix(texts["A"], 2), shape_matrix(texts["B"], 2))
+        assert s.state.relation == want and want in ("separate", "overlap")  # rounded: not exactly tangent
+        s.close()
+    finally:
+        server.stop()

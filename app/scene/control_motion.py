@@ -84,6 +84,7 @@ class MotionControl:
         s = self.s
         with s.lock:
             s.state.errors.pop("touch", None)
+            self.freeze()  # from a motion: the shapes as their fields show them, exactly
             try:
                 texts = touch_motion(s.state.shapes["A"], s.state.shapes["B"])
             except ValueError as e:
