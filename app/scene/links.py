@@ -154,9 +154,15 @@ class Router:
         """Wrap viser's HTTP hook ``inner`` (websocket handshakes pass through unchanged)."""
 
         def route(connection: Any, request: Any) -> Any:
-            if not self.enabled or request.headers.get("Upgrade", "").lower() == "websocket":
+            if request.headers.get("Upgrade", "").lower() == "websocket":
                 return inner(connection, request) if inner is not None else None
             parts = urlsplit(request.path)
+            if not self.enabled:  # presenter mode: one page, still with its labels tied to inputs
+                if parts.path in ("", "/", "/index.html"):
+                    from .page import page_response
+
+                    return page_response(request)
+                return inner(connection, request) if inner is not None else None
             query = f"?{parts.query}" if parts.query else ""
             # relative redirects: the same request works behind a proxy that serves the scene
             # under a path of its own (jupyter-server-proxy's <notebook>/proxy/PORT/)
