@@ -773,3 +773,36 @@ def test_shape_meshes_are_inscribed_and_within_a_pixel_of_the_surface():
         assert (h > 0).all()  # outward faces
         assert h.min() >= 1 - MESH_GAP  # every face within MESH_GAP of the sphere
     assert MESH_GAP * 3000 / 2 < 1  # 3,000 px across: a semi-axis of 1,500 px, a gap under a pixel
+
+
+def test_leaving_a_motion_certifies_exactly_what_the_fields_show(server):
+    """Issue 22.1, the reported case: circles-sqrt2 at α1, then "(static shapes)", then A's centre
+    typed "0, 2". The fields show exact decimals (semi-axes "1, 1", not a float decomposition's
+    1.0000000000000004), the configuration holds them, and the readout is the exact relation of
+    what the fields say (tests/oracle.py on the fields' text)."""
+    from fractions import Fraction
+
+    from oracle import oracle_relation
+
+    from app.scene.gui import STATIC
+    from core import quadric_from_axes
+
+    s = Session(server, SceneConfig.from_dict({"preset": "circles-sqrt2", "event": 1}))
+    assert s.ready.wait(120) and s.state.relation == "tangent"
+    s.ui.motion.preset.value = STATIC
+    assert s.state.motion is None and "exactly the decimals their fields show" in s.state.status
+    s.ui.shapes["A"].fields["center"].value = "0, 2"
+    s.panel.show(s.state)
+    texts = {n: {k: h.value for k, h in s.ui.shapes[n].fields.items()} for n in "AB"}
+    assert texts["A"]["semi_axes"] == texts["B"]["semi_axes"] == "1, 1", texts
+    assert texts["A"]["center"] == "0, 2"
+
+    def matrix(t: dict) -> list:
+        c, a = ([Fraction(v) for v in t[k].split(",")] for k in ("center", "semi_axes"))
+        assert float(t["orientation"]) == 0
+        return quadric_from_axes(c, a, None, exact=True)
+
+    assert s.state.relation == oracle_relation(matrix(texts["A"]), matrix(texts["B"]))
+    cfg = s.snapshot().to_dict()
+    assert cfg["A"]["semi_axes"] == cfg["B"]["semi_axes"] == ["1", "1"] and cfg["A"]["center"] == ["0", "2"]
+    s.close()
