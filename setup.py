@@ -11,10 +11,16 @@ rounding per operation as written. -fno-math-errno and -fno-trapping-math change
 they let sqrt and the selects vectorise.
 """
 
+import hashlib
 import platform
 import sys
+from pathlib import Path
 
 from setuptools import Extension, setup
+
+# the extension remembers which generated kernels it was built from: core.fixed.compiled warns
+# when core/fixed/_kernels.h changed since (regenerated but not rebuilt)
+_HASH = hashlib.sha256(Path(__file__).with_name("core").joinpath("fixed", "_kernels.h").read_bytes()).hexdigest()[:16]
 
 _X86 = platform.machine().lower() in ("x86_64", "amd64")
 _SOURCES = ["core/fixed/_filter.c", "core/fixed/_filter_base.c"]
@@ -34,6 +40,7 @@ setup(
             sources=_SOURCES,
             depends=["core/fixed/_kernels.h", "core/fixed/_blocks.h", "core/fixed/_variant.h"],
             extra_compile_args=_FLAGS,
+            define_macros=[("KERNELS_SHA256", f'"{_HASH}"')],
             libraries=[] if sys.platform == "win32" else ["m"],
         )
     ]

@@ -125,7 +125,13 @@ static PyObject *classify(PyObject *self, PyObject *args) {
     return result;
 }
 
+#ifndef KERNELS_SHA256
+#define KERNELS_SHA256 "unknown"
+#endif
+static PyObject *kernels_sha256(PyObject *self, PyObject *noargs) { return PyUnicode_FromString(KERNELS_SHA256); }
+
 static PyMethodDef METHODS[] = {
+    {"kernels_sha256", kernels_sha256, METH_NOARGS, "First 16 hex digits of the SHA-256 of the _kernels.h this module was built from."},
     {"classify", classify, METH_VARARGS, "classify(n, a, b, out): rule ids of count pairs into the int8 buffer out (GIL released)."},
     {"variant", get_variant, METH_NOARGS, "The SIMD variant in use."},
     {"variants", get_variants, METH_NOARGS, "The variants of this build that this CPU can run (slowest first)."},

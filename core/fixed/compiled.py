@@ -17,15 +17,20 @@ decisions ~100x slower, and a :class:`RuntimeWarning` says so once, naming the c
 
 from __future__ import annotations
 
+import hashlib
 import os
 import threading
 import warnings
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 from types import ModuleType
 
 import numpy as np
 
-__all__ = ["available", "warm_up", "status", "variant", "rules", "rule_one", "set_threads", "get_threads", "FIX"]
+__all__ = [
+    "available", "warm_up", "status", "variant", "variants", "select", "rules", "rule_one", "set_threads", "get_threads",
+    "header_sha256", "FIX", "HEADER",
+]
 
 FIX = 'reinstall the package with a C compiler present: `pip install -e .` (or `pip install .`)'
 """What builds the extension (setup.py, setuptools Extension)."""
@@ -37,11 +42,32 @@ _lock = threading.Lock()
 _state: dict[str, object] = {"threads": None, "pool": None, "warned": False}
 
 
+HEADER = Path(__file__).with_name("_kernels.h")
+"""The generated kernels the extension is built from."""
+
+
+def header_sha256() -> str | None:
+    """First 16 hex digits of the SHA-256 of ``_kernels.h`` (None when it is not shipped)."""
+    try:
+        return hashlib.sha256(HEADER.read_bytes()).hexdigest()[:16]
+    except OSError:
+        return None
+
+
 def _load() -> tuple[ModuleType | None, str]:
     try:
         from . import _filter
     except ImportError as e:  # not built: the numpy filter serves (warned once, when used)
         return None, f"the compiled float filter core.fixed._filter is not built ({e})"
+    current = header_sha256()
+    if current is not None and _filter.kernels_sha256() != current:  # regenerated, not rebuilt
+        warnings.warn(
+            f"core.fixed._filter was built from another core/fixed/_kernels.h than the one beside it "
+            f"(run `pip install -e .` after `python -m core.fixed.kernelgen`); it still certifies what it "
+            f"was built to certify, but the numpy filter and the C may now differ.",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     return _filter, f"compiled float filter loaded ({_filter.variant()} variant)"
 
 
@@ -80,6 +106,23 @@ def status() -> str:
 def variant() -> str | None:
     """The SIMD variant in use ("avx512", "avx2", "baseline"), None without the extension."""
     return None if _EXT is None else str(_EXT.variant())
+
+
+def variants() -> list[str]:
+    """The variants of this build that this CPU runs, slowest first (empty without the extension)."""
+    return [] if _EXT is None else list(_EXT.variants())
+
+
+def select(name: str) -> None:
+    """Use this SIMD variant (tests compare them; ``ELLIPSOID_SIMD`` chooses one at import).
+
+    Raises:
+        ValueError: unknown, not built, or not supported by this CPU.
+        RuntimeError: the extension is not built.
+    """
+    if _EXT is None:
+        raise RuntimeError(f"{_STATUS}; fix: {FIX}")
+    _EXT.select(name)
 
 
 def set_threads(n: int | None) -> None:

@@ -157,9 +157,9 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False) -
     return Prepared(W, k, ok, rounded, sym & ~sym)
 
 
-def radii(x: Any, P: Prepared, tag: str) -> dict[tuple[int, int], Any]:
+def radii(x: Any, W: dict[tuple[int, int], Any], rounded: Any, tag: str) -> dict[tuple[int, int], Any]:
     """Radius of each prepared entry: 0 when exact, else |w| 2^-52 + 1e-323 (a rounded half sum)."""
-    return {ij: x.let(f"{tag}q{ij[0]}{ij[1]}", x.where(P.rounded, (x.abs(w) * LEAF_ROUNDING) + LEAF_UNDERFLOW, 0.0)) for ij, w in P.W.items()}
+    return {ij: x.let(f"{tag}q{ij[0]}{ij[1]}", x.where(rounded, (x.abs(w) * LEAF_ROUNDING) + LEAF_UNDERFLOW, 0.0)) for ij, w in W.items()}
 
 
 def pencil_bounds(x: Any, n: int, Pa: Prepared, Pb: Prepared) -> tuple[list[Any], list[Any], list[tuple[Any, Any]]]:

@@ -113,9 +113,8 @@ def first_stage(a: np.ndarray, b: np.ndarray) -> FirstStage:
         todo = np.flatnonzero(code == NEEDS_CERT)
         if todo.size:  # the certificates only where a valid pair is still open
             Wa, Wb = _take(Pa.W, todo), _take(Pb.W, todo)
-            sa = Prepared(Wa, Pa.k[todo], Pa.ok[todo], Pa.rounded[todo])
-            sb = Prepared(Wb, Pb.k[todo], Pb.ok[todo], Pb.rounded[todo])
-            code[todo] = certify(_X, n, Wa, radii(_X, sa, "a"), Wb, radii(_X, sb, "b"), _take(c, todo), _take(cr, todo))
+            Ra, Rb = radii(_X, Wa, Pa.rounded[todo], "a"), radii(_X, Wb, Pb.rounded[todo], "b")
+            code[todo] = certify(_X, n, Wa, Ra, Wb, Rb, _take(c, todo), _take(cr, todo))
     return FirstStage(Pa, Pb, c, cr, code.astype(np.int8), asked)
 
 
@@ -155,7 +154,7 @@ def prepared(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     n = M.shape[-1]
     with np.errstate(all="ignore"):
         P = prepare(_X, n, _entries(M), "m")
-        R = radii(_X, P, "m")
+        R = radii(_X, P.W, P.rounded, "m")
     status = np.where(P.ok, np.where(P.rounded, 2, 1), 0).astype(np.int8)
     return _full(P.W, n), status, _full(R, n)
 
@@ -211,7 +210,7 @@ def classify_translated(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None
     with np.errstate(all="ignore"):
         Pa = prepare(_X, n, _entries(a), "a")
         Pb = prepare(_X, n, _entries(b), "b")
-        ra, rb = radii(_X, Pa, "a"), radii(_X, Pb, "b")
+        ra, rb = radii(_X, Pa.W, Pa.rounded, "a"), radii(_X, Pb.W, Pb.rounded, "b")
         ctr, _, okc = _centre(_X, n, Pa.W, "c")
         centre = np.stack(ctr, axis=1)
         ok = Pa.ok & Pb.ok & okc & np.isfinite(centre).all(axis=1) & (np.abs(centre) <= TRANSLATE_MAX).all(axis=1)

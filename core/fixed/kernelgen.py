@@ -401,7 +401,7 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             Pa, Pb = prepare(x, n, entry("a"), "a"), prepare(x, n, entry("b"), "b")
             c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
             cr = [CExpr(f"c[{n + 1 + i} * s]", "d") for i in range(n + 1)]
-            return certify(x, n, Pa.W, radii(x, Pa, "a"), Pb.W, radii(x, Pb, "b"), c, cr)
+            return certify(x, n, Pa.W, radii(x, Pa.W, Pa.rounded, "a"), Pb.W, radii(x, Pb.W, Pb.rounded, "b"), c, cr)
 
         params = f"const {T} *restrict a, const {T} *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out"
         out.append(_lane_c(
