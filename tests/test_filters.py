@@ -281,7 +281,7 @@ def test_float32_input_is_certified_for_its_own_values(n):
     for v, got in _every_variant(A32, B32).items():
         assert (got == expected).all(), v
     codes = classify(A32, B32, method="float", on_invalid="mark")
-    decided = np.flatnonzero((codes >= 0))
+    decided = np.flatnonzero(codes >= 0)
     assert decided.size > 0.8 * len(A)
     exact = classify(A32[decided[::9]], B32[decided[::9]], method="exact", on_invalid="mark")
     assert (codes[decided[::9]] == exact).all()

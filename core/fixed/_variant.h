@@ -5,7 +5,7 @@
  */
 #include "_kernels.h"
 
-#define CHUNK 128 /* pairs per block: the stage buffers stay in the L1 cache */
+#define CHUNK 64  /* pairs per block: the stage buffers stay in the L1 cache */
 #define LANES 8   /* pairs between two rounds of prefetching the next block */
 #define GLUE_(a, b) a##_##b
 #define GLUE(a, b) GLUE_(a, b)

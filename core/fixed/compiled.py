@@ -62,9 +62,9 @@ def _load() -> tuple[ModuleType | None, str]:
     current = header_sha256()
     if current is not None and _filter.kernels_sha256() != current:  # regenerated, not rebuilt
         warnings.warn(
-            f"core.fixed._filter was built from another core/fixed/_kernels.h than the one beside it "
-            f"(run `pip install -e .` after `python -m core.fixed.kernelgen`); it still certifies what it "
-            f"was built to certify, but the numpy filter and the C may now differ.",
+            "core.fixed._filter was built from another core/fixed/_kernels.h than the one beside it "
+            "(run `pip install -e .` after `python -m core.fixed.kernelgen`); it still certifies what it "
+            "was built to certify, but the numpy filter and the C may now differ.",
             RuntimeWarning,
             stacklevel=2,
         )

@@ -207,8 +207,10 @@ def decide(x: Any, n: int, c: list[Any], cr: list[Any], minors: list[tuple[Any, 
 
 
 def decide_s0(x: Any, n: int, c: list[Any], cr: list[Any], idx: Any) -> Any:
-    """The tree with the certified sign of s0 (through its sign-equivalent hat form): a rule id
-    or :data:`NEEDS_CERT` (s0 not certified)."""
+    """The tree with the certified sign of s0 (its sign-equivalent hat form).
+
+    Returns a rule id, or :data:`NEEDS_CERT` when s0 is not certified.
+    """
     name = f"hat_s0_{n}"
     v, r = x.call(name, [x.vector(c, "c"), x.vector(cr, "cr")])
     bound = x.let("s0r", (r * RADIUS_FACTOR) + x.info(name).floor)

@@ -27,7 +27,17 @@ from ..formulae.decision import RULE_RELATION
 from ..relation import Relation
 from . import _kernels as K
 from . import compiled
-from .driver import NEEDS_CERT, NEEDS_S0, Prepared, certify, decide, decide_s0, pencil_bounds, prepare, radii
+from .driver import (
+    NEEDS_CERT,
+    NEEDS_S0,
+    Prepared,
+    certify,
+    decide,
+    decide_s0,
+    pencil_bounds,
+    prepare,
+    radii,
+)
 from .driver import centre as _centre
 from .errorbound import RADIUS_FACTOR, TRANSLATE_MAX
 from .lanes import NumpyLanes

@@ -28,8 +28,8 @@ from ..formulae.subresultants import hat_s0, hat_s1, hat_s10
 from ..shapes.quadrics import origin_moved
 from .errorbound import (
     CERT_T_MAX,
-    TRANSLATE_MAX,
     LEAF_MAX,
+    TRANSLATE_MAX,
     Kernel,
     build_kernel,
 )

@@ -83,7 +83,7 @@ class NumpyLanes:
         return np.full(np.shape(like), v, dtype=np.int64)
 
     def frexp_exponent(self, v: Any) -> Any:
-        """e with v in [2^(e-1), 2^e) (v finite and > 0)."""
+        """E with v in [2^(e-1), 2^e) (v finite and > 0)."""
         return np.frexp(v)[1].astype(np.int64)
 
     def pow2(self, k: Any) -> Any:
@@ -91,11 +91,11 @@ class NumpyLanes:
         return np.ldexp(1.0, k)
 
     def imin(self, a: Any, b: int) -> Any:
-        """min of an integer lane and a constant."""
+        """Min of an integer lane and a constant."""
         return np.minimum(a, b)
 
     def imax(self, a: Any, b: int) -> Any:
-        """max of an integer lane and a constant."""
+        """Max of an integer lane and a constant."""
         return np.maximum(a, b)
 
     def digit(self, v: Any, bound: Any) -> Any:
@@ -280,11 +280,11 @@ class CLanes:
         return CExpr(f"pow2({_as_c(k, 'i').text})", "d")
 
     def imin(self, a: Any, b: int) -> CExpr:
-        """min of an integer and a constant."""
+        """Min of an integer and a constant."""
         return CExpr(f"imin2({_as_c(a, 'i').text}, {_as_c(b, 'i').text})", "i")
 
     def imax(self, a: Any, b: int) -> CExpr:
-        """max of an integer and a constant."""
+        """Max of an integer and a constant."""
         return CExpr(f"imax2({_as_c(a, 'i').text}, {_as_c(b, 'i').text})", "i")
 
     def digit(self, v: Any, bound: Any) -> CExpr:
