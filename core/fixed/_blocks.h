@@ -19,7 +19,22 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
         double c[2 * (N + 1) * CHUNK];        /* a_0..a_n, then their radii: the same layout */
         int64_t code[CHUNK], idx[CHUNK];
         int32_t open[CHUNK];
-        for (int64_t p = 0; p < m; p++)
+        int64_t done = 0;
+#ifdef HAVE_TRANSPOSE8
+        if (sizeof(T) == sizeof(double)) /* 8 pairs at a time, 8 entries per shuffle network */
+            for (; done + 8 <= m; done += 8) {
+                for (int k = 0; k + 8 <= N * N; k += 8) {
+                    transpose8((const double *)A + (i0 + done) * N * N + k, N * N, (double *)a + k * CHUNK + done, CHUNK);
+                    transpose8((const double *)B + (i0 + done) * N * N + k, N * N, (double *)b + k * CHUNK + done, CHUNK);
+                }
+                for (int64_t p = done; p < done + 8; p++)
+                    for (int k = N * N / 8 * 8; k < N * N; k++) {
+                        a[k * CHUNK + p] = A[(i0 + p) * N * N + k];
+                        b[k * CHUNK + p] = B[(i0 + p) * N * N + k];
+                    }
+            }
+#endif
+        for (int64_t p = done; p < m; p++)
             for (int k = 0; k < N * N; k++) {
                 a[k * CHUNK + p] = A[(i0 + p) * N * N + k];
                 b[k * CHUNK + p] = B[(i0 + p) * N * N + k];

@@ -7,6 +7,39 @@
 
 #define CHUNK 64  /* pairs per block: the stage buffers stay in the L1 cache */
 #define LANES 8   /* pairs between two rounds of prefetching the next block */
+
+#if defined(__GNUC__) && !defined(__clang__)
+#define SHUFFLE(a, b, ...) __builtin_shuffle(a, b, (v8i){__VA_ARGS__})
+#elif defined(__clang__)
+#define SHUFFLE(a, b, ...) __builtin_shufflevector(a, b, __VA_ARGS__)
+#endif
+#ifdef SHUFFLE
+#define HAVE_TRANSPOSE8 1
+typedef double v8d __attribute__((vector_size(64)));
+typedef long long v8i __attribute__((vector_size(64)));
+
+/* dst[k * ld_dst + p] = src[p * ld_src + k] for p, k < 8: an 8 x 8 transpose in 24 shuffles
+ * (pairs of rows, then quads, then halves), in whatever vector width the variant has. */
+static inline void transpose8(const double *restrict src, int64_t ld_src, double *restrict dst, int64_t ld_dst) {
+    v8d r[8], t[8], u[8];
+    for (int p = 0; p < 8; p++) memcpy(&r[p], src + p * ld_src, sizeof(v8d));
+    for (int p = 0; p < 8; p += 2) {
+        t[p] = SHUFFLE(r[p], r[p + 1], 0, 8, 2, 10, 4, 12, 6, 14);
+        t[p + 1] = SHUFFLE(r[p], r[p + 1], 1, 9, 3, 11, 5, 13, 7, 15);
+    }
+    for (int p = 0; p < 8; p += 4)
+        for (int q = 0; q < 2; q++) {
+            u[p + q] = SHUFFLE(t[p + q], t[p + q + 2], 0, 1, 8, 9, 4, 5, 12, 13);
+            u[p + q + 2] = SHUFFLE(t[p + q], t[p + q + 2], 2, 3, 10, 11, 6, 7, 14, 15);
+        }
+    for (int k = 0; k < 4; k++) {
+        const v8d lo = SHUFFLE(u[k], u[k + 4], 0, 1, 2, 3, 8, 9, 10, 11);
+        const v8d hi = SHUFFLE(u[k], u[k + 4], 4, 5, 6, 7, 12, 13, 14, 15);
+        memcpy(dst + k * ld_dst, &lo, sizeof(v8d));
+        memcpy(dst + (k + 4) * ld_dst, &hi, sizeof(v8d));
+    }
+}
+#endif
 #define GLUE_(a, b) a##_##b
 #define GLUE(a, b) GLUE_(a, b)
 
