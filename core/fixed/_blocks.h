@@ -9,7 +9,8 @@
  * The pairs of a block are first transposed to structure of arrays (entry k of every pair in
  * one row). Each stage is then a loop over pairs whose body is a branch-free lane function, so
  * the compiler turns it into SIMD across pairs, a vector load reading one entry of several pairs. Stage 2 (s0) and stage 3 (the certificates) run only on the pairs
- * the stage before left open; those are packed first so that the SIMD lanes stay full.
+ * the stage before left open: packed first so that the SIMD lanes stay full, or, when most pairs
+ * of the block are open, run on every lane in place and selected.
  */
 
 void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict out, int64_t count) {
@@ -58,7 +59,17 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
             open[k] = (int32_t)p;
             k += code[p] == NEEDS_FULL;
         }
-        if (k) {
+        if (2 * k > m) { /* most pairs (numpy-built matrices): every lane in place, then select */
+            double d[2 * (N + 1) * CHUNK];
+            int64_t di[CHUNK];
+            for (int64_t p = 0; p < m; p++) {
+                const int64_t full = FULL(a + p, b + p, d + p, CHUNK, di + p);
+                const int64_t take = code[p] == NEEDS_FULL;
+                for (int r = 0; r < 2 * (N + 1); r++) c[r * CHUNK + p] = take ? d[r * CHUNK + p] : c[r * CHUNK + p];
+                idx[p] = take ? di[p] : idx[p];
+                code[p] = take ? full : code[p];
+            }
+        } else if (k) {
             T pa[N * N * CHUNK], pb[N * N * CHUNK];
             double d[2 * (N + 1) * CHUNK];
             int64_t di[CHUNK], dc[CHUNK];
@@ -101,7 +112,12 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
             open[k] = (int32_t)p;
             k += code[p] == NEEDS_CERT;
         }
-        if (k) {
+        if (2 * k > m) { /* most pairs (spheres, copies): every lane in place, then select */
+            for (int64_t p = 0; p < m; p++) {
+                const int64_t cert = THIRD(a + p, b + p, c + p, CHUNK);
+                code[p] = code[p] == NEEDS_CERT ? cert : code[p];
+            }
+        } else if (k) {
             T pa[N * N * CHUNK], pb[N * N * CHUNK];
             double d[2 * (N + 1) * CHUNK];
             int64_t dc[CHUNK];
