@@ -345,7 +345,7 @@ def _classify_flat(
         if a.dtype != b.dtype:  # float32 against float64: widen (exact)
             a, b = a.astype(np.float64), b.astype(np.float64)
         codes = classify_float(a, b, scalar=scalar)
-        by[codes != Relation.UNDECIDED] = Certifier.FLOAT
+        by = (codes != Relation.UNDECIDED).view(np.int8)  # Certifier.FLOAT is 1, NONE 0
     errors = _resolve(a, b, codes, by, method, scalar, on_invalid, progress)
     return codes, by, errors
 

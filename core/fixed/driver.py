@@ -109,7 +109,9 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False) -
     off = [(i, j) for i, j in idx if i != j]
     X = {(i, j): x.let(f"{tag}x{i}{j}", entry(i, j)) for i, j in idx}
     Y = {(i, j): x.let(f"{tag}y{i}{j}", entry(j, i)) for i, j in off}
-    values = [*X.values(), *Y.values()]
+    # the fast pass reads the upper triangle for the scale and the finiteness: a lower entry
+    # that differs (NaN included) makes the matrix not exactly symmetric, left to the full pass
+    values = [*X.values()] if exact_only else [*X.values(), *Y.values()]
     nan_free = values[0] == values[0]
     mx = x.abs(values[0])
     for v in values[1:]:
@@ -124,14 +126,16 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False) -
     # the sign flip to a negative interior rides on the first factor (exact either way)
     g1 = x.let(f"{tag}g1", x.where(X[0, 0] < 0.0, -x.pow2(k1), x.pow2(k1)))
     g2 = x.let(f"{tag}g2", x.pow2(k - k1))
-    XS = {ij: x.let(f"{tag}X{ij[0]}{ij[1]}", (v * g1) * g2) for ij, v in X.items()}
     sym = X[off[0]] == Y[off[0]]
     for ij in off[1:]:
         sym = sym & (X[ij] == Y[ij])
     sym = x.let(f"{tag}sym", sym)
     if exact_only:
-        W = {ij: x.let(f"{tag}w{ij[0]}{ij[1]}", v) for ij, v in XS.items()}
-        return Prepared(W, k, x.let(f"{tag}ok", finite & sym), sym & ~sym, x.let(f"{tag}open", finite & ~sym))
+        # one exact factor (2^k1 = 2^k unless the largest entry is below 2^-999: the full pass)
+        W = {ij: x.let(f"{tag}w{ij[0]}{ij[1]}", v * g1) for ij, v in X.items()}
+        fast = x.let(f"{tag}fast", sym & (mx >= 2.0**-1000))  # i.e. k <= 1000: g2 = 1
+        return Prepared(W, k, x.let(f"{tag}ok", finite & fast), sym & ~sym, x.let(f"{tag}open", finite & ~fast))
+    XS = {ij: x.let(f"{tag}X{ij[0]}{ij[1]}", (v * g1) * g2) for ij, v in X.items()}
     YS = {ij: x.let(f"{tag}Y{ij[0]}{ij[1]}", (v * g1) * g2) for ij, v in Y.items()}
     m = []
     for i in range(n):
