@@ -113,27 +113,34 @@ def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -
     cores = len(os.sched_getaffinity(0))
     rows: list[dict[str, Any]] = []
     random_rate: dict[int, float] = {}
+    random_data: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     for dim in (3, 2):
         ds = D.random_pairs(dim, n_lab, seed=11)
         A, B = _tile(ds, size)
         A32, B32 = A.astype(np.float32), B.astype(np.float32)
-        with _one_cpu():
-            core.set_threads(1)
-            one = _rounds({
+        one: dict[str, float] = {}
+        every: dict[str, float] = {}
+        for _ in range(rounds):  # interleaved: one core (pinned) and every core in each round
+            with _one_cpu():
+                core.set_threads(1)
+                for key, rate in _rounds({
+                    "certified": lambda A=A, B=B: core.classify(A, B),
+                    "float32": lambda A=A32, B=B32: core.classify(A, B),
+                    "baseline": lambda A=A, B=B: baseline.baseline_codes(A, B),
+                    "read": lambda A=A, B=B: baseline.read_all(A, B),
+                }, size, 1).items():
+                    one[key] = max(one.get(key, 0.0), rate)
+            core.set_threads(None)
+            for key, rate in _rounds({
                 "certified": lambda A=A, B=B: core.classify(A, B),
                 "float32": lambda A=A32, B=B32: core.classify(A, B),
-                "baseline": lambda A=A, B=B: baseline.baseline_codes(A, B),
-                "read": lambda A=A, B=B: baseline.read_all(A, B),
-            }, size, rounds)
-        core.set_threads(None)
-        every = _rounds({
-            "certified": lambda A=A, B=B: core.classify(A, B),
-            "float32": lambda A=A32, B=B32: core.classify(A, B),
-        }, size, rounds)
+            }, size, 1).items():
+                every[key] = max(every.get(key, 0.0), rate)
         agree = float((baseline.baseline_codes(ds.A, ds.B) == ds.truth).mean())
         right32 = float((core.classify(ds.A.astype(np.float32), ds.B.astype(np.float32), method="exact") ==
                          core.classify(ds.A.astype(np.float32), ds.B.astype(np.float32))).mean())
         random_rate[dim] = every["certified"]
+        random_data[dim] = (A, B)
         rows.append({"kind": "random", "dim": dim, "all": every["certified"], "one": one["certified"],
                      "baseline": one["baseline"], "read": one["read"], "f32_one": one["float32"], "f32_all": every["float32"],
                      "baseline_right": agree, "f32_right": right32, "cores": cores})
@@ -146,13 +153,16 @@ def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -
             ds = D.structured_pairs(dim, n_lab, kind=kind, seed=12)
             res = classify_detailed(ds.A, ds.B)
             A, B = _tile(ds, size)
-            rate = _rounds({"c": lambda A=A, B=B: core.classify(A, B)}, size, max(3, rounds // 2))["c"]
+            RA, RB = random_data[dim]
+            both = _rounds({"c": lambda A=A, B=B: core.classify(A, B), "r": lambda A=RA, B=RB: core.classify(A, B)},
+                           size, max(3, rounds // 2))  # against random pairs in the same rounds
+            rate = both["c"]
             structured.append({
-                "name": f"{kind} {dim}D", "dim": dim, "n": len(ds), "rate": rate, "ratio": rate / random_rate[dim],
+                "name": f"{kind} {dim}D", "dim": dim, "n": len(ds), "rate": rate, "ratio": rate / both["r"],
                 "escalated": int(np.count_nonzero(res.certified_by == Certifier.EXACT)),
                 "wrong": int(np.count_nonzero(res.relation != ds.truth)),
             })
-            log(f"# {kind} {dim}D: {rate / 1e6:.1f} M/s ({rate / random_rate[dim]:.2f}x random), escalated {structured[-1]['escalated']}")
+            log(f"# {kind} {dim}D: {rate / 1e6:.1f} M/s ({structured[-1]['ratio']:.2f}x random), escalated {structured[-1]['escalated']}")
     hard: list[dict[str, Any]] = []
     for dim in (3, 2):
         for gap in (1e-3, 1e-2, 1e-1):
@@ -231,3 +241,63 @@ def format_throughput(tp: dict[str, Any]) -> str:
     L.append(f"| import core | {fc['import']:.3f} |\n| first classify | {fc['first']:.3f} |\n| second classify | {fc['second']:.3f} |")
     L.append(f"| first / second | {fc['ratio']:.2f}x |")
     return "\n".join(L)
+
+
+_SECTION = "## Throughput on every core, on the inputs users bring"
+_OLD_TARGETS = (
+    "certified adaptive (random 3D, all",
+    "cold start:",
+    "spheres, translated / homothetic copies",
+    "large ellipsoid beside a small sphere",
+)
+_BEFORE = (
+    "Before issue 24 (report of 2026-12-01 and the issue's own run, same machine): certified one core 20.5-22.2 M/s "
+    "= 0.87x the C tree, every core 34.1-35.1 M/s = 53 % of the read limit; first call in a fresh process 31x the "
+    "second (kernels compiled or loaded from a disk cache in the background, numpy meanwhile); no compiler: numpy only, "
+    "silently."
+)
+
+
+def write_section(tp: dict[str, Any], path: Path, *, command: str) -> None:
+    """Replace the throughput section and the throughput target rows of an existing REPORT.md."""
+    text = path.read_text()
+    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    body = (f"{_SECTION}\n\nRows generated by `{command}` on {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
+            f"(load average {load} at the end: the machine is shared, so every figure is a ratio measured in the same "
+            f"run). {_BEFORE}\n\nCertified = `core.classify(A, B)` (adaptive: the compiled float filter, exact arithmetic "
+            "for what it leaves) on float64 (and float32) stacks; the uncertified baseline is the paper's tree in plain C "
+            "(`bench/baseline_tree.c`, built at benchmark time with `gcc -O3 -march=native`, no error bound, no "
+            "validation); the memory read sums both input arrays once. Structured data: s0 vanishes identically for "
+            "spheres and translated or homothetic copies, so the filter decides them by its certificates that do not "
+            "need s0 (rules `sep-witness`, `common-point`).\n\n" + format_throughput(tp) + "\n\n")
+    start = text.index(_SECTION)
+    end = text.index("\n## ", start + len(_SECTION)) + 1
+    text = text[:start] + body + text[end:]
+    lines = text.split("\n")
+    rows = [f"| {t} | {m} | {v} |" for t, m, v, _ in throughput_targets(tp)]
+    keep = [ln for ln in lines if not any(ln.startswith(f"| {old}") for old in (*_OLD_TARGETS, *(r[2:40] for r in rows)))]
+    at = next(i for i, ln in enumerate(keep) if ln.startswith("## Reading")) - 1
+    while keep[at] == "":
+        at -= 1
+    path.write_text("\n".join(keep[: at + 1] + rows + keep[at + 1 :]))
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m bench.throughput [--quick] [--write]``: print the tables (and update bench/REPORT.md)."""
+    import argparse
+
+    ap = argparse.ArgumentParser(description="Throughput of the certified filter against the C tree and the memory read.")
+    ap.add_argument("--quick", action="store_true", help="100k pairs instead of 1M")
+    ap.add_argument("--write", action="store_true", help="replace the throughput section and rows of bench/REPORT.md")
+    a = ap.parse_args(argv)
+    tp = run_throughput(quick=a.quick, log=lambda s: print(s, file=sys.stderr, flush=True))
+    print(format_throughput(tp))
+    for t, m, v, _ in throughput_targets(tp):
+        print(f"| {t} | {m} | {v} |")
+    if a.write:
+        write_section(tp, ROOT / "bench" / "REPORT.md", command="python -m bench.throughput --write" + (" --quick" if a.quick else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

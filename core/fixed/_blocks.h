@@ -22,11 +22,10 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
         int32_t open[CHUNK];
         int64_t done = 0;
 #ifdef HAVE_TRANSPOSE8
-        if (sizeof(T) == sizeof(double)) /* 8 pairs at a time, 8 entries per shuffle network */
-            for (; done + 8 <= m; done += 8) {
+        for (; done + 8 <= m; done += 8) { /* 8 pairs at a time, 8 entries per shuffle network */
                 for (int k = 0; k + 8 <= N * N; k += 8) {
-                    transpose8((const double *)A + (i0 + done) * N * N + k, N * N, (double *)a + k * CHUNK + done, CHUNK);
-                    transpose8((const double *)B + (i0 + done) * N * N + k, N * N, (double *)b + k * CHUNK + done, CHUNK);
+                    TRANSPOSE8_T(A + (i0 + done) * N * N + k, N * N, a + k * CHUNK + done, CHUNK);
+                    TRANSPOSE8_T(B + (i0 + done) * N * N + k, N * N, b + k * CHUNK + done, CHUNK);
                 }
                 for (int64_t p = done; p < done + 8; p++)
                     for (int k = N * N / 8 * 8; k < N * N; k++) {

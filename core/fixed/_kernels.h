@@ -372,7 +372,6 @@ static inline __attribute__((always_inline)) int64_t first3_f64(const double *re
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
     const double aw00 = (ax00 * ag1);
     const double aw01 = (ax01 * ag1);
@@ -397,7 +396,6 @@ static inline __attribute__((always_inline)) int64_t first3_f64(const double *re
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
     const double bw00 = (bx00 * bg1);
     const double bw01 = (bx01 * bg1);
@@ -470,8 +468,8 @@ static inline __attribute__((always_inline)) int64_t full3_f64(const double *res
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
+    const double ag2 = pow2((ak - ak1));
     const double aX00 = ((ax00 * ag1) * ag2);
     const double aX01 = ((ax01 * ag1) * ag2);
     const double aX02 = ((ax02 * ag1) * ag2);
@@ -509,8 +507,8 @@ static inline __attribute__((always_inline)) int64_t full3_f64(const double *res
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
+    const double bg2 = pow2((bk - bk1));
     const double bX00 = ((bx00 * bg1) * bg2);
     const double bX01 = ((bx01 * bg1) * bg2);
     const double bX02 = ((bx02 * bg1) * bg2);
@@ -596,8 +594,8 @@ static inline __attribute__((always_inline)) int64_t third3_f64(const double *re
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
+    const double ag2 = pow2((ak - ak1));
     const double aX00 = ((ax00 * ag1) * ag2);
     const double aX01 = ((ax01 * ag1) * ag2);
     const double aX02 = ((ax02 * ag1) * ag2);
@@ -635,8 +633,8 @@ static inline __attribute__((always_inline)) int64_t third3_f64(const double *re
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
+    const double bg2 = pow2((bk - bk1));
     const double bX00 = ((bx00 * bg1) * bg2);
     const double bX01 = ((bx01 * bg1) * bg2);
     const double bX02 = ((bx02 * bg1) * bg2);
@@ -754,7 +752,6 @@ static inline __attribute__((always_inline)) int64_t first3_f32(const float *res
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
     const double aw00 = (ax00 * ag1);
     const double aw01 = (ax01 * ag1);
@@ -779,7 +776,6 @@ static inline __attribute__((always_inline)) int64_t first3_f32(const float *res
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
     const double bw00 = (bx00 * bg1);
     const double bw01 = (bx01 * bg1);
@@ -852,8 +848,8 @@ static inline __attribute__((always_inline)) int64_t full3_f32(const float *rest
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
+    const double ag2 = pow2((ak - ak1));
     const double aX00 = ((ax00 * ag1) * ag2);
     const double aX01 = ((ax01 * ag1) * ag2);
     const double aX02 = ((ax02 * ag1) * ag2);
@@ -891,8 +887,8 @@ static inline __attribute__((always_inline)) int64_t full3_f32(const float *rest
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
+    const double bg2 = pow2((bk - bk1));
     const double bX00 = ((bx00 * bg1) * bg2);
     const double bX01 = ((bx01 * bg1) * bg2);
     const double bX02 = ((bx02 * bg1) * bg2);
@@ -978,8 +974,8 @@ static inline __attribute__((always_inline)) int64_t third3_f32(const float *res
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
+    const double ag2 = pow2((ak - ak1));
     const double aX00 = ((ax00 * ag1) * ag2);
     const double aX01 = ((ax01 * ag1) * ag2);
     const double aX02 = ((ax02 * ag1) * ag2);
@@ -1017,8 +1013,8 @@ static inline __attribute__((always_inline)) int64_t third3_f32(const float *res
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
+    const double bg2 = pow2((bk - bk1));
     const double bX00 = ((bx00 * bg1) * bg2);
     const double bX01 = ((bx01 * bg1) * bg2);
     const double bX02 = ((bx02 * bg1) * bg2);
@@ -1819,7 +1815,6 @@ static inline __attribute__((always_inline)) int64_t first4_f64(const double *re
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
     const double aw00 = (ax00 * ag1);
     const double aw01 = (ax01 * ag1);
@@ -1855,7 +1850,6 @@ static inline __attribute__((always_inline)) int64_t first4_f64(const double *re
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
     const double bw00 = (bx00 * bg1);
     const double bw01 = (bx01 * bg1);
@@ -1955,8 +1949,8 @@ static inline __attribute__((always_inline)) int64_t full4_f64(const double *res
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
+    const double ag2 = pow2((ak - ak1));
     const double aX00 = ((ax00 * ag1) * ag2);
     const double aX01 = ((ax01 * ag1) * ag2);
     const double aX02 = ((ax02 * ag1) * ag2);
@@ -2018,8 +2012,8 @@ static inline __attribute__((always_inline)) int64_t full4_f64(const double *res
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
+    const double bg2 = pow2((bk - bk1));
     const double bX00 = ((bx00 * bg1) * bg2);
     const double bX01 = ((bx01 * bg1) * bg2);
     const double bX02 = ((bx02 * bg1) * bg2);
@@ -2145,8 +2139,8 @@ static inline __attribute__((always_inline)) int64_t third4_f64(const double *re
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
+    const double ag2 = pow2((ak - ak1));
     const double aX00 = ((ax00 * ag1) * ag2);
     const double aX01 = ((ax01 * ag1) * ag2);
     const double aX02 = ((ax02 * ag1) * ag2);
@@ -2208,8 +2202,8 @@ static inline __attribute__((always_inline)) int64_t third4_f64(const double *re
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
+    const double bg2 = pow2((bk - bk1));
     const double bX00 = ((bx00 * bg1) * bg2);
     const double bX01 = ((bx01 * bg1) * bg2);
     const double bX02 = ((bx02 * bg1) * bg2);
@@ -2392,7 +2386,6 @@ static inline __attribute__((always_inline)) int64_t first4_f32(const float *res
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
     const double aw00 = (ax00 * ag1);
     const double aw01 = (ax01 * ag1);
@@ -2428,7 +2421,6 @@ static inline __attribute__((always_inline)) int64_t first4_f32(const float *res
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
     const double bw00 = (bx00 * bg1);
     const double bw01 = (bx01 * bg1);
@@ -2528,8 +2520,8 @@ static inline __attribute__((always_inline)) int64_t full4_f32(const float *rest
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
+    const double ag2 = pow2((ak - ak1));
     const double aX00 = ((ax00 * ag1) * ag2);
     const double aX01 = ((ax01 * ag1) * ag2);
     const double aX02 = ((ax02 * ag1) * ag2);
@@ -2591,8 +2583,8 @@ static inline __attribute__((always_inline)) int64_t full4_f32(const float *rest
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
+    const double bg2 = pow2((bk - bk1));
     const double bX00 = ((bx00 * bg1) * bg2);
     const double bX01 = ((bx01 * bg1) * bg2);
     const double bX02 = ((bx02 * bg1) * bg2);
@@ -2718,8 +2710,8 @@ static inline __attribute__((always_inline)) int64_t third4_f32(const float *res
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
-    const double ag2 = pow2((ak - ak1));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
+    const double ag2 = pow2((ak - ak1));
     const double aX00 = ((ax00 * ag1) * ag2);
     const double aX01 = ((ax01 * ag1) * ag2);
     const double aX02 = ((ax02 * ag1) * ag2);
@@ -2781,8 +2773,8 @@ static inline __attribute__((always_inline)) int64_t third4_f32(const float *res
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
-    const double bg2 = pow2((bk - bk1));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
+    const double bg2 = pow2((bk - bk1));
     const double bX00 = ((bx00 * bg1) * bg2);
     const double bX01 = ((bx01 * bg1) * bg2);
     const double bX02 = ((bx02 * bg1) * bg2);

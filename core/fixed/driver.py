@@ -125,7 +125,6 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False) -
     k1 = x.let(f"{tag}k1", x.imin(k, 1000))
     # the sign flip to a negative interior rides on the first factor (exact either way)
     g1 = x.let(f"{tag}g1", x.where(X[0, 0] < 0.0, -x.pow2(k1), x.pow2(k1)))
-    g2 = x.let(f"{tag}g2", x.pow2(k - k1))
     sym = X[off[0]] == Y[off[0]]
     for ij in off[1:]:
         sym = sym & (X[ij] == Y[ij])
@@ -135,6 +134,7 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False) -
         W = {ij: x.let(f"{tag}w{ij[0]}{ij[1]}", v * g1) for ij, v in X.items()}
         fast = x.let(f"{tag}fast", sym & (mx >= 2.0**-1000))  # i.e. k <= 1000: g2 = 1
         return Prepared(W, k, x.let(f"{tag}ok", finite & fast), sym & ~sym, x.let(f"{tag}open", finite & ~fast))
+    g2 = x.let(f"{tag}g2", x.pow2(k - k1))
     XS = {ij: x.let(f"{tag}X{ij[0]}{ij[1]}", (v * g1) * g2) for ij, v in X.items()}
     YS = {ij: x.let(f"{tag}Y{ij[0]}{ij[1]}", (v * g1) * g2) for ij, v in Y.items()}
     m = []
