@@ -68,7 +68,7 @@ def _load() -> tuple[ModuleType | None, str]:
             RuntimeWarning,
             stacklevel=2,
         )
-    return _filter, f"compiled float filter loaded ({_filter.variant()} variant)"
+    return _filter, f"compiled kernels loaded (core.fixed._filter, {_filter.variant()} variant)"
 
 
 _EXT, _STATUS = _load()
