@@ -54,7 +54,7 @@ def run(n: int, *, fraction: float, periodic: bool, seed: int = 0) -> dict[str, 
 def pipeline_row(n: int, *, fraction: float, seed: int = 0) -> dict[str, float]:
     """The pipeline a user would otherwise write, beside ``contacts``: uncertified, same bodies.
 
-    scipy's ``cKDTree.query_pairs`` on bounding spheres (centre, largest semi-axis; all cores),
+    scipy's ``cKDTree.query_pairs`` on bounding spheres (centre, largest semi-axis; one thread),
     the pairs whose spheres meet, then the paper's tree in plain C without any error bound
     (``bench/baseline_tree.c``, one thread) on those candidates. Times include building the
     matrices in both (the same routine). Returns both times and contact counts.
@@ -64,21 +64,23 @@ def pipeline_row(n: int, *, fraction: float, seed: int = 0) -> dict[str, float]:
     from bench import baseline
 
     b = random_bodies(n, fraction=fraction, seed=seed)
-    t0 = time.perf_counter()
-    Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
-    res = contacts(Q)
-    certified = time.perf_counter() - t0
     baseline.build()
-    t0 = time.perf_counter()
-    Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
-    r = b.semi_axes.max(axis=1)
-    pairs = cKDTree(b.centers).query_pairs(2 * float(r.max()), output_type="ndarray", workers=-1)
-    i, j = pairs[:, 0], pairs[:, 1]
-    d2 = ((b.centers[i] - b.centers[j]) ** 2).sum(axis=1)
-    keep = d2 <= (r[i] + r[j]) ** 2
-    i, j = i[keep], j[keep]
-    codes = baseline.baseline_codes(Q[i], Q[j])
-    pipeline = time.perf_counter() - t0
+    certified = pipeline = float("inf")
+    for _ in range(3):  # best of 3 each, interleaved (shared machine)
+        t0 = time.perf_counter()
+        Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
+        res = contacts(Q)
+        certified = min(certified, time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
+        r = b.semi_axes.max(axis=1)
+        pairs = cKDTree(b.centers).query_pairs(2 * float(r.max()), output_type="ndarray")
+        i, j = pairs[:, 0], pairs[:, 1]
+        d2 = ((b.centers[i] - b.centers[j]) ** 2).sum(axis=1)
+        keep = d2 <= (r[i] + r[j]) ** 2
+        i, j = i[keep], j[keep]
+        codes = baseline.baseline_codes(Q[i], Q[j])
+        pipeline = min(pipeline, time.perf_counter() - t0)
     return {"n": n, "certified": certified, "pipeline": pipeline, "contacts": len(res),
             "pipeline_contacts": int(np.count_nonzero(codes != 0)), "candidates": int(i.size)}
 
