@@ -151,7 +151,8 @@ def sweep_contacts(
             if held >= _BATCH:
                 found.add(Candidates.concatenate(waiting, d, L is not None), progress, total)
                 waiting, held = [], 0
-            found.done = examined
+            if not waiting:  # every pair examined so far is through both phases
+                found.done = examined
             if progress is not None:
                 progress(found.done, total)
         if waiting:
@@ -206,7 +207,8 @@ class _Found:
         self.parts: list[tuple[Candidates, FirstContacts]] = []
         self.candidates = self.by_float = self.by_exact = 0
         self.done = 0
-        """Broad-phase pairs examined before the batch in the narrow phase (its progress)."""
+        """Broad-phase pairs examined whose candidates are through the narrow phase (the progress
+        reported while a batch is in the narrow phase)."""
         self.narrow_s = 0.0
 
     def add(self, cand: Candidates, progress: Progress | None, total: int) -> None:
