@@ -334,3 +334,24 @@ def test_exact_times_over_the_time_budget_is_503_saying_where():
         r"stopped after [\d,]+ of 300 exact times: over the time budget of 1 s per request; send fewer bodies per request",
         detail,
     ) or detail == killed, detail
+
+
+def test_the_sweep_runs_in_a_worker_process():
+    """The event loop only passes the bytes on: the sweep and its JSON are made in sweep_job."""
+    from app.api.deps import get_workers
+    from app.workers import WorkerPool
+
+    jobs: list[str] = []
+
+    class Recording(WorkerPool):
+        def run(self, fn, /, *args, **kwargs):
+            jobs.append(fn.__name__)
+            return super().run(fn, *args, **kwargs)
+
+    app = create_api()
+    pool = Recording(1)
+    app.dependency_overrides[get_workers] = lambda: pool
+    with TestClient(app) as c:
+        status, out = post(c, {"start": HAND_START, "end": HAND_END})
+    assert status == 200 and out == hand_answer(out, times=False)
+    assert jobs == ["sweep_job"]
