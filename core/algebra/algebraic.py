@@ -384,9 +384,13 @@ def _exact_decimal(x: fmpq, digits: int) -> str | None:
         return "0"
     # n = a 10^k ends in a nonzero digit (k is least): it has floor_log10(a) + k + 1 digits, all
     # significant; decide before writing any (a value like 10^5000 never becomes text here)
-    if floor_log10(a) + k + 1 > digits:
+    e = floor_log10(a)
+    if e + k + 1 > digits:
         return None
     s = str((a * fmpq(10) ** k).p)  # an fmpz: no 4300-digit limit
+    if not -6 <= e < digits + 6:  # far from 1: mantissa and exponent, as _round_decimal writes it
+        s = s.rstrip("0")
+        return ("-" if x < 0 else "") + s[0] + ("." + s[1:] if len(s) > 1 else "") + f"e{e}"
     if k == 0:
         out = s
     else:

@@ -45,7 +45,7 @@ from .floatdet import det_with_bound
 from .floats import centred, dot, down, is_array, lists, maximise, scaled, stacked, up, where
 from .numbers import to_float
 from .plane import separating_plane_pair
-from .scale import _contact_scale_pair
+from .scale import contact_scale_pair
 
 __all__ = ["ContactScaleBatch", "PlaneBatch", "FloatWitness", "contact_scale_batch", "separating_plane_batch", "float_witness"]
 
@@ -413,7 +413,7 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
         a_obj, b_obj = (a, b) if a.ndim == 3 else (a[None], b[None])
 
     for i in np.flatnonzero(need):
-        cs = _contact_scale_pair(a_obj[i].tolist(), b_obj[i].tolist(), max(rtol, 1e-15))
+        cs = contact_scale_pair(a_obj[i].tolist(), b_obj[i].tolist(), rtol=max(rtol, 1e-15))
         mu_lo[i], mu_hi[i], approx[i] = _float_down(cs.lo), _float_up(cs.hi), cs.approx
     codes = codes_full.reshape(-1)
     sep, ovl, tan = codes == Relation.SEPARATE, codes == Relation.OVERLAP, codes == Relation.TANGENT

@@ -34,12 +34,13 @@ from ..fixed.classify import classify
 from ..formulae.pencil import determinant, pencil_coefficients
 from ..relation import Relation
 from .centred import CentredShape, column
-from .contact_function import ContactFunction
+from .contact_function import ContactFunction, log2_abs, pow2
 from .numbers import algebraic_dict, simplest_between
 
 __all__ = ["ContactPoint", "contact_point", "tangent_point", "overlap_point"]
 
-_MAX_ROUNDS = 12
+_MAX_STEPS = 400
+"""Narrowing steps at most (a handful are needed): a safety net."""
 
 
 @dataclass
@@ -161,50 +162,33 @@ def _inside_both(A: CentredShape, B: CentredShape, x: fmpq_mat) -> bool:
     return A.form(x) < 0 and B.form(x) < 0
 
 
-def _float_candidate(A: CentredShape, B: CentredShape) -> fmpq_mat | None:
-    """x(lambda*) from float arithmetic (a candidate only: checked exactly by the caller)."""
-    from .floats import maximise
-
-    try:
-        ca, SA = A.floats()
-        cb, SB = B.floats()
-        lam, _, y = maximise(SA, SB, [q - p for p, q in zip(ca, cb, strict=True)])
-        x = [ca[i] + (1 - lam) * sum(SA[i][j] * y[j] for j in range(A.d)) for i in range(A.d)]
-        return column([fmpq(*float(v).as_integer_ratio()) for v in x])
-    except (ArithmeticError, ValueError):
-        return None
-
-
 def overlap_point(A: CentredShape, B: CentredShape, cf: ContactFunction | None = None) -> ContactPoint:
     """A rational point inside both shapes of an overlapping pair (see the module docstring).
 
-    ``cf``: the pair's contact function if already built (its first bracket is cached).
+    ``cf``: the pair's contact function if already built (its first bracket is cached). The
+    candidates are simple rationals near x(lambda) at the best lambda known; the bracket of
+    lambda* is narrowed a step at a time until one of them is inside both (x(lambda*) is, with
+    depth 1 - s* > 0, and each step at least halves the bracket).
     """
-    size = min(*(A.S[i, i] for i in range(A.d)), *(B.S[i, i] for i in range(B.d)))
-    if cf is not None and cf.first_bracket() is not None:  # cached: x(lambda) at its best lambda
-        quick: fmpq_mat | None = cf.point(cf.first_bracket().best)  # type: ignore[union-attr]
-    else:
-        quick = _float_candidate(A, B)
-    if quick is not None:
-        for cand in _candidates(quick, size):
-            if _inside_both(A, B, cand):
-                return ContactPoint(Relation.OVERLAP, tuple(RealAlgebraic.rational(cand[i, 0]) for i in range(A.d)))
+    # a length of the order of the smaller semi-axis (S_ii is a squared length), a power of two
+    size = pow2(min(log2_abs(S[i, i]) for S in (A.S, B.S) for i in range(A.d)) // 2)
     cf = cf or ContactFunction(A, B)
-    br = cf.first_bracket()
-    rounds = [A.centre] if br is None else []
-    bits = 64
-    for _ in range(_MAX_ROUNDS):
-        if br is not None:
-            rounds = [cf.point(br.best), A.centre, B.centre]
-        for x in rounds:
+    br = cf.start()
+    if br is None:  # same centre: it is inside both
+        return _rational_point(A.centre)
+    for k in range(_MAX_STEPS):
+        for x in (cf.point(br.best), A.centre, B.centre) if k == 0 else (cf.point(br.best),):
             for cand in _candidates(x, size):
                 if _inside_both(A, B, cand):
-                    return ContactPoint(Relation.OVERLAP, tuple(RealAlgebraic.rational(cand[i, 0]) for i in range(A.d)))
-        if br is None:
+                    return _rational_point(cand)
+        if br.exact:
             break
-        bits *= 2
-        br = cf.refine(br, bits)
+        br = cf.step(br)
     raise RuntimeError("contact_point: no common interior point found (please report this pair)")
+
+
+def _rational_point(x: fmpq_mat) -> ContactPoint:
+    return ContactPoint(Relation.OVERLAP, tuple(RealAlgebraic.rational(x[i, 0]) for i in range(x.nrows())))
 
 
 def contact_point(A: Any, B: Any) -> ContactPoint:

@@ -6,12 +6,15 @@ mu* - 1 to touch), mu* = 1 tangent, mu* < 1 overlap (both must shrink by 1 - mu*
 spheres mu* = |c1 - c2| / (r1 + r2).
 
 mu*^2 = s* = max of the concave contact function f (:mod:`core.witness.contact_function`). One
-pair: a float estimate of the maximiser starts an exact rational bracket; concavity turns it into
-rational bounds lo <= mu* <= hi, refined by exact Newton steps until they are within ``rtol`` and
-on one side of 1, or proven equal to 1 (s* = 1 iff the factor of f' that vanishes at lambda* divides
-N - D). So the relation reported is certified independently of the paper's decision tree (the
-tests check that both agree). On request mu* is given exactly as a real algebraic number
-(defining polynomial and isolating interval; :meth:`ContactScale.algebraic`).
+pair: a float estimate of the maximiser (taken at unit size, so any scale starts well) starts an
+exact rational bracket; concavity turns it into rational bounds lo <= mu* <= hi, refined by
+safeguarded exact Newton steps until they are within ``rtol`` and on the side of 1 that the
+certified relation (:func:`core.classify`) names; a tangent pair is mu* = 1 exactly. The bits
+used grow with the accuracy reached, not with the size of the numbers. If the bracket ever
+crossed 1 on the wrong side the two certified computations would disagree: a RuntimeError
+(never seen; the tests check the bracket against an independent oracle). On request mu* is
+given exactly as a real algebraic number (defining polynomial and isolating interval;
+:meth:`ContactScale.algebraic`).
 
 Stacks of float pairs go to :func:`core.witness.batch.contact_scale_batch` (vectorised).
 """
@@ -25,14 +28,16 @@ from typing import Any
 from flint import fmpq
 
 from ..algebra.algebraic import RealAlgebraic
+from ..fixed.classify import classify
 from ..relation import Relation
 from .centred import centred_pair
 from .contact_function import Bracket, ContactFunction
 from .numbers import algebraic_dict, sqrt_bounds, to_float, value_at_root
 
-__all__ = ["ContactScale", "contact_scale_pair", "solve_pair", "scale_from"]
+__all__ = ["ContactScale", "contact_scale_pair", "scale_from", "check_rtol"]
 
-_MAX_REFINEMENTS = 40
+_MAX_STEPS = 400
+"""Narrowing steps at most (each at least halves the bracket; a handful are needed): a safety net."""
 
 
 @dataclass
@@ -78,8 +83,8 @@ class ContactScale:
                 self._algebraic = RealAlgebraic.rational(self.lo)
             else:
                 assert self._cf is not None and self._bracket is not None
-                h = self._cf.root_factor(self._bracket)
-                alpha = RealAlgebraic.isolating(h, self._bracket.lo, self._bracket.hi)
+                h, br = self._cf.root_factor(self._bracket)
+                alpha = RealAlgebraic.rational(br.lo) if br.exact else RealAlgebraic.isolating(h, br.lo, br.hi)
                 N, D = self._cf.polynomials
                 self._algebraic = value_at_root(alpha, N, D, square_root=True)
         return self._algebraic
@@ -105,26 +110,6 @@ class ContactScale:
         return out
 
 
-def solve_pair(A: Any, B: Any, rtol: float = 1e-12) -> tuple[ContactFunction, Bracket | None]:
-    """Validate a pair, build its contact function and a first exact bracket (None: same centre).
-
-    The bracket of lambda* is about sqrt(rtol) wide: by concavity the bracket of s* = f(lambda*)
-    it gives is about rtol wide.
-    """
-    cf = ContactFunction(*centred_pair(A, B))
-    return cf, cf.first_bracket(bits=min(40, max(12, int(-math.log2(rtol) / 2) + 8)))
-
-
-def _relation(cf: ContactFunction, br: Bracket, tangent: list[bool | None]) -> Relation | None:
-    if br.s_lo > 1:
-        return Relation.SEPARATE
-    if br.s_hi < 1:
-        return Relation.OVERLAP
-    if tangent[0] is None:
-        tangent[0] = cf.is_tangent(br)
-    return Relation.TANGENT if tangent[0] else None
-
-
 def _mu_bounds(br: Bracket, rel: Relation, bits: int) -> tuple[fmpq, fmpq]:
     """Rational bounds of sqrt(s*) from those of s*, precise enough to stay on the side of 1."""
     while True:
@@ -135,30 +120,53 @@ def _mu_bounds(br: Bracket, rel: Relation, bits: int) -> tuple[fmpq, fmpq]:
         bits *= 2
 
 
-def _contact_scale_pair(A: Any, B: Any, rtol: float) -> ContactScale:
-    return scale_from(*solve_pair(A, B, rtol), rtol)
+def scale_from(cf: ContactFunction, rel: Relation, rtol: float) -> ContactScale:
+    """The contact scale of a pair from its contact function and its certified relation.
 
-
-def scale_from(cf: ContactFunction, br: Bracket | None, rtol: float) -> ContactScale:
-    """The contact scale from a pair's contact function and first bracket (see :func:`solve_pair`)."""
-    if br is None:
+    The relation (from :func:`core.classify`) says on which side of 1 mu* lies (= 1 exactly for
+    a tangent pair); the bracket of the contact function is narrowed until it is on that side
+    and within ``rtol``. Every step at least halves the bracket, and Newton steps double the
+    bits gained, so this ends after a handful of steps; should it ever not, the bracket reached
+    (clipped to the certified side of 1) is returned: certified, only wider than asked.
+    """
+    if rel == Relation.TANGENT:
+        return ContactScale(fmpq(1), fmpq(1), rel, cf, None)
+    br = cf.start()
+    if br is None:  # same centre: scaled down to a point each, they still share it
         return ContactScale(fmpq(0), fmpq(0), Relation.OVERLAP, cf, None)
+    tol = fmpq(*float(rtol).as_integer_ratio())
     bits = max(64, int(-math.log2(rtol)) + 16)
-    tangent: list[bool | None] = [None]
-    for _ in range(_MAX_REFINEMENTS):
-        rel = _relation(cf, br, tangent)
-        if rel == Relation.TANGENT:
-            return ContactScale(fmpq(1), fmpq(1), rel, cf, br)
-        if rel is not None:
-            lo, hi = _mu_bounds(br, rel, bits)
-            if br.exact or hi - lo <= hi * fmpq(*float(rtol).as_integer_ratio()):
-                return ContactScale(lo, hi, rel, cf, br)
-        br = cf.refine(br, 2 * max(bits, int(br.hi.q.bit_length())))
-    raise RuntimeError("contact_scale: the bracket did not converge (please report this pair)")
+    for _ in range(_MAX_STEPS):
+        if br.s_lo > 1 and rel == Relation.OVERLAP or br.s_hi < 1 and rel == Relation.SEPARATE:
+            raise RuntimeError(f"contact scale and classify disagree ({rel}): please report this pair")
+        on_side = br.s_lo > 1 if rel == Relation.SEPARATE else br.s_hi < 1
+        if on_side or br.exact:
+            lo, hi = _mu_bounds(br, rel, bits) if on_side else sqrt_bounds(br.s_lo, bits)
+            if br.exact or hi - lo <= hi * tol:
+                return _clipped(lo, hi, rel, cf, br)
+        br = cf.step(br)
+    lo, _ = sqrt_bounds(br.s_lo, bits)
+    _, hi = sqrt_bounds(br.s_hi, bits)
+    return _clipped(lo, hi, rel, cf, br)
+
+
+def _clipped(lo: fmpq, hi: fmpq, rel: Relation, cf: ContactFunction, br: Bracket) -> ContactScale:
+    """The bracket [lo, hi] intersected with the side of 1 that the relation certifies."""
+    if rel == Relation.SEPARATE:
+        lo = max(lo, fmpq(1))
+    else:
+        hi = min(hi, fmpq(1))
+    return ContactScale(lo, hi, rel, cf, br)
 
 
 def contact_scale_pair(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScale:
     """:func:`core.witness.contact_scale` of one pair (exact rational bracket)."""
-    if not (rtol > 0 and math.isfinite(rtol)):
+    check_rtol(rtol)
+    rel = classify(A, B)
+    return scale_from(ContactFunction(*centred_pair(A, B)), rel, rtol)
+
+
+def check_rtol(rtol: float) -> None:
+    """ValueError unless rtol is a finite number > 0."""
+    if not (isinstance(rtol, int | float) and rtol > 0 and math.isfinite(rtol)):
         raise ValueError(f"rtol must be a finite number > 0 (the exact value is .algebraic()), got {rtol!r}")
-    return _contact_scale_pair(A, B, rtol)

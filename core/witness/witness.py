@@ -10,16 +10,17 @@ from touching, as a margin a class can read ("1.8 % apart", "overlapping by 3 %"
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
 from ..fixed.classify import classify
 from ..relation import Relation
+from .centred import centred_pair
+from .contact_function import ContactFunction
 from .numbers import to_float
 from .plane import SeparatingPlane, plane_from
 from .point import ContactPoint, overlap_point, tangent_point
-from .scale import ContactScale, scale_from, solve_pair
+from .scale import ContactScale, check_rtol, scale_from
 
 __all__ = ["Witness", "witness", "witness_of", "margin_text", "SENTENCES"]
 
@@ -114,24 +115,21 @@ def witness(A: Any, B: Any, *, rtol: float = 1e-12) -> Witness:
         >>> witness(circle(0), circle(2)).point.rational_point
         (1, 0)
     """
-    if not (rtol > 0 and math.isfinite(rtol)):
-        raise ValueError(f"rtol must be a finite number > 0, got {rtol!r}")
+    check_rtol(rtol)
     return witness_of(A, B, classify(A, B), rtol)
 
 
 def witness_of(A: Any, B: Any, rel: Relation, rtol: float = 1e-12) -> Witness:
     """:func:`witness` for a pair whose relation ``rel`` ``core`` already certified.
 
-    ``rel`` comes from ``classify`` or ``explain``: the scene's path, without classifying twice. The contact
-    scale is computed independently and must agree (RuntimeError otherwise).
+    ``rel`` comes from ``classify`` or ``explain``: the scene's path, without classifying twice.
+    One contact function (and its bracket) serves the contact scale and the plane or point.
     """
-    cf, br = solve_pair(A, B, rtol)
-    scale = scale_from(cf, br, rtol)
-    if scale.relation != rel:  # two independent certified computations: never expected
-        raise RuntimeError(f"contact scale says {scale.relation}, the classifier {rel}: please report this pair")
+    cf = ContactFunction(*centred_pair(A, B))
+    scale = scale_from(cf, rel, rtol)
     out = Witness(rel, SENTENCES[rel], scale)
     if rel == Relation.SEPARATE:
-        out.plane = plane_from(cf, br)
+        out.plane = plane_from(cf, scale._bracket)
     elif rel == Relation.TANGENT:
         out.point = tangent_point(cf.A, cf.B)
     else:
