@@ -33,19 +33,21 @@ replaced by pi) < 0 (Cramer: (A^-1 pi)_last = (d - n.c) / k, and det A < 0).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from flint import fmpq
 
-from ..fixed.classify import Stats, classify
+from ..fixed.classify import OnInvalid, Stats, classify, classify_detailed
 from ..relation import Relation
+from .centred import centred_pair
+from .contact_function import ContactFunction
 from .floatdet import det_with_bound
 from .floats import centred, dot, down, is_array, lists, maximise, scaled, stacked, up, where
 from .numbers import to_float
-from .plane import separating_plane_pair
-from .scale import contact_scale_pair
+from .plane import plane_from
+from .scale import check_rtol, scale_from
 
 __all__ = ["ContactScaleBatch", "PlaneBatch", "FloatWitness", "contact_scale_batch", "separating_plane_batch", "float_witness"]
 
@@ -71,6 +73,8 @@ class ContactScaleBatch:
     """How many pairs needed the exact one-pair computation (the floats could not bracket them)."""
     exact_classifications: int = 0
     """How many scaled pairs the float filter left to exact classification (gaps near rtol)."""
+    errors: dict[int, str] = field(default_factory=dict)
+    """Flat pair index -> why the pair has no bracket (``on_invalid="mark"``: invalid input)."""
 
 
 @dataclass
@@ -86,6 +90,8 @@ class PlaneBatch:
     separate the pair strictly (certified determinant signs)."""
     relation: np.ndarray
     """int8 Relation codes of the pairs."""
+    errors: dict[int, str] = field(default_factory=dict)
+    """Flat pair index -> why the pair has no plane (``on_invalid="mark"``: invalid input)."""
 
 
 # ------------------------------------------------------------------ inputs
@@ -102,22 +108,71 @@ def _normalised(M: np.ndarray) -> np.ndarray:
     return M * factor[..., None, None]
 
 
-def _float_input(A: Any, B: Any) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]] | None:
-    """Normalised float arrays, (n, n) for one pair or (N, n, n), and the batch shape.
+def _log2(x: np.ndarray) -> np.ndarray:
+    """Binary exponents of |x| (frexp), -inf-like (-10**6) for zeros."""
+    _, e = np.frexp(x)
+    return np.where(x != 0, e, -(10**6))
 
-    None for exact input (fractions, strings), which goes pair by pair.
+
+def _space_exponent(M: np.ndarray) -> np.ndarray:
+    """log2 of a shape's extent from its float matrix (..., n, n): centre distance and size.
+
+    With the quadratic block M ~ 1/L^2 (L the size), m ~ c / L^2 and a ~ |c|^2 / L^2 - 1, the
+    extent max(|c|, L) is about max(|m| / |M|, sqrt(|a| / |M|)).
+    """
+    d = M.shape[-1] - 1
+    eM = _log2(np.abs(M[..., :d, :d]).max(axis=(-2, -1)))
+    em = _log2(np.abs(M[..., :d, d]).max(axis=-1))
+    ea = _log2(np.abs(M[..., d, d]))
+    return np.maximum(em - eM, (ea - eM) // 2)
+
+
+def unit_space(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pairs seen through x' = 2^e x, with e per pair bringing them to about unit extent.
+
+    A' = D A D with D = diag(2^-e, ..., 2^-e, 1): the quadratic block times 4^-e, the linear
+    part 2^-e, the constant unchanged. Exact (powers of two) wherever no entry leaves the normal
+    float range; a pair where one would keeps e = 0. The contact scale and the relation do not
+    change; a plane n.x' = d' is n.x = 2^-e d', a point x' is 2^-e x'.
+
+    Returns:
+        (a', b', e) with e an int64 array of the batch shape (0-d for one pair).
+    """
+    d = a.shape[-1] - 1
+    e = -np.maximum(_space_exponent(a), _space_exponent(b))
+    e = np.where(np.abs(e) < 2100, e, 0)  # beyond: nothing representable on both sides anyway
+    # exponent of each entry's factor: -2e on the quadratic block, -e on the linear part, 0 last
+    e2 = np.broadcast_to(np.asarray(-e)[..., None, None], a.shape).copy()
+    e2[..., :d, :d] *= 2
+    e2[..., d, d] = 0
+    with np.errstate(all="ignore"):
+        a2, b2 = np.ldexp(a, e2), np.ldexp(b, e2)
+        exact = (np.ldexp(a2, -e2) == a) & (np.ldexp(b2, -e2) == b) & np.isfinite(a2) & np.isfinite(b2)
+    ok = exact.all(axis=(-2, -1))
+    e = np.where(ok, e, 0)
+    a2 = np.where(ok[..., None, None], a2, a)
+    b2 = np.where(ok[..., None, None], b2, b)
+    return a2, b2, e.astype(np.int64)
+
+
+def _float_input(A: Any, B: Any) -> tuple[np.ndarray, np.ndarray, tuple[int, ...], np.ndarray] | None:
+    """Normalised float arrays, (n, n) for one pair or (N, n, n), the batch shape, and the space exponents.
+
+    None for exact input (fractions, strings), which goes pair by pair. The pairs are seen at
+    unit extent (:func:`unit_space`, exponents e per pair) and each matrix is scaled by a power of
+    two to a largest entry in [1, 2): both exact, neither changes a shape's relation or scale.
     """
     a, b = np.asarray(A), np.asarray(B)
     if a.dtype.kind not in "fiu" or b.dtype.kind not in "fiu":
         return None
     a, b = a.astype(np.float64), b.astype(np.float64)
     shape = np.broadcast_shapes(a.shape[:-2], b.shape[:-2])
-    if shape == ():
-        return _normalised(a), _normalised(b), shape
-    n = a.shape[-1]
-    a = np.ascontiguousarray(np.broadcast_to(a, (*shape, n, n))).reshape(-1, n, n)
-    b = np.ascontiguousarray(np.broadcast_to(b, (*shape, n, n))).reshape(-1, n, n)
-    return _normalised(a), _normalised(b), shape
+    if shape != ():
+        n = a.shape[-1]
+        a = np.ascontiguousarray(np.broadcast_to(a, (*shape, n, n))).reshape(-1, n, n)
+        b = np.ascontiguousarray(np.broadcast_to(b, (*shape, n, n))).reshape(-1, n, n)
+    a, b, e = unit_space(a, b)
+    return _normalised(a), _normalised(b), shape, e
 
 
 def _object_pairs(A: Any, B: Any, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -359,7 +414,7 @@ def _float_bracket(P: _Pair, codes: Any, rtol: float, stats: Stats) -> tuple[Any
     return mu_lo, mu_hi, found
 
 
-def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleBatch:
+def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12, on_invalid: OnInvalid = "raise") -> ContactScaleBatch:
     """Certified float brackets of mu* for one float pair or stacks of pairs (module docstring).
 
     Args:
@@ -371,8 +426,12 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
             nearly every pair; near 1e-12 the scaled pairs are a hair from touching and the float
             filter leaves some to exact classification.
 
+        on_invalid: "raise" (default) for the first invalid pair, or "mark" it (relation
+            INVALID, NaN bracket, the reason in ``errors``) and answer the others.
+
     Returns:
         :class:`ContactScaleBatch` with float arrays of the batch shape (0-d for one pair).
+        Every valid pair gets its certified bracket: one hard pair never costs the others theirs.
 
     Raises:
         ValueError: an invalid matrix (the message names the pair), or shapes that do not broadcast.
@@ -383,9 +442,10 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
         >>> bool(r.lo[0] <= 1.5 <= r.hi[0]), float(r.lo[1]), float(r.hi[1]), r.relation.tolist()
         (True, 1.0, 1.0, [0, 1])
     """
-    if not (rtol > 0 and math.isfinite(rtol)):
-        raise ValueError(f"rtol must be a finite number > 0, got {rtol!r}")
-    codes_full = np.asarray(classify(A, B), dtype=np.int8)  # validates, names a bad pair
+    check_rtol(rtol)
+    res = classify_detailed(A, B, on_invalid=on_invalid)  # validates, names a bad pair
+    codes_full = res.relation
+    errors = dict(res.errors)
     stats = Stats()
     floats = _float_input(A, B)
     if floats is None:
@@ -396,7 +456,7 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
         approx: Any = np.zeros(N)
         need = np.ones(N, bool)
     else:
-        a, b, shape = floats
+        a, b, shape, _ = floats
         codes = codes_full.reshape(-1) if shape != () else int(codes_full)
         try:
             with np.errstate(all="ignore"):
@@ -411,19 +471,27 @@ def contact_scale_batch(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScaleB
         mu_hi = np.asarray(mu_hi, dtype=np.float64).reshape(-1)
         need = (codes_full.reshape(-1) != Relation.TANGENT) & ~np.asarray(found).reshape(-1)
         a_obj, b_obj = (a, b) if a.ndim == 3 else (a[None], b[None])
-
-    for i in np.flatnonzero(need):
-        cs = contact_scale_pair(a_obj[i].tolist(), b_obj[i].tolist(), rtol=max(rtol, 1e-15))
-        mu_lo[i], mu_hi[i], approx[i] = _float_down(cs.lo), _float_up(cs.hi), cs.approx
     codes = codes_full.reshape(-1)
+    need &= codes >= 0
+    for i in np.flatnonzero(need):
+        try:  # one pair's trouble (never expected) stays that pair's: the others keep their answers
+            cs = scale_from(ContactFunction(*centred_pair(a_obj[i].tolist(), b_obj[i].tolist())), Relation(int(codes[i])), max(rtol, 1e-15))
+        except (ArithmeticError, RuntimeError, ValueError) as e:
+            errors[int(i)] = f"contact scale: {e}"
+            mu_lo[i], mu_hi[i], approx[i] = 0.0, math.inf, math.nan
+            continue
+        mu_lo[i], mu_hi[i], approx[i] = _float_down(cs.lo), _float_up(cs.hi), cs.approx
     sep, ovl, tan = codes == Relation.SEPARATE, codes == Relation.OVERLAP, codes == Relation.TANGENT
     mu_lo = np.where(sep, np.maximum(mu_lo, 1.0), np.where(tan, 1.0, mu_lo))
     mu_hi = np.where(ovl, np.minimum(mu_hi, 1.0), np.where(tan, 1.0, mu_hi))
-    approx = np.clip(approx, mu_lo, mu_hi)
+    bad = codes < 0
+    mu_lo, mu_hi = np.where(bad, np.nan, mu_lo), np.where(bad, np.nan, mu_hi)
+    with np.errstate(invalid="ignore"):
+        approx = np.where(bad, np.nan, np.clip(approx, mu_lo, mu_hi))
     shape = codes_full.shape
     return ContactScaleBatch(
         mu_lo.reshape(shape), mu_hi.reshape(shape), approx.reshape(shape), codes_full,
-        int(need.sum()), stats.escalated,
+        int(need.sum()), stats.escalated, errors,
     )
 
 
@@ -496,7 +564,7 @@ def _float_point(P: _Pair) -> tuple[list[Any], Any]:
     return x, _inside_certified(P.al, x) & _inside_certified(P.bl, x)
 
 
-def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
+def separating_plane_batch(A: Any, B: Any, *, on_invalid: OnInvalid = "raise") -> PlaneBatch:
     """Float separating planes of one float pair or stacks of pairs, each with a certified flag.
 
     Every pair certified SEPARATE gets a plane n.x = d (n of unit length) from the contact
@@ -504,6 +572,8 @@ def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
     pairs the floats cannot verify (gaps near rounding) get the exact plane of
     :func:`core.witness.separating_plane` rounded to floats, flagged certified only if the rounded
     plane passes the same check. Pairs that are not separate: NaN plane, ``certified`` False.
+    ``on_invalid="mark"``: invalid pairs are marked (relation INVALID, the reason in
+    ``errors``) and the others answered.
 
     Examples:
         >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
@@ -511,7 +581,9 @@ def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
         >>> p.normal[0].tolist(), float(p.offset[0]), p.certified.tolist()
         ([1.0, 0.0], 1.5, [True, False])
     """
-    codes_full = np.asarray(classify(A, B), dtype=np.int8)
+    res = classify_detailed(A, B, on_invalid=on_invalid)
+    codes_full = res.relation
+    errors = dict(res.errors)
     shape = codes_full.shape
     codes = codes_full.reshape(-1)
     floats = _float_input(A, B)
@@ -520,8 +592,10 @@ def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
         dim = a_obj.shape[-1] - 1
         normal, offset, certified = np.full((codes.size, dim), np.nan), np.full(codes.size, np.nan), np.zeros(codes.size, bool)
         retry = codes == Relation.SEPARATE
+        e = np.zeros(codes.size, np.int64)
     else:
-        a, b, _ = floats
+        a, b, _, e = floats
+        e = e.reshape(-1)
         a_obj, b_obj = (a, b) if a.ndim == 3 else (a[None], b[None])
         try:
             with np.errstate(all="ignore"):
@@ -535,9 +609,14 @@ def separating_plane_batch(A: Any, B: Any) -> PlaneBatch:
         normal = np.where(sep[:, None], normal, np.nan)
         offset = np.where(sep, offset, np.nan)
     if retry.any():
-        _exact_planes(a_obj, b_obj, retry, normal, offset, certified, floats is not None)
+        _exact_planes(a_obj, b_obj, retry, normal, offset, certified, floats is not None, errors)
+    # back from the unit-extent view: n.x' = d' is n.x = 2^-e d' (exact unless it leaves the range)
+    with np.errstate(all="ignore"):
+        world = np.ldexp(offset, -e)
+        certified = certified & (np.ldexp(world, e) == offset) & np.isfinite(world)
+    offset = world
     dim = normal.shape[-1]
-    return PlaneBatch(normal.reshape(*shape, dim), offset.reshape(shape), certified.reshape(shape), codes_full)
+    return PlaneBatch(normal.reshape(*shape, dim), offset.reshape(shape), certified.reshape(shape), codes_full, errors)
 
 
 @dataclass
@@ -575,7 +654,8 @@ def float_witness(A: np.ndarray, B: np.ndarray, *, rtol: float = 1e-6) -> FloatW
     floats = _float_input(A, B)
     if floats is None or floats[2] != ():
         raise ValueError("float_witness takes one pair of float matrices")
-    a, b, _ = floats
+    a, b, _, e0 = floats
+    e = int(e0)  # the pair is seen at unit extent: x' = 2^e x
     out = FloatWitness(rel, 0.0, math.inf)
     if rel == Relation.TANGENT:
         out.lo = out.hi = 1.0
@@ -587,29 +667,51 @@ def float_witness(A: np.ndarray, B: np.ndarray, *, rtol: float = 1e-6) -> FloatW
             out.lo, out.hi = (max(lo, 1.0), hi) if rel == Relation.SEPARATE else (lo, min(hi, 1.0))
         if rel == Relation.SEPARATE:
             normal, offset, ok = _float_planes(P)
-            if ok[0]:
-                out.plane = (normal[0], float(offset[0]))
+            d = math.ldexp(float(offset[0]), -e)
+            if ok[0] and math.ldexp(d, e) == float(offset[0]):
+                out.plane = (normal[0], d)
         else:
             x, ok = _float_point(P)
-            if ok:
-                out.point = tuple(float(v) for v in x)
+            xw = tuple(math.ldexp(float(v), -e) for v in x)
+            if ok and all(math.ldexp(w, e) == float(v) for w, v in zip(xw, x, strict=True)):
+                out.point = xw
     except _ARITHMETIC:
         pass
     return out
 
 
-def _exact_planes(a: np.ndarray, b: np.ndarray, which: np.ndarray, normal: np.ndarray, offset: np.ndarray, certified: np.ndarray, float_input: bool) -> None:
-    """Exact planes for the pairs ``which``, rounded to floats (in place) and re-checked."""
+def _exact_planes(
+    a: np.ndarray,
+    b: np.ndarray,
+    which: np.ndarray,
+    normal: np.ndarray,
+    offset: np.ndarray,
+    certified: np.ndarray,
+    float_input: bool,
+    errors: dict[int, str],
+) -> None:
+    """Exact planes for the pairs ``which``, rounded to floats (in place) and re-checked.
+
+    A pair whose exact plane fails (never expected) keeps a NaN plane and its reason in
+    ``errors``: the other pairs keep theirs.
+    """
     from ..shapes.numbers import to_fmpq
 
-    idx = np.flatnonzero(which)
-    for i in idx:
-        plane = separating_plane_pair(a[i].tolist(), b[i].tolist())
+    idx = []
+    for i in np.flatnonzero(which):
+        try:
+            plane = plane_from(ContactFunction(*centred_pair(a[i].tolist(), b[i].tolist())))
+        except (ArithmeticError, RuntimeError, ValueError) as e:
+            errors[int(i)] = f"separating plane: {e}"
+            continue
         big = max(abs(v) for v in plane.normal)  # exact scaling: the largest component is +-1
         n = np.array([to_float(v / big) for v in plane.normal])
         norm = float(np.linalg.norm(n))
         normal[i] = n / norm
         offset[i] = to_float(plane.offset / big) / norm
+        idx.append(int(i))
+    if not idx:
+        return
     fa = np.array([[[to_float(to_fmpq(v)) for v in row] for row in a[i]] for i in idx])
     fb = np.array([[[to_float(to_fmpq(v)) for v in row] for row in b[i]] for i in idx])
     exact_floats = float_input or all(_is_float_exact(a[i]) and _is_float_exact(b[i]) for i in idx)

@@ -119,7 +119,7 @@ class Bracket:
         """A value of f in the bracket: s* >= s_lo."""
         return max(self.f_lo, self.f_hi)
 
-    @property
+    @cached_property
     def s_hi(self) -> fmpq:
         """Where the tangent lines at lo and hi cross: s* <= s_hi."""
         if self.exact:
@@ -204,14 +204,23 @@ class ContactFunction:
         )
 
     @cached_property
-    def float_guess(self) -> float:
-        """lambda* estimated in floats at unit size (0.5 when floats fail): where exact work starts."""
+    def float_estimate(self) -> tuple[float, list[float]] | None:
+        """(lambda*, y(lambda*)) estimated in floats at unit size; None when floats fail."""
         delta, SA, SB = self.unit_floats()
         try:
-            guess = float(maximise(SA, SB, delta)[0])
+            lam, _, y = maximise(SA, SB, delta)
         except (ZeroDivisionError, OverflowError, ValueError):
-            return 0.5
-        return min(max(guess, 0.0), 1.0) if math.isfinite(guess) else 0.5
+            return None
+        lam = float(lam)
+        if not (math.isfinite(lam) and all(math.isfinite(v) for v in y)):
+            return None
+        return min(max(lam, 0.0), 1.0), [float(v) for v in y]
+
+    @property
+    def float_guess(self) -> float:
+        """lambda* estimated in floats (0.5 when floats fail): where exact work starts."""
+        est = self.float_estimate
+        return 0.5 if est is None else est[0]
 
     # ---------------------------------------------------------------- brackets
     def start(self) -> Bracket | None:
@@ -232,16 +241,27 @@ class ContactFunction:
 
     def _first(self) -> Bracket:
         zero, one = fmpq(0), fmpq(1)
-        br = Bracket(zero, one, *self._end(zero), *self._end(one))
         g = dyadic(fmpq(*self.float_guess.as_integer_ratio()), 64)
-        if not zero < g < one:
-            return self._simplest(br)
-        h = pow2(-40 + log2_abs(min(g, 1 - g)))
-        for _ in range(4):  # widen by 2^8 while the probes do not straddle lambda*
-            br, done = self._probe(br, g, h)
-            if done:
-                break
-            h *= 256
+        h = pow2(-40 + log2_abs(min(g, 1 - g))) if zero < g < one else fmpq(0)
+        seen: list[tuple[fmpq, fmpq, fmpq]] = []
+        if h and zero < g - h and g + h < one:  # the usual case: two evaluations straddle lambda*
+            for x in (g - h, g + h):
+                f, f1 = self._end(x)
+                if f1 == 0:
+                    return Bracket(x, x, f, f1, f, f1)
+                seen.append((x, f, f1))
+            (a, fa, da), (c, fc, dc) = seen
+            if da > 0 > dc:
+                return self._simplest(Bracket(a, c, fa, da, fc, dc))
+        br = Bracket(zero, one, *self._end(zero), *self._end(one))
+        for x, f, f1 in seen:  # what the first probes proved
+            br = Bracket(x, br.hi, f, f1, br.f_hi, br.d_hi) if f1 > 0 else Bracket(br.lo, x, br.f_lo, br.d_lo, f, f1)
+        if h:
+            for _ in range(4):  # widen by 2^8 while the probes do not straddle lambda*
+                h *= 256
+                br, done = self._probe(br, g, h)
+                if done or br.exact:
+                    break
         return self._simplest(br)
 
     def _probe(self, br: Bracket, g: fmpq, h: fmpq) -> tuple[Bracket, bool]:

@@ -238,7 +238,7 @@ def _exact_normal(cf: ContactFunction) -> list[fmpq]:
 
 
 def _points_only(A: CentredShape, B: CentredShape, rel: Relation, n: fmpq_mat, bits: int) -> DistanceBracket:
-    """lo = 0 (true for any pair) and hi from the two support points along n."""
+    """The bracket [0, hi]: 0 is true for any pair, hi comes from the two support points along n."""
     _, sa = sqrt_bounds(dot(n, A.S * n), bits)
     _, sb = sqrt_bounds(dot(n, B.S * n), bits)
     p = A.centre + A.S * n * (1 / sa)

@@ -173,9 +173,15 @@ def overlap_point(A: CentredShape, B: CentredShape, cf: ContactFunction | None =
     # a length of the order of the smaller semi-axis (S_ii is a squared length), a power of two
     size = pow2(min(log2_abs(S[i, i]) for S in (A.S, B.S) for i in range(A.d)) // 2)
     cf = cf or ContactFunction(A, B)
-    br = cf.start()
-    if br is None:  # same centre: it is inside both
+    if cf.coincident:  # same centre: it is inside both
         return _rational_point(A.centre)
+    quick = _float_candidate(cf)
+    if quick is not None:
+        for cand in _candidates(quick, size):
+            if _inside_both(A, B, cand):
+                return _rational_point(cand)
+    br = cf.start()
+    assert br is not None
     for k in range(_MAX_STEPS):
         for x in (cf.point(br.best), A.centre, B.centre) if k == 0 else (cf.point(br.best),):
             for cand in _candidates(x, size):
@@ -185,6 +191,22 @@ def overlap_point(A: CentredShape, B: CentredShape, cf: ContactFunction | None =
             break
         br = cf.step(br)
     raise RuntimeError("contact_point: no common interior point found (please report this pair)")
+
+
+def _float_candidate(cf: ContactFunction) -> fmpq_mat | None:
+    """x(lambda*) from floats at unit size, back in world coordinates (a candidate only)."""
+    est = cf.float_estimate
+    if est is None:
+        return None
+    lam, y = est
+    try:
+        _, SA, _ = cf.unit_floats()
+        d = len(y)
+        off = [(1 - lam) * sum(SA[i][j] * y[j] for j in range(d)) for i in range(d)]
+        r = pow2(-cf.exponent)
+        return column([cf.A.centre[i, 0] + fmpq(*float(v).as_integer_ratio()) * r for i, v in enumerate(off)])
+    except (ArithmeticError, ValueError):
+        return None
 
 
 def _rational_point(x: fmpq_mat) -> ContactPoint:
