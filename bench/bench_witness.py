@@ -9,7 +9,10 @@ Prints a table of the time per pair (median over repeats) for:
 * ``float_witness`` (one float pair: the scene's drag path);
 * ``separating_plane`` and ``contact_point`` (tangent: exact; overlap: a rational point), one pair;
 * ``distance`` (certified bracket of the Euclidean distance), one separate pair;
-* ``witness`` (everything for one pair).
+* ``witness`` (everything for one pair);
+* extreme scales (issue 21): every witness on valid pairs scaled by 10^+-150 (floats) and
+  10^+-1000 (exact), near tangent at gaps 1e-7..1e-14, a needle, and contact_scale at rtol
+  1e-200: the worst time of one call (target: <= 1 s).
 
 Run: ``python bench/bench_witness.py [--quick]``.
 """
@@ -29,7 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from core import classify, quadric_from_axes, warm_up  # noqa: E402
+from core import classify, explain, quadric_from_axes, warm_up  # noqa: E402
 from core.witness import (  # noqa: E402
     contact_point,
     contact_scale,
@@ -64,6 +67,48 @@ def tangent_pair(d: int, a: F, r: F) -> tuple[list[list[F]], list[list[F]]]:
     A = quadric_from_axes([0] * d, [a] + [1] * (d - 1), exact=True)
     B = quadric_from_axes([a + r] + [0] * (d - 1), [r] * d, exact=True)
     return A, B
+
+
+def space_exact(M: list[list[Any]], L: F) -> list[list[F]]:
+    """The shape seen through x -> L x (exact)."""
+    n = len(M)
+    return [[F(int(M[i][j].p), int(M[i][j].q)) / L ** ((i < n - 1) + (j < n - 1)) for j in range(n)] for i in range(n)]
+
+
+def space_float(M: np.ndarray, L: float) -> np.ndarray:
+    """The same for a float matrix (rounded)."""
+    D = np.diag([1 / L] * (M.shape[0] - 1) + [1.0])
+    return D @ M @ D
+
+
+def extreme_pairs(rng: np.random.Generator, n: int) -> list[tuple[str, Any, Any]]:
+    """Valid pairs at extreme scales (issue 21's classes), each labelled."""
+    out: list[tuple[str, Any, Any]] = []
+    fl = list(zip(random_floats(rng, 3, n), random_floats(rng, 3, n), strict=True))
+    for L in (1e150, 1e-150, 1e100):
+        out += [(f"float, space x {L:g}", space_float(a, L), space_float(b, L)) for a, b in fl]
+    out += [("float, matrices x 2^-1000, 1e300", a * 2.0**-1000, b * 1e300) for a, b in fl]
+    for k in (1000, -1000, 100):
+        for g in (F(1, 10**7), F(1, 10**9), -F(1, 10**8)):
+            A = quadric_from_axes([0, 0, 0], [2, 1, 1], exact=True)
+            B = quadric_from_axes([3 + g, F(1, 1000), 0], [1, 1, 1], exact=True)
+            out.append((f"exact, space x 10^{k}, near tangent", space_exact(A, F(10) ** k), space_exact(B, F(10) ** k)))
+    needle = quadric_from_axes([0, 0, 0], [1000, F(1, 1000), F(1, 1000)], exact=True)
+    for c in ([1001 + F(1, 10**14), 0, 0], [0, 1 + F(1, 1000) + F(1, 10**14), 0]):
+        out.append(("exact, needle at gap 1e-14", needle, quadric_from_axes(c, [1, 1, 1], exact=True)))
+    return out
+
+
+def worst_call(fn: Callable[[Any, Any], Any], pairs: list[tuple[str, Any, Any]]) -> tuple[float, str]:
+    """The slowest single call (seconds) and its pair's label."""
+    worst, label = 0.0, ""
+    for name, a, b in pairs:
+        t0 = time.perf_counter()
+        fn(a, b)
+        dt = time.perf_counter() - t0
+        if dt > worst:
+            worst, label = dt, name
+    return worst, label
 
 
 def per_pair(fn: Callable[[Any, Any], Any], pairs: list[tuple[Any, Any]], repeat: int) -> float:
@@ -124,6 +169,28 @@ def main() -> None:
     print("|---|---|---:|---|")
     for op, inp, us, note in rows:
         print(f"| {op} | {inp} | {us:,.1f} | {note} |")
+
+    pairs = extreme_pairs(rng, 3 if args.quick else 10)
+    sep = [p for p in pairs if classify(p[1], p[2]) == 0]
+    meet = [p for p in pairs if classify(p[1], p[2]) != 0]
+    checks: list[tuple[str, Callable[[Any, Any], Any], list[tuple[str, Any, Any]]]] = [
+        ("explain", explain, pairs),
+        ("contact_scale (rtol 1e-12)", contact_scale, pairs),
+        ("contact_scale (rtol 1e-200)", lambda a, b: contact_scale(a, b, rtol=1e-200), pairs),
+        ("witness", witness, pairs),
+        ("distance", distance, sep),
+        ("separating_plane", separating_plane, sep),
+        ("contact_point", contact_point, meet),
+        ("contact_scale, stack of the float pairs", lambda a, b: contact_scale(a[None], b[None]), [p for p in pairs if isinstance(p[1], np.ndarray)]),
+    ]
+    print()
+    print(f"Extreme scales ({len(pairs)} valid pairs: floats at 1e+-150, exact at 10^+-1000, near tangent, a needle):")
+    print()
+    print("| call | pairs | worst call (s) | worst pair | target |")
+    print("|---|---:|---:|---|---|")
+    for name, fn, ps in checks:
+        worst, label = worst_call(fn, ps)
+        print(f"| {name} | {len(ps)} | {worst:.3f} | {label} | {'met' if worst <= 1.0 else 'MISSED'} (<= 1 s) |")
 
 
 if __name__ == "__main__":

@@ -13,7 +13,6 @@ here with ``fractions.Fraction`` and the Leibniz determinant (no code of core.wi
 
 from __future__ import annotations
 
-import itertools
 import math
 from fractions import Fraction as F
 from typing import Any
@@ -26,6 +25,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from oracle import oracle_relation
 from strategies import dyadic_tangent_pair, exact_shapes, float_pairs, tangent_pairs
+from witness_checks import check_bracket, form, frac, mu_side, plane_misses_on_side, q
 
 from core import (
     Relation,
@@ -40,109 +40,6 @@ from core import (
 from core.moving.motions import matrix_at_exact
 from core.moving.presets import preset_arguments
 from core.witness import contact_scale_batch, distance, margin_text, witness
-
-# ------------------------------------------------------------------ independent exact helpers
-
-
-def frac(M: Any) -> list[list[F]]:
-    """Exact Fraction matrix, normalised to a positive definite quadratic block (M[0][0] > 0)."""
-    out = [[F(str(v)) if isinstance(v, str | fmpq) else F(v) for v in row] for row in (np.asarray(M, dtype=object).tolist())]
-    if out[0][0] < 0:
-        out = [[-v for v in row] for row in out]
-    n = len(out)  # the quadratic form: the exact symmetric part (floats symmetric up to rounding)
-    return [[(out[i][j] + out[j][i]) / 2 for j in range(n)] for i in range(n)]
-
-
-def q(x: Any) -> F:
-    """An exact Fraction from fmpq / float / int / Fraction."""
-    if isinstance(x, fmpq):
-        return F(int(x.p), int(x.q))
-    return F(x)
-
-
-def det(M: list[list[F]]) -> F:
-    """Leibniz formula (independent of core.formulae.pencil.determinant)."""
-    n = len(M)
-    total = F(0)
-    for perm in itertools.permutations(range(n)):
-        inv = sum(1 for i in range(n) for j in range(i + 1, n) if perm[i] > perm[j])
-        term = F(-1 if inv % 2 else 1)
-        for i in range(n):
-            term *= M[i][perm[i]]
-            if term == 0:
-                break
-        total += term
-    return total
-
-
-def form(M: list[list[F]], x: list[F]) -> F:
-    X = [*x, F(1)]
-    return sum(M[i][j] * X[i] * X[j] for i in range(len(X)) for j in range(len(X)))
-
-
-def centre(M: list[list[F]]) -> list[F]:
-    """-Q^-1 m by Cramer's rule."""
-    d = len(M) - 1
-    Q = [row[:d] for row in M[:d]]
-    rhs = [-M[i][d] for i in range(d)]
-    D = det(Q)
-    return [det([[rhs[r] if c == i else Q[r][c] for c in range(d)] for r in range(d)]) / D for i in range(d)]
-
-
-def size_k(M: list[list[F]]) -> F:
-    d = len(M) - 1
-    return -det(M) / det([row[:d] for row in M[:d]])
-
-
-def scaled(M: list[list[F]], mu: F) -> list[list[F]]:
-    """The shape scaled about its centre by mu: the last entry gains k (1 - mu^2)."""
-    out = [row[:] for row in M]
-    out[-1][-1] += size_k(M) * (1 - mu * mu)
-    return out
-
-
-def plane_misses_on_side(M: list[list[F]], n: list[F], d: F, side: int) -> bool:
-    """Plane n.x = d misses the closed shape M, which lies where sign(n.x - d) = side.
-
-    Parametrise the plane x = p + E u (E: the coordinate axes but j, with x_j solved), restrict the
-    quadric to (u, 1) and require its minimum (Schur complement) to be positive.
-    """
-    dim = len(n)
-    j = max(range(dim), key=lambda i: abs(n[i]))
-    free = [i for i in range(dim) if i != j]
-    # homogeneous embedding T: (u, 1) -> (x, 1)
-    T = [[F(0)] * dim for _ in range(dim + 1)]
-    for k, i in enumerate(free):
-        T[i][k] = F(1)
-        T[j][k] = -n[i] / n[j]
-    T[j][dim - 1] = d / n[j]
-    T[dim][dim - 1] = F(1)
-    R = [[sum(T[a][r] * M[a][b] * T[b][c] for a in range(dim + 1) for b in range(dim + 1)) for c in range(dim)] for r in range(dim)]
-    minimum = det(R) / det([row[: dim - 1] for row in R[: dim - 1]])
-    c = centre(M)
-    s = sum(a * b for a, b in zip(n, c, strict=True)) - d
-    return minimum > 0 and (s > 0) - (s < 0) == side
-
-
-def mu_side(A: list[list[F]], B: list[list[F]], mu: F) -> str:
-    """Oracle relation of the pair scaled about its centres by mu."""
-    return oracle_relation(scaled(A, mu), scaled(B, mu))
-
-
-def check_bracket(A: Any, B: Any, cs: Any) -> None:
-    """Independent check of a bracket: just below lo the scaled pair is separate, above hi overlap."""
-    fa, fb = frac(A), frac(B)
-    lo, hi = q(cs.lo), q(cs.hi)
-    assert lo <= hi
-    if lo == hi:  # exact: separate just below, overlap just above, tangent at mu itself
-        if lo > 0:
-            assert mu_side(fa, fb, lo * (1 - F(1, 10**30))) == "separate"
-            assert mu_side(fa, fb, lo) == "tangent"
-        assert mu_side(fa, fb, hi * (1 + F(1, 10**30)) + F(1, 10**30)) == "overlap"
-        return
-    assert mu_side(fa, fb, lo) in ("separate", "tangent")
-    assert mu_side(fa, fb, hi) in ("overlap", "tangent")
-
 
 # ------------------------------------------------------------------ contact scale
 
