@@ -537,3 +537,17 @@ def test_distance_random(pair):
     p, qq = [q(v) for v in r.point_a], [q(v) for v in r.point_b]
     mid = (sum(a * b for a, b in zip(n, p, strict=True)) + sum(a * b for a, b in zip(n, qq, strict=True))) / 2
     assert plane_misses_on_side(frac(A), n, mid, -1) and plane_misses_on_side(frac(B), n, mid, 1)
+
+
+# ------------------------------------------------------------------ generated kernels
+
+
+def test_determinant_kernels_are_generated_and_current(tmp_path, monkeypatch):
+    """core/witness/_det_kernels.py is what core.witness.detgen writes today (no drift), and the check notices drift."""
+    from core.witness import detgen
+
+    assert detgen.main(["--check"]) == 0
+    stale = tmp_path / "_det_kernels.py"
+    stale.write_text(detgen.GENERATED_PATH.read_text().replace("DET2_CONSTANT = ", "DET2_CONSTANT = 0.5 * "))
+    monkeypatch.setattr(detgen, "GENERATED_PATH", stale)
+    assert detgen.main(["--check"]) == 1
