@@ -2,11 +2,12 @@
 
 Prints a table of the time per pair (median over repeats) for:
 
-* ``contact_scale`` one pair, exact bracket (rtol 1e-12), float and rational input, 2D and 3D,
-  and with the exact algebraic value (``.algebraic()``, 30 digits);
-* the batch forms on 10 000 random float pairs (``contact_scale`` on stacks at rtol 1e-12 and
-  1e-9, ``separating_plane`` on stacks), with how many pairs fell back to exact arithmetic;
-* ``float_witness`` (one float pair: the scene's drag path);
+* ``contact_scale`` one pair (adaptive: certified floats, exact where they cannot; and
+  ``method="exact"``), float and rational input, 2D and 3D, and with the exact algebraic value
+  (``.algebraic()``, 30 digits);
+* stacks of 10 000 random float pairs (``contact_scale`` at rtol 1e-12 and 1e-9,
+  ``separating_plane``), with how many pairs the floats certified;
+* ``witness(..., method="float")`` (one float pair: the scene's drag path);
 * ``separating_plane`` and ``contact_point`` (tangent: exact; overlap: a rational point), one pair;
 * ``distance`` (certified bracket of the Euclidean distance), one separate pair;
 * ``witness`` (everything for one pair);
@@ -32,12 +33,18 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from core import classify, explain, quadric_from_axes, warm_up  # noqa: E402
+from core import (  # noqa: E402
+    Certifier,  # noqa: E402
+    classify,
+    explain,
+    quadric_from_axes,
+    warm_up,
+)
 from core.witness import (  # noqa: E402
+    NoWitness,
     contact_point,
     contact_scale,
     distance,
-    float_witness,
     separating_plane,
     witness,
 )
@@ -136,13 +143,14 @@ def main() -> None:
         A, B = random_floats(rng, d, n_one), random_floats(rng, d, n_one)
         fl = list(zip(A, B, strict=True))
         ex = [(random_exact(rng, d), random_exact(rng, d)) for _ in range(n_one)]
-        rows.append(("contact_scale, exact bracket (rtol 1e-12)", f"float {kind}", per_pair(contact_scale, fl, repeat), ""))
-        rows.append(("contact_scale, exact bracket (rtol 1e-12)", f"rational {kind}", per_pair(contact_scale, ex, repeat), ""))
+        rows.append(("contact_scale, adaptive (rtol 1e-12)", f"float {kind}", per_pair(contact_scale, fl, repeat), ""))
+        rows.append(("contact_scale, exact (rtol 1e-12)", f"float {kind}", per_pair(lambda a, b: contact_scale(a, b, method="exact"), fl, repeat), ""))
+        rows.append(("contact_scale (rtol 1e-12)", f"rational {kind}", per_pair(contact_scale, ex, repeat), ""))
         rows.append(
             ("contact_scale + .algebraic() (30 digits)", f"float {kind}",
              per_pair(lambda a, b: contact_scale(a, b).algebraic().decimal(30), fl[: max(10, n_one // 5)], 1), "")
         )
-        rows.append(("float_witness (one pair, drag path)", f"float {kind}", per_pair(float_witness, fl, repeat), ""))
+        rows.append(("witness, method='float' (one pair, drag path)", f"float {kind}", per_pair(lambda a, b: witness(a, b, rtol=1e-6, method="float", on_invalid="mark"), fl, repeat), ""))
         sep = [(a, b) for a, b in fl if classify(a, b) == 0]
         ovl = [(a, b) for a, b in fl if classify(a, b) == 2]
         rows.append(("separating_plane, exact, verified", f"float {kind}, separate", per_pair(separating_plane, sep, repeat), ""))
@@ -157,13 +165,14 @@ def main() -> None:
             t0 = time.perf_counter()
             r = contact_scale(A, B, rtol=rtol)
             dt = (time.perf_counter() - t0) / n_batch * 1e6
-            note = f"{r.exact_pairs} exact pairs, {r.exact_classifications} exact classifications"
-            rows.append((f"contact_scale batch (rtol {rtol:g}), {n_batch} pairs", f"float {kind}", dt, note))
+            by_float = sum(1 for c in r if c.certified_by == Certifier.FLOAT)
+            rows.append((f"contact_scale stack (rtol {rtol:g}), {n_batch} pairs", f"float {kind}", dt, f"{by_float}/{n_batch} certified by floats"))
         t0 = time.perf_counter()
-        p = separating_plane(A, B)
+        p = separating_plane(A, B, on_invalid="mark")
         dt = (time.perf_counter() - t0) / n_batch * 1e6
-        sepn = int((p.relation == 0).sum())
-        rows.append((f"separating_plane batch, {n_batch} pairs", f"float {kind}", dt, f"{int(p.certified.sum())}/{sepn} separate certified"))
+        planes = [x for x in p if not isinstance(x, NoWitness)]
+        by_float = sum(1 for x in planes if x.certified_by == Certifier.FLOAT)
+        rows.append((f"separating_plane stack, {n_batch} pairs", f"float {kind}", dt, f"{len(planes)} separate pairs, {by_float} certified by floats"))
 
     print("| operation | input | us per pair | note |")
     print("|---|---|---:|---|")
@@ -181,7 +190,7 @@ def main() -> None:
         ("distance", distance, sep),
         ("separating_plane", separating_plane, sep),
         ("contact_point", contact_point, meet),
-        ("contact_scale, stack of the float pairs", lambda a, b: contact_scale(a[None], b[None]), [p for p in pairs if isinstance(p[1], np.ndarray)]),
+        ("contact_scale, as a stack of one", lambda a, b: contact_scale(np.asarray(a)[None], np.asarray(b)[None]), [p for p in pairs if isinstance(p[1], np.ndarray)]),
     ]
     print()
     print(f"Extreme scales ({len(pairs)} valid pairs: floats at 1e+-150, exact at 10^+-1000, near tangent, a needle):")

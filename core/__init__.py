@@ -9,7 +9,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import analyse                              # moving pairs: events and intervals
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
     from core import warm_up, set_threads                 # build the C kernels early; threads
-    from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
+    from core import contact_scale, separating_plane, contact_point, distance   # witnesses (core.witness)
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
@@ -50,10 +50,12 @@ from .shapes.quadrics import rotation_from_quaternion as rotation_from_quaternio
 from .shapes.quadrics import validate_quadric as validate_quadric
 from .witness import ContactPoint as ContactPoint
 from .witness import ContactScale as ContactScale
+from .witness import NoWitness as NoWitness
 from .witness import SeparatingPlane as SeparatingPlane
 from .witness import Witness as Witness
 from .witness import contact_point as contact_point
 from .witness import contact_scale as contact_scale
+from .witness import distance as distance
 from .witness import separating_plane as separating_plane
 
 __all__ = [
@@ -74,6 +76,7 @@ __all__ = [
     "SeparatingPlane",
     "ShapeParams",
     "Stats",
+    "NoWitness",
     "Witness",
     "analyse",
     "axes_from_quadric",
@@ -82,6 +85,7 @@ __all__ = [
     "contact_point",
     "contact_scale",
     "contacts",
+    "distance",
     "explain",
     "motion_from_dict",
     "motion_to_dict",

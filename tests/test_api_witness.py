@@ -42,6 +42,7 @@ def test_contact_scale_separate(client):
         "margin": 0.5,
         "margin_text": "50 % apart",
         "exact": None,
+        "certified_by": "exact",
     }
 
 
@@ -70,7 +71,9 @@ def test_contact_scale_shapes_and_floats(client):
     assert (r["kind"], r["lo"], r["hi"]) == ("ellipsoid", "5/3", "5/3")  # along x: 5 = mu (2 + 1)
     body = {"a": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]], "b": [[1.0, 0.0, -4.0], [0.0, 1.0, 0.0], [-4.0, 0.0, 15.0]], "rtol": 1e-6}
     r = client.post("/api/contact-scale", json=body).json()
-    assert (r["relation"], r["lo"], r["hi"]) == ("separate", "2", "2")
+    assert (r["relation"], r["lo"], r["hi"]) == ("separate", "2", "2")  # floats bracket it, an exact check pins 2
+    r = client.post("/api/separating-plane", json={k: body[k] for k in ("a", "b")}).json()
+    assert (r["normal"], r["offset"], r["certified_by"]) == (["1", "0"], "2", "float")  # binary64 input: floats certify x = 2
 
 
 def test_separating_plane(client):
@@ -86,6 +89,7 @@ def test_separating_plane(client):
         "support_a": "1",
         "support_b": "2",
         "gap_lower_bound": 1.0,
+        "certified_by": "exact",
     }
 
 
@@ -107,6 +111,7 @@ def test_contact_point_tangent(client):
         "point": [one, zero],
         "normal": [one, zero],
         "pencil_root": one,
+        "certified_by": "exact",
     }
 
 

@@ -35,14 +35,16 @@ from witness_checks import (
     is_valid,
 )
 
-from core import Relation, classify, contact_point, contact_scale, explain, separating_plane
-from core.witness import (
-    contact_scale_batch,
-    distance,
-    float_witness,
-    separating_plane_batch,
-    witness,
+from core import (
+    Certifier,
+    Relation,
+    classify,
+    contact_point,
+    contact_scale,
+    explain,
+    separating_plane,
 )
+from core.witness import NoWitness, distance, witness
 
 # ------------------------------------------------------------------ pairs and their scalings
 
@@ -187,30 +189,36 @@ def check_single(A: Any, B: Any) -> None:
 
 
 def check_stack(A: Any, B: Any, rel: str) -> None:
-    """The pair and its swap as a stack of two: both answered, each checked."""
+    """The pair and its swap as a stack of two: both answered, each checked, by every method."""
     if isinstance(A, np.ndarray):
         SA, SB = np.stack([A, B]), np.stack([B, A])
     else:
         SA, SB = [A, B], [B, A]
-    r = contact_scale_batch(SA, SB, rtol=1e-9)
-    assert [str(Relation(int(c))) for c in r.relation] == [rel, rel]
-    for i, (a, b) in enumerate(((A, B), (B, A))):
-        check_mu_bracket(a, b, r.lo[i], r.hi[i])
-    p = separating_plane_batch(SA, SB)
-    for i, (a, b) in enumerate(((A, B), (B, A))):
-        if rel != "separate":
-            assert not p.certified[i] and np.isnan(p.offset[i])
-        elif p.certified[i]:
-            check_plane(a, b, p.normal[i], p.offset[i])
-    if isinstance(A, np.ndarray):
-        fw = float_witness(A, B)
-        assert str(fw.relation) == rel
-        if math.isfinite(fw.hi):
-            check_mu_bracket(A, B, fw.lo, fw.hi)
-        if fw.plane is not None:
-            check_plane(A, B, fw.plane[0], fw.plane[1])
-        if fw.point is not None:
-            check_inside_both(A, B, fw.point)
+    swap = ((A, B), (B, A))
+    r = contact_scale(SA, SB, rtol=1e-9)
+    assert [str(c.relation) for c in r] == [rel, rel]
+    for c, (a, b) in zip(r, swap, strict=True):
+        check_mu_bracket(a, b, c.lo, c.hi)
+    p = separating_plane(SA, SB, on_invalid="mark")
+    pt = contact_point(SA, SB, on_invalid="mark")
+    for i, (a, b) in enumerate(swap):
+        if rel == "separate":
+            check_plane(a, b, p[i].normal, p[i].offset)
+            assert isinstance(pt[i], NoWitness) and pt[i].kind == "none"
+        else:
+            assert isinstance(p[i], NoWitness) and p[i].kind == "none"
+            if rel == "overlap":
+                check_inside_both(a, b, pt[i].rational_point)
+    for w, (a, b) in zip(witness(SA, SB, method="float", on_invalid="mark"), swap, strict=True):
+        if isinstance(w, NoWitness):  # floats could not certify it (tangency always needs exact)
+            assert w.kind == "undecided"
+            continue
+        assert str(w.relation) == rel and w.certified_by == Certifier.FLOAT
+        check_mu_bracket(a, b, w.scale.lo, w.scale.hi)
+        if w.plane is not None:
+            check_plane(a, b, w.plane.normal, w.plane.offset)
+        if w.point is not None:
+            check_inside_both(a, b, w.point.rational_point)
 
 
 # ------------------------------------------------------------------ the properties
@@ -263,24 +271,25 @@ def test_tight_rtol_is_met_quickly_and_exactly():
 
 def test_one_hard_pair_never_costs_the_others(monkeypatch):
     """A pair whose exact computation fails (simulated) is marked; the other pairs keep their answers."""
-    import core.witness.batch as batch
+    import core.witness.api as api
 
     circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]  # noqa: E731
     A = [circle(0), circle(0), circle(0)]
     B = [circle(3), circle(F(1, 2)), circle(F(5, 2))]
-    real = batch.scale_from
+    real = api.scale_exact
 
-    def flaky(cf, rel, rtol):
-        if cf.B.centre[0, 0] == fmpq(1, 2):
+    def flaky(pairs, i, rtol):
+        if str(pairs.b[i][0][2]) == "-1/2":  # the pair with circle(1/2)
             raise RuntimeError("simulated failure")
-        return real(cf, rel, rtol)
+        return real(pairs, i, rtol)
 
-    monkeypatch.setattr(batch, "scale_from", flaky)
-    r = contact_scale_batch(A, B)
-    assert list(r.errors) == [1] and "simulated failure" in r.errors[1]
-    assert r.relation.tolist() == [0, 2, 0]
-    assert (r.lo[0], r.hi[0]) == (1.5, 1.5) and (r.lo[2], r.hi[2]) == (1.25, 1.25)
-    assert r.lo[1] == 0.0 and r.hi[1] == 1.0  # what the certified relation alone proves
+    monkeypatch.setattr(api, "scale_exact", flaky)
+    r = contact_scale(A, B)  # even with on_invalid="raise": a failure is that pair's alone
+    assert isinstance(r[1], NoWitness) and r[1].kind == "failed" and "simulated failure" in r[1].reason
+    assert r[1].relation == Relation.OVERLAP
+    assert (r[0].lo, r[0].hi) == (fmpq(3, 2), fmpq(3, 2)) and (r[2].lo, r[2].hi) == (fmpq(5, 4), fmpq(5, 4))
+    with pytest.raises(RuntimeError, match="simulated failure"):  # one pair: the failure is the answer
+        contact_scale(A[1], B[1])
 
 
 def test_invalid_pairs_marked_in_stacks():
@@ -288,10 +297,12 @@ def test_invalid_pairs_marked_in_stacks():
     hyperbola = [[1, 0, 0], [0, -1, 0], [0, 0, -1]]
     A = np.array([circle(0), hyperbola, circle(0)], float)
     B = np.array([circle(3), circle(1), circle(1)], float)
-    with pytest.raises(ValueError, match="pair 1"):
-        contact_scale_batch(A, B)
-    r = contact_scale_batch(A, B, on_invalid="mark")
-    assert r.relation.tolist() == [0, -2, 2] and list(r.errors) == [1]
-    assert r.lo[0] <= 1.5 <= r.hi[0] and np.isnan(r.lo[1]) and r.hi[2] <= 1
-    p = separating_plane_batch(A, B, on_invalid="mark")
-    assert p.certified.tolist() == [True, False, False] and list(p.errors) == [1]
+    with pytest.raises(ValueError, match="pair 1: A is not an ellipse"):
+        contact_scale(A, B)
+    r = contact_scale(A, B, on_invalid="mark")
+    assert [c.relation for c in r] == [Relation.SEPARATE, Relation.INVALID, Relation.OVERLAP]
+    assert isinstance(r[1], NoWitness) and r[1].kind == "invalid" and "not an ellipse" in r[1].reason
+    assert r[0].lo <= fmpq(3, 2) <= r[0].hi and r[2].hi <= 1
+    p = separating_plane(A, B, on_invalid="mark")
+    assert [type(x).__name__ for x in p] == ["SeparatingPlane", "NoWitness", "NoWitness"]
+    assert [x.kind for x in p[1:]] == ["invalid", "none"]

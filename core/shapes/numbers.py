@@ -208,7 +208,7 @@ def floor_log10(q: Any) -> int:
 
 
 def _ge_pow10(p: fmpz, d: fmpz, e: int) -> bool:
-    """p / d >= 10^e, exactly (p, d > 0)."""
+    """Whether p / d >= 10^e, exactly (p, d > 0)."""
     return bool(p >= d * fmpz(10) ** e) if e >= 0 else bool(p * fmpz(10) ** (-e) >= d)
 
 

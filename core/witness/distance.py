@@ -20,12 +20,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from flint import arb, fmpq, fmpq_mat
 
 from ..algebra.algebraic import working_precision
-from ..fixed.classify import classify
+from ..fixed.classify import Certifier, classify
 from ..relation import Relation
 from .centred import CentredShape, centred_pair, column, dot
 from .contact_function import ContactFunction, log2_abs, pow2
@@ -33,7 +33,10 @@ from .floats import dot as fdot
 from .floats import inverse, mat_vec, maximise
 from .numbers import sqrt_bounds, to_float
 
-__all__ = ["DistanceBracket", "distance"]
+if TYPE_CHECKING:
+    from .filtered import Pairs
+
+__all__ = ["DistanceBracket", "distance_pair", "distance_exact", "distance_from"]
 
 _MAX_ROUNDS = 8
 
@@ -51,6 +54,8 @@ class DistanceBracket:
     """Separate: a point of A (exactly: X^T A X <= 0) ..."""
     point_b: tuple[fmpq, ...] | None = field(default=None)
     """... and a point of B with |point_a - point_b| <= hi."""
+    certified_by: Certifier = Certifier.EXACT
+    """Which arithmetic proved the bracket (exact rationals either way)."""
 
     @property
     def approx(self) -> float:
@@ -71,6 +76,7 @@ class DistanceBracket:
             "normal": vec(self.normal),
             "point_a": vec(self.point_a),
             "point_b": vec(self.point_b),
+            "certified_by": str(self.certified_by),
         }
 
 
@@ -158,8 +164,10 @@ def _bracket(A: CentredShape, B: CentredShape, n: fmpq_mat, bits: int) -> tuple[
     return slab / norm, hi, p, q
 
 
-def distance(A: Any, B: Any, *, rtol: float = 1e-12) -> DistanceBracket:
-    """Certified bracket of the Euclidean distance between two ellipses/ellipsoids.
+def distance_pair(A: Any, B: Any, *, rtol: float = 1e-12) -> DistanceBracket:
+    """Certified bracket of the Euclidean distance between two ellipses/ellipsoids (the exact stage alone).
+
+    :func:`core.witness.distance` is the public form (stacks, ``method``).
 
     Args:
         A: one matrix, any input form of :func:`core.classify`.
@@ -176,20 +184,30 @@ def distance(A: Any, B: Any, *, rtol: float = 1e-12) -> DistanceBracket:
 
     Examples:
         >>> circle = lambda x, r: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - r * r]]
-        >>> b = distance(circle(0, 1), circle(5, 2))          # 5 - 1 - 2
+        >>> b = distance_pair(circle(0, 1), circle(5, 2))          # 5 - 1 - 2
         >>> b.lo <= 2 <= b.hi, float(b.hi - b.lo) < 1e-12, b.point_a, b.point_b
         (True, True, (1, 0), (3, 0))
-        >>> distance(circle(0, 1), circle(2, 1)).hi
+        >>> distance_pair(circle(0, 1), circle(2, 1)).hi
         0
     """
     if not (rtol > 0 and math.isfinite(rtol)):
         raise ValueError(f"rtol must be a finite number > 0, got {rtol!r}")
     a, b = centred_pair(A, B)
     rel = classify(A, B)
+    return distance_from(ContactFunction(a, b), rel, rtol)
+
+
+def distance_exact(pairs: Pairs, i: int, rtol: float) -> DistanceBracket:
+    """The exact stage: pair i's distance bracket."""
+    return distance_from(pairs.contact_function(i), Relation(int(pairs.relation[i])), rtol)
+
+
+def distance_from(cf: ContactFunction, rel: Relation, rtol: float) -> DistanceBracket:
+    """The bracket from a pair's contact function and certified relation (see :func:`distance_pair`)."""
     if rel != Relation.SEPARATE:
         return DistanceBracket(fmpq(0), fmpq(0), rel)
+    a, b = cf.A, cf.B
     tol = fmpq(*float(rtol).as_integer_ratio())
-    cf = ContactFunction(a, b)
     try:
         n: list[Any] = [fmpq(*float(x).as_integer_ratio()) for x in _float_normal(cf)]
     except (ArithmeticError, ValueError):  # float trouble: the exact normal of the contact function

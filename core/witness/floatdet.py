@@ -10,7 +10,7 @@ sums). Each row is first multiplied by a power of two that brings its largest en
 (exact; it keeps every leaf <= 2, so nothing overflows and the underflow floor applies), and the
 total exponent is returned so that callers can recover the value itself:
 det(original) = 2^exponent * det(scaled). A sign is certain when |value| > bound;
-:mod:`core.witness.batch` uses it for a certified lower bound of det Q (the smallest eigenvalue).
+:mod:`core.witness.floatcert` uses it for a certified lower bound of det Q (the smallest eigenvalue).
 """
 
 from __future__ import annotations

@@ -7,8 +7,8 @@ safeguarded Newton iteration for the maximiser of the contact function (f is con
 f'(0) > 0 > f'(1), see :mod:`core.witness.contact_function`). The estimates only *start*
 certified computations: the exact bracket of
 :class:`~core.witness.contact_function.ContactFunction` or the certified classifications of
-:mod:`core.witness.batch`. Also the type-generic helpers (``where``, ``down``, ``up``, ...)
-that let :mod:`core.witness.batch` run one code on both kinds.
+:mod:`core.witness.floatcert`. Also the type-generic helpers (``where``, ``down``, ``up``, ...)
+that let :mod:`core.witness.floatcert` run one code on both kinds.
 """
 
 from __future__ import annotations
@@ -101,7 +101,7 @@ def centred(M: list[list[Any]]) -> tuple[list[Any], list[list[Any]], Any]:
     """(centre c, Q^-1, size k) of a normalised float matrix [[Q, m], [m^T, a]].
 
     The inverse shape matrix is S = k Q^-1. This k = -m.c - a loses digits to cancellation when
-    the centre is far out compared with the size; :mod:`core.witness.batch` encloses it
+    the centre is far out compared with the size; :mod:`core.witness.floatcert` encloses it
     accurately instead.
     """
     d = len(M) - 1

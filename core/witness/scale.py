@@ -16,25 +16,32 @@ crossed 1 on the wrong side the two certified computations would disagree: a Run
 given exactly as a real algebraic number (defining polynomial and isolating interval;
 :meth:`ContactScale.algebraic`).
 
-Stacks of float pairs go to :func:`core.witness.batch.contact_scale_batch` (vectorised).
+This module holds the exact stage (:func:`scale_exact`) and the float stage (:func:`scale_float`,
+vectorised certificates of :mod:`core.witness.floatcert`) that :func:`core.witness.contact_scale`
+runs through the one filtered evaluation of :mod:`core.witness.filtered`.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+import numpy as np
 from flint import fmpq
 
 from ..algebra.algebraic import RealAlgebraic
-from ..fixed.classify import classify
+from ..fixed.classify import Certifier, classify
 from ..relation import Relation
 from .centred import centred_pair
 from .contact_function import Bracket, ContactFunction
-from .numbers import algebraic_dict, sqrt_bounds, to_float, value_at_root
+from .floatcert import scale_brackets
+from .numbers import algebraic_dict, simplest_between, sqrt_bounds, to_float, value_at_root
 
-__all__ = ["ContactScale", "contact_scale_pair", "scale_from", "check_rtol"]
+if TYPE_CHECKING:
+    from .filtered import Pairs
+
+__all__ = ["ContactScale", "contact_scale_pair", "scale_from", "scale_exact", "scale_float", "check_rtol"]
 
 _MAX_STEPS = 400
 """Narrowing steps at most (each at least halves the bracket; a handful are needed): a safety net."""
@@ -45,15 +52,20 @@ class ContactScale:
     """A certified bracket of the contact scale mu* of one pair.
 
     ``lo <= mu* <= hi`` (exact rationals, equal when mu* is known exactly, e.g. 1 for a tangent
-    pair); ``relation`` is SEPARATE (mu* > 1), TANGENT (mu* = 1) or OVERLAP (mu* < 1).
+    pair); ``relation`` is SEPARATE (mu* > 1), TANGENT (mu* = 1) or OVERLAP (mu* < 1);
+    ``certified_by`` says which arithmetic proved the bracket (float with directed rounding, or
+    exact rationals; the bounds are exact rationals either way).
     """
 
     lo: fmpq
     hi: fmpq
     relation: Relation
-    _cf: ContactFunction | None = field(default=None, repr=False)
-    _bracket: Bracket | None = field(default=None, repr=False)
-    _algebraic: RealAlgebraic | None = field(default=None, repr=False)
+    certified_by: Certifier = Certifier.EXACT
+    _pair: tuple[Any, Any] | None = field(default=None, repr=False, compare=False)
+    """The pair's matrices as given, for the exact value on demand."""
+    _cf: ContactFunction | None = field(default=None, repr=False, compare=False)
+    _bracket: Bracket | None = field(default=None, repr=False, compare=False)
+    _algebraic: RealAlgebraic | None = field(default=None, repr=False, compare=False)
 
     @property
     def approx(self) -> float:
@@ -82,7 +94,11 @@ class ContactScale:
             if self.lo == self.hi:
                 self._algebraic = RealAlgebraic.rational(self.lo)
             else:
-                assert self._cf is not None and self._bracket is not None
+                if self._cf is None or self._bracket is None:  # a float bracket: the exact one now
+                    assert self._pair is not None
+                    self._cf = ContactFunction(*centred_pair(*self._pair))
+                    self._bracket = self._cf.start()
+                    assert self._bracket is not None  # lo < hi: the centres differ
                 h, br = self._cf.root_factor(self._bracket)
                 alpha = RealAlgebraic.rational(br.lo) if br.exact else RealAlgebraic.isolating(h, br.lo, br.hi)
                 N, D = self._cf.polynomials
@@ -94,7 +110,7 @@ class ContactScale:
         return self.algebraic().decimal(digits)
 
     def to_dict(self, digits: int | None = None) -> dict[str, Any]:
-        """JSON form: exact bounds as strings, float approximation, relation.
+        """JSON form: exact bounds as strings, float approximation, relation, certifier.
 
         With ``digits``, also the exact algebraic value (decimal, polynomial, isolating interval).
         """
@@ -104,6 +120,7 @@ class ContactScale:
             "approx": self.approx,
             "margin": self.margin,
             "relation": str(self.relation),
+            "certified_by": str(self.certified_by),
         }
         if digits is not None:
             out["exact"] = algebraic_dict(self.algebraic(), digits)
@@ -130,10 +147,10 @@ def scale_from(cf: ContactFunction, rel: Relation, rtol: float) -> ContactScale:
     (clipped to the certified side of 1) is returned: certified, only wider than asked.
     """
     if rel == Relation.TANGENT:
-        return ContactScale(fmpq(1), fmpq(1), rel, cf, None)
+        return ContactScale(fmpq(1), fmpq(1), rel, Certifier.EXACT, None, cf, None)
     br = cf.start()
     if br is None:  # same centre: scaled down to a point each, they still share it
-        return ContactScale(fmpq(0), fmpq(0), Relation.OVERLAP, cf, None)
+        return ContactScale(fmpq(0), fmpq(0), Relation.OVERLAP, Certifier.EXACT, None, cf, None)
     tol = fmpq(*float(rtol).as_integer_ratio())
     bits = max(64, int(-math.log2(rtol)) + 16)
     for _ in range(_MAX_STEPS):
@@ -156,14 +173,73 @@ def _clipped(lo: fmpq, hi: fmpq, rel: Relation, cf: ContactFunction, br: Bracket
         lo = max(lo, fmpq(1))
     else:
         hi = min(hi, fmpq(1))
-    return ContactScale(lo, hi, rel, cf, br)
+    return ContactScale(lo, hi, rel, Certifier.EXACT, None, cf, br)
 
 
 def contact_scale_pair(A: Any, B: Any, *, rtol: float = 1e-12) -> ContactScale:
-    """:func:`core.witness.contact_scale` of one pair (exact rational bracket)."""
+    """The exact contact scale of one pair (the exact stage alone; :func:`core.witness.contact_scale` is the public form)."""
     check_rtol(rtol)
     rel = classify(A, B)
     return scale_from(ContactFunction(*centred_pair(A, B)), rel, rtol)
+
+
+def scale_exact(pairs: Pairs, i: int, rtol: float) -> ContactScale:
+    """The exact stage: pair i's bracket in exact rationals (within ``rtol``)."""
+    rel = Relation(int(pairs.relation[i]))
+    if rel == Relation.TANGENT:
+        return ContactScale(fmpq(1), fmpq(1), rel, Certifier.EXACT, (pairs.a[i], pairs.b[i]))
+    out = scale_from(pairs.contact_function(i), rel, rtol)
+    out._pair = (pairs.a[i], pairs.b[i])
+    return out
+
+
+_SIMPLE = fmpq(1, 2**10)
+"""A simple rational c in a float bracket is tried as mu* itself when den(c)^2 (hi - lo) is below
+this: always for brackets around simple values (3/2 for two spheres, 2 at rtol 1e-6), by chance
+for about one bracket in a thousand (a random bracket of width w holds a rational of denominator
+q or less with probability about q^2 w): an exact check then, a fraction of a millisecond."""
+
+
+def scale_float(pairs: Pairs, todo: np.ndarray, rtol: float) -> dict[int, ContactScale]:
+    """The float stage: certified float brackets (vectorised); tangent pairs are mu* = 1 exactly.
+
+    A bracket is kept only when it lies strictly on the side of 1 of the relation (lo > 1 for a
+    separate pair, hi < 1 for an overlapping one), as the exact stage's always does.
+
+    Under ``method="adaptive"`` a bracket around a simple rational c is tested exactly: the
+    pair scaled by c is classified, and tangent there means mu* = c exactly.
+    """
+    fp = pairs.floats
+    assert fp is not None
+    out: dict[int, ContactScale] = {}
+    for i in np.flatnonzero(todo & (pairs.relation == Relation.TANGENT)):
+        out[int(i)] = ContactScale(fmpq(1), fmpq(1), Relation.TANGENT, Certifier.EXACT, (pairs.a[i], pairs.b[i]))
+    lo, hi, _, ok = scale_brackets(fp, pairs.relation, rtol, pairs.method)
+    for i in np.flatnonzero(todo & ok & (pairs.relation != Relation.TANGENT)):
+        rel = Relation(int(pairs.relation[i]))
+        flo, fhi = fmpq(*float(lo[i]).as_integer_ratio()), fmpq(*float(hi[i]).as_integer_ratio())
+        if (flo <= 1) if rel == Relation.SEPARATE else (fhi >= 1):
+            continue  # the bracket must show the side of 1 by itself (as the exact one does)
+        cs = ContactScale(flo, fhi, rel, Certifier.FLOAT, (pairs.a[i], pairs.b[i]))
+        if pairs.method == "adaptive":
+            c = simplest_between(flo, fhi)
+            if c > 0 and c.q * c.q * (fhi - flo) < _SIMPLE and _is_contact_scale(pairs.contact_function(int(i)), c):
+                cs = ContactScale(c, c, rel, Certifier.EXACT, cs._pair)
+        out[int(i)] = cs
+    return out
+
+
+def _is_contact_scale(cf: ContactFunction, mu: fmpq) -> bool:
+    """Exactly whether mu* = mu: the pair scaled about its centres by mu is tangent."""
+    s = mu * mu
+    mats = []
+    for shape in (cf.A, cf.B):
+        M = shape.matrix
+        n = M.nrows()
+        rows = [[M[i, j] for j in range(n)] for i in range(n)]
+        rows[n - 1][n - 1] += shape.k * (1 - s)  # scaled about its centre: 1 becomes s in q
+        mats.append(rows)
+    return bool(classify(mats[0], mats[1]) == Relation.TANGENT)
 
 
 def check_rtol(rtol: float) -> None:

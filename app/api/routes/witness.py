@@ -15,11 +15,12 @@ from typing import Any, TypeVar, cast
 
 from fastapi import APIRouter, HTTPException, Request
 
-from core import Relation
+from core import Certifier, Relation
 from core.witness import (
     SENTENCES,
     ContactPoint,
     ContactScale,
+    SeparatingPlane,
     contact_point,
     contact_scale,
     margin_text,
@@ -34,6 +35,7 @@ from ..json_body import JsonRoute
 from ..schemas import ERROR_RESPONSES, ErrorOut
 from ..witness_schemas import (
     AlgebraicOut,
+    CertifiedBy,
     ContactPointOut,
     ContactScaleIn,
     ContactScaleOut,
@@ -101,6 +103,7 @@ def _scale_out(cs: ContactScale, kind: Kind, digits: int | None) -> ContactScale
         margin=_finite(cs.margin),
         margin_text=margin_text(float(cs.lo), float(cs.hi), cs.relation),
         exact=None if digits is None else _algebraic(algebraic_dict(cs.algebraic(), digits)),
+        certified_by=_by(cs.certified_by),
     )
 
 
@@ -112,14 +115,21 @@ def _point_out(cp: ContactPoint, digits: int) -> ContactPointOut:
         point=[_algebraic(c) for c in d["point"]],
         normal=None if d["normal"] is None else [_algebraic(c) for c in d["normal"]],
         pencil_root=None if d["pencil_root"] is None else _algebraic(d["pencil_root"]),
+        certified_by=_by(cp.certified_by),
     )
 
 
-def _plane_out(plane: Any) -> PlaneOut:
+def _plane_out(plane: SeparatingPlane) -> PlaneOut:
     d = plane.to_dict()
     d["offset_approx"] = _finite(d["offset_approx"])
     d["gap_lower_bound"] = _finite(d["gap_lower_bound"])
+    d["certified_by"] = _by(plane.certified_by)
     return PlaneOut(relation="separate", sentence=SENTENCES[Relation.SEPARATE], **d)
+
+
+def _by(c: Certifier) -> CertifiedBy:
+    """The API name of the arithmetic that certified a witness."""
+    return "float" if c == Certifier.FLOAT else "exact"
 
 
 def _kind(a: Any) -> Kind:
