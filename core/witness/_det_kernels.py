@@ -7,11 +7,13 @@ scaled so that every |entry| <= 2, and returns (value, M) with
 
 # ruff: noqa
 
+from typing import Any
+
 
 DET2_CONSTANT = 2.220446049250315e-16
 DET2_FLOOR = 1.3e-322
 
-def det2(M):
+def det2(M: Any) -> tuple[Any, Any]:
     v0 = M[0, 0]
     v1 = M[0, 1]
     v2 = M[1, 0]
@@ -32,7 +34,7 @@ def det2(M):
 DET3_CONSTANT = 5.551115123125793e-16
 DET3_FLOOR = 2.707e-321
 
-def det3(M):
+def det3(M: Any) -> tuple[Any, Any]:
     v0 = M[0, 0]
     v1 = M[0, 1]
     v2 = M[0, 2]

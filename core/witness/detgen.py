@@ -34,6 +34,8 @@ scaled so that every |entry| <= 2, and returns (value, M) with
 """
 
 # ruff: noqa
+
+from typing import Any
 '''
 
 
@@ -65,7 +67,8 @@ def generate_module() -> str:
     parts = [_HEADER]
     for n in SIZES:
         k = kernel(n)
-        parts.append(f"DET{n}_CONSTANT = {float(k.constants[0])!r}\nDET{n}_FLOOR = {float(k.underflow_floor)!r}\n\n{k.source.strip()}\n")
+        source = k.source.strip().replace(f"def det{n}(M):", f"def det{n}(M: Any) -> tuple[Any, Any]:", 1)
+        parts.append(f"DET{n}_CONSTANT = {float(k.constants[0])!r}\nDET{n}_FLOOR = {float(k.underflow_floor)!r}\n\n{source}\n")
     return "\n\n".join(parts)
 
 

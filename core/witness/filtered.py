@@ -112,7 +112,7 @@ class Pairs:
             return None
         return prepare(self.a, self.b)
 
-    def rows(self, i: int) -> tuple[Any, Any]:
+    def rows(self, i: int) -> tuple[list[list[Any]], list[list[Any]]]:
         """Pair i as nested lists of the numbers given (for the exact stage)."""
         return self.a[i].tolist(), self.b[i].tolist()
 

@@ -40,14 +40,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from ..fixed.classify import Method, Stats, classify
 from ..relation import Relation
 from .floatdet import det_with_bound
-from .floats import centred, dot, down, is_array, lists, maximise, scaled, stacked, up, where
+from .floats import Real, centred, dot, down, is_array, lists, maximise, scaled, stacked, up, where
 
 __all__ = ["FloatPairs", "prepare", "unit_space", "scale_brackets", "planes", "points"]
 
@@ -70,7 +70,7 @@ def _normalised(M: np.ndarray) -> np.ndarray:
     mx = np.abs(M).max(axis=(-2, -1))
     _, e = np.frexp(np.where((mx > 0) & np.isfinite(mx), mx, 1.0))
     factor = np.ldexp(np.where(M[..., 0, 0] < 0, -1.0, 1.0), 1 - e)
-    return M * factor[..., None, None]
+    return np.asarray(M * factor[..., None, None])
 
 
 def _log2(x: np.ndarray) -> np.ndarray:
@@ -89,7 +89,7 @@ def _space_exponent(M: np.ndarray) -> np.ndarray:
     eM = _log2(np.abs(M[..., :d, :d]).max(axis=(-2, -1)))
     em = _log2(np.abs(M[..., :d, d]).max(axis=-1))
     ea = _log2(np.abs(M[..., d, d]))
-    return np.maximum(em - eM, (ea - eM) // 2)
+    return np.asarray(np.maximum(em - eM, (ea - eM) // 2))
 
 
 def unit_space(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -310,10 +310,10 @@ class _Centre:
     """Every matrix exactly symmetric (else the exact symmetric part is what is certified)."""
 
     @property
-    def k_mid(self) -> Any:
-        return 0.5 * (self.k_lo + self.k_hi)
+    def k_mid(self) -> Real:
+        return cast(Real, 0.5 * (self.k_lo + self.k_hi))
 
-    def offset_error(self) -> Any:
+    def offset_error(self) -> Real:
         """An upper bound of |r|_2 / lambda_min: |u.(c - v)| <= |u|_2 times this, for any u."""
         rr = sum(((abs(ri) + b) * (abs(ri) + b) for ri, b in zip(self.r, self.rb, strict=True)), 0.0)
         return up(_sqrt(up(rr)) / self.lam_lo * (1 + 2.0**-40))

@@ -20,8 +20,10 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _det_kernels
+from .floats import Real
 
 __all__ = ["det_with_bound"]
 
@@ -47,7 +49,7 @@ class _Rows:
         return self.rows[ij[0]][ij[1]]
 
 
-def det_with_bound(M: Any) -> tuple[Any, Any, Any]:
+def det_with_bound(M: Any) -> tuple[Real, Real, int | npt.NDArray[np.int64]]:
     """Determinants of n x n float matrices, n = 2 or 3, certified.
 
     Args:
