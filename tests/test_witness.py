@@ -25,7 +25,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from oracle import oracle_relation
 from strategies import dyadic_tangent_pair, exact_shapes, float_pairs, tangent_pairs
-from witness_checks import check_bracket, form, frac, plane_misses_on_side, q
+from witness_checks import check_bracket, check_distance, form, frac, plane_misses_on_side, q
 
 from core import (
     Certifier,
@@ -538,11 +538,9 @@ def test_near_symmetric_float_matrices():
 
 
 def _check_distance(A: Any, B: Any, r: Any) -> None:
-    """Exactly: the two points lie in the shapes, |p - q| <= hi, lo <= hi."""
-    p, qq = [q(v) for v in r.point_a], [q(v) for v in r.point_b]
-    assert form(frac(A), p) <= 0 and form(frac(B), qq) <= 0
-    assert sum((x - y) ** 2 for x, y in zip(p, qq, strict=True)) <= q(r.hi) ** 2
-    assert 0 < q(r.lo) <= q(r.hi)
+    """Exactly: the two points lie in the shapes, |p - q| <= hi, 0 < lo <= hi, the slab is lo wide."""
+    check_distance(A, B, r.lo, r.hi, r.point_a, r.point_b, r.normal)
+    assert r.lo > 0
 
 
 @pytest.mark.parametrize(("c2", "r1", "r2"), [((3, 4, 12), 2, F(3, 2)), ((1, 1, 1), F(1, 3), F(1, 4)), ((5, 0, 0), 1, 2)])
@@ -565,10 +563,16 @@ def test_distance_ellipse_and_circle(k):
     assert q(r.lo) <= g <= q(r.hi) and r.hi - r.lo <= r.hi * fmpq(1, 10**12)
 
 
-@given(float_pairs())
-def test_distance_random(pair):
+@pytest.mark.parametrize("method", ["adaptive", "float", "exact"])
+@given(pair=float_pairs())
+def test_distance_random(method, pair):
     A, B = pair
-    r = distance(A, B)
+    r = distance(A, B, method=method, on_invalid="mark")
+    if isinstance(r, NoWitness):  # method="float": the floats could not certify it
+        assert method == "float" and r.kind == "undecided"
+        return
+    if method != "adaptive":
+        assert r.certified_by == (Certifier.EXACT if method == "exact" else Certifier.FLOAT)
     if classify(A, B) != Relation.SEPARATE:
         assert r.lo == r.hi == 0
         return

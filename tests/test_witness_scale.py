@@ -175,7 +175,7 @@ def check_single(A: Any, B: Any) -> None:
         check_plane(A, B, plane.normal, plane.offset)
         assert w.plane is not None
         check_plane(A, B, w.plane.normal, w.plane.offset)
-        check_distance(A, B, dist.lo, dist.hi, dist.point_a, dist.point_b)
+        check_distance(A, B, dist.lo, dist.hi, dist.point_a, dist.point_b, dist.normal)
         assert dist.normal is not None and dist.lo > 0
     else:
         cp = contact_point(A, B)

@@ -12,6 +12,7 @@ Written with ``fractions.Fraction`` and the Leibniz determinant:
 from __future__ import annotations
 
 import itertools
+import math
 from fractions import Fraction as F
 from typing import Any
 
@@ -156,9 +157,35 @@ def check_on_both(A: Any, B: Any, point: Any) -> None:
     assert form(frac(A), x) == 0 and form(frac(B), x) == 0
 
 
-def check_distance(A: Any, B: Any, lo: Any, hi: Any, point_a: Any, point_b: Any) -> None:
-    """The points lie in their shapes, |p - q| <= hi and 0 <= lo <= hi (lo is checked by the slab's plane elsewhere)."""
+def check_distance(A: Any, B: Any, lo: Any, hi: Any, point_a: Any, point_b: Any, normal: Any = None) -> None:
+    """The points lie in their shapes, |p - q| <= hi, 0 <= lo <= hi, and (with the normal) the
+    slab along it is at least lo wide: lo |n| + sqrt(n^T S_A n) + sqrt(n^T S_B n) <= n.(c_B - c_A)."""
     p, qq = [q(v) for v in point_a], [q(v) for v in point_b]
     assert form(frac(A), p) <= 0 and form(frac(B), qq) <= 0
     assert sum((x - y) ** 2 for x, y in zip(p, qq, strict=True)) <= q(hi) ** 2
     assert 0 <= q(lo) <= q(hi)
+    if normal is not None:
+        n = [q(v) for v in normal]
+        fa, fb = frac(A), frac(B)
+        gap = sum(x * (cb - ca) for x, ca, cb in zip(n, centre(fa), centre(fb), strict=True))
+        total = q(lo) * sqrt_hi(sum(x * x for x in n)) + sqrt_hi(support_sq(fa, n)) + sqrt_hi(support_sq(fb, n))
+        assert total <= gap
+
+
+def sqrt_hi(x: F, bits: int = 256) -> F:
+    """A rational upper bound of sqrt(x), relatively within 2^-bits (integer square root; x >= 0); exact for squares."""
+    rn, rd = math.isqrt(x.numerator), math.isqrt(x.denominator)
+    if rn * rn == x.numerator and rd * rd == x.denominator:
+        return F(rn, rd)
+    k = bits - (x.numerator.bit_length() - x.denominator.bit_length()) // 2  # sqrt(x) 2^k has ~bits bits
+    scaled_x = x * F(4) ** k
+    return F(math.isqrt(scaled_x.numerator // scaled_x.denominator) + 1) / F(2) ** k
+
+
+def support_sq(M: list[list[F]], n: list[F]) -> F:
+    """(max over the shape of n.x - n.c)^2 = n^T S n, S = k Q^-1 (Cramer: Q^-1 n)."""
+    d = len(M) - 1
+    Q = [row[:d] for row in M[:d]]
+    D = det(Q)
+    Qn = [det([[n[r] if c == i else Q[r][c] for c in range(d)] for r in range(d)]) / D for i in range(d)]
+    return size_k(M) * sum(a * b for a, b in zip(n, Qn, strict=True))

@@ -27,7 +27,7 @@ from flint import fmpq, fmpz
 
 from ..fixed.classify import Method, OnInvalid
 from ..relation import Relation
-from .distance import DistanceBracket, distance_exact
+from .distance import DistanceBracket, distance_exact, distance_float
 from .filtered import NoWitness, Pairs, WitnessArray, check_options, filtered, finish, read_pairs
 from .plane import SeparatingPlane, no_plane, plane_exact, plane_float
 from .point import ContactPoint, no_point, point_exact, point_float
@@ -250,7 +250,13 @@ def distance(
     check_rtol(rtol)
     check_options(method, on_invalid)
     pairs = read_pairs(A, B, method)
-    out = filtered(pairs, what="distance", missing=_none, float_stage=None, exact_stage=lambda p, i: distance_exact(p, i, rtol))
+    out = filtered(
+        pairs,
+        what="distance",
+        missing=_none,
+        float_stage=lambda p, todo: distance_float(p, todo, rtol),
+        exact_stage=lambda p, i: distance_exact(p, i, rtol),
+    )
     return finish(out, pairs, on_invalid)
 
 

@@ -22,6 +22,7 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 from flint import arb, fmpq, fmpq_mat
 
 from ..algebra.algebraic import working_precision
@@ -29,6 +30,7 @@ from ..fixed.classify import Certifier, classify
 from ..relation import Relation
 from .centred import CentredShape, centred_pair, column, dot
 from .contact_function import ContactFunction, log2_abs, pow2
+from .floatcert import distances
 from .floats import dot as fdot
 from .floats import inverse, mat_vec, maximise
 from .numbers import sqrt_bounds, to_float
@@ -36,7 +38,7 @@ from .numbers import sqrt_bounds, to_float
 if TYPE_CHECKING:
     from .filtered import Pairs
 
-__all__ = ["DistanceBracket", "distance_pair", "distance_exact", "distance_from"]
+__all__ = ["DistanceBracket", "distance_pair", "distance_exact", "distance_float", "distance_from"]
 
 _MAX_ROUNDS = 8
 
@@ -200,6 +202,32 @@ def distance_pair(A: Any, B: Any, *, rtol: float = 1e-12) -> DistanceBracket:
 def distance_exact(pairs: Pairs, i: int, rtol: float) -> DistanceBracket:
     """The exact stage: pair i's distance bracket."""
     return distance_from(pairs.contact_function(i), Relation(int(pairs.relation[i])), rtol)
+
+
+def distance_float(pairs: Pairs, todo: np.ndarray, rtol: float) -> dict[int, DistanceBracket]:
+    """The float stage: certified float brackets of separate pairs (vectorised); 0 for the others.
+
+    A tangent or overlapping pair is at distance 0 exactly (its relation is certified).
+    """
+    fp = pairs.floats
+    assert fp is not None
+    out: dict[int, DistanceBracket] = {}
+    for i in np.flatnonzero(todo & (pairs.relation != Relation.SEPARATE)):
+        out[int(i)] = DistanceBracket(fmpq(0), fmpq(0), Relation(int(pairs.relation[i])), certified_by=Certifier.FLOAT)
+    mask = todo & (pairs.relation == Relation.SEPARATE)
+    if not mask.any():
+        return out
+    lo, hi, n, pa, pb, ok = distances(fp, mask, rtol)
+
+    def exact(v: np.ndarray) -> tuple[fmpq, ...]:
+        return tuple(fmpq(*float(x).as_integer_ratio()) for x in v)
+
+    for i in np.flatnonzero(ok & mask):
+        out[int(i)] = DistanceBracket(
+            fmpq(*float(lo[i]).as_integer_ratio()), fmpq(*float(hi[i]).as_integer_ratio()), Relation.SEPARATE,
+            exact(n[i]), exact(pa[i]), exact(pb[i]), Certifier.FLOAT,
+        )
+    return out
 
 
 def distance_from(cf: ContactFunction, rel: Relation, rtol: float) -> DistanceBracket:
