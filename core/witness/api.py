@@ -280,8 +280,9 @@ def witness(
 
     The contact scale for every relation, and the separating plane (separate), the exact
     contact point and normal (tangent) or a point inside both (overlap). One read of the pairs
-    and one contact function per pair serve all of them. ``witness(A, B, method="float")`` is
-    the scene's drag path: floats only, a few tenths of a millisecond for one float pair.
+    and one contact function per pair serve all of them. For one float pair the floats do the
+    work in a few tenths of a millisecond (the scene's drag path), exact rationals only what
+    they cannot certify; ``method="float"`` never goes exact.
 
     Args:
         A: one matrix, or a stack (..., n, n); any input form of :func:`core.classify`.

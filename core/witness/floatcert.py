@@ -32,7 +32,9 @@ strictly on one side iff side (n.c - d) > sqrt(k n^T Q^-1 n) (:func:`_plane_cert
 Points (:func:`points`): x(lambda*) of an overlapping pair, certified inside both
 (X^T A X < 0 with a compensated, bounded evaluation). Both are tried first in a simple form (the
 normal scaled to a largest component 1, coordinates rounded to short dyadics) that the same
-certificate must accept.
+certificate must accept. Distances (:func:`distances`): the best direction by Newton, the empty
+slab between certified support bounds along it below, two float points certified inside the
+shapes above.
 """
 
 from __future__ import annotations
