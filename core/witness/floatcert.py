@@ -226,6 +226,8 @@ def planes(fp: FloatPairs, todo: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
                 got = np.asarray(got, dtype=bool).reshape(-1) & todo & ~ok & np.isfinite(dc) & np.isfinite(nc).all(axis=1)
                 normal[got], offset[got] = nc[got], dc[got]
                 ok |= got
+                if ok[todo].all():
+                    break
     except _ARITHMETIC:
         return np.full((N, dim), np.nan), np.full(N, np.nan), np.zeros(N, bool)
     # back from the unit-extent view: n.x' = d' is n.x = 2^-e d' (exact unless it leaves the range)
@@ -255,6 +257,8 @@ def points(fp: FloatPairs, todo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                 got = np.asarray(got, dtype=bool).reshape(-1) & todo & ~ok & np.isfinite(xc).all(axis=1)
                 out[got] = xc[got]
                 ok |= got
+                if ok[todo].all():
+                    break
     except _ARITHMETIC:
         return np.full((N, dim), np.nan), np.zeros(N, bool)
     with np.errstate(all="ignore"):
