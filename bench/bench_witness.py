@@ -153,7 +153,7 @@ def main() -> None:
         rows.append(("witness, method='float' (one pair, drag path)", f"float {kind}", per_pair(lambda a, b: witness(a, b, rtol=1e-6, method="float", on_invalid="mark"), fl, repeat), ""))
         sep = [(a, b) for a, b in fl if classify(a, b) == 0]
         ovl = [(a, b) for a, b in fl if classify(a, b) == 2]
-        rows.append(("separating_plane, exact, verified", f"float {kind}, separate", per_pair(separating_plane, sep, repeat), ""))
+        rows.append(("separating_plane (adaptive)", f"float {kind}, separate", per_pair(separating_plane, sep, repeat), ""))
         rows.append(("distance bracket (rtol 1e-12)", f"float {kind}, separate", per_pair(distance, sep, repeat), ""))
         rows.append(("contact_point, overlap (rational point)", f"float {kind}, overlap", per_pair(contact_point, ovl, repeat), ""))
         tan = [tangent_pair(d, F(int(a), 4), F(int(r), 3)) for a, r in zip(rng.integers(2, 12, n_one // 3), rng.integers(1, 9, n_one // 3), strict=True)]

@@ -36,7 +36,7 @@ from ..relation import Relation
 from .centred import centred_pair
 from .contact_function import Bracket, ContactFunction
 from .floatcert import scale_brackets
-from .numbers import algebraic_dict, simplest_between, sqrt_bounds, to_float, value_at_root
+from .numbers import algebraic_dict, sqrt_bounds, to_float, value_at_root
 
 if TYPE_CHECKING:
     from .filtered import Pairs
@@ -222,11 +222,41 @@ def scale_float(pairs: Pairs, todo: np.ndarray, rtol: float) -> dict[int, Contac
             continue  # the bracket must show the side of 1 by itself (as the exact one does)
         cs = ContactScale(flo, fhi, rel, Certifier.FLOAT, (pairs.a[i], pairs.b[i]))
         if pairs.method == "adaptive":
-            c = simplest_between(flo, fhi)
-            if c > 0 and c.q * c.q * (fhi - flo) < _SIMPLE and _is_contact_scale(pairs.contact_function(int(i)), c):
+            c = _simple_in(float(lo[i]), float(hi[i]), flo, fhi)
+            if c is not None and _is_contact_scale(pairs.contact_function(int(i)), c):
                 cs = ContactScale(c, c, rel, Certifier.EXACT, cs._pair)
         out[int(i)] = cs
     return out
+
+
+def _simple_in(lo: float, hi: float, flo: fmpq, fhi: fmpq) -> fmpq | None:
+    """The rational c in [lo, hi] with den(c)^2 (hi - lo) < _SIMPLE, if there is one (at most one is).
+
+    Such a c is within (hi - lo) / 2 < 1 / (2 den(c)^2) of the midpoint m, so by Legendre's
+    theorem it is a convergent of m's continued fraction: the last convergent with a
+    denominator small enough is the only candidate (integer Euclid, a few steps).
+    """
+    w = hi - lo
+    if not w > 0:
+        return None
+    qmax = int(math.sqrt(float(_SIMPLE) / w))
+    if qmax < 1:
+        return None
+    a, b = (0.5 * lo + 0.5 * hi).as_integer_ratio()
+    p0, q0, p1, q1 = 0, 1, 1, 0  # convergents p/q of a/b
+    while b:
+        t, r = divmod(a, b)
+        p0, q0, p1, q1 = p1, q1, t * p1 + p0, t * q1 + q0
+        if q1 > qmax:
+            p1, q1 = p0, q0
+            break
+        a, b = b, r
+    if q1 == 0:
+        return None
+    c = fmpq(p1, q1)
+    if c > 0 and flo <= c <= fhi and c.q * c.q * (fhi - flo) < _SIMPLE:
+        return c
+    return None
 
 
 def _is_contact_scale(cf: ContactFunction, mu: fmpq) -> bool:
