@@ -206,7 +206,7 @@ def planes(fp: FloatPairs, todo: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
 
     ``ok``: A lies strictly in n.x < d and B strictly in n.x > d, for the floats as the binary
     rationals they are. Tried in order: the normal with a largest component 1 and coordinates
-    rounded to 2^-20, with the offset rounded to 2^-8 and to 2^-30 at unit extent; then unrounded.
+    rounded to 2^-20, with the offset rounded to 2^-20 at unit extent; then unrounded.
     """
     N, dim = fp.size, fp.dim
     normal, offset, ok = np.full((N, dim), np.nan), np.full(N, np.nan), np.zeros(N, bool)
@@ -218,7 +218,7 @@ def planes(fp: FloatPairs, todo: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
             n0, d0, ok0 = _float_planes(P)
             big = np.abs(n0).max(axis=1)
             n1, d1 = n0 / big[:, None], d0 / big
-            tries = [(_snap(n1, 20), _snap(d1, 8)), (_snap(n1, 20), _snap(d1, 30)), (n1, d1), (n0, d0)]
+            tries = [(_snap(n1, 20), _snap(d1, 20)), (n1, d1), (n0, d0)]
             for nc, dc in tries:
                 nl = [nc[:, i] if fp.a.ndim == 3 else float(nc[0, i]) for i in range(dim)]
                 dl = dc if fp.a.ndim == 3 else float(dc[0])
