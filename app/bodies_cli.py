@@ -1,16 +1,25 @@
 """The ``contacts`` and ``classify`` sub-commands of ``python -m app`` (files in, files out).
 
-* ``python -m app contacts BODIES --out PAIRS.csv [--box Lx,Ly,Lz] [--method M]
-  [--on-invalid mark] [--scheduler ADDRESS]``: every pair of bodies that is not separate
-  (:func:`core.contacts`); BODIES is CSV or NPZ (:mod:`app.bodyfiles`). A progress bar on
-  stderr while pairs are classified (long runs), a summary at the end.
+* ``python -m app contacts BODIES --out PAIRS.csv [--box Lx,Ly,Lz] [--frame K] [--format F]
+  [--method M] [--on-invalid mark] [--with scale] [--scheduler ADDRESS] [--quiet]``: every
+  pair of bodies that is not separate (:func:`core.contacts`). BODIES is any file of
+  :mod:`app.readers` (CSV, Parquet, NPZ, HOOMD GSD, LAMMPS dump, extended XYZ) or ``-`` for
+  standard input; PAIRS is CSV (or NPZ for a ``.npz`` name) or ``-`` for standard output
+  (:mod:`app.bodyfiles`). The box of the file (GSD, LAMMPS, XYZ, NPZ ``box``) is used unless
+  ``--box`` is given.
 * ``python -m app classify PAIRS.npz --out LABELS.npy [--method M]``: the relations of the pairs
-  of stacks ``A``, ``B`` in an .npz file, saved as int8 Relation codes (:func:`core.classify`).
+  of stacks ``A``, ``B`` in an .npz file, saved as int8 Relation codes (:func:`core.classify`);
+  the .npy file is written at exactly the path given.
+
+Standard output carries only the data (``--out -``); the progress bar, the summary and every
+message go to standard error (``--quiet``: errors only). Output files are written whole or not
+at all (:mod:`app.output`).
 """
 
 from __future__ import annotations
 
 import argparse
+import io
 import sys
 import time
 from typing import Any, TextIO
@@ -23,123 +32,208 @@ COMMANDS = ("contacts", "classify")
 
 
 def box_argument(text: str) -> tuple[float, ...]:
-    """``--box Lx,Ly[,Lz]`` as a tuple of floats (argparse type)."""
+    """``--box Lx,Ly[,Lz]`` (or ``Lx,Ly,Lz,xy,xz,yz``, a tilted box) as a tuple of floats (argparse type)."""
     try:
         sides = tuple(float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"--box takes Lx,Ly[,Lz] (numbers), got {text!r}") from None
-    if len(sides) not in (2, 3):
-        raise argparse.ArgumentTypeError(f"--box takes 2 or 3 sides, got {text!r}")
+    if len(sides) not in (2, 3, 6):
+        raise argparse.ArgumentTypeError(f"--box takes 2 or 3 sides (or Lx,Ly,Lz,xy,xz,yz), got {text!r}")
     return sides
+
+
+def frame_argument(text: str) -> int:
+    """``--frame K``: an integer, from 0 (negative: from the end)."""
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--frame takes a frame number (0 first, -1 last), got {text!r}") from None
+
+
+def add_body_file_options(parser: argparse.ArgumentParser) -> None:
+    """``--frame`` and ``--format``: which frame of a trajectory, and which reader (:mod:`app.readers`)."""
+    from .readers import FORMATS
+
+    parser.add_argument("--frame", type=frame_argument, default=None, help="frame of a trajectory (GSD, LAMMPS, XYZ): 0 first, -1 last (default)")
+    parser.add_argument("--format", choices=FORMATS, default=None, help="file format (default: from the name, else the first bytes)")
 
 
 def add_parsers(sub: Any) -> None:
     """Add ``contacts`` and ``classify`` to the sub-command parsers of :func:`app.cli.build_parser`."""
-    c = sub.add_parser("contacts", help="certified contacts among many bodies (CSV/NPZ in, CSV out)")
-    c.add_argument("bodies", help="CSV (x,y,z,a,b,c,qw,qx,qy,qz or x,y,a,b,angle) or NPZ (centers, semi_axes, orientations | Q)")
-    c.add_argument("--out", required=True, help="output CSV: i,j,relation (relation: separate|tangent|overlap)")
-    c.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz] (minimum image)")
+    c = sub.add_parser("contacts", help="certified contacts among many bodies (CSV/Parquet/NPZ/GSD/LAMMPS/XYZ in, CSV/NPZ out)")
+    c.add_argument("bodies", help="file of bodies (app.readers: CSV, Parquet, NPZ, HOOMD GSD, LAMMPS dump, extended XYZ), or - for stdin")
+    c.add_argument(
+        "--out", required=True,
+        help="output: CSV i,j,relation,certified_by,image_x,image_y,image_z (NPZ for a .npz name), or - for stdout",
+    )
+    c.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz] (minimum image); default: the file's box")
+    add_body_file_options(c)
     c.add_argument("--method", choices=("adaptive", "float", "exact"), default="adaptive")
     c.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bad bodies and go on")
-    c.add_argument("--scheduler", default=None, help="run on Dask: scheduler address tcp://host:8786 (pip install -e .[dask])")
-    c.add_argument("--quiet", action="store_true", help="no progress bar")
+    c.add_argument(
+        "--with", dest="extras", action="append", choices=("scale",), default=[],
+        help="scale: add a certified contact-scale bracket scale_lo,scale_hi and a containment flag per pair",
+    )
+    c.add_argument("--scheduler", default=None, help="run on Dask: scheduler address tcp://host:8786 (pip install 'ellipsoid-interference[dask]')")
+    c.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
 
     k = sub.add_parser("classify", help="certified relations of a file of pairs (NPZ with stacks A, B)")
-    k.add_argument("pairs", help="NPZ with arrays A and B, stacks (N, n, n) that broadcast")
-    k.add_argument("--out", required=True, help="output .npy of int8 codes (0 separate, 1 tangent, 2 overlap, -2 invalid)")
+    k.add_argument("pairs", help="NPZ with arrays A and B, stacks (N, n, n) that broadcast; - for stdin")
+    k.add_argument("--out", required=True, help="output .npy of int8 codes (0 separate, 1 tangent, 2 overlap, -2 invalid), exactly this path; - for stdout")
     k.add_argument("--method", choices=("adaptive", "float", "exact"), default="adaptive")
     k.add_argument("--on-invalid", choices=("raise", "mark"), default="raise")
+    k.add_argument("--quiet", action="store_true", help="no summary (errors only)")
 
 
 class ProgressBar:
-    """A one-line progress bar on a terminal (plain lines, at most every 10 %, otherwise).
+    """A one-line progress bar on a terminal (plain lines at most every 10 % otherwise).
+
+    It appears once the work is large (``min_total`` pairs) or has run for ``delay`` seconds,
+    so short runs stay quiet and long ones always say how far they are.
 
     Args:
         stream: where to draw (stderr).
         label: text before the bar.
-        min_total: totals below this draw nothing (short runs stay quiet).
+        min_total: totals from this many pairs draw from the start.
+        delay: any run draws once it has taken this many seconds.
     """
 
-    def __init__(self, stream: TextIO, label: str, *, min_total: int = 1_000_000) -> None:
+    def __init__(self, stream: TextIO, label: str, *, min_total: int = 1_000_000, delay: float = 1.0) -> None:
         self.stream = stream
         self.label = label
         self.min_total = min_total
+        self.delay = delay
         self.tty = bool(getattr(stream, "isatty", lambda: False)())
         self.start = time.perf_counter()
-        self.last = -1
+        self.last = -100
 
     def __call__(self, done: int, total: int) -> None:
         """Show ``done`` of ``total``."""
-        if total < self.min_total:
+        elapsed = time.perf_counter() - self.start
+        if total < self.min_total and elapsed < self.delay:
             return
         pct = int(100 * done / total) if total else 100
         if not self.tty and pct // 10 == self.last // 10 and done < total:
             return
         self.last = pct
         bar = "#" * (pct * 30 // 100)
-        line = f"{self.label} [{bar:<30}] {pct:3d}% {done:,}/{total:,} pairs, {time.perf_counter() - self.start:.1f} s"
+        line = f"{self.label} [{bar:<30}] {pct:3d}% {done:,}/{total:,} pairs, {elapsed:.1f} s"
         self.stream.write(("\r" + line) if self.tty else line + "\n")
         if self.tty and done >= total:
             self.stream.write("\n")
         self.stream.flush()
 
 
+def _say(args: argparse.Namespace, text: str) -> None:
+    """A message for the user: stderr (stdout carries only data), unless --quiet."""
+    if not getattr(args, "quiet", False):
+        print(text, file=sys.stderr, flush=True)
+
+
+def _connect(address: str) -> Any:
+    """A ``distributed.Client`` on ``address``, or a one-line error (RuntimeError) within seconds."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise RuntimeError("--scheduler needs Dask: pip install 'ellipsoid-interference[dask]'") from None
+    import logging
+
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)  # its retries are not the user's business
+    try:
+        return Client(address, timeout=10)
+    except (OSError, TimeoutError, ValueError) as e:
+        raise RuntimeError(f"cannot reach the Dask scheduler at {address}: {str(e).splitlines()[0] if str(e) else type(e).__name__}") from None
+
+
 def run_contacts(args: argparse.Namespace) -> int:
     """``python -m app contacts``: read, search, write, summarise. Returns the exit status."""
     from core import contacts
 
-    from .bodyfiles import read_bodies, write_pairs_csv
+    from .bodyfiles import write_pairs_csv, write_pairs_npz
+    from .output import Output
+    from .readers import read_bodies, usable_box
 
-    t0 = time.perf_counter()
-    bodies = read_bodies(args.bodies)
-    if bodies.errors and args.on_invalid == "raise":
-        k, why = next(iter(bodies.errors.items()))
-        raise ValueError(f"{args.bodies}: {bodies.where(k)}: {why}")
-    if args.box is not None and len(args.box) != bodies.dim:
-        raise ValueError(f"--box has {len(args.box)} sides but the bodies are {bodies.dim}D")
-    t1 = time.perf_counter()
-    err = sys.stderr
-    if not args.quiet:
-        err.write(f"read {len(bodies):,} {'ellipsoids' if bodies.dim == 3 else 'ellipses'} from {args.bodies} in {t1 - t0:.1f} s\n")
-    progress = None if args.quiet else ProgressBar(err, "classifying")
-    res = contacts(
-        bodies.Q, box=args.box, method=args.method, on_invalid=args.on_invalid, scheduler=args.scheduler, progress=progress
-    )
-    invalid = dict(res.invalid)
-    for k, why in bodies.errors.items():  # the reason from the file's parameters, not "NaN"
-        invalid[k] = why
-    t2 = time.perf_counter()
-    write_pairs_csv(args.out, res.i, res.j, res.relation)
+    as_npz = args.out.lower().endswith(".npz")
+    out = Output(args.out, binary=as_npz)  # checked (and its temporary file made) before any work
+    with out as f:
+        t0 = time.perf_counter()
+        bodies = read_bodies(args.bodies, frame=args.frame, format=args.format)
+        source = "<stdin>" if args.bodies == "-" else args.bodies
+        if bodies.errors and args.on_invalid == "raise":
+            k, why = next(iter(bodies.errors.items()))
+            raise ValueError(f"{source}: {bodies.where(k)}: {why}")
+        box = args.box if args.box is not None else bodies.box
+        if box is not None and len(box) != 6 and len(box) != bodies.dim:
+            raise ValueError(f"--box has {len(box)} sides but the bodies are {bodies.dim}D")
+        box = usable_box(box, bodies.dim, source)
+        t1 = time.perf_counter()
+        what = "ellipsoids" if bodies.dim == 3 else "ellipses"
+        frame = f" (frame {bodies.frame})" if bodies.frame is not None else ""
+        _say(args, f"read {len(bodies):,} {what} from {source}{frame} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
+        scheduler = _connect(args.scheduler) if args.scheduler else None
+        try:
+            progress = None if args.quiet else (True if scheduler is not None else ProgressBar(sys.stderr, "classifying"))
+            chunk = 10_000 if args.method == "exact" else None  # exact: ~1 ms of work per 10 pairs, progress every second or so
+            res = contacts(
+                bodies.Q, box=box, method=args.method, on_invalid=args.on_invalid, scheduler=scheduler, progress=progress,
+                **({"chunk": chunk} if chunk else {}),
+            )
+        finally:
+            if scheduler is not None:
+                scheduler.close()
+        details: dict[str, np.ndarray] | None = None
+        if "scale" in args.extras:
+            from core.bodies.details import pair_details
+
+            ts = time.perf_counter()
+            d = pair_details(bodies.Q, res)
+            details = {"scale_lo": d.scale_lo, "scale_hi": d.scale_hi, "contained": np.array(d.contained_names())}
+            _say(args, f"contact scales and containment of {len(res):,} pairs in {time.perf_counter() - ts:.1f} s")
+        t2 = time.perf_counter()
+        if as_npz:
+            write_pairs_npz(f, res.i, res.j, res.relation, res.certified_by, res.image, details)
+        else:
+            write_pairs_csv(f, res.i, res.j, res.relation, res.certified_by, res.image, details)
     t3 = time.perf_counter()
-    print(f"wrote {len(res):,} pairs to {args.out}")
-    print(res.summary())
+    invalid = dict(res.invalid)
+    invalid.update(bodies.errors)  # the reason from the file's parameters, not "NaN"
+    _say(args, f"wrote {len(res):,} pairs to {'<stdout>' if args.out == '-' else args.out}")
+    _say(args, res.summary())
     phases = ", ".join(f"{k} {v:.2f} s" for k, v in res.seconds.items() if k != "total")
-    print(f"time: read {t1 - t0:.2f} s, {phases}, write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
-    for k in sorted(invalid)[:10]:
-        print(f"invalid {bodies.where(k)}: {invalid[k]}")
+    _say(args, f"time: read {t1 - t0:.2f} s, {phases}, write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
+    for k in sorted(invalid)[:10]:  # warnings about the answer: shown even with --quiet
+        print(f"invalid {bodies.where(k)}: {invalid[k]}", file=sys.stderr)
     if len(invalid) > 10:
-        print(f"... and {len(invalid) - 10} more invalid bodies")
+        print(f"... and {len(invalid) - 10} more invalid bodies", file=sys.stderr)
     return 0
 
 
 def run_classify(args: argparse.Namespace) -> int:
-    """``python -m app classify``: relations of the pairs of an .npz file, saved as .npy."""
+    """``python -m app classify``: relations of the pairs of an .npz file, saved as .npy (exactly at ``--out``)."""
     from core import Relation, classify_detailed
 
-    try:
-        with np.load(args.pairs, allow_pickle=False) as z:
-            if "A" not in z.files or "B" not in z.files:
-                raise ValueError(f"{args.pairs}: expected arrays A and B, found {sorted(z.files)}")
-            A, B = z["A"], z["B"]
-    except (OSError, EOFError) as e:
-        raise ValueError(f"cannot read {args.pairs}: {e}") from None
-    t0 = time.perf_counter()
-    res = classify_detailed(A, B, method=args.method, on_invalid=args.on_invalid)
-    codes = np.asarray(res.relation, dtype=np.int8)
-    np.save(args.out, codes)
+    from .output import Output
+    from .readers.npzfile import npz_arrays
+
+    out = Output(args.out, binary=True)
+    with out as f:
+        if args.pairs == "-":
+            source: Any = sys.stdin.buffer.read()
+            name = "<stdin>"
+        else:
+            source, name = args.pairs, args.pairs
+        arrays = npz_arrays(source, name, ("A", "B"), required=("A", "B"))
+        A, B = arrays["A"], arrays["B"]
+        t0 = time.perf_counter()
+        res = classify_detailed(A, B, method=args.method, on_invalid=args.on_invalid)
+        codes = np.asarray(res.relation, dtype=np.int8)
+        buf = io.BytesIO()
+        np.save(buf, codes)  # to a file object: numpy adds no ".npy" to the name
+        f.write(buf.getvalue())
     counts = {str(r): int(np.count_nonzero(codes == r)) for r in Relation if np.count_nonzero(codes == r)}
     exact = int(np.count_nonzero(res.certified_by == 2))
-    print(f"wrote {codes.size:,} labels to {args.out} in {time.perf_counter() - t0:.2f} s: {counts}; {exact} certified by exact arithmetic")
+    where = "<stdout>" if args.out == "-" else args.out
+    _say(args, f"wrote {codes.size:,} labels to {where} in {time.perf_counter() - t0:.2f} s: {counts}; {exact} certified by exact arithmetic")
     for k in sorted(res.errors)[:10]:
-        print(f"invalid pair {k}: {res.errors[k]}")
+        print(f"invalid pair {k}: {res.errors[k]}", file=sys.stderr)
     return 0

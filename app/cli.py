@@ -17,12 +17,22 @@
 * ``python -m app contacts BODIES --out PAIRS.csv [--box Lx,Ly,Lz]`` and ``python -m app
   classify PAIRS.npz --out LABELS.npy``: many bodies and files of pairs (:mod:`app.bodies_cli`);
   ``serve --bodies FILE`` / ``screenshot --bodies FILE`` show many bodies in the scene.
+* ``python -m app --version``. The console script ``ellipsoids`` is the same command.
+
+Exit status: 0 done; 1 the work could not be done here (a missing optional package or
+browser, an unreachable Dask scheduler, a render that timed out); 2 bad arguments or input (a
+one-line message on stderr, never a traceback); 130 interrupted by Ctrl+C (SIGINT), 143
+terminated (SIGTERM), 141 standard output closed early (a pipe): in these three no output file
+is left half written (:mod:`app.output`). Messages and progress go to stderr, data to the files
+(or to stdout with ``--out -``).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
+import signal
 import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -30,7 +40,27 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:  # imported where used: the command line starts without viser
     from .scene.state import SceneConfig
 
-__all__ = ["main", "build_parser", "config_from_args"]
+__all__ = ["main", "run", "build_parser", "config_from_args", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_TERMINATED, EXIT_PIPE = 0, 1, 2, 130, 143, 141
+"""Exit statuses (module docstring)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors ("python -m app contacts: error: ...; see --help"), exit 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        """Print one line to stderr and exit with status 2."""
+        sys.stderr.write(f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        raise SystemExit(EXIT_USAGE)
+
+
+class Terminated(BaseException):
+    """SIGTERM during a command: unwinds like Ctrl+C (temporary files removed), exit 143."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated()
 
 
 def _port(text: str) -> int:
@@ -52,6 +82,11 @@ def _origin(text: str) -> str:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
+def _cors_origin(text: str) -> str:
+    """An origin for ``--cors-origin`` (as browsers send it), or "*" for any."""
+    return "*" if text.strip() == "*" else _origin(text)
+
+
 def _size(text: str) -> int:
     try:
         v = int(text)
@@ -69,18 +104,23 @@ def _time(text: str) -> float:
         q = to_fmpq(text)
     except ValueError as e:
         raise argparse.ArgumentTypeError(str(e)) from None
-    t = float(q.p) / float(q.q)
-    if not math.isfinite(t):
+    try:
+        t = float(q.p) / float(q.q)
+    except OverflowError:  # numerator or denominator beyond the float range
+        t = math.inf
+    if not math.isfinite(t) or (t == 0 and q != 0):
         raise argparse.ArgumentTypeError(f"t out of range: {text!r}")
     return t
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (sub-commands ``serve``, ``screenshot`` and ``export``)."""
-    p = argparse.ArgumentParser(
-        prog="python -m app",
-        description="Certified ellipse/ellipsoid interference: viser scene, HTTP API, screenshots.",
+    p = _Parser(
+        prog="ellipsoids" if os.path.basename(sys.argv[0]) == "ellipsoids" else "python -m app",
+        description="Certified ellipse/ellipsoid interference: viser scene, HTTP API, screenshots, contacts among many bodies.",
+        epilog="Exit status: 0 done, 1 could not be done here, 2 bad arguments or input, 130 interrupted (Ctrl+C).",
     )
+    p.add_argument("--version", action="version", version=f"ellipsoid-interference {_version()}")
     sub = p.add_subparsers(dest="command")
     s = sub.add_parser("serve", help="serve the scene and the API (the default command)")
     s.add_argument("--host", default="127.0.0.1", help="interface (default 127.0.0.1; 0.0.0.0 to share on a network)")
@@ -94,6 +134,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--allow-origin", action="append", default=[], type=_origin, metavar="URL",
         help="also accept scene connections from pages at this origin, e.g. https://example.org "
         "(repeatable; default: only the scene's own pages, and clients that send no Origin)",
+    )
+    s.add_argument(
+        "--cors-origin", action="append", default=[], type=_cors_origin, metavar="URL",
+        help="let web pages at this origin call the API from a browser (CORS), e.g. https://example.org, "
+        "or '*' for any (repeatable; default: no CORS headers)",
     )
 
     sh = sub.add_parser(
@@ -118,13 +163,24 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--seconds", type=float, default=12.0, help="playing time of the sweep over I (default 12)")
     ex.add_argument("--frames", type=int, default=240, help="time steps recorded (default 240)")
     ex.add_argument("--out", required=True, help="output HTML path")
-    from .bodies_cli import add_parsers, box_argument
+    from .bodies_cli import add_body_file_options, add_parsers, box_argument
 
     for parser in (s, sh):  # many bodies (issue 14): the scene opens on the bodies of a file
-        parser.add_argument("--bodies", default=None, help="CSV/NPZ file of many bodies to show (app.bodyfiles)")
-        parser.add_argument("--box", type=box_argument, default=None, help="periodic box Lx,Ly[,Lz] of --bodies")
+        parser.add_argument("--bodies", default=None, help="file of many bodies to show (app.readers: CSV, Parquet, NPZ, GSD, LAMMPS, XYZ)")
+        parser.add_argument("--box", type=box_argument, default=None, help="periodic box Lx,Ly[,Lz] of --bodies (default: the file's)")
+        add_body_file_options(parser)
     add_parsers(sub)
     return p
+
+
+def _version() -> str:
+    """The installed package's version (the source tree's pyproject when not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("ellipsoid-interference")
+    except PackageNotFoundError:
+        return "(not installed)"
 
 
 def config_from_args(args: argparse.Namespace, path: str | None = None) -> SceneConfig:
@@ -195,7 +251,7 @@ def _serve(args: argparse.Namespace) -> int:
         if scene is not None:
             scene.stop()
         return 0
-    api = create_api(ApiSettings(scene_url=scene_url))
+    api = create_api(ApiSettings(scene_url=scene_url, cors_origins=tuple(args.cors_origin)))
 
     def stop_work() -> None:
         """On SIGTERM/SIGINT: fail every request budget, kill the analysis workers (API, scene)."""
@@ -227,10 +283,13 @@ def _bodies_model(args: argparse.Namespace) -> object:
     """The bodies of ``--bodies FILE`` with their contacts (``--box``), or None."""
     if getattr(args, "bodies", None) is None:
         return None
-    from .scene.bodies_view import load_model
+    from .readers import read_bodies, usable_box
+    from .scene.bodies import BodiesModel
 
-    model = load_model(args.bodies, args.box)
-    print(f"Bodies: {model.result.summary()}", flush=True)
+    bodies = read_bodies(args.bodies, frame=getattr(args, "frame", None), format=getattr(args, "format", None))
+    box = args.box if args.box is not None else bodies.box
+    model = BodiesModel(bodies, usable_box(box, bodies.dim, args.bodies), name=str(args.bodies).rsplit("/", 1)[-1])
+    print(f"Bodies: {model.result.summary()}", file=sys.stderr, flush=True)
     return model
 
 
@@ -250,8 +309,12 @@ def _screenshot(args: argparse.Namespace) -> int:
     else:
         cfg = config_from_args(args)
         shots = shots_for(cfg, args.out, ts if len(ts) + len(events) > 1 else [], events if len(ts) + len(events) > 1 else [])
-    for path in screenshots(shots, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args)):
-        print(f"wrote {path}")
+    import contextlib
+
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # the scene server's banner: not for a screenshot
+        written = screenshots(shots, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args))
+    for path in written:
+        print(f"wrote {path}", file=sys.stderr)
     return 0
 
 
@@ -262,23 +325,30 @@ def _export(args: argparse.Namespace) -> int:
 
     if not 0 < args.seconds <= 600 or not 2 <= args.frames <= 5000:
         raise ValueError("--seconds must be in (0, 600] and --frames in 2..5000")
-    html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames)
+    from .output import Output
+
     out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(html, encoding="utf-8")
-    print(f"wrote {out} ({len(html) // 1024} kB; open it in a browser, no server needed)")
+    if not out.is_dir():
+        out.parent.mkdir(parents=True, exist_ok=True)  # documented: the folders are created
+    target = Output(out)  # checked before the replay is built
+    with target as f:
+        html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames)
+        f.write(html)
+    print(f"wrote {out} ({len(html) // 1024} kB; open it in a browser, no server needed)", file=sys.stderr)
     return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status (2 for bad arguments or input)."""
+    """Run the command line; returns the exit status (module docstring: 0, 1, 2, 130, 141, 143)."""
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     from .bodies_cli import COMMANDS, run_classify, run_contacts
 
-    if not argv or (argv[0] not in ("serve", "screenshot", "export", *COMMANDS) and argv[0] not in ("-h", "--help")):
+    if not argv or (argv[0] not in ("serve", "screenshot", "export", *COMMANDS) and argv[0] not in ("-h", "--help", "--version")):
         argv = ["serve", *argv]  # no sub-command: serve with the given options (or defaults)
     args = parser.parse_args(argv)
+    if args.command != "serve" and args.command is not None:
+        _on_sigterm()  # serve has its own shutdown (app.lifecycle)
     try:
         if args.command == "screenshot":
             return _screenshot(args)
@@ -290,8 +360,38 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run_classify(args)
         return _serve(args)
     except ValueError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    except (RuntimeError, TimeoutError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 1
+        return _fail(f"error: {e}", EXIT_USAGE)
+    except (RuntimeError, TimeoutError, ImportError) as e:
+        return _fail(f"error: {e}", EXIT_FAILED)
+    except MemoryError:
+        return _fail("error: out of memory (try fewer bodies per file, or --scheduler to spread the work)", EXIT_FAILED)
+    except KeyboardInterrupt:
+        return _fail("interrupted (Ctrl+C): no output written", EXIT_INTERRUPTED)
+    except Terminated:
+        return _fail("terminated (SIGTERM): no output written", EXIT_TERMINATED)
+    except BrokenPipeError:
+        # the reader of stdout went away (e.g. | head): say nothing more to it
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_PIPE
+    except OSError as e:  # the machine's, not the input's: a full disk, a vanished file system...
+        return _fail(f"error: {e.strerror or e}" + (f": {e.filename}" if e.filename else ""), EXIT_FAILED)
+
+
+def run() -> None:
+    """Entry point of the ``ellipsoids`` console script: :func:`main`, then exit with its status."""
+    raise SystemExit(main())
+
+
+def _fail(message: str, status: int) -> int:
+    """One line on stderr (the first line of the message), and the exit status."""
+    print(message.splitlines()[0] if message else "error", file=sys.stderr, flush=True)
+    return status
+
+
+def _on_sigterm() -> None:
+    """SIGTERM unwinds a command like Ctrl+C does (the main thread only can set handlers)."""
+    try:
+        signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:  # not the main thread (main() called from a test's thread)
+        pass

@@ -22,10 +22,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .output import Output
 from .scene.shapes import PALETTES, RELATION_HEX
 from .scene.state import SceneConfig
 
-__all__ = ["CHROMIUM", "CHROMIUM_FLAGS", "HeadlessScene", "Shot", "screenshot", "screenshots"]
+__all__ = ["CHROMIUM", "CHROMIUM_FLAGS", "HeadlessScene", "Shot", "screenshot", "screenshots", "SCREENSHOT_EXTRA"]
+
+SCREENSHOT_EXTRA = (
+    "screenshots need Playwright, an optional part: pip install 'ellipsoid-interference[screenshot]' "
+    "(and Debian's chromium: apt-get install chromium; never 'playwright install')"
+)
+"""What to do when Playwright is missing (it is the ``screenshot`` extra, not a core dependency)."""
 
 CHROMIUM = "/usr/bin/chromium"
 """Debian's chromium (installed by apt; never a Playwright browser download)."""
@@ -138,7 +145,10 @@ class HeadlessScene:
     def __enter__(self) -> HeadlessScene:
         if not os.path.exists(CHROMIUM):
             raise RuntimeError(f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium)")
-        from playwright.sync_api import sync_playwright
+        try:
+            from playwright.sync_api import sync_playwright
+        except ImportError:
+            raise RuntimeError(SCREENSHOT_EXTRA) from None
 
         from .scene.server import start_scene
 
@@ -310,12 +320,23 @@ class HeadlessScene:
         )
         return np.frombuffer(base64.b64decode(b64), dtype=np.uint8).reshape(-1, 4)
 
-    def save(self, out: str | Path) -> Path:
-        """Screenshot of the page (scene + GUI) to a PNG file."""
-        out = Path(out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        self.page.screenshot(path=str(out))
-        return out
+    def save(self, out: str | Path | Output) -> Path:
+        """Screenshot of the page (scene + GUI) to a PNG file, written whole (:mod:`app.output`)."""
+        target = out if isinstance(out, Output) else _output(Path(out))
+        with target as f:
+            f.write(self.page.screenshot())
+        return target.path
+
+    def check_event(self, event: int | None) -> None:
+        """Refuse an event the shown motion does not have (the tab would show another t)."""
+        s = self.session
+        if event is None or s is None or not hasattr(s, "state"):
+            return
+        an = s.state.analysis
+        if s.state.motion is None:
+            raise ValueError(f"--event {event}: the scene has no motion (choose a preset or a configuration with a motion)")
+        if an is not None and not 1 <= event <= len(an.events):
+            raise ValueError(f"--event {event}: this motion has {len(an.events)} event{'s' if len(an.events) != 1 else ''} (1..{len(an.events)})")
 
 
 def screenshot(
@@ -365,22 +386,35 @@ def screenshots(
     shots = list(shots)
     if not shots:
         return []
+    targets = [_output(Path(shot.out)) for shot in shots]  # every path checked before the browser starts
     out: list[Path] = []
     t0 = time.perf_counter()
     with HeadlessScene(shots[0].config, width=width, height=height, timeout=timeout, bodies=bodies) as hs:
         shown: SceneConfig | None = shots[0].config
-        for shot in shots:
+        for shot, target in zip(shots, targets, strict=True):
             if shot.config is not shown:
                 hs.show(shot.config)
                 shown = shot.config
+            if bodies is None:
+                hs.check_event(shot.event if shot.event is not None else shot.config.event)
             if shot.t is not None or shot.event is not None:
                 hs.show(t=shot.t, event=shot.event)
-            out.append(hs.save(shot.out))
+            out.append(hs.save(target))
             if timings is not None:
                 now = time.perf_counter()
                 timings.append(now - t0)
                 t0 = now
     return out
+
+
+def _output(path: Path) -> Output:
+    """The PNG's :class:`~app.output.Output` (its folders created, as documented)."""
+    if not path.is_dir():
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise ValueError(f"--out {path}: cannot create the folder {path.parent}: {e.strerror}") from None
+    return Output(path, binary=True)
 
 
 def shots_for(config: SceneConfig, out: str | Path, ts: Sequence[float | str], events: Sequence[int]) -> list[Shot]:

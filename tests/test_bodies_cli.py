@@ -31,13 +31,14 @@ def test_contacts_command_round_trip(tmp_path, capsys, dim):
     b = random_bodies(600, dim=dim, seed=3)
     src = write_csv(tmp_path / "bodies.csv", b)
     out = tmp_path / "pairs.csv"
-    assert main(["contacts", str(src), "--out", str(out), "--quiet"]) == 0
+    assert main(["contacts", str(src), "--out", str(out)]) == 0
     i, j, rel = read_pairs_csv(out)
     want = contacts(bodies_from_axes(b.centers, b.semi_axes, b.orientations))
     assert np.array_equal(i, want.i) and np.array_equal(j, want.j) and np.array_equal(rel, want.relation)
-    text = capsys.readouterr().out
-    assert f"wrote {len(want):,} pairs to {out}" in text and want.summary() in text
-    assert out.read_text().startswith("i,j,relation\n")
+    captured = capsys.readouterr()
+    assert captured.out == ""  # stdout carries data only
+    assert f"wrote {len(want):,} pairs to {out}" in captured.err and want.summary() in captured.err
+    assert out.read_text().startswith("i,j,relation,certified_by,image_x,image_y,image_z\n")
 
 
 def test_contacts_command_periodic_box_and_npz(tmp_path):
@@ -61,7 +62,8 @@ def test_tangent_lattice_file(tmp_path):
     out = tmp_path / "pairs.csv"
     assert main(["contacts", str(path), "--out", str(out), "--quiet"]) == 0
     lines = out.read_text().splitlines()
-    assert lines[0] == "i,j,relation" and len(lines) == 1 + 17 and all(ln.endswith(",tangent") for ln in lines[1:])
+    assert lines[0] == "i,j,relation,certified_by,image_x,image_y,image_z" and len(lines) == 1 + 17
+    assert all(ln.endswith(",tangent,exact,0,0,0") for ln in lines[1:])  # tangency is certified exactly, always
 
 
 def test_bad_files_name_the_line(tmp_path, capsys):
@@ -73,7 +75,7 @@ def test_bad_files_name_the_line(tmp_path, capsys):
     assert main(["contacts", str(bad), "--out", str(tmp_path / "o.csv"), "--quiet"]) == 2
     assert "body 3 (line 5): semi-axes must be positive, got [1.0, -1.0, 1.0]" in capsys.readouterr().err
     assert main(["contacts", str(bad), "--out", str(tmp_path / "o.csv"), "--quiet", "--on-invalid", "mark"]) == 0
-    assert "invalid body 3 (line 5): semi-axes must be positive" in capsys.readouterr().out
+    assert "invalid body 3 (line 5): semi-axes must be positive" in capsys.readouterr().err
     lines[2] = "1,2,x,1,1,1,1,0,0,0"
     bad.write_text("\n".join(lines) + "\n")
     assert main(["contacts", str(bad), "--out", str(tmp_path / "o.csv")]) == 2
@@ -97,7 +99,7 @@ def test_classify_command_round_trip(tmp_path, capsys):
     assert main(["classify", str(tmp_path / "pairs.npz"), "--out", str(tmp_path / "labels.npy")]) == 0
     labels = np.load(tmp_path / "labels.npy")
     assert labels.dtype == np.int8 and np.array_equal(labels, classify(A, B)) and labels[0] == Relation.TANGENT
-    assert "wrote 200 labels" in capsys.readouterr().out
+    assert "wrote 200 labels" in capsys.readouterr().err
     np.savez(tmp_path / "wrong.npz", A=A)
     assert main(["classify", str(tmp_path / "wrong.npz"), "--out", str(tmp_path / "x.npy")]) == 2
     assert "expected arrays A and B" in capsys.readouterr().err
@@ -110,6 +112,11 @@ def test_pairs_csv_writer_reader():
         p = Path(d) / "p.csv"
         write_pairs_csv(p, np.array([0, 3]), np.array([5, 4]), np.array([1, 2], np.int8))
         assert p.read_text() == "i,j,relation\n0,5,tangent\n3,4,overlap\n"
+        write_pairs_csv(p, np.array([0, 3]), np.array([5, 4]), np.array([1, 2], np.int8), np.array([1, 2], np.int8),
+                        np.array([[0, 0], [-1, 1]], np.int8))
+        assert p.read_text() == (
+            "i,j,relation,certified_by,image_x,image_y,image_z\n0,5,tangent,float,0,0,0\n3,4,overlap,exact,-1,1,0\n"
+        )
         assert [a.tolist() for a in read_pairs_csv(p)] == [[0, 3], [5, 4], [1, 2]]
 
 
@@ -129,4 +136,4 @@ def test_contacts_command_runs_as_a_program(tmp_path):
         capture_output=True, text=True, cwd=ROOT, timeout=120, check=False,
     )
     assert r.returncode == 0, r.stderr
-    assert "300 bodies" in r.stdout and "read 300 ellipsoids" in r.stderr
+    assert r.stdout == "" and "300 bodies" in r.stderr and "read 300 ellipsoids" in r.stderr

@@ -95,3 +95,38 @@ def test_contacts_on_the_cluster_2d_invalid_and_exact_lattice(client):
     c = np.array([[x, y] for x in range(12) for y in range(12)], dtype=float)
     lattice = contacts(bodies_from_axes(c, np.full_like(c, 0.5)), box=(12, 12), scheduler=client, partitions=5)
     assert len(lattice) == 2 * 144 and np.all(lattice.relation == Relation.TANGENT)
+
+
+def test_contacts_scatter_the_data_once_no_large_graph_warning(client, recwarn):
+    """The matrices are scattered, never embedded in a task graph: no "Sending large graph"."""
+    import dask
+
+    Q, _ = _bodies(8000, seed=9)  # 1 MB of matrices, ten times the threshold set here
+    with dask.config.set({"distributed.admin.large-graph-warning-threshold": "100kB"}):
+        got = contacts(Q, scheduler=client, partitions=4)
+    assert not [w for w in recwarn if "large graph" in str(w.message)], [str(w.message) for w in recwarn]
+    _same(got, contacts(Q))
+
+
+def test_contacts_on_dask_show_progress_when_asked(client, capsys):
+    Q, _ = _bodies(3000, seed=3)
+    calls = []
+    _same(contacts(Q, scheduler=client, partitions=3, progress=lambda done, total: calls.append((done, total))), contacts(Q))
+    assert calls == [(1, 3), (2, 3), (3, 3)]
+    contacts(Q, scheduler=client, partitions=3, progress=True)
+    err = capsys.readouterr()
+    assert "contacts [" in err.err and "100%" in err.err and err.out == ""
+    contacts(Q, scheduler="threads", progress=True)  # a local scheduler: dask.diagnostics' bar
+    err = capsys.readouterr()
+    assert "100%" in err.err and err.out == ""
+
+
+def test_an_unreachable_scheduler_is_a_clear_error():
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    Q, _ = _bodies(100)
+    with pytest.raises(RuntimeError, match=f"cannot reach the Dask scheduler at tcp://127.0.0.1:{port}"):
+        contacts(Q, scheduler=f"tcp://127.0.0.1:{port}")

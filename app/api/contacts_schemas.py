@@ -86,8 +86,13 @@ class PairOut(BaseModel):
     """i < j; in a periodic box, j's nearest image (j + image * box)."""
     relation: PairRelation
     certified_by: CertifiedBy | None
+    """Which arithmetic certified the relation: "float" (the filter) or "exact"."""
     image: list[int] | None = None
     """Lattice image of j (periodic box only)."""
+    image_x: int = 0
+    image_y: int = 0
+    image_z: int = 0
+    """The lattice image k of j as three numbers (j stands at c_j + k L; all 0 in open space, image_z 0 in 2D)."""
 
 
 class ContactsOut(BaseModel):

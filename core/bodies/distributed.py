@@ -1,14 +1,19 @@
 """The contact search on a Dask cluster: spatial partitions with a halo, one task each.
 
 Imported only when Dask is used (``contacts(Q, scheduler=...)`` or a dask array ``Q``;
-``pip install -e ".[dask]"``). Steps:
+``pip install -e ".[dask]"``). The data travels once: a numpy ``Q`` is cut into blocks of
+:data:`BODY_CHUNK` bodies that are *scattered* to the workers (``Client.scatter``) and stay
+there; every later task names blocks by their futures, so the task graphs hold no arrays (no
+"Sending large graph" warnings) and the client sends the matrices exactly once. Steps:
 
-1. Bounding spheres, one task per chunk of bodies (:func:`core.bodies.bounds.bounding_spheres`),
-   gathered to the client: (d + 1) floats per body.
+1. Bounding spheres, one task per block (:func:`core.bodies.bounds.bounding_spheres`); the
+   spheres, (d + 1) floats per body, are gathered to the client, which plans the partitions.
 2. The longest axis is cut into slabs holding equal numbers of bodies. Partition p *owns* the
    bodies whose centre lies in its slab and also receives the *halo*: the bodies within
    h = 2 R (1 + 2^-20) + pad of the slab on that axis, R the largest bounding radius (in a
    periodic box, measured across the faces).
+   Each block sends each partition its members (one small task per block and partition, on
+   the worker that holds the block: the plan travels, not the rows).
 3. One task per partition runs the broad phase and the narrow phase on its bodies
    (:mod:`core.bodies.broadphase`, :mod:`core.bodies.narrowphase`) and keeps the candidate pairs
    whose smaller body index it owns. A pair that can touch satisfies |x_i - x_j| <= r_i + r_j
@@ -18,6 +23,10 @@ Imported only when Dask is used (``contacts(Q, scheduler=...)`` or a dask array 
 4. The client concatenates the owned candidates and builds the result exactly as the local
    search does (:func:`core.bodies.search.contacts_of`): the same pairs, relations, certifiers
    and counts as ``contacts(Q)`` on one machine.
+
+Progress (``progress=True``): Dask's own progress bar (``distributed``'s on a cluster, or
+``dask.diagnostics.ProgressBar`` on a local scheduler), drawn on stderr, one bar per step; a
+callable ``progress(done, total)`` is called instead as the partition tasks finish.
 
 The compiled kernels are built once per machine and loaded once per worker process: the
 :class:`WarmUp` worker plugin does it when a worker starts (registered by :func:`register`).
@@ -30,20 +39,23 @@ or ``contacts(Q, scheduler=Client("tcp://SCHEDULER:8786"))``.
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import dask
-import dask.array as da
 import numpy as np
 from distributed.diagnostics.plugin import WorkerPlugin
+from distributed.diagnostics.progressbar import TextProgressBar
 
 from ..fixed.lazy import PAIR_CHUNK, is_dask_array
 from .bounds import BoundingSpheres, bounding_spheres
-from .broadphase import _CELL_SLACK, _PAD, Candidates, candidate_pairs
+from .broadphase import _CELL_SLACK, _PAD, BroadPhase, Candidates, TooManyPairs, candidate_pairs
 from .narrowphase import classify_candidates
 from .periodic import check_box, read_box
 from .result import Contacts
-from .search import _check, contacts_of, read_bodies
+from .search import Progress, _check, contacts_of, read_bodies
 
 __all__ = ["WarmUp", "register", "contacts_distributed", "BODY_CHUNK"]
 
@@ -89,6 +101,8 @@ def contacts_distributed(
     scheduler: Any = None,
     partitions: int | None = None,
     chunk: int = PAIR_CHUNK,
+    progress: Progress | bool | None = None,
+    max_pairs: int | None = None,
 ) -> Contacts:
     """:func:`core.contacts` on Dask (same arguments; see the module docstring).
 
@@ -102,9 +116,17 @@ def contacts_distributed(
             current default, e.g. the active Client).
         partitions: number of spatial partitions (default: 2 per worker thread, at least 2).
         chunk: candidate pairs per classify batch inside a task.
+        progress: True: Dask's progress bars on stderr; a callable ``progress(done, total)``
+            called as partitions finish; None: quiet.
+        max_pairs: most pairs the broad phase may examine (counted first, here, on the bounding
+            spheres): :class:`~core.bodies.broadphase.TooManyPairs` over it.
 
     Returns:
         The same :class:`Contacts` as the local search (``seconds`` aside).
+
+    Raises:
+        ValueError: bad input (as :func:`core.contacts`).
+        RuntimeError: the scheduler at an address cannot be reached.
     """
     import time
 
@@ -115,34 +137,83 @@ def contacts_distributed(
     try:
         if client is not None:
             register(client)
-        get = {"scheduler": client} if client is not None else ({"scheduler": scheduler} if isinstance(scheduler, str) else {})
-        q = _as_dask(Q)
-        n = q.shape[-1]
+        run = _Runner(client, scheduler if isinstance(scheduler, str) and client is None else None, progress)
+        blocks, offsets, N, n = _blocks(Q, client)
         L = read_box(box, n - 1)
-        spheres = _spheres(q, get)
+        sphere_handles, parts = run.compute([dask.delayed(_block_spheres)(b, o) for b, o in zip(blocks, offsets, strict=True)], "bounds")
+        spheres = _merged(parts, n - 1)
         if spheres.invalid and on_invalid == "raise":
             raise ValueError(next(iter(spheres.invalid.values())))
         if L is not None:
             check_box(spheres.centers, spheres.radii, L)
+        if max_pairs is not None and (pairs := BroadPhase(spheres.centers, spheres.radii, box=L).pairs) > max_pairs:
+            raise TooManyPairs(pairs, max_pairs)
         t1 = time.perf_counter()
-        parts = _partitions(spheres, L, partitions or _default_partitions(client))
+        plan = _plan(spheres, L, partitions or _default_partitions(client))
         tasks = []
-        for members, owned in parts:
-            rows = np.sort(members)
-            tasks.append(
-                dask.delayed(_partition_task)(
-                    q[rows], rows, owned, spheres.centers[rows], spheres.radii[rows], L, method, chunk
-                )
-            )
-        results = dask.compute(*tasks, **get) if tasks else []
+        for p in range(plan.count):
+            pieces = [dask.delayed(_members)(b, s, o, plan, p) for b, s, o in zip(blocks, sphere_handles, offsets, strict=True)]
+            tasks.append(dask.delayed(_partition_task)(pieces, L, method, chunk))
+        _, results = run.compute(tasks, "contacts", final=True) if tasks else (None, [])
         t2 = time.perf_counter()
         cand, rel, by = _concatenate(results, n - 1, L is not None)
-        out = contacts_of(cand, rel, by, q.shape[0], L, spheres)
+        out = contacts_of(cand, rel, by, N, L, spheres)
         out.seconds = {"bounds": t1 - t0, "partitions": t2 - t1, "total": time.perf_counter() - t0}
         return out
     finally:
         if own and client is not None:
             client.close()
+
+
+class _StderrProgressBar(TextProgressBar):
+    """``distributed``'s text progress bar, drawn on stderr (stdout may carry the program's data)."""
+
+    def __init__(self, keys: Any, label: str, **kwargs: Any) -> None:
+        self.label = label
+        super().__init__(keys, **kwargs)
+
+    def _draw_bar(self, remaining: int, all: int, **kwargs: Any) -> None:
+        frac = (1 - remaining / all) if all else 1.0
+        bar = "#" * int(self.width * frac)
+        sys.stderr.write(f"\r{self.label} [{bar:<{self.width}}] {int(100 * frac):3d}% | {self.elapsed:.1f} s")
+        sys.stderr.flush()
+
+    def _draw_stop(self, **kwargs: Any) -> None:
+        sys.stderr.write("\n")
+        sys.stderr.flush()
+
+
+class _Runner:
+    """Computes lists of delayed tasks on a Client (as futures) or a local scheduler, with progress."""
+
+    def __init__(self, client: Any, local: str | None, progress: Progress | bool | None) -> None:
+        self.client = client
+        self.local = local
+        self.progress = progress
+
+    def compute(self, tasks: Sequence[Any], label: str, *, final: bool = False) -> tuple[list[Any], list[Any]]:
+        """(handles usable in later tasks, the results); the callable progress counts the final step."""
+        if self.client is not None:
+            futures = self.client.compute(list(tasks))
+            if self.progress is True:
+                _StderrProgressBar(futures, label, interval="200ms")
+            elif callable(self.progress) and final:
+                from distributed import as_completed
+
+                for done, _ in enumerate(as_completed(futures), 1):
+                    self.progress(done, len(futures))
+            return futures, self.client.gather(futures)
+        get = {"scheduler": self.local} if self.local else {}
+        if self.progress is True:
+            from dask.diagnostics import ProgressBar
+
+            with ProgressBar(out=sys.stderr):
+                results = list(dask.compute(*tasks, **get))
+        else:
+            results = list(dask.compute(*tasks, **get))
+            if callable(self.progress) and final:
+                self.progress(len(results), len(results))
+        return results, results
 
 
 def _client(scheduler: Any) -> tuple[Any, bool]:
@@ -159,7 +230,10 @@ def _client(scheduler: Any) -> tuple[Any, bool]:
     if isinstance(scheduler, str):
         from distributed import Client
 
-        return Client(scheduler), True
+        try:
+            return Client(scheduler, timeout=10), True
+        except (OSError, TimeoutError) as e:
+            raise RuntimeError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
     return scheduler, False
 
 
@@ -170,22 +244,31 @@ def _default_partitions(client: Any) -> int:
     return max(2, 2 * threads)
 
 
-def _as_dask(Q: Any) -> Any:
-    """Q as a dask array (N, n, n) whose chunks hold whole matrices (numpy input is read first)."""
+def _blocks(Q: Any, client: Any) -> tuple[list[Any], list[int], int, int]:
+    """(blocks of whole matrices, their first rows, N, n): scattered once, or the dask array's own blocks."""
     if is_dask_array(Q):
         if Q.ndim != 3 or Q.shape[1] != Q.shape[2] or Q.shape[1] not in (3, 4):
             raise ValueError(f"Q must be an (N, 3, 3) stack of ellipses or (N, 4, 4) of ellipsoids, got shape {Q.shape}")
-        return Q.rechunk({1: -1, 2: -1})  # each task reads its block exactly (read_bodies)
+        q = Q.rechunk({1: -1, 2: -1})  # each task reads its block exactly (read_bodies)
+        starts = np.cumsum((0, *q.chunks[0]))[:-1]
+        return list(q.to_delayed().ravel()), [int(o) for o in starts], int(q.shape[0]), int(q.shape[1])
     arr = read_bodies(Q)
-    return da.from_array(arr, chunks=(min(BODY_CHUNK, max(1, arr.shape[0])), arr.shape[1], arr.shape[2]))
+    N, n = int(arr.shape[0]), int(arr.shape[1])
+    offsets = list(range(0, N, BODY_CHUNK))
+    pieces: list[Any] = [arr[o : o + BODY_CHUNK] for o in offsets]
+    if client is not None and pieces:
+        pieces = client.scatter(pieces)  # the matrices travel once; tasks name them by future
+    return pieces, offsets, N, n
 
 
-def _spheres(q: Any, get: dict[str, Any]) -> BoundingSpheres:
-    """Bounding spheres of every body, one task per chunk, gathered (invalid rows named globally)."""
-    blocks = q.to_delayed().ravel()
-    offsets = np.cumsum((0, *q.chunks[0]))[:-1]
-    parts = dask.compute(*(dask.delayed(_block_spheres)(b, int(o)) for b, o in zip(blocks, offsets, strict=True)), **get)
-    d = q.shape[-1] - 1
+def _block_spheres(block: np.ndarray, offset: int) -> tuple[np.ndarray, np.ndarray, dict[int, str], int]:
+    """Spheres of one block; invalid bodies renamed by their global row."""
+    s = bounding_spheres(read_bodies(block))
+    invalid = {k + offset: msg.replace(f"body {k}", f"body {k + offset}", 1) for k, msg in s.invalid.items()}
+    return s.centers, s.radii, invalid, s.exact
+
+
+def _merged(parts: list[Any], d: int) -> BoundingSpheres:
     if not parts:
         return BoundingSpheres(np.zeros((0, d)), np.zeros(0), {}, 0)
     invalid: dict[int, str] = {}
@@ -196,18 +279,29 @@ def _spheres(q: Any, get: dict[str, Any]) -> BoundingSpheres:
     )
 
 
-def _block_spheres(block: np.ndarray, offset: int) -> tuple[np.ndarray, np.ndarray, dict[int, str], int]:
-    """Spheres of one chunk; invalid bodies renamed by their global row."""
-    s = bounding_spheres(read_bodies(block))
-    invalid = {k + offset: msg.replace(f"body {k}", f"body {k + offset}", 1) for k, msg in s.invalid.items()}
-    return s.centers, s.radii, invalid, s.exact
+@dataclass(frozen=True)
+class _Plan:
+    """The spatial partitions (module docstring, step 2): a few numbers, sent to every task."""
+
+    count: int
+    axis: int
+    cuts: np.ndarray
+    """count - 1 cut positions on the axis; slab p is [cuts[p-1], cuts[p]] (ends: the extreme centres)."""
+    lo: float
+    hi: float
+    halo: float
+    side: float | None
+    """The box side along the axis (periodic), else None."""
+
+    def slab(self, p: int) -> tuple[float, float]:
+        return (self.lo if p == 0 else float(self.cuts[p - 1]), self.hi if p == self.count - 1 else float(self.cuts[p]))
 
 
-def _partitions(spheres: BoundingSpheres, box: np.ndarray | None, count: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(members, owned mask over members) per slab of the longest axis (module docstring, step 2)."""
+def _plan(spheres: BoundingSpheres, box: np.ndarray | None, count: int) -> _Plan:
+    """Slabs of the longest axis holding equal numbers of bodies, and the halo width."""
     valid = np.flatnonzero(spheres.valid)
-    if valid.size < 2:
-        return [(valid, np.ones(valid.size, dtype=bool))] if valid.size else []
+    if valid.size == 0:
+        return _Plan(0, 0, np.zeros(0), 0.0, 0.0, 0.0, None)
     c = spheres.centers[valid]
     axis = int(np.argmax(box)) if box is not None else int(np.argmax(np.ptp(c, axis=0)))
     x = c[:, axis]
@@ -216,17 +310,21 @@ def _partitions(spheres: BoundingSpheres, box: np.ndarray | None, count: int) ->
     halo = 2 * big * _CELL_SLACK + 2 * _PAD * (span + big) + 4 * np.spacing(span)
     count = max(1, min(count, valid.size // 2))
     cuts = np.quantile(x, np.linspace(0, 1, count + 1)[1:-1]) if count > 1 else np.zeros(0)
-    slab = np.searchsorted(cuts, x, side="right")  # owner of each body
-    out = []
-    for p in range(count):
-        a = x.min() if p == 0 else cuts[p - 1]  # the slab [a, b] holds every owned centre
-        b = x.max() if p == count - 1 else cuts[p]
-        gap = _gap(x, a, b)
-        if box is not None:  # across the faces too (the centres span at most one side)
-            gap = np.minimum(gap, np.minimum(_gap(x + box[axis], a, b), _gap(x - box[axis], a, b)))
-        take = (gap <= halo) | (slab == p)
-        out.append((valid[take], slab[take] == p))
-    return out
+    return _Plan(count, axis, cuts, float(x.min()), float(x.max()), float(halo), None if box is None else float(box[axis]))
+
+
+def _members(block: np.ndarray, spheres: Any, offset: int, plan: _Plan, p: int) -> tuple[np.ndarray, ...]:
+    """The bodies of one block that partition p needs: (global rows, owned, matrices, centres, radii)."""
+    centers, radii = spheres[0], spheres[1]
+    valid = np.isfinite(radii)
+    x = centers[:, plan.axis]
+    slab = np.searchsorted(plan.cuts, x, side="right")  # owner of each body
+    a, b = plan.slab(p)
+    gap = _gap(x, a, b)
+    if plan.side is not None:  # across the faces too (the centres span at most one side)
+        gap = np.minimum(gap, np.minimum(_gap(x + plan.side, a, b), _gap(x - plan.side, a, b)))
+    take = np.flatnonzero(valid & ((gap <= plan.halo) | (slab == p)))
+    return take + offset, slab[take] == p, read_bodies(block)[take], centers[take], radii[take]
 
 
 def _gap(x: np.ndarray, a: float, b: float) -> np.ndarray:
@@ -234,24 +332,16 @@ def _gap(x: np.ndarray, a: float, b: float) -> np.ndarray:
     return np.maximum(a - x, 0.0) + np.maximum(x - b, 0.0)
 
 
-def _partition_task(
-    block: np.ndarray,
-    rows: np.ndarray,
-    owned: np.ndarray,
-    centers: np.ndarray,
-    radii: np.ndarray,
-    box: np.ndarray | None,
-    method: str,
-    chunk: int,
-) -> tuple[np.ndarray, ...]:
+def _partition_task(pieces: list[tuple[np.ndarray, ...]], box: np.ndarray | None, method: str, chunk: int) -> tuple[np.ndarray, ...]:
     """Broad and narrow phase on one partition; the owned candidates with global indices."""
     from ..fixed.compiled import warm_up
 
     warm_up()
+    rows, owned, block, centers, radii = (np.concatenate([piece[k] for piece in pieces]) for k in range(5))
     local = candidate_pairs(centers, radii, box=box)
-    mine = np.flatnonzero(owned[local.i])  # i < j locally and globally (rows are sorted)
+    mine = np.flatnonzero(owned[local.i])  # i < j locally and globally (rows ascend: blocks in order)
     cand = Candidates(local.i[mine], local.j[mine], None if local.image is None else local.image[mine])
-    rel, by = classify_candidates(read_bodies(block), cand, box, method, chunk=chunk)
+    rel, by = classify_candidates(block, cand, box, method, chunk=chunk)
     image = np.zeros((len(cand), centers.shape[1]), np.int8) if cand.image is None else cand.image
     return rows[cand.i], rows[cand.j], image, rel, by
 
@@ -262,3 +352,4 @@ def _concatenate(results: Any, d: int, periodic: bool) -> tuple[Candidates, np.n
         return Candidates(z, z, np.zeros((0, d), np.int8) if periodic else None), np.zeros(0, np.int8), np.zeros(0, np.int8)
     i, j, image, rel, by = (np.concatenate([r[k] for r in results]) for k in range(5))
     return Candidates(i, j, image if periodic else None), rel, by
+

@@ -1,0 +1,160 @@
+"""Readers of files of many bodies: every format gives the same :class:`BodySet`.
+
+One reader per format, each with the format's own library where one exists; all return the
+same arrays (centres, semi-axes, orientations wxyz, and the file's periodic box in HOOMD's
+convention ``(Lx, Ly, Lz)`` or ``(Lx, Ly, Lz, xy, xz, yz)``: :mod:`app.readers.bodyset`).
+They serve ``python -m app contacts``, ``serve --bodies``, ``screenshot --bodies`` and the
+scene's upload.
+
+=========  =====================================  ==============================================
+format     file names                             read with
+=========  =====================================  ==============================================
+csv        ``*.csv`` (anything else: CSV)         numpy, block by block (:mod:`.table`)
+parquet    ``*.parquet``, ``*.pq``                pyarrow (:mod:`.table`)
+npz        ``*.npz``                              numpy, never unpickling (:mod:`.npzfile`)
+gsd        ``*.gsd``                              gsd, HOOMD-blue's (:mod:`.gsdfile`)
+lammps     ``*.dump``, ``*.lammpstrj``            lammpsio + the ellipsoid columns (:mod:`.lammpsdump`)
+xyz        ``*.xyz``, ``*.extxyz``                extxyz, libAtoms' (:mod:`.extxyzfile`)
+=========  =====================================  ==============================================
+
+The format comes from ``format=`` (``--format``), else the file name, else the first bytes.
+``-`` reads standard input (CSV is streamed; other formats are read whole first).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import IO
+
+from .bodyset import BodySet, file_box, usable_box
+from .table import COLUMNS
+
+__all__ = ["BodySet", "COLUMNS", "FORMATS", "format_of", "read_bodies", "read_bodies_bytes", "file_box", "usable_box"]
+
+FORMATS = ("csv", "parquet", "npz", "gsd", "lammps", "xyz")
+"""The formats read, by name (``--format``)."""
+
+_SUFFIXES = {
+    ".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".npz": "npz", ".gsd": "gsd",
+    ".dump": "lammps", ".lammpstrj": "lammps", ".lammps": "lammps", ".xyz": "xyz", ".extxyz": "xyz",
+}
+_TRAJECTORIES = ("gsd", "lammps", "xyz")
+
+
+def format_of(name: str, head: bytes = b"") -> str:
+    r"""The format of a file from its name, else from its first bytes ("csv" when unsure).
+
+    Examples:
+        >>> format_of("run.lammpstrj"), format_of("x.bin", b"PK\x03\x04"), format_of("-", b"x,y,a")
+        ('lammps', 'npz', 'csv')
+    """
+    suffix = Path(name).suffix.lower()
+    if suffix in _SUFFIXES:
+        return _SUFFIXES[suffix]
+    if head.startswith(b"PK"):
+        return "npz"
+    if head.startswith(b"PAR1"):
+        return "parquet"
+    if head.startswith(b"\xdf\x65\xdf\x65"):
+        return "gsd"
+    if head.lstrip().startswith(b"ITEM: TIMESTEP"):
+        return "lammps"
+    lines = head.split(b"\n")
+    if len(lines) > 1 and lines[0].strip().isdigit() and (b"Properties=" in lines[1] or b"Lattice=" in lines[1]):
+        return "xyz"
+    return "csv"
+
+
+def read_bodies(path: str | os.PathLike[str], *, frame: int | None = None, format: str | None = None) -> BodySet:
+    """Read a file of bodies (``-``: standard input) in any format of :data:`FORMATS`.
+
+    Args:
+        path: the file, or ``-``.
+        frame: trajectories (GSD, LAMMPS, XYZ): the frame from 0 (negative: from the end);
+            None: the last one. Other formats have one frame: only None, 0 or -1.
+        format: one of :data:`FORMATS`, or None to tell from the name and the first bytes.
+
+    Raises:
+        ValueError: unreadable file, unknown format, a format's own errors (missing columns,
+            bad numbers...: the message names the line or body).
+    """
+    name = str(path)
+    if name == "-":
+        return _read_stream(sys.stdin.buffer, "<stdin>", frame, format)
+    try:
+        with open(path, "rb") as f:
+            head = f.read(512)
+            fmt = _checked_format(format, name, head, frame)
+            if fmt == "csv":
+                f.seek(0)
+                from .table import read_csv
+
+                return read_csv(f, Path(name).name)
+    except IsADirectoryError:
+        raise ValueError(f"cannot read {name}: it is a folder") from None
+    except OSError as e:
+        raise ValueError(f"cannot read {name}: {e.strerror}") from None
+    return _read_file(name, Path(name).name, fmt, frame)
+
+
+def read_bodies_bytes(data: bytes, name: str, *, frame: int | None = None, format: str | None = None) -> BodySet:
+    """:func:`read_bodies` from the bytes of a file called ``name`` (the scene's upload)."""
+    import io
+
+    return _read_stream(io.BytesIO(data), name, frame, format)
+
+
+def _read_stream(stream: IO[bytes], name: str, frame: int | None, format: str | None) -> BodySet:
+    """A stream (stdin, an upload): CSV is parsed as it comes, other formats via a temporary file."""
+    head = stream.peek(512)[:512] if hasattr(stream, "peek") else b""
+    if not head and hasattr(stream, "getvalue"):
+        head = stream.getvalue()[:512]  # type: ignore[attr-defined]
+    fmt = _checked_format(format, name, head, frame)
+    if fmt == "csv":
+        from .table import read_csv
+
+        return read_csv(stream, name)
+    data = stream.read()
+    if fmt == "npz":
+        from .npzfile import read_npz
+
+        return read_npz(data, name)
+    with tempfile.TemporaryDirectory(prefix="bodies-") as d:  # the libraries read files by name
+        tmp = os.path.join(d, "bodies" + {"gsd": ".gsd", "lammps": ".dump", "xyz": ".xyz", "parquet": ".parquet"}[fmt])
+        with open(tmp, "wb") as f:
+            f.write(data)
+        return _read_file(tmp, name, fmt, frame)
+
+
+def _checked_format(format: str | None, name: str, head: bytes, frame: int | None) -> str:
+    if format is not None and format not in FORMATS:
+        raise ValueError(f"unknown format {format!r}; formats: {', '.join(FORMATS)}")
+    fmt = format or format_of(name, head)
+    if frame not in (None, 0, -1) and fmt not in _TRAJECTORIES:
+        raise ValueError(f"{name}: --frame {frame}: a {fmt} file holds one frame (frames: GSD, LAMMPS dump, XYZ)")
+    return fmt
+
+
+def _read_file(path: str, name: str, fmt: str, frame: int | None) -> BodySet:
+    if fmt == "npz":
+        from .npzfile import read_npz
+
+        return read_npz(path, name)
+    if fmt == "parquet":
+        from .table import read_parquet
+
+        return read_parquet(path, name)
+    if fmt == "gsd":
+        from .gsdfile import read_gsd
+
+        return read_gsd(path, name, frame=frame)
+    if fmt == "lammps":
+        from .lammpsdump import read_lammps_dump
+
+        return read_lammps_dump(path, name, frame=frame)
+    from .extxyzfile import read_extxyz
+
+    return read_extxyz(path, name, frame=frame)

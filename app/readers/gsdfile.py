@@ -1,0 +1,104 @@
+"""HOOMD-blue GSD files (read with the ``gsd`` package, ``pip install 'ellipsoid-interference[formats]'``).
+
+One frame (default: the last) of a HOOMD trajectory: ``particles/position`` (centres),
+``particles/orientation`` (quaternions wxyz), ``particles/typeid`` with the shape of each type
+from ``particles/type_shapes`` (``{"type": "Ellipsoid", "a", "b", "c"}``: semi-axes, as HOOMD's
+HPMC ``Ellipsoid`` integrator logs them; ``{"type": "Sphere", "diameter"}`` is a sphere of radius
+diameter / 2), and ``configuration/box`` ``[Lx, Ly, Lz, xy, xz, yz]`` (HOOMD boxes are
+periodic; tilted boxes included). With ``configuration/dimensions`` = 2 the bodies are ellipses
+in the plane z = 0 (semi-axes a, b; the quaternion must rotate about z).
+
+GSD stores float32 numbers; each is the float64 of the same value (widened exactly).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .bodyset import BodySet, file_box, from_parameters
+
+__all__ = ["read_gsd"]
+
+
+def read_gsd(path: str, name: str, *, frame: int | None = None) -> BodySet:
+    """Bodies of one frame of a GSD file (module docstring).
+
+    Args:
+        path: the file.
+        name: its name, for messages.
+        frame: frame number from 0 (negative: from the end); None: the last frame.
+
+    Raises:
+        ValueError: gsd missing, not a GSD file, no such frame, a type whose shape is not an
+            ellipsoid, no shapes in the file.
+    """
+    try:
+        import gsd.hoomd
+    except ImportError:
+        raise ValueError(f"{name}: reading GSD files needs the gsd package: pip install 'ellipsoid-interference[formats]'") from None
+    try:
+        traj = gsd.hoomd.open(path, "r")
+    except Exception as e:  # noqa: BLE001 - gsd raises RuntimeError/OSError kinds for bad files
+        raise ValueError(f"{name}: not a readable GSD file ({e})") from None
+    with traj:
+        n = len(traj)
+        k = _frame_index(frame, n, name)
+        try:
+            f = traj[k]
+        except Exception as e:  # noqa: BLE001
+            raise ValueError(f"{name}: frame {k} cannot be read ({e})") from None
+    return _bodies(f, name, k)
+
+
+def _frame_index(frame: int | None, n: int, name: str) -> int:
+    """The frame to read, counted from 0 (module docstring); a message for one out of range."""
+    if n == 0:
+        raise ValueError(f"{name}: the file has no frames")
+    k = n - 1 if frame is None else frame
+    if not -n <= k < n:
+        raise ValueError(f"{name}: no frame {frame}: the file has {n} frame{'s' if n != 1 else ''} (0..{n - 1}; -1 is the last)")
+    return k % n
+
+
+def _bodies(f: Any, name: str, k: int) -> BodySet:
+    p = f.particles
+    N = int(p.N)
+    dim = int(f.configuration.dimensions)
+    types = list(p.types or [])
+    shapes = list(p.type_shapes or [])
+    if N and not shapes:
+        raise ValueError(
+            f"{name}: frame {k} has no particles/type_shapes: the shape of each type is needed "
+            "(HOOMD writes it when the HPMC integrator's type_shapes are logged to the GSD file)"
+        )
+    semi = np.empty((len(shapes), 3))
+    for t, shape in enumerate(shapes):
+        semi[t] = _semi_axes(shape, types[t] if t < len(types) else str(t), name)
+    typeid = np.asarray(p.typeid, dtype=np.int64)
+    if typeid.size and (typeid.min() < 0 or typeid.max() >= len(shapes)):
+        raise ValueError(f"{name}: frame {k}: a typeid has no entry in particles/type_shapes ({len(shapes)} shapes)")
+    pos = np.asarray(p.position, dtype=np.float64).reshape(N, 3)
+    q = np.asarray(p.orientation, dtype=np.float64).reshape(N, 4)
+    box = np.asarray(f.configuration.box, dtype=np.float64)
+    if dim == 2:
+        bad = np.flatnonzero(pos[:, 2] != 0)
+        if bad.size:
+            raise ValueError(f"{name}: frame {k} is 2D but particle {int(bad[0])} has z = {pos[bad[0], 2]!r}")
+        return from_parameters(pos[:, :2], semi[typeid][:, :2], q, name, box=file_box(box[:3], box[3:], dim=2), frame=k)
+    return from_parameters(pos, semi[typeid], q, name, box=file_box(box[:3], box[3:], dim=3), frame=k)
+
+
+def _semi_axes(shape: Any, type_name: str, name: str) -> tuple[float, float, float]:
+    """Semi-axes of one type's shape (Ellipsoid a, b, c; Sphere diameter / 2)."""
+    kind = shape.get("type") if isinstance(shape, dict) else None
+    try:
+        if kind == "Ellipsoid":
+            return float(shape["a"]), float(shape["b"]), float(shape["c"])
+        if kind == "Sphere":
+            r = float(shape["diameter"]) / 2
+            return r, r, r
+    except (KeyError, TypeError, ValueError):
+        raise ValueError(f"{name}: type {type_name!r}: incomplete {kind} shape {shape!r}") from None
+    raise ValueError(f"{name}: type {type_name!r} has the shape {kind or shape!r}: only Ellipsoid and Sphere shapes are ellipsoids")

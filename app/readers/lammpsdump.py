@@ -1,0 +1,140 @@
+"""LAMMPS dump files with ellipsoid columns (``dump custom``), read with ``lammpsio``.
+
+A frame (default: the last) of a text dump such as ``dump 1 all custom 100 out.dump id type x y
+z shapex shapey shapez quatw quati quatj quatk``:
+
+* ``lammpsio`` reads the frame's box (``ITEM: BOX BOUNDS``, tilted ``xy xz yz`` included), the
+  particle ids and the positions ``x y z``, and orders the particles by id.
+* ``lammpsio`` does not read per-atom columns beyond its fixed set, so the ellipsoid columns of
+  the same frame are read by name with numpy and put in the same id order: ``shapex shapey
+  shapez`` are the three **diameters** of the ellipsoid (LAMMPS writes diameters since July
+  2020), halved here (exact in binary); ``quatw quati quatj quatk`` the orientation (wxyz;
+  identity when absent). A row with shape 0 0 0 (a point particle) is an invalid body.
+
+The box becomes HOOMD's convention (:mod:`app.readers.bodyset`): Lx = xhi - xlo, ...; a tilted
+box's tilt *lengths* xy, xz, yz become the factors xy / Ly, xz / Lz, yz / Lz (one rounding
+each). Boundaries ``pp pp pp`` are a periodic box, fixed or shrink-wrapped ones (``ff``, ``ss``,
+``fs``, ``fm``...) on every axis open space; a mix is refused.
+"""
+
+from __future__ import annotations
+
+import mmap
+import os
+import tempfile
+
+import numpy as np
+
+from .bodyset import BodySet, file_box, from_parameters
+from .gsdfile import _frame_index
+
+__all__ = ["read_lammps_dump", "SHAPE_COLUMNS", "QUAT_COLUMNS"]
+
+SHAPE_COLUMNS = ("shapex", "shapey", "shapez")
+"""Diameters of the ellipsoid along its body axes."""
+QUAT_COLUMNS = ("quatw", "quati", "quatj", "quatk")
+"""Orientation quaternion, w first."""
+
+
+def read_lammps_dump(path: str, name: str, *, frame: int | None = None) -> BodySet:
+    """Bodies of one frame of a LAMMPS text dump (module docstring).
+
+    Args:
+        path: the file (text; a compressed dump must be decompressed first).
+        name: its name, for messages.
+        frame: frame number from 0 (negative: from the end); None: the last frame.
+
+    Raises:
+        ValueError: lammpsio missing, not a dump, no such frame, missing columns, bad numbers,
+            mixed periodic and open boundaries.
+    """
+    try:
+        import lammpsio
+    except ImportError:
+        raise ValueError(f"{name}: reading LAMMPS dumps needs lammpsio: pip install 'ellipsoid-interference[formats]'") from None
+    k, data = _frame_text(path, name, frame)
+    lines = data.split(b"\n")
+    atoms = next((i for i, ln in enumerate(lines) if ln.startswith(b"ITEM: ATOMS")), None)
+    bounds = next((i for i, ln in enumerate(lines) if ln.startswith(b"ITEM: BOX BOUNDS")), None)
+    if atoms is None or bounds is None:
+        raise ValueError(f"{name}: frame {k} has no ITEM: BOX BOUNDS / ITEM: ATOMS section")
+    columns = lines[atoms].decode("ascii", "replace").split()[2:]
+    for need in (("x", "y", "z"), SHAPE_COLUMNS):
+        missing = [c for c in need if c not in columns]
+        if missing:
+            raise ValueError(
+                f"{name}: the dump has no column {', '.join(missing)} (columns: {' '.join(columns)}); "
+                "write it with e.g. dump custom ... id type x y z shapex shapey shapez quatw quati quatj quatk"
+            )
+    periodic = _periodic(lines[bounds].decode("ascii", "replace").split()[3:], name)
+    with tempfile.NamedTemporaryFile(suffix=".dump") as tmp:  # lammpsio reads a file by name
+        tmp.write(data)
+        tmp.flush()
+        try:
+            snap = next(iter(lammpsio.DumpFile(tmp.name, sort_ids=True)))
+        except Exception as e:  # noqa: BLE001 - lammpsio raises IOError/ValueError/IndexError kinds
+            raise ValueError(f"{name}: frame {k} cannot be read ({e})") from None
+    N = int(snap.N)
+    use = [columns.index(c) for c in (*SHAPE_COLUMNS, *(QUAT_COLUMNS if "quatw" in columns else ()))]
+    rows = lines[atoms + 1 : atoms + 1 + N]
+    if len(rows) < N or (N and not rows[-1].strip()):
+        raise ValueError(f"{name}: frame {k} is truncated: {N} atoms announced")
+    try:
+        table = np.loadtxt(rows, dtype=np.float64, ndmin=2, usecols=use) if N else np.zeros((0, len(use)))
+    except ValueError as e:
+        raise ValueError(f"{name}: frame {k}: {e}") from None
+    ids = np.asarray(snap.id, dtype=np.int64)
+    if "id" in columns and N:
+        file_ids = np.loadtxt(rows, dtype=np.int64, usecols=[columns.index("id")], ndmin=1)
+        table = table[np.argsort(file_ids, kind="stable")]  # lammpsio's order: sorted by id
+    has_quat = "quatw" in columns
+    if has_quat and any(c not in columns for c in QUAT_COLUMNS):
+        raise ValueError(f"{name}: give all of {' '.join(QUAT_COLUMNS)} or none")
+    box = None
+    if periodic:
+        lo, hi = np.asarray(snap.box.low, np.float64), np.asarray(snap.box.high, np.float64)
+        L = hi - lo
+        tilt = np.zeros(3) if snap.box.tilt is None else np.asarray(snap.box.tilt, np.float64)
+        box = file_box(L, (tilt[0] / L[1], tilt[1] / L[2], tilt[2] / L[2]), dim=3)
+    return from_parameters(
+        np.asarray(snap.position, np.float64), table[:, :3] / 2, table[:, 3:7] if has_quat else None, name,
+        box=box, ids=ids, frame=k,
+    )
+
+
+def _frame_text(path: str, name: str, frame: int | None) -> tuple[int, bytes]:
+    """(frame number, the bytes of that frame) of a dump file."""
+    try:
+        with open(path, "rb") as f:
+            if f.read(2) == b"\x1f\x8b":
+                raise ValueError(f"{name}: a gzip-compressed dump: decompress it first (gunzip)")
+            size = os.fstat(f.fileno()).st_size
+            if size == 0:
+                raise ValueError(f"{name}: empty file")
+            with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as m:
+                starts = []
+                at = m.find(b"ITEM: TIMESTEP")
+                while at >= 0:
+                    if at == 0 or m[at - 1 : at] == b"\n":
+                        starts.append(at)
+                    at = m.find(b"ITEM: TIMESTEP", at + 1)
+                if not starts:
+                    raise ValueError(f"{name}: not a LAMMPS dump file (no ITEM: TIMESTEP line)")
+                k = _frame_index(frame, len(starts), name)
+                end = starts[k + 1] if k + 1 < len(starts) else size
+                return k, bytes(m[starts[k] : end])
+    except OSError as e:
+        raise ValueError(f"cannot read {name}: {e.strerror}") from None
+
+
+def _periodic(flags: list[str], name: str) -> bool:
+    """Whether the boundaries (``xy xz yz pp pp pp`` after ITEM: BOX BOUNDS) are periodic."""
+    flags = [f for f in flags if f not in ("xy", "xz", "yz")]
+    if not flags:
+        return True  # old dumps name no boundaries: LAMMPS's default is periodic
+    per = [f == "pp" for f in flags]
+    if all(per):
+        return True
+    if not any(per):
+        return False
+    raise ValueError(f"{name}: boundaries {' '.join(flags)} mix periodic and open axes: not supported")
