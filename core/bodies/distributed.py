@@ -257,7 +257,9 @@ def _blocks(Q: Any, client: Any) -> tuple[list[Any], list[int], int, int]:
     offsets = list(range(0, N, BODY_CHUNK))
     pieces: list[Any] = [arr[o : o + BODY_CHUNK] for o in offsets]
     if client is not None and pieces:
-        pieces = client.scatter(pieces)  # the matrices travel once; tasks name them by future
+        # The matrices travel once; tasks name them by future. hash=False: a content-hashed key is shared
+        # with an earlier call on the same data, whose release can race this scatter ("lost dependencies").
+        pieces = client.scatter(pieces, hash=False)
     return pieces, offsets, N, n
 
 
