@@ -147,10 +147,16 @@ class BodiesView:
 
     def _draw_box(self, box: tuple[float, ...]) -> None:
         assert self.model is not None
+        from core.bodies.periodic import box_vectors, read_box
+
+        d = self.model.dim
         lo = self.model.positions.min(axis=0)
-        L = np.array(list(box) + ([0.0] if len(box) == 2 else []))
-        corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in ((0, 1) if len(box) == 3 else (0,))], dtype=float)
-        pts = lo + corners * L
+        vectors = np.zeros((3, 3))
+        L = read_box(box, d)
+        assert L is not None
+        vectors[:d, :d] = box_vectors(L, d)  # columns a1, a2[, a3]: a tilted box is a parallelepiped
+        corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in ((0, 1) if d == 3 else (0,))], dtype=float)
+        pts = lo + corners @ vectors.T
         segs = [
             (a, b)
             for a in range(len(pts))
@@ -180,7 +186,7 @@ class BodiesView:
             self.fade = gui.add_checkbox("Fade separate bodies", True)
         with gui.add_folder("File", expand_by_default=m is None):
             self.upload = gui.add_upload_button("Open a file of bodies", mime_type=".csv,.npz", hint="CSV (x,y,z,a,b,c,qw,qx,qy,qz or x,y,a,b,angle) or NPZ")
-            self.box_text = gui.add_text("Periodic box", "" if m is None or m.box is None else ", ".join(f"{v:g}" for v in m.box), hint="Lx, Ly(, Lz); empty: open space")
+            self.box_text = gui.add_text("Periodic box", "" if m is None or m.box is None else ", ".join(f"{v:g}" for v in m.box), hint="Lx, Ly(, Lz), or Lx, Ly, Lz, xy, xz, yz (tilted); empty: open space")
             self.file_md = gui.add_markdown("")
         self.pairs.on_update(self._on_pick)
         self.open_button.on_click(lambda ev: self._open_current())
@@ -337,8 +343,8 @@ def _parse_box(text: str, dim: int) -> tuple[float, ...] | None:
         sides = tuple(float(p) for p in parts)
     except ValueError:
         raise ValueError(f"periodic box: expected {dim} numbers, got {text!r}") from None
-    if len(sides) != dim:
-        raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies, got {len(sides)}")
+    if len(sides) not in (dim, 6) and not (dim == 2 and len(sides) == 3):
+        raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies (or a tilted box: Lx, Ly, Lz, xy, xz, yz), got {len(sides)}")
     return sides
 
 

@@ -95,7 +95,8 @@ def candidate_pairs(
     Args:
         centers: (N, d) float64 sphere centres.
         radii: (N,) float64 radii; NaN marks a body to leave out (invalid).
-        box: periodic box sides (d,), or None for open space. The caller has checked
+        box: periodic box sides (d,), or None for open space (a tilted box, the six numbers of
+            :func:`core.bodies.periodic.read_box`, goes to :mod:`core.bodies.ghosts`). The caller has checked
             (:mod:`core.bodies.periodic`) that the centres span at most one box side per axis and
             that the two largest radii sum to less than half the smallest side (so the minimum
             image is the only image that can touch).
@@ -114,6 +115,10 @@ def candidate_pairs(
     """
     centers = np.asarray(centers, dtype=np.float64)
     N, d = centers.shape
+    if box is not None and box.size != d:  # a tilted box (its six numbers): ghost images, then open space
+        from .ghosts import tilted_candidates
+
+        return tilted_candidates(centers, radii, box)
     valid = np.flatnonzero(np.isfinite(radii))
     tasks: list[Callable[[], list[tuple[np.ndarray, ...]]]] = []
     if valid.size >= 2:
