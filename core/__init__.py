@@ -11,6 +11,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import warm_up, set_threads                 # build the C kernels early; threads
     from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
+    from core import BodyIndex                            # an index asked about new bodies
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
 are compiled with the system's C compiler on first use, :mod:`core.fixed.compiled`); the Dask
@@ -19,6 +20,7 @@ path (:mod:`core.fixed.lazy`, :mod:`core.bodies.distributed`) imports dask only 
 
 from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes
 from .bodies.build import bodies_from_axes as bodies_from_axes
+from .bodies.index import BodyIndex as BodyIndex
 from .bodies.contacts import contacts as contacts
 from .bodies.result import Contacts as Contacts
 from .fixed.classify import METHODS as METHODS
@@ -57,6 +59,7 @@ from .witness import contact_scale as contact_scale
 from .witness import separating_plane as separating_plane
 
 __all__ = [
+    "BodyIndex",
     "METHODS",
     "ON_INVALID",
     "Certifier",

@@ -42,6 +42,7 @@ from __future__ import annotations
 import itertools
 import math
 from fractions import Fraction
+from collections.abc import Sequence
 from functools import lru_cache
 from typing import Any
 
@@ -62,8 +63,10 @@ __all__ = [
     "lattice_shifts",
     "cell_heights",
     "fractional",
+    "fractional_point",
     "shift_error",
     "check_box",
+    "check_sizes",
     "classify_images",
 ]
 
@@ -259,22 +262,39 @@ def fractional(centers: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.nda
     N, d = c.shape
     if not N:
         return np.zeros((0, d)), np.zeros(d)
-    B = box_vectors(box, d)
-    L = np.diag(B)
     with np.errstate(over="ignore", invalid="ignore"):
-        f = np.empty_like(c)
-        e = np.empty_like(c)
-        for a in range(d - 1, -1, -1):  # upper triangular: the last axis first
-            acc = c[:, a].copy()
-            mag = np.abs(c[:, a])
-            err = np.zeros(N)
-            for b in range(a + 1, d):
-                acc = acc - B[a, b] * f[:, b]
-                mag = mag + abs(B[a, b]) * np.abs(f[:, b])
-                err = err + abs(B[a, b]) * e[:, b]
-            f[:, a] = acc / L[a]
-            e[:, a] = ((_GAMMA * mag + err) / L[a]) * (1 + _GAMMA) + _TINY
-    return f, e.max(axis=0)
+        f, e = _solve([c[:, a] for a in range(d)], _vectors(tuple(float(v) for v in box), d))
+    return np.stack(f, axis=1), np.array([float(np.max(x)) for x in e])
+
+
+def fractional_point(c: Sequence[float], box: np.ndarray) -> tuple[list[float], list[float]]:
+    """:func:`fractional` of one point, in Python floats (the same operations): (f, eps)."""
+    return _solve([float(v) for v in c], _vectors(tuple(float(v) for v in box), len(c)))
+
+
+@lru_cache(maxsize=64)
+def _vectors(box: tuple[float, ...], d: int) -> tuple[tuple[float, ...], ...]:
+    """:func:`box_vectors` as nested tuples of Python floats (cached)."""
+    return tuple(tuple(float(x) for x in row) for row in box_vectors(np.array(box), d))
+
+
+def _solve(c: list[Any], B: tuple[tuple[float, ...], ...]) -> tuple[list[Any], list[Any]]:
+    """The triangular solve B f = c and its error bound (numpy columns or Python floats alike)."""
+    d = len(c)
+    f: list[Any] = [0.0] * d
+    e: list[Any] = [0.0] * d
+    for a in range(d - 1, -1, -1):  # upper triangular: the last axis first
+        acc = c[a]
+        mag = abs(c[a])
+        err: Any = 0.0
+        for b in range(a + 1, d):
+            if B[a][b]:
+                acc = acc - B[a][b] * f[b]
+                mag = mag + abs(B[a][b]) * abs(f[b])
+                err = err + abs(B[a][b]) * e[b]
+        f[a] = acc / B[a][a]
+        e[a] = ((_GAMMA * mag + err) / B[a][a]) * (1 + _GAMMA) + _TINY
+    return f, e
 
 
 def check_box(centers: np.ndarray, radii: np.ndarray, box: np.ndarray) -> None:
@@ -329,6 +349,18 @@ def check_box(centers: np.ndarray, radii: np.ndarray, box: np.ndarray) -> None:
                     f"(L{axis_names[a]} = {box[a]:.12g}) from body {valid[lo]}'s ({axis_names[a]} = {c[lo, a] + 0.0:.12g}): "
                     f"the centres must lie in one box (wrap them into it first, e.g. {axis_names[a]} mod L{axis_names[a]})"
                 )
+    check_sizes(radii, box, d)
+
+
+def check_sizes(radii: np.ndarray, box: np.ndarray, d: int) -> None:
+    """The size rule of :func:`check_box` alone: the two largest radii sum to less than h / 2.
+
+    Raises:
+        ValueError: naming the largest body.
+    """
+    valid = np.flatnonzero(np.isfinite(radii))
+    if not valid.size:
+        return
     r = radii[valid]
     top = np.argsort(r)[::-1][:2]
     r1 = float(r[top[0]])
