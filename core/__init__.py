@@ -20,8 +20,8 @@ path (:mod:`core.fixed.lazy`, :mod:`core.bodies.distributed`) imports dask only 
 
 from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes
 from .bodies.build import bodies_from_axes as bodies_from_axes
-from .bodies.index import BodyIndex as BodyIndex
 from .bodies.contacts import contacts as contacts
+from .bodies.index import BodyIndex as BodyIndex
 from .bodies.result import Contacts as Contacts
 from .fixed.classify import METHODS as METHODS
 from .fixed.classify import ON_INVALID as ON_INVALID
