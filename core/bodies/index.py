@@ -492,13 +492,20 @@ class BodyIndex:
             body = ids[ids >= 0].astype(np.int64)
             qi = np.full(body.size, ok[0], dtype=np.int64)
         else:
-            groups = [np.flatnonzero((m == row).all(axis=1)) for row in np.unique(m, axis=0)]
+            first = m[0]
+            same = bool((m == first).all())
+            groups = [np.arange(ok.size)] if same else [np.flatnonzero((m == row).all(axis=1)) for row in np.unique(m, axis=0)]
+            members = self._table[self._table >= 0]  # the bodies cell by cell (slots [0, count) are filled)
+            start = np.cumsum(self._count) - self._count
             q_parts, b_parts = [], []
             for g in groups:
-                ids = self._table[self._cells(coords[g], tuple(int(x) for x in m[g[0]]))].reshape(-1)  # (q K slots)
-                pos = np.flatnonzero(ids >= 0)
-                q_parts.append(ok[g[pos // (ids.size // g.size)]])
-                b_parts.append(ids[pos])
+                cells = self._cells(coords[g], tuple(int(x) for x in m[g[0]]))  # (q, K)
+                cnt = self._count[cells]
+                ends = np.cumsum(cnt.reshape(-1))
+                # position in ``members`` of the t-th pair: t + (start of its cell - pairs before its cell)
+                jump = np.repeat((start[cells].reshape(-1) - ends + cnt.reshape(-1)).astype(np.int64), cnt.reshape(-1))
+                b_parts.append(members[np.arange(jump.size) + jump])
+                q_parts.append(np.repeat(ok[g], cnt.sum(axis=1)))
             qi = q_parts[0] if len(q_parts) == 1 else np.concatenate(q_parts)
             body = (b_parts[0] if len(b_parts) == 1 else np.concatenate(b_parts)).astype(np.int64)
         if exclude is not None:
@@ -517,7 +524,7 @@ class BodyIndex:
         r = radii[qi] + self._radii[body] + _PAD * scale
         near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= r * r)
         if near.size > 1:
-            near = near[np.lexsort((body[near], qi[near]))]
+            near = near[np.argsort(qi[near] * len(self) + body[near], kind="stable")]
         return qi[near], body[near], None if image is None else image[near]
 
     def _near_one(self, c: list[float], r: float, exclude: int) -> tuple[np.ndarray, np.ndarray | None]:
