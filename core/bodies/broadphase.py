@@ -116,9 +116,9 @@ def candidate_pairs(
     centers = np.asarray(centers, dtype=np.float64)
     N, d = centers.shape
     if box is not None and box.size != d:  # a tilted box (its six numbers): ghost images, then open space
-        from .ghosts import tilted_candidates
+        from .ghosts import tilted_pairs
 
-        return tilted_candidates(centers, radii, box)
+        return Candidates(*tilted_pairs(centers, radii, box, candidate_pairs))
     valid = np.flatnonzero(np.isfinite(radii))
     tasks: list[Callable[[], list[tuple[np.ndarray, ...]]]] = []
     if valid.size >= 2:

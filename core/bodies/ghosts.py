@@ -1,7 +1,7 @@
 """Broad phase in a tilted (triclinic) periodic box: ghost images, then the open-space grid.
 
-The open-space broad phase (:func:`core.bodies.broadphase.candidate_pairs` with no box) is run
-on the bodies together with *ghosts*: copies of the bodies near the faces of the region the
+The open-space broad phase (:func:`core.bodies.broadphase.candidate_pairs` with no box, handed
+in by it: that function sends a tilted box here) is run on the bodies together with *ghosts*: copies of the bodies near the faces of the region the
 centres occupy, moved by the lattice vectors v(k), k in {-1, 0, 1}^d, k != 0
 (:func:`core.bodies.periodic.lattice_shifts`). A pair (body i, ghost of j moved by v(k)) is the
 pair (i, j) with image k; pairs of two ghosts are dropped (they repeat a pair of a body and a
@@ -29,13 +29,16 @@ the open-space grid (levels, threads) as it is.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
-from .broadphase import Candidates, candidate_pairs
 from .periodic import cell_heights, fractional, lattice_shifts, shift_error
 
-__all__ = ["tilted_candidates"]
+__all__ = ["tilted_pairs"]
+
+Pairs = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 _SLACK = 1.0 + 2.0**-30
 """Widens the ghost test (roundings of delta itself)."""
@@ -43,7 +46,7 @@ _GHOST_PAD = 2.0**-50
 """Relative padding of a ghost's radius: covers the rounding of c_j + v(k) (module docstring)."""
 
 
-def tilted_candidates(centers: np.ndarray, radii: np.ndarray, box: np.ndarray) -> Candidates:
+def tilted_pairs(centers: np.ndarray, radii: np.ndarray, box: np.ndarray, open_search: Callable[[np.ndarray, np.ndarray], Any]) -> Pairs:
     """All pairs (i < j, image k of j) of valid bodies whose bounding spheres meet, in a tilted box.
 
     Args:
@@ -51,23 +54,26 @@ def tilted_candidates(centers: np.ndarray, radii: np.ndarray, box: np.ndarray) -
         radii: (N,) float64 radii; NaN marks a body to leave out (invalid).
         box: the six numbers of a tilted box (:func:`core.bodies.periodic.read_box`); the caller
             has run :func:`core.bodies.periodic.check_box`.
+        open_search: the open-space broad phase, ``open_search(centers, radii)`` with ``.i``,
+            ``.j`` (:func:`core.bodies.broadphase.candidate_pairs`, which calls this module).
 
     Returns:
-        :class:`Candidates` with ``image`` (M, d) int8: j is taken at c_j + v(image).
+        (i, j, image): int64 i < j and the (M, d) int8 images; j is taken at c_j + v(image).
 
     Examples:
+        >>> from core.bodies.broadphase import candidate_pairs
         >>> from core.bodies.periodic import read_box
         >>> box = read_box((10, 10, 0.5), 2)          # a2 = (5, 10): the cell is sheared
         >>> c = np.array([[1.0, 1.0], [5.5, 9.5]])    # body 1's image moved by -a2 is at (0.5, -0.5)
-        >>> p = tilted_candidates(c, np.array([1.0, 1.0]), box)
-        >>> p.i.tolist(), p.j.tolist(), p.image.tolist()
+        >>> i, j, image = tilted_pairs(c, np.array([1.0, 1.0]), box, candidate_pairs)
+        >>> i.tolist(), j.tolist(), image.tolist()
         ([0], [1], [[0, -1]])
     """
     centers = np.asarray(centers, dtype=np.float64)
     N, d = centers.shape
     valid = np.flatnonzero(np.isfinite(radii))
     if valid.size < 2:
-        return Candidates(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, d), np.int8))
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, d), np.int8)
     f, eps = fractional(centers[valid], box)
     lo, hi = f.min(axis=0), f.max(axis=0)
     big = float(np.max(radii[valid]))
@@ -85,13 +91,13 @@ def tilted_candidates(centers: np.ndarray, radii: np.ndarray, box: np.ndarray) -
             ghost_image.append(np.broadcast_to(np.array(k, dtype=np.int8), (near.size, d)))
             ghost_centers.append(centers[valid[near]] + v)
     if not ghost_rows:
-        open_pairs = candidate_pairs(centers, radii)
-        return Candidates(open_pairs.i, open_pairs.j, np.zeros((len(open_pairs), d), np.int8))
+        plain = open_search(centers, radii)
+        return plain.i, plain.j, np.zeros((plain.i.size, d), np.int8)
     rows = np.concatenate(ghost_rows)
     image = np.concatenate(ghost_image)
     all_centers = np.concatenate([centers, *ghost_centers])
     all_radii = np.concatenate([radii, radii[rows] + pad])
-    found = candidate_pairs(all_centers, all_radii)
+    found = open_search(all_centers, all_radii)
     p, q = found.i, found.j  # p < q; the ghosts come after the N bodies
     both = q < N
     mixed = (p < N) & (q >= N)
@@ -108,4 +114,4 @@ def tilted_candidates(centers: np.ndarray, radii: np.ndarray, box: np.ndarray) -
         code = code * 3 + (img[:, a].astype(np.int64) + 1)
     key = (i * N + j) * 3**d + code
     _, first = np.unique(key, return_index=True)
-    return Candidates(i[first].astype(np.int64), j[first].astype(np.int64), img[first])
+    return i[first].astype(np.int64), j[first].astype(np.int64), img[first]
