@@ -82,6 +82,11 @@ def _origin(text: str) -> str:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
+def _cors_origin(text: str) -> str:
+    """An origin for ``--cors-origin`` (as browsers send it), or "*" for any."""
+    return "*" if text.strip() == "*" else _origin(text)
+
+
 def _size(text: str) -> int:
     try:
         v = int(text)
@@ -129,6 +134,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--allow-origin", action="append", default=[], type=_origin, metavar="URL",
         help="also accept scene connections from pages at this origin, e.g. https://example.org "
         "(repeatable; default: only the scene's own pages, and clients that send no Origin)",
+    )
+    s.add_argument(
+        "--cors-origin", action="append", default=[], type=_cors_origin, metavar="URL",
+        help="let web pages at this origin call the API from a browser (CORS), e.g. https://example.org, "
+        "or '*' for any (repeatable; default: no CORS headers)",
     )
 
     sh = sub.add_parser(
@@ -241,7 +251,7 @@ def _serve(args: argparse.Namespace) -> int:
         if scene is not None:
             scene.stop()
         return 0
-    api = create_api(ApiSettings(scene_url=scene_url))
+    api = create_api(ApiSettings(scene_url=scene_url, cors_origins=tuple(args.cors_origin)))
 
     def stop_work() -> None:
         """On SIGTERM/SIGINT: fail every request budget, kill the analysis workers (API, scene)."""

@@ -50,9 +50,19 @@ def serve(app: Any, host: str, port: int, on_stop: Callable[[], None]) -> None:
 
     uvicorn re-raises the signal after its shutdown; the handler installed here turns it into
     a normal exit (``SystemExit(0)``) so that the caller's cleanup (``finally``) still runs.
+
+    Raises:
+        RuntimeError: the port cannot be bound (taken, or not allowed); nothing was served.
     """
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", timeout_graceful_shutdown=GRACE_S)
     server = StoppableServer(config, on_stop)
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, _exit)
-    server.run()
+    try:
+        server.run()
+    except SystemExit:
+        if server.started:
+            raise
+        # uvicorn exits when it cannot listen (it logged the OS error): a message and exit status 1
+        raise RuntimeError(f"cannot serve the API on {host}:{port} (the port is taken or not allowed): "
+                           "choose another with --api-port") from None

@@ -4,8 +4,11 @@ Used by both the HTTP API (:mod:`app.api`) and the scene (:mod:`app.scene`): the
 server process, so a long exact computation on a user's input must neither hold
 the GIL nor outlive its budget. Each job runs in a fresh child process (``forkserver``: forked
 from a clean single-threaded server, never from the threaded web process); the caller waits on
-a pipe and kills the child when the budget is spent. A semaphore bounds the jobs running at once;
-a job that finds all slots taken is refused at once (the caller answers 503) instead of queueing.
+a pipe and kills the child when the budget is spent. At most ``max_jobs`` run at once; in front of
+them a bounded first-come-first-served queue (``max_waiting`` callers, each for at most
+``max_wait_s`` seconds, then :class:`WorkerBusy`): a burst of ordinary requests is served in
+turn, and only a burst beyond the queue is refused at once (the caller answers 503). A job's time
+budget starts when it starts running, not while it waits.
 
 Children never outlive the server: each asks the kernel for SIGKILL when its parent dies
 (``prctl(PR_SET_PDEATHSIG)``; its parent is the fork server, which exits when the server
@@ -21,20 +24,21 @@ import signal
 import sys
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, cast
 
 if TYPE_CHECKING:
     from multiprocessing.context import ForkContext, ForkServerContext, SpawnContext
 
-__all__ = ["WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
+__all__ = ["WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerStopped", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
 
 _POLL_S = 0.1
 """How often a waiting caller checks the budget, the child and the cancel event."""
 
 
 class WorkerBusy(RuntimeError):
-    """All worker slots are taken, or the pool is shut down (the server is stopping)."""
+    """No slot: every slot and the queue are taken, the wait ran out, or the pool is shut down."""
 
 
 class WorkerCancelled(RuntimeError):
@@ -42,7 +46,17 @@ class WorkerCancelled(RuntimeError):
 
 
 class WorkerTimeout(RuntimeError):
-    """The job exceeded its time budget and was killed."""
+    """The job exceeded its time budget and was killed.
+
+    A job raises it from its own budget check (it stops where it is; the message says where).
+    """
+
+
+class WorkerStopped(WorkerTimeout):
+    """The job stopped itself at its own budget check; the message says where.
+
+    (It raised :class:`WorkerTimeout` in the child.)
+    """
 
 
 class WorkerDied(RuntimeError):
@@ -114,6 +128,8 @@ def _child(conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_
         result = ("ok", fn(*args, **kwargs))
     except ValueError as e:
         result = ("value_error", str(e))
+    except WorkerTimeout as e:  # the job's own budget check: it says where it stopped
+        result = ("timeout", str(e))
     except MemoryError:
         result = ("died", f"the job ran out of memory (limit {memory_mb} MB)")
     except BaseException as e:  # report everything: the parent turns it into a clean error
@@ -134,6 +150,9 @@ class WorkerPool:
         memory_mb: address-space limit of each child (None: none).
         start_method: multiprocessing start method ("forkserver" where available).
         preload: modules the fork server imports once, so children start warm.
+        max_waiting: callers that may wait for a slot (first come, first served); one more is
+            refused at once. 0: refuse whenever every slot is taken.
+        max_wait_s: longest wait in the queue before :class:`WorkerBusy`.
 
     Examples:
         >>> import math
@@ -153,6 +172,8 @@ class WorkerPool:
         memory_mb: int | None = None,
         start_method: str | None = None,
         preload: tuple[str, ...] = ("core",),
+        max_waiting: int = 0,
+        max_wait_s: float = 10.0,
     ) -> None:
         if start_method is None:
             start_method = "forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn"
@@ -160,12 +181,18 @@ class WorkerPool:
         self._ctx = cast("ForkServerContext | SpawnContext | ForkContext", mp.get_context(start_method))
         if start_method == "forkserver" and preload:
             self._ctx.set_forkserver_preload(list(preload))
-        self._slots = threading.BoundedSemaphore(max_jobs)
         self._memory_mb = memory_mb
         self._running: set[Any] = set()
         self._lock = threading.Lock()
+        self._turn = threading.Condition(self._lock)
+        """Signalled when a slot is freed, a waiter leaves the queue, or the pool shuts down."""
+        self._queue: deque[object] = deque()
+        self._busy = 0
+        """Slots taken (a job between taking its slot and ending)."""
         self._closed = False
         self.max_jobs = max_jobs
+        self.max_waiting = max_waiting
+        self.max_wait_s = max_wait_s
 
     def start(self) -> None:
         """Accept jobs (again) after :meth:`shutdown`.
@@ -187,38 +214,76 @@ class WorkerPool:
         *args: Any,
         timeout: float,
         cancel: threading.Event | None = None,
+        grace: float = 0.0,
         **kwargs: Any,
     ) -> Any:
         """Run ``fn(*args, **kwargs)`` in a child process and return its result.
 
-        ``fn``, its arguments and its result must be picklable (module-level functions). The
-        slot is taken before anything else, so a busy pool answers before any input is read.
+        ``fn``, its arguments and its result must be picklable (module-level functions). A
+        slot is taken (after waiting in the queue, if any) before anything else, so a busy pool
+        answers before any input is read.
 
         Args:
             fn: module-level function run in the child.
             *args: its positional arguments.
-            timeout: wall-clock budget in seconds (the child is killed when it is spent).
-            cancel: set it (e.g. when the client has disconnected) to kill the job.
+            timeout: wall-clock budget in seconds from the job's start (the child is killed
+                when it is spent, plus ``grace``).
+            cancel: set it (e.g. when the client has disconnected) to kill the job, or to leave
+                the queue.
+            grace: extra seconds for a job that checks its own budget of ``timeout`` seconds
+                (it then raises :class:`WorkerTimeout` saying where it stopped).
             **kwargs: its keyword arguments.
 
         Raises:
-            WorkerBusy: every slot is taken, or the pool is shut down (nothing was started).
-            WorkerTimeout: ``timeout`` seconds passed; the child was killed.
-            WorkerCancelled: ``cancel`` was set; the child was killed.
+            WorkerBusy: every slot and the queue are taken, the wait ran out, or the pool is
+                shut down (nothing was started).
+            WorkerTimeout: ``timeout`` seconds passed; the child was killed (or stopped itself).
+            WorkerCancelled: ``cancel`` was set; the child was killed (or the caller left the
+                queue).
             ValueError: the job raised ValueError (bad input): same message.
             WorkerDied: the child process died or ran out of memory.
             WorkerFailed: the job raised another exception.
         """
-        if self._closed:
-            raise WorkerBusy("the server is shutting down")
-        if not self._slots.acquire(blocking=False):
-            raise WorkerBusy(f"all {self.max_jobs} analysis workers are busy")
+        self._acquire(cancel)
         try:
-            return self._run(fn, args, kwargs, timeout, cancel)
+            return self._run(fn, args, kwargs, timeout, grace, cancel)
         finally:
-            self._slots.release()
+            with self._turn:
+                self._busy -= 1
+                self._turn.notify_all()
 
-    def _run(self, fn: Callable[..., Any], args: tuple, kwargs: dict, timeout: float, cancel: threading.Event | None) -> Any:
+    def _acquire(self, cancel: threading.Event | None) -> None:
+        """Take a slot: at once, or in turn after the callers queued before this one."""
+        with self._turn:
+            if self._closed:
+                raise WorkerBusy("the server is shutting down")
+            if self._busy < self.max_jobs and not self._queue:
+                self._busy += 1
+                return
+            if len(self._queue) >= self.max_waiting:
+                queued = f" and {len(self._queue)} requests are waiting" if self.max_waiting else ""
+                raise WorkerBusy(f"all {self.max_jobs} workers are busy{queued}")
+            ticket = object()
+            self._queue.append(ticket)
+            deadline = time.monotonic() + self.max_wait_s
+            try:
+                while not (self._queue[0] is ticket and self._busy < self.max_jobs):
+                    if self._closed:
+                        raise WorkerBusy("the server is shutting down")
+                    if cancel is not None and cancel.is_set():
+                        raise WorkerCancelled("the request left the queue (the client went away)")
+                    left = deadline - time.monotonic()
+                    if left <= 0:
+                        raise WorkerBusy(f"waited {self.max_wait_s:g} s in the queue for one of the {self.max_jobs} workers")
+                    self._turn.wait(min(left, _POLL_S))
+                self._busy += 1
+            finally:
+                self._queue.remove(ticket)
+                self._turn.notify_all()  # the next in line may now be first
+
+    def _run(
+        self, fn: Callable[..., Any], args: tuple, kwargs: dict, timeout: float, grace: float, cancel: threading.Event | None
+    ) -> Any:
         recv, send = self._ctx.Pipe(duplex=False)
         proc = self._ctx.Process(target=_child, args=(send, fn, args, kwargs, self._memory_mb), daemon=True)
         try:
@@ -227,7 +292,7 @@ class WorkerPool:
             recv.close()
             send.close()
             raise WorkerFailed(f"could not start a worker process: {type(e).__name__}: {e}") from None
-        deadline = time.monotonic() + timeout  # after start: a cold fork server does not eat the budget
+        deadline = time.monotonic() + timeout + grace  # after start: a cold fork server does not eat the budget
         with self._lock:
             self._running.add(proc)
             closed = self._closed  # shutdown() ran while this child was starting
@@ -266,6 +331,8 @@ class WorkerPool:
             return payload
         if status == "value_error":
             raise ValueError(payload)
+        if status == "timeout":
+            raise WorkerStopped(payload)
         if status == "died":
             raise WorkerDied(payload)
         raise WorkerFailed(payload)
@@ -281,15 +348,22 @@ class WorkerPool:
         with self._lock:
             return len(self._running)
 
+    @property
+    def waiting(self) -> int:
+        """Callers waiting in the queue now."""
+        with self._lock:
+            return len(self._queue)
+
     def shutdown(self) -> None:
         """Kill every running job and refuse new ones (called when the server stops).
 
-        The callers waiting on those jobs get :class:`WorkerBusy` ("shutting down") within
-        ``_POLL_S`` seconds.
+        The callers waiting on those jobs, and those waiting in the queue, get
+        :class:`WorkerBusy` ("shutting down") within ``_POLL_S`` seconds.
         """
-        with self._lock:
+        with self._turn:
             self._closed = True
             procs = list(self._running)
+            self._turn.notify_all()
         for proc in procs:
             try:
                 if proc.is_alive():

@@ -7,6 +7,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import classify, Relation, explain          # static pairs (certified)
     from core import classify_detailed                    # + which arithmetic certified each pair
     from core import analyse                              # moving pairs: events and intervals
+    from core import read_motion, read_interval           # user text, under limits (one grammar)
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
     from core import warm_up, set_threads                 # build the C kernels early; threads
     from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
@@ -19,6 +20,7 @@ path (:mod:`core.fixed.lazy`, :mod:`core.bodies.distributed`) imports dask only 
 """
 
 from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes
+from .bodies.broadphase import TooManyPairs as TooManyPairs
 from .bodies.build import bodies_from_axes as bodies_from_axes
 from .bodies.contacts import contacts as contacts
 from .bodies.index import BodyIndex as BodyIndex
@@ -42,6 +44,8 @@ from .moving.expressions import parse_expression as parse_expression
 from .moving.motions import Motion as Motion
 from .moving.motions import motion_from_dict as motion_from_dict
 from .moving.motions import motion_to_dict as motion_to_dict
+from .moving.motions import read_interval as read_interval
+from .moving.motions import read_motion as read_motion
 from .moving.presets import preset as preset
 from .moving.presets import preset_names as preset_names
 from .relation import Relation as Relation
@@ -75,6 +79,7 @@ __all__ = [
     "Quantity",
     "Relation",
     "SeparatingPlane",
+    "TooManyPairs",
     "ShapeParams",
     "Stats",
     "Witness",
@@ -92,6 +97,8 @@ __all__ = [
     "preset",
     "preset_names",
     "quadric_from_axes",
+    "read_interval",
+    "read_motion",
     "rotation_from_quaternion",
     "separating_plane",
     "set_threads",

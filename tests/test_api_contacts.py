@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
@@ -95,3 +97,40 @@ def test_the_default_limit_takes_ten_thousand_bodies(client):
     rows = np.concatenate([b.centers, b.semi_axes, b.orientations], axis=1)
     r = client.post("/api/contacts", json={"bodies": rows.tolist()})
     assert r.status_code == 200 and r.json()["bodies"] == 10_000
+
+
+def test_pairs_to_examine_and_answer_size_limits_say_how_many_and_the_limit():
+    """Counted before any pair is built (candidates) / before the answer is built (pairs)."""
+    at_one_point = [[0.0, 0.0, 1.0, 1.0, 0.0]] * 30  # 435 pairs, every one overlapping
+    with TestClient(create_api(ApiSettings(max_contacts_candidates=434))) as c:
+        r = c.post("/api/contacts", json={"bodies": at_one_point})
+        assert (r.status_code, r.json()) == (422, {"detail": (
+            "30 bodies give 435 pairs to examine (bodies close enough that their bounding spheres may meet), over the "
+            "limit of 434 per request: send fewer or less crowded bodies, or search them with `python -m app contacts` "
+            "or `core.contacts`, which have no such limit"
+        )})
+        assert c.post("/api/contacts", json={"bodies": at_one_point[:29]}).status_code == 200  # 406 pairs
+    with TestClient(create_api(ApiSettings(max_contacts_pairs=434))) as c:
+        r = c.post("/api/contacts", json={"bodies": at_one_point})
+        assert (r.status_code, r.json()) == (422, {"detail": (
+            "the answer would list 435 pairs of the 30 bodies that touch or overlap, over the limit of 434 pairs per "
+            "answer: send fewer bodies per request, or search them with `python -m app contacts` or `core.contacts`, "
+            "which have no such limit"
+        )})
+        r = c.post("/api/contacts", json={"bodies": at_one_point[:29]})
+        assert r.status_code == 200 and len(r.json()["pairs"]) == 406
+
+
+def test_contacts_over_the_time_budget_is_503_saying_where():
+    """A lattice of touching spheres (every pair needs exact arithmetic) under a 20 ms budget."""
+    c = np.array(np.meshgrid(*(np.arange(8.0),) * 3, indexing="ij")).reshape(3, -1).T  # 1,344 tangent pairs
+    rows = [[*p, 0.5, 0.5, 0.5, 1.0, 0.0, 0.0, 0.0] for p in c.tolist()]
+    with TestClient(create_api(ApiSettings(request_budget_s=0.02))) as client:
+        r = client.post("/api/contacts", json={"bodies": rows})
+    assert (r.status_code, r.headers["retry-after"]) == (503, "2")
+    detail = r.json()["detail"]
+    killed = "stopped: the job exceeded its time budget of 0.02 s and was stopped; send fewer bodies per request"
+    assert re.fullmatch(
+        r"stopped after [\d,]+ of [\d,]+ pairs to examine: over the time budget of 0\.02 s per request; "
+        r"send fewer bodies per request", detail
+    ) or detail == killed, detail

@@ -1,4 +1,4 @@
-"""The float sign filter for exact polynomials (core.moving.polysign): it may abstain, never be wrong.
+"""The float sign filter for exact polynomials (core.algebra.polysign): it may abstain, never be wrong.
 
 Ground truth: exact evaluation in Q(sqrt d) (flint fmpq_poly at the exact binary value of the
 float t, sign of a + b sqrt(d) by squaring), not the code under test.
@@ -12,8 +12,8 @@ from flint import fmpq, fmpq_poly
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from core.algebra.polysign import FloatPoly
 from core.algebra.qsqrt import QSqrtPoly, sign_qsqrt
-from core.moving.polysign import FloatPoly
 from core.shapes.numbers import to_fmpq
 
 rationals = st.builds(fmpq, st.integers(-10**12, 10**12), st.integers(1, 10**6))

@@ -16,13 +16,21 @@ from typing import Any, cast
 import numpy as np
 from fastapi import HTTPException
 
-from core import Certifier, Relation, classify_detailed, quadric_from_axes, validate_quadric
+from core import (
+    Certifier,
+    Relation,
+    bodies_from_axes,
+    classify_detailed,
+    quadric_from_axes,
+    validate_quadric,
+)
 from core.shapes.numbers import to_fmpq
 
 from .budget import Budget
+from .contacts_schemas import ContactsIn
 from .schemas import ClassifyOut, PairItem, RelationName, ShapeIn
 
-__all__ = ["bad_input", "quadric_input", "checked_pair", "classify_items", "is_plain_pair"]
+__all__ = ["bad_input", "quadric_input", "checked_pair", "classify_items", "is_plain_pair", "contacts_matrices"]
 
 
 @contextmanager
@@ -120,16 +128,27 @@ def _validated(a: Any, b: Any, where: str) -> None:
         )
 
 
-def is_plain_pair(pair: PairItem) -> bool:
-    """True for two matrices of JSON numbers (binary64 values).
+def _plain(v: Any) -> bool:
+    """A JSON float, or a JSON integer that a float holds exactly."""
+    return type(v) is float or (type(v) is int and abs(v) < _EXACT_FLOAT_INT)
 
-    Classifying such a pair is bounded work: the float filter, at worst one exact
-    classification of doubles.
+
+def is_plain_pair(pair: PairItem) -> bool:
+    """True when every number of the pair is a JSON number (a binary64 value).
+
+    Matrices or shapes: classifying such a pair is bounded work (the float filter, at worst one
+    exact classification of doubles), so it runs in a server thread; number strings (exact
+    values of up to 400 characters and exponents up to 1000) go to the worker processes.
     """
-    return all(
-        isinstance(q, list) and all(type(v) is float or type(v) is int and abs(v) < _EXACT_FLOAT_INT for row in q for v in row)
-        for q in (pair.a, pair.b)
-    )
+    for q in (pair.a, pair.b):
+        if isinstance(q, ShapeIn):
+            o = q.orientation
+            values = [*q.center, *q.semi_axes, *(o if isinstance(o, list) else [] if o is None else [o])]
+        else:
+            values = [v for row in q for v in row]
+        if not all(_plain(v) for v in values):
+            return False
+    return True
 
 
 def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
@@ -207,3 +226,30 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
         )
         for i in range(n)
     ]
+
+
+def contacts_matrices(body: ContactsIn) -> np.ndarray:
+    """The bodies of a contacts request as float matrices (422 for mixed forms or bad rows).
+
+    The count limit is the route's (checked before this runs in a worker).
+    """
+    if (body.bodies is None) == (body.matrices is None):
+        raise HTTPException(422, "send either 'bodies' (rows of parameters) or 'matrices', not both or neither")
+    if body.matrices is not None:
+        sizes = {len(m) for m in body.matrices} | {len(r) for m in body.matrices for r in m}
+        if len(sizes) > 1:
+            raise HTTPException(422, "matrices: every matrix must be 3x3 (ellipses) or every one 4x4 (ellipsoids)")
+        return np.array(body.matrices, dtype=np.float64).reshape(len(body.matrices), *(2 * (sizes.pop() if sizes else 4,)))
+    widths = {len(r) for r in body.bodies or []}
+    if not widths:
+        return np.zeros((0, 4, 4))
+    if widths not in ({10}, {5}):
+        raise HTTPException(422, "bodies: every row must be [x, y, z, a, b, c, qw, qx, qy, qz] (3D) or every row [x, y, a, b, angle] (2D)")
+    if body.box is not None and len(body.box) not in ((3, 6) if 10 in widths else (2, 3, 6)):
+        raise HTTPException(422, f"box: {len(body.box)} numbers for {'3D' if 10 in widths else '2D'} bodies")
+    t = np.array(body.bodies, dtype=np.float64)
+    d = 3 if t.shape[1] == 10 else 2
+    with bad_input("bodies: "):
+        if body.on_invalid == "mark":
+            return bodies_from_axes(t[:, :d], t[:, d : 2 * d], t[:, 2 * d :] if d == 3 else t[:, 4], on_invalid="mark")
+        return bodies_from_axes(t[:, :d], t[:, d : 2 * d], t[:, 2 * d :] if d == 3 else t[:, 4])

@@ -1,4 +1,4 @@
-"""Dependencies of the routes: the settings and the worker pool of this app instance.
+"""Dependencies of the routes: the settings, the worker pool and the pair batcher of this app.
 
 Both live on ``app.state`` (set by :func:`app.api.create_api`), are reached through ``Depends``
 and can be swapped in tests with ``app.dependency_overrides[get_settings] = ...``.
@@ -11,9 +11,10 @@ from typing import Annotated
 from fastapi import Depends, Request
 
 from ..workers import WorkerPool
+from .batching import PairBatcher
 from .settings import ApiSettings
 
-__all__ = ["get_settings", "get_workers", "SettingsDep", "WorkersDep"]
+__all__ = ["get_settings", "get_workers", "get_batcher", "SettingsDep", "WorkersDep", "BatcherDep"]
 
 
 def get_settings(request: Request) -> ApiSettings:
@@ -26,5 +27,11 @@ def get_workers(request: Request) -> WorkerPool:
     return request.app.state.workers
 
 
+def get_batcher(request: Request) -> PairBatcher:
+    """The thread that classifies single pairs of JSON numbers together, off the event loop."""
+    return request.app.state.batcher
+
+
 SettingsDep = Annotated[ApiSettings, Depends(get_settings)]
 WorkersDep = Annotated[WorkerPool, Depends(get_workers)]
+BatcherDep = Annotated[PairBatcher, Depends(get_batcher)]

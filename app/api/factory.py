@@ -12,6 +12,7 @@ from fastapi.staticfiles import StaticFiles
 from core import warm_up
 
 from ..workers import WorkerPool
+from .batching import PairBatcher
 from .limits import BodySizeLimit, validation_error_handler
 from .routes import classify, contacts, health, landing, motion, presets, witness
 from .settings import ApiSettings
@@ -42,8 +43,12 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     workers = WorkerPool(
         settings.max_concurrent_analyses,
         memory_mb=settings.memory_limit_mb,
-        preload=("core", "core.moving.analysis", "app.api.jobs"),
+        preload=("core", "core.moving.analysis", "core.witness", "app.jobs", "app.api.convert", "app.api.witness_out"),
+        max_waiting=settings.max_queued_analyses,
+        max_wait_s=settings.queue_wait_s,
     )
+
+    batcher = PairBatcher(settings.request_budget_s)
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -51,6 +56,7 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
         workers.start()
         yield
         workers.shutdown()
+        batcher.stop()
 
     app = FastAPI(
         title="Ellipse & ellipsoid interference",
@@ -63,9 +69,21 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     _offline_docs(app)
     app.state.settings = settings
     app.state.workers = workers
+    app.state.batcher = batcher
     # ignored: starlette types every handler as taking any Exception; this one is registered for its class only
     app.add_exception_handler(RequestValidationError, validation_error_handler)  # type: ignore[arg-type]
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes, per_path={"/api/contacts": settings.max_contacts_body_bytes})
+    if settings.cors_origins:  # opt-in (--cors-origin): pages at these origins may call the API
+        from fastapi.middleware.cors import CORSMiddleware
+
+        app.add_middleware(
+            CORSMiddleware,
+            allow_origins=list(settings.cors_origins),
+            allow_methods=["GET", "HEAD", "POST"],
+            allow_headers=["content-type"],
+            expose_headers=["retry-after"],
+            max_age=600,
+        )
     for module in (classify, contacts, motion, presets, witness, health, landing):
         app.include_router(module.router)
     if settings.static_dir is not None and settings.static_dir.is_dir():

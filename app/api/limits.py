@@ -1,4 +1,10 @@
-"""Request-level guards: body size limit and validation errors that never echo the input.
+"""Request-level guards: body size, the contact search's per-request limits, validation errors.
+
+The library has no limits (``core.contacts`` answers any input it can hold); the server's
+limits are applied here, at the edge, with messages that say what was asked, the limit and what
+to do instead: :func:`contacts_limit_message` (the pairs the broad phase would examine, counted
+before any is built: :class:`core.bodies.broadphase.TooManyPairs`) and
+:func:`contacts_answer_message` (the pairs an answer would list, checked before it is built).
 
 FastAPI's default 422 handler echoes each offending input; a NaN there (Python's JSON reader
 accepts the ``NaN`` token) cannot be written back as JSON and would turn the 422 into a 500,
@@ -14,7 +20,30 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-__all__ = ["BodySizeLimit", "validation_error_handler"]
+__all__ = ["BodySizeLimit", "validation_error_handler", "contacts_limit_message", "contacts_answer_message"]
+
+_ELSEWHERE = "or search them with `python -m app contacts` or `core.contacts`, which have no such limit"
+
+
+def contacts_limit_message(bodies: int, pairs: int, limit: int) -> str:
+    """422 detail: the broad phase would examine ``pairs`` pairs, over ``limit``.
+
+    Examples:
+        >>> contacts_limit_message(10_000, 49_995_000, 2_000_000)[:95]
+        '10,000 bodies give 49,995,000 pairs to examine (bodies close enough that their bounding spheres'
+    """
+    return (
+        f"{bodies:,} bodies give {pairs:,} pairs to examine (bodies close enough that their bounding spheres "
+        f"may meet), over the limit of {limit:,} per request: send fewer or less crowded bodies, {_ELSEWHERE}"
+    )
+
+
+def contacts_answer_message(bodies: int, pairs: int, limit: int) -> str:
+    """422 detail: the answer would list ``pairs`` pairs, over ``limit``."""
+    return (
+        f"the answer would list {pairs:,} pairs of the {bodies:,} bodies that touch or overlap, over the limit "
+        f"of {limit:,} pairs per answer: send fewer bodies per request, {_ELSEWHERE}"
+    )
 
 
 class BodySizeLimit:
@@ -98,6 +127,9 @@ def _is_json(content_type: str) -> bool:
 async def validation_error_handler(request: Request, exc: RequestValidationError) -> JSONResponse:
     """422 with ``{"detail": [{"loc", "msg", "type"}, ...]}`` (no echo of the input).
 
+    As the OpenAPI schema declares: 400 when there is no JSON to validate (malformed JSON, or
+    an empty body), 422 when the JSON does not fit the schema or a value is invalid.
+
     A body sent without a JSON content type (``curl -d`` sends a form type) is not read as JSON
     by FastAPI; say so (415) instead of reporting a missing object.
     """
@@ -109,4 +141,7 @@ async def validation_error_handler(request: Request, exc: RequestValidationError
             status_code=415,
             content={"detail": f"send the body as JSON with the header 'content-type: application/json' ({got})"},
         )
+    unreadable = [e for e in errors if e.get("type") == "json_invalid" or (tuple(e.get("loc", ())) == ("body",) and e.get("type") == "missing")]
+    if unreadable:  # the schema's 400: no JSON to validate (malformed, or no body at all)
+        return JSONResponse(status_code=400, content={"detail": [_clean(e) for e in unreadable]})
     return JSONResponse(status_code=422, content={"detail": [_clean(e) for e in errors]})

@@ -20,7 +20,7 @@ from pydantic import (
     WithJsonSchema,
 )
 
-from .schemas import RelationName, checked_number
+from .schemas import AlgebraicOut, RelationName, checked_number
 
 __all__ = ["Expr", "Motion", "AnalyseIn", "AnalyseOut", "PresetOut"]
 
@@ -162,18 +162,6 @@ class AnalyseIn(BaseModel):
     polynomials: bool = Field(default=True, description="include a_i(t), s0, s1, s1,0 as strings")
     name: str | None = Field(default=None, description="ignored (lets a preset be posted unchanged)")
     description: str | None = Field(default=None, description="ignored")
-
-
-class AlgebraicOut(BaseModel):
-    """An exact real time: decimal value, isolating interval with rational ends, exact value if rational."""
-
-    value: str
-    """Decimal to the requested digits."""
-    approx: float | None
-    exact: str | None
-    """"p/q" when the time is rational, else None."""
-    isolating: list[str]
-    """[lo, hi] rational ends of an interval that holds this time and no other candidate."""
 
 
 class EventOut(AlgebraicOut):

@@ -39,6 +39,7 @@ __all__ = [
     "ClassifyOut",
     "QuantityOut",
     "ExplainOut",
+    "AlgebraicOut",
     "HealthOut",
     "ErrorItem",
     "ErrorOut",
@@ -249,9 +250,32 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
 """Error responses documented on every API route."""
 
 
+class AlgebraicOut(BaseModel):
+    """A real algebraic number: rational ('exact'), or a root of 'polynomial' in 'isolating'.
+
+    The one JSON form of an exact irrational value (:meth:`core.algebra.algebraic.RealAlgebraic.to_dict`):
+    witness values, the times of motion events and the ends of motion intervals.
+    """
+
+    value: str
+    """Decimal to the requested significant digits (error below one unit in the last place)."""
+    approx: float | None
+    """Float approximation (None if it overflows a double)."""
+    exact: str | None
+    """'p/q' when the number is rational."""
+    isolating: list[str]
+    """[lo, hi] rational ends of an interval that holds this root of the polynomial and no other."""
+    polynomial: list[str] | None = None
+    """Integer coefficients, ascending, of a polynomial it is a root of (None when rational)."""
+
+
 class HealthOut(BaseModel):
     """Liveness and load."""
 
     status: Literal["ok"]
     analyses_running: int
+    """Jobs running in the worker processes (analyses, explanations, witnesses, contacts...)."""
     max_concurrent_analyses: int
+    analyses_waiting: int = 0
+    """Requests waiting in the queue for a worker."""
+    max_queued_analyses: int = 0

@@ -43,6 +43,9 @@ class ApiSettings:
 
     scene_url: str | None = None
     """Link to the 3D scene shown on the landing page; None when serving ``--api-only``."""
+    cors_origins: tuple[str, ...] = ()
+    """Web origins (``https://example.org``) whose pages may call the API from a browser (CORS,
+    ``--cors-origin``); empty: none (the default: no CORS headers at all)."""
     max_body_bytes: int = 1_000_000
     """Largest accepted request body (413 above)."""
     max_batch: int = 1000
@@ -52,6 +55,11 @@ class ApiSettings:
     larger sets: ``python -m app contacts`` or the library)."""
     max_contacts_body_bytes: int = 4_000_000
     """Largest ``/api/contacts`` body (10,000 rows of 10 JSON numbers are about 2 MB)."""
+    max_contacts_candidates: int = 2_000_000
+    """Most pairs the broad phase of one ``/api/contacts`` request may examine (counted before
+    any is built; 10,000 bodies at random in a box give ~50,000, 10,000 at one point 49,995,000)."""
+    max_contacts_pairs: int = 100_000
+    """Most pairs listed in one ``/api/contacts`` answer (checked before the answer is built)."""
     max_expression_chars: int = SERVER.expression_chars or 2000
     """Longest expression string in a motion (all other size limits of user text:
     :data:`core.shapes.limits.SERVER`, e.g. number strings up to 400 characters)."""
@@ -61,12 +69,18 @@ class ApiSettings:
     time_budget_s: float = 20.0
     """Wall-clock budget of one motion analysis; the worker process is killed when exceeded."""
     request_budget_s: float = 5.0
-    """Wall-clock budget of one classify/explain request: a batch over it is stopped between
-    pairs and answered with 503."""
+    """Wall-clock budget of one classify/explain/witness/contacts request: the work is stopped
+    (between pairs, or its worker process killed) and answered with 503."""
     max_digits: int = 200
     """Largest ``digits`` accepted by /api/analyse."""
     max_concurrent_analyses: int = 2
-    """Analyses running at once (each in its own process); more get 503 with Retry-After."""
+    """Worker processes running at once (analyses, explanations, witnesses, contacts, exact
+    classifications: each job in its own process); more wait in the queue."""
+    max_queued_analyses: int = 16
+    """Requests that may wait for a worker (first come, first served); beyond them, 503 with
+    Retry-After at once."""
+    queue_wait_s: float = 10.0
+    """Longest wait in the queue for a worker; then 503 with Retry-After."""
     memory_limit_mb: int | None = 2048
     """Address-space cap of an analysis worker process (None: no cap)."""
     static_dir: Path | None = field(default_factory=default_static_dir)
@@ -77,11 +91,15 @@ class ApiSettings:
     def __post_init__(self) -> None:
         """Reject limits that make no sense (a ValueError naming the field)."""
         for name in ("max_body_bytes", "max_batch", "max_expression_chars", "max_degree",
-                     "max_digits", "max_concurrent_analyses", "max_contacts_bodies", "max_contacts_body_bytes"):
+                     "max_digits", "max_concurrent_analyses", "max_contacts_bodies", "max_contacts_body_bytes",
+                     "max_contacts_candidates", "max_contacts_pairs"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"ApiSettings.{name} must be a positive integer, got {value!r}")
-        for name in ("time_budget_s", "request_budget_s"):
+        q = self.max_queued_analyses
+        if isinstance(q, bool) or not isinstance(q, int) or q < 0:
+            raise ValueError(f"ApiSettings.max_queued_analyses must be a non-negative integer, got {q!r}")
+        for name in ("time_budget_s", "request_budget_s", "queue_wait_s"):
             if not (getattr(self, name) > 0):
                 raise ValueError(f"ApiSettings.{name} must be > 0, got {getattr(self, name)!r}")
 

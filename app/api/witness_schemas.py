@@ -12,12 +12,11 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field
 from pydantic.config import JsonValue
 
-from .schemas import PairItem
+from .schemas import AlgebraicOut, PairItem
 
 __all__ = [
     "WitnessIn",
     "ContactScaleIn",
-    "AlgebraicOut",
     "ContactScaleOut",
     "PlaneOut",
     "ContactPointOut",
@@ -53,21 +52,6 @@ class ContactScaleIn(WitnessIn):
         default=1e-12, description="relative width of the bracket: hi - lo <= rtol * hi"
     )
     exact: bool = Field(default=False, description="also give mu* exactly (polynomial, isolating interval, decimals)")
-
-
-class AlgebraicOut(BaseModel):
-    """A real algebraic number: rational ('exact'), or a root of 'polynomial' in 'isolating'."""
-
-    value: str
-    """Decimal to the requested significant digits (error below one unit in the last place)."""
-    approx: float | None
-    """Float approximation (None if it overflows a double)."""
-    exact: str | None
-    """'p/q' when the number is rational."""
-    isolating: list[str]
-    """[lo, hi] rational ends of an interval that holds this root of the polynomial and no other."""
-    polynomial: list[str] | None
-    """Integer coefficients, ascending, of a polynomial it is a root of (None when rational)."""
 
 
 class ContactScaleOut(BaseModel):

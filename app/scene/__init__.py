@@ -7,7 +7,7 @@ the timeline), :mod:`~app.scene.readout` (the explanation at t), :mod:`~app.scen
 shapes and their certified relation, derived in one place), :mod:`~app.scene.contact`
 (witnesses), :mod:`~app.scene.touch` (snap to contact), :mod:`~app.scene.motion_form`,
 :mod:`~app.scene.links` (tab addresses and shared links), :mod:`~app.scene.export` (analysis
-files), :mod:`~app.scene.jobs` (what worker processes run).
+files); what worker processes run is :mod:`app.jobs`.
 
 Controllers (callbacks change the state and call ``Session.refresh``):
 :mod:`~app.scene.control_shapes`, :mod:`~app.scene.control_motion`,
@@ -21,8 +21,8 @@ touching viser's private attributes. Around them: :mod:`~app.scene.session` (one
 :mod:`~app.scene.server` (the server, tabs, presenter mode), :mod:`~app.scene.origin` (who may
 connect), :mod:`~app.scene.replay` (HTML replay), :mod:`~app.scene.costs` (hot-path timer).
 
-Exports load lazily: worker processes import :mod:`app.scene.jobs` (``core`` only) without
-paying for viser.
+Exports load lazily: worker processes import :mod:`app.jobs` and :mod:`~app.scene.motion` (``core`` only)
+without paying for viser.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The exact analysis of a loaded motion, run off the GUI thread and shown by the timeline.
 
 :class:`AnalysisCache` runs ``core.analyse`` once per motion and interval, in worker processes
-(:class:`app.workers.WorkerPool`, whose fork server preloads ``core`` and :mod:`app.scene.jobs`:
+(:class:`app.workers.WorkerPool`, whose fork server preloads ``core`` and :mod:`app.jobs`:
 a job starts in milliseconds), and shares the results among the tabs of a server. The result
 is ``core``'s own :class:`~core.moving.result.MotionAnalysis`, pickled back unchanged;
 :class:`AnalysisView` adds only what drawing needs (floats of the event times, the window of the
@@ -26,7 +26,7 @@ from core.algebra.closedform import closed_form, polynomial_text
 from core.moving.result import Event, MotionAnalysis
 from core.shapes.numbers import to_fmpq
 
-from .jobs import analyse_job, read_motion_job
+from ..jobs import analyse_job, read_motion_job
 from .motion import MAX_MOTION_TEXT, MotionError, MotionModel
 from .readout import explanation_at
 
@@ -232,7 +232,7 @@ class AnalysisCache:
 
     With ``processes=True`` each analysis (and each typed motion's reading) runs in a child
     process of a :class:`app.workers.WorkerPool` (forkserver with ``core`` and
-    :mod:`app.scene.jobs` preloaded; killed after its budget), so a long exact computation never
+    :mod:`app.jobs` preloaded; killed after its budget), so a long exact computation never
     holds the GIL of the process serving the tabs. Otherwise it runs in a worker thread.
     """
 
@@ -262,7 +262,7 @@ class AnalysisCache:
         if processes:
             from app.workers import WorkerPool
 
-            self._pool = WorkerPool(2, memory_mb=memory_mb, preload=("core", "core.moving.analysis", "app.scene.jobs"))
+            self._pool = WorkerPool(2, memory_mb=memory_mb, preload=("core", "core.moving.analysis", "app.jobs"))
 
     def warm(self) -> None:
         """Start the worker pool's fork server now, in the background.

@@ -3,7 +3,9 @@
 :func:`load_motion` reads a preset by name or typed text (the JSON form of
 :mod:`core.moving.motions`); :class:`MotionModel` evaluates the float matrices A(t), B(t) for
 drawing only (a float never decides a relation: the analysis does,
-:mod:`app.scene.analysis`). Imports only ``core``: worker processes load it (:mod:`app.scene.jobs`).
+:mod:`app.scene.analysis`). The text is read by core's readers (one grammar for the scene, the
+API and the library: :func:`core.moving.motions.read_motion`, :func:`core.moving.motions.read_interval`).
+Imports only ``core``: worker processes load it (:func:`app.jobs.read_motion_job`).
 """
 
 from __future__ import annotations
@@ -15,9 +17,10 @@ from typing import Any
 
 import numpy as np
 
-from core.moving.motions import Motion, matrix_at, motion_from_dict
+from core.moving.motions import Motion, matrix_at, read_motion
+from core.moving.motions import read_interval as read_exact_interval
 from core.shapes.limits import SERVER, Limits
-from core.shapes.numbers import parse_number, to_fmpq
+from core.shapes.numbers import to_fmpq
 from core.shapes.quadrics import axes_from_quadric
 
 from .state import ShapeState
@@ -141,43 +144,34 @@ def _interval_text(iv: Any) -> str:
 
 
 def read_interval(text: str, limits: Limits | None = None) -> tuple[str | None, str | None]:
-    """I from "lo, hi" ("-inf"/"inf" for an open end): the end texts, checked.
+    """I from "lo, hi": the end texts, checked, and drawable on the time slider.
+
+    The grammar is core's (:func:`core.moving.motions.read_interval`): an open end is "none",
+    "-inf"/"inf" or "-infinity"/"infinity" (on its side); a finite end is a number string.
 
     Raises:
         MotionError: (field "interval") unreadable, lo >= hi, or beyond the range of the slider.
 
     Examples:
-        >>> read_interval("0, 1/2"), read_interval("-inf; 3")
-        (('0', '1/2'), (None, '3'))
+        >>> read_interval("0, 1/2"), read_interval("-inf; 3"), read_interval("none, Infinity")
+        (('0', '1/2'), (None, '3'), (None, None))
         >>> read_interval("1, 1")
         Traceback (most recent call last):
         ...
-        app.scene.motion.MotionError: interval: need lo < hi
+        app.scene.motion.MotionError: empty interval: need lo < hi, got [1, 1]
     """
-    parts = [p.strip() for p in str(text).replace(";", ",").split(",")]
-    if len(parts) != 2 or not all(parts):
-        raise MotionError("interval: expected 'lo, hi' (use -inf / inf for an open end)", "interval")
-    out: list[tuple[str, Any] | None] = []
-    floats: list[float] = []
-    for p, infs in zip(parts, (("-inf", "none"), ("inf", "+inf", "none")), strict=True):
-        if p.lower() in infs:
-            out.append(None)
-            continue
-        try:
-            q = parse_number(p, limits)
-        except ValueError as e:
-            raise MotionError(f"interval: {e}", "interval") from None
-        floats.append(_to_float(q))
-        if not math.isfinite(floats[-1]):
+    try:
+        ends = read_exact_interval(str(text), limits)
+    except ValueError as e:
+        raise MotionError(str(e), "interval") from None
+    parts = [p.strip() for p in str(text).replace(";", ",").split(",")]  # the texts as typed (two: read above)
+    floats = [None if q is None else _to_float(q) for q in ends]
+    for p, f in zip(parts, floats, strict=True):
+        if f is not None and not math.isfinite(f):
             raise MotionError(f"interval: {p[:40]} is beyond the range of the time slider (|t| < 1.8e308)", "interval")
-        out.append((p, q))
-    first, second = out
-    if first is not None and second is not None:
-        if first[1] >= second[1]:
-            raise MotionError("interval: need lo < hi", "interval")
-        if floats[0] >= floats[1]:
-            raise MotionError("interval: lo and hi are too close for the time slider (the same as floats)", "interval")
-    return (None if first is None else first[0], None if second is None else second[0])
+    if floats[0] is not None and floats[1] is not None and floats[0] >= floats[1]:
+        raise MotionError("interval: lo and hi are too close for the time slider (the same as floats)", "interval")
+    return tuple(None if q is None else p for p, q in zip(parts, ends, strict=True))  # type: ignore[return-value]
 
 
 def load_motion(*, preset: str | None, motion: dict[str, Any] | None, limits: Limits | None = None) -> MotionModel:
@@ -188,7 +182,7 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, limits: Li
         motion: the typed texts {"A", "B", "interval"} (or dicts).
         limits: size limits of the text (:mod:`core.shapes.limits`); typed motions from a browser
             are read with :data:`core.shapes.limits.SERVER` in a worker process
-            (:func:`app.scene.jobs.read_motion_job`).
+            (:func:`app.jobs.read_motion_job`).
 
     Raises:
         MotionError: unknown preset, or a typed motion/interval core cannot read (the error
@@ -227,7 +221,7 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, limits: Li
         else:
             texts[key] = json.dumps(value)
         try:
-            parsed[key] = motion_from_dict(value, limits=limits)
+            parsed[key] = read_motion(value, limits=limits)  # the exact matrix too: each expression parsed once
         except ValueError as e:
             raise MotionError(f"motion of {key}: {e}", key) from None
     iv = raw.get("interval", "-inf, inf")

@@ -323,6 +323,32 @@ class RealAlgebraic:
         mid = self.value if self.value is not None else (self.lo + self.hi) / 2
         return _round_decimal(mid, digits)
 
+    def to_dict(self, digits: int = 20) -> dict[str, Any]:
+        """The JSON form of a real algebraic number (the one form: events, intervals, witnesses).
+
+        ``value``: the decimal to ``digits`` significant digits; ``approx``: a float (None when
+        it overflows); ``exact``: "p/q" when rational, else None; ``isolating``: [lo, hi] as
+        "p/q" strings, an interval that holds this root of ``polynomial`` and no other root
+        ([v, v] for a rational v); ``polynomial``: the integer coefficients, ascending, of a
+        squarefree polynomial it is a root of (None when rational).
+
+        Examples:
+            >>> d = RealAlgebraic.isolating(fmpz_poly([-2, 0, 1]), fmpq(1), fmpq(2)).to_dict(5)
+            >>> d["value"], d["approx"], d["exact"], d["polynomial"]       # sqrt(2); isolating: refined
+            ('1.4142', 1.4142135623730951, None, ['-2', '0', '1'])
+            >>> RealAlgebraic.rational(fmpq(1, 3)).to_dict(3)
+            {'value': '0.333', 'approx': 0.3333333333333333, 'exact': '1/3', 'isolating': ['1/3', '1/3'], 'polynomial': None}
+        """
+        value = self.decimal(digits)
+        approx = float(self)
+        out: dict[str, Any] = {"value": value, "approx": approx if approx - approx == 0 else None}
+        if self.value is not None:
+            v = str(self.value)
+            out.update(exact=v, isolating=[v, v], polynomial=None)
+        else:
+            out.update(exact=None, isolating=[str(self.lo), str(self.hi)], polynomial=[str(c) for c in self.poly.numer().coeffs()])
+        return out
+
     def __repr__(self) -> str:
         if self.value is not None:
             return f"RealAlgebraic({self.value})"

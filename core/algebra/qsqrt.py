@@ -15,6 +15,8 @@ from typing import Any
 
 from flint import fmpq, fmpq_poly, fmpz, fmpz_poly
 
+from .polysign import FloatPoly
+
 __all__ = ["QSqrtPoly", "sign_qsqrt", "squarefree_decomposition"]
 
 
@@ -234,12 +236,10 @@ class QSqrtPoly:
     def float_sign_at(self, t: float) -> int | None:
         """Certified sign at the float t, or None when the float bound cannot tell.
 
-        A float Horner step with a proven error bound (:mod:`core.moving.polysign`); on None use
+        A float Horner step with a proven error bound (:mod:`core.algebra.polysign`); on None use
         :meth:`sign_at_rational`. The float enclosure is built on first use.
         """
         if self._float is None:
-            from ..moving.polysign import FloatPoly
-
             self._float = FloatPoly(self.p, self.q, self.d)
         return self._float.sign_at(t)
 

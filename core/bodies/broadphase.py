@@ -18,16 +18,21 @@ Conservative, and why (what bounds what):
    box). Computing d and the squares rounds by far less than pad = 2^-40 * (largest |centre|
    coordinate + box side + R), so no pair with |c_i - c_j| <= rho_i + rho_j is ever dropped.
 
-Work: sorting the cell keys (numpy), then per occupied cell its 13 "forward" neighbour cells
-(or all 26 plus an index test when a periodic axis has fewer than 3 cells), expanded to pairs in
-chunks of a few million; O(N) pairs for bodies of similar size at any density.
+Work and memory: sorting the cell keys (numpy), then per occupied cell its 13 "forward"
+neighbour cells (or all 26 plus an index test when a periodic axis has fewer than 3 cells). The
+pairs to examine are *counted* before any is built (:attr:`BroadPhase.pairs`, O(cells): the
+sizes of the neighbouring cells multiplied), so a caller can refuse a crowded set (``max_pairs``:
+:class:`TooManyPairs`) before spending memory on it; they are then built in chunks of at most
+``_PAIRS_PER_CHUNK`` (a cell holding 10,000 bodies is cut inside its row of pairs), each chunk
+tested and handed over before the next ones are built (:meth:`BroadPhase.chunks`). O(N) pairs for
+bodies of similar size at any density; the memory beyond the candidates kept is a few chunks.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import partial
@@ -36,7 +41,7 @@ import numpy as np
 
 from ..fixed.compiled import get_threads
 
-__all__ = ["Candidates", "candidate_pairs", "LEVEL_RATIO"]
+__all__ = ["BroadPhase", "Candidates", "TooManyPairs", "candidate_pairs", "LEVEL_RATIO"]
 
 LEVEL_RATIO = 2.0
 """Radii within one level differ by at most this factor (a level's cells are 2 x its largest)."""
@@ -45,7 +50,27 @@ _MAX_CELLS = 2**30
 """Most cells per axis: keeps the float cell coordinates exact to well under one cell."""
 _PAD = 2.0**-40
 _PAIRS_PER_CHUNK = 1 << 22
-"""Pairs expanded at once before the sphere test (bounded memory: ~100 MB of temporaries)."""
+"""Pairs built at once before the sphere test (bounded memory: ~100 MB of temporaries)."""
+
+
+class TooManyPairs(ValueError):
+    """The broad phase would examine more pairs than the caller's ``max_pairs``.
+
+    Raised after counting (cheap) and before any pair is built.
+
+    Attributes:
+        pairs: the pairs of bodies the broad phase would examine (an upper bound on the
+            candidates: every pair whose bounding spheres meet is among them).
+        limit: the caller's ``max_pairs``.
+    """
+
+    def __init__(self, pairs: int, limit: int) -> None:
+        self.pairs = pairs
+        self.limit = limit
+        super().__init__(
+            f"{pairs:,} pairs of bodies to examine (bodies close enough that their bounding spheres "
+            f"may meet), over the limit of {limit:,} (max_pairs)"
+        )
 
 
 @dataclass
@@ -62,6 +87,16 @@ class Candidates:
 
     def __len__(self) -> int:
         return int(self.i.size)
+
+    @staticmethod
+    def concatenate(parts: list[Candidates], d: int, periodic: bool) -> Candidates:
+        """One :class:`Candidates` of several (d: dimension, for an empty periodic result)."""
+        i = np.concatenate([p.i for p in parts]) if parts else np.zeros(0, np.int64)
+        j = np.concatenate([p.j for p in parts]) if parts else np.zeros(0, np.int64)
+        if not periodic:
+            return Candidates(i, j, None)
+        k = np.concatenate([p.image for p in parts if p.image is not None]) if parts else np.zeros((0, d), np.int8)
+        return Candidates(i, j, k)
 
 
 @dataclass
@@ -84,22 +119,164 @@ class _Grid:
     """(cells, d) integer coordinates of the occupied cells."""
 
 
+@dataclass
+class _Side:
+    """Bodies in some order: their ids, centres and radii at positions 0, 1, ..."""
+
+    ids: np.ndarray
+    centers: np.ndarray
+    radii: np.ndarray
+
+
+@dataclass
+class _Block:
+    """The pairs of one grid offset: per row, positions [sa, sa + ca) of ``a`` x [sb, sb + cb) of ``b``.
+
+    ``upper``: each row is one cell with itself, and only p < q is a pair (c (c - 1) / 2 per
+    row). ``dedupe``: the full shell of a tiny periodic grid meets a pair from both cells; it is
+    kept once (a.ids[p] < b.ids[q]). ``total`` counts the pairs built (an upper bound on the
+    candidates of the block).
+    """
+
+    a: _Side
+    b: _Side
+    sa: np.ndarray
+    ca: np.ndarray
+    sb: np.ndarray
+    cb: np.ndarray
+    upper: bool = False
+    dedupe: bool = False
+
+    def sizes(self) -> np.ndarray:
+        """Pairs of each row (int64)."""
+        return self.ca * (self.ca - 1) // 2 if self.upper else self.ca * self.cb
+
+    @property
+    def total(self) -> int:
+        return int(self.sizes().sum())
+
+
+class BroadPhase:
+    """The grids of a set of bodies, and the pairs to examine: counted first, built in chunks.
+
+    Args:
+        centers: (N, d) float64 sphere centres.
+        radii: (N,) float64 radii; NaN marks a body to leave out (invalid).
+        box: periodic box sides (d,), or None for open space (a tilted box, the six numbers of
+            :func:`core.bodies.periodic.read_box`: :mod:`core.bodies.ghosts`). The caller has checked
+            (:mod:`core.bodies.periodic`) that the centres span at most one box side per axis and
+            that the two largest radii sum to less than half the smallest side (so the minimum
+            image is the only image that can touch).
+
+    Planning (building the grids and finding the neighbouring occupied cells) is O(N log N) and
+    builds no pair; :attr:`pairs` is then known, and :meth:`chunks` builds and tests them.
+
+    Examples:
+        >>> c = np.zeros((1000, 3))                 # a crowd: 1000 bodies at one point
+        >>> BroadPhase(c, np.ones(1000)).pairs      # every pair, counted, none built
+        499500
+    """
+
+    def __init__(self, centers: np.ndarray, radii: np.ndarray, *, box: np.ndarray | None = None) -> None:
+        centers = np.asarray(centers, dtype=np.float64)
+        self.d = centers.shape[1]
+        self.ghosts = None
+        if box is not None and box.size != self.d:  # a tilted box (its six numbers): ghost images, then open space
+            from .ghosts import Ghosts
+
+            self.ghosts = Ghosts(centers, radii, box)
+            centers, radii, box = self.ghosts.centers, self.ghosts.radii, None
+        self.box = box
+        """The box of the grids (None for a tilted box: its ghosts are searched in open space)."""
+        self.blocks: list[_Block] = []
+        self.pad = 0.0
+        valid = np.flatnonzero(np.isfinite(radii))
+        plans: list[Callable[[], _Block | None]] = []
+        if valid.size >= 2:
+            big = float(np.max(radii[valid]))
+            span = float(np.max(np.abs(centers[valid]))) + (float(np.max(box)) if box is not None else 0.0)
+            self.pad = _PAD * (span + big)
+            levels = _levels(radii, valid, big)
+            lo, hi = centers[valid].min(axis=0), centers[valid].max(axis=0)
+            for a, members in enumerate(levels):
+                grid = _grid(centers, members, 2 * float(np.max(radii[members])) * _CELL_SLACK, lo, hi, box)
+                # positions in the grid's cell order: neighbouring cells are near in memory
+                mine = _Side(grid.order, centers[grid.order], radii[grid.order])
+                half = not grid.periodic or bool((grid.n >= 3).all())
+                plans.append(partial(_inside_cells, grid, mine))
+                for off in [o for o in _offsets(grid, half) if any(o)]:
+                    plans.append(partial(_same_level, grid, mine, off, half))
+                for finer in levels[a + 1 :]:
+                    coords = _coords(centers[finer], grid.lo, grid.h, grid.n, grid.periodic)
+                    o = np.argsort(_encode(coords, grid.n), kind="stable")
+                    theirs = _Side(finer[o], centers[finer[o]], radii[finer[o]])
+                    for off in _offsets(grid, half=False):
+                        plans.append(partial(_query, grid, coords[o], off, theirs, mine))
+        self.blocks = [b for b in _map(plans) if b is not None and b.total]
+        self.pairs = sum(b.total for b in self.blocks)
+        """Pairs of bodies the broad phase examines: every candidate is among them."""
+
+    def chunks(self, size: int | None = None) -> Generator[tuple[Candidates, int], None, None]:
+        """The candidates, chunk by chunk, with the pairs examined so far.
+
+        Each chunk comes from at most ``size`` pairs examined (built, sphere-tested, dropped;
+        default ``_PAIRS_PER_CHUNK``).
+        Chunks are built in rounds on every core (:func:`core.fixed.compiled.get_threads`), a
+        round of at most ``threads x size`` pairs at a time, and nothing is built while the
+        consumer works on a round's chunks (the narrow phase then has the cores to itself): the
+        memory stays at one round whatever the number of pairs. Stopping the iteration
+        (``close()``, or an exception in the consumer) stops the building.
+
+        Yields:
+            (candidates of the chunk, pairs examined so far); the last count is :attr:`pairs`.
+        """
+        size = size or _PAIRS_PER_CHUNK
+        units = [(b, g, min(g + size, b.total)) for b in self.blocks for g in range(0, b.total, size)]
+        threads = min(get_threads(), len(units))
+        examined = 0
+        if threads <= 1:
+            for block, g0, g1 in units:
+                examined += g1 - g0
+                yield self._test(block, g0, g1), examined
+            return
+        with ThreadPoolExecutor(threads, thread_name_prefix="broadphase") as pool:
+            k = 0
+            while k < len(units):
+                start, pairs = k, 0
+                while k < len(units) and k - start < 4 * threads and pairs < threads * size:
+                    pairs += units[k][2] - units[k][1]
+                    k += 1
+                for cand, (_, g0, g1) in zip(pool.map(lambda u: self._test(*u), units[start:k]), units[start:k], strict=True):
+                    examined += g1 - g0
+                    yield cand, examined
+
+    def _test(self, block: _Block, g0: int, g1: int) -> Candidates:
+        """Pairs g0 .. g1 - 1 of ``block`` built, sphere-tested: the candidates among them."""
+        p, q = _build(block, g0, g1)
+        if block.dedupe:
+            keep = block.a.ids[p] < block.b.ids[q]
+            p, q = p[keep], q[keep]
+        cand = _keep(block.a, p, block.b, q, self.box, self.pad, self.d)
+        if self.ghosts is not None:  # bodies and ghosts -> pairs of bodies with images
+            return Candidates(*self.ghosts.resolve(cand.i, cand.j))
+        return cand
+
+
 def candidate_pairs(
     centers: np.ndarray,
     radii: np.ndarray,
     *,
     box: np.ndarray | None = None,
+    max_pairs: int | None = None,
 ) -> Candidates:
     """All pairs (i < j) of valid bodies whose bounding spheres meet (conservative).
 
     Args:
         centers: (N, d) float64 sphere centres.
         radii: (N,) float64 radii; NaN marks a body to leave out (invalid).
-        box: periodic box sides (d,), or None for open space (a tilted box, the six numbers of
-            :func:`core.bodies.periodic.read_box`, goes to :mod:`core.bodies.ghosts`). The caller has checked
-            (:mod:`core.bodies.periodic`) that the centres span at most one box side per axis and
-            that the two largest radii sum to less than half the smallest side (so the minimum
-            image is the only image that can touch).
+        box: periodic box sides (d,), or None for open space (see :class:`BroadPhase`).
+        max_pairs: most pairs to examine (None: no limit); over it, :class:`TooManyPairs`
+            before any pair is built.
 
     Returns:
         :class:`Candidates`, in no particular order.
@@ -112,46 +289,24 @@ def candidate_pairs(
         >>> q = candidate_pairs(c, np.array([1.0, 1.0, 1.0]), box=np.array([6.0, 6.0]))
         >>> sorted(zip(q.i.tolist(), q.j.tolist(), q.image.tolist()))
         [(0, 1, [0, 0]), (0, 2, [-1, 0])]
+        >>> candidate_pairs(np.zeros((100, 2)), np.ones(100), max_pairs=1000)
+        Traceback (most recent call last):
+        ...
+        core.bodies.broadphase.TooManyPairs: 4,950 pairs of bodies to examine (bodies close enough that their bounding spheres may meet), over the limit of 1,000 (max_pairs)
     """
-    centers = np.asarray(centers, dtype=np.float64)
-    N, d = centers.shape
-    if box is not None and box.size != d:  # a tilted box (its six numbers): ghost images, then open space
-        from .ghosts import tilted_pairs
+    plan = BroadPhase(centers, radii, box=box)
+    if max_pairs is not None and plan.pairs > max_pairs:
+        raise TooManyPairs(plan.pairs, max_pairs)
+    return Candidates.concatenate([c for c, _ in plan.chunks() if len(c)], plan.d, box is not None)
 
-        return Candidates(*tilted_pairs(centers, radii, box, candidate_pairs))
-    valid = np.flatnonzero(np.isfinite(radii))
-    tasks: list[Callable[[], list[tuple[np.ndarray, ...]]]] = []
-    if valid.size >= 2:
-        big = float(np.max(radii[valid]))
-        span = float(np.max(np.abs(centers[valid]))) + (float(np.max(box)) if box is not None else 0.0)
-        pad = _PAD * (span + big)
-        levels = _levels(radii, valid, big)
-        lo, hi = centers[valid].min(axis=0), centers[valid].max(axis=0)
-        for a, members in enumerate(levels):
-            grid = _grid(centers, members, 2 * float(np.max(radii[members])) * _CELL_SLACK, lo, hi, box)
-            # positions in the grid's cell order: neighbouring cells are near in memory
-            mine = _Side(grid.order, centers[grid.order], radii[grid.order])
-            half = not grid.periodic or bool((grid.n >= 3).all())
-            for off in [(0,) * d] + [o for o in _offsets(grid, half) if any(o)]:
-                tasks.append(partial(_run, _same_level(grid, off, half), mine, mine, box, pad))
-            for finer in levels[a + 1 :]:
-                coords = _coords(centers[finer], grid.lo, grid.h, grid.n, grid.periodic)
-                o = np.argsort(_encode(coords, grid.n), kind="stable")
-                theirs = _Side(finer[o], centers[finer[o]], radii[finer[o]])
-                for off in _offsets(grid, half=False):
-                    tasks.append(partial(_run, _query(grid, coords[o], off), theirs, mine, box, pad))
-    threads = min(get_threads(), len(tasks))
-    if threads > 1:  # numpy releases the GIL inside each operation: offsets run side by side
-        with ThreadPoolExecutor(threads, thread_name_prefix="broadphase") as pool:
-            parts = [part for result in pool.map(lambda task: task(), tasks) for part in result]
-    else:
-        parts = [part for task in tasks for part in task()]
-    i = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, np.int64)
-    j = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, np.int64)
-    if box is None:
-        return Candidates(i, j, None)
-    k = np.concatenate([p[2] for p in parts]) if parts else np.zeros((0, d), np.int8)
-    return Candidates(i, j, k)
+
+def _map(plans: list[Callable[[], _Block | None]]) -> list[_Block | None]:
+    """Run the planning steps on every core (numpy releases the GIL inside each operation)."""
+    threads = min(get_threads(), len(plans))
+    if threads <= 1:
+        return [plan() for plan in plans]
+    with ThreadPoolExecutor(threads, thread_name_prefix="broadphase") as pool:
+        return list(pool.map(lambda plan: plan(), plans))
 
 
 def _levels(radii: np.ndarray, valid: np.ndarray, big: float) -> list[np.ndarray]:
@@ -232,29 +387,31 @@ def _neighbour_keys(grid: _Grid, coords: np.ndarray, off: tuple[int, ...]) -> np
     return _encode(x, grid.n)
 
 
-def _same_level(grid: _Grid, off: tuple[int, ...], half: bool) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """Position pairs between each occupied cell and its neighbour at ``off``.
+def _inside_cells(grid: _Grid, mine: _Side) -> _Block | None:
+    """The pairs p < q inside each occupied cell."""
+    multi = np.flatnonzero(grid.count >= 2)
+    if not multi.size:
+        return None
+    s, c = grid.start[multi], grid.count[multi]
+    return _Block(mine, mine, s, c, s, c, upper=True)
 
-    Each unordered pair of bodies comes once over all offsets; ``off`` = 0 gives the pairs
-    p < q inside a cell.
+
+def _same_level(grid: _Grid, mine: _Side, off: tuple[int, ...], half: bool) -> _Block | None:
+    """Pairs between each occupied cell and its neighbour at ``off`` (nonzero).
+
+    With ``half`` (the 13 forward offsets), each unordered pair of bodies comes once over all
+    offsets; otherwise (full shell) a pair is met from both cells and kept once.
     """
-    if not any(off):
-        multi = np.flatnonzero(grid.count >= 2)
-        yield from _expand(grid.start[multi], grid.count[multi], grid.start[multi], grid.count[multi], upper=True)
-        return
     nk = _neighbour_keys(grid, grid.coords, off)
     pos = np.minimum(np.searchsorted(grid.keys, nk), grid.keys.size - 1)
     hit = np.flatnonzero(grid.keys[pos] == nk)
+    if not hit.size:
+        return None
     b = pos[hit]
-    for p, q in _expand(grid.start[hit], grid.count[hit], grid.start[b], grid.count[b]):
-        if half:
-            yield p, q
-        else:  # full shell: the pair is met from both cells; keep it once
-            keep = grid.order[p] < grid.order[q]
-            yield p[keep], q[keep]
+    return _Block(mine, mine, grid.start[hit], grid.count[hit], grid.start[b], grid.count[b], dedupe=not half)
 
 
-def _query(grid: _Grid, coords: np.ndarray, off: tuple[int, ...]) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+def _query(grid: _Grid, coords: np.ndarray, off: tuple[int, ...], theirs: _Side, mine: _Side) -> _Block | None:
     """Pairs (position of a finer body, position in this grid) in neighbouring cells.
 
     The finer body's cell (``coords``: its coordinates in this grid) and the grid's cell at
@@ -263,64 +420,63 @@ def _query(grid: _Grid, coords: np.ndarray, off: tuple[int, ...]) -> Iterator[tu
     nk = _neighbour_keys(grid, coords, off)
     pos = np.minimum(np.searchsorted(grid.keys, nk), grid.keys.size - 1)
     hit = np.flatnonzero(grid.keys[pos] == nk)
+    if not hit.size:
+        return None
     b = pos[hit]
-    yield from _expand(hit, np.ones(hit.size, dtype=np.int64), grid.start[b], grid.count[b])
+    return _Block(theirs, mine, hit, np.ones(hit.size, dtype=np.int64), grid.start[b], grid.count[b])
 
 
-def _expand(
-    sa: np.ndarray, ca: np.ndarray, sb: np.ndarray, cb: np.ndarray, *, upper: bool = False
-) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """All (p, q) with p in [sa, sa + ca) and q in [sb, sb + cb), per row; chunked.
+def _build(block: _Block, g0: int, g1: int) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (p, q) of the pairs g0 .. g1 - 1 of ``block`` (rows in order, row-major inside).
 
-    ``upper``: only p < q (rows are one range paired with itself).
+    A row may be cut anywhere: a cell of 10,000 bodies is 50 M pairs, built a chunk at a time.
     """
-    tot = ca * cb
-    if not tot.size:
-        return
+    tot = block.sizes()
     ends = np.cumsum(tot)
-    begin = 0
-    while begin < tot.size:
-        base = ends[begin - 1] if begin else 0
-        stop = int(np.searchsorted(ends, base + _PAIRS_PER_CHUNK, side="right"))
-        stop = max(stop, begin + 1)
-        t = tot[begin:stop]
-        rows = np.repeat(np.arange(begin, stop), t)
-        local = np.arange(int(t.sum()), dtype=np.int64) - np.repeat(np.cumsum(t) - t, t)
-        cbr = cb[rows]
-        p = sa[rows] + local // cbr
-        q = sb[rows] + local % cbr
-        if upper:
-            keep = p < q
-            p, q = p[keep], q[keep]
-        yield p, q
-        begin = stop
+    r0 = int(np.searchsorted(ends, g0, side="right"))
+    r1 = int(np.searchsorted(ends, g1 - 1, side="right"))
+    t = tot[r0 : r1 + 1].copy()
+    skip = g0 - (int(ends[r0]) - int(tot[r0]))  # pairs of row r0 before g0
+    t[-1] -= int(ends[r1]) - g1  # pairs of row r1 from g1 on
+    t[0] -= skip
+    rows = np.repeat(np.arange(r0, r1 + 1), t)
+    local = np.arange(g1 - g0, dtype=np.int64) - np.repeat(np.cumsum(t) - t, t)
+    local[: t[0]] += skip
+    if block.upper:
+        first, second = _triangle(local, block.ca[rows])
+        s = block.sa[rows]
+        return s + first, s + second
+    cbr = block.cb[rows]
+    return block.sa[rows] + local // cbr, block.sb[rows] + local % cbr
 
 
-@dataclass
-class _Side:
-    """Bodies in some order: their ids, centres and radii at positions 0, 1, ..."""
+def _triangle(k: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The k-th pair (p, q), 0 <= p < q < c, in row-major order (k < c (c - 1) / 2).
 
-    ids: np.ndarray
-    centers: np.ndarray
-    radii: np.ndarray
+    Row p starts at S(p) = p (2c - p - 1) / 2; p is the root of S(p) = k rounded down, from a
+    float square root corrected in exact integers (the float error is far below one row).
 
-
-def _run(
-    pairs: Iterator[tuple[np.ndarray, np.ndarray]], a: _Side, b: _Side, box: np.ndarray | None, pad: float
-) -> list[tuple[np.ndarray, ...]]:
-    """The sphere test on every chunk of position pairs: surviving (i, j[, image]) arrays."""
-    return [kept for p, q in pairs if (kept := _keep(a, p, b, q, box, pad)) is not None]
+    Examples:
+        >>> p, q = _triangle(np.arange(6), np.full(6, 4))
+        >>> list(zip(p.tolist(), q.tolist()))
+        [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
+    """
+    m = 2 * c - 1
+    p = np.floor((m - np.sqrt(np.maximum(m.astype(np.float64) ** 2 - 8.0 * k, 0.0))) / 2).astype(np.int64)
+    p = np.clip(p, 0, c - 2)
+    for _ in range(2):
+        p -= (p * (m - p) // 2 > k).astype(np.int64)
+        p += ((p + 1) * (m - p - 1) // 2 <= k).astype(np.int64)
+    return p, k - p * (m - p) // 2 + p + 1
 
 
 def _keep(
-    a: _Side, p: np.ndarray, b: _Side, q: np.ndarray, box: np.ndarray | None, pad: float
-) -> tuple[np.ndarray, ...] | None:
+    a: _Side, p: np.ndarray, b: _Side, q: np.ndarray, box: np.ndarray | None, pad: float, d: int
+) -> Candidates:
     """Sphere test (padded, minimum image in a box) of positions p of ``a`` against q of ``b``.
 
-    Returns the survivors as body ids i < j (and j's image), or None.
+    Returns the survivors as body ids i < j (and j's image).
     """
-    if not p.size:
-        return None
     diff = b.centers[q] - a.centers[p]
     k = None
     if box is not None:
@@ -330,8 +486,8 @@ def _keep(
     near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= reach * reach)
     i, j = a.ids[p[near]], b.ids[q[near]]
     swap = i > j
-    lo, hi = np.where(swap, j, i), np.where(swap, i, j)
+    lo, hi = np.where(swap, j, i).astype(np.int64), np.where(swap, i, j).astype(np.int64)
     if k is None:
-        return lo, hi
-    kk = k[near].astype(np.int8)
-    return lo, hi, np.where(swap[:, None], -kk, kk)
+        return Candidates(lo, hi, None)
+    kk = k[near].astype(np.int8).reshape(-1, d)
+    return Candidates(lo, hi, np.where(swap[:, None], -kk, kk))

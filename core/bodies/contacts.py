@@ -22,6 +22,7 @@ def contacts(
     partitions: int | None = None,
     chunk: int = CHUNK_PAIRS,
     progress: Progress | bool | None = None,
+    max_pairs: int | None = None,
 ) -> Contacts:
     """Every pair of bodies that is not separate, with its certified relation.
 
@@ -49,15 +50,26 @@ def contacts(
             is a dask array). Spatial partitions with a halo: :mod:`core.bodies.distributed`.
         partitions: number of spatial partitions for Dask (default: 2 per worker).
         chunk: candidate pairs per classify batch (memory: 256 bytes per ellipsoid pair).
-        progress: optional ``progress(done, total)`` called after each batch of pairs (Dask: as
-            the partition tasks finish); on Dask, True draws Dask's own progress bars on stderr.
+        progress: optional ``progress(done, total)``: ``done`` of the ``total`` pairs the broad
+            phase examines (counted before any is built), called between chunks of the broad
+            and the narrow phase (a progress bar); raise from it to stop the search there (a
+            time budget). On Dask it is called as the partition tasks finish, and True draws
+            Dask's own progress bars on stderr.
+        max_pairs: most pairs the broad phase may examine (None: no limit). Over it,
+            :class:`~core.bodies.broadphase.TooManyPairs` (a ValueError with ``.pairs`` and
+            ``.limit``) is raised after counting, before any pair is built: a server's guard
+            against crowded input (10,000 bodies at one point are 49,995,000 pairs).
+
+    Memory: the answer plus a few chunks of pairs (candidates are built, classified and
+    dropped or kept chunk by chunk), however crowded the bodies are.
 
     Returns:
         :class:`Contacts` with ``.i``, ``.j`` (int64, i < j, sorted by (i, j)), ``.relation``
         (int8 Relation codes), ``.certified_by``, ``.counts``, ``.invalid``.
 
     Raises:
-        ValueError: bad shapes or options, an invalid body (``on_invalid="raise"``), a bad box.
+        ValueError: bad shapes or options, an invalid body (``on_invalid="raise"``), a bad box;
+            :class:`~core.bodies.broadphase.TooManyPairs` over ``max_pairs``.
 
     Guarantee:
         Every pair that touches or overlaps is reported, with its true relation for the input
@@ -82,9 +94,12 @@ def contacts(
 
         return contacts_distributed(
             Q, box=box, method=method, on_invalid=on_invalid, scheduler=scheduler, partitions=partitions, chunk=chunk,
-            progress=progress,
+            progress=progress, max_pairs=max_pairs,
         )
-    return search(Q, box=box, method=method, on_invalid=on_invalid, chunk=chunk, progress=None if progress is True else progress or None)
+    return search(
+        Q, box=box, method=method, on_invalid=on_invalid, chunk=chunk,
+        progress=None if progress is True else progress or None, max_pairs=max_pairs,
+    )
 
 
 def _is_dask(x: Any) -> bool:

@@ -54,7 +54,7 @@ from distributed.diagnostics.progressbar import TextProgressBar
 
 from ..fixed.lazy import PAIR_CHUNK, is_dask_array
 from .bounds import BoundingSpheres, bounding_spheres
-from .broadphase import _CELL_SLACK, _PAD, Candidates, candidate_pairs
+from .broadphase import _CELL_SLACK, _PAD, BroadPhase, Candidates, TooManyPairs, candidate_pairs
 from .narrowphase import classify_candidates
 from .periodic import (
     box_vectors,
@@ -113,6 +113,7 @@ def contacts_distributed(
     partitions: int | None = None,
     chunk: int = PAIR_CHUNK,
     progress: Progress | bool | None = None,
+    max_pairs: int | None = None,
 ) -> Contacts:
     """:func:`core.contacts` on Dask (same arguments; see the module docstring).
 
@@ -128,6 +129,8 @@ def contacts_distributed(
         chunk: candidate pairs per classify batch inside a task.
         progress: True: Dask's progress bars on stderr; a callable ``progress(done, total)``
             called as partitions finish; None: quiet.
+        max_pairs: most pairs the broad phase may examine (counted first, here, on the bounding
+            spheres): :class:`~core.bodies.broadphase.TooManyPairs` over it.
 
     Returns:
         The same :class:`Contacts` as the local search (``seconds`` aside).
@@ -154,6 +157,8 @@ def contacts_distributed(
             raise ValueError(next(iter(spheres.invalid.values())))
         if L is not None:
             check_box(spheres.centers, spheres.radii, L)
+        if max_pairs is not None and (pairs := BroadPhase(spheres.centers, spheres.radii, box=L).pairs) > max_pairs:
+            raise TooManyPairs(pairs, max_pairs)
         t1 = time.perf_counter()
         plan = _plan(spheres, L, partitions or _default_partitions(client))
         tasks = []

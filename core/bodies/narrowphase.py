@@ -8,6 +8,8 @@ over every core. Pairs with a lattice image go to :func:`core.bodies.periodic.cl
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..fixed.classify import classify_detailed
@@ -31,7 +33,7 @@ def classify_candidates(
     method: str,
     *,
     chunk: int = CHUNK_PAIRS,
-    progress: object = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Certified relations of the candidate pairs, and which arithmetic certified each.
 
@@ -41,7 +43,8 @@ def classify_candidates(
         box: the box (:func:`core.bodies.periodic.read_box`), or None.
         method: "adaptive", "float" or "exact" (as for :func:`core.classify`).
         chunk: pairs per batch.
-        progress: optional callable ``progress(done, total)`` after each batch.
+        progress: optional callable ``progress(done, total)`` after each batch, and (with the
+            done so far) before each pair that needs exact arithmetic: raise from it to stop.
 
     Returns:
         (int8 Relation codes, int8 Certifier codes), one per candidate pair.
@@ -54,11 +57,12 @@ def classify_candidates(
     done = 0
     for s in range(0, plain.size, chunk):
         rows = plain[s : s + chunk]
-        res = classify_detailed(Q[cand.i[rows]], Q[cand.j[rows]], method=method)  # type: ignore[arg-type]
+        check = None if progress is None else (lambda k, m, done=done: progress(done, M))
+        res = classify_detailed(Q[cand.i[rows]], Q[cand.j[rows]], method=method, progress=check)  # type: ignore[arg-type]
         codes[rows], by[rows] = res.relation, res.certified_by
         done += rows.size
         if progress is not None:
-            progress(done, M)  # type: ignore[operator]
+            progress(done, M)
     images = np.flatnonzero(shifted)
     for s in range(0, images.size, chunk):
         rows = images[s : s + chunk]
@@ -67,5 +71,5 @@ def classify_candidates(
         codes[rows], by[rows] = classify_images(Q[cand.i[rows]], Q[cand.j[rows]], shift, method)
         done += rows.size
         if progress is not None:
-            progress(done, M)  # type: ignore[operator]
+            progress(done, M)
     return codes, by

@@ -4,6 +4,5 @@
 * :mod:`.motions`: a moving shape as a matrix of rational functions in t.
 * :mod:`.analysis`: ``analyse``, the paper's cases 3.4, 4.4.1, 4.4.2, 4.4.3 as named steps.
 * :mod:`.result`: the typed result (events, intervals, sign table, ``relation_at``); it pickles.
-* :mod:`.polysign`: certified float signs of the exact polynomials at a float t.
 * :mod:`.presets`: the paper's Examples 29-33 and 2D cases.
 """

@@ -22,8 +22,6 @@ there) and do not split intervals. Finite ends of I are included (I is closed th
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,11 +34,11 @@ from ..formulae.decision import sign_variations
 from ..formulae.pencil import determinant, pencil_coefficients
 from ..formulae.subresultants import hat_s0, hat_s1, hat_s10, hat_scale
 from ..relation import Relation
-from ..shapes.numbers import sign, to_fmpq
+from ..shapes.numbers import sign
 from ..shapes.quadrics import interior_sign, not_a_quadric_message
 from .expressions import RationalFunction
-from .motions import as_motion
-from .result import EVENT_KINDS, Event, Interval, MotionAnalysis, SignRow
+from .motions import as_motion, read_interval
+from .result import EVENT_KINDS, Event, Interval, MotionAnalysis, MotionPencil, SignRow
 from .signs import Signs, decide_with, sign_row
 
 __all__ = ["analyse", "MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
@@ -169,24 +167,6 @@ def _interval_text(lo: fmpq | None, hi: fmpq | None) -> str:
     return f"{left}, {right}"
 
 
-def _read_end(x: Any, which: str) -> fmpq | None:
-    if x is None:
-        return None
-    if isinstance(x, float) and math.isinf(x):
-        if (which == "lo" and x < 0) or (which == "hi" and x > 0):
-            return None
-        raise ValueError(f"interval {which} = {x} is on the wrong side")
-    if isinstance(x, str) and x.strip().lower() in ("inf", "+inf", "-inf", "infinity", "-infinity", "+infinity"):
-        neg = x.strip().startswith("-")
-        if (which == "lo") == neg:
-            return None
-        raise ValueError(f"interval {which} = {x!r} is on the wrong side")
-    try:
-        return to_fmpq(x)
-    except ValueError as e:
-        raise ValueError(f"interval {which}: {e}") from None
-
-
 # -------------------------------------------------------------------------------------------
 # the analysis
 
@@ -206,8 +186,9 @@ def analyse(
             (``{"matrix": ...}`` or ``{"shape": ..., "translation": ..., "rotation": ...}``, see
             :mod:`core.moving.motions`) or a :class:`core.moving.motions.Motion`.
         B_t: the second moving shape, likewise.
-        interval: (lo, hi) with numbers, exact strings ("1/3", "0.5") or None for an infinite
-            end. Finite ends belong to I.
+        interval: (lo, hi) or the text "lo, hi": numbers, exact strings ("1/3", "0.5"), or
+            None / "none" / "-inf" / "inf" / "infinity" for an infinite end
+            (:func:`core.moving.motions.read_interval`, the one grammar). Finite ends belong to I.
         digits: significant digits of the decimal event values (1..1000; refine more later with
             ``event.decimal(k)``).
 
@@ -241,7 +222,7 @@ def analyse(
     """
     if not isinstance(digits, int) or isinstance(digits, bool) or not 1 <= digits <= 1000:
         raise ValueError(f"digits must be an integer in 1..1000, got {digits!r}")
-    lo, hi = _read_interval(interval)
+    lo, hi = read_interval(interval)
     pencil = _motion_pencil(A_t, B_t, lo, hi)
     case = _paper_case(pencil, lo, hi)
     cands = real_roots(case.candidates, lo, hi) if case.candidates is not None else []
@@ -250,22 +231,14 @@ def analyse(
     segments = _decide_segments(pencil, case, cands, lo, hi)
     events, roots, breaks = _events(cands, points, segments, digits)
     res = MotionAnalysis(
-        n=pencil.n,
+        pencil=pencil,
         interval=(lo, hi),
         case=case.name,
         events=events,
         roots=roots,
         intervals=_intervals(cands, segments, breaks, lo, hi),
         sign_table=_sign_table(cands, points, segments),
-        a=pencil.a,
-        s0=pencil.s0,
-        s1=pencil.s1,
-        s10=pencil.s10,
-        sqrt_d=pencil.sqrt_d,
         digits=digits,
-        A=pencil.A,
-        B=pencil.B,
-        matrices=pencil.matrices,
         paper_case=case.paper,
     )
     res._points = list(cands)
@@ -283,38 +256,7 @@ def analyse(
 # the steps of analyse
 
 
-def _read_interval(interval: Any) -> tuple[fmpq | None, fmpq | None]:
-    """I = [lo, hi] from numbers, exact strings or None / inf (infinite ends)."""
-    if isinstance(interval, str) or not isinstance(interval, Sequence) or len(interval) != 2:
-        raise ValueError(f"interval must be a pair (lo, hi), got {interval!r}")
-    lo, hi = _read_end(interval[0], "lo"), _read_end(interval[1], "hi")
-    if lo is not None and hi is not None and not lo < hi:
-        raise ValueError(f"empty interval: need lo < hi, got [{lo}, {hi}]")
-    return lo, hi
-
-
-@dataclass
-class _MotionPencil:
-    """P(t, T) of the pair on I: its coefficients a_i(t) and the hat subresultants ŝ_j(t)."""
-
-    n: int
-    a: list[QSqrtPoly]
-    s0: QSqrtPoly
-    s1: QSqrtPoly
-    s10: QSqrtPoly
-    sqrt_d: int
-    A: Any
-    B: Any
-    matrices: tuple[Any, Any]
-
-    @property
-    def polys(self) -> dict[str, QSqrtPoly]:
-        out = {f"a{i}": p for i, p in enumerate(self.a)}
-        out.update(s0=self.s0, s1=self.s1, s10=self.s10)
-        return out
-
-
-def _motion_pencil(A_t: Any, B_t: Any, lo: fmpq | None, hi: fmpq | None) -> _MotionPencil:
+def _motion_pencil(A_t: Any, B_t: Any, lo: fmpq | None, hi: fmpq | None) -> MotionPencil:
     """Read both motions, clear denominators, check validity on I, build a_i(t) and ŝ_j(t)."""
     mA, mB = as_motion(A_t), as_motion(B_t)
     if mA.dim != mB.dim:
@@ -327,7 +269,7 @@ def _motion_pencil(A_t: Any, B_t: Any, lo: fmpq | None, hi: fmpq | None) -> _Mot
     a = _canonical_pencil(pencil_coefficients(PA, PB), lamA, lamB, _sample_in(lo, hi))
     n = len(a) - 1
     c0, c1, c10 = hat_scale(n)
-    return _MotionPencil(
+    return MotionPencil(
         n=n,
         a=a,
         s0=hat_s0(a).scale_positive(fmpq(c0.numerator, c0.denominator)),
@@ -358,7 +300,7 @@ class _Case:
         return self.identically_zero | ({self.name} if self.name != "none" else set())
 
 
-def _paper_case(pencil: _MotionPencil, lo: fmpq | None, hi: fmpq | None) -> _Case:
+def _paper_case(pencil: MotionPencil, lo: fmpq | None, hi: fmpq | None) -> _Case:
     """Which case of Sections 3.4 and 4.4 applies, and which polynomial gives the candidates.
 
     The real roots of s0(t) are the only times the relation can change (4.4.1, 3.4(1)); if s0 vanishes identically, those of s1(t) (4.4.2; for ellipses 3.4(2):
@@ -405,14 +347,14 @@ class _Segment:
     row: SignRow | None
 
 
-def _decide_point(pencil: _MotionPencil, alpha: RealAlgebraic, known_zero: set[str], digits: int) -> _Point:
-    sg = Signs(pencil.polys, alpha, known_zero)
+def _decide_point(pencil: MotionPencil, alpha: RealAlgebraic, known_zero: set[str], digits: int) -> _Point:
+    sg = Signs(pencil.polynomials(), alpha, known_zero)
     dec = decide_with(pencil.n, sg)
     return _Point(dec.relation, dec.rule, sign_row("point", alpha.decimal(digits), pencil.n, sg, dec))
 
 
 def _decide_segments(
-    pencil: _MotionPencil, case: _Case, cands: list[RealAlgebraic], lo: fmpq | None, hi: fmpq | None
+    pencil: MotionPencil, case: _Case, cands: list[RealAlgebraic], lo: fmpq | None, hi: fmpq | None
 ) -> list[_Segment]:
     """The relation on each open interval between consecutive candidates.
 
@@ -439,7 +381,7 @@ def _decide_segments(
             if left is None or right is None or not left < right:
                 raise RuntimeError("candidate isolating intervals overlap")
         t = _strictly_between(left, right)
-        sg = Signs(pencil.polys, t, zero)
+        sg = Signs(pencil.polynomials(), t, zero)
         dec = decide_with(pencil.n, sg)
         out.append(_Segment(dec.relation, t, sign_row("interval", str(t), pencil.n, sg, dec)))
     return out

@@ -16,6 +16,16 @@ Two input forms share one JSON format (used by the HTTP API, the scene and the p
 This is the paper's motion convention (NOTES.md): A(t) = M(t)^-T A0 M(t)^-1 with
 M = [[L, c], [0, 1]]. We compute it as world centre ``c + L c0`` and quadratic block
 ``L^-T Q0 L^-1`` (L^-1 = adj(L)/det(L), exact), which is the same matrix.
+
+Reading user text (the scene, the HTTP API, the library) goes through two public readers, one
+grammar each, under the caller's size limits (:mod:`core.shapes.limits`):
+
+* :func:`read_motion`: a motion in any accepted form, its matrix built at once: every
+  expression is parsed exactly once, and an error names its place (``a.translation[0]: ...``);
+* :func:`read_interval`: the interval I, a pair (lo, hi) or the text "lo, hi". An infinite end
+  is None, "none", or -inf / inf / infinity / -infinity / +inf / +infinity (any case, on the
+  right side: "-inf" only as lo), or a float infinity; a finite end is a number or a number
+  string (``parse_number``: "1/3", "0.25", "1e-3").
 """
 
 from __future__ import annotations
@@ -30,12 +40,16 @@ from flint import fmpq
 
 from ..formulae.pencil import determinant
 from ..shapes.limits import Limits, using
-from ..shapes.numbers import to_fmpq
+from ..shapes.numbers import parse_number, to_fmpq
 from ..shapes.quadrics import ShapeParams, axes_from_quadric
 from .expressions import RationalFunction, parse_expression
 
 __all__ = [
     "Motion",
+    "ExpressionError",
+    "read_motion",
+    "read_interval",
+    "INFINITE_ENDS",
     "motion_from_dict",
     "motion_to_dict",
     "as_motion",
@@ -61,11 +75,23 @@ def _expr_text(x: Any) -> str:
     raise ValueError(f"expected an expression string or a number, got {type(x).__name__} {x!r}")
 
 
+class ExpressionError(ValueError):
+    """An expression of a motion could not be read: ``path`` is its place, ``reason`` why.
+
+    The message is ``"{path}: {reason}"``, e.g. ``translation[0]: unexpected 'x' at position 3``.
+    """
+
+    def __init__(self, path: str, reason: str) -> None:
+        super().__init__(f"{path}: {reason}")
+        self.path = path
+        self.reason = reason
+
+
 def _parse(x: Any, where: str) -> RationalFunction:
     try:
         return parse_expression(_expr_text(x))
     except ValueError as e:
-        raise ValueError(f"{where}: {e}") from None
+        raise ExpressionError(where, str(e)) from None
 
 
 def _vector(x: Any, n: int | None, where: str) -> list[str]:
@@ -220,17 +246,119 @@ def motion_to_dict(m: Motion) -> dict[str, Any]:
     return copy.deepcopy(m.source)
 
 
-def as_motion(x: Any) -> Motion:
-    """A :class:`Motion` from a Motion, a JSON dict, or an n x n nested list of expressions."""
+def as_motion(x: Any, *, limits: Limits | None = None) -> Motion:
+    """A :class:`Motion` from a Motion, a JSON dict, or an n x n nested list of expressions.
+
+    ``limits``: size limits of the text (a Motion keeps its own).
+    """
     if isinstance(x, Motion):
         return x
     if isinstance(x, dict):
-        return motion_from_dict(x)
+        return motion_from_dict(x, limits=limits)
     if isinstance(x, np.ndarray):
         x = x.tolist()
     if isinstance(x, Sequence) and not isinstance(x, str):
-        return motion_from_dict({"matrix": x})
+        return motion_from_dict({"matrix": x}, limits=limits)
     raise ValueError(f"cannot read a motion from {type(x).__name__}")
+
+
+def read_motion(data: Any, *, limits: Limits | None = None, name: str | None = None) -> Motion:
+    """Read a motion from user input and build its exact matrix A(t): every expression parsed once.
+
+    Args:
+        data: a motion dict (:func:`motion_from_dict`), an n x n nested list of expressions, or a
+            :class:`Motion` (returned as it is, its matrix built).
+        limits: size limits of the text and of the arithmetic (:mod:`core.shapes.limits`;
+            default: those in force). A server reads with :data:`core.shapes.limits.SERVER`,
+            in a worker process.
+        name: the motion's name in the caller's input; errors then read
+            ``"{name}.{place}: {reason}"`` for an expression (``a.translation[0]: ...``) and
+            ``"{name}: {reason}"`` otherwise.
+
+    Raises:
+        ValueError: the first problem, with its place (:class:`ExpressionError` for an
+            expression).
+
+    Examples:
+        >>> read_motion({"shape": {"center": [0, 0], "semi_axes": [1, 1]}, "translation": ["2*t + x", "0"]}, name="a")
+        Traceback (most recent call last):
+        ...
+        core.moving.motions.ExpressionError: a.translation[0]: unexpected 'x' at position 6: 2*t + x (allowed: numbers, t, + - * / ^, parentheses, sqrt(n))
+    """
+    try:
+        m = as_motion(data, limits=limits)
+        m.matrix()
+        m.sqrt_d()
+        return m
+    except ExpressionError as e:
+        if name is None:
+            raise
+        raise ExpressionError(f"{name}.{e.path}", e.reason) from None
+    except ValueError as e:
+        if name is None:
+            raise
+        raise ValueError(f"{name}: {e}") from None
+
+
+INFINITE_ENDS = ("none", "inf", "+inf", "-inf", "infinity", "+infinity", "-infinity")
+"""Texts of an infinite end of I (any case; a signed one must be on its side)."""
+
+
+def _interval_end(x: Any, which: str, limits: Limits | None) -> fmpq | None:
+    """One end of I (``which``: "lo" or "hi"): None for an infinite end, else the exact rational."""
+    if x is None:
+        return None
+    if isinstance(x, float) and math.isinf(x):
+        if (x < 0) == (which == "lo"):
+            return None
+        raise ValueError(f"interval {which} = {x} is on the wrong side")
+    if isinstance(x, str) and x.strip().lower() in INFINITE_ENDS:
+        text = x.strip().lower()
+        if text == "none" or text.startswith("-") == (which == "lo"):  # "none": either end; "-inf": lo only
+            return None
+        raise ValueError(f"interval {which} = {x!r} is on the wrong side")
+    try:
+        return parse_number(x, limits) if isinstance(x, str) else to_fmpq(x)
+    except ValueError as e:
+        raise ValueError(f"interval {which}: {e}") from None
+
+
+def read_interval(interval: Any, limits: Limits | None = None) -> tuple[fmpq | None, fmpq | None]:
+    """The interval I = [lo, hi] from a pair (lo, hi) or the text "lo, hi" (";" also separates).
+
+    The one grammar of intervals (scene, HTTP API, library): see the module docstring.
+
+    Args:
+        interval: (lo, hi) or "lo, hi".
+        limits: size limits of number strings (:mod:`core.shapes.limits`; default: in force).
+
+    Returns:
+        (lo, hi) exact rationals, None for an infinite end; lo < hi.
+
+    Raises:
+        ValueError: not a pair, an unreadable end ("interval lo: ..."), an infinity on the wrong
+            side, or lo >= hi.
+
+    Examples:
+        >>> read_interval(("-1/2", None)), read_interval("-infinity, 2.5"), read_interval("none; none")
+        ((-1/2, None), (None, 5/2), (None, None))
+        >>> read_interval("inf, 0")
+        Traceback (most recent call last):
+        ...
+        ValueError: interval lo = 'inf' is on the wrong side
+    """
+    if isinstance(interval, str):
+        parts: Any = [p.strip() for p in interval.replace(";", ",").split(",")]
+        if len(parts) != 2 or not all(parts):
+            raise ValueError(f"interval: expected 'lo, hi' (none, -inf or inf for an open end), got {interval[:60]!r}")
+    elif isinstance(interval, Sequence) and len(interval) == 2:
+        parts = interval
+    else:
+        raise ValueError(f"interval must be a pair (lo, hi), got {interval!r}")
+    lo, hi = _interval_end(parts[0], "lo", limits), _interval_end(parts[1], "hi", limits)
+    if lo is not None and hi is not None and not lo < hi:
+        raise ValueError(f"empty interval: need lo < hi, got [{lo}, {hi}]")
+    return lo, hi
 
 
 # -------------------------------------------------------------------------------------------

@@ -22,7 +22,7 @@ from ..shapes.numbers import to_fmpq
 from .motions import Motion, motion_to_dict
 from .signs import SignRow, sign_row_at
 
-__all__ = ["MotionAnalysis", "Event", "Interval", "SignRow", "EVENT_KINDS"]
+__all__ = ["MotionAnalysis", "MotionPencil", "Event", "Interval", "SignRow", "EVENT_KINDS"]
 
 EVENT_KINDS = ("change", "touch", "endpoint")
 """change: relation differs on the two sides; touch: tangent and the same relation on both
@@ -31,16 +31,8 @@ sides (touch and leave); endpoint: tangent at a finite end of I."""
 _SIGN = {1: "+", 0: "0", -1: "-"}
 
 
-
 def _alg_dict(a: RealAlgebraic | None, digits: int) -> dict[str, Any] | None:
-    if a is None:
-        return None
-    return {
-        "value": a.decimal(digits),
-        "approx": float(a),
-        "exact": str(a.value) if a.value is not None else None,
-        "isolating": [str(a.lo), str(a.hi)],
-    }
+    return None if a is None else a.to_dict(digits)
 
 
 @dataclass
@@ -112,11 +104,45 @@ class Interval:
 
 
 @dataclass
-class MotionAnalysis:
-    """Result of :func:`analyse`."""
+class MotionPencil:
+    """P(t, T) = det(T A(t) + B(t)) of a pair on I: its coefficients a_i(t) and the hat subresultants.
+
+    What :func:`core.moving.analysis.analyse` computes first and :class:`MotionAnalysis` keeps
+    (its ``n``, ``a``, ``s0``, ... are this pencil's).
+    """
 
     n: int
     """3 (ellipses) or 4 (ellipsoids): degree of P in T."""
+    a: list[QSqrtPoly]
+    """[a_0, ..., a_n] of P(t, T): numerator of det(T A(t) + B(t)), common factors in t removed
+    (a positive multiple of the true coefficients on I; exact)."""
+    s0: QSqrtPoly
+    """ŝ0 = -s0/a_n (same sign as s0)."""
+    s1: QSqrtPoly
+    """ŝ1 = -s1/a_n."""
+    s10: QSqrtPoly
+    """ŝ1,0 = -s1,0/a_n."""
+    sqrt_d: int
+    """d of the sqrt(d) in the coefficients (1: all rational)."""
+    A: Motion
+    B: Motion
+    matrices: tuple[list[list[QSqrtPoly]], list[list[QSqrtPoly]]]
+    """The denominator-free matrices (positive multiples of A(t), B(t) on I)."""
+
+    def polynomials(self) -> dict[str, QSqrtPoly]:
+        """``a0``..``a{n}``, ``s0``, ``s1``, ``s10`` (hat forms) by name, as the sign table uses them."""
+        out = {f"a{i}": p for i, p in enumerate(self.a)}
+        out.update(s0=self.s0, s1=self.s1, s10=self.s10)
+        return out
+
+
+@dataclass
+class MotionAnalysis:
+    """Result of :func:`analyse`: the pencil, the paper's case, events, intervals, sign table."""
+
+    pencil: MotionPencil
+    """P(t, T) of the pair on I (``n``, ``a``, ``s0``, ``s1``, ``s10``, ``sqrt_d``, ``A``, ``B``,
+    ``matrices`` below are its fields)."""
     interval: tuple[fmpq | None, fmpq | None]
     """I (None = infinite end); finite ends are included."""
     case: str
@@ -129,22 +155,7 @@ class MotionAnalysis:
     """Maximal open intervals of constant relation covering I minus the events."""
     sign_table: list[SignRow]
     """Rows for every candidate and for the sample of every interval between candidates."""
-    a: list[QSqrtPoly]
-    """[a_0, ..., a_n] of P(t, T): numerator of det(T A(t) + B(t)), common factors in t removed
-    (a positive multiple of the true coefficients on I; exact)."""
-    s0: QSqrtPoly
-    """ŝ0 = -s0/a_n (same sign as s0)."""
-    s1: QSqrtPoly
-    """ŝ1 = -s1/a_n."""
-    s10: QSqrtPoly
-    """ŝ1,0 = -s1,0/a_n."""
-    sqrt_d: int
-    """d of the sqrt(d) in the coefficients (1: all rational)."""
     digits: int
-    A: Motion
-    B: Motion
-    matrices: tuple[list[list[QSqrtPoly]], list[list[QSqrtPoly]]]
-    """The denominator-free matrices (positive multiples of A(t), B(t) on I)."""
     paper_case: str = ""
     """The paper's case: "3.4(1)", "3.4(2)" for ellipses; "4.4.1", "4.4.2(1)".."4.4.2(3)",
     "4.4.3(1)", "4.4.3(2)" for ellipsoids (see :func:`core.moving.analysis.analyse`)."""
@@ -153,7 +164,61 @@ class MotionAnalysis:
     _seg_rel: list[Relation] = field(default_factory=list, repr=False)
     _his: list[fmpq] = field(default_factory=list, repr=False)
 
+    # -- the pencil's fields ---------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """3 (ellipses) or 4 (ellipsoids): degree of P in T."""
+        return self.pencil.n
+
+    @property
+    def a(self) -> list[QSqrtPoly]:
+        """[a_0, ..., a_n] of P(t, T) (:attr:`MotionPencil.a`)."""
+        return self.pencil.a
+
+    @property
+    def s0(self) -> QSqrtPoly:
+        """ŝ0 = -s0/a_n (same sign as s0)."""
+        return self.pencil.s0
+
+    @property
+    def s1(self) -> QSqrtPoly:
+        """ŝ1 = -s1/a_n."""
+        return self.pencil.s1
+
+    @property
+    def s10(self) -> QSqrtPoly:
+        """ŝ1,0 = -s1,0/a_n."""
+        return self.pencil.s10
+
+    @property
+    def sqrt_d(self) -> int:
+        """D of the sqrt(d) in the coefficients (1: all rational)."""
+        return self.pencil.sqrt_d
+
+    @property
+    def A(self) -> Motion:
+        """The motion of the first shape."""
+        return self.pencil.A
+
+    @property
+    def B(self) -> Motion:
+        """The motion of the second shape."""
+        return self.pencil.B
+
+    @property
+    def matrices(self) -> tuple[list[list[QSqrtPoly]], list[list[QSqrtPoly]]]:
+        """The denominator-free matrices (positive multiples of A(t), B(t) on I)."""
+        return self.pencil.matrices
+
     # -- queries ---------------------------------------------------------------------------
+    def _in_interval(self, t: Any) -> fmpq:
+        """T as an exact rational, checked to lie in I (ValueError otherwise)."""
+        tq = to_fmpq(t)
+        lo, hi = self.interval
+        if (lo is not None and tq < lo) or (hi is not None and tq > hi):
+            raise ValueError(f"t = {t} is outside the analysed interval [{lo}, {hi}]")
+        return tq
+
     def relation_at(self, t: Any, *, method: str = "lookup") -> Relation:
         """Certified relation at one time t (float = exact binary rational, int, "p/q", "0.1").
 
@@ -167,10 +232,7 @@ class MotionAnalysis:
         Raises:
             ValueError: t outside I or not a number; "classify" on a motion with sqrt(d) entries.
         """
-        tq = to_fmpq(t)
-        lo, hi = self.interval
-        if (lo is not None and tq < lo) or (hi is not None and tq > hi):
-            raise ValueError(f"t = {t} is outside the analysed interval [{lo}, {hi}]")
+        tq = self._in_interval(t)
         if method == "classify":
             from ..fixed.classify import classify
             from .motions import matrix_at_exact
@@ -189,9 +251,7 @@ class MotionAnalysis:
 
     def polynomials(self) -> dict[str, QSqrtPoly]:
         """``a0``..``a{n}``, ``s0``, ``s1``, ``s10`` (hat forms) by name, as the sign table uses them."""
-        out = {f"a{i}": p for i, p in enumerate(self.a)}
-        out.update(s0=self.s0, s1=self.s1, s10=self.s10)
-        return out
+        return self.pencil.polynomials()
 
     def sign_row_at(self, t: Any) -> SignRow:
         """Sign-table row at one rational time t in I.
@@ -202,11 +262,7 @@ class MotionAnalysis:
         Raises:
             ValueError: t outside I or not a number.
         """
-        tq = to_fmpq(t)
-        lo, hi = self.interval
-        if (lo is not None and tq < lo) or (hi is not None and tq > hi):
-            raise ValueError(f"t = {t} is outside the analysed interval [{lo}, {hi}]")
-        return sign_row_at(self.n, self.polynomials(), tq)
+        return sign_row_at(self.n, self.polynomials(), self._in_interval(t))
 
     def samples(self, num: int = 256, lo: float | None = None, hi: float | None = None) -> dict[str, Any]:
         """Float samples of a_i, ŝ0, ŝ1, ŝ1,0 on a uniform grid, for plots (display only).

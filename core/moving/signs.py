@@ -100,7 +100,7 @@ def decide_at(n: int, polys: dict[str, QSqrtPoly], t: Any) -> tuple[Any, dict[st
     Like the static :func:`core.explain`: the signs of a_n..a_0 always, ŝ0, ŝ1, ŝ1,0 only when
     the decision tree asks for them (the paper's point). Signs are exact: at a float t (its
     exact binary value) a float Horner filter with a proven bound decides first
-    (:mod:`core.moving.polysign`), exact evaluation otherwise; so the relation agrees with
+    (:mod:`core.algebra.polysign`), exact evaluation otherwise; so the relation agrees with
     :meth:`MotionAnalysis.relation_at`.
 
     Args:

@@ -146,22 +146,12 @@ def value_at_root(alpha: RealAlgebraic, num: fmpq_poly, den: fmpq_poly, *, squar
 
 
 def algebraic_dict(a: RealAlgebraic, digits: int = 20) -> dict[str, Any]:
-    """JSON form of a real algebraic number.
+    """JSON form of a real algebraic number: :meth:`core.algebra.algebraic.RealAlgebraic.to_dict`.
 
     Decimal ``value``, ``approx`` float, ``exact`` "p/q" when rational, else the isolating
     interval and the integer ``polynomial`` (ascending coefficients) it is a root of.
     """
-    if a.value is not None:
-        v = a.value
-        return {"value": a.decimal(digits), "approx": float(a), "exact": str(v), "isolating": [str(v), str(v)], "polynomial": None}
-    num = a.poly.numer()
-    return {
-        "value": a.decimal(digits),
-        "approx": float(a),
-        "exact": None,
-        "isolating": [str(a.lo), str(a.hi)],
-        "polynomial": [str(c) for c in num.coeffs()],
-    }
+    return a.to_dict(digits)
 
 
 def arb_bounds(x: arb) -> tuple[fmpq, fmpq]:

@@ -1,8 +1,13 @@
 """POST /api/classify and POST /api/explain: the relation of fixed pairs.
 
-The work runs off the event loop under the request budget (``ApiSettings.request_budget_s``):
-a batch that runs over it is stopped between pairs and answered with 503, and work whose client
-has disconnected is dropped at the next check.
+No pair is decided on the event loop. Pairs of JSON numbers (binary64 values) are bounded work:
+a single pair is classified with the other single pairs waiting at that moment by one thread
+(:class:`app.api.batching.PairBatcher`); a batch in a server thread under the request budget
+(``ApiSettings.request_budget_s``), checked between pairs, and dropped at the next check when the
+client disconnects. Pairs with number strings (exact values up to the server's limits: 400
+characters, exponents up to 1000) and every explanation run in the budgeted worker processes
+(:func:`app.api.budget.run_job`): queued when busy, killed at the budget, on disconnect or when the
+server stops. Every stop is a 503 with Retry-After.
 """
 
 from __future__ import annotations
@@ -11,11 +16,10 @@ import threading
 
 from fastapi import APIRouter, HTTPException, Request
 
-from core import explain as core_explain
-
-from ..budget import Budget, BudgetExceeded, Cancelled, budget_error, run_off_loop
-from ..convert import bad_input, checked_pair, classify_items, is_plain_pair
-from ..deps import SettingsDep
+from ...jobs import classify_job, explain_job
+from ..budget import Budget, BudgetExceeded, Cancelled, budget_error, run_job, run_off_loop
+from ..convert import classify_items, is_plain_pair
+from ..deps import BatcherDep, SettingsDep, WorkersDep
 from ..json_body import JsonRoute
 from ..schemas import (
     ERROR_RESPONSES,
@@ -31,43 +35,46 @@ router = APIRouter(
     prefix="/api",
     tags=["classify"],
     route_class=JsonRoute,
-    responses={**ERROR_RESPONSES, 503: {"model": ErrorOut, "description": "Over the time budget of a request"}},
+    responses={**ERROR_RESPONSES, 503: {"model": ErrorOut, "description": "Busy, over the time budget of a request, or stopping (Retry-After)"}},
 )
 
 
 @router.post("/classify", response_model=ClassifyOut | list[ClassifyOut])
-async def classify(body: ClassifyIn, request: Request, settings: SettingsDep) -> ClassifyOut | list[ClassifyOut]:
+async def classify(
+    body: ClassifyIn, request: Request, settings: SettingsDep, workers: WorkersDep, batcher: BatcherDep
+) -> ClassifyOut | list[ClassifyOut]:
     """Certified relation of one pair ``{"a", "b"}``, or a list for ``{"pairs": [...]}``."""
     batch = isinstance(body, BatchIn)
     pairs = body.pairs if isinstance(body, BatchIn) else [body]
     if len(pairs) > settings.max_batch:
         raise HTTPException(422, f"batch of {len(pairs)} pairs is over the limit of {settings.max_batch}")
+    hint = "send fewer pairs per request" if batch else ""
+    if not batch and is_plain_pair(pairs[0]):
+        try:
+            return await batcher.classify(pairs[0], body.method)
+        except (BudgetExceeded, Cancelled) as e:
+            raise budget_error(e) from None
+    if all(is_plain_pair(p) for p in pairs):
 
-    def work(cancel: threading.Event) -> list[ClassifyOut]:
-        return classify_items(pairs, body.method, Budget(settings.request_budget_s, cancel), batch=batch)
+        def work(cancel: threading.Event) -> list[ClassifyOut]:
+            return classify_items(pairs, body.method, Budget(settings.request_budget_s, cancel), batch=batch)
 
-    try:
-        if not batch and is_plain_pair(pairs[0]):  # bounded (< 1 ms): no thread hop
-            out = work(threading.Event())
-        else:
+        try:
             out = await run_off_loop(request, work)
-    except (BudgetExceeded, Cancelled) as e:
-        raise budget_error(e, "send fewer pairs per request" if batch else "") from None
+        except (BudgetExceeded, Cancelled) as e:
+            raise budget_error(e, hint) from None
+    else:
+        out = await run_job(
+            request, workers, classify_job, pairs, body.method, settings.request_budget_s, batch,
+            seconds=settings.request_budget_s, checks_budget=True, hint=hint, memory_mb=settings.memory_limit_mb,
+        )
     return out if batch else out[0]
 
 
 @router.post("/explain", response_model=ExplainOut)
-async def explain(body: PairItem, request: Request, settings: SettingsDep) -> ExplainOut:
+async def explain(body: PairItem, request: Request, settings: SettingsDep, workers: WorkersDep) -> ExplainOut:
     """Coefficients of P(T) = det(T A + B), s0, s1, s1,0, their signs, Var and the deciding rule."""
-
-    def work(cancel: threading.Event) -> ExplainOut:
-        budget = Budget(settings.request_budget_s, cancel)
-        a, b = checked_pair(body)
-        budget.check("after reading the pair")
-        with bad_input():
-            return ExplainOut(**core_explain(a, b).to_dict())
-
-    try:
-        return await run_off_loop(request, work)
-    except (BudgetExceeded, Cancelled) as e:
-        raise budget_error(e) from None
+    return await run_job(
+        request, workers, explain_job, body, settings.request_budget_s,
+        seconds=settings.request_budget_s, checks_budget=True, memory_mb=settings.memory_limit_mb,
+    )

@@ -1,87 +1,46 @@
-"""POST /api/contacts: certified contacts among many bodies (at most ``max_contacts_bodies``).
+"""POST /api/contacts: certified contacts among many bodies, under the request's limits.
 
-The search (:func:`core.contacts`) runs off the event loop under the request budget; it is
-checked after each batch of pairs, so an over-budget search answers 503. A bad body is a 422
+The search runs in a budgeted worker process (:func:`app.jobs.contacts_job`): at most
+``max_contacts_bodies`` bodies; the broad phase counts the pairs it would examine before building
+any (over ``max_contacts_candidates``: 422 saying how many and the limit); the time budget is
+checked between its chunks and the narrow phase's batches (503 with Retry-After); the pairs found
+are counted against ``max_contacts_pairs`` before the answer is built (422). A bad body is a 422
 that names it ("body 7: ...").
 """
 
 from __future__ import annotations
 
-import threading
-from typing import cast
+from fastapi import APIRouter, HTTPException, Request, Response
 
-import numpy as np
-from fastapi import APIRouter, HTTPException, Request
-
-from core import Certifier, Relation, bodies_from_axes, contacts
-
-from ..budget import Budget, BudgetExceeded, Cancelled, budget_error, run_off_loop
-from ..contacts_schemas import ContactsIn, ContactsOut, PairOut, PairRelation
-from ..convert import bad_input
-from ..deps import SettingsDep
+from ...jobs import contacts_job
+from ..budget import run_job
+from ..contacts_schemas import ContactsIn, ContactsOut
+from ..deps import SettingsDep, WorkersDep
 from ..json_body import JsonRoute
-from ..schemas import ERROR_RESPONSES, CertifiedBy, ErrorOut
+from ..schemas import ERROR_RESPONSES, ErrorOut
 
 router = APIRouter(
     prefix="/api",
     tags=["contacts"],
     route_class=JsonRoute,
-    responses={**ERROR_RESPONSES, 503: {"model": ErrorOut, "description": "Over the time budget of a request"}},
+    responses={**ERROR_RESPONSES, 503: {"model": ErrorOut, "description": "Busy, over the time budget of a request, or stopping (Retry-After)"}},
 )
 
 
 @router.post("/contacts", response_model=ContactsOut)
-async def contacts_route(body: ContactsIn, request: Request, settings: SettingsDep) -> ContactsOut:
-    """Every pair of bodies that is not separate, with its certified relation."""
-    Q = _matrices(body, settings.max_contacts_bodies)
+async def contacts_route(body: ContactsIn, request: Request, settings: SettingsDep, workers: WorkersDep) -> Response:
+    """Every pair of bodies that is not separate, with its certified relation.
 
-    def work(cancel: threading.Event) -> ContactsOut:
-        budget = Budget(settings.request_budget_s, cancel)
-
-        def progress(done: int, total: int) -> None:
-            budget.check(f"after {done} of {total} candidate pairs")
-
-        with bad_input():
-            res = contacts(Q, box=body.box, method=body.method, on_invalid=body.on_invalid, progress=progress)
-        names = {int(r): str(r) for r in Relation}  # core lists the non-separate pairs of valid bodies
-        by_name: dict[int, CertifiedBy] = {int(Certifier.FLOAT): "float", int(Certifier.EXACT): "exact"}
-        images = res.image.tolist() if res.image is not None else None
-        pairs = [
-            PairOut(i=a, j=b, relation=cast(PairRelation, names[r]), certified_by=by_name.get(c), image=None if images is None else images[k],
-                    **({} if images is None else dict(zip(("image_x", "image_y", "image_z"), images[k], strict=False))))
-            for k, (a, b, r, c) in enumerate(zip(res.i.tolist(), res.j.tolist(), res.relation.tolist(), res.certified_by.tolist(), strict=True))
-        ]
-        return ContactsOut(bodies=res.n_bodies, pairs=pairs, counts=res.counts, invalid=res.invalid, summary=res.summary())
-
-    try:
-        return await run_off_loop(request, work)
-    except (BudgetExceeded, Cancelled) as e:
-        raise budget_error(e, "send fewer bodies per request") from None
-
-
-def _matrices(body: ContactsIn, limit: int) -> np.ndarray:
-    """The bodies as float matrices (422 for a wrong count, mixed forms or bad rows)."""
-    if (body.bodies is None) == (body.matrices is None):
-        raise HTTPException(422, "send either 'bodies' (rows of parameters) or 'matrices', not both or neither")
+    422 when there are more bodies than ``max_contacts_bodies``, when the broad phase would examine
+    more pairs than ``max_contacts_candidates`` (bodies crowded together), or when the answer
+    would list more pairs than ``max_contacts_pairs``; each message gives the number and the limit.
+    """
     rows = body.bodies if body.bodies is not None else body.matrices
-    assert rows is not None
-    if len(rows) > limit:
-        raise HTTPException(422, f"{len(rows)} bodies is over the limit of {limit} per request")
-    if body.matrices is not None:
-        sizes = {len(m) for m in body.matrices} | {len(r) for m in body.matrices for r in m}
-        if len(sizes) > 1:
-            raise HTTPException(422, "matrices: every matrix must be 3x3 (ellipses) or every one 4x4 (ellipsoids)")
-        return np.array(body.matrices, dtype=np.float64).reshape(len(body.matrices), *(2 * (sizes.pop() if sizes else 4,)))
-    widths = {len(r) for r in body.bodies or []}
-    if not widths:
-        return np.zeros((0, 4, 4))
-    if widths not in ({10}, {5}):
-        raise HTTPException(422, "bodies: every row must be [x, y, z, a, b, c, qw, qx, qy, qz] (3D) or every row [x, y, a, b, angle] (2D)")
-    if body.box is not None and len(body.box) not in ((3, 6) if 10 in widths else (2, 3, 6)):
-        raise HTTPException(422, f"box: {len(body.box)} numbers for {'3D' if 10 in widths else '2D'} bodies")
-    t = np.array(body.bodies, dtype=np.float64)
-    d = 3 if t.shape[1] == 10 else 2
-    with bad_input("bodies: "):
-        if body.on_invalid == "mark":
-            return bodies_from_axes(t[:, :d], t[:, d : 2 * d], t[:, 2 * d :] if d == 3 else t[:, 4], on_invalid="mark")
-        return bodies_from_axes(t[:, :d], t[:, d : 2 * d], t[:, 2 * d :] if d == 3 else t[:, 4])
+    if rows is not None and len(rows) > settings.max_contacts_bodies:
+        raise HTTPException(422, f"{len(rows)} bodies is over the limit of {settings.max_contacts_bodies} per request")
+    data = await run_job(
+        request, workers, contacts_job, body, settings.request_budget_s, settings.max_contacts_candidates,
+        settings.max_contacts_pairs, seconds=settings.request_budget_s, checks_budget=True,
+        hint="send fewer bodies per request", memory_mb=settings.memory_limit_mb,
+    )
+    return Response(content=data, media_type="application/json")

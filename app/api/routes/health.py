@@ -1,4 +1,4 @@
-"""GET /healthz: liveness and analysis load."""
+"""GET /healthz (and HEAD, for load balancers): liveness and the load of the worker processes."""
 
 from __future__ import annotations
 
@@ -10,11 +10,14 @@ from ..schemas import HealthOut
 router = APIRouter(tags=["health"])
 
 
+@router.head("/healthz", response_model=HealthOut, name="healthz_head")  # its own operation id
 @router.get("/healthz", response_model=HealthOut)
 async def healthz(settings: SettingsDep, workers: WorkersDep) -> HealthOut:
-    """Answers at once (runs on the event loop, never waits on a worker)."""
+    """Answers at once (runs on the event loop, never waits on a worker); HEAD: the status alone."""
     return HealthOut(
         status="ok",
         analyses_running=workers.running,
         max_concurrent_analyses=settings.max_concurrent_analyses,
+        analyses_waiting=workers.waiting,
+        max_queued_analyses=settings.max_queued_analyses,
     )

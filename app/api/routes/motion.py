@@ -7,11 +7,11 @@ from typing import Any
 
 from fastapi import APIRouter, HTTPException, Request
 
-from ...workers import WorkerBusy, WorkerCancelled, WorkerDied, WorkerFailed, WorkerTimeout
-from ..budget import run_off_loop
-from ..convert import bad_input
+from core.moving.result import MotionAnalysis
+
+from ...jobs import analyse_job
+from ..budget import run_job, run_off_loop
 from ..deps import SettingsDep, WorkersDep
-from ..jobs import analyse_job
 from ..json_body import JsonRoute
 from ..motion_input import motion_payload
 from ..motion_schemas import AnalyseIn, AnalyseOut
@@ -21,7 +21,7 @@ router = APIRouter(
     prefix="/api",
     tags=["motion"],
     route_class=JsonRoute,
-    responses={**ERROR_RESPONSES, 503: {"model": ErrorOut, "description": "Busy, or over the time/memory budget"}},
+    responses={**ERROR_RESPONSES, 503: {"model": ErrorOut, "description": "Busy, over the time/memory budget, or stopping (Retry-After)"}},
 )
 
 
@@ -30,28 +30,28 @@ async def analyse(body: AnalyseIn, request: Request, settings: SettingsDep, work
     """Tangency events (exact isolating intervals, decimals), intervals of constant relation, sign table.
 
     The motion text is parsed and analysed in a separate process under the server's time and
-    memory budget (a busy server answers 503 before reading it); the event loop and the scene
-    stay responsive meanwhile, and the worker is stopped if the client disconnects.
+    memory budget (a busy server queues the request, or answers 503 before reading it when the
+    queue is full); the event loop and the scene stay responsive meanwhile, and the worker is
+    stopped if the client disconnects.
     """
     if body.digits > settings.max_digits:
         raise HTTPException(422, f"digits = {body.digits} is over the limit of {settings.max_digits}")
     a, b = motion_payload(body.a), motion_payload(body.b)
-    args = (a, b, body.interval, body.digits, body.polynomials, settings.text_limits())
+    result = await run_job(
+        request, workers, analyse_job, a, b, body.interval, body.digits, settings.text_limits(), ("a", "b"),
+        seconds=settings.time_budget_s, stopped="analysis stopped: ", hint="narrow the interval or simplify the motion",
+        memory_mb=settings.memory_limit_mb,
+    )
 
-    def work(cancel: threading.Event) -> dict[str, Any]:
-        return workers.run(analyse_job, *args, timeout=settings.time_budget_s, cancel=cancel)
+    def write(cancel: threading.Event) -> AnalyseOut:  # exact numbers to text: bounded, but not for the event loop
+        return AnalyseOut(**_json(result, body.polynomials))
 
-    try:
-        with bad_input():
-            out = await run_off_loop(request, work)
-    except WorkerBusy as e:
-        raise HTTPException(503, f"{e}; retry in a moment", headers={"Retry-After": "2"}) from None
-    except WorkerTimeout as e:
-        raise HTTPException(503, f"analysis stopped: {e}; narrow the interval or simplify the motion") from None
-    except WorkerCancelled as e:
-        raise HTTPException(503, f"analysis stopped: {e}") from None
-    except WorkerDied as e:
-        raise HTTPException(503, f"analysis stopped: {e} (memory limit {settings.memory_limit_mb} MB)") from None
-    except WorkerFailed as e:
-        raise HTTPException(500, f"internal error in the analysis: {e}") from None
-    return AnalyseOut(**out)
+    return await run_off_loop(request, write)
+
+
+def _json(result: MotionAnalysis, polynomials: bool) -> dict[str, Any]:
+    """The analysis as the API's JSON (core's ``to_dict``, with the motions named "a" and "b")."""
+    out = result.to_dict(polynomials=polynomials)
+    out["a"] = out.pop("A")
+    out["b"] = out.pop("B")
+    return out

@@ -1,0 +1,260 @@
+"""What the worker processes run: the one module of jobs for the scene and the HTTP API.
+
+Module-level functions for :class:`app.workers.WorkerPool` (picklable by reference). Each runs
+in its own process under a time budget and a memory cap, so a job can be killed when its client
+leaves, when its budget is spent or when the server stops. Every text a user typed is read here,
+in the worker, by core's readers (:func:`core.moving.motions.read_motion`,
+:func:`core.moving.motions.read_interval`: one grammar, each expression parsed once), never in
+the process serving the tabs and the requests.
+
+* :func:`analyse_job`: read two motions and I under the server's limits, analyse; the
+  :class:`core.moving.result.MotionAnalysis` pickles back as it is (the scene keeps it, the API
+  writes its JSON). :func:`read_motion_job`: the scene's typed motion, read and built.
+* The API's request jobs (``classify_job`` with number strings, ``explain_job``, the witness
+  jobs, ``contacts_job``): their arguments and results are the request and response models;
+  inside, a budget (:class:`app.api.budget.Budget`) is checked between steps and a stop is
+  reported as :class:`app.workers.WorkerTimeout` saying where; bad input is a ValueError with
+  the message the route answers 422 with. They import the API's modules when called, so the
+  scene's workers never load FastAPI.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import TYPE_CHECKING, Any
+
+from core.moving.analysis import analyse
+from core.moving.motions import read_interval, read_motion
+from core.moving.result import MotionAnalysis
+from core.shapes.limits import SERVER, Limits
+
+from .workers import WorkerTimeout
+
+if TYPE_CHECKING:
+    from .api.budget import Budget
+    from .api.contacts_schemas import ContactsIn
+    from .api.schemas import ClassifyOut, ExplainOut, PairItem
+    from .api.witness_schemas import (
+        ContactPointOut,
+        ContactScaleIn,
+        ContactScaleOut,
+        PlaneOut,
+        WitnessIn,
+        WitnessOut,
+    )
+    from .scene.motion import MotionModel
+
+__all__ = [
+    "analyse_job",
+    "read_motion_job",
+    "classify_job",
+    "explain_job",
+    "contact_scale_job",
+    "separating_plane_job",
+    "contact_point_job",
+    "witness_job",
+    "contacts_job",
+]
+
+
+def analyse_job(
+    a: Any,
+    b: Any,
+    interval: Any,
+    digits: int = 20,
+    limits: Limits = SERVER,
+    names: tuple[str, str] = ("a", "b"),
+) -> MotionAnalysis:
+    """Read both motions and I under ``limits``, then :func:`core.moving.analysis.analyse` them.
+
+    The same contract for the scene and the HTTP API.
+
+    Args:
+        a: the first motion: a motion dict, an n x n nested list of expressions, or a
+            :class:`core.moving.motions.Motion` already read (the scene's).
+        b: the second, likewise.
+        interval: I as a pair (lo, hi) or the text "lo, hi" (:func:`core.moving.motions.read_interval`).
+        digits: significant digits of the event values.
+        limits: size limits of the text (:data:`core.shapes.limits.SERVER`, or the API's
+            :meth:`app.api.settings.ApiSettings.text_limits`).
+        names: the motions' names in error messages ("a.translation[0]: ...").
+
+    Raises:
+        ValueError: unreadable text (its place named), or a motion that cannot be analysed on I
+            (core's message).
+    """
+    ma, mb = read_motion(a, limits=limits, name=names[0]), read_motion(b, limits=limits, name=names[1])
+    return analyse(ma, mb, read_interval(interval, limits), digits=digits)
+
+
+def read_motion_job(motion: dict[str, Any]) -> MotionModel | tuple[str, str]:
+    """Read a scene's typed motion under :data:`core.shapes.limits.SERVER` and build its exact matrices.
+
+    Returns:
+        The loaded model (it pickles with its exact matrices), or (message, field) for a
+        :class:`app.scene.motion.MotionError` (an exception would lose its field on the way back).
+    """
+    from .scene.motion import MotionError, load_motion
+
+    try:
+        return load_motion(preset=None, motion=motion, limits=SERVER)
+    except MotionError as e:
+        return str(e), e.field
+
+
+def _budget(seconds: float) -> Budget:
+    from .api.budget import Budget
+
+    return Budget(seconds)
+
+
+@contextmanager
+def _as_job_errors() -> Iterator[None]:
+    """The route's errors as the worker carries them: 422 -> ValueError, a budget stop -> WorkerTimeout."""
+    from fastapi import HTTPException
+
+    from .api.budget import BudgetExceeded
+
+    try:
+        yield
+    except HTTPException as e:  # raised by app.api.convert for bad input (always 422), place named
+        raise ValueError(str(e.detail)) from None
+    except BudgetExceeded as e:
+        raise WorkerTimeout(str(e)) from None
+
+
+def classify_job(pairs: Sequence[PairItem], method: str, seconds: float, batch: bool) -> list[ClassifyOut]:
+    """:func:`app.api.convert.classify_items` under a budget of ``seconds`` (pairs with number strings)."""
+    from .api.convert import classify_items
+
+    with _as_job_errors():
+        return classify_items(pairs, method, _budget(seconds), batch=batch)
+
+
+def explain_job(pair: PairItem, seconds: float) -> ExplainOut:
+    """:func:`core.explain` of one pair: P(T), s0, s1, s1,0, their signs, Var and the rule."""
+    from core import explain
+
+    from .api.convert import bad_input, checked_pair
+
+    with _as_job_errors():
+        a, b = checked_pair(pair)
+        _budget(seconds).check("after reading the pair")
+        with bad_input():
+            from .api.schemas import ExplainOut
+
+            return ExplainOut(**explain(a, b).to_dict())
+
+
+def contact_scale_job(body: ContactScaleIn) -> ContactScaleOut:
+    """Certified bracket of the contact scale (with ``exact``: mu* as an algebraic number)."""
+    from core.witness import contact_scale
+
+    from .api.convert import bad_input, checked_pair
+    from .api.witness_out import kind_of, scale_out
+
+    with _as_job_errors():
+        a, b = checked_pair(body)
+        with bad_input():
+            return scale_out(contact_scale(a, b, rtol=body.rtol), kind_of(a), body.digits if body.exact else None)
+
+
+def separating_plane_job(body: WitnessIn) -> PlaneOut:
+    """A separating plane, exact and verified (ValueError unless the pair is separate)."""
+    from core.witness import separating_plane
+
+    from .api.convert import bad_input, checked_pair
+    from .api.witness_out import plane_out
+
+    with _as_job_errors():
+        a, b = checked_pair(body)
+        with bad_input():
+            return plane_out(separating_plane(a, b))
+
+
+def contact_point_job(body: WitnessIn) -> ContactPointOut:
+    """The contact point of a tangent pair, or a point inside both (ValueError if separate)."""
+    from core.witness import contact_point
+
+    from .api.convert import bad_input, checked_pair
+    from .api.witness_out import point_out
+
+    with _as_job_errors():
+        a, b = checked_pair(body)
+        with bad_input():
+            return point_out(contact_point(a, b), body.digits)
+
+
+def witness_job(body: WitnessIn) -> WitnessOut:
+    """The relation, its sentence, the contact scale and the plane or the point."""
+    from core.witness import witness
+
+    from .api.convert import bad_input, checked_pair
+    from .api.witness_out import decided, kind_of, plane_out, point_out, scale_out
+
+    with _as_job_errors():
+        a, b = checked_pair(body)
+        with bad_input():
+            w = witness(a, b)
+            from .api.witness_schemas import WitnessOut
+
+            return WitnessOut(
+                relation=decided(w.relation),
+                sentence=w.sentence,
+                margin_text=w.margin,
+                contact_scale=scale_out(w.scale, kind_of(a), None),
+                plane=None if w.plane is None else plane_out(w.plane),
+                point=None if w.point is None else point_out(w.point, body.digits),
+            )
+
+
+def contacts_job(body: ContactsIn, seconds: float, max_candidates: int, max_pairs: int) -> bytes:
+    """:func:`core.contacts` of the bodies under the request's limits; the answer as JSON bytes.
+
+    The broad phase counts the pairs it would examine before building any (over
+    ``max_candidates``: 422), the budget is checked between its chunks and the narrow phase's
+    batches, and the number of pairs found is checked against ``max_pairs`` before the answer
+    is built. The JSON is written here, so the server process only passes the bytes on.
+    """
+    from typing import cast
+
+    from core import Certifier, Relation, contacts
+    from core.bodies.broadphase import TooManyPairs
+
+    from .api.contacts_schemas import ContactsOut, PairOut, PairRelation
+    from .api.convert import bad_input, contacts_matrices
+    from .api.limits import contacts_answer_message, contacts_limit_message
+    from .api.schemas import CertifiedBy
+
+    budget = _budget(seconds)
+    with _as_job_errors():
+        Q = contacts_matrices(body)
+        n = int(Q.shape[0])
+
+        def progress(done: int, total: int) -> None:
+            budget.check(f"after {done:,} of {total:,} pairs to examine")
+
+        with bad_input():
+            try:
+                res = contacts(
+                    Q, box=body.box, method=body.method, on_invalid=body.on_invalid, progress=progress,
+                    max_pairs=max_candidates,
+                )
+            except TooManyPairs as e:
+                raise ValueError(contacts_limit_message(n, e.pairs, e.limit)) from None
+        if len(res) > max_pairs:
+            raise ValueError(contacts_answer_message(n, len(res), max_pairs))
+        names = {int(r): str(r) for r in Relation}  # core lists the non-separate pairs of valid bodies
+        by_name: dict[int, CertifiedBy] = {int(Certifier.FLOAT): "float", int(Certifier.EXACT): "exact"}
+        images = res.image.tolist() if res.image is not None else None
+        pairs = [
+            PairOut(i=a, j=b, relation=cast(PairRelation, names[r]), certified_by=by_name.get(c),
+                    image=None if images is None else images[k],
+                    **({} if images is None else dict(zip(("image_x", "image_y", "image_z"), images[k], strict=False))))
+            for k, (a, b, r, c) in enumerate(
+                zip(res.i.tolist(), res.j.tolist(), res.relation.tolist(), res.certified_by.tolist(), strict=True)
+            )
+        ]
+        out = ContactsOut(bodies=res.n_bodies, pairs=pairs, counts=res.counts, invalid=res.invalid, summary=res.summary())
+        return out.model_dump_json().encode()
