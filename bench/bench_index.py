@@ -10,7 +10,7 @@ box of the same volume (HOOMD tilt factors xy = 0.5, xz = 0.3, yz = -0.4). Colum
 index, bounding spheres included), one new body per ``query`` call from Python (median and 90th
 percentile wall time over the new bodies, and the median CPU time of the process: the machine is
 shared, so wall times carry other jobs' load), a batch (all the new bodies in one call; best
-of 3), one accepted move (``update`` of one row, median), and the check: the batch's pairs,
+of 3, wall and CPU time of the process: its two threads' CPU seconds add up), one accepted move (``update`` of one row, median), and the check: the batch's pairs,
 relations, certifiers and images against :func:`core.contacts` on the union (differences must
 be 0). Targets: one query <= 200 us (median), a batch of 10,000 <= 0.2 s.
 """
@@ -91,11 +91,12 @@ def run(n: int, m: int, space: str) -> dict[str, float]:
         index.query(q)
         cpu.append(time.process_time() - c)
         wall.append(time.perf_counter() - w)
-    batch = []
+    batch, batch_cpu = [], []
     for _ in range(3):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         hits = index.query(Qnew)
         batch.append(time.perf_counter() - t)
+        batch_cpu.append(time.process_time() - c)
     pairs, diff = differences(hits, Q, Qnew, box)
     rng = np.random.default_rng(3)
     moves = []
@@ -110,6 +111,7 @@ def run(n: int, m: int, space: str) -> dict[str, float]:
         "one90": float(np.percentile(wall, 90)),
         "cpu": float(np.median(cpu)),
         "batch": min(batch),
+        "batch_cpu": min(batch_cpu),
         "update": float(np.median(moves)),
         "pairs": pairs,
         "found": len(hits),
@@ -127,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"# BodyIndex: {m:,} new ellipsoids against {n:,} indexed, packing fraction 0.3, {get_threads()} threads, load average {load}")
     head = (
         f"| {'space':>6} | {'build s':>7} | {'one query us':>12} | {'p90 us':>7} | {'cpu us':>6} | "
-        f"{'batch s':>7} | {'update us':>9} | {'pairs':>6} | {'differences':>11} |"
+        f"{'batch s':>7} | {'batch cpu s':>11} | {'update us':>9} | {'pairs':>6} | {'differences':>11} |"
     )
     print(head)
     print("|" + "|".join("-" * len(c) for c in head.split("|")[1:-1]) + "|")
@@ -136,7 +138,7 @@ def main(argv: list[str] | None = None) -> int:
         r = run(n, m, space)
         print(
             f"| {space:>6} | {r['build']:7.2f} | {1e6 * r['one']:12.0f} | {1e6 * r['one90']:7.0f} | {1e6 * r['cpu']:6.0f} | "
-            f"{r['batch']:7.3f} | {1e6 * r['update']:9.0f} | {r['pairs']:>6,} | {r['diff']:>11} |",
+            f"{r['batch']:7.3f} | {r['batch_cpu']:11.3f} | {1e6 * r['update']:9.0f} | {r['pairs']:>6,} | {r['diff']:>11} |",
             flush=True,
         )
         worst = {"one": max(worst["one"], r["one"]), "batch": max(worst["batch"], r["batch"]), "diff": worst["diff"] + r["diff"]}

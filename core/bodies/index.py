@@ -46,6 +46,7 @@ from .periodic import (
     classify_images,
     fractional,
     fractional_point,
+    is_tilted,
     lattice_shifts,
     read_box,
     shift_error,
@@ -512,20 +513,24 @@ class BodyIndex:
             keep = body != exclude[qi]
             qi, body = qi[keep], body[keep]
         diff = self._centers[body] - centers[qi]
-        image = None
+        k = None
         if self.box is not None:
-            assert frac is not None and self._frac is not None
-            fq = np.empty((centers.shape[0], d))
-            fq[ok] = frac
-            image = self._images(self._frac[body] - fq[qi])
-            if image.any():
-                diff = diff + lattice_shifts(self.box, image)
+            if is_tilted(self.box):
+                assert frac is not None and self._frac is not None
+                fq = np.empty((centers.shape[0], d))
+                fq[ok] = frac
+                k = -np.rint(self._frac[body] - fq[qi])
+            else:  # fractional coordinates of the difference: as the open broad phase does
+                k = -np.rint(diff / self.box)
+            moved = np.flatnonzero(k.any(axis=1))
+            if moved.size:
+                diff[moved] += lattice_shifts(self.box, self._images(k[moved]))
         scale = float(np.max(np.abs(centers[ok]))) + self._span + float(np.max(reach))
         r = radii[qi] + self._radii[body] + _PAD * scale
         near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= r * r)
         if near.size > 1:
             near = near[np.argsort(qi[near] * len(self) + body[near], kind="stable")]
-        return qi[near], body[near], None if image is None else image[near]
+        return qi[near], body[near], None if k is None else k[near].astype(np.int8)
 
     def _near_one(self, c: list[float], r: float, exclude: int) -> tuple[np.ndarray, np.ndarray | None]:
         """:meth:`_candidates` for one new body (centre c, radius r): (indexed bodies, images)."""
@@ -550,7 +555,7 @@ class BodyIndex:
         image = None
         if self.box is not None:
             assert self._frac is not None and f is not None
-            image = self._images(self._frac[body] - np.array(f))
+            image = self._images(-np.rint(self._frac[body] - np.array(f)))
             if image.any():
                 diff += lattice_shifts(self.box, image)
         pad = _PAD * (max(abs(x) for x in c) + self._span + reach)
@@ -589,13 +594,12 @@ class BodyIndex:
             self._offset_cache[key] = out
         return out
 
-    def _images(self, df: np.ndarray) -> np.ndarray:
-        """The image k of each indexed body: -rint of the fractional difference.
+    def _images(self, k: np.ndarray) -> np.ndarray:
+        """Images k = -rint(fractional difference) as int8 (they must fit).
 
         The one image that can touch has |df + k| below 1/2 by far more than the coordinates'
-        errors (the size rule's margin).
+        errors (the size rule's margin), so rounding finds it.
         """
-        k = -np.rint(df)
         if k.size and not np.abs(k).max() <= 127:
             raise ValueError("a body lies more than 127 boxes from another: wrap the centres into the box")
         return k.astype(np.int8)
