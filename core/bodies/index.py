@@ -41,6 +41,7 @@ from ..fixed.compiled import warm_up
 from ..relation import Relation
 from .bounds import bounding_spheres
 from .periodic import (
+    box_vectors_exact,
     cell_heights,
     check_sizes,
     classify_images,
@@ -176,6 +177,8 @@ class BodyIndex:
         N = max(valid.size, 1)
         width = 2 * max(self._big, 1e-300) * _SLACK
         if self.box is not None:
+            self._vectors = box_vectors_exact(self.box, d)
+            self._tilted = is_tilted(self.box)
             self._heights = cell_heights(self.box, d)
             self._limit = (float(np.min(self._heights)) / 2 - shift_error(self.box, d)) * _MARGIN
             """A new body's radius plus the largest indexed one must stay below this (the size rule)."""
@@ -244,7 +247,7 @@ class BodyIndex:
         """:meth:`_place` of one centre in Python floats (the same operations)."""
         d = self.d
         if self.box is not None:
-            f, eps = fractional_point(c, self.box)
+            f, eps = fractional_point(c, self._vectors)
             if not all(e < 2.0**-30 and abs(x) <= _FAR for x, e in zip(f, eps, strict=True)):
                 raise ValueError(_FAR_MESSAGE)
             return [math.floor(f[a] * self._nl[a]) % self._nl[a] for a in range(d)], f
@@ -552,17 +555,21 @@ class BodyIndex:
             body = body[body != exclude]
         body = body.astype(np.int64)
         diff = self._centers[body] - np.array(c)
-        image = None
-        if self.box is not None:
-            assert self._frac is not None and f is not None
-            image = self._images(-np.rint(self._frac[body] - np.array(f)))
-            if image.any():
-                diff += lattice_shifts(self.box, image)
+        k = None
+        if self.box is not None:  # k = -image: the fractional difference rounded (as in _candidates)
+            if self._tilted:
+                assert self._frac is not None and f is not None
+                k = np.rint(self._frac[body] - np.array(f))
+            else:
+                k = np.rint(diff / self.box)
+            if k.any():
+                diff -= lattice_shifts(self.box, self._images(k))  # v(-k) = -v(k)
         pad = _PAD * (max(abs(x) for x in c) + self._span + reach)
         rr = self._radii[body] + (r + pad)
         near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= rr * rr)
-        near = near[np.argsort(body[near], kind="stable")]
-        return body[near], None if image is None else image[near]
+        if near.size > 1:
+            near = near[np.argsort(body[near], kind="stable")]
+        return body[near], None if k is None else (-k[near]).astype(np.int8)
 
     def _cells(self, coords: np.ndarray, m: tuple[int, ...]) -> np.ndarray:
         """(q, K) flat cells within m[a] cells of each cell coordinate row, axis by axis.

@@ -64,6 +64,7 @@ __all__ = [
     "cell_heights",
     "fractional",
     "fractional_point",
+    "box_vectors_exact",
     "shift_error",
     "check_box",
     "check_sizes",
@@ -267,9 +268,18 @@ def fractional(centers: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.nda
     return np.stack(f, axis=1), np.array([float(np.max(x)) for x in e])
 
 
-def fractional_point(c: Sequence[float], box: np.ndarray) -> tuple[list[float], list[float]]:
-    """:func:`fractional` of one point, in Python floats (the same operations): (f, eps)."""
-    return _solve([float(v) for v in c], _vectors(tuple(float(v) for v in box), len(c)))
+def fractional_point(c: Sequence[float], box: np.ndarray | tuple[tuple[float, ...], ...]) -> tuple[list[float], list[float]]:
+    """:func:`fractional` of one point, in Python floats (the same operations): (f, eps).
+
+    ``box`` may also be :func:`box_vectors_exact` of the box (a caller asking for many points).
+    """
+    vectors = box if isinstance(box, tuple) else _vectors(tuple(float(v) for v in box), len(c))
+    return _solve([float(v) for v in c], vectors)
+
+
+def box_vectors_exact(box: np.ndarray, d: int) -> tuple[tuple[float, ...], ...]:
+    """:func:`box_vectors` as nested tuples of Python floats (for :func:`fractional_point`)."""
+    return _vectors(tuple(float(v) for v in box), d)
 
 
 @lru_cache(maxsize=64)
