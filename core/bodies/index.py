@@ -133,6 +133,11 @@ class BodyIndex:
     Raises:
         ValueError: bad shapes or options, an invalid body, a bad box or a body too large for it.
 
+    The grid is sized when the index is built (its region, its largest body): bodies that later
+    move far outside that region, or grow much larger, keep every answer right but make queries
+    slower; ``BodyIndex(index.Q, box)`` builds a fresh one. The indexed bodies may stand anywhere
+    (also outside the box: the image of a pair is found by rounding fractional coordinates).
+
     Examples:
         >>> from core import bodies_from_axes, Relation
         >>> index = BodyIndex(bodies_from_axes([[0, 0], [3, 0]], [[1, 1], [1, 1]]))
