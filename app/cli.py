@@ -17,6 +17,8 @@
 * ``python -m app contacts BODIES --out PAIRS.csv [--box Lx,Ly,Lz]`` and ``python -m app
   classify PAIRS.npz --out LABELS.npy``: many bodies and files of pairs (:mod:`app.bodies_cli`);
   ``serve --bodies FILE`` / ``screenshot --bodies FILE`` show many bodies in the scene.
+* ``python -m app sweep START.csv END.csv --out EVENTS.csv``: first contact times of moving
+  bodies (:mod:`app.sweep_cli`).
 * ``python -m app --version``. The console script ``ellipsoids`` is the same command.
 
 Exit status: 0 done; 1 the work could not be done here (a missing optional package or
@@ -170,6 +172,9 @@ def build_parser() -> argparse.ArgumentParser:
         parser.add_argument("--box", type=box_argument, default=None, help="periodic box Lx,Ly[,Lz] of --bodies (default: the file's)")
         add_body_file_options(parser)
     add_parsers(sub)
+    from .sweep_cli import add_parser as add_sweep_parser
+
+    add_sweep_parser(sub)
     return p
 
 
@@ -344,7 +349,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     from .bodies_cli import COMMANDS, run_classify, run_contacts
 
-    if not argv or (argv[0] not in ("serve", "screenshot", "export", *COMMANDS) and argv[0] not in ("-h", "--help", "--version")):
+    if not argv or (argv[0] not in ("serve", "screenshot", "export", "sweep", *COMMANDS) and argv[0] not in ("-h", "--help", "--version")):
         argv = ["serve", *argv]  # no sub-command: serve with the given options (or defaults)
     args = parser.parse_args(argv)
     if args.command != "serve" and args.command is not None:
@@ -358,6 +363,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run_contacts(args)
         if args.command == "classify":
             return run_classify(args)
+        if args.command == "sweep":
+            from .sweep_cli import run_sweep
+
+            return run_sweep(args)
         return _serve(args)
     except ValueError as e:
         return _fail(f"error: {e}", EXIT_USAGE)

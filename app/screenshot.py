@@ -72,6 +72,20 @@ _POSE_JS = """(n) => {
   return [r.position.x, r.position.y, r.position.z, r.quaternion.w, r.quaternion.x, r.quaternion.y, r.quaternion.z];
 }"""
 
+_BODIES_DRAWN_JS = """(want) => {
+  const m = window.__viserMutable?.nodeRefFromName;
+  if (!m) return false;
+  for (const [name, count] of Object.entries(want)) {
+    const r = m[name];
+    if (!r) return false;
+    let n = null;
+    r.traverse((o) => { if (n === null && o.isInstancedMesh2) n = o.instancesCount; if (n === null && o.isPoints) n = o.geometry.attributes.position?.count ?? null; });
+    if (n !== count) return false;
+  }
+  return true;
+}"""
+"""Every node of the bodies view is in the browser with its number of instances / points."""
+
 _FRAME_JS = "() => window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0"
 
 _DRAWN_JS = """([poses, colours, word]) => {
@@ -264,7 +278,7 @@ class HeadlessScene:
         deadline = time.monotonic() + self.timeout
         s = self.session
         if hasattr(s, "show_bodies"):  # many bodies: the view of all bodies, or its open pair
-            if s.session is None:
+            if s.pair is None:
                 return self._wait_bodies(frames)
             s = s.session
         if not s.ready.wait(self.timeout):
@@ -281,14 +295,33 @@ class HeadlessScene:
             self.page.evaluate(_TWO_FRAMES_JS)
 
     def _wait_bodies(self, frames: int) -> None:
-        """Many bodies: the view built, its batched mesh in the browser, then a few frames."""
-        from .scene.bodies_view import MESH_NODE
+        """Many bodies: the view built and drawn as it is for the tab's camera.
 
-        if not self.session.ready.wait(self.timeout):
+        The tab's camera reported, its solids chosen for that camera and in the browser with
+        every instance (a newer choice restarts the wait), then a few painted frames.
+        """
+        view = self.session
+        deadline = time.monotonic() + self.timeout
+        if not view.ready.wait(self.timeout):
             raise TimeoutError("the bodies view was not built")
         self.page.wait_for_function("() => (window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0) > 2")
-        if self.session.mesh is not None:
-            self.page.wait_for_function("(n) => window.__viserMutable?.nodeRefFromName?.[n] != null", arg=MESH_NODE)
+        layers = view.layers
+        while layers is not None:  # the camera settles, the solids follow; the browser draws them
+            version = layers.version
+            if layers.pose is None or view.settling():
+                if time.monotonic() > deadline:
+                    raise TimeoutError("the tab never reported its camera")
+                time.sleep(0.02)
+                continue
+            try:
+                self.page.wait_for_function(_BODIES_DRAWN_JS, arg=layers.expected_in_browser(),
+                                            timeout=max(0.1, min(5.0, deadline - time.monotonic())) * 1000)
+            except Exception:  # noqa: BLE001 - a newer choice of solids replaced the one waited for
+                if time.monotonic() > deadline:
+                    raise TimeoutError("the browser never drew the bodies") from None
+                continue
+            if layers.version == version and not view.settling():
+                break
         for _ in range(frames):  # painted (see wait_settled)
             self.page.evaluate(_TWO_FRAMES_JS)
 

@@ -16,6 +16,7 @@ import argparse
 import math
 import os
 import platform
+import re
 import sys
 import time
 from collections.abc import Callable
@@ -30,7 +31,7 @@ import numpy as np  # noqa: E402
 
 import bench  # noqa: E402,F401  (pins BLAS threads before numpy)
 
-from . import api_load, moving, scene_browser, scene_cost, static, throughput  # noqa: E402
+from . import api_load, bodies_browser, moving, scene_browser, scene_cost, static, throughput  # noqa: E402
 
 __all__ = ["main", "machine_info", "write_report", "targets"]
 
@@ -133,6 +134,8 @@ def targets(st: dict[str, Any], sc: dict[str, Any] | None, api: dict[str, Any] |
                      f"first {sh['first_s']:.1f} s, further {sh['further_t_ms_median']:.0f} ms (another t) / "
                      f"{sh['further_config_ms_median']:.0f} ms (another configuration), slowest {sh['further_ms_max']:.0f} ms",
                      "met" if ok else "missed", ok))
+    if sc and sc.get("bodies_browser"):
+        rows += bodies_browser.target_rows(sc["bodies_browser"])
     if api:
         b2, b3 = api.get("batch_2d"), api.get("batch_3d")
         if b2 and b3:
@@ -501,6 +504,12 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
                      "'panel complete' adds the readout, timeline and plots. Screenshots: one browser and one server for all "
                      "images (`app.screenshot.screenshots`).\n")
             L.append(scene_browser.format_browser(sc["browser"]) + "\n")
+        if sc.get("bodies_browser"):
+            L.append("## Many bodies in a browser: orbit, open pair, screenshots\n")
+            L.append("`bench/bodies_browser.py` (in a subprocess): random ellipsoids (packing fraction 0.3) in "
+                     "`serve --bodies`'s view, headless Chromium at 1200 x 800, software WebGL. Each body is a point; the "
+                     "largest on screen are solids within a triangle budget, chosen for the tab's camera.\n")
+            L.append(bodies_browser.format_bodies_browser(sc["bodies_browser"]) + "\n")
     if api:
         L.append("## HTTP API: batch and concurrent requests\n")
         L.append("The real server (`python -m app serve --api-only`) in a subprocess, driven over keep-alive HTTP/1.1 from the "
@@ -517,7 +526,9 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
     if not figs:
         L.append("_matplotlib is not installed (`pip install -e .[bench]`): no figures._\n")
     path = outdir / "REPORT.md"
-    path.write_text("\n".join(L) + "\n")
+    # sections written by other scripts (bench_sweep.py --report) are kept as they are
+    blocks = re.findall(r"<!-- \w+:begin -->.*?<!-- \w+:end -->", path.read_text(), re.S) if path.exists() else []
+    path.write_text("\n".join(L) + "\n" + "".join("\n" + b + "\n" for b in blocks))
     return path
 
 
@@ -554,6 +565,11 @@ def main(argv: list[str] | None = None) -> Path:
                 sc["browser"] = scene_browser.run_in_subprocess(quick=a.quick)
             except (RuntimeError, OSError, ValueError) as e:  # no chromium, or it failed
                 log(f"# scene in a browser skipped: {e}")
+            log("# many bodies in a browser (orbit, open pair)")
+            try:
+                sc["bodies_browser"] = bodies_browser.run_in_subprocess(quick=a.quick)
+            except (RuntimeError, OSError, ValueError) as e:  # no chromium, or it failed
+                log(f"# many bodies in a browser skipped: {e}")
     api = None
     if "api" not in a.skip:
         log("# HTTP API")

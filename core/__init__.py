@@ -13,6 +13,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
     from core import BodyIndex                            # an index asked about new bodies
+    from core import sweep_contacts, SweepContacts, first_contact   # N moving bodies: first contacts
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
 are compiled with the system's C compiler on first use, :mod:`core.fixed.compiled`); the Dask
@@ -25,6 +26,8 @@ from .bodies.build import bodies_from_axes as bodies_from_axes
 from .bodies.contacts import contacts as contacts
 from .bodies.index import BodyIndex as BodyIndex
 from .bodies.result import Contacts as Contacts
+from .bodies.sweep import sweep_contacts as sweep_contacts
+from .bodies.sweep_result import SweepContacts as SweepContacts
 from .fixed.classify import METHODS as METHODS
 from .fixed.classify import ON_INVALID as ON_INVALID
 from .fixed.classify import Certifier as Certifier
@@ -41,6 +44,7 @@ from .fixed.explanation import Quantity as Quantity
 from .moving.analysis import MotionAnalysis as MotionAnalysis
 from .moving.analysis import analyse as analyse
 from .moving.expressions import parse_expression as parse_expression
+from .moving.first_contact import first_contact as first_contact
 from .moving.motions import Motion as Motion
 from .moving.motions import motion_from_dict as motion_from_dict
 from .moving.motions import motion_to_dict as motion_to_dict
@@ -82,6 +86,7 @@ __all__ = [
     "TooManyPairs",
     "ShapeParams",
     "Stats",
+    "SweepContacts",
     "Witness",
     "analyse",
     "axes_from_quadric",
@@ -91,6 +96,7 @@ __all__ = [
     "contact_scale",
     "contacts",
     "explain",
+    "first_contact",
     "motion_from_dict",
     "motion_to_dict",
     "parse_expression",
@@ -102,6 +108,7 @@ __all__ = [
     "rotation_from_quaternion",
     "separating_plane",
     "set_threads",
+    "sweep_contacts",
     "validate_quadric",
     "warm_up",
 ]

@@ -171,3 +171,23 @@ def test_dockerfile_serves_scene_and_api_as_documented():
     copied = " ".join(d["COPY"])
     for part in ("pyproject.toml", "README.md", "core", "app", "static"):
         assert part in copied
+
+
+def test_preset_cards_open_the_preset_in_the_scene(tmp_path):
+    """Issue 22.4: each preset card links to the scene on that preset (a /c/<configuration>/ link
+    whose configuration is the preset), when the scene runs; API only: no such link."""
+    from app.scene.links import decode_config
+
+    static = tmp_path / "static"
+    shutil.copytree(STATIC, static, ignore=shutil.ignore_patterns("img"))
+    (static / "img").mkdir()
+    (static / "img" / "example-30.png").write_bytes(PNG_1x1)
+    with TestClient(create_api(ApiSettings(static_dir=static, scene_url="http://127.0.0.1:8080/"))) as c:
+        page = c.get("/").text
+        names = [p["name"] for p in c.get("/api/presets").json()]
+    links = re.findall(r'<a class="open-scene" href="http://127\.0\.0\.1:8080/c/([A-Za-z0-9_=-]+)/">Open in the scene</a>', page)
+    assert [decode_config(t)["preset"] for t in links] == names
+    card = page[page.index('id="preset-example-30"'):]
+    assert card.index('<a href="http://127.0.0.1:8080/c/') < card.index('<img src="/static/img/example-30.png"')
+    with TestClient(create_api(ApiSettings(static_dir=static, scene_url=None))) as c:
+        assert "Open in the scene" not in c.get("/").text

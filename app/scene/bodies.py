@@ -2,7 +2,8 @@
 
 A :class:`BodiesModel` holds the bodies of a file (:mod:`app.bodyfiles`), their certified
 contacts (:func:`core.contacts`), each body's worst relation (its colour), float poses for
-drawing, the list of pairs shown in the GUI, picking by a click ray, and the
+drawing, the pages of pairs shown in the GUI (filtered by relation or body), picking by a
+click ray, and the
 :class:`~app.scene.state.SceneConfig` that opens one pair in the two-body view.
 
 What the two-body view certifies: it rebuilds both shapes from their parameters with
@@ -27,11 +28,14 @@ from core.shapes.quadrics import rotations_from_orientations
 from ..bodyfiles import BodySet
 from .state import SceneConfig
 
-__all__ = ["BodiesModel", "PairEntry", "MAX_LISTED"]
+__all__ = ["BodiesModel", "PairEntry", "PairPage", "PAGE_SIZE", "RELATION_FILTERS"]
 
-MAX_LISTED = 200
-"""Pairs offered in the GUI's list (tangent first, then overlap); every pair can still be
-opened by clicking its two bodies."""
+PAGE_SIZE = 200
+"""Pairs per page of the GUI's list (tangent first, then overlap, then by (i, j))."""
+
+RELATION_FILTERS = ("all", "tangent", "overlap")
+"""What the list can be filtered by (a contact is tangent or overlap; "undecided" is added
+when a float-only search left some)."""
 
 
 @dataclass(frozen=True)
@@ -40,6 +44,29 @@ class PairEntry:
 
     index: int
     label: str
+
+
+@dataclass(frozen=True)
+class PairPage:
+    """One page of the pair list and where it sits in the whole (filtered) list."""
+
+    entries: list[PairEntry]
+    total: int
+    """Pairs that pass the filter (all pages)."""
+    start: int
+    """0-based position of the first entry in the filtered list."""
+    page: int
+    """0-based page number."""
+    pages: int
+    """Number of pages (at least 1)."""
+
+    def caption(self, what: str = "pairs") -> str:
+        """"showing 1–200 of 2,228 pairs" (or "no pairs")."""
+        if not self.entries:
+            return f"no {what}"
+        if len(self.entries) == self.total:
+            return f"showing all {self.total:,} {what}"
+        return f"showing {self.start + 1:,}–{self.start + len(self.entries):,} of {self.total:,} {what}"
 
 
 class BodiesModel:
@@ -63,6 +90,10 @@ class BodiesModel:
         self.invalid = {**self.result.invalid, **bodies.errors}
         self.worst = self.result.per_body()
         self.positions, self.wxyz, self.scales = self._poses()
+        self._rotations: np.ndarray | None = None
+        res = self.result
+        self.order = np.lexsort((res.j, res.i, -(res.relation == Relation.TANGENT).astype(np.int8)))
+        """Indices of the contacts in list order: tangent first, then by (i, j)."""
 
     # ------------------------------------------------------------------ drawing
     def _poses(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -107,19 +138,52 @@ class BodiesModel:
         return lo, hi
 
     # ------------------------------------------------------------------ the list of pairs
-    def listed(self, body: int | None = None) -> list[PairEntry]:
-        """Pairs for the GUI list.
+    def relation_filters(self) -> tuple[str, ...]:
+        """The relation filters that make sense for this set ("undecided" only if present)."""
+        extra = ("undecided",) if np.any(self.result.relation == Relation.UNDECIDED) else ()
+        return RELATION_FILTERS + extra
 
-        All the pairs of ``body`` when given, else the first MAX_LISTED (tangent before overlap,
-        then by (i, j)).
+    def matching(self, relation: str = "all", body: int | None = None) -> np.ndarray:
+        """Indices of the contacts that pass the filter, in list order.
+
+        Args:
+            relation: "all", or a relation name ("tangent", "overlap", "undecided").
+            body: only the pairs of this body (None: every body).
+
+        Raises:
+            ValueError: an unknown relation, or a body index out of range.
         """
-        res = self.result
+        res, idx = self.result, self.order
         if body is not None:
-            idx = res.pairs_of(body)
-        else:
-            order = np.lexsort((res.j, res.i, -(res.relation == Relation.TANGENT).astype(np.int8)))
-            idx = order[:MAX_LISTED]
-        return [PairEntry(int(k), self.pair_label(int(k))) for k in idx]
+            if not 0 <= body < len(self.bodies):
+                raise ValueError(f"no body {body}: the bodies are numbered 0 to {len(self.bodies) - 1:,}")
+            idx = idx[(res.i[idx] == body) | (res.j[idx] == body)]
+        if relation != "all":
+            code = Relation.parse(relation)
+            idx = idx[res.relation[idx] == code]
+        return idx
+
+    def page(self, relation: str = "all", body: int | None = None, page: int = 0, size: int = PAGE_SIZE) -> PairPage:
+        """One page of the filtered pair list (the page number is clamped to the pages there are)."""
+        idx = self.matching(relation, body)
+        pages = max(1, -(-len(idx) // size))
+        page = min(max(0, page), pages - 1)
+        chunk = idx[page * size : (page + 1) * size]
+        return PairPage([PairEntry(int(k), self.pair_label(int(k))) for k in chunk], len(idx), page * size, page, pages)
+
+    def partners(self, body: int) -> list[int]:
+        """The bodies that ``body`` touches or overlaps, ascending."""
+        res = self.result
+        k = res.pairs_of(body)
+        return sorted({int(res.j[q]) if int(res.i[q]) == body else int(res.i[q]) for q in k})
+
+    def colours(self) -> np.ndarray:
+        """(N, 3) uint8: each body in the colour of its worst certified relation (grey: invalid)."""
+        from .shapes import NEUTRAL, RELATION_COLORS
+
+        # rows for the codes INVALID (-2), UNDECIDED (-1), SEPARATE, TANGENT, OVERLAP
+        table = np.array([NEUTRAL, NEUTRAL, *(RELATION_COLORS[k] for k in ("separate", "tangent", "overlap"))], dtype=np.uint8)
+        return table[self.worst.astype(np.int64) + 2]
 
     def pair_label(self, k: int) -> str:
         """"3 – 17  tangent (exact)" (with the image in a box: "3 – 17 [+x]  overlap (float)")."""
@@ -157,13 +221,25 @@ class BodiesModel:
             lines.append(f"{len(self.invalid)} invalid bodies (grey), e.g. {next(iter(self.invalid.values()))}")
         return "\n\n".join(lines)
 
+    def contact_segments(self) -> np.ndarray:
+        """(M, 2, 3) the centres of the two bodies of each contact (in a box: j's image)."""
+        res = self.result
+        a = self.positions[res.i]
+        b = self.positions[res.j].copy()
+        shifts = res.shifts()  # the lattice vectors v(k) the search moved j by
+        if shifts is not None:
+            b[:, : self.dim] += shifts
+        return np.stack([a, b], axis=1)
+
     # ------------------------------------------------------------------ picking
     def pick(self, origin: Any, direction: Any) -> int | None:
         """The body first hit by the ray (drawn shapes; 2D: the z = 0 plane), or None."""
         o = np.asarray(origin, dtype=float)
         u = np.asarray(direction, dtype=float)
         u = u / (np.linalg.norm(u) or 1.0)
-        R = rotations_from_orientations(self.wxyz, len(self.wxyz), 3)  # body -> world
+        if self._rotations is None:
+            self._rotations = rotations_from_orientations(self.wxyz, len(self.wxyz), 3)  # body -> world
+        R = self._rotations
         lo = np.einsum("nji,nj->ni", R, o[None, :] - self.positions)  # ray in body frames
         du = np.einsum("nji,j->ni", R, u)
         if self.dim == 2:

@@ -1,46 +1,46 @@
-"""The many-bodies view of one tab: all bodies as instanced meshes, and their contacts.
+"""The many-bodies view of one tab: all bodies, their contacts, the way into the two-body view.
 
-It is also the way in to the two-body view for any pair.
+* Every body is drawn as a point, and the bodies largest on screen for the tab's camera as
+  solids on top (:mod:`app.scene.bodies_layers`, :mod:`app.scene.bodies_lod`: 100,000 bodies
+  stay interactive in software WebGL), each in the colour of its worst certified relation
+  (separate green, tangent amber, overlap red, invalid grey). Separate bodies can be shown,
+  faded or hidden; the contact network (a line per contact pair) can be shown.
+* The GUI lists the pairs a page at a time ("showing 1–200 of 2,228 pairs"), filtered by
+  relation and by body index; it opens a file (upload, CSV/NPZ) with an optional periodic box.
+  Clicking a body selects it (its pairs are listed); clicking a body it touches, or picking a
+  pair from the list, opens that pair in the existing two-body view
+  (:class:`~app.scene.session.Session` on a :class:`~app.scene.state.SceneConfig` built from
+  the two bodies' parameters), with a button back to all bodies.
 
-* Every body is one instance of a batched mesh (viser ``add_batched_meshes_simple``: one draw
-  call for thousands), coloured by its worst certified relation (separate green, tangent amber,
-  overlap red, invalid grey); separate bodies can be faded so the contacts stand out.
-* The GUI lists the pairs (tangent first), opens a file (upload, CSV/NPZ) with an optional
-  periodic box, and shows the selected body's pairs. Clicking a body selects it; clicking a body
-  it touches (or picking a pair from the list) opens that pair in the existing two-body view
-  (:class:`~app.scene.session.Session` on a :class:`~app.scene.state.SceneConfig` built from the
-  two bodies' parameters), with a button back to all bodies.
-
-The maths (contacts, picking, configurations) lives in :mod:`app.scene.bodies`.
+The maths (contacts, the list, picking, configurations) lives in :mod:`app.scene.bodies`.
 """
 
 from __future__ import annotations
 
 import html
 import threading
+import time
 from concurrent.futures import Executor
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
-from core import Relation
-
 from ..bodyfiles import read_bodies, read_bodies_bytes
-from .bodies import BodiesModel
+from .bodies import BodiesModel, PairPage
+from .bodies_layers import SEPARATE_MODES, BodyLayers, relation_colour_rows
+from .bodies_lod import ViewPose
 from .camera import Framing
 from .lighting import light_scene
-from .shapes import NEUTRAL, RELATION_COLORS, RELATION_HEX, unit_disc
+from .shapes import RELATION_HEX
 
-__all__ = ["BodiesView", "load_model", "MESH_NODE", "FADED_OPACITY"]
+__all__ = ["BodiesView", "load_model", "NO_PAIRS"]
 
-MESH_NODE = "/bodies/meshes"
-"""Scene name of the batched mesh of all bodies."""
-FADED_OPACITY = 0.25
-"""Opacity of separate bodies while "Fade separate bodies" is on."""
-_DETAIL = ((2000, 2), (20000, 1), (None, 0))
-"""Icosphere subdivisions by number of bodies (320, 80 or 20 triangles): thousands of bodies stay
-interactive in a software renderer."""
+NO_PAIRS = "(no pairs)"
+"""The pair list's only option when no pair passes the filter."""
+CAMERA_QUIET = 0.12
+"""Seconds without a camera message after which the solids are chosen anew."""
+CAMERA_MAX_WAIT = 0.5
+"""While the camera keeps moving, the solids are chosen anew at least this often (seconds)."""
 
 
 def load_model(path: str, box: Any = None) -> BodiesModel:
@@ -49,19 +49,12 @@ def load_model(path: str, box: Any = None) -> BodiesModel:
     return BodiesModel(bodies, box, name=str(path).rsplit("/", 1)[-1])
 
 
-@lru_cache(maxsize=4)
-def _sphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh
-
-    m = trimesh.creation.icosphere(subdivisions=subdivisions)
-    return np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32)
-
-
 class BodiesView:
     """The scene and GUI of one tab showing many bodies (or, after a pick, one pair of them).
 
     Args:
-        target: ``viser.ClientHandle`` of the tab (``.scene``, ``.gui``, ``.camera``).
+        target: ``viser.ClientHandle`` of the tab (``.scene``, ``.gui``, ``.camera``), or a
+            ``viser.ViserServer`` (no camera: no solids until :meth:`set_pose`).
         model: the bodies to show (None: an empty view with the upload button).
         cache: analysis cache handed to the two-body view.
         executor: where the two-body view runs analyses.
@@ -75,161 +68,287 @@ class BodiesView:
         self.cache = cache
         self.executor = executor
         self.session: Any = None
-        """The two-body :class:`~app.scene.session.Session` while a pair is open, else None."""
+        """The two-body :class:`~app.scene.session.Session` (built at the first "Open pair", then
+        kept, hidden, while all bodies are shown: a pair opens like a preset, with no shader to
+        compile), or None."""
         self.pair: int | None = None
-        """Index (in the contacts) of the open pair."""
+        """Index (in the contacts) of the open pair, or None when all bodies are shown."""
         self.selected: int | None = None
+        self.layers: BodyLayers | None = None
+        """The bodies' scene nodes (None: no bodies, or a pair is open)."""
         self.ready = threading.Event()
         """Set when the current view (all bodies, or a pair) is built."""
+        self.relation = "all"
+        self.body: int | None = None
+        """The body the list is filtered by (None: all)."""
+        self.page_no = 0
+        self.separate = "faded"
+        self.network = False
+        self.listing: PairPage | None = None
+        """The page of pairs the list shows."""
         self._lock = threading.RLock()
         self._closed = False
         self._choices: dict[str, int] = {}
         self._syncing = False
-        self.show_bodies()
+        self._timer: threading.Timer | None = None
+        self._last_pose = 0.0
+        self.labels: list[Any] = []
+        self._bodies_gui: list[Any] = []
+        self._pair_gui: list[Any] = []
+        self._session_nodes: dict[str, bool] = {}
+        self._bodies_camera: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.scene.on_click()(self._on_scene_click)
+        cam = getattr(target, "camera", None)
+        if cam is not None:
+            cam.on_update(self._on_camera)
+        self._build_all()
 
     # ------------------------------------------------------------------ all bodies
     def show_bodies(self) -> None:
-        """Build (or rebuild, coming back from a pair) the view of all bodies."""
+        """Show all bodies: back from a pair (nothing is rebuilt), or build the view anew."""
+        with self._lock:
+            if self.pair is not None and self.session is not None:
+                return self._back_from_pair()
+            self._build_all()
+
+    def _build_all(self) -> None:
+        """Build the view of all bodies (a new file or box: the two-body view goes too)."""
         with self._lock:
             self.ready.clear()
             if self.session is not None:
                 self.session.close()
                 self.session = None
             self.pair = None
+            self._session_nodes = {}
             self.gui.reset()
             self.scene.reset()
-            self._build_scene()
+            self.labels = []
+            light_scene(self.scene)
+            self.layers = self._build_layers()
             self._build_gui()
             self._frame_camera()
+            if self.selected is not None and self.model is not None:
+                self._label(self.selected)
+            self.set_pose(ViewPose.of_camera(getattr(self.target, "camera", None)))
             self.ready.set()
 
-    def _build_scene(self) -> None:
-        scene = self.scene
-        light_scene(scene)
-        self.mesh = None
-        self.labels: list[Any] = []
+    def _build_layers(self) -> BodyLayers | None:
         m = self.model
         if m is None or len(m.bodies) == 0:
-            return
-        N = len(m.bodies)
-        if m.dim == 2:
-            vertices, faces = unit_disc()
-        else:
-            vertices, faces = _sphere(next(s for n, s in _DETAIL if n is None or N <= n))
-        self.mesh = scene.add_batched_meshes_simple(
-            MESH_NODE,
-            vertices,
-            faces,
-            batched_wxyzs=m.wxyz.astype(np.float32),
-            batched_positions=m.positions.astype(np.float32),
-            batched_scales=m.scales.astype(np.float32),
-            batched_colors=self._colours(),
-            batched_opacities=self._opacities(True),
-            side="double" if m.dim == 2 else "front",
-            cast_shadow=False,
-            receive_shadow=False,
-        )
-        self.mesh.on_click(self._on_click)
+            return None
+        layers = BodyLayers(self.scene, m.dim, m.positions, m.wxyz, m.scales, m.colours(), m.worst, separate=self.separate)
         if m.box is not None:
-            self._draw_box(m.box)
+            layers.add_box(m.positions.min(axis=0), m.box)
+        if self.network:
+            layers.set_network(True, m.contact_segments(), relation_colour_rows(m.result.relation))
+        return layers
 
-    def _colours(self) -> np.ndarray:
-        """(N, 3) uint8: each body in the colour of its worst relation (grey: invalid)."""
-        assert self.model is not None
-        # rows for the codes INVALID (-2), UNDECIDED (-1), SEPARATE, TANGENT, OVERLAP
-        table = np.array([NEUTRAL, NEUTRAL, *(RELATION_COLORS[k] for k in ("separate", "tangent", "overlap"))], dtype=np.uint8)
-        return table[self.model.worst.astype(np.int64) + 2]
+    def set_pose(self, pose: ViewPose | None) -> None:
+        """Choose the solids for this camera pose (the tab's camera calls it when it stops)."""
+        with self._lock:
+            if self.layers is None or self.pair is not None or pose is None:
+                return
+            self.layers.set_pose(pose)
+            self._last_pose = time.monotonic()
+            self._show_drawn()
 
-    def _opacities(self, fade: bool) -> np.ndarray:
-        assert self.model is not None
-        separate = self.model.worst == Relation.SEPARATE
-        return np.where(separate & fade, FADED_OPACITY, 1.0).astype(np.float32)
-
-    def _draw_box(self, box: tuple[float, ...]) -> None:
-        assert self.model is not None
-        from core.bodies.periodic import box_vectors, read_box
-
-        d = self.model.dim
-        lo = self.model.positions.min(axis=0)
-        vectors = np.zeros((3, 3))
-        L = read_box(box, d)
-        assert L is not None
-        vectors[:d, :d] = box_vectors(L, d)  # columns a1, a2[, a3]: a tilted box is a parallelepiped
-        corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in ((0, 1) if d == 3 else (0,))], dtype=float)
-        pts = lo + corners @ vectors.T
-        segs = [
-            (a, b)
-            for a in range(len(pts))
-            for b in range(a + 1, len(pts))
-            if np.count_nonzero(corners[a] != corners[b]) == 1
-        ]
-        self.scene.add_line_segments(
-            "/bodies/box", np.array([[pts[a], pts[b]] for a, b in segs], dtype=np.float32), (90, 90, 90),
-            thickness=1.5, thickness_units="screen",
+    def _show_drawn(self) -> None:
+        if self.layers is None or not hasattr(self, "drawn_md"):
+            return
+        d = self.layers.drawn()
+        self.drawn_md.content = (
+            f"Drawn: {d['fine'] + d['coarse']:,} bodies as solids (the largest on screen; they follow the camera), "
+            f"{d['points']:,} as points."
         )
 
     def _build_gui(self) -> None:
         gui = self.gui
         gui.configure_theme(control_width="large", show_share_button=False)
-        gui.add_markdown("**Many bodies** — certified contacts")
+        self.back_button = gui.add_button("← All bodies", order=-1000.0, visible=False)
+        self.pair_note = gui.add_markdown("", order=-999.0, visible=False)
+        self._pair_gui = [self.back_button, self.pair_note]
+        self.back_button.on_click(lambda ev: self.show_bodies())
+        title = gui.add_markdown("**Many bodies** — certified contacts")
         m = self.model
         self.summary = gui.add_markdown(m.summary() if m is not None else "Open a file of bodies (CSV or NPZ).")
-        gui.add_html(_legend())
-        with gui.add_folder("Contacts"):
-            entries = m.listed() if m is not None else []
-            self._set_choices(entries)
-            self.pairs = gui.add_dropdown(
-                "Pair", list(self._choices) or ["(no contacts)"], hint="pick a pair to open it in the two-body view"
-            )
-            self.open_button = gui.add_button("Open pair", disabled=not self._choices, icon=None)
-            self.body_md = gui.add_markdown("Click a body to see its contacts; click one it touches to open the pair.")
-            self.fade = gui.add_checkbox("Fade separate bodies", True)
-        with gui.add_folder("File", expand_by_default=m is None):
+        legend = gui.add_html(_legend())
+        contacts_folder = gui.add_folder("Contacts")
+        self._bodies_gui = [title, self.summary, legend, contacts_folder]
+        with contacts_folder:
+            filters = list(m.relation_filters()) if m is not None else ["all"]
+            self.relation_box = gui.add_dropdown("Relation", filters, initial_value=self.relation if self.relation in filters else "all",
+                                                 hint="list only the pairs of this relation")
+            self.body_text = gui.add_text("Body", "" if self.body is None else str(self.body),
+                                          hint="a body's index: list only its pairs (empty: all bodies)")
+            self.list_md = gui.add_markdown("")
+            self.pairs = gui.add_dropdown("Pair", [NO_PAIRS], hint="pick a pair to open it in the two-body view")
+            self.prev_button = gui.add_button("◀ Previous page", disabled=True)
+            self.next_button = gui.add_button("Next page ▶", disabled=True)
+            self.open_button = gui.add_button("Open pair", disabled=True)
+            self.body_md = gui.add_markdown("Click a body to list its contacts; click one it touches to open the pair.")
+        view_folder = gui.add_folder("View")
+        with view_folder:
+            self.separate_box = gui.add_dropdown("Separate bodies", list(SEPARATE_MODES), initial_value=self.separate,
+                                                 hint="faded: pale; hidden: only bodies in contact are drawn")
+            self.network_box = gui.add_checkbox("Contact network", self.network, hint="a line between the centres of each contact pair")
+            self.drawn_md = gui.add_markdown("")
+        file_folder = gui.add_folder("File", expand_by_default=m is None)
+        self._bodies_gui += [view_folder, file_folder]
+        with file_folder:
             self.upload = gui.add_upload_button("Open a file of bodies", mime_type=".csv,.npz", hint="CSV (x,y,z,a,b,c,qw,qx,qy,qz or x,y,a,b,angle) or NPZ")
             self.box_text = gui.add_text("Periodic box", "" if m is None or m.box is None else ", ".join(f"{v:g}" for v in m.box), hint="Lx, Ly(, Lz), or Lx, Ly, Lz, xy, xz, yz (tilted); empty: open space")
             self.file_md = gui.add_markdown("")
-        self.pairs.on_update(self._on_pick)
+        self._refresh_list()
+        self._show_drawn()
+        self.relation_box.on_update(lambda ev: self._from_client(ev, self._on_relation))
+        self.body_text.on_update(lambda ev: self._from_client(ev, self._on_body_text))
+        self.pairs.on_update(lambda ev: self._from_client(ev, self._open_current))
+        self.prev_button.on_click(lambda ev: self.turn_page(-1))
+        self.next_button.on_click(lambda ev: self.turn_page(+1))
         self.open_button.on_click(lambda ev: self._open_current())
-        self.fade.on_update(lambda ev: self._on_fade())
+        self.separate_box.on_update(lambda ev: self._from_client(ev, lambda: self.set_separate(str(self.separate_box.value))))
+        self.network_box.on_update(lambda ev: self._from_client(ev, lambda: self.set_network(bool(self.network_box.value))))
         self.upload.on_upload(self._on_upload)
         self.box_text.on_update(self._on_box)
 
-    def _set_choices(self, entries: list[Any]) -> None:
-        self._choices = {e.label: e.index for e in entries}
-
-    # ------------------------------------------------------------------ callbacks
-    def _on_pick(self, ev: Any) -> None:
+    def _from_client(self, ev: Any, action: Any) -> None:
+        """Run ``action`` for a change the user made (not for the view's own updates of the GUI)."""
         if self._syncing or getattr(ev, "client", None) is None:
             return
-        self._open_current()
+        action()
 
+    # ------------------------------------------------------------------ the list of pairs
+    def _refresh_list(self) -> None:
+        """Show the current page of the filtered pair list."""
+        m = self.model
+        if m is None:
+            self.list_md.content = ""
+            return
+        try:
+            self.listing = m.page(self.relation, self.body, self.page_no)
+        except ValueError as e:
+            self.listing = None
+            self.list_md.content = f'<span style="color:#d62728">⚠ {html.escape(str(e))}</span>'
+            self._set_pair_options([])
+            return
+        pg = self.listing
+        self.page_no = pg.page
+        what = ("pairs" if self.relation == "all" else f"{self.relation} pairs") + ("" if self.body is None else f" of body {self.body}")
+        text = pg.caption(what)
+        if pg.pages > 1:
+            text += f" (page {pg.page + 1:,} of {pg.pages:,})"
+        self.list_md.content = text[0].upper() + text[1:]
+        self._set_pair_options(pg.entries)
+        self.prev_button.disabled = pg.page == 0
+        self.next_button.disabled = pg.page >= pg.pages - 1
+
+    def _set_pair_options(self, entries: list[Any]) -> None:
+        self._choices = {e.label: e.index for e in entries}
+        self._syncing = True
+        try:
+            self.pairs.options = list(self._choices) or [NO_PAIRS]
+        finally:
+            self._syncing = False
+        self.open_button.disabled = not self._choices
+
+    def filter_pairs(self, relation: str | None = None, body: int | None | str = "keep", page: int = 0) -> PairPage | None:
+        """Filter the list (a relation, a body or None for all, "keep" to keep it) and show a page."""
+        with self._lock:
+            if relation is not None:
+                self.relation = relation
+            if body != "keep":
+                self.body = body if body is None else int(body)
+            self.page_no = page
+            self._refresh_list()
+            return self.listing
+
+    def turn_page(self, step: int) -> PairPage | None:
+        """Show the next (+1) or previous (-1) page of the list."""
+        with self._lock:
+            self.page_no += step
+            self._refresh_list()
+            return self.listing
+
+    def _on_relation(self) -> None:
+        self.filter_pairs(relation=str(self.relation_box.value))
+
+    def _on_body_text(self) -> None:
+        text = str(self.body_text.value).strip()
+        if not text:
+            self.filter_pairs(body=None)
+            return
+        try:
+            body = int(text)
+        except ValueError:
+            self.list_md.content = f'<span style="color:#d62728">⚠ body: expected a whole number, got {html.escape(text)!s}</span>'
+            return
+        self.filter_pairs(body=body)
+        if self.listing is not None and self.model is not None:
+            self._describe(body)
+
+    # ------------------------------------------------------------------ options
+    def set_separate(self, mode: str) -> None:
+        """Draw separate bodies "shown", "faded" or "hidden"."""
+        with self._lock:
+            self.separate = mode
+            if self.layers is not None:
+                self.layers.set_separate(mode)
+                self._show_drawn()
+
+    def set_network(self, shown: bool) -> None:
+        """Show or hide the contact network (built the first time it is shown)."""
+        with self._lock:
+            self.network = shown
+            m = self.model
+            if self.layers is None or m is None:
+                return
+            if shown and self.layers.network is None:
+                self.layers.set_network(True, m.contact_segments(), relation_colour_rows(m.result.relation))
+            else:
+                self.layers.set_network(shown)
+
+    # ------------------------------------------------------------------ callbacks
     def _open_current(self) -> None:
         k = self._choices.get(self.pairs.value)
         if k is not None:
             self.open_pair(k)
 
-    def _on_fade(self) -> None:
-        if self.mesh is not None and self.model is not None:
-            self.mesh.batched_opacities = self._opacities(bool(self.fade.value))
-
-    def _on_click(self, ev: Any) -> None:
-        if self.model is None:
+    def _on_camera(self, cam: Any) -> None:
+        """A camera message: choose the solids when the camera stops (or every CAMERA_MAX_WAIT s)."""
+        if self._closed or self.pair is not None or self.layers is None:
             return
-        k = ev.instance_index
-        if k is None:
-            k = self.model.pick(ev.ray_origin, ev.ray_direction)
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+            if time.monotonic() - self._last_pose >= CAMERA_MAX_WAIT:
+                self._timer = None
+                self.set_pose(ViewPose.of_camera(cam))
+                return
+            self._timer = threading.Timer(CAMERA_QUIET, lambda: self.set_pose(ViewPose.of_camera(cam)))
+            self._timer.daemon = True
+            self._timer.start()
+
+    def settling(self) -> bool:
+        """True while a camera move waits for its solids (a timer is pending)."""
+        t = self._timer
+        return t is not None and t.is_alive()
+
+    def _on_scene_click(self, ev: Any) -> None:
+        if self.model is None or self.pair is not None:
+            return
+        k = self.model.pick(ev.ray_origin, ev.ray_direction)
         if k is not None:
             self.select(int(k))
 
     def select(self, body: int) -> int | None:
-        """Select a body (a click): show its pairs; open the pair if it touches the previous one.
+        """Select a body (a click): list its pairs; open the pair if it touches the previous one.
 
         Returns:
             The index of the pair opened, or None.
         """
         with self._lock:
             m = self.model
-            if m is None or self.session is not None:
+            if m is None or self.pair is not None:
                 return None
             previous, self.selected = self.selected, body
             if previous is not None and previous != body:
@@ -237,26 +356,32 @@ class BodiesView:
                 if k is not None:
                     self.open_pair(k)
                     return k
-            entries = m.listed(body)
-            self._set_choices(entries)
             self._syncing = True
             try:
-                self.pairs.options = list(self._choices) or ["(no contacts)"]
+                self.body_text.value = str(body)
             finally:
                 self._syncing = False
-            self.open_button.disabled = not self._choices
-            partners = sorted({int(m.result.i[e.index]) if int(m.result.j[e.index]) == body else int(m.result.j[e.index]) for e in entries})
-            why = m.invalid.get(body)
-            if why:
-                text = f"Body **{body}** is invalid: {html.escape(why)}"
-            elif partners:
-                shown = ", ".join(str(p) for p in partners[:12]) + (" …" if len(partners) > 12 else "")
-                text = f"Body **{body}** touches or overlaps {len(partners)} bodies ({shown}): click one, or pick the pair above."
-            else:
-                text = f"Body **{body}** is separate from all others."
-            self.body_md.content = text
-            self._label(body)
+            self.filter_pairs(body=body)
+            self._describe(body)
             return None
+
+    def _describe(self, body: int) -> None:
+        m = self.model
+        assert m is not None
+        if not 0 <= body < len(m.bodies):
+            return
+        self.selected = body
+        partners = m.partners(body)
+        why = m.invalid.get(body)
+        if why:
+            text = f"Body **{body}** is invalid: {html.escape(why)}"
+        elif partners:
+            shown = ", ".join(str(p) for p in partners[:12]) + (" …" if len(partners) > 12 else "")
+            text = f"Body **{body}** touches or overlaps {len(partners)} bodies ({shown}): click one, or pick the pair above."
+        else:
+            text = f"Body **{body}** is separate from all others."
+        self.body_md.content = text
+        self._label(body)
 
     def _label(self, body: int) -> None:
         for h in self.labels:
@@ -264,7 +389,7 @@ class BodiesView:
         assert self.model is not None
         pos = self.model.positions[body] + np.array([0.0, 0.0, self.model.scales[body].max() if self.model.dim == 3 else 0.0])
         self.labels = [
-            self.scene.add_label(f"/bodies/selected/{body}", f"body {body}", position=tuple(float(v) for v in pos), anchor="bottom-center")
+            self.scene.add_label("/selected", f"body {body}", position=tuple(float(v) for v in pos), anchor="bottom-center")
         ]
 
     def _on_upload(self, ev: Any) -> None:
@@ -282,8 +407,9 @@ class BodiesView:
             return str(e)
         with self._lock:
             self.model = model
-            self.selected = None
-            self.show_bodies()
+            self.selected = self.body = None
+            self.relation, self.page_no = "all", 0
+            self._build_all()
         return None
 
     def _on_box(self, ev: Any) -> None:
@@ -297,27 +423,84 @@ class BodiesView:
             return
         with self._lock:
             self.model = model
-            self.show_bodies()
+            self.page_no = 0
+            self._build_all()
 
     # ------------------------------------------------------------------ one pair
     def open_pair(self, k: int) -> Any:
-        """Open pair k (index in the contacts) in the two-body view of this tab."""
+        """Open pair k (index in the contacts) in the two-body view of this tab.
+
+        The bodies, their GUI and the two-body view's nodes are hidden or shown, never rebuilt:
+        the first pair builds the two-body :class:`~app.scene.session.Session`, later pairs are
+        loaded into it (no shader to compile in the browser: that was most of a second).
+        """
         from .session import Session
 
         with self._lock:
             assert self.model is not None
+            if self._timer is not None:
+                self._timer.cancel()
             cfg, note = self.model.pair_config(k)
             self.ready.clear()
-            self.gui.reset()
-            self.scene.reset()
+            self._bodies_camera = _camera_of(getattr(self.target, "camera", None)) if self.pair is None else self._bodies_camera
             self.pair = k
-            back = self.gui.add_button("← All bodies", order=-1000.0)
-            self.gui.add_markdown(note, order=-999.0)
-            back.on_click(lambda ev: self.show_bodies())
-            self.session = Session(self.target, cfg, cache=self.cache, executor=self.executor)
+            for h in self._bodies_gui + self.labels:
+                h.visible = False
+            if self.layers is not None:
+                self.layers.frame.visible = False
+            self.pair_note.content = note
+            for h in self._pair_gui:
+                h.visible = True
+            if self.session is None:
+                self.pair_folder = self.gui.add_folder("Two-body view", order=-998.0)
+                with self.pair_folder:
+                    self.session = Session(self.target, cfg, cache=self.cache, executor=self.executor)
+            else:
+                self.pair_folder.visible = True
+                self._show_session_nodes(True)
+                self.session.load(cfg)
             self.session.frame_camera()
             self.ready.set()
             return self.session
+
+    def _back_from_pair(self) -> None:
+        with self._lock:
+            self.ready.clear()
+            self._show_session_nodes(False)
+            self.pair_folder.visible = False
+            for h in self._pair_gui:
+                h.visible = False
+            self.pair = None
+            for h in self._bodies_gui + self.labels:
+                h.visible = True
+            if self.layers is not None:
+                self.layers.frame.visible = True
+            cam = getattr(self.target, "camera", None)
+            if cam is not None and self._bodies_camera is not None:  # the bodies as the user left them
+                position, look_at, up = self._bodies_camera
+                cam.up_direction, cam.position, cam.look_at = up, position, look_at
+            self.ready.set()
+
+    def _show_session_nodes(self, shown: bool) -> None:
+        """Hide the two-body view's scene nodes (remembering which were visible), or show them again.
+
+        Its nodes are found in viser's registry of the tab's scene (viser 1.1.1 has no public
+        listing): every node outside ``/bodies`` whose parent is not itself a node.
+        """
+        registry: dict[str, Any] = getattr(self.scene, "_handle_from_node_name", {})
+        if not shown:
+            self._session_nodes = {}
+            for name, h in list(registry.items()):
+                parent = name.rsplit("/", 1)[0]
+                if name.startswith(("/bodies", "/selected")) or name == "/WorldAxes" or parent in registry:
+                    continue
+                self._session_nodes[name] = bool(h.visible)
+                h.visible = False
+        else:
+            for name, was in self._session_nodes.items():
+                h = registry.get(name)
+                if h is not None:
+                    h.visible = was
 
     # ------------------------------------------------------------------ camera, lifecycle
     def _frame_camera(self) -> None:
@@ -328,10 +511,20 @@ class BodiesView:
         Framing(np.array([lo, hi]), self.model.dim).aim(cam, fill=1.35 if self.model.dim == 3 else 1.0, view=(0.55, -1.0, 0.7))
 
     def close(self) -> None:
-        """The tab went away: stop the two-body view's work."""
+        """The tab went away: stop the two-body view's work and the camera timer."""
         self._closed = True
+        if self._timer is not None:
+            self._timer.cancel()
         if self.session is not None:
             self.session.close()
+
+
+def _camera_of(cam: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Position, look-at point and up direction of a tab's camera (None if it never reported)."""
+    try:
+        return np.array(cam.position), np.array(cam.look_at), np.array(cam.up_direction)
+    except Exception:  # noqa: BLE001 - no camera, or no camera message yet
+        return None
 
 
 def _parse_box(text: str, dim: int) -> tuple[float, ...] | None:

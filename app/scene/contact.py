@@ -54,7 +54,14 @@ class WitnessView:
         lines = []
         if self.margin is not None and self.mu is not None:
             lo, hi = self.mu
-            lines.append(f"**Margin** {self.margin} (contact scale μ ∈ [{lo:.7g}, {hi:.7g}])")
+            if self.relation == "tangent":
+                lines.append(f"**Margin** {self.margin} (contact scale μ = 1)")
+            else:  # a rounded percentage and bracket: marked, never a number that looks exact
+                side = ">" if self.relation == "separate" else "<"
+                bracket = f"μ ∈ [{lo:.7g}, {hi:.7g}]"
+                if f"{lo:.7g}" == f"{hi:.7g}" == "1":
+                    bracket = f"μ {side} 1 by less than float64 can show"
+                lines.append(f"**Margin** ≈ {self.margin} (contact scale {bracket})")
         lines.append("")
         lines.append(f"**Witness** {self.sentence}: {self.detail}" if self.detail else f"**Witness** {self.sentence}")
         return "\n".join(lines)

@@ -8,6 +8,8 @@
 * :mod:`.index`: :class:`BodyIndex`, an index asked about new bodies (Monte Carlo, packing).
 * :mod:`.narrowphase`: the certified :func:`core.classify` on the candidates, in chunks.
 * :mod:`.result`: :class:`Contacts`, what a search returns.
+* :mod:`.swept`, :mod:`.sweep`, :mod:`.sweep_result`: moving bodies over one step t in [0, 1]:
+  the swept broad phase, ``sweep_contacts()`` and :class:`SweepContacts` (first contact times).
 * :mod:`.search`: the search on one machine; :mod:`.distributed`: the same on a Dask cluster;
   :mod:`.contacts`: ``contacts()``, the entry point that picks one.
 """

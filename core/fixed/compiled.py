@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["library", "warm_up", "status", "rules", "rule_one", "set_threads", "get_threads", "SOURCE", "FLAGS"]
+__all__ = ["library", "load_source", "warm_up", "status", "rules", "rule_one", "set_threads", "get_threads", "SOURCE", "FLAGS"]
 
 SOURCE = Path(__file__).with_name("_kernels.c")
 FLAGS: tuple[str, ...] = (
@@ -94,54 +94,68 @@ def cache_dir() -> Path:
     return Path(base) / "ellipsoid-interference"
 
 
-def _library_path(cc: str) -> Path:
+def _library_path(cc: str, source: Path = SOURCE) -> Path:
     try:
         version = subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=30, check=False).stdout
     except (OSError, subprocess.SubprocessError):
         version = cc
     h = hashlib.sha256()
-    for part in (SOURCE.read_bytes(), " ".join(FLAGS).encode(), version.encode(), _cpu_tag().encode(), platform.machine().encode()):
+    for part in (source.read_bytes(), " ".join(FLAGS).encode(), version.encode(), _cpu_tag().encode(), platform.machine().encode()):
         h.update(part)
         h.update(b"\0")
-    return Path(f"kernels-{h.hexdigest()[:20]}.so")
+    stem = "kernels" if source == SOURCE else source.stem.lstrip("_")
+    return Path(f"{stem}-{h.hexdigest()[:20]}.so")
+
+
+def load_source(source: Path) -> tuple[ctypes.CDLL | None, str]:
+    """Compile a C source with :data:`FLAGS` (or find it in the cache) and load it.
+
+    The same cache, naming by hash (source, flags, compiler, CPU) and atomic write as the
+    filter's own kernels, so any C file of the project is built once per machine.
+
+    Returns:
+        (the library, or None; a sentence saying where it was loaded from or why not).
+    """
+    cc = _compiler()
+    if cc is None:
+        return None, "no C compiler found (set CC)"
+    name = _library_path(cc, source)
+    status = "not built"
+    for folder in (cache_dir(), Path(tempfile.gettempdir()) / "ellipsoid-interference"):
+        target = folder / name
+        try:
+            if not target.exists():
+                folder.mkdir(parents=True, exist_ok=True)
+                fd, tmp = tempfile.mkstemp(suffix=".so", dir=folder)
+                os.close(fd)
+                for flags in (FLAGS, PORTABLE_FLAGS):  # a compiler that lacks a flag: portable build
+                    cmd = [cc, *flags, "-o", tmp, str(source), "-lm"]
+                    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300, check=False)
+                    if res.returncode == 0:
+                        break
+                else:
+                    os.unlink(tmp)
+                    return None, f"C compilation failed: {res.stderr.strip()[:500]}"
+                os.replace(tmp, target)  # atomic: concurrent builders agree on the result
+            return ctypes.CDLL(str(target)), f"compiled kernels loaded from {target}"
+        except OSError as e:  # unwritable cache: try the next folder
+            status = f"cannot use {folder}: {e}"
+    return None, status
 
 
 def _build() -> None:
     """Compile (or find in the cache) and load the library; record why not otherwise."""
     try:
-        cc = _compiler()
-        if cc is None:
-            _state["status"] = "no C compiler found (set CC): the numpy filter serves"
+        lib, status = load_source(SOURCE)
+        if lib is None:
+            _state["status"] = status + ("" if "compiler" not in status else ": the numpy filter serves")
             return
-        name = _library_path(cc)
-        for folder in (cache_dir(), Path(tempfile.gettempdir()) / "ellipsoid-interference"):
-            target = folder / name
-            try:
-                if not target.exists():
-                    folder.mkdir(parents=True, exist_ok=True)
-                    fd, tmp = tempfile.mkstemp(suffix=".so", dir=folder)
-                    os.close(fd)
-                    for flags in (FLAGS, PORTABLE_FLAGS):  # a compiler that lacks a flag: portable build
-                        cmd = [cc, *flags, "-o", tmp, str(SOURCE), "-lm"]
-                        res = subprocess.run(cmd, capture_output=True, text=True, timeout=300, check=False)
-                        if res.returncode == 0:
-                            break
-                    else:
-                        os.unlink(tmp)
-                        _state["status"] = f"C compilation failed: {res.stderr.strip()[:500]}"
-                        return
-                    os.replace(tmp, target)  # atomic: concurrent builders agree on the result
-                lib = ctypes.CDLL(str(target))
-            except OSError as e:  # unwritable cache: try the next folder
-                _state["status"] = f"cannot use {folder}: {e}"
-                continue
-            for n in (3, 4):
-                fn = getattr(lib, f"classify{n}")
-                fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int64]
-                fn.restype = None
-            _state["lib"] = lib
-            _state["status"] = f"compiled kernels loaded from {target}"
-            return
+        for n in (3, 4):
+            fn = getattr(lib, f"classify{n}")
+            fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int64]
+            fn.restype = None
+        _state["lib"] = lib
+        _state["status"] = status
     except Exception as e:  # noqa: BLE001 - never break classification: numpy serves
         _state["status"] = f"could not build the compiled kernels: {type(e).__name__}: {e}"
     finally:

@@ -32,7 +32,6 @@ from ..algebra.qsqrt import QSqrtPoly
 from ..algebra.realroots import real_roots
 from ..formulae.decision import sign_variations
 from ..formulae.pencil import determinant, pencil_coefficients
-from ..formulae.subresultants import hat_s0, hat_s1, hat_s10, hat_scale
 from ..relation import Relation
 from ..shapes.numbers import sign
 from ..shapes.quadrics import interior_sign, not_a_quadric_message
@@ -267,19 +266,7 @@ def _motion_pencil(A_t: Any, B_t: Any, lo: fmpq | None, hi: fmpq | None) -> Moti
     PA, lamA = _polynomial_matrix(mA.matrix(), lo, hi, "A")
     PB, lamB = _polynomial_matrix(mB.matrix(), lo, hi, "B")
     a = _canonical_pencil(pencil_coefficients(PA, PB), lamA, lamB, _sample_in(lo, hi))
-    n = len(a) - 1
-    c0, c1, c10 = hat_scale(n)
-    return MotionPencil(
-        n=n,
-        a=a,
-        s0=hat_s0(a).scale_positive(fmpq(c0.numerator, c0.denominator)),
-        s1=hat_s1(a).scale_positive(fmpq(c1.numerator, c1.denominator)),
-        s10=hat_s10(a).scale_positive(fmpq(c10.numerator, c10.denominator)),
-        sqrt_d=max(dA, dB),
-        A=mA,
-        B=mB,
-        matrices=(PA, PB),
-    )
+    return MotionPencil(n=len(a) - 1, a=a, sqrt_d=max(dA, dB), A=mA, B=mB, matrices=(PA, PB))
 
 
 @dataclass

@@ -17,6 +17,7 @@ from flint import fmpq
 from ..algebra.algebraic import RealAlgebraic
 from ..algebra.qsqrt import QSqrtPoly
 from ..formulae.decision import RULES
+from ..formulae.subresultants import hat_s0, hat_s1, hat_s10, hat_scale
 from ..relation import Relation
 from ..shapes.numbers import to_fmpq
 from .motions import Motion, motion_to_dict
@@ -108,7 +109,9 @@ class MotionPencil:
     """P(t, T) = det(T A(t) + B(t)) of a pair on I: its coefficients a_i(t) and the hat subresultants.
 
     What :func:`core.moving.analysis.analyse` computes first and :class:`MotionAnalysis` keeps
-    (its ``n``, ``a``, ``s0``, ... are this pencil's).
+    (its ``n``, ``a``, ``s0``, ... are this pencil's). ŝ0, ŝ1, ŝ1,0 are computed on first use:
+    the full analysis reads all three, the first contact
+    (:mod:`core.moving.first_contact`) often only ŝ0.
     """
 
     n: int
@@ -116,18 +119,35 @@ class MotionPencil:
     a: list[QSqrtPoly]
     """[a_0, ..., a_n] of P(t, T): numerator of det(T A(t) + B(t)), common factors in t removed
     (a positive multiple of the true coefficients on I; exact)."""
-    s0: QSqrtPoly
-    """ŝ0 = -s0/a_n (same sign as s0)."""
-    s1: QSqrtPoly
-    """ŝ1 = -s1/a_n."""
-    s10: QSqrtPoly
-    """ŝ1,0 = -s1,0/a_n."""
     sqrt_d: int
     """d of the sqrt(d) in the coefficients (1: all rational)."""
     A: Motion
     B: Motion
     matrices: tuple[list[list[QSqrtPoly]], list[list[QSqrtPoly]]]
     """The denominator-free matrices (positive multiples of A(t), B(t) on I)."""
+    _hats: dict[str, QSqrtPoly] = field(default_factory=dict, repr=False, compare=False)
+
+    def _hat(self, name: str) -> QSqrtPoly:
+        if name not in self._hats:
+            c0, c1, c10 = hat_scale(self.n)
+            fn, c = {"s0": (hat_s0, c0), "s1": (hat_s1, c1), "s10": (hat_s10, c10)}[name]
+            self._hats[name] = fn(self.a).scale_positive(fmpq(c.numerator, c.denominator))
+        return self._hats[name]
+
+    @property
+    def s0(self) -> QSqrtPoly:
+        """ŝ0 = -s0/a_n (same sign as s0; exact)."""
+        return self._hat("s0")
+
+    @property
+    def s1(self) -> QSqrtPoly:
+        """ŝ1 = -s1/a_n."""
+        return self._hat("s1")
+
+    @property
+    def s10(self) -> QSqrtPoly:
+        """ŝ1,0 = -s1,0/a_n."""
+        return self._hat("s10")
 
     def polynomials(self) -> dict[str, QSqrtPoly]:
         """``a0``..``a{n}``, ``s0``, ``s1``, ``s10`` (hat forms) by name, as the sign table uses them."""

@@ -7,6 +7,7 @@ the tree of :mod:`core.formulae.decision` on exact signs, computing ŝ0, ŝ1, ŝ
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -61,7 +62,7 @@ class SignRow:
 class Signs:
     """Exact signs of a_i, ŝ_j at one point (rational or algebraic), computed on demand."""
 
-    def __init__(self, polys: dict[str, QSqrtPoly], point: fmpq | RealAlgebraic, zero: set[str], float_point: float | None = None) -> None:
+    def __init__(self, polys: Mapping[str, QSqrtPoly], point: fmpq | RealAlgebraic, zero: set[str], float_point: float | None = None) -> None:
         self.polys = polys
         self.point = point
         self.zero = zero  # names known to vanish at this point

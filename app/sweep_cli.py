@@ -1,0 +1,182 @@
+"""The ``sweep`` sub-command of ``python -m app``: first contact times among moving bodies.
+
+``python -m app sweep START END --out EVENTS.csv [--box Lx,Ly,Lz] [--frame K] [--end-frame K]
+[--format F] [--on-invalid mark] [--quiet]``
+
+START and END are files of bodies as for ``contacts`` (any format of :mod:`app.readers`: CSV
+with the columns ``x,y,z,a,b,c,qw,qx,qy,qz`` or ``x,y,a,b,angle``, Parquet, NPZ, HOOMD GSD,
+LAMMPS dump, extended XYZ): row k of START is body k at t = 0, row k of END the same body at
+t = 1 (same semi-axes, row by row). They may be two frames of one trajectory (``--frame``,
+``--end-frame``). Each body moves on the straight line between its centres and turns along
+q(t) = (1 - t) q0 + t q1 (:func:`core.sweep_contacts`). The box is ``--box``, else START's; in a
+box, a body whose end centre is more than half a side away on an axis (a wrapped trajectory:
+it crossed a face) is taken at the nearest image of its end centre (:func:`unwrapped`).
+
+EVENTS is CSV ``i,j,t_lo,t_hi,relation`` (or ``-``: standard output): every pair that touches or
+overlaps during the step, t_lo <= t* <= t_hi (floats written so that they read back exactly),
+the relation at t* (``tangent``, or ``overlap`` when they already overlap at t = 0), sorted by
+(i, j). It is written whole or not at all (:mod:`app.output`). Messages and the progress bar go
+to standard error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+__all__ = ["add_parser", "run_sweep", "unwrapped", "write_events_csv", "read_events_csv", "EVENTS_HEADER"]
+
+EVENTS_HEADER = "i,j,t_lo,t_hi,relation"
+
+
+def add_parser(sub: Any) -> None:
+    """Add ``sweep`` to the sub-command parsers of :func:`app.cli.build_parser`."""
+    from .bodies_cli import add_body_file_options, box_argument, frame_argument
+
+    s = sub.add_parser("sweep", help="certified first contact times among moving bodies (START, END files in, CSV out)")
+    s.add_argument("start", help="bodies at t = 0 (any format of app.readers: CSV, Parquet, NPZ, GSD, LAMMPS, XYZ), or - for stdin")
+    s.add_argument("end", help="the same bodies at t = 1 (same rows, same semi-axes)")
+    s.add_argument("--out", required=True, help=f"output CSV {EVENTS_HEADER}, or - for stdout")
+    s.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz] (minimum image over the step); default: START's box")
+    add_body_file_options(s)
+    s.add_argument("--end-frame", type=frame_argument, default=None, help="frame of END when it is a trajectory (default: --frame)")
+    s.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bad bodies and go on")
+    s.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
+
+
+def _say(args: argparse.Namespace, text: str) -> None:
+    if not getattr(args, "quiet", False):
+        print(text, file=sys.stderr, flush=True)
+
+
+def run_sweep(args: argparse.Namespace) -> int:
+    """``python -m app sweep``: read both files, sweep, write EVENTS, summarise. Returns the exit status."""
+    from core import sweep_contacts
+
+    from .bodies_cli import ProgressBar
+    from .output import Output
+    from .readers import read_bodies, usable_box
+
+    if args.start == "-" and args.end == "-":
+        raise ValueError("START and END cannot both be standard input")
+    out = Output(args.out)  # checked (and its temporary file made) before any work
+    with out as f:
+        t0 = time.perf_counter()
+        start = read_bodies(args.start, frame=args.frame, format=args.format)
+        end = read_bodies(args.end, frame=args.end_frame if args.end_frame is not None else args.frame, format=args.format)
+        names = ("<stdin>" if args.start == "-" else args.start, "<stdin>" if args.end == "-" else args.end)
+        for b, name in zip((start, end), names, strict=True):
+            if b.centers is None or b.semi_axes is None:
+                raise ValueError(f"{name}: sweep needs the bodies' parameters (centres, semi-axes, orientations), not matrices Q")
+        assert start.centers is not None and end.centers is not None and start.semi_axes is not None and end.semi_axes is not None
+        if start.centers.shape != end.centers.shape:
+            raise ValueError(
+                f"{names[0]} has {len(start)} {start.dim}D bodies but {names[1]} has {len(end)} {end.dim}D bodies: "
+                "END must hold the same bodies, row by row"
+            )
+        same = (start.semi_axes == end.semi_axes) | (np.isnan(start.semi_axes) & np.isnan(end.semi_axes))
+        bad = np.flatnonzero(~same.all(axis=1))
+        if bad.size:
+            k = int(bad[0])
+            raise ValueError(
+                f"{start.where(k)}: the semi-axes differ between {names[0]} ({start.semi_axes[k].tolist()}) and "
+                f"{names[1]} ({end.semi_axes[k].tolist()}): a body keeps its shape during the step"
+            )
+        errors = {k: f"{names[0]}: {why}" for k, why in start.errors.items()}
+        errors.update({k: f"{names[1]}: {why}" for k, why in end.errors.items() if k not in errors})
+        if errors and args.on_invalid == "raise":
+            k, why = min(errors.items())
+            raise ValueError(f"{start.where(k)}: {why}")
+        box = args.box if args.box is not None else start.box
+        if box is not None and len(box) != 6 and len(box) != start.dim:
+            raise ValueError(f"--box has {len(box)} sides but the bodies are {start.dim}D")
+        box = usable_box(box, start.dim, names[0])
+        if box is not None and len(box) == 6:
+            raise ValueError(f"{names[0]}: sweep takes orthogonal boxes only (Lx, Ly, Lz); give --box Lx,Ly,Lz")
+        t1 = time.perf_counter()
+        kind = "ellipsoids" if start.dim == 3 else "ellipses"
+        _say(args, f"read {len(start):,} moving {kind} from {names[0]} and {names[1]} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
+        centers1 = end.centers
+        if box is not None:
+            centers1, moved = unwrapped(start.centers, end.centers, np.asarray(box, dtype=np.float64))
+            if moved:
+                _say(args, f"{moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
+        progress = None if args.quiet else ProgressBar(sys.stderr, "first contacts", min_total=50_000)
+        res = sweep_contacts(
+            start.centers, centers1, start.semi_axes, start.orientations, end.orientations,
+            box=box, on_invalid=args.on_invalid, progress=progress,
+        )
+        t2 = time.perf_counter()
+        write_events_csv(f, res.i, res.j, res.t_lo, res.t_hi, res.relation)
+    t3 = time.perf_counter()
+    invalid = dict(res.invalid)
+    invalid.update(errors)  # the reason from the files' parameters, not the stand-in's
+    _say(args, f"wrote {len(res):,} first contacts to {'<stdout>' if args.out == '-' else args.out}")
+    _say(args, res.summary())
+    phases = ", ".join(f"{k} {v:.2f} s" for k, v in res.seconds.items() if k != "total")
+    _say(args, f"time: read files {t1 - t0:.2f} s, sweep ({phases}), write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
+    for k in sorted(invalid)[:10]:  # warnings about the answer: shown even with --quiet
+        print(f"invalid {start.where(k)}: {invalid[k]}", file=sys.stderr)
+    if len(invalid) > 10:
+        print(f"... and {len(invalid) - 10} more invalid bodies", file=sys.stderr)
+    return 0
+
+
+def unwrapped(c0: np.ndarray, c1: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, int]:
+    """END's centres moved by whole box sides so that each body moves by its minimum image.
+
+    Trajectories in a periodic box store wrapped positions: a body that crosses a face between
+    two frames jumps by about one side. Its end centre is taken as c1 - k L, k = round((c1 - c0) / L)
+    (computed in float64: the nearest float to that image). Returns (centres, how many moved).
+
+    Examples:
+        >>> c, n = unwrapped(np.array([[9.5, 5.0]]), np.array([[0.25, 5.0]]), np.array([10.0, 10.0]))
+        >>> c.tolist(), n
+        ([[10.25, 5.0]], 1)
+    """
+    k = np.rint((c1 - c0) / box)
+    moved = np.flatnonzero((k != 0).any(axis=1))
+    out = c1.copy()
+    out[moved] = c1[moved] - k[moved] * box
+    return out, int(moved.size)
+
+
+def write_events_csv(f: IO[str], i: np.ndarray, j: np.ndarray, t_lo: np.ndarray, t_hi: np.ndarray, relation: np.ndarray) -> None:
+    """Write ``i,j,t_lo,t_hi,relation`` rows (header first) to a text file object.
+
+    Floats are written with ``repr`` (the shortest text that reads back to the same float), so
+    the brackets stay certified after a round trip.
+    """
+    from core import Relation
+
+    names = {int(r): str(r) for r in Relation}
+    f.write(EVENTS_HEADER + "\n")
+    step = 1 << 16
+    for s in range(0, len(i), step):
+        rows = zip(
+            i[s : s + step].tolist(), j[s : s + step].tolist(), t_lo[s : s + step].tolist(),
+            t_hi[s : s + step].tolist(), relation[s : s + step].tolist(), strict=True,
+        )
+        f.write("".join(f"{a},{b},{lo!r},{hi!r},{names[r]}\n" for a, b, lo, hi, r in rows))
+
+
+def read_events_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Read a file written by :func:`write_events_csv`: (i, j, t_lo, t_hi, int8 Relation codes)."""
+    from core import Relation
+
+    lines = Path(path).read_text().splitlines()
+    if not lines or lines[0].strip() != EVENTS_HEADER:
+        raise ValueError(f"{path}: expected the header {EVENTS_HEADER}")
+    rows = [ln.split(",") for ln in lines[1:] if ln.strip()]
+    return (
+        np.array([int(r[0]) for r in rows], dtype=np.int64),
+        np.array([int(r[1]) for r in rows], dtype=np.int64),
+        np.array([float(r[2]) for r in rows], dtype=np.float64),
+        np.array([float(r[3]) for r in rows], dtype=np.float64),
+        np.array([int(Relation.parse(r[4])) for r in rows], dtype=np.int8),
+    )
