@@ -373,3 +373,12 @@ def test_scene_draws_the_tilted_cell_and_takes_a_typed_tilted_box(tmp_path):
     assert _parse_box("8, 8, 8, 0.5, -0.25, 0.375", 3) == box and _parse_box("5 5 0.5", 2) == (5.0, 5.0, 0.5)
     with pytest.raises(ValueError, match="expected 3 sides for 3D bodies"):
         _parse_box("8, 8, 8, 1", 3)
+
+
+def test_moving_bodies_refuse_a_tilted_box_clearly():
+    from core import sweep_contacts
+
+    c = np.array([[0.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
+    with pytest.raises(ValueError, match=r"^box: tilted \(triclinic\) boxes are not supported for moving bodies yet"):
+        sweep_contacts(c, c + 0.5, np.full((2, 3), 0.5), box=(10, 10, 10, 0.5, 0, 0))
+    assert len(sweep_contacts(c, c + 0.5, np.full((2, 3), 0.5), box=(10, 10, 10, 0, 0, 0))) == 0  # no tilt: orthorhombic
