@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from oracle import pencil_oracle, positive_roots
 
-from app.scene.jobs import analyse_job
+from app.jobs import analyse_job
 from app.scene.motion import load_motion
 from app.scene.roots import locus, roots_at, roots_of_pencil
 from app.scene.roots_view import locus_data, plane_data, roots_words

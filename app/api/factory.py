@@ -16,7 +16,7 @@ from core import warm_up
 from ..workers import WorkerPool
 from .batching import PairBatcher
 from .limits import BodySizeLimit, validation_error_handler
-from .routes import classify, contacts, health, landing, motion, presets, witness
+from .routes import classify, contacts, health, landing, motion, presets, sweep, witness
 from .settings import ApiSettings
 
 __all__ = ["create_api", "DOCS_ASSETS"]
@@ -38,8 +38,9 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
         settings: limits and the scene link; defaults to ``ApiSettings()``.
 
     Returns:
-        A FastAPI app with /api/classify, /api/explain, /api/analyse, /api/presets, /healthz,
-        the landing page at / and OpenAPI docs at /docs.
+        A FastAPI app with /api/classify, /api/explain, /api/analyse, the witness routes,
+        /api/contacts, /api/sweep, /api/presets, /healthz, the landing page at / and OpenAPI
+        docs at /docs.
     """
     settings = settings or ApiSettings()
     workers = WorkerPool(
@@ -74,7 +75,12 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     app.state.batcher = batcher
     # ignored: starlette types every handler as taking any Exception; this one is registered for its class only
     app.add_exception_handler(RequestValidationError, validation_error_handler)  # type: ignore[arg-type]
-    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes, per_path={"/api/contacts": settings.max_contacts_body_bytes})
+    app.add_middleware(
+        BodySizeLimit,
+        max_bytes=settings.max_body_bytes,
+        # /api/sweep: start and end rows, twice the bytes of the same bodies in /api/contacts
+        per_path={"/api/contacts": settings.max_contacts_body_bytes, "/api/sweep": 2 * settings.max_contacts_body_bytes},
+    )
     if settings.cors_origins:  # opt-in (--cors-origin): pages at these origins may call the API
         from fastapi.middleware.cors import CORSMiddleware
 
@@ -86,7 +92,7 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
             expose_headers=["retry-after"],
             max_age=600,
         )
-    for module in (classify, contacts, motion, presets, witness, health, landing):
+    for module in (classify, contacts, sweep, motion, presets, witness, health, landing):
         app.include_router(module.router)
     if settings.static_dir is not None and settings.static_dir.is_dir():
         app.mount("/static", StaticFiles(directory=settings.static_dir), name="static")
