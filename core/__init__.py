@@ -12,6 +12,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import warm_up, set_threads                 # compiled filter available?; threads
     from core import contact_scale, separating_plane, contact_point, distance   # witnesses (core.witness)
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
+    from core import BodyIndex                            # an index asked about new bodies
     from core import sweep_contacts, SweepContacts, first_contact   # N moving bodies: first contacts
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
@@ -23,6 +24,7 @@ from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: re
 from .bodies.broadphase import TooManyPairs as TooManyPairs
 from .bodies.build import bodies_from_axes as bodies_from_axes
 from .bodies.contacts import contacts as contacts
+from .bodies.index import BodyIndex as BodyIndex
 from .bodies.result import Contacts as Contacts
 from .bodies.sweep import sweep_contacts as sweep_contacts
 from .bodies.sweep_result import SweepContacts as SweepContacts
@@ -67,6 +69,7 @@ from .witness import distance as distance
 from .witness import separating_plane as separating_plane
 
 __all__ = [
+    "BodyIndex",
     "METHODS",
     "ON_INVALID",
     "Certifier",

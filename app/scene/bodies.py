@@ -8,8 +8,8 @@ click ray, and the
 
 What the two-body view certifies: it rebuilds both shapes from their parameters with
 :func:`core.quadric_from_axes`, bit for bit the matrices the search classified, so an open pair
-gets the same label. In a periodic box the second body is shown at its image centre c_j + k L
-rounded to a float, while the search classified the exact translate of its matrix; a pair at
+gets the same label. In a periodic box the second body is shown at its image centre c_j + v(k)
+(k L, or the tilted box's lattice vector) rounded to a float, while the search classified the exact translate of its matrix; a pair at
 the very edge of tangency may then read differently (the view says so). Bodies given as
 matrices (NPZ ``Q``) are shown with parameters recovered in floats (approximate).
 """
@@ -208,7 +208,9 @@ class BodiesModel:
         """Markdown: the set, its contacts by relation and how they were certified."""
         res, c = self.result, self.result.counts
         kind = "ellipsoids" if self.dim == 3 else "ellipses"
-        box = "" if self.box is None else " in a periodic box " + " × ".join(f"{v:g}" for v in self.box)
+        box = "" if self.box is None else " in a periodic box " + " × ".join(f"{v:g}" for v in self.box[: max(self.dim, 3) if len(self.box) == 6 else self.dim])
+        if self.box is not None and len(self.box) == 6:
+            box += " tilted (xy, xz, yz) = (" + ", ".join(f"{v:g}" for v in self.box[3:]) + ")"
         lines = [
             f"**{len(self.bodies):,} {kind}**{box}" + (f" from `{self.name}`" if self.name else ""),
             f"{len(res):,} contacts: **{c.get('tangent', 0):,} tangent**, **{c.get('overlap', 0):,} overlap** "
@@ -224,9 +226,9 @@ class BodiesModel:
         res = self.result
         a = self.positions[res.i]
         b = self.positions[res.j].copy()
-        if res.image is not None and self.box is not None:
-            shift = res.image.astype(float) * np.array(self.box)
-            b[:, : self.dim] += shift
+        shifts = res.shifts()  # the lattice vectors v(k) the search moved j by
+        if shifts is not None:
+            b[:, : self.dim] += shifts
         return np.stack([a, b], axis=1)
 
     # ------------------------------------------------------------------ picking
@@ -265,9 +267,8 @@ class BodiesModel:
         """A static two-body configuration of pair k, and a note on what it shows."""
         res = self.result
         i, j = int(res.i[k]), int(res.j[k])
-        shift = np.zeros(self.dim)
-        if res.image is not None and self.box is not None:
-            shift = res.image[k].astype(float) * np.array(self.box)
+        shifts = res.shifts()  # the float lattice vectors v(k) the search moved j by
+        shift = np.zeros(self.dim) if shifts is None else shifts[k]
         shapes = {"A": self._shape(i, np.zeros(self.dim)), "B": self._shape(j, shift)}
         cfg = SceneConfig.from_dict({"dim": self.dim, **shapes, "preset": None, "show_plots": False})
         rel = str(Relation(int(res.relation[k])))

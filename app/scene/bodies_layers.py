@@ -237,10 +237,16 @@ class BodyLayers:
                 self.network.visible = shown
 
     def add_box(self, lo: np.ndarray, sides: tuple[float, ...]) -> None:
-        """Draw the periodic box with its lower corner at ``lo`` (world)."""
-        L = np.array(list(sides) + ([0.0] if len(sides) == 2 else []))
-        corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in ((0, 1) if len(sides) == 3 else (0,))], dtype=float)
-        pts = lo + corners * L - self.origin
+        """Draw the periodic box with its lower corner at ``lo`` (world); a tilted box as its parallelepiped."""
+        from core.bodies.periodic import box_vectors, read_box
+
+        d = self.dim
+        L = read_box(sides, d)
+        assert L is not None
+        vectors = np.zeros((3, 3))
+        vectors[:d, :d] = box_vectors(L, d)  # columns a1, a2[, a3]
+        corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in ((0, 1) if d == 3 else (0,))], dtype=float)
+        pts = lo + corners @ vectors.T - self.origin
         segs = [(a, b) for a in range(len(pts)) for b in range(a + 1, len(pts)) if np.count_nonzero(corners[a] != corners[b]) == 1]
         self.scene.add_line_segments(
             f"{ROOT}/box", _f32(np.array([[pts[a], pts[b]] for a, b in segs])), (90, 90, 90), thickness=1.5, thickness_units="screen"

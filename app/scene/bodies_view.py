@@ -196,7 +196,7 @@ class BodiesView:
         self._bodies_gui += [view_folder, file_folder]
         with file_folder:
             self.upload = gui.add_upload_button("Open a file of bodies", mime_type=".csv,.npz", hint="CSV (x,y,z,a,b,c,qw,qx,qy,qz or x,y,a,b,angle) or NPZ")
-            self.box_text = gui.add_text("Periodic box", "" if m is None or m.box is None else ", ".join(f"{v:g}" for v in m.box), hint="Lx, Ly(, Lz); empty: open space")
+            self.box_text = gui.add_text("Periodic box", "" if m is None or m.box is None else ", ".join(f"{v:g}" for v in m.box), hint="Lx, Ly(, Lz), or Lx, Ly, Lz, xy, xz, yz (tilted); empty: open space")
             self.file_md = gui.add_markdown("")
         self._refresh_list()
         self._show_drawn()
@@ -536,8 +536,8 @@ def _parse_box(text: str, dim: int) -> tuple[float, ...] | None:
         sides = tuple(float(p) for p in parts)
     except ValueError:
         raise ValueError(f"periodic box: expected {dim} numbers, got {text!r}") from None
-    if len(sides) != dim:
-        raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies, got {len(sides)}")
+    if len(sides) not in (dim, 6) and not (dim == 2 and len(sides) == 3):
+        raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies (or a tilted box: Lx, Ly, Lz, xy, xz, yz), got {len(sides)}")
     return sides
 
 
