@@ -23,6 +23,8 @@ from flint import fmpq
 
 viser = pytest.importorskip("viser")
 
+from oracle import oracle_relation  # noqa: E402
+
 from app.bodyfiles import write_bodies_csv  # noqa: E402
 from app.scene.analysis import AnalysisView  # noqa: E402
 from app.scene.bodies_view import BodiesView  # noqa: E402
@@ -31,7 +33,6 @@ from app.sweep_cli import read_moving_bodies  # noqa: E402
 from bench.sweep_data import moving_bodies  # noqa: E402
 from core import Relation, analyse  # noqa: E402
 from core.algebra.algebraic import RealAlgebraic  # noqa: E402
-from oracle import oracle_relation  # noqa: E402
 
 ARTIFACTS = Path(__file__).resolve().parent / "artifacts"
 I = [1.0, 0.0, 0.0, 0.0]
@@ -161,6 +162,21 @@ def test_random_rotating_sets_against_the_oracle(tmp_path):
             assert m.worst_at(mo).tolist() == oracle_worst(params, t), (dim, t)
         assert m.moment(0.0).by_sweep == len(m.result)  # the ends are the sweep's alone
         assert m.moment(1.0).by_sweep == len(m.result)
+
+
+def test_colours_use_the_sweeps_own_exact_matrices():
+    """The matrices classified at t are the sweep's motions at t (also moved to a periodic image)."""
+    from core.moving.linear import read_linear_motions
+    from core.moving.motions import matrix_at_exact
+
+    for dim, seed in ((3, 5), (2, 6)):
+        mv = moving_bodies(6, dim=dim, rotate=True, seed=seed)
+        b, _ = read_linear_motions(*mv.arguments())
+        for k in range(6):
+            for t in ("0", "3/7", 0.61803, "1"):
+                assert b.matrix_at(k, t) == matrix_at_exact(b.motion(k), t)
+            shift = [10.0] * dim
+            assert b.matrix_at(k, "2/9", shift) == matrix_at_exact(b.motion(k, shift), "2/9")
 
 
 def test_event_time_colours_at_the_exact_irrational_t(model):

@@ -15,7 +15,7 @@ What decides a colour (each body: its worst relation over its pairs at t):
 * in between (the pair's contact window), nothing the sweep returns decides: exact arithmetic
   at the exact t, only for the pairs a colour needs (a pair whose two bodies already overlap
   another body changes no colour): ``core.classify`` of the bodies' exact matrices A(t), B(t)
-  (:func:`core.moving.motions.matrix_at_exact` of the very motions the sweep certified) at a
+  (the very motions the sweep certified, evaluated at t: :meth:`LinearMotions.matrix_at`) at a
   rational t, or at an event's algebraic t* the paper's tree on the exact signs of the pair's
   pencil there (``core.analyse`` on a rational bracket of t*, :mod:`core.moving.signs`).
 
@@ -43,7 +43,7 @@ from core import Certifier, Relation, analyse, classify, sweep_contacts
 from core.algebra.algebraic import RealAlgebraic
 from core.algebra.closedform import closed_form
 from core.bodies.sweep_result import SweepContacts
-from core.moving.motions import Motion, matrix_at_exact, motion_to_dict
+from core.moving.motions import Motion, motion_to_dict
 from core.moving.signs import Signs, decide_with
 
 from .bodies import PairList
@@ -430,9 +430,14 @@ class SweepModel(PairList):
         return int(decide_with(r.n, Signs(polys, t, zero)).relation)
 
     def _matrix_at(self, m: Moment, body: int, image: tuple[int, ...], tq: fmpq) -> Any:
+        """Body's exact A(t) at the moment's rational t (the motion's matrix at t, built directly).
+
+        :meth:`core.moving.linear.LinearMotions.matrix_at`, equal to ``matrix_at_exact(motion, t)``.
+        """
         key = (body, image)
         if key not in m._matrices:
-            m._matrices[key] = matrix_at_exact(self.motion(body, image), tq)
+            shift = None if not any(image) or self.box is None else np.array(image, dtype=float) * np.array(self.box)
+            m._matrices[key] = self.result.bodies.matrix_at(body, tq, shift)
         return m._matrices[key]
 
     def motion(self, body: int, image: tuple[int, ...] = ()) -> Motion:
