@@ -242,7 +242,7 @@ def format_bodies_browser(out: dict[str, Any]) -> str:
         "| bodies (contacts) | drawn: solids / points (triangles) | first picture | orbit frame, median / worst "
         "| with contact network | open pair, median / worst | back to all bodies | `screenshot --bodies` (whole command) |",
         "|---|---|---:|---:|---:|---:|---:|---:|",
-    ]
+    ] if out["rows"] else []
     for r in out["rows"]:
         d = r["drawn"]
         o, net, op = r["orbit_ms"], r["orbit_network_ms"], r["open_pair_ms"]
@@ -256,7 +256,7 @@ def format_bodies_browser(out: dict[str, Any]) -> str:
         )
     if out.get("moving"):
         lines += [
-            "",
+            *([""] if lines else []),
             "| moving bodies (events) | model: read + sweep forward and back | t-step, server (median / worst) "
             "| t-step to its frame in the browser | colours certified at t (pairs decided exactly) | open an event (pair analysed, drawn) |",
             "|---|---:|---:|---:|---:|---:|",
