@@ -191,6 +191,19 @@ def test_event_time_colours_at_the_exact_irrational_t(model):
     assert model.worst_at(m).tolist() == [2, 2, 2, 2, 0, 0, 0, 0, 0, 1, 1]
 
 
+def test_event_at_a_rational_time_that_is_no_float(tmp_path):
+    """t* = 1/3 (3 - 3t = 2) is rational but no float: the colours are certified at 1/3 itself."""
+    rows = [((0, 0, 0), (0, 0, 0), (1, 1, 1), I, I), ((3, 0, 0), (0, 0, 0), (1, 1, 1), I, I),  # t* = 1/3
+            ((10, 0, 0), (10, 0, 0), (1, 1, 1), I, I), ((13, 0, 0), (9, 0, 0), (1, 1, 1), I, I)]  # t* = 1/4
+    m = SweepModel(read_moving_bodies(*(str(p) for p in write_scene(tmp_path, rows))))
+    k = m.pair_between(0, 1)
+    assert m.time_text(k) == "= 1/3" and m.time(k).value == fmpq(1, 3)
+    mo = certified(m, m.time(k), event=k)
+    assert m.worst_at(mo).tolist() == [1, 1, 2, 2]
+    other = m.pair_between(2, 3)
+    assert mo.relation[other] == Relation.OVERLAP and m.exact_relation(k, mo) == Relation.TANGENT
+
+
 def test_pending_bodies_are_never_guessed(model):
     """Before exact arithmetic runs, the bodies of undecided pairs are "deciding" (pale grey)."""
     m = model.moment(0.4100001)
@@ -266,8 +279,8 @@ def server():
 
 
 def test_view_timeline_events_and_the_two_body_view(server, scene_files):
-    m = SweepModel(read_moving_bodies(str(scene_files[0]), str(scene_files[1])))
-    view = BodiesView(server, m)
+    view = BodiesView(server, SweepModel(read_moving_bodies(str(scene_files[0]), str(scene_files[1]))))
+    m = view.model  # the view's own (its time)
     try:
         tl = view.timeline
         assert tl is not None and view.layers is not None and tl.wait_certified(60)
@@ -296,6 +309,22 @@ def test_view_timeline_events_and_the_two_body_view(server, scene_files):
         view.show_bodies()
     finally:
         view.close()
+
+
+def test_two_tabs_have_their_own_time(server, model):
+    """One model serves every tab of a server: each view scrubs its own t (the sweep is shared)."""
+    other = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)  # a second tab's own GUI and scene
+    a, b = BodiesView(server, model), BodiesView(other, model)
+    try:
+        a.timeline.set_time(0.5)
+        assert a.timeline.wait_certified(60) and b.timeline.wait_certified(60)
+        assert a.model.current.tf == 0.5 and b.model.current.tf == 0.0 and model.current.tf == 0.0
+        assert a.model.result is b.model.result is model.result
+        assert a.model.worst.tolist() != b.model.worst.tolist()
+    finally:
+        a.close()
+        b.close()
+        other.stop()
 
 
 def test_cli_to_needs_bodies_and_matching_files(scene_files, tmp_path, capsys):
@@ -399,8 +428,9 @@ def test_browser_scrub_the_timeline(sweep_page):
     """Moving t in the page moves the bodies and recolours them with their certified relation."""
     from app.scene.shapes import RELATION_COLORS
 
-    hs, m = sweep_page
+    hs, _ = sweep_page
     view = hs.goto("/")
+    m = view.model  # the tab's own time on the shared sweep
     page = hs.page
     text_shown(page, "Showing all 5 events")
     amber, red = rgb(RELATION_COLORS["tangent"]), rgb(RELATION_COLORS["overlap"])
@@ -427,8 +457,9 @@ def test_browser_scrub_the_timeline(sweep_page):
 @needs_chromium
 def test_browser_click_an_event_the_two_body_view_shows_it(sweep_page):
     """Clicking an event opens its pair in the two-body view at the analysis' event equal to t*."""
-    hs, m = sweep_page
+    hs, _ = sweep_page
     view = hs.goto("/")
+    m = view.model  # the tab's own time on the shared sweep
     page = hs.page
     k = m.pair_between(2, 3)
     until(lambda: not view.timeline.busy(), what="exact event labels")

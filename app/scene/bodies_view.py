@@ -69,6 +69,8 @@ class BodiesView:
         self.target = target
         self.scene = target.scene
         self.gui = target.gui
+        if getattr(model, "moving", False):  # moving bodies: this tab's own time (the sweep is shared)
+            model = model.for_view()  # type: ignore[union-attr]
         self.model = model
         self.cache = cache
         self.executor = executor

@@ -27,6 +27,7 @@ same first event time.
 
 from __future__ import annotations
 
+import copy
 import functools
 import json
 import math
@@ -149,6 +150,12 @@ class SweepModel(PairList):
         self._exact: dict[tuple[Any, ...], int] = {}
         self._labels: dict[int, str] = {}
         self.current: Moment = self.moment(0.0)
+
+    def for_view(self) -> SweepModel:
+        """This model for one more tab: its own current t; the sweep, the caches and the labels shared."""
+        other = copy.copy(self)
+        other.current = self.moment(0.0)
+        return other
 
     # ------------------------------------------------------------------ events
     def _time_order(self) -> np.ndarray:
@@ -406,8 +413,9 @@ class SweepModel(PairList):
         i, j = int(res.i[k]), int(res.j[k])
         image = () if res.image is None else tuple(int(v) for v in res.image[k])
         t = m.t
-        if not isinstance(t, RealAlgebraic):
-            tq = fmpq(*float(t).as_integer_ratio())
+        tq = t.value if isinstance(t, RealAlgebraic) else fmpq(*float(t).as_integer_ratio())
+        if tq is not None or not isinstance(t, RealAlgebraic):  # a rational t: classify there
+            assert tq is not None
             A = self._matrix_at(m, i, (), tq)
             B = self._matrix_at(m, j, image, tq)
             return int(classify(A, B))
@@ -418,9 +426,7 @@ class SweepModel(PairList):
                 return int(Relation.SEPARATE)
             if c == 0:
                 return int(res.relation[k])
-        a, b = max(t.lo, fmpq(0)), min(t.hi, fmpq(1))
-        if a == b:  # pragma: no cover - an irrational t has an open isolating interval
-            a, b = t.lo, t.hi
+        a, b = max(t.lo, fmpq(0)), min(t.hi, fmpq(1))  # an irrational t in (0, 1): a < t < b
         r = analyse(self.motion(i), self.motion(j, image), interval=(a, b))
         for e in (*r.events, *r.roots):  # t is an instant the analysis decided itself
             if same_time(e.time, t):
