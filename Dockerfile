@@ -1,25 +1,64 @@
 # Scene (viser, port 8080) and HTTP API (FastAPI, port 8000) in one process, as the README documents:
 #   docker build -t ellipsoids . && docker run --rm -p 8080:8080 -p 8000:8000 ellipsoids
-# Runtime dependencies only (`pip install .`, no test extras, no browser); runs as a non-root user.
-FROM python:3.11-slim
+#
+# Three stages:
+#   deps    the runtime dependencies of pyproject.toml in a virtualenv, in a layer of their own
+#           (it depends on pyproject.toml alone: a code change does not reinstall them);
+#           Playwright is left out (screenshots are a command-line tool, not served by the image)
+#   build   the C compiler, and the package built into a wheel: the compiled float filter
+#           (setup.py: core.fixed._filter, baseline / AVX2 / AVX-512 variants chosen when it is
+#           imported, so the image runs on any x86-64 CPU; a portable build elsewhere) and the
+#           sweep filter of moving bodies (core.moving._sweep_filter)
+#   runtime python:3.11-slim, the dependencies' virtualenv, the wheel installed without its
+#           dependencies; no compiler, no build tools, no Playwright; a non-root user
+FROM python:3.11-slim AS deps
+
+ENV PIP_NO_CACHE_DIR=1 \
+    PIP_DISABLE_PIP_VERSION_CHECK=1
+
+WORKDIR /src
+COPY pyproject.toml ./
+RUN python -m venv /opt/venv \
+    && python -c "import tomllib; deps = tomllib.load(open('pyproject.toml', 'rb'))['project']['dependencies']; print('\n'.join(d for d in deps if not d.startswith('playwright')))" > /tmp/requirements.txt \
+    && /opt/venv/bin/pip install -r /tmp/requirements.txt
+
+
+FROM python:3.11-slim AS build
+
+ENV PIP_NO_CACHE_DIR=1 \
+    PIP_DISABLE_PIP_VERSION_CHECK=1
+
+# the compiler exists in this stage only
+RUN apt-get update && apt-get install -y --no-install-recommends gcc libc6-dev \
+    && rm -rf /var/lib/apt/lists/*
+
+WORKDIR /src
+COPY pyproject.toml setup.py MANIFEST.in README.md ./
+COPY core ./core
+COPY app ./app
+# a wheel with the compiled extension (setuptools from the build-system requirements)
+RUN pip wheel --no-deps --wheel-dir /wheels . \
+    && python -m zipfile -l /wheels/*.whl | grep -q "core/fixed/_filter.*\.so" \
+    || (echo "the compiled float filter was not built" >&2 && exit 1)
+
+
+FROM python:3.11-slim AS runtime
 
 ENV PYTHONDONTWRITEBYTECODE=1 \
     PYTHONUNBUFFERED=1 \
     PIP_NO_CACHE_DIR=1 \
-    PIP_DISABLE_PIP_VERSION_CHECK=1
+    PIP_DISABLE_PIP_VERSION_CHECK=1 \
+    PATH=/opt/venv/bin:$PATH
 
 WORKDIR /srv/ellipsoids
 
-# A C compiler: the certified float filter (core/fixed/_kernels.c) is compiled on first use for the
-# CPU it runs on (-march=native), cached in the user's ~/.cache; without it numpy serves, slower.
-RUN apt-get update && apt-get install -y --no-install-recommends gcc libc6-dev \
-    && rm -rf /var/lib/apt/lists/*
-
-# Dependencies and packages first (cached unless the code changes).
-COPY pyproject.toml README.md ./
-COPY core ./core
-COPY app ./app
-RUN pip install . \
+# dependencies first (cached unless pyproject.toml changes), then the package (small layer)
+COPY --from=deps /opt/venv /opt/venv
+COPY --from=build /wheels /wheels
+RUN pip install --no-deps /wheels/*.whl \
+    && rm -rf /wheels \
+    && python -c "from core.fixed import compiled; assert compiled.available(), compiled.status(); print(compiled.status())" \
+    && python -c "from core.moving import sweep_filter as s; assert s._library() is not None, s.filter_status(); print(s.filter_status())" \
     && useradd --create-home --uid 10001 --shell /usr/sbin/nologin app
 
 # The landing page (served at / by the API; found as ./static from this work directory).

@@ -11,7 +11,7 @@ the process serving the tabs and the requests.
   :class:`core.moving.result.MotionAnalysis` pickles back as it is (the scene keeps it, the API
   writes its JSON). :func:`read_motion_job`: the scene's typed motion, read and built.
 * The API's request jobs (``classify_job`` with number strings, ``explain_job``, the witness
-  jobs, ``contacts_job``): their arguments and results are the request and response models;
+  jobs, ``contacts_job``, ``sweep_job``): their arguments and results are the request and response models;
   inside, a budget (:class:`app.api.budget.Budget`) is checked between steps and a stop is
   reported as :class:`app.workers.WorkerTimeout` saying where; bad input is a ValueError with
   the message the route answers 422 with. They import the API's modules when called, so the
@@ -35,6 +35,7 @@ if TYPE_CHECKING:
     from .api.budget import Budget
     from .api.contacts_schemas import ContactsIn
     from .api.schemas import ClassifyOut, ExplainOut, PairItem
+    from .api.sweep_schemas import SweepIn
     from .api.witness_schemas import (
         ContactPointOut,
         ContactScaleIn,
@@ -55,6 +56,7 @@ __all__ = [
     "contact_point_job",
     "witness_job",
     "contacts_job",
+    "sweep_job",
 ]
 
 
@@ -257,4 +259,74 @@ def contacts_job(body: ContactsIn, seconds: float, max_candidates: int, max_pair
             )
         ]
         out = ContactsOut(bodies=res.n_bodies, pairs=pairs, counts=res.counts, invalid=res.invalid, summary=res.summary())
+        return out.model_dump_json().encode()
+
+
+def sweep_job(body: SweepIn, seconds: float, max_candidates: int, max_pairs: int, max_times: int) -> bytes:
+    """:func:`core.sweep_contacts` of the moving bodies under the request's limits; the answer as JSON bytes.
+
+    As :func:`contacts_job`: the swept broad phase counts the pairs it would examine before
+    building any (over ``max_candidates``: 422), the budget is checked between its chunks and
+    the narrow phase's batches, the pairs found are checked against ``max_pairs`` before the
+    answer is built; with ``exact_times``, their number against ``max_times`` before any is
+    computed, and the budget between them.
+    """
+    from typing import cast
+
+    from core import Certifier, Relation, sweep_contacts
+    from core.bodies.broadphase import TooManyPairs
+
+    from .api.limits import sweep_answer_message, sweep_limit_message, sweep_times_message
+    from .api.schemas import AlgebraicOut, CertifiedBy
+    from .api.sweep_schemas import (
+        PairRelation,
+        SweepOut,
+        SweepPairOut,
+        in_api_words,
+        sweep_arguments,
+    )
+
+    budget = _budget(seconds)
+    with _as_job_errors():
+        c0, c1, r, o0, o1, box = sweep_arguments(body)
+        n = int(c0.shape[0])
+
+        def progress(done: int, total: int) -> None:
+            budget.check(f"after {done:,} of {total:,} pairs to examine")
+
+        try:
+            res = sweep_contacts(
+                c0, c1, r, o0, o1, box=box, on_invalid=body.on_invalid, method=body.method, progress=progress,
+                max_pairs=max_candidates,
+            )
+        except TooManyPairs as e:
+            raise ValueError(sweep_limit_message(n, e.pairs, e.limit)) from None
+        except ValueError as e:
+            raise ValueError(in_api_words(e)) from None
+        m = len(res)
+        if m > max_pairs:
+            raise ValueError(sweep_answer_message(n, m, max_pairs))
+        times: list[AlgebraicOut | None] = [None] * m
+        if body.exact_times:
+            if m > max_times:
+                raise ValueError(sweep_times_message(m, max_times))
+            for k in range(m):
+                budget.check(f"after {k:,} of {m:,} exact times")
+                times[k] = AlgebraicOut(**res.time(k).to_dict(body.digits))
+        names = {int(x): str(x) for x in Relation}
+        by_name: dict[int, CertifiedBy] = {int(Certifier.FLOAT): "float", int(Certifier.EXACT): "exact"}
+        images = res.image.tolist() if res.image is not None else None
+        pairs = [
+            SweepPairOut(
+                i=a, j=b, t_lo=lo, t_hi=hi, relation=cast(PairRelation, names[x]), certified_by=by_name[c], time=times[k],
+                image=None if images is None else images[k],
+                **({} if images is None else dict(zip(("image_x", "image_y", "image_z"), images[k], strict=False))),
+            )
+            for k, (a, b, lo, hi, x, c) in enumerate(zip(
+                res.i.tolist(), res.j.tolist(), res.t_lo.tolist(), res.t_hi.tolist(), res.relation.tolist(),
+                res.certified_by.tolist(), strict=True,
+            ))
+        ]
+        invalid = {k: in_api_words(why) for k, why in res.invalid.items()}
+        out = SweepOut(bodies=res.n_bodies, pairs=pairs, counts=res.counts, invalid=invalid, summary=res.summary())
         return out.model_dump_json().encode()

@@ -1,16 +1,34 @@
-"""The scene inside a Jupyter notebook, in one call.
+"""The scene inside a Jupyter notebook, in one call, local or remote.
 
 ``from app.notebook import show; show("example-29")`` starts the scene server in the notebook's
-kernel (a free port on this machine, analyses in worker processes) and shows it in the cell as
-an iframe; the object returned is the running scene (``.stop()`` ends it, ``.session`` is the
-tab's state once the cell has been displayed). ``show(..., static=True)`` shows a self-contained
-replay instead (:mod:`app.scene.replay`): no server, it stays in the saved notebook.
+kernel (a free port on the kernel's machine, analyses in worker processes) and shows it in the
+cell as an iframe; the object returned is the running scene (``.stop()`` ends it, ``.session`` is
+the tab's state once the cell has been displayed). ``show(..., static=True)`` shows a
+self-contained replay instead (:mod:`app.scene.replay`): no server, it stays in the saved notebook.
+
+**Remote Jupyter** (JupyterHub, a server on another machine): the browser cannot reach the
+kernel's ``127.0.0.1``. The cell then goes through the notebook server's own proxy,
+`jupyter-server-proxy <https://jupyter-server-proxy.readthedocs.io>`_ (``pip install
+jupyter-server-proxy`` where the Jupyter server runs): its ``<base_url>proxy/<port>/`` path
+forwards HTTP and websockets to a port of the kernel's machine, behind the notebook's own login.
+``proxy=None`` (the default) uses it when the package is importable in the kernel's environment
+or the kernel runs under JupyterHub (``JUPYTERHUB_SERVICE_PREFIX``); ``proxy=True`` / ``False``
+force the choice. The iframe's address is ``<base_url>proxy/<port>/s/<tab>/``; base_url is
+``JUPYTERHUB_SERVICE_PREFIX`` when set, else read in the page from Jupyter's own page config
+(JupyterLab / Notebook 7: ``#jupyter-config-data``; classic: ``body[data-base-url]``), "/" by
+default. The scene's redirects and links are relative, so they stay under that path. The
+page's Origin is the notebook server's, which the scene cannot vouch for (:mod:`app.scene.origin`):
+the tab id in the address is a random secret that only this cell holds, and the scene trusts
+handshakes to that tab (:meth:`app.scene.origin.OriginPolicy.trust_tab`).
+
 Jupyter displays the returned object through ``_repr_html_``: no IPython import is needed.
 """
 
 from __future__ import annotations
 
 import html
+import importlib.util
+import os
 from typing import Any
 
 from .scene.state import SceneConfig
@@ -28,22 +46,54 @@ def _config(config: SceneConfig | str | dict[str, Any] | None) -> SceneConfig:
     return SceneConfig.from_dict(config)
 
 
+def _proxy_wanted() -> bool:
+    """True when the notebook's proxy should carry the scene (see the module docstring)."""
+    return bool(os.environ.get("JUPYTERHUB_SERVICE_PREFIX")) or importlib.util.find_spec("jupyter_server_proxy") is not None
+
+
+_BASE_URL_JS = """(function (frame) {
+  let base = null;
+  const cfg = document.getElementById('jupyter-config-data');
+  if (cfg) { try { base = JSON.parse(cfg.textContent).baseUrl || null; } catch (e) { base = null; } }
+  if (!base && document.body && document.body.dataset.baseUrl) base = document.body.dataset.baseUrl;
+  if (base) { if (!base.endsWith('/')) base += '/'; frame.src = base + frame.dataset.proxyPath; }
+})(document.currentScript.previousElementSibling);"""
+"""Re-points the iframe at Jupyter's own base URL, read from the notebook page."""
+
+
 class NotebookScene:
     """A running scene shown in a notebook cell (an iframe on its page).
 
     Args:
         config: what the scene opens on.
         height: height of the iframe in pixels.
-        host: address the notebook's browser uses to reach this kernel's machine.
+        host: interface the scene binds to and, without the proxy, the address the notebook's
+            browser uses to reach it.
         port: scene port (0: a free one).
+        proxy: reach the scene through the notebook server's jupyter-server-proxy (None: when
+            it is installed or under JupyterHub; see the module docstring).
     """
 
-    def __init__(self, config: SceneConfig, *, height: int = 600, host: str = "127.0.0.1", port: int = 0) -> None:
+    def __init__(
+        self, config: SceneConfig, *, height: int = 600, host: str = "127.0.0.1", port: int = 0, proxy: bool | None = None
+    ) -> None:
         from .scene.server import start_scene
 
         self.height = height
         self.scene = start_scene(host, port, config)
-        self.url = f"http://{host}:{self.scene.port}/"
+        self.tab = self.scene.store.new_id()
+        """The cell's tab (``/s/<tab>/``): opens on ``config``; its id is the cell's secret."""
+        self.scene.store.put(self.tab, config)
+        self.proxy = _proxy_wanted() if proxy is None else proxy
+        self.proxy_path = f"proxy/{self.scene.port}/s/{self.tab}/"
+        """The scene's path below Jupyter's base URL, through jupyter-server-proxy."""
+        if self.proxy:
+            if self.scene.policy is not None:
+                self.scene.policy.trust_tab(self.tab)
+            prefix = os.environ.get("JUPYTERHUB_SERVICE_PREFIX") or "/"
+            self.url = (prefix if prefix.endswith("/") else prefix + "/") + self.proxy_path
+        else:
+            self.url = f"http://{host}:{self.scene.port}/s/{self.tab}/"
 
     @property
     def session(self) -> Any:
@@ -52,10 +102,14 @@ class NotebookScene:
         return sessions[max(sessions)] if sessions else None
 
     def _repr_html_(self) -> str:
-        return (
+        frame = (
             f'<iframe src="{html.escape(self.url, quote=True)}" width="100%" height="{self.height}" '
+            f'data-proxy-path="{html.escape(self.proxy_path, quote=True)}" '
             'style="border:1px solid #ddd" allow="clipboard-write"></iframe>'
         )
+        if self.proxy and not os.environ.get("JUPYTERHUB_SERVICE_PREFIX"):
+            frame += f"<script>{_BASE_URL_JS}</script>"
+        return frame
 
     def stop(self) -> None:
         """Stop the server (the cell then shows a disconnected scene)."""
@@ -87,7 +141,8 @@ def show(
         config: a preset name, a configuration dict (the JSON of ``--config``) or a SceneConfig.
         height: height of the cell's view in pixels.
         static: a self-contained replay instead of the live scene.
-        **kwargs: ``host``/``port`` of the live scene, or ``seconds`` of the replay.
+        **kwargs: ``host``/``port``/``proxy`` of the live scene (see :class:`NotebookScene`), or
+            ``seconds`` of the replay.
 
     Returns:
         The object Jupyter displays (the live scene: call ``.stop()`` when done).

@@ -65,6 +65,15 @@ def best_rate(fn, count: int, repeats: int = 5) -> float:
     return count / best
 
 
+def read_all(A: np.ndarray, B: np.ndarray) -> float:
+    """Sum every entry of both arrays once in C (one thread): the memory-read limit."""
+    lib = build()
+    if lib is None:
+        raise RuntimeError("no C compiler")
+    flatA, flatB = A.reshape(-1), B.reshape(-1)
+    return float(lib.read_all(flatA.ctypes.data, flatB.ctypes.data, flatA.size))
+
+
 def read_rate(A: np.ndarray, B: np.ndarray, repeats: int = 5) -> float:
     """Pairs per second at which one thread can merely read both input arrays once."""
     lib = build()

@@ -13,6 +13,7 @@ no figures). ``--out DIR`` writes elsewhere (the smoke test uses a temporary dir
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import math
 import os
 import platform
@@ -538,9 +539,14 @@ def main(argv: list[str] | None = None) -> Path:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=HERE, help="directory for REPORT.md and figures/ (default: bench/)")
     ap.add_argument("--skip", nargs="*", default=[], choices=["moving", "scene", "browser", "api", "profiles", "throughput"], help="parts to leave out")
+    ap.add_argument("--allow-missing-peers", action="store_true", help="run even if a peer (coal, python-fcl, scipy) is missing")
     a = ap.parse_args(argv)
     t0 = time.perf_counter()
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True)
+    missing = [name for name, module in (("coal", "coal"), ("python-fcl", "fcl"), ("scipy", "scipy")) if importlib.util.find_spec(module) is None]
+    if missing and not a.allow_missing_peers:  # the GJK rows must not be empty again (issue 24)
+        ap.error(f"the benchmark's peers are not installed: {', '.join(missing)}. Fix: pip install -e \".[bench]\" "
+                 "(or --allow-missing-peers to run without them)")
     info = machine_info()
     tp = None
     if "throughput" not in a.skip:

@@ -69,6 +69,7 @@ def run_scene_cost(
     repeats: int | None = None,
     rounds: int | None = None,
     cross_check: bool = True,
+    roots: bool = False,
 ) -> dict[str, Any]:
     """Measure drag and t-step costs; returns rows {name, median_ms, p95_ms, max_ms, messages, ...}.
 
@@ -79,6 +80,8 @@ def run_scene_cost(
         repeats: updates timed per row (default 50 quick, 300 full).
         rounds: runs per row, the one with the lowest median is reported (default 1 quick, 3 full).
         cross_check: also run the scene helper's ``measure_update_costs``.
+        roots: also time the hot paths with the roots of P(T) panel on, and one roots update
+            (``python -m bench.scene_cost`` does; the report's table keeps its rows).
 
     Returns:
         {"rows": [...], "cross_check": measure_update_costs(...) or {"error": ...}, "skipped": {...}}.
@@ -104,27 +107,29 @@ def run_scene_cost(
         runs = [measure(*args) for _ in range(rounds)]
         return min(runs, key=lambda r: r["median_ms"])
 
-    def drag_row(dim: int) -> dict[str, Any]:
+    def drag_row(dim: int, roots: bool = False) -> dict[str, Any]:
         server = fresh()
         try:
             s = S.Session(server, SceneConfig(dim=dim, preset=None), count_messages=True)
+            s.ui.roots.show_roots.value = roots  # the roots of P(T) panel (issue 22.2): coalesced, off the hot path
             s.apply_drag("B", (2.0, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0))  # warm-up
             m0 = s.messages
             with _counting(cp, "analyse") as n_an:
                 ts = _time_calls(lambda i: s.apply_drag("B", (4.0 - 4.0 * i / repeats, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0)), repeats)
-            row = {"name": f"drag ({dim}D static shapes)", "kind": "drag", **_stats(ts),
+            row = {"name": f"drag ({dim}D static shapes){', roots of P(T) on' if roots else ''}", "kind": "drag", **_stats(ts),
                    "messages": (s.messages - m0) / repeats, "analyses": n_an[0]}
             s.close()
             return row
         finally:
             server.stop()
 
-    def t_step_row(preset: str, plots_on: bool, defer: bool) -> dict[str, Any]:
+    def t_step_row(preset: str, plots_on: bool, defer: bool, roots: bool = False) -> dict[str, Any]:
         server = fresh()
         try:
             with _counting(cp, "analyse") as n_an:
                 s = S.Session(server, SceneConfig(preset=preset, show_plots=plots_on), count_messages=True)
                 s.ready.wait(120)
+                s.ui.roots.show_roots.value = roots
                 lo, hi = s.state.analysis.window if s.state.analysis else (0.0, 1.0)
                 s.set_t(lo)  # warm-up
                 time.sleep(0.12)
@@ -134,7 +139,8 @@ def run_scene_cost(
                     ts = _time_calls(lambda i: s.set_t(lo + (hi - lo) * (i + 0.5) / repeats, defer_panels=defer), repeats)
                     time.sleep(0.12)  # let a coalesced panel refresh fire: its messages count too
             mode = "slider (panels at 20 Hz)" if defer else "jump: readout, bar, t box at once"
-            row = {"name": f"t-step {preset}, {mode}, plots {'on' if plots_on else 'off (panel closed)'}",
+            row = {"name": f"t-step {preset}, {mode}, plots {'on' if plots_on else 'off (panel closed)'}"
+                           + (", roots of P(T) on" if roots else ""),
                    "kind": "t-step", **_stats(ts), "messages": (s.messages - m0) / repeats,
                    "analyses": n_an[0] - loaded, "explains": n_ex[0], "analyses_on_load": loaded}
             s.close()
@@ -150,12 +156,64 @@ def run_scene_cost(
             for defer in (True, False):
                 rows.append(best(t_step_row, preset, plots_on, defer))
                 log(f"#   {rows[-1]['name']}: {rows[-1]['median_ms']:.3f} ms")
+    if roots:
+        rows.append(best(drag_row, 3, True))  # the roots of P(T) shown: the hot paths are unchanged
+        log(f"#   {rows[-1]['name']}: {rows[-1]['median_ms']:.3f} ms")
+        for preset in presets:
+            for defer in (True, False):
+                rows.append(best(t_step_row, preset, True, defer, True))
+                log(f"#   {rows[-1]['name']}: {rows[-1]['median_ms']:.3f} ms")
+        skipped["roots_update_ms"] = roots_update_ms(presets, repeats=20 if quick else 60)
+        log(f"#   roots of P(T): one coalesced update (words, plane, locus cursor), median ms: {skipped['roots_update_ms']}")
     if cross_check:
         try:
             skipped["cross_check"] = measure_update_costs(repeats=50 if quick else 200)
         except Exception as e:  # noqa: BLE001 - a cross-check; report, do not fail the run
             skipped["cross_check"] = {"error": repr(e)[:120]}
-    return {"rows": rows, "cross_check": skipped.get("cross_check", {}), "repeats": repeats}
+    return {"rows": rows, "cross_check": skipped.get("cross_check", {}), "repeats": repeats,
+            "roots_update_ms": skipped.get("roots_update_ms", {})}
+
+
+def roots_update_ms(presets: tuple[str, ...], repeats: int = 60) -> dict[str, float]:
+    """Median ms of one update of the roots of P(T) panel (the coalesced part, at most 20 per s).
+
+    Static shapes along a drag path, and each preset at ``repeats`` slider times (new times each:
+    nothing cached): the certified roots, the words and the plots' data.
+    """
+    import viser
+
+    from app.scene import session as S
+    from app.scene.state import SceneConfig
+
+    out: dict[str, float] = {}
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        s = S.Session(server, SceneConfig(dim=3, preset=None))
+        s.ui.roots.show_roots.value = True
+        ts = []
+        for i in range(repeats):
+            s.apply_drag("B", (4.0 - 4.0 * i / repeats, 1.0, 0.2), (1.0, 0.0, 0.0, 0.0))
+            t0 = time.perf_counter()
+            s.panel.show_plots(s.state)
+            ts.append(time.perf_counter() - t0)
+        out["static shapes (drag)"] = float(np.median(ts) * 1e3)
+        s.close()
+        for preset in presets:
+            s = S.Session(server, SceneConfig(preset=preset, show_plots=False))
+            s.ready.wait(120)
+            s.ui.roots.show_roots.value = True
+            lo, hi = s.state.analysis.window
+            ts = []
+            for i in range(repeats):
+                s.set_t(lo + (hi - lo) * (i + 0.37) / repeats, defer_panels=True)
+                t0 = time.perf_counter()
+                s.panel.show_plots(s.state)
+                ts.append(time.perf_counter() - t0)
+            out[preset] = float(np.median(ts) * 1e3)
+            s.close()
+        return {k: round(v, 3) for k, v in out.items()}
+    finally:
+        server.stop()
 
 
 def profile_drag(top: int = 12) -> str:
@@ -202,8 +260,9 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--profile", action="store_true", help="also print a cProfile of the drag path")
     a = ap.parse_args()
-    out = run_scene_cost(quick=a.quick)
+    out = run_scene_cost(quick=a.quick, roots=True)
     print(format_scene(out))
+    print("\nroots of P(T), one coalesced panel update (off the hot path), median ms:", out["roots_update_ms"])
     print("\ncross-check (app.scene.costs.measure_update_costs):", out["cross_check"])
     if a.profile:
         print(profile_drag())

@@ -9,13 +9,13 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import analyse                              # moving pairs: events and intervals
     from core import read_motion, read_interval           # user text, under limits (one grammar)
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
-    from core import warm_up, set_threads                 # build the C kernels early; threads
-    from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
+    from core import warm_up, set_threads                 # compiled filter available?; threads
+    from core import contact_scale, separating_plane, contact_point, distance   # witnesses (core.witness)
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
     from core import sweep_contacts, SweepContacts, first_contact   # N moving bodies: first contacts
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
-are compiled with the system's C compiler on first use, :mod:`core.fixed.compiled`); the Dask
+are the extension built when the package is installed, :mod:`core.fixed.compiled`); the Dask
 path (:mod:`core.fixed.lazy`, :mod:`core.bodies.distributed`) imports dask only when it is used.
 """
 
@@ -58,10 +58,12 @@ from .shapes.quadrics import rotation_from_quaternion as rotation_from_quaternio
 from .shapes.quadrics import validate_quadric as validate_quadric
 from .witness import ContactPoint as ContactPoint
 from .witness import ContactScale as ContactScale
+from .witness import NoWitness as NoWitness
 from .witness import SeparatingPlane as SeparatingPlane
 from .witness import Witness as Witness
 from .witness import contact_point as contact_point
 from .witness import contact_scale as contact_scale
+from .witness import distance as distance
 from .witness import separating_plane as separating_plane
 
 __all__ = [
@@ -83,6 +85,7 @@ __all__ = [
     "TooManyPairs",
     "ShapeParams",
     "Stats",
+    "NoWitness",
     "SweepContacts",
     "Witness",
     "analyse",
@@ -92,6 +95,7 @@ __all__ = [
     "contact_point",
     "contact_scale",
     "contacts",
+    "distance",
     "explain",
     "first_contact",
     "motion_from_dict",

@@ -4,6 +4,7 @@ import os
 import sys
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, settings
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -16,3 +17,59 @@ settings.register_profile(
 )
 settings.register_profile("dev", max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+def _chromium() -> bool:
+    return os.path.exists("/usr/bin/chromium")
+
+
+class _SharedScene:
+    """One scene server and one headless Chromium tab, shared by the tests that ask for them.
+
+    Opened by the first test that uses the ``headless_scene`` fixture and kept for the next ones
+    (starting a browser costs seconds on the shared 2-core machines); closed before a test that
+    does not use it, because Playwright's sync API (and ``asyncio.run``) cannot run while another
+    sync Playwright holds this thread's event loop. The users sit in a few modules, so a session
+    starts it once or twice.
+    """
+
+    def __init__(self) -> None:
+        self.scene = None
+
+    def get(self):
+        if self.scene is None:
+            from app.scene.state import SceneConfig
+            from app.screenshot import HeadlessScene
+
+            scene = HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1300, height=950, timeout=90)
+            self.scene = scene.__enter__()
+        return self.scene
+
+    def close(self) -> None:
+        if self.scene is not None:
+            scene, self.scene = self.scene, None
+            scene.__exit__(None, None, None)
+
+
+_SHARED = _SharedScene()
+
+
+def pytest_runtest_setup(item):
+    """Close the shared browser before a test that does not use it (it may start its own)."""
+    if "headless_scene" not in getattr(item, "fixturenames", ()):
+        _SHARED.close()
+
+
+def pytest_sessionfinish(session, exitstatus):
+    _SHARED.close()
+
+
+@pytest.fixture
+def headless_scene():
+    """The shared scene server and headless Chromium tab (see :class:`_SharedScene`).
+
+    Tests open their own tab on their own configuration with a link (``hs.goto(link_path(cfg))``).
+    """
+    if not _chromium():
+        pytest.skip("needs Debian chromium at /usr/bin/chromium")
+    return _SHARED.get()

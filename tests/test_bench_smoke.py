@@ -151,3 +151,28 @@ def test_bench_bodies_runs_and_misses_nothing():
     assert bench_bodies.brute_force_check(600, fraction=0.3)[1:] == (0, 0)
     lat = bench_bodies.lattice(4)
     assert lat["tangent"] == lat["exact"] == 3 * 16 * 3
+
+
+def test_throughput_section_and_rows_replace_the_old_ones(tmp_path):
+    from bench import throughput
+
+    rows = [{"kind": "random", "dim": d, "all": 30e6, "one": 20e6, "baseline": 10e6, "read": 40e6, "f32_one": 22e6,
+             "f32_all": 33e6, "baseline_right": 1.0, "f32_right": 1.0, "cores": 2,
+             "cpu": {"certified": 25e6, "baseline": 12e6, "read": 50e6, "float32": 27e6}} for d in (3, 2)]
+    tp = {"rows": rows, "structured": [{"name": "spheres 3D", "dim": 3, "n": 10, "rate": 15e6, "ratio": 0.5, "escalated": 0, "wrong": 0}],
+          "hard": [{"name": "big-small +0.001 3D", "n": 10, "undecided": 0, "wrong": 0}],
+          "first_call": {"pairs": 400, "import": 0.5, "first": 0.011, "second": 0.01, "ratio": 1.1, "variant": "avx2"},
+          "size": 1000, "cores": 2, "variant": "avx2", "variants": ["baseline", "avx2"], "rounds": 3}
+    report = tmp_path / "REPORT.md"
+    report.write_text("# r\n\n## Targets\n\n| target | measured | verdict |\n|---|---|---|\n| other | x | met |\n"
+                      "| cold start: kernels ready | 1 s | met |\n\n## Reading\n\n- a\n\n"
+                      f"{throughput._SECTION}\n\nold tables\n\n## Static pairs\n\nkept\n")
+    throughput.write_section(tp, report, command="test")
+    text = report.read_text()
+    assert "old tables" not in text and "cold start: kernels ready" not in text
+    assert "| other | x | met |" in text and "## Static pairs\n\nkept" in text
+    assert "2.00x (avx2 variant); by CPU time 2.08x | met |" in text
+    assert "| first classify of 400 pairs in a fresh process" in text
+    assert text.index("| first classify") < text.index("## Reading")
+    throughput.write_section(tp, report, command="test")  # again: the rows are replaced, not added
+    assert report.read_text().count("| first classify of 400 pairs") == 1

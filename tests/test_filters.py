@@ -1,4 +1,4 @@
-"""The float filter: generated kernels are current, error bounds hold, implementations agree."""
+"""The float filter: generated files are current, error bounds hold, numpy and every SIMD variant of the C agree."""
 
 from __future__ import annotations
 
@@ -12,25 +12,51 @@ from strategies import dyadic_tangent_pair
 from core import Relation, classify, explain, quadric_from_axes
 from core.fixed import _kernels as K
 from core.fixed import compiled
-from core.fixed.errorbound import UNIT_ROUNDOFF, gamma_constant
+from core.fixed.errorbound import RADIUS_FACTOR, UNIT_ROUNDOFF, gamma_constant
 from core.fixed.exact import exact_pair
-from core.fixed.filters import (
-    _HAT,
-    _PENCIL,
-    _Prepared,
-    _relations,
-    _run_hat,
-    _run_pencil,
-    rules_numpy,
-)
+from core.fixed.filters import first_stage, relations, rules_numpy
 from core.fixed.kernelgen import main as kernelgen_main
 from core.formulae.decision import RULE_RELATION
 from core.formulae.pencil import pencil_coefficients
 from core.formulae.subresultants import hat_s0, hat_s1, hat_s10
 
 
-def test_generated_kernels_are_current():
+def test_generated_files_are_current():
+    # _kernels.py (numpy) and _kernels.h (C) are what the description generates today
     assert kernelgen_main(["--check"]) == 0
+
+
+def test_extension_is_built_from_the_committed_header():
+    assert compiled.available(), compiled.status()
+    assert compiled._EXT.kernels_sha256() == compiled.header_sha256()
+
+
+class _Run:
+    """The first stage on stacks: prepared matrices (upper triangles), a_i with bounds."""
+
+    def __init__(self, A, B):
+        run = first_stage(A, B)
+        n = A.shape[-1]
+        self.n = n
+        self.a = _full(run.a.W, n)
+        self.b = _full(run.b.W, n)
+        self.ea, self.eb = run.a.k, run.b.k
+        self.ok = run.a.ok & run.b.ok
+        self.rounded = run.a.rounded | run.b.rounded
+        self.c, self.cr = run.c, run.cr
+
+
+def _full(W, n):
+    N = np.shape(W[0, 0])[0]
+    S = np.empty((N, n, n))
+    for (i, j), v in W.items():
+        S[:, i, j] = S[:, j, i] = v
+    return S
+
+
+def _hat(n, which, vals, radii):
+    v, r = getattr(K, f"hat_{which}_{n}")(vals, radii)
+    return v, r * RADIUS_FACTOR + getattr(K, f"HAT_{which.upper()}_{n}_FLOOR")
 
 
 @pytest.mark.parametrize("K_, Kb", [(1, 1), (10, 18), (14, 18), (99, 120)])
@@ -63,14 +89,12 @@ def test_pencil_error_bounds_hold(n):
     A = _random_matrices(rng, n, 60)
     B = _random_matrices(rng, n, 60)
     B[::7] = A[::7]  # identical shapes: coefficients with huge cancellation
-    prep = _Prepared(A, B)
-    out = _run_pencil(prep.a, prep.b)
+    run = _Run(A, B)
+    assert not run.rounded.any()
     for i in range(len(A)):
-        EA, EB = _exact(prep.a[i]), _exact(prep.b[i])
-        coeffs = pencil_coefficients(EA, EB)
+        coeffs = pencil_coefficients(_exact(run.a[i]), _exact(run.b[i]))
         for k, c in enumerate(coeffs):
-            v, bd = out[f"c{k}"]
-            assert abs(fmpq(*float(v[i]).as_integer_ratio()) - c) <= fmpq(*float(bd[i]).as_integer_ratio())
+            assert abs(fmpq(*float(run.c[k][i]).as_integer_ratio()) - c) <= fmpq(*float(run.cr[k][i]).as_integer_ratio())
 
 
 def _fq(x):
@@ -100,11 +124,10 @@ def test_pencil_error_bounds_hold_for_rounded_symmetrisation(n):
     # the pencil of the EXACT symmetric part of the input
     rng = np.random.default_rng(30 + n)
     A, B = _numpy_built(rng, n, 50), _numpy_built(rng, n, 50)
-    prep = _Prepared(A, B)
-    assert prep.rounded.mean() > 0.5 and prep.ok.all()
-    out = _run_pencil(prep.a, prep.b, prep.rounded)
+    run = _Run(A, B)
+    assert run.rounded.mean() > 0.5 and run.ok.all()
     for i in range(len(A)):
-        ea, eb = int(prep.ea[i]), int(prep.eb[i])
+        ea, eb = int(run.ea[i]), int(run.eb[i])
         fa = fmpq(2) ** ea if ea >= 0 else fmpq(1, 2 ** (-ea))
         fb = fmpq(2) ** eb if eb >= 0 else fmpq(1, 2 ** (-eb))
         sa = 1 if A[i, 0, 0] > 0 else -1
@@ -112,8 +135,7 @@ def test_pencil_error_bounds_hold_for_rounded_symmetrisation(n):
         EA = [[(_fq(A[i, r, c]) + _fq(A[i, c, r])) / 2 * fa * sa for c in range(n)] for r in range(n)]
         EB = [[(_fq(B[i, r, c]) + _fq(B[i, c, r])) / 2 * fb * sb for c in range(n)] for r in range(n)]
         for k, c in enumerate(pencil_coefficients(EA, EB)):
-            v, bd = out[f"c{k}"]
-            assert abs(_fq(v[i]) - c) <= _fq(bd[i])
+            assert abs(_fq(run.c[k][i]) - c) <= _fq(run.cr[k][i])
 
 
 @pytest.mark.parametrize("n", [3, 4])
@@ -152,23 +174,22 @@ def test_subresultant_error_bounds_hold(n, which):
     rng = np.random.default_rng(10 * n + len(which))
     A = _random_matrices(rng, n, 40)
     B = _random_matrices(rng, n, 40)
-    prep = _Prepared(A, B)
-    out = _run_pencil(prep.a, prep.b)
+    run = _Run(A, B)
     f = {"s0": hat_s0, "s1": hat_s1, "s10": hat_s10}[which]
     for i in range(len(A)):
-        exact = f(pencil_coefficients(_exact(prep.a[i]), _exact(prep.b[i])))
-        vals = [float(out[f"c{k}"][0][i]) for k in range(n + 1)]
-        radii = [float(out[f"c{k}"][1][i]) for k in range(n + 1)]
-        v, bd = _run_hat(n, which, vals, radii)
+        exact = f(pencil_coefficients(_exact(run.a[i]), _exact(run.b[i])))
+        vals = [float(run.c[k][i]) for k in range(n + 1)]
+        radii = [float(run.cr[k][i]) for k in range(n + 1)]
+        v, bd = _hat(n, which, vals, radii)
         assert abs(fmpq(*float(v).as_integer_ratio()) - exact) <= fmpq(*float(bd).as_integer_ratio())
 
 
 def test_kernel_tables_are_consistent():
     for n in (3, 4):
-        fn, outputs, consts, floor = _PENCIL[n]
-        assert len(outputs) == len(consts) and 0 < floor < 2.0**-850
+        outputs, consts = getattr(K, f"PENCIL{n}_OUTPUTS"), getattr(K, f"PENCIL{n}_CONSTANTS")
+        assert len(outputs) == len(consts) and 0 < getattr(K, f"PENCIL{n}_FLOOR") < 2.0**-850
         for which in ("s0", "s1", "s10"):
-            assert 0 < _HAT[(n, which)][1] < 2.0**-850
+            assert 0 < getattr(K, f"HAT_{which.upper()}_{n}_FLOOR") < 2.0**-850
     assert K.PENCIL4_OUTPUTS[:2] == ("c0", "c0_M")
 
 
@@ -190,10 +211,9 @@ def _structured(rng, n, count):
     return np.array(A), np.array(B)
 
 
-@pytest.mark.parametrize("n", [3, 4])
-def test_compiled_numpy_and_single_pair_paths_agree(n):
-    assert compiled.warm_up(), compiled.status()
-    rng = np.random.default_rng(42 + n)
+def _mixed(n, seed=42):
+    """Random pairs with every case of the prepare step, and structured and numpy-built pairs."""
+    rng = np.random.default_rng(seed + n)
     A = _random_matrices(rng, n, 300)
     B = _random_matrices(rng, n, 300)
     T1, T2 = dyadic_tangent_pair(n - 1, 2.0, 1.0, [0.0] * (n - 1))
@@ -202,28 +222,118 @@ def test_compiled_numpy_and_single_pair_paths_agree(n):
     B[6, 0, 1] += 1e-3  # not symmetric
     A[7, 1, 1] = np.nan
     B[8] = A[8]  # identical
-    A[9:60:3] *= 10.0 ** rng.integers(-150, 150, (17, 1, 1))  # scaled: the fast path rescales too
-    B[10:60:7] *= 2.0**-1040  # subnormal entries: the one-pair path rescales
+    A[9:60:3] *= 10.0 ** rng.integers(-150, 150, (17, 1, 1))  # scaled by a power of two in prepare
+    B[10:60:7] *= 2.0**-1040  # subnormal entries
+    A[11] *= 2.0**1000  # near the top of the float range
+    B[12, 2, 1] = np.inf
     SA, SB = _structured(rng, n, 120)
-    NA, NB = _numpy_built(rng, n, 64), _numpy_built(rng, n, 64)  # symmetric only up to rounding
-    NA[::5] *= 1e-7  # ... and rescaled by the fast path
-    A, B = np.concatenate([A, SA, NA]), np.concatenate([B, SB, NB])
-    a = compiled.rules(A, B, threads=1)
-    b = rules_numpy(A, B)
-    c = np.array([compiled.rule_one(np.ascontiguousarray(A[i]), np.ascontiguousarray(B[i])) for i in range(len(A))])
-    d = compiled.rules(A, B, threads=4)
-    assert (a == b).all() and (a == c).all() and (a == d).all()
-    assert (a[:5] == -1).all() and (a[6:8] == -1).all()
-    assert RULE_RELATION[a[8]] == Relation.OVERLAP or a[8] == -1
+    NA, NB = _numpy_built(rng, n, 64), _numpy_built(rng, n, 64)  # symmetric up to rounding: the full prepare
+    NA[::5] *= 1e-7  # ... and rescaled
+    NB[1::5, 0, n - 1] = NB[1::5, n - 1, 0] * (1 + 2.0**-30)  # within the tolerance, far from exact
+    return np.concatenate([A, SA, NA]), np.concatenate([B, SB, NB])
+
+
+def _every_variant(A, B):
+    """Rule ids of the C on every SIMD variant this CPU runs (restoring the chosen one)."""
+    assert compiled.available(), compiled.status()
+    chosen = compiled.variant()
+    out = {}
+    try:
+        for v in compiled.variants():
+            compiled.select(v)
+            out[v] = compiled.rules(A, B, threads=1)
+    finally:
+        compiled.select(chosen)
+    return out
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_numpy_and_every_simd_variant_agree_bit_for_bit(n):
+    A, B = _mixed(n)
+    expected = rules_numpy(A, B)  # the description run by numpy
+    runs = _every_variant(A, B)
+    assert "baseline" in runs
+    for v, got in runs.items():
+        assert (got == expected).all(), (v, np.flatnonzero(got != expected)[:10])
+    assert (compiled.rules(A, B, threads=4) == expected).all()  # split over threads
+    one = [compiled.rule_one(A[i], B[i]) for i in range(0, len(A), 5)]
+    assert one == expected[::5].tolist()
+    assert (expected[:5] == -1).all() and (expected[6:8] == -1).all() and expected[12] == -1
+    assert RULE_RELATION[expected[8]] == Relation.OVERLAP or expected[8] == -1
     # the structured pairs: decided by the certificates, never wrong
     from oracle import oracle_relation
 
-    tail = a[300:420]
-    assert (tail >= 0).mean() > 0.95
-    assert (a[420:] >= 0).mean() > 0.95  # numpy-built pairs stay in the filter
+    assert (expected[300:420] >= 0).mean() > 0.95
+    assert (expected[420:] >= 0).mean() > 0.95  # numpy-built pairs stay in the filter
     for i in range(300, len(A), 7):
-        if a[i] >= 0:
-            assert str(Relation(int(RULE_RELATION[a[i]]))) == oracle_relation(A[i], B[i])
+        if expected[i] >= 0:
+            assert str(Relation(int(RULE_RELATION[expected[i]]))) == oracle_relation(A[i], B[i])
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_float32_input_is_certified_for_its_own_values(n):
+    # float32 entries widen exactly: the C reads them as they are (half the bytes) and agrees
+    # with the numpy description on the widened values; labels against the exact path
+    A, B = _mixed(n, seed=7)
+    with np.errstate(over="ignore"):  # the pairs scaled beyond the float32 range become inf: abstain
+        A32, B32 = A.astype(np.float32), B.astype(np.float32)
+    expected = rules_numpy(A32.astype(np.float64), B32.astype(np.float64))
+    for v, got in _every_variant(A32, B32).items():
+        assert (got == expected).all(), v
+    codes = classify(A32, B32, method="float", on_invalid="mark")
+    decided = np.flatnonzero(codes >= 0)
+    assert decided.size > 0.8 * len(A)
+    exact = classify(A32[decided[::9]], B32[decided[::9]], method="exact", on_invalid="mark")
+    assert (codes[decided[::9]] == exact).all()
+
+
+def _benchmark_sets(dim):
+    from bench import datasets as D
+
+    sets = [D.random_pairs(dim, 60, seed=3), D.tangent_pairs(dim, 12, seed=3)]
+    sets += [D.structured_pairs(dim, 30, kind=k, seed=3) for k in D.STRUCTURED_KINDS]
+    sets += [D.extreme_pairs(dim, 12, kind=k, seed=3) for k in D.EXTREME_KINDS]
+    sets += [D.big_small_pairs(dim, 16, gap=g, sign=s, seed=3) for g in (1e-3, 1e-1) for s in (1, -1)]
+    return sets
+
+
+def _near_tangent_sets(dim):
+    """Adversarial: near-tangent pairs at relative gaps 1e-3 .. 1e-16 on both sides."""
+    from bench import datasets as D
+
+    return [D.near_tangent_pairs(dim, 6, gap=10.0**-e, sign=s, seed=e) for e in (3, 6, 9, 12, 14, 16) for s in (1, -1)]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_vector_kernel_agrees_with_the_exact_path_on_benchmark_and_near_tangent_sets(dim):
+    """Every SIMD variant on every data set of the benchmark and on near-tangent pairs: where it
+    decides, the label is the exact one (the oracle's: exact characteristic polynomial and
+    certified root isolation), and it decides exactly what the numpy description decides."""
+    for ds in _benchmark_sets(dim) + _near_tangent_sets(dim):
+        expected = rules_numpy(ds.A, ds.B)
+        for v, got in _every_variant(ds.A, ds.B).items():
+            assert (got == expected).all(), (ds.name, v)
+        codes = relations(expected)
+        decided = codes != Relation.UNDECIDED
+        assert (codes[decided] == ds.truth[decided]).all(), ds.name
+        if ds.family == "tangent":
+            assert not decided.any()  # a float filter never certifies tangency
+
+
+def test_numpy_fallback_warns_once_naming_cause_and_fix(monkeypatch):
+    A, B = _mixed(3, seed=5)
+    expected = classify(A, B, method="float", on_invalid="mark")
+    monkeypatch.setattr(compiled, "_EXT", None)
+    monkeypatch.setattr(compiled, "_STATUS", "the compiled float filter core.fixed._filter is not built (test)")
+    monkeypatch.setitem(compiled._state, "warned", False)
+    with pytest.warns(RuntimeWarning, match=r"not built \(test\).*numpy filter.*pip install -e \."):
+        got = classify(A, B, method="float", on_invalid="mark")
+    assert (got == expected).all()
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once only
+        classify(A, B, method="float", on_invalid="mark")
 
 
 @pytest.mark.parametrize("n", [3, 4])
@@ -283,7 +393,7 @@ def test_translated_stage_is_sound_and_useful(n, centre):
     A, B = _far_pairs(rng, n, 150, centre)
     from core.fixed.filters import classify_translated
 
-    codes = _relations(classify_translated(A, B))
+    codes = relations(classify_translated(A, B))
     exact = classify(A, B, method="exact")
     decided = codes != Relation.UNDECIDED
     assert (codes[decided] == exact[decided]).all()
@@ -322,6 +432,6 @@ def test_translated_stage_near_tangent_far_away(n):
             off = np.zeros(d)
             off[0] = dist
             B = quadric_from_axes(c + off, [r] * d)
-            code = _relations(classify_translated(A[None], B[None]))[0]
+            code = relations(classify_translated(A[None], B[None]))[0]
             truth = oracle_relation(A, B)
             assert code == Relation.UNDECIDED or str(Relation(code)) == truth

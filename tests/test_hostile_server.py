@@ -8,6 +8,9 @@ processes (under 3 GB together); afterwards the server is alive and no worker pr
   pairs the broad phase would examine and the limit (counted before any pair is built); 500
   bodies at one point: refused because the answer would list too many pairs; a lattice of 9,702
   touching spheres (exact arithmetic for every pair): answered or stopped by the budget (503).
+* ``POST /api/sweep`` with 10,000 moving bodies at one point: refused (422) at once, as for
+  contacts (the swept broad phase counts before it builds); a sweep whose every pair needs exact
+  arithmetic, its client leaving after 1 s: the worker is stopped then, not at the budget.
 * ``POST /api/contact-scale`` with ``exact`` on a pair whose work grows with its numbers
   (semi-axis ``1e-999``): stopped by the budget in its worker process (503, Retry-After); a
   client that leaves has its work stopped before the budget runs out.
@@ -187,6 +190,73 @@ def test_contacts_heavy_exact_work_is_answered_or_stopped_by_the_budget(server):
         assert detail.startswith("stopped after ") and detail.endswith(
             "pairs to examine: over the time budget of 5 s per request; send fewer bodies per request"
         ), detail
+
+
+# --- sweep: moving bodies -------------------------------------------------------------------------
+
+@pytest.mark.parametrize("dim", [3, 2])
+def test_sweep_crowd_is_refused_before_any_pair_is_built(server, dim):
+    """10,000 moving bodies at one point (each moving by one unit): 49,995,000 pairs to examine."""
+    start = crowd(10_000, dim)
+    end = [[1.0, *row[1:]] for row in start]
+    r = attack(server, "/api/sweep", {"start": start, "end": end})
+    assert r.status_code == 422, r.text[:300]
+    assert r.json() == {"detail": (
+        "10,000 moving bodies give 49,995,000 pairs to examine (bodies whose swept volumes may meet during the step), "
+        "over the limit of 2,000,000 per request: send fewer or less crowded bodies, or sweep them with "
+        "`python -m app sweep` or `core.sweep_contacts`, which have no such limit"
+    )}
+
+
+def test_sweep_answer_over_the_cap_is_refused_before_it_is_built(server):
+    """500 moving bodies at one point: 124,750 pairs overlapping at t = 0, over the 100,000 pairs of one answer."""
+    r = attack(server, "/api/sweep", {"start": crowd(500, 3), "end": crowd(500, 3)})
+    assert r.status_code == 422, r.text[:300]
+    assert r.json()["detail"].startswith(
+        "the answer would list 124,750 pairs of the 500 moving bodies that touch or overlap during the step, over the "
+        "limit of 100,000 pairs per answer"
+    )
+
+
+def grazing_sweep(n: int) -> dict:
+    """n pairs of unit spheres, each passing the other at exactly 2, swept exactly (a few ms per pair)."""
+    unit = [1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]
+    start, end = [], []
+    for k in range(n):
+        x = 20.0 * k
+        start += [[x, 0.0, 0.0, *unit], [x + 5, 2.0, 0.0, *unit]]
+        end += [[x, 0.0, 0.0, *unit], [x - 5, 2.0, 0.0, *unit]]
+    return {"start": start, "end": end, "method": "exact"}
+
+
+def test_work_of_a_sweep_client_that_went_away_is_stopped(server):
+    """5,000 exact grazing pairs (10,000 bodies: far over the 5 s budget); the client leaves after 1 s and its worker with it."""
+    with Probes(server) as probes:
+        t0 = time.monotonic()
+        try:
+            r = httpx.post(f"{server.api}/api/sweep", json=grazing_sweep(5000), timeout=httpx.Timeout(30, read=1.0))
+            pytest.fail(f"answered within 1 s: {r.status_code} {r.text[:200]}")
+        except httpx.ReadTimeout:  # the client leaves
+            pass
+        wait_until(lambda: health(server)["analyses_running"] == 0, "the worker to be stopped")
+        seconds = time.monotonic() - t0
+    assert seconds < 5.0, "the worker ran to its budget: the disconnect did not stop it"
+    probes.check()
+    assert wait_gone(job_processes(server.proc.pid), 5) == set()
+
+
+def test_sweep_heavy_exact_work_is_answered_or_stopped_by_the_budget(server):
+    """The same 5,000 exact grazing pairs, waited for: today 503 saying where the budget stopped the
+    sweep (a sweep fast enough to answer them within the budget is as good)."""
+    r = attack(server, "/api/sweep", grazing_sweep(5000))
+    if r.status_code == 200:
+        assert r.json()["counts"]["tangent"] == 5000
+        return
+    assert (r.status_code, r.headers.get("retry-after")) == (503, "2"), r.text[:300]
+    detail = r.json()["detail"]
+    assert detail.startswith("stopped after ") and detail.endswith(
+        "pairs to examine: over the time budget of 5 s per request; send fewer bodies per request"
+    ), detail
 
 
 # --- witnesses: work that grows with the numbers ---------------------------------------------------

@@ -155,13 +155,35 @@ def _dockerfile() -> dict[str, list[str]]:
     return out
 
 
+def _stages() -> dict[str, str]:
+    """Instructions of each stage of the Dockerfile by its name (comments dropped)."""
+    text = (Path(__file__).resolve().parents[1] / "Dockerfile").read_text()
+    out: dict[str, str] = {}
+    name = ""
+    for raw in text.splitlines():
+        line = raw.strip()
+        if line.startswith("FROM "):
+            name = line.split(" AS ")[-1].strip()
+            out[name] = ""
+        elif name and line and not line.startswith("#"):
+            out[name] += line + "\n"
+    return out
+
+
 def test_dockerfile_serves_scene_and_api_as_documented():
     from app.cli import build_parser
 
     d = _dockerfile()
-    assert d["FROM"] == ["python:3.11-slim"]
+    assert all(f.startswith("python:3.11-slim AS ") for f in d["FROM"])  # multi-stage, one base
+    assert d["FROM"][-1] == "python:3.11-slim AS runtime"
     assert any(u not in ("root", "0") for u in d["USER"])  # non-root
-    assert any("pip install ." in r and "[" not in r for r in d["RUN"])  # runtime deps only, no extras
+    stages = _stages()
+    runtime = stages["runtime"]
+    assert "gcc" not in runtime and "playwright" not in runtime.lower()  # no compiler, no browser at run time
+    assert "gcc" in stages["build"] and "pip wheel" in stages["build"]  # the compiled filter goes into the wheel
+    deps = stages["deps"]
+    assert "COPY pyproject.toml ./" in deps and "COPY core" not in deps and "playwright" in deps  # deps before the code; Playwright left out
+    assert "pip install --no-deps /wheels/*.whl" in runtime  # the package, without re-resolving dependencies
     cmd = json.loads(d["CMD"][-1])
     assert cmd[:4] == ["python", "-m", "app", "serve"]
     args = build_parser().parse_args(cmd[3:])  # the CLI accepts exactly this command
@@ -171,3 +193,23 @@ def test_dockerfile_serves_scene_and_api_as_documented():
     copied = " ".join(d["COPY"])
     for part in ("pyproject.toml", "README.md", "core", "app", "static"):
         assert part in copied
+
+
+def test_preset_cards_open_the_preset_in_the_scene(tmp_path):
+    """Issue 22.4: each preset card links to the scene on that preset (a /c/<configuration>/ link
+    whose configuration is the preset), when the scene runs; API only: no such link."""
+    from app.scene.links import decode_config
+
+    static = tmp_path / "static"
+    shutil.copytree(STATIC, static, ignore=shutil.ignore_patterns("img"))
+    (static / "img").mkdir()
+    (static / "img" / "example-30.png").write_bytes(PNG_1x1)
+    with TestClient(create_api(ApiSettings(static_dir=static, scene_url="http://127.0.0.1:8080/"))) as c:
+        page = c.get("/").text
+        names = [p["name"] for p in c.get("/api/presets").json()]
+    links = re.findall(r'<a class="open-scene" href="http://127\.0\.0\.1:8080/c/([A-Za-z0-9_=-]+)/">Open in the scene</a>', page)
+    assert [decode_config(t)["preset"] for t in links] == names
+    card = page[page.index('id="preset-example-30"'):]
+    assert card.index('<a href="http://127.0.0.1:8080/c/') < card.index('<img src="/static/img/example-30.png"')
+    with TestClient(create_api(ApiSettings(static_dir=static, scene_url=None))) as c:
+        assert "Open in the scene" not in c.get("/").text

@@ -159,6 +159,21 @@ def test_without_the_compiled_filter_exact_arithmetic_answers(monkeypatch):
         assert got.time(k).compare(q(want.t_lo[k])) >= 0 and got.time(k).compare(q(want.t_hi[k])) <= 0
 
 
+def test_the_sweep_kernel_is_built_at_install_and_its_absence_is_loud(monkeypatch):
+    # installed package: the extension loads, nothing is compiled at run time
+    assert sweep_filter.filter_status().startswith("compiled sweep kernel loaded from ")
+    # a copy without the extension: exact arithmetic answers, and a warning names cause and fix
+    monkeypatch.setattr(sweep_filter, "_state", {"lib": None, "status": "not built yet", "tried": False})
+
+    def missing(name: str):
+        raise ImportError(f"No module named {name!r}")
+
+    monkeypatch.setattr(sweep_filter.importlib, "import_module", missing)
+    with pytest.warns(RuntimeWarning, match=r"sweep kernel is missing .*pip install"):
+        assert sweep_filter._library() is None
+    assert "exact arithmetic answers every pair" in sweep_filter.filter_status()
+
+
 def test_exact_motions_are_the_parsed_expressions():
     # the directly built A(t) equals the one the motion's own expressions give (parser path)
     from core.moving.motions import motion_from_dict, motion_to_dict

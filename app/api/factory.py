@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from functools import lru_cache
+from typing import Any
 
 from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
@@ -14,7 +16,7 @@ from core import warm_up
 from ..workers import WorkerPool
 from .batching import PairBatcher
 from .limits import BodySizeLimit, validation_error_handler
-from .routes import classify, contacts, health, landing, motion, presets, witness
+from .routes import classify, contacts, health, landing, motion, presets, sweep, witness
 from .settings import ApiSettings
 
 __all__ = ["create_api", "DOCS_ASSETS"]
@@ -36,8 +38,9 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
         settings: limits and the scene link; defaults to ``ApiSettings()``.
 
     Returns:
-        A FastAPI app with /api/classify, /api/explain, /api/analyse, /api/presets, /healthz,
-        the landing page at / and OpenAPI docs at /docs.
+        A FastAPI app with /api/classify, /api/explain, /api/analyse, the witness routes,
+        /api/contacts, /api/sweep, /api/presets, /healthz, the landing page at / and OpenAPI
+        docs at /docs.
     """
     settings = settings or ApiSettings()
     workers = WorkerPool(
@@ -72,7 +75,12 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     app.state.batcher = batcher
     # ignored: starlette types every handler as taking any Exception; this one is registered for its class only
     app.add_exception_handler(RequestValidationError, validation_error_handler)  # type: ignore[arg-type]
-    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes, per_path={"/api/contacts": settings.max_contacts_body_bytes})
+    app.add_middleware(
+        BodySizeLimit,
+        max_bytes=settings.max_body_bytes,
+        # /api/sweep: start and end rows, twice the bytes of the same bodies in /api/contacts
+        per_path={"/api/contacts": settings.max_contacts_body_bytes, "/api/sweep": 2 * settings.max_contacts_body_bytes},
+    )
     if settings.cors_origins:  # opt-in (--cors-origin): pages at these origins may call the API
         from fastapi.middleware.cors import CORSMiddleware
 
@@ -84,13 +92,40 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
             expose_headers=["retry-after"],
             max_age=600,
         )
-    for module in (classify, contacts, motion, presets, witness, health, landing):
+    for module in (classify, contacts, sweep, motion, presets, witness, health, landing):
         app.include_router(module.router)
     if settings.static_dir is not None and settings.static_dir.is_dir():
         app.mount("/static", StaticFiles(directory=settings.static_dir), name="static")
     if settings.bench_dir is not None:  # may be written later by python -m bench.report
         app.mount("/bench/figures", StaticFiles(directory=settings.bench_dir, check_dir=False), name="bench")
     return app
+
+
+REDOC_JS = "/redoc-assets/redoc.standalone.js"
+"""ReDoc's script as served: the local copy with its one remaining internet address replaced."""
+
+REDOC_LOGO_URL = "https://cdn.redoc.ly/redoc/logo-mini.svg"
+"""The "API docs by Redocly" logo the standalone script loads from a CDN on every page view."""
+
+REDOC_LOGO = (
+    "data:image/svg+xml,%3Csvg xmlns='http://www.w3.org/2000/svg' viewBox='0 0 16 16'%3E"
+    "%3Ccircle cx='8' cy='8' r='6' fill='%23c33'/%3E%3C/svg%3E"
+)
+"""A small local stand-in for that logo (a data URI: no request at all)."""
+
+
+@lru_cache(maxsize=1)
+def _redoc_js(path: Any) -> bytes:
+    """The ReDoc script with the CDN logo replaced by :data:`REDOC_LOGO` (read once).
+
+    Raises:
+        RuntimeError: the script no longer holds the logo's address (a new ReDoc: check the
+            page for other internet requests, then update :data:`REDOC_LOGO_URL`).
+    """
+    text = path.read_text(encoding="utf-8")
+    if REDOC_LOGO_URL not in text:
+        raise RuntimeError(f"{path} does not load {REDOC_LOGO_URL} any more: check /redoc for other CDN requests")
+    return text.replace(REDOC_LOGO_URL, REDOC_LOGO).encode("utf-8")
 
 
 def _offline_docs(app: FastAPI) -> None:
@@ -103,7 +138,7 @@ def _offline_docs(app: FastAPI) -> None:
 
     import fastapi_offline
     from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
-    from fastapi.responses import HTMLResponse
+    from fastapi.responses import HTMLResponse, Response
 
     static = Path(fastapi_offline.__file__).parent / "static"
     app.mount(DOCS_ASSETS, StaticFiles(directory=static), name="docs-assets")
@@ -119,12 +154,17 @@ def _offline_docs(app: FastAPI) -> None:
             swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png",
         )
 
+    @app.get(REDOC_JS, include_in_schema=False)
+    def redoc_js() -> Response:
+        return Response(_redoc_js(static / "redoc.standalone.js"), media_type="application/javascript",
+                        headers={"Cache-Control": "public, max-age=86400"})
+
     @app.get("/redoc", include_in_schema=False)
     def redoc() -> HTMLResponse:
         return get_redoc_html(
             openapi_url=app.openapi_url or "/openapi.json",
             title=f"{title} - ReDoc",
-            redoc_js_url=f"{DOCS_ASSETS}/redoc.standalone.js",
+            redoc_js_url=REDOC_JS,
             redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png",
             with_google_fonts=False,
         )

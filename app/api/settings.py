@@ -59,7 +59,12 @@ class ApiSettings:
     """Most pairs the broad phase of one ``/api/contacts`` request may examine (counted before
     any is built; 10,000 bodies at random in a box give ~50,000, 10,000 at one point 49,995,000)."""
     max_contacts_pairs: int = 100_000
-    """Most pairs listed in one ``/api/contacts`` answer (checked before the answer is built)."""
+    """Most pairs listed in one ``/api/contacts`` answer (checked before the answer is built).
+    ``/api/sweep`` has the same three limits (bodies, pairs to examine, pairs listed) and twice
+    the body size (its start and end rows)."""
+    max_sweep_exact_times: int = 100
+    """Most exact first contact times (``exact_times``) in one ``/api/sweep`` answer (each is
+    exact arithmetic on the pair's motion: ~1-40 ms)."""
     max_expression_chars: int = SERVER.expression_chars or 2000
     """Longest expression string in a motion (all other size limits of user text:
     :data:`core.shapes.limits.SERVER`, e.g. number strings up to 400 characters)."""
@@ -92,7 +97,7 @@ class ApiSettings:
         """Reject limits that make no sense (a ValueError naming the field)."""
         for name in ("max_body_bytes", "max_batch", "max_expression_chars", "max_degree",
                      "max_digits", "max_concurrent_analyses", "max_contacts_bodies", "max_contacts_body_bytes",
-                     "max_contacts_candidates", "max_contacts_pairs"):
+                     "max_contacts_candidates", "max_contacts_pairs", "max_sweep_exact_times"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"ApiSettings.{name} must be a positive integer, got {value!r}")

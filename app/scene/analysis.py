@@ -11,6 +11,7 @@ slider, plot samples) and answers every question about relations with the result
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable, Hashable, Iterable
@@ -24,7 +25,7 @@ from flint import fmpq
 from core.algebra.algebraic import RealAlgebraic
 from core.algebra.closedform import closed_form, polynomial_text
 from core.moving.result import Event, MotionAnalysis
-from core.shapes.numbers import to_fmpq
+from core.shapes.numbers import format_rational, to_float, to_fmpq
 
 from ..jobs import analyse_job, read_motion_job
 from .motion import MAX_MOTION_TEXT, MotionError, MotionModel
@@ -53,6 +54,21 @@ class EventView:
     """Exact form the t box reads back: "1/3", "(12 - 2*sqrt(2))/17", or "α2" (degree > 2)."""
     closed: bool
     """True when ``exact`` is a closed form (the defining factor has degree <= 2)."""
+    origin: str = ""
+    """Which polynomial of the paper α_k is a root of and of what degree, for a time with no
+    closed form: "root of ŝ0(t) (degree 84 in t, coefficients in Q(√2)); over Q: a root of a
+    factor of degree 166 of its norm" (the degree of the defining polynomial alone misleads)."""
+
+    @property
+    def shown(self) -> str:
+        """How α_k reads after its name: "= (12 − 2√2)/17", or "≈ 0.900801131…" (marked rounding).
+
+        A decimal is never shown as if it were the exact value: the exact one is
+        :attr:`definition` (copy button).
+        """
+        if self.closed:
+            return f"= {self.exact}"
+        return f"≈ {_short(self.exact)}"
 
     @property
     def definition(self) -> str:
@@ -62,11 +78,40 @@ class EventView:
         return polynomial_text(self.event.time)
 
 
-def _event_view(k: int, ev: Event) -> EventView:
+CLOSED_FORM_CHARS = 80
+"""Longest closed form shown as an event's exact value (longer ones: the defining polynomial)."""
+
+_HAT = {"s0": "ŝ0", "s1": "ŝ1", "s10": "ŝ1,0"}
+
+
+def event_origin(result: MotionAnalysis, time_: RealAlgebraic) -> str:
+    """Which of the paper's hat forms ŝ0, ŝ1, ŝ1,0 vanishes at an event time, with the degrees.
+
+    ŝ_j = -s_j / a_n are the forms the paper's examples print (Example 30: ŝ0 of degree 84 in t,
+    coefficients in Q(√2)); the exact time is stored as a root of a polynomial over Q: a factor
+    of the norm ŝ0·ŝ0' (degree 2·84 = 168 there, the factor 166), whose degree is told apart.
+    """
+    from core.algebra.algebraic import sign_at
+
+    over_q = time_.poly.degree()
+    for name in ("s0", "s1", "s10"):
+        poly = getattr(result, name)
+        if poly.is_zero() or sign_at(poly, time_) != 0:
+            continue
+        field_ = "Q" if poly.d == 1 else f"Q(√{poly.d})"
+        text = f"root of {_HAT[name]}(t), of degree {poly.degree()} in t with coefficients in {field_}"
+        if poly.d != 1:
+            return text + f"; over Q, of a factor of degree {over_q} of its norm (degree {poly.norm().degree()})"
+        return text + (f"; over Q, of its factor of degree {over_q}" if over_q != poly.degree() else "")
+    return f"root of a polynomial of degree {over_q} over Q"
+
+
+def _event_view(k: int, ev: Event, result: MotionAnalysis | None = None) -> EventView:
     form = closed_form(ev.time)
-    if form is not None and len(form) <= 48:
+    if form is not None and len(form) <= CLOSED_FORM_CHARS:
         return EventView(k, ev, float(ev.time), str(ev.relation), ev.kind, closed_form(ev.time, unicode=True) or form, form, True)
-    return EventView(k, ev, float(ev.time), str(ev.relation), ev.kind, ev.value, f"α{k}", False)
+    origin = event_origin(result, ev.time) if result is not None else ""
+    return EventView(k, ev, float(ev.time), str(ev.relation), ev.kind, ev.value, f"α{k}", False, origin)
 
 
 @dataclass
@@ -108,7 +153,7 @@ class AnalysisView:
             result=result,
             seconds=seconds,
             window=window,
-            events=[_event_view(k, e) for k, e in enumerate(result.events, start=1)],
+            events=[_event_view(k, e, result) for k, e in enumerate(result.events, start=1)],
             segments=segments,
             samples_t=ts,
             samples=series,
@@ -217,14 +262,17 @@ def _no_matrices(t: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _short(decimal: str) -> str:
-    return decimal if len(decimal) <= 12 else decimal[:12] + "…"
+    return decimal if len(decimal) <= 12 else decimal[:12] + "…"  # always marked "≈" where shown
 
 
 def _short_rational(text: str) -> str:
     if len(text) <= 10:
         return text
     q = to_fmpq(text)
-    return f"{int(q.p) / int(q.q):.6g}"
+    f = to_float(q)
+    if not math.isfinite(f) or (f == 0 and q != 0):  # beyond the float range: exact mantissa, exponent
+        return format_rational(q)
+    return f"{f:.6g}"
 
 
 class AnalysisCache:

@@ -21,7 +21,7 @@ from .motion_form import form_text
 from .panel_view import error_html
 from .panels import analysed_text
 from .state import SceneConfig
-from .texts import read_time, time_float
+from .texts import SHOWN_DIGITS, read_time, time_float
 from .touch import touch_event, touch_motion
 
 if TYPE_CHECKING:
@@ -58,8 +58,10 @@ class MotionControl:
         name = str(s.ui.motion.preset.value)
         if name == STATIC:
             with s.lock:
-                self.leave()
+                self.freeze()
                 s.refresh()
+            return
+        if name not in s.ui.motion.presets:  # "(typed motion)", "(Touch …)": the motion shown already
             return
         st = s.state
         s.load(SceneConfig(dim=st.dim, preset=name, gizmos=st.gizmos, show_plots=st.show_plots,
@@ -82,6 +84,7 @@ class MotionControl:
         s = self.s
         with s.lock:
             s.state.errors.pop("touch", None)
+            self.freeze()  # from a motion: the shapes as their fields show them, exactly
             try:
                 texts = touch_motion(s.state.shapes["A"], s.state.shapes["B"])
             except ValueError as e:
@@ -92,6 +95,7 @@ class MotionControl:
         except MotionError as e:
             s.field_error("touch", f"Touch: {e}")
             return
+        model.kind = "touch"
         model.description = (
             "Touch: B slides along the line of centres, from A's centre (t = 0) to where it was (t = 1) and "
             "beyond; the event shown is the exact external contact."
@@ -268,6 +272,34 @@ class MotionControl:
         self.last_to_picture_s = time.perf_counter() - self._started
         s.frame_camera()
         s.ready.set()
+
+    FROZEN = (
+        "Static shapes: the shapes as drawn at t, made exactly the decimals their fields show "
+        f"({SHOWN_DIGITS} significant digits); the relation is certified for these numbers."
+    )
+    """Status after leaving a motion for static shapes (what is then certified)."""
+
+    def freeze(self) -> None:
+        """Leave the motion for static shapes: exactly the decimals the Shape fields show.
+
+        The shapes drawn at t are floats (from the float matrices at the float t); they are
+        rounded to :data:`~app.scene.texts.SHOWN_DIGITS` significant digits and taken as exact
+        decimals, so the fields show exactly the numbers whose relation the readout certifies.
+        A shape too thin for those digits keeps its floats (the field says "≈").
+        """
+        s = self.s
+        st = s.state
+        if st.motion is None:
+            return
+        shapes = {}
+        for name, sh in st.shapes.items():
+            try:
+                shapes[name] = sh.rationalised()
+            except ValueError:
+                shapes[name] = sh
+        st.shapes = shapes
+        self.leave()
+        st.status = self.FROZEN
 
     def leave(self) -> None:
         """Turn the scene static (a drag, a typed shape, "(static shapes)").

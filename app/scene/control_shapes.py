@@ -59,6 +59,7 @@ class ShapeControl:
         ui.view.palette.on_update(lambda _ev: self.on_option("palette", str(ui.view.palette.value)))
         ui.plots.live.on_update(lambda _ev: self.on_option("show_plots", bool(ui.plots.live.value)))
         ui.plots.scale.on_update(lambda _ev: self.on_option("plot_scale", str(ui.plots.scale.value)))
+        ui.roots.show_roots.on_update(lambda _ev: self.on_roots())
 
     def attach_gizmos(self) -> None:
         """Listen to the gizmos of the current shape views (after they are (re)built)."""
@@ -72,6 +73,9 @@ class ShapeControl:
             return
         tc = ev.target
         self.drag(name, tuple(tc.position), tuple(tc.wxyz))
+        if getattr(ev, "phase", None) == "end":  # the drag is over: draw the shape certified (the
+            with self.s.lock:                   # decimals its fields show), not the pointer's float pose
+                self.s.views[name].resend_pose()
 
     def drag(self, name: str, position: tuple[float, ...], wxyz: tuple[float, ...]) -> str | None:
         """Shape ``name`` now has this pose (floats): classify, recolour (the hot path)."""
@@ -79,13 +83,21 @@ class ShapeControl:
         with s.lock:
             st = s.state
             if st.motion is not None:
-                s.motion_ctl.leave()
+                s.motion_ctl.freeze()
             sh = st.shapes[name]
+            axes = sh.semi_axes
             if st.dim == 2:
                 angle = 2.0 * math.atan2(float(wxyz[3]), float(wxyz[0]))
-                new = ShapeState((float(position[0]), float(position[1])), sh.semi_axes, (angle,))
+                new = ShapeState((float(position[0]), float(position[1])), axes, (angle,))
             else:
-                new = ShapeState(tuple(float(v) for v in position), sh.semi_axes, tuple(float(v) for v in wxyz))
+                new = ShapeState(tuple(float(v) for v in position), axes, tuple(float(v) for v in wxyz))
+            try:  # the shape becomes exactly the decimals its fields show (SHOWN_DIGITS)
+                new = new.rationalised()
+                if sh.matrix is None and "semi_axes" in sh.typed:  # unchanged by a drag: still as typed
+                    new.typed = {"semi_axes": sh.typed["semi_axes"]}
+            except ValueError as e:
+                s.field_error(f"shape {name}", str(e))
+                return st.relation
             st.shapes[name] = new
             st.errors.pop(f"shape {name}", None)
             return s.refresh(dragged=name)
@@ -109,12 +121,25 @@ class ShapeControl:
         s = self.s
         with s.lock:
             st = s.state
-            # a new matrix replaces the shape; a new centre (etc.) edits the shape's parameters
-            d = {} if "matrix" in fields else st.shapes[name].params_dict()
+            if st.motion is not None:  # the shapes drawn at t become the decimals shown, exactly
+                s.motion_ctl.freeze()
+            old = st.shapes[name]
+            # a new matrix replaces the shape; a new centre (etc.) edits the shape's parameters,
+            # the others as their fields show them (a computed float: the decimals shown)
+            typed: dict[str, str] = {}
+            if "matrix" in fields:
+                d: dict[str, Any] = {}
+            else:
+                base = old if old.matrix is None else ShapeState(old.center, old.semi_axes, old.orientation)
+                base = base.rationalised()
+                d = base.params_dict()
+                typed = {k: v for k, v in old.typed.items() if k != "matrix"} if old.matrix is None else {}
             d.update(fields)
             new = drawable(ShapeState.from_dict(d, st.dim, name))
-            if st.motion is not None:
-                s.motion_ctl.leave()
+            for key, value in fields.items():
+                if isinstance(value, str):
+                    typed[key] = value.strip()
+            new.typed = typed
             st.shapes[name] = new
             st.errors.pop(f"shape {name}", None)
             return s.refresh()
@@ -130,6 +155,14 @@ class ShapeControl:
             s.load(SceneConfig(dim=dim, preset=None, gizmos=st.gizmos, show_plots=st.show_plots,
                                separating_plane=st.separating_plane, palette=st.palette))
             s.frame_camera()
+
+    def on_roots(self) -> None:
+        """"Show the roots of P(T)" switched: the panel draws (or removes) the roots' plots."""
+        s = self.s
+        if s.syncing.active:
+            return
+        with s.lock:
+            s.refresh()
 
     def on_option(self, key: str, value: Any) -> None:
         """A display option (gizmos, plane, palette, plots): stored and drawn."""

@@ -45,7 +45,9 @@ class ShareControl:
 
     def on_link(self) -> None:
         """Show a link that opens a new tab on this view, with a button copying its address."""
-        path = link_path(self.s.snapshot())
+        # relative to the tab's page /s/<id>/ (or / in presenter mode): also right behind a proxy
+        # that serves the scene under a path of its own (a remote notebook's /proxy/PORT/)
+        path = "../.." + link_path(self.s.snapshot())
         share = self.s.ui.share
         share.link_html.content = (
             f'<div style="font-size:12px"><a href="{html.escape(path, quote=True)}" target="_blank">'

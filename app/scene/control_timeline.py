@@ -44,6 +44,8 @@ class TimelineControl:
         tg.t_box.on_update(lambda _ev: self.on_t_text())
         tg.play.on_update(lambda _ev: self.on_play())
         self._thread: threading.Thread | None = None
+        self._ending = False
+        """The playback thread paused at an event and is returning (Play may be checked again at once)."""
 
     # ------------------------------------------------------------------ time
     def set_t(self, t: Any, *, event: int | None = None, defer_panels: bool = False, text: str | None = None) -> str | None:
@@ -150,8 +152,9 @@ class TimelineControl:
         s = self.s
         if s.syncing.active or not s.ui.timeline.play.value:
             return
-        if self._thread is not None and self._thread.is_alive():
-            return
+        if self._thread is not None and self._thread.is_alive() and not self._ending:
+            return  # playing already (a thread that paused at an event is ending: start anew)
+        self._ending = False
         self._thread = threading.Thread(target=self._play_loop, name="play", daemon=True)
         self._thread.start()
 
@@ -173,9 +176,10 @@ class TimelineControl:
             if an is not None and s.ui.timeline.pause_at_events.value:
                 after = s.state.event or 0  # sitting on an event: the next one
                 hit = next((e for e in an.events if e.k > after and t0 <= e.t <= min(t, hi)), None)
-                if hit is not None:  # stop exactly on it (its exact relation, drawn at its float)
+                if hit is not None:  # stop exactly on it (its exact relation, drawn at its float);
+                    self.jump_to_event(hit.k)  # the event first: Play reads unchecked only once it is shown
+                    self._ending = True
                     self.stop_playing()
-                    self.jump_to_event(hit.k)
                     return
             if t > hi:
                 t = lo

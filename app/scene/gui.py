@@ -18,12 +18,13 @@ from typing import TYPE_CHECKING
 import viser
 
 from .plots import SCALES
+from .roots_view import RootsView
 from .shapes import PALETTES
 
 if TYPE_CHECKING:  # what GuiApi.add_progress_bar returns; viser 1.1.1 does not export it at the top level
     from viser._gui_handles import GuiProgressBarHandle
 
-__all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "ShareGui", "build_gui", "ignoring_event", "STATIC", "DIM_LABELS"]
+__all__ = ["Gui", "TimelineGui", "PlotsGui", "MotionGui", "ShapeGui", "ViewGui", "ShareGui", "build_gui", "ignoring_event", "STATIC", "TYPED", "TOUCH", "DIM_LABELS"]
 
 FORM_LABELS = (
     ("center", "Body centre", "x, y[, z] (expressions in t allowed)"),
@@ -37,6 +38,12 @@ FORM_LABELS = (
 
 STATIC = "(static shapes)"
 """Preset dropdown entry for no motion."""
+
+TYPED = "(typed motion)"
+"""Preset dropdown entry shown while a typed motion (editor, form, link) runs."""
+
+TOUCH = "(Touch: B slides to A)"
+"""Preset dropdown entry shown while the motion of "Touch: slide B to A" runs."""
 
 DIM_LABELS = {3: "3D ellipsoids", 2: "2D ellipses"}
 """Dimension dropdown entries."""
@@ -78,6 +85,8 @@ class MotionGui:
 
     folder: viser.GuiFolderHandle
     preset: viser.GuiDropdownHandle
+    presets: list[str]
+    """The presets' names (the dropdown also lists STATIC, and TYPED / TOUCH while one runs)."""
     description: viser.GuiMarkdownHandle
     fields: dict[str, viser.GuiTextHandle]
     """"A", "B", "interval"."""
@@ -99,6 +108,8 @@ class ShapeGui:
     fields: dict[str, viser.GuiTextHandle]
     """"center", "semi_axes", "orientation", "matrix"."""
     error: viser.GuiMarkdownHandle
+    exact: viser.GuiHtmlHandle
+    """Under "≈" fields: what is rounded and a button copying the exact matrix certified."""
 
 
 @dataclass(repr=False)
@@ -108,6 +119,8 @@ class ViewGui:
     folder: viser.GuiFolderHandle
     dimension: viser.GuiDropdownHandle
     gizmos: viser.GuiCheckboxHandle
+    gizmo_note: viser.GuiMarkdownHandle
+    """Shown while a motion runs: the gizmos are hidden, and how to get them back."""
     plane: viser.GuiCheckboxHandle
     palette: viser.GuiDropdownHandle
     follow: viser.GuiCheckboxHandle
@@ -144,6 +157,8 @@ class Gui:
     """"What am I seeing?": the decision in plain words."""
     timeline: TimelineGui
     plots: PlotsGui
+    roots: RootsView
+    """The roots of P(T): the paper's picture (:mod:`app.scene.roots_view`)."""
     motion: MotionGui
     shapes: dict[str, ShapeGui]
     sign_table: viser.GuiMarkdownHandle
@@ -194,6 +209,7 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             scale=gui.add_dropdown("Plot scale", list(SCALES), initial_value="asinh"),
             about=gui.add_markdown(""),
         )
+    roots = RootsView(gui)
     with gui.add_folder("Motion") as mo_folder:
         preset = gui.add_dropdown("Preset", [STATIC, *presets], initial_value=STATIC)
         description = gui.add_markdown("")
@@ -219,6 +235,7 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
         motion = MotionGui(
             folder=mo_folder,
             preset=preset,
+            presets=list(presets),
             description=description,
             fields=fields,
             errors=errors,
@@ -243,6 +260,7 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
                     ),
                 },
                 error=gui.add_markdown("", visible=False),
+                exact=gui.add_html("", visible=False),
             )
     with gui.add_folder("Sign table", expand_by_default=False):
         sign_table = gui.add_markdown("")
@@ -251,6 +269,10 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             folder=v_folder,
             dimension=gui.add_dropdown("Dimension", list(DIM_LABELS.values()), initial_value=DIM_LABELS[dim]),
             gizmos=gui.add_checkbox("Transform gizmos", gizmos),
+            gizmo_note=gui.add_markdown(
+                "*A motion drives the shapes: the gizmos are hidden. Pick “(static shapes)” as the Preset to drag them.*",
+                visible=False,
+            ),
             plane=gui.add_checkbox("Separating plane (when separate)", plane),
             palette=gui.add_dropdown("Palette", list(PALETTES), initial_value=next(iter(PALETTES))),
             follow=gui.add_checkbox("Camera follows the shapes", False),
@@ -267,4 +289,4 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             analysis_json=gui.add_button("Download analysis (JSON)", visible=False),
             analysis_csv=gui.add_button("Download analysis (CSV)", visible=False),
         )
-    return Gui(title, legend, readout, touch, touch_error, words, timeline, plots, motion, shapes, sign_table, view, share)
+    return Gui(title, legend, readout, touch, touch_error, words, timeline, plots, roots, motion, shapes, sign_table, view, share)

@@ -154,12 +154,20 @@ class Router:
         """Wrap viser's HTTP hook ``inner`` (websocket handshakes pass through unchanged)."""
 
         def route(connection: Any, request: Any) -> Any:
-            if not self.enabled or request.headers.get("Upgrade", "").lower() == "websocket":
+            if request.headers.get("Upgrade", "").lower() == "websocket":
                 return inner(connection, request) if inner is not None else None
             parts = urlsplit(request.path)
+            if not self.enabled:  # presenter mode: one page, still with its labels tied to inputs
+                if parts.path in ("", "/", "/index.html"):
+                    from .page import page_response
+
+                    return page_response(request)
+                return inner(connection, request) if inner is not None else None
             query = f"?{parts.query}" if parts.query else ""
+            # relative redirects: the same request works behind a proxy that serves the scene
+            # under a path of its own (jupyter-server-proxy's <notebook>/proxy/PORT/)
             if parts.path in ("", "/", "/index.html"):
-                return _redirect(connection, f"/s/{self.store.new_id()}/{query}")
+                return _redirect(connection, f"s/{self.store.new_id()}/{query}")
             m = _LINK.match(parts.path)
             if m is not None:
                 try:
@@ -168,10 +176,15 @@ class Router:
                     data = {"error": str(e)}
                 tab = self.store.new_id()
                 self.store.put(tab, data)
-                return _redirect(connection, f"/s/{tab}/{query}")
+                up = "../../" if parts.path.endswith("/") else "../"  # from /c/<token>/ (or /c/<token>)
+                return _redirect(connection, f"{up}s/{tab}/{query}")
             m = _TAB.match(parts.path)
             if m is not None:  # the page itself, or a file next to it
                 rest = parts.path[m.end():]
+                if rest in ("", "index.html"):
+                    from .page import page_response
+
+                    return page_response(request)  # viser's page with labels tied to inputs
                 request = dataclasses.replace(request, path="/" + rest + query)
             return inner(connection, request) if inner is not None else None
 

@@ -65,6 +65,8 @@ class MotionModel:
         self.A, self.B = A, B
         self.interval = interval
         self.preset = preset
+        self.kind = "preset" if preset is not None else "typed"
+        """"preset", "typed" (editor, form, link) or "touch" (set by "Touch: slide B to A")."""
         self.description = description
         self._texts = dict(texts)
         self.dim = int(A.dim)
@@ -113,6 +115,32 @@ class MotionModel:
             p = axes_from_quadric(M, validate=False)
             out.append(ShapeState(tuple(p.center), tuple(p.semi_axes), tuple(p.orientation)))
         return out[0], out[1]
+
+    def exact_matrix_text(self, name: str, t: Any) -> str:
+        """The exact matrix of shape ``name`` at the exact time t, as text to copy.
+
+        t rational (a float is its binary value): each entry exactly, "p/q" or "(a + b*sqrt(d))/c"
+        over Q(√d). t algebraic (an event, a closed form): the entries as functions of t with the
+        exact definition of t. Rows separated by ";" (the Matrix field's form).
+        """
+        from core.algebra.algebraic import RealAlgebraic
+        from core.algebra.closedform import closed_form, polynomial_text
+
+        rows = getattr(self, name).matrix()
+        if isinstance(t, RealAlgebraic) and t.value is None:
+            entries = "; ".join(", ".join(str(e) for e in row) for row in rows)
+            definition = closed_form(t) or polynomial_text(t)
+            return f"[{entries}] at t = {definition}"
+        tq = to_fmpq(t.value if isinstance(t, RealAlgebraic) else t)
+        out = []
+        for row in rows:
+            cells = []
+            for e in row:
+                den = e.den(tq)
+                a, b = e.num.at(tq)
+                cells.append(str(a / den) if b == 0 else f"({a / den} + ({b / den})*sqrt({e.num.d}))")
+            out.append(", ".join(cells))
+        return "; ".join(out)
 
     def extent_points(self, window: tuple[float, float]) -> np.ndarray:
         """Points spanning where the shapes go on ``window`` (for framing the camera), (k, 3)."""
@@ -198,7 +226,9 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, limits: Li
         except ValueError as e:
             raise MotionError(str(e), "A") from None
         raw: dict[str, Any] = {"A": p["A"], "B": p["B"], "interval": _interval_text(p["interval"])}
-        description = p.get("description", "")
+        from .preset_notes import preset_notes
+
+        description = p.get("description", "") + preset_notes(preset)
     else:
         raw = dict(motion)
         description = "Typed motion."

@@ -133,6 +133,19 @@ class OriginPolicy:
         except OSError:  # pragma: no cover - resolver trouble
             pass
         self.machine_names = frozenset(n for n in names if n)
+        self.trusted_tabs: set[str] = set()
+        """Tab ids handed out as capabilities (a notebook cell's scene): a handshake to
+        ``/s/<id>/`` of such a tab opens whatever its Origin (see :meth:`trust_tab`)."""
+
+    def trust_tab(self, tab: str) -> None:
+        """Accept handshakes to the tab ``/s/<tab>/`` from any page.
+
+        For a scene shown in a notebook cell through the notebook's proxy
+        (jupyter-server-proxy: ``<notebook>/proxy/PORT/s/<tab>/``): the page's Origin is the
+        notebook server's, a name this scene cannot vouch for. The tab id is a random 96-bit
+        secret that only the cell's output holds, so knowing it is the permission.
+        """
+        self.trusted_tabs.add(tab)
 
     def allows(self, origin: str | None, host_header: str | None = None) -> bool:
         """True if a websocket handshake with this ``Origin`` (and ``Host``) may open a session."""
@@ -160,6 +173,11 @@ class OriginPolicy:
             if request.headers.get("Upgrade", "").lower() == "websocket":
                 origins = request.headers.get_all("Origin")
                 origin = origins[0] if len(origins) == 1 else None
+                if self.trusted_tabs:
+                    from .links import tab_id_of
+
+                    if tab_id_of(request.path) in self.trusted_tabs:
+                        return inner(connection, request) if inner is not None else None
                 if len(origins) > 1 or not self.allows(origin, request.headers.get("Host")):
                     return connection.respond(
                         http.HTTPStatus.FORBIDDEN,

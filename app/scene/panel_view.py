@@ -19,9 +19,10 @@ from typing import Any
 import viser
 
 from .analysis import AnalysisView
-from .gui import DIM_LABELS, STATIC, Gui, ignoring_event
+from .gui import DIM_LABELS, STATIC, TOUCH, TYPED, Gui, ignoring_event
 from .motion_form import form_from_source
 from .panels import (
+    copy_button,
     events_html,
     intervals_bar_html,
     legend_html,
@@ -30,8 +31,8 @@ from .panels import (
 )
 from .plots import SCALES, PlotsView
 from .shapes import PALETTES
-from .state import AppState
-from .texts import format_number
+from .state import AppState, ShapeState
+from .texts import APPROX
 from .words import plain_words
 
 __all__ = ["PanelView", "Syncing", "error_html"]
@@ -87,6 +88,8 @@ class PanelView:
         self._analysis_shown: object = None
         self._palette_shown: str | None = None
         self.palette: dict[str, str] = next(iter(PALETTES.values()))
+        self.expl: dict[str, Any] | None = None
+        """The readout's data last shown (the roots panel names the same Var, signs and rule)."""
 
     # ------------------------------------------------------------------ primitives
     def set_value(self, handle: Any, value: Any) -> None:
@@ -125,6 +128,7 @@ class PanelView:
         self.set_value(g.view.dimension, DIM_LABELS[state.dim])
         self.set_value(g.view.palette, state.palette)
         self.set_value(g.view.gizmos, state.gizmos)
+        self.set_visible(g.view.gizmo_note, state.motion is not None and state.gizmos)
         self.set_value(g.view.plane, state.separating_plane)
         self.set_value(g.view.follow, state.follow)
         self.set_value(g.plots.live, state.show_plots)
@@ -161,7 +165,7 @@ class PanelView:
             event = state.event
             if event is not None:
                 ev = an.events[event - 1]
-                where, at = f"at t = α{event} = {ev.exact}", None
+                where, at = f"at t = α{event} {ev.shown}", None
             elif state.t_exact is not None:
                 where, at = f"at t = {state.t_text or state.t_exact}", state.t_exact
             else:
@@ -172,6 +176,7 @@ class PanelView:
             text = readout_markdown(expl, where=where, palette=self.palette)
         self.set_text(g.readout, text)
         self.set_text(g.words, plain_words(expl))
+        self.expl = expl
 
     def _show_shapes(self, state: AppState) -> None:
         for name, sg in self.gui.shapes.items():
@@ -179,19 +184,56 @@ class PanelView:
             self.set_error(sg.error, err)
             if err is not None:
                 continue  # keep the text the user is correcting
+            texts = state.shapes[name].field_texts()
+            for key, text in texts.items():
+                self.set_value(sg.fields[key], text)
+            self._show_exact(state, name, sg, any(t.startswith(APPROX) for t in texts.values()))
+
+    def _show_exact(self, state: AppState, name: str, sg: Any, rounded: bool) -> None:
+        """Under rounded ("≈") fields: what they are rounded from, and the exact value one click away."""
+        if not rounded:
+            self.set_visible(sg.exact, False)
+            return
+        model, an = state.motion, state.analysis
+        if model is not None and an is not None:
+            if state.event is not None:
+                t: Any = an.events[state.event - 1].event.time
+            else:
+                t = state.t_exact if state.t_exact is not None else an.inside(state.t)
+            try:
+                exact = model.exact_matrix_text(name, t)
+            except (ValueError, ArithmeticError):
+                exact = None
+            why = "≈: the pose drawn at t, rounded; the relation is certified at the exact t."
+        elif model is None and state.shapes[name].matrix is not None:
+            exact, why = None, "≈: the float decomposition of the typed matrix; the Matrix field is what is certified."
+        elif model is None:
             sh = state.shapes[name]
-            self.set_value(sg.fields["center"], ", ".join(format_number(v) for v in sh.center))
-            self.set_value(sg.fields["semi_axes"], ", ".join(format_number(v) for v in sh.semi_axes))
-            self.set_value(sg.fields["orientation"], ", ".join(format_number(v) for v in sh.orientation))
-            matrix = "" if sh.matrix is None else "; ".join(", ".join(str(v) for v in row) for row in sh.matrix)
-            self.set_value(sg.fields["matrix"], matrix)
+            exact = None if sh.matrix is not None else "; ".join(", ".join(str(v) for v in row) for row in _exact_rows(sh))
+            why = "≈: float64 numbers (read as floats); the float64 matrix they give is what is certified."
+        else:
+            exact, why = None, "≈: the pose drawn at t, rounded (the motion is being analysed)."
+        html_ = f'<span style="font-size:11px;color:#555">{html.escape(why)}</span>'
+        if exact is not None:
+            html_ += copy_button(exact, "copy the exact matrix")
+        self.set_text(sg.exact, html_)
+        self.set_visible(sg.exact, True)
 
     def _show_motion(self, state: AppState) -> None:
         mg = self.gui.motion
         model = state.motion
         if model is not self._motion_shown:
             self._motion_shown = model
-            self.set_value(mg.preset, model.preset if model is not None and model.preset else STATIC)
+            # the dropdown says what the tab shows: a preset, a typed motion, Touch's, or static shapes
+            if model is None or model.preset:
+                label, options = (model.preset if model is not None else STATIC), (STATIC, *mg.presets)
+            else:
+                label = TOUCH if model.kind == "touch" else TYPED
+                options = (STATIC, label, *mg.presets)
+            with self._syncing():
+                if tuple(mg.preset.options) != options:
+                    mg.preset.options = options
+            self.set_value(mg.preset, label)
             if model is not None:
                 for key, text in model.texts().items():
                     self.set_value(mg.fields[key], text)
@@ -255,7 +297,12 @@ class PanelView:
         self.set_text(self.gui.sign_table, sign_table_markdown(an.sign_rows(), an.n, self.palette))
 
     def show_plots(self, state: AppState) -> None:
-        """The plots of the analysis with the cursor at t (removed when off or no analysis)."""
+        """The plots of the analysis with the cursor at t (removed when off or no analysis).
+
+        Also the roots of P(T) (when switched on): like the plot cursor, never on the hot path of
+        a jump or a drag, but with the coalesced part of the refresh (within PANEL_PERIOD).
+        """
+        self.gui.roots.show(state, self.expl, "linear" if state.plot_scale == "linear" else "asinh")
         an = state.analysis
         self.set_value(self.gui.plots.scale, state.plot_scale)
         self.set_text(self.gui.plots.about, f"y axis: {SCALES[state.plot_scale]}. Only signs and zeros carry meaning "
@@ -273,3 +320,10 @@ class PanelView:
             state.t,
             scale="linear" if state.plot_scale == "linear" else "asinh",
         )
+
+
+def _exact_rows(shape: ShapeState) -> list[list[Any]]:
+    """The exact matrix a shape with float parameters is certified as (its float64 matrix, exactly)."""
+    from core.shapes.numbers import to_fmpq
+
+    return [[to_fmpq(v) for v in row] for row in shape.quadric()]

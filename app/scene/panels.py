@@ -299,11 +299,11 @@ def events_html(events: Sequence[Any], palette: Mapping[str, str] = RELATION_HEX
     rows = []
     for ev in events:
         swatch = f'<span style="color:{palette.get(ev.relation, "#999")}">■</span>'
-        exact = html.escape(ev.exact)
+        exact = html.escape(ev.shown)
         if not ev.closed:
-            exact += f' <span style="color:#666">(root of a degree-{ev.event.time.poly.degree()} polynomial)</span>'
+            exact += f' <span style="color:#666">({html.escape(ev.origin or "root of a polynomial")}: copy the exact form)</span>'
         rows.append(
-            f'<div style="margin:2px 0">α{ev.k} = {exact} {swatch} {ev.relation}, {ev.kind}'
+            f'<div style="margin:2px 0">α{ev.k} {exact} {swatch} {ev.relation}, {ev.kind}'
             f"{copy_button(ev.definition)}</div>"
         )
     return '<div style="font-size:13px">' + "".join(rows) + "</div>"

@@ -99,7 +99,7 @@ def replay_html(config: SceneConfig, *, seconds: float = 12.0, frames: int = 240
             while pending and pending[0].t <= t:  # the event itself, exactly, before passing it
                 ev = pending.pop(0)
                 s.jump_to_event(ev.k)
-                caption.text = f"t = α{ev.k} = {ev.exact} · {ev.relation.upper()} (exact)"
+                caption.text = f"t = α{ev.k} {ev.shown} · {ev.relation.upper()} (exact)"
                 rec.insert_sleep(event_pause)
             rel = s.set_t(float(t))
             caption.text = f"t = {t:.4f} · {(rel or 'unknown').upper()}"

@@ -59,8 +59,11 @@ class SceneServer:
         store: TabStore | None = None,
         bodies: Any = None,
         prefetch: bool = True,
+        policy: Any = None,
     ) -> None:
         self.server = server
+        self.policy = policy
+        """The :class:`~app.scene.origin.OriginPolicy` of the handshakes (None: not checked here)."""
         self.config = config
         """Configuration new tabs open on (change it to change what the next tab sees)."""
         self.bodies = bodies
@@ -207,13 +210,15 @@ def start_scene(
     warm_up(wait=False)  # compile the float filter in the background; drags use exact meanwhile
     store = TabStore()
     router = Router(store, enabled=not shared)
-    server = start_viser(OriginPolicy(host, allow_origins), router, host=host, port=port, verbose=verbose)
+    policy = OriginPolicy(host, allow_origins)
+    server = start_viser(policy, router, host=host, port=port, verbose=verbose)
     if port and server.get_port() != port:  # taken between the check and the start
         server.stop()
         raise PortBusy(f"the scene's port {port} on {host} is already in use: choose another with --port")
     server.gui.configure_theme(control_width="large", show_share_button=False)
     return SceneServer(
-        server, config or SceneConfig(), processes=processes, shared=shared, store=store, bodies=bodies, prefetch=prefetch
+        server, config or SceneConfig(), processes=processes, shared=shared, store=store, bodies=bodies, prefetch=prefetch,
+        policy=policy,
     )
 
 

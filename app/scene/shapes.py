@@ -28,6 +28,9 @@ __all__ = [
     "EllipsoidView",
     "unit_sphere",
     "unit_disc",
+    "MESH_GAP",
+    "SPHERE_SUBDIVISIONS",
+    "DISC_SEGMENTS",
     "rgb",
 ]
 
@@ -67,16 +70,38 @@ Pose = tuple[tuple[float, float, float], tuple[float, float, float, float], tupl
 """(position, wxyz, scale) of a shape, in 3D (2D shapes live in z = 0)."""
 
 
-@lru_cache(maxsize=1)
-def unit_sphere() -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (V, 3) float32 and faces (F, 3) uint32 of a unit icosphere (built once)."""
+SPHERE_SUBDIVISIONS = 5
+"""Icosphere subdivisions of a shape's mesh: 20,480 faces, whose planes lie within
+:data:`MESH_GAP` of the unit sphere (``tests/test_scene.py`` proves the bound)."""
+
+DISC_SEGMENTS = 256
+"""Sides of the polygon drawn for an ellipse (its sides lie within 1 - cos(π/256) = 7.5e-5)."""
+
+MESH_GAP = 3e-4
+"""How far inside the true surface a shape's drawing may lie, relative to its largest semi-axis.
+
+The mesh is *inscribed*: its vertices lie on the unit sphere (circle), so its convex hull lies
+inside the ball and contains the ball of radius 1 - MESH_GAP. A shape's drawing is the linear
+image of that mesh, so it lies inside the true ellipsoid and contains the ellipsoid shrunk by
+(1 - MESH_GAP) about its centre. Hence two tangent shapes are never drawn interpenetrating
+(their interiors are disjoint and each drawing is inside its shape), and the gap drawn at the
+contact is at most MESH_GAP times the larger semi-axis: under a pixel for a shape up to 3,000
+pixels across. Drawn opaque at a tangency, they look touching."""
+
+
+@lru_cache(maxsize=4)
+def unit_sphere(subdivisions: int = SPHERE_SUBDIVISIONS) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) float32 and faces (F, 3) uint32 of a unit icosphere (built once).
+
+    The vertices lie on the unit sphere (to float32 rounding): the mesh is inscribed.
+    """
     import trimesh
 
-    m = trimesh.creation.icosphere(subdivisions=3)
+    m = trimesh.creation.icosphere(subdivisions=subdivisions)
     return np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32)
 
 
-@lru_cache(maxsize=1)
+@lru_cache(maxsize=4)
 def unit_disc(segments: int = 96) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and faces of a unit disc in the z = 0 plane (both sides drawn by the material).
 
@@ -113,7 +138,7 @@ _SIDE: dict[int, Literal["front", "double"]] = {2: "double", 3: "front"}
 
 def _geometry(dim: int) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and faces of a shape's unit mesh: a disc (2D) or an icosphere (3D)."""
-    return unit_disc() if dim == 2 else unit_sphere()
+    return unit_disc(DISC_SEGMENTS) if dim == 2 else unit_sphere()
 
 
 _POINT = (np.zeros((3, 3), np.float32), np.array([[0, 1, 2]], np.uint32))
@@ -148,8 +173,10 @@ class EllipsoidView:
 
     OPACITY = 0.6
     """Mesh opacity when separate or overlapping (the other shape shows through)."""
-    TANGENT_OPACITY = 0.85
-    """Mesh opacity at a tangency (the relation shows by more than its colour)."""
+    TANGENT_OPACITY = 1.0
+    """Mesh opacity at a tangency: opaque, so neither shape shows through the other (two
+    see-through shapes that touch look interpenetrating) and the relation shows by more than
+    its colour."""
 
     def __init__(self, scene: viser.SceneApi, name: str, dim: int, *, gizmo: bool = True) -> None:
         self.name = name
@@ -235,6 +262,16 @@ class EllipsoidView:
             self.mesh.scale = scale
             # label above the top of the shape, in the body frame of the gizmo node
             self.label.position = (0.0, 0.0, scale[2] if self.dim == 3 else 0.0)
+            self.sent += 2
+
+    def resend_pose(self) -> None:
+        """Send the pose last set again, explicitly.
+
+        After a drag the browser's gizmo holds the pointer's float pose; the certified shape is
+        the rounded one (:meth:`app.scene.state.ShapeState.rationalised`), drawn from here on.
+        """
+        if self._pose is not None:
+            wire.force_pose(self.control, *self._pose)
             self.sent += 2
 
     def set_relation(self, relation: str | None, palette: dict[str, str] = RELATION_HEX) -> None:

@@ -18,7 +18,7 @@ from flint import fmpq
 
 from core.shapes.numbers import to_float
 
-from .texts import Number, parse_matrix, parse_vector, read_time
+from .texts import APPROX, Number, exact_text, parse_matrix, parse_vector, read_time, round_decimal
 
 __all__ = ["ShapeState", "SceneConfig", "AppState", "DEFAULT_PRESET"]
 
@@ -45,6 +45,75 @@ class ShapeState:
     matrix: tuple[tuple[fmpq, ...], ...] | None = None
     """The exact matrix when the shape was typed as one (then centre, semi-axes and orientation
     are its float decomposition, for drawing and for the fields)."""
+    typed: dict[str, str] = field(default_factory=dict, compare=False)
+    """Field ("center", "semi_axes", "orientation", "matrix") -> the text the user typed there,
+    shown back verbatim: the exact value certified is what that text says."""
+
+    FIELDS = ("center", "semi_axes", "orientation")
+
+    def field_texts(self) -> dict[str, str]:
+        """What each Shape field shows: exactly the value the shape holds.
+
+        Typed text verbatim; an exact rational as its decimal or "p/q"; a computed float (a pose
+        drawn at t, the float decomposition of a typed matrix) rounded to
+        :data:`~app.scene.texts.SHOWN_DIGITS` and marked "≈ " (never a rounded number that looks
+        exact); the matrix field: the typed matrix, or empty.
+
+        Examples:
+            >>> s = ShapeState((fmpq(1, 10), 2.0000000000000004), (fmpq(1), fmpq(3, 7)), (0.0,))
+            >>> s.field_texts()["center"], s.field_texts()["semi_axes"]
+            ('≈ 0.1, 2', '1, 3/7')
+        """
+        out: dict[str, str] = {}
+        for key in self.FIELDS:
+            values = getattr(self, key)
+            if key in self.typed:
+                out[key] = self.typed[key]
+            elif all(isinstance(v, fmpq) for v in values):
+                out[key] = ", ".join(exact_text(v) for v in values)
+            else:
+                out[key] = APPROX + ", ".join(exact_text(v) for v in self._rounded(key))
+        if "matrix" in self.typed:
+            out["matrix"] = self.typed["matrix"]
+        else:
+            out["matrix"] = "" if self.matrix is None else "; ".join(", ".join(exact_text(v) for v in row) for row in self.matrix)
+        return out
+
+    def _scale(self) -> float:
+        """Size of the shape (largest |centre coordinate| or semi-axis): where float noise ends."""
+        return max([abs(float(v)) for v in self.center] + [float(v) for v in self.semi_axes])
+
+    def _rounded(self, key: str) -> tuple[fmpq, ...]:
+        """The values of one field rounded to SHOWN_DIGITS significant digits.
+
+        The centre against the size of the shape (noise such as 1e-17 becomes 0), each semi-axis
+        against itself, the orientation (angle or quaternion components, of order 1) against 1.
+        """
+        values = getattr(self, key)
+        if key == "center":
+            scale = self._scale()
+            return tuple(round_decimal(v, scale) for v in values)
+        if key == "semi_axes":
+            return tuple(round_decimal(v) for v in values)
+        return tuple(round_decimal(v, 1) for v in values)
+
+    def rationalised(self) -> ShapeState:
+        """The shape made exactly the decimals its fields show (floats rounded to SHOWN_DIGITS).
+
+        What a drag and leaving a motion do: from then on the shape certified is the one whose
+        numbers are on screen. Exact parameters stay as they are; a typed matrix stays.
+
+        Examples:
+            >>> s = ShapeState((2.0000000000000004, -2.7e-17), (0.9999999999999998, 1.0), (0.0,))
+            >>> r = s.rationalised(); r.center, r.semi_axes, r.field_texts()["center"]
+            ((2, 0), (1, 1), '2, 0')
+        """
+        if self.matrix is not None or not any(isinstance(v, float) for k in self.FIELDS for v in getattr(self, k)):
+            return self
+        center, axes, orient = (self._rounded(k) for k in self.FIELDS)
+        if any(v <= 0 for v in axes) or (len(orient) == 4 and not any(orient)):
+            raise ValueError("the shape is too thin to be written with the digits shown")
+        return ShapeState(center, axes, orient)
 
     @classmethod
     def from_matrix(cls, M: Any, name: str = "matrix") -> ShapeState:
@@ -58,16 +127,23 @@ class ShapeState:
         Examples:
             >>> s = ShapeState.from_matrix([["1", "0", "-2"], ["0", "1", "0"], ["-2", "0", "3"]])
             >>> s.center, s.semi_axes, str(s.matrix[0][2])
-            ((2.0, 0.0), (1.0, 1.0), '-2')
+            ((2, 0), (1.0, 1.0), '-2')
         """
         import numpy as np
+        from flint import fmpq_mat
 
         from core.shapes.quadrics import axes_from_quadric, validate_quadric
 
         E = validate_quadric(M, name=name)
         exact = tuple(tuple(fmpq(v) for v in row) for row in E)
         p = axes_from_quadric(np.array([[to_float(v) for v in row] for row in exact]), validate=False)
-        return cls(tuple(v + 0.0 for v in p.center), tuple(p.semi_axes), tuple(p.orientation), matrix=exact)
+        # the centre is rational (Q c = -m, Q positive definite): exact; axes and orientation are
+        # eigen-data (irrational in general): their float decomposition, shown as "≈"
+        d = len(exact) - 1
+        Q = fmpq_mat([list(row[:d]) for row in exact[:d]])
+        c = Q.solve(fmpq_mat([[-row[d]] for row in exact[:d]]))
+        center = tuple(c[i, 0] for i in range(d))
+        return cls(center, tuple(p.semi_axes), tuple(p.orientation), matrix=exact)
 
     @property
     def dim(self) -> int:
@@ -87,15 +163,17 @@ class ShapeState:
             return [list(row) for row in self.matrix]
 
         o: Any = self.orientation
+        exact = all(isinstance(v, fmpq) for v in (*self.center, *self.semi_axes))
         if len(o) == 1:
             angle = o[0]
             if angle == 0:
                 o = None
-            else:
+            elif exact:
+                o = angle_quaternion(angle)
+            else:  # float parameters (a configuration's JSON floats, many bodies): the float64 matrix
                 return quadric_from_axes(
                     [float(v) for v in self.center], [float(v) for v in self.semi_axes], float(angle)
                 )
-        exact = self.is_exact
         if exact and o is not None and any(isinstance(v, float) for v in o):
             o = [fmpq(*v.as_integer_ratio()) if isinstance(v, float) else v for v in o]
         return quadric_from_axes(self.center, self.semi_axes, o, exact=exact)
@@ -156,20 +234,37 @@ class ShapeState:
         return cls(center, axes, orient)
 
 
+def angle_quaternion(angle: Any) -> list[fmpq]:
+    """The exact rotation the scene means by a 2D angle θ (radians).
+
+    The quaternion (cos θ/2, 0, 0, sin θ/2) with its two components computed in float64 and then
+    taken as the exact binary rationals they are (θ itself is the float nearest to the typed value).
+
+    The rotation is then exact (a rational quaternion gives a rational rotation matrix), so the
+    centre and semi-axes stay exact too; cos and sin of a rational angle are not rational.
+
+    Examples:
+        >>> angle_quaternion(fmpq(0))
+        [1, 0, 0, 0]
+    """
+    h = float(angle) / 2
+    return [fmpq(*math.cos(h).as_integer_ratio()), fmpq(0), fmpq(0), fmpq(*math.sin(h).as_integer_ratio())]
+
+
 def _unit(q: tuple[float, ...]) -> tuple[float, float, float, float]:
     n = math.sqrt(sum(v * v for v in q)) or 1.0
     return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
 
 
 def _num_text(v: Number) -> str:
-    return repr(v) if isinstance(v, float) else str(v)
+    return repr(v) if isinstance(v, float) else exact_text(v)
 
 
 def _default_shapes(dim: int) -> tuple[ShapeState, ShapeState]:
     if dim == 2:
         return (
-            ShapeState((fmpq(0), fmpq(0)), (fmpq(2), fmpq(1)), (0.0,)),
-            ShapeState((fmpq(3), fmpq(3, 2)), (fmpq(3, 2), fmpq(1, 2)), (0.6,)),
+            ShapeState((fmpq(0), fmpq(0)), (fmpq(2), fmpq(1)), (fmpq(0),)),
+            ShapeState((fmpq(3), fmpq(3, 2)), (fmpq(3, 2), fmpq(1, 2)), (fmpq(3, 5),)),
         )
     one, zero = fmpq(1), fmpq(0)
     return (

@@ -17,9 +17,12 @@ from core.algebra.algebraic import RealAlgebraic
 from core.algebra.closedform import algebraic_from_quadratic
 from core.moving.expressions import parse_expression
 from core.shapes.limits import SERVER
-from core.shapes.numbers import format_rational, parse_number, to_float, to_fmpq
+from core.shapes.numbers import parse_number, to_fmpq
 
-__all__ = ["Number", "parse_vector", "parse_matrix", "read_time", "time_float", "format_number"]
+__all__ = [
+    "Number", "parse_vector", "parse_matrix", "read_time", "time_float", "SHOWN_DIGITS",
+    "exact_text", "decimal_text", "round_decimal", "APPROX",
+]
 
 Number = float | fmpq
 """A shape parameter: a float (its exact binary value) or an exact rational (typed text)."""
@@ -148,18 +151,98 @@ def time_float(t: Any) -> float:
         return math.inf if t > 0 else -math.inf
 
 
-def format_number(v: Number, digits: int = 6) -> str:
-    """Short text of a number: exact "p/q" for small rationals, else a rounded decimal.
+
+SHOWN_DIGITS = 10
+"""Significant digits of a computed number shown in a field (a pose drawn at t, a drag).
+
+A drag or leaving a motion makes the shape *exactly* the decimals shown with these digits
+(:meth:`app.scene.state.ShapeState.rationalised`): the fields then hold what is certified."""
+
+APPROX = "≈ "
+"""Prefix of a field that shows a rounded, computed value (never a number that looks exact)."""
+
+
+def decimal_text(q: fmpq, max_chars: int = 40) -> str | None:
+    """The exact decimal text of a rational with a terminating decimal expansion, else None.
 
     Examples:
-        >>> format_number(fmpq(3, 7)), format_number(0.25), format_number(1 / 3), format_number(-0.0)
-        ('3/7', '0.25', '0.333333', '0')
+        >>> decimal_text(fmpq(3, 8)), decimal_text(fmpq(-12, 1)), decimal_text(fmpq(1, 3))
+        ('0.375', '-12', None)
+        >>> decimal_text(fmpq(1, 10**30))
+        '1e-30'
     """
-    if isinstance(v, fmpq):
-        if len(str(v)) <= 24:
-            return str(v)
-        f = to_float(v)
-        if not math.isfinite(f) or (f == 0 and v != 0):  # beyond the float range: exact digits
-            return format_rational(v, digits)
-        v = f
-    return f"{float(v) + 0.0:.{digits}g}"  # + 0.0: a float -0.0 (from a motion) shows as 0
+    p, den = int(q.p), int(q.q)
+    a = b = 0
+    while den % 2 == 0:
+        den //= 2
+        a += 1
+    while den % 5 == 0:
+        den //= 5
+        b += 1
+    if den != 1:
+        return None
+    k = max(a, b)
+    m = p * 10**k // int(q.q)  # exact: q.q divides 10^k
+    sign, digits = ("-" if m < 0 else ""), str(abs(m))
+    if k == 0:
+        text = sign + digits
+    else:
+        digits = digits.rjust(k + 1, "0")
+        text = sign + digits[:-k] + "." + digits[-k:]
+    if len(text) > max_chars or (k > 8 and len(digits.lstrip("0")) <= 6):  # 1e-30, not 0.000…0001
+        zeros = len(digits) - len(digits.lstrip("0"))
+        mant = digits.rstrip("0").lstrip("0")
+        exp = (len(digits) - zeros - 1) - k  # value = m.mmm × 10^exp
+        body = mant[0] + ("." + mant[1:] if len(mant) > 1 else "")
+        text = f"{sign}{body}e{exp}"
+        if len(text) > max_chars:
+            return None
+    return text
+
+
+def exact_text(q: Any) -> str:
+    """Exact text of a rational: its decimal when it terminates (shortly), else "p/q".
+
+    Examples:
+        >>> exact_text(fmpq(1, 10)), exact_text(fmpq(3, 7)), exact_text(fmpq(5))
+        ('0.1', '3/7', '5')
+    """
+    q = to_fmpq(q)
+    return decimal_text(q) or str(q)
+
+
+def _floor_log10(x: fmpq) -> int:
+    """floor(log10(|x|)) of a nonzero rational, exactly."""
+    x = abs(x)
+    k = len(str(int(x.p))) - len(str(int(x.q)))
+    while fmpq(10) ** k > x if k >= 0 else fmpq(1, 10**-k) > x:
+        k -= 1
+    while (fmpq(10) ** (k + 1) if k + 1 >= 0 else fmpq(1, 10 ** -(k + 1))) <= x:
+        k += 1
+    return k
+
+
+def round_decimal(x: Any, scale: Any = None, digits: int = SHOWN_DIGITS) -> fmpq:
+    """``x`` rounded to ``digits`` significant digits of ``scale`` (default: of x itself), exactly.
+
+    The quantum is 10^(floor(log10 scale) - digits + 1); float noise far below the scale of a
+    shape (a centre of 1e-17 beside semi-axes of 1) rounds to 0.
+
+    Examples:
+        >>> round_decimal(0.1), round_decimal(2.0000000000000004), round_decimal(-2.7e-17, 3.0)
+        (1/10, 2, 0)
+        >>> round_decimal(1 / 3, digits=3)
+        333/1000
+    """
+    xq = to_fmpq(x)
+    s = to_fmpq(x if scale is None else scale)
+    if s == 0:
+        return xq
+    e = _floor_log10(s) - digits + 1
+    quantum = fmpq(10) ** e if e >= 0 else fmpq(1, 10**-e)
+    r = xq / quantum
+    n = int(r.p) // int(r.q)  # floor
+    frac = r - n
+    if frac > fmpq(1, 2) or (frac == fmpq(1, 2) and n % 2 == 1):
+        n += 1
+    return n * quantum

@@ -121,8 +121,9 @@ def _scale_brackets(
     lo, hi = np.empty(M), np.empty(M)
     plain = np.setdiff1d(np.arange(M), moved)
     if plain.size:
-        batch = contact_scale(Q[i[plain]], Q[j[plain]], rtol=rtol)
-        lo[plain], hi[plain] = np.asarray(batch.lo, dtype=np.float64), np.asarray(batch.hi, dtype=np.float64)
+        batch = contact_scale(Q[i[plain]], Q[j[plain]], rtol=rtol)  # one ContactScale per pair
+        lo[plain] = [_down(cs.lo) for cs in batch]
+        hi[plain] = [_up(cs.hi) for cs in batch]
     for k in moved.tolist():
         cs = contact_scale(_exact(Q[i[k]]), _translated(Q[j[k]], shifts[k]), rtol=rtol)
         lo[k], hi[k] = _down(cs.lo), _up(cs.hi)

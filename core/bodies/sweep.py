@@ -6,9 +6,12 @@ that is not separate at some t, the first such t* with a certified bracket and i
 
 Pipeline (as :func:`core.contacts` for frozen bodies): read and check the parameters; the swept
 broad phase (:mod:`core.bodies.swept`: balls around each body's swept volume on the grid of
-:mod:`core.bodies.broadphase`, then a relative-motion test; conservative); the narrow phase
-:func:`core.moving.first_contact.first_contacts` (the certified float filter, exact arithmetic
-where it abstains); the result :class:`core.bodies.sweep_result.SweepContacts`.
+:mod:`core.bodies.broadphase`, its pairs counted before any is built (``max_pairs``), then built
+in chunks, each through a relative-motion test; conservative); the narrow phase
+:func:`core.moving.first_contact.first_contacts` on batches of candidates as they come (the
+certified float filter, exact arithmetic where it abstains), keeping only the pairs that meet;
+the result :class:`core.bodies.sweep_result.SweepContacts`. ``progress`` runs between the chunks
+and batches of both phases: the budget hook of a server.
 """
 
 from __future__ import annotations
@@ -19,17 +22,22 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..algebra.algebraic import RealAlgebraic
 from ..fixed.classify import Certifier
-from ..moving.first_contact import first_contacts
-from ..moving.linear import read_linear_motions
+from ..moving.first_contact import FirstContacts, first_contacts
+from ..moving.linear import LinearMotions, read_linear_motions
 from ..relation import Relation
+from .broadphase import Candidates
 from .periodic import check_box, read_box
 from .sweep_result import SweepContacts
-from .swept import swept_pairs, swept_spheres
+from .swept import approaching, swept_plan, swept_spheres
 
 __all__ = ["sweep_contacts"]
 
 Progress = Callable[[int, int], None]
+
+_BATCH = 1 << 18
+"""Candidate pairs gathered from the broad phase before a narrow-phase batch (memory: a few MB)."""
 
 
 def sweep_contacts(
@@ -43,6 +51,7 @@ def sweep_contacts(
     on_invalid: Literal["raise", "mark"] = "raise",
     method: Literal["adaptive", "exact"] = "adaptive",
     progress: Progress | None = None,
+    max_pairs: int | None = None,
 ) -> SweepContacts:
     """Every pair of moving bodies that touches or overlaps during t in [0, 1], with its first contact.
 
@@ -68,7 +77,14 @@ def sweep_contacts(
             rows in ``.invalid`` and search the rest.
         method: "adaptive" (the certified float filter, exact arithmetic where it abstains) or
             "exact" (every candidate pair exactly: slow; for checking).
-        progress: optional ``progress(done, total)`` over the candidate pairs.
+        progress: optional ``progress(done, total)``: ``done`` of the ``total`` pairs the broad
+            phase examines (counted before any is built), called between its chunks and during
+            the narrow phase (between batches of the float filter and between exact pairs); raise
+            from it to stop the sweep there (a time budget), as for :func:`core.contacts`.
+        max_pairs: most pairs the broad phase may examine (None: no limit). Over it,
+            :class:`~core.bodies.broadphase.TooManyPairs` (a ValueError with ``.pairs`` and
+            ``.limit``) is raised after counting, before any pair is built: a server's guard
+            against crowded input (10,000 bodies at one point are 49,995,000 pairs).
 
     Returns:
         :class:`core.bodies.sweep_result.SweepContacts`: ``.i``, ``.j`` (int64, i < j, sorted),
@@ -76,9 +92,13 @@ def sweep_contacts(
         (int8 at t*: TANGENT, or OVERLAP when they overlap at t = 0), ``.time(k)`` (t* exactly),
         ``.certified_by``, ``.counts``, ``.invalid``. Pairs that never meet are absent.
 
+    Memory: the answer plus a few chunks of pairs (the broad phase hands its candidates over
+    chunk by chunk; each batch goes through the narrow phase and only its contacts are kept).
+
     Raises:
         ValueError: arrays of the wrong shape, numbers that are not float64 values, a bad row
-            (``on_invalid="raise"``), a bad box or bodies too large for it.
+            (``on_invalid="raise"``), a bad box or bodies too large for it;
+            :class:`~core.bodies.broadphase.TooManyPairs` over ``max_pairs``.
 
     Guarantee:
         Every pair that is not separate at some t in [0, 1] is reported, each bracket holds its
@@ -94,6 +114,8 @@ def sweep_contacts(
     """
     if on_invalid not in ("raise", "mark"):
         raise ValueError(f"unknown on_invalid {on_invalid!r}; valid options: raise, mark")
+    if method not in ("adaptive", "exact"):
+        raise ValueError(f"unknown method {method!r}; valid options: adaptive, exact")
     t0 = time.perf_counter()
     bodies, bad = read_linear_motions(centers0, centers1, semi_axes, orientations0, orientations1)
     if bad and on_invalid == "raise":
@@ -111,27 +133,51 @@ def sweep_contacts(
     t1 = time.perf_counter()
     if L is not None:
         check_box(spheres.centers, spheres.radii, L)
-    cand, broad = swept_pairs(bodies, spheres, L)
-    t2 = time.perf_counter()
-    shift = None if cand.image is None or L is None else cand.image.astype(np.float64) * L
-    fc = first_contacts(bodies, cand.i, cand.j, shift, method=method, progress=progress)
+    plan = swept_plan(spheres, L, max_pairs=max_pairs)
+    found = _Found(bodies, L, method)
+    total = plan.pairs
+    if progress is not None:
+        progress(0, total)
+    waiting: list[Candidates] = []
+    held = broad = 0
+    chunks = plan.chunks()
+    try:
+        for cand, examined in chunks:
+            broad += len(cand)
+            near = approaching(bodies, spheres, cand, L)
+            if len(near):
+                waiting.append(near)
+                held += len(near)
+            if held >= _BATCH:
+                found.add(Candidates.concatenate(waiting, d, L is not None), progress, total)
+                waiting, held = [], 0
+            if not waiting:  # every pair examined so far is through both phases
+                found.done = examined
+            if progress is not None:
+                progress(found.done, total)
+        if waiting:
+            found.add(Candidates.concatenate(waiting, d, L is not None), progress, total)
+    finally:
+        chunks.close()  # an exception above (e.g. from progress) stops the chunks being built
+    if progress is not None and total:
+        progress(total, total)
     t3 = time.perf_counter()
-    keep = np.flatnonzero(fc.relation != Relation.SEPARATE)
-    order = keep[np.lexsort((cand.j[keep], cand.i[keep]))]
-    where = np.full(len(cand), -1, dtype=np.int64)  # candidate -> its row in the result
-    where[order] = np.arange(order.size)
+    cand, fc = found.result(d)
+    order = np.lexsort((cand.j, cand.i))
     counts = {
         "bodies": N,
         "invalid": len(bad),
         "broad": broad,
-        "candidates": len(cand),
-        "float": int(np.count_nonzero(fc.certified_by == Certifier.FLOAT)),
-        "exact": int(np.count_nonzero(fc.certified_by == Certifier.EXACT)),
+        "candidates": found.candidates,
+        "float": found.by_float,
+        "exact": found.by_exact,
         "contacts": int(order.size),
         "tangent": int(np.count_nonzero(fc.relation == Relation.TANGENT)),
         "overlap": int(np.count_nonzero(fc.relation == Relation.OVERLAP)),
-        "at_start": int(np.count_nonzero(fc.t_hi[keep] == 0.0)),
+        "at_start": int(np.count_nonzero(fc.t_hi == 0.0)),
     }
+    where = np.empty(order.size, dtype=np.int64)  # kept pair -> its row in the result
+    where[order] = np.arange(order.size)
     out = SweepContacts(
         i=cand.i[order].astype(np.int64),
         j=cand.j[order].astype(np.int64),
@@ -145,7 +191,60 @@ def sweep_contacts(
         image=None if cand.image is None else cand.image[order],
         invalid=dict(sorted(bad.items())),
         counts=counts,
-        _times={int(where[k]): t for k, t in fc.times.items() if where[k] >= 0},
+        _times={int(where[k]): t for k, t in fc.times.items()},
     )
-    out.seconds = {"read": t1 - t0, "broad": t2 - t1, "narrow": t3 - t2, "total": time.perf_counter() - t0}
+    out.seconds = {"read": t1 - t0, "broad": t3 - t1 - found.narrow_s, "narrow": found.narrow_s, "total": time.perf_counter() - t0}
     return out
+
+
+class _Found:
+    """Batches of candidates through the narrow phase; keeps the pairs that meet, counts them all."""
+
+    def __init__(self, bodies: LinearMotions, box: np.ndarray | None, method: str) -> None:
+        self.bodies = bodies
+        self.box = box
+        self.method = method
+        self.parts: list[tuple[Candidates, FirstContacts]] = []
+        self.candidates = self.by_float = self.by_exact = 0
+        self.done = 0
+        """Broad-phase pairs examined whose candidates are through the narrow phase (the progress
+        reported while a batch is in the narrow phase)."""
+        self.narrow_s = 0.0
+
+    def add(self, cand: Candidates, progress: Progress | None, total: int) -> None:
+        """First contacts of a batch; its pairs that meet are kept (with their exact times)."""
+        t = time.perf_counter()
+        shift = None if cand.image is None or self.box is None else cand.image.astype(np.float64) * self.box
+        fc = first_contacts(
+            self.bodies, cand.i, cand.j, shift, method=self.method,
+            progress=None if progress is None else (lambda k, m: progress(self.done, total)),
+        )
+        self.candidates += len(cand)
+        self.by_float += int(np.count_nonzero(fc.certified_by == Certifier.FLOAT))
+        self.by_exact += int(np.count_nonzero(fc.certified_by == Certifier.EXACT))
+        keep = np.flatnonzero(fc.relation != Relation.SEPARATE)
+        at = np.full(len(cand), -1, dtype=np.int64)
+        at[keep] = np.arange(keep.size)
+        self.parts.append((
+            Candidates(cand.i[keep], cand.j[keep], None if cand.image is None else cand.image[keep]),
+            FirstContacts(fc.relation[keep], fc.t_lo[keep], fc.t_hi[keep], fc.certified_by[keep],
+                          {int(at[k]): e for k, e in fc.times.items() if at[k] >= 0}),
+        ))
+        self.narrow_s += time.perf_counter() - t
+
+    def result(self, d: int) -> tuple[Candidates, FirstContacts]:
+        """Every kept pair (in batch order) and its first contact; times by position."""
+        cand = Candidates.concatenate([c for c, _ in self.parts], d, self.box is not None)
+        times: dict[int, RealAlgebraic] = {}
+        offset = 0
+        for c, f in self.parts:
+            times.update({offset + k: e for k, e in f.times.items()})
+            offset += len(c)
+
+        def joined(name: str, dtype: type) -> np.ndarray:
+            parts = [getattr(f, name) for _, f in self.parts]
+            return np.concatenate(parts).astype(dtype, copy=False) if parts else np.zeros(0, dtype)
+
+        fc = FirstContacts(joined("relation", np.int8), joined("t_lo", np.float64), joined("t_hi", np.float64),
+                           joined("certified_by", np.int8), times)
+        return cand, fc

@@ -10,15 +10,17 @@ Conservative, and why (the rounding argument, as in :mod:`core.bodies.bounds`):
    halving is exact), and the float |c1 - c0| is within (d + 3) U of the exact one; the radius
    R_k = (a_k + |fl(c1 - c0)| / 2) (1 + 2^-40) + 2^-40 |m~| (rounded up by the same margin)
    covers both, with room to spare (2^-40 >> (d + 3) U). These spheres go to the static broad
-   phase (:func:`core.bodies.broadphase.candidate_pairs`), which never drops a pair whose
-   spheres meet.
+   phase (:class:`core.bodies.broadphase.BroadPhase`), which never drops a pair whose spheres
+   meet; it counts the pairs it would examine before building any (:func:`swept_plan`,
+   ``max_pairs``), then builds them in chunks.
 3. Relative motion: bodies i and j can only meet when |d(t)| <= a_i + a_j for some t, with
    d(t) = c_j(t) + k L - c_i(t) = d0 + t e, e = d1 - d0 (a segment). A lower bound of its
    distance to the origin: the distance of the whole line, |d0 x e| / |e|, or |d0| when d0.e > 0
    (moving apart), or |d1| when d1.e < 0; the float d0, d1 are within eps = 4 U (|c0_i| + |c0_j|
    + |c1_i| + |c1_j| + |k L|) of the exact ones (per coordinate), and every float bound is
    lowered by 2^-40 of the lengths involved. Pairs whose lower bound exceeds a_i + a_j are
-   dropped: exactly the pairs whose bounding spheres never meet at one same time.
+   dropped: exactly the pairs whose bounding spheres never meet at one same time
+   (:func:`approaching`, chunk by chunk).
 """
 
 from __future__ import annotations
@@ -28,9 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..moving.linear import LinearMotions
-from .broadphase import Candidates, candidate_pairs
+from .broadphase import BroadPhase, Candidates, TooManyPairs
 
-__all__ = ["SweptSpheres", "swept_spheres", "swept_pairs"]
+__all__ = ["SweptSpheres", "swept_spheres", "swept_plan", "swept_pairs", "approaching"]
 
 _U = 2.0**-52
 _MARGIN = 2.0**-40
@@ -68,17 +70,47 @@ def swept_spheres(bodies: LinearMotions, valid: np.ndarray) -> SweptSpheres:
     return SweptSpheres(np.where(ok[:, None], m, np.nan), np.where(ok, R, np.nan), reach)
 
 
-def swept_pairs(bodies: LinearMotions, spheres: SweptSpheres, box: np.ndarray | None) -> tuple[Candidates, int]:
+def swept_plan(spheres: SweptSpheres, box: np.ndarray | None, *, max_pairs: int | None = None) -> BroadPhase:
+    """The static broad phase over the swept balls: its pairs counted, none built yet.
+
+    Raises:
+        TooManyPairs: it would examine more than ``max_pairs`` pairs (counted before any is
+            built: a server's guard against crowded bodies).
+    """
+    if max_pairs is not None and (isinstance(max_pairs, bool) or not isinstance(max_pairs, int) or max_pairs < 0):
+        raise ValueError(f"max_pairs must be a non-negative integer or None, got {max_pairs!r}")
+    plan = BroadPhase(spheres.centers, spheres.radii, box=box)
+    if max_pairs is not None and plan.pairs > max_pairs:
+        raise TooManyPairs(plan.pairs, max_pairs)
+    return plan
+
+
+def swept_pairs(
+    bodies: LinearMotions, spheres: SweptSpheres, box: np.ndarray | None, *, max_pairs: int | None = None
+) -> tuple[Candidates, int]:
     """Pairs whose swept balls meet, then those whose centres come within a_i + a_j (step 3).
 
     Returns:
         (the candidates, i < j, with j's lattice image in a box; how many pairs the broad phase
         found before the relative-motion test).
+
+    Raises:
+        TooManyPairs: the broad phase would examine more than ``max_pairs`` pairs.
     """
-    cand = candidate_pairs(spheres.centers, spheres.radii, box=box)
+    plan = swept_plan(spheres, box, max_pairs=max_pairs)
+    parts: list[Candidates] = []
+    found = 0
+    for cand, _ in plan.chunks():
+        found += len(cand)
+        parts.append(approaching(bodies, spheres, cand, box))
+    return Candidates.concatenate(parts, plan.d, box is not None), found
+
+
+def approaching(bodies: LinearMotions, spheres: SweptSpheres, cand: Candidates, box: np.ndarray | None) -> Candidates:
+    """The candidates whose centres come within a_i + a_j of each other at one same t (step 3)."""
     found = len(cand)
     if not found:
-        return cand, 0
+        return cand
     i, j = cand.i, cand.j
     c0, c1 = bodies.centers0, bodies.centers1
     s = np.zeros((found, c0.shape[1])) if cand.image is None or box is None else cand.image.astype(np.float64) * box
@@ -106,4 +138,4 @@ def swept_pairs(bodies: LinearMotions, spheres: SweptSpheres, box: np.ndarray | 
         reach = (spheres.reach[i] + spheres.reach[j]) * (1 + _MARGIN)
         keep = ~(low > reach)  # NaN (overflow) keeps the pair
     rows = np.flatnonzero(keep)
-    return Candidates(i[rows], j[rows], None if cand.image is None else cand.image[rows]), found
+    return Candidates(i[rows], j[rows], None if cand.image is None else cand.image[rows])

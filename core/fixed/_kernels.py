@@ -4,7 +4,7 @@ Each ``pencil{n}(A, B)`` reads ``A[i, j]`` (a float, or an array of floats for m
 returns the outputs listed in ``PENCIL{n}_OUTPUTS``; |error of x| <= constant * x_M + floor.
 The midpoint-radius kernels (``hat_{s}_{n}``, ``translate{n}``, ``pencil_radius{n}``,
 ``pencil_at{n}``, ``form{n}``) return values and radii; |error| <= radius * RADIUS_FACTOR + floor.
-See core/fixed/errorbound.py for the proofs; core/fixed/_kernels.c holds the same kernels in C.
+See core/fixed/errorbound.py for the proofs; core/fixed/_kernels.h holds the same kernels in C.
 """
 
 # ruff: noqa

@@ -6,6 +6,7 @@ could not certify (:mod:`core.fixed.exact`), in the manner of CGAL's filtered pr
 answer and, with ``on_invalid="mark"``, why a pair is invalid.
 
 Inputs are read exactly: float16/32/64 and long double arrays are the binary rationals they hold
+(float32 stacks go to the filter as they are: half the bytes, widened exactly inside it)
 (a long double that is not a float64 value goes to the exact path, never rounded), numpy integers
 are integers, object arrays may hold Fractions, fmpq, ints or number strings.
 """
@@ -122,9 +123,9 @@ def _read_array(x: Any, name: str) -> np.ndarray:
     if isinstance(x, np.ndarray):
         kind = x.dtype.kind
         if kind == "f":
-            if x.dtype == np.float64:
+            if x.dtype == np.float64 or x.dtype == np.float32:  # float32: the filter reads it as it is
                 return x
-            if x.dtype.itemsize < 8:  # float16/32: widening is exact
+            if x.dtype.itemsize < 8:  # float16: widening is exact
                 return x.astype(np.float64)
             wide = x.astype(np.float64)  # long double: float64 only where that is exact
             same = (wide.astype(x.dtype) == x) | np.isnan(x)
@@ -340,9 +341,11 @@ def _classify_flat(
     N = a.shape[0]
     codes = np.full(N, Relation.UNDECIDED, dtype=np.int8)
     by = np.zeros(N, dtype=np.int8)
-    if method != "exact" and a.dtype == np.float64 and b.dtype == np.float64:
+    if method != "exact" and a.dtype.kind == "f" and b.dtype.kind == "f":
+        if a.dtype != b.dtype:  # float32 against float64: widen (exact)
+            a, b = a.astype(np.float64), b.astype(np.float64)
         codes = classify_float(a, b, scalar=scalar)
-        by[codes != Relation.UNDECIDED] = Certifier.FLOAT
+        by = (codes != Relation.UNDECIDED).view(np.int8)  # Certifier.FLOAT is 1, NONE 0
     errors = _resolve(a, b, codes, by, method, scalar, on_invalid, progress)
     return codes, by, errors
 

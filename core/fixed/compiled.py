@@ -1,191 +1,128 @@
-"""The compiled float filter: ``core/fixed/_kernels.c`` built once per machine and source, called by ctypes.
+"""The compiled float filter: the extension ``core.fixed._filter``, built when the package is installed.
 
-Why C: the filter's kernels are straight-line float code generated from the same trace as the
-numpy ones (:mod:`core.fixed.kernelgen`), so a C compiler turns them into the fastest code this
-machine can run (``-O3 -march=native``), in about half a second (numba needed 20 s), with
-no runtime dependency beyond a C compiler. Contraction into fused multiply-adds is off
-(``-ffp-contract=off``) and there is no ``-ffast-math``: every operation rounds once, as the
-error bounds assume.
+Why C: the filter's lane functions are straight-line float code generated from one description
+(:mod:`core.fixed.driver`, :mod:`core.fixed.kernelgen`), so a C compiler turns them into SIMD
+across pairs. ``setup.py`` builds them with the standard setuptools ``Extension`` (``pip install
+.`` or ``pip install -e .``): on x86-64 three variants (baseline SSE2, AVX2, AVX-512) in one build,
+the best one this CPU runs chosen when the module is imported (:func:`variant`), so a wheel or an
+image runs on any CPU of the architecture; elsewhere the portable build. Contraction into fused
+multiply-adds is off (``-ffp-contract=off``) and there is no ``-ffast-math``: every operation
+rounds once, as the error bounds assume. Nothing is compiled, cached or waited for at run time.
 
-The shared library is cached under ``$ELLIPSOID_KERNEL_CACHE`` (else ``$XDG_CACHE_HOME`` or
-``~/.cache``, then the temp directory) in a file named by the hash of the source, the flags, the
-compiler and the CPU, written atomically, so every process of the machine (scene, API workers,
-Dask workers) loads it without compiling again. Calls release the GIL (ctypes), and batches are
-split over a thread pool: :func:`set_threads` chooses how many threads (default: every core).
-Without a C compiler :func:`library` returns None and the numpy filter serves.
+Calls release the GIL, and batches are split over a thread pool: :func:`set_threads` chooses how
+many threads (default: every core). If the extension is missing (the package was copied without
+being installed, or built without a C compiler) the numpy filter serves, which takes the same
+decisions ~100x slower, and a :class:`RuntimeWarning` says so once, naming the cause and the fix.
 """
 
 from __future__ import annotations
 
-import ctypes
 import hashlib
 import os
-import platform
-import shutil
-import subprocess
-import tempfile
 import threading
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 
-__all__ = ["library", "load_source", "warm_up", "status", "rules", "rule_one", "set_threads", "get_threads", "SOURCE", "FLAGS"]
+__all__ = [
+    "available", "warm_up", "status", "variant", "variants", "select", "rules", "rule_one", "set_threads", "get_threads",
+    "header_sha256", "FIX", "HEADER",
+]
 
-SOURCE = Path(__file__).with_name("_kernels.c")
-FLAGS: tuple[str, ...] = (
-    "-O3",
-    "-march=native",
-    "-mprefer-vector-width=512",
-    "-std=c99",
-    "-ffp-contract=off",
-    "-fno-fast-math",
-    "-fno-math-errno",
-    "-fno-trapping-math",
-    "-fPIC",
-    "-shared",
-)
-"""Compiler flags: optimise for this CPU, but never fuse or reassociate floating-point operations.
-
-``-fno-math-errno`` and ``-fno-trapping-math`` only let the compiler assume that sqrt need not
-set errno and that floating-point exceptions are not trapped (so it may evaluate both sides of a
-select and vectorise the branch-free loops); the value of every operation is unchanged, which is
-all the error bounds rely on. Value-changing options (-ffast-math, -fassociative-math,
--ffinite-math-only, contraction into FMA) stay off."""
-
-PORTABLE_FLAGS: tuple[str, ...] = ("-O2", "-std=c99", "-ffp-contract=off", "-fno-fast-math", "-fPIC", "-shared")
-"""Fallback for compilers that do not know a flag of FLAGS (same guarantees, less speed)."""
+FIX = 'reinstall the package with a C compiler present: `pip install -e .` (or `pip install .`)'
+"""What builds the extension (setup.py, setuptools Extension)."""
 
 _MIN_CHUNK = 16384
 """Pairs per thread below which a batch is not split (thread start-up would dominate)."""
 
 _lock = threading.Lock()
-_ready = threading.Event()
-_state: dict[str, object] = {"lib": None, "status": "not built yet", "thread": None, "threads": None, "pool": None}
+_state: dict[str, object] = {"threads": None, "pool": None, "warned": False}
 
 
-def _compiler() -> str | None:
-    cc = os.environ.get("CC")
-    if cc:
-        return cc
-    for name in ("cc", "gcc", "clang"):
-        if shutil.which(name):
-            return name
-    return None
+HEADER = Path(__file__).with_name("_kernels.h")
+"""The generated kernels the extension is built from."""
 
 
-def _cpu_tag() -> str:
-    """What -march=native depends on: the CPU's flags (a shared cache serves mixed machines)."""
+def header_sha256() -> str | None:
+    """First 16 hex digits of the SHA-256 of ``_kernels.h`` (None when it is not shipped)."""
     try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith(("flags", "Features")):
-                return line
+        return hashlib.sha256(HEADER.read_bytes()).hexdigest()[:16]
     except OSError:
-        pass
-    return platform.processor() or platform.machine()
+        return None
 
 
-def cache_dir() -> Path:
-    """Where compiled libraries are kept (created on demand)."""
-    env = os.environ.get("ELLIPSOID_KERNEL_CACHE")
-    if env:
-        return Path(env)
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "ellipsoid-interference"
-
-
-def _library_path(cc: str, source: Path = SOURCE) -> Path:
+def _load() -> tuple[ModuleType | None, str]:
     try:
-        version = subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=30, check=False).stdout
-    except (OSError, subprocess.SubprocessError):
-        version = cc
-    h = hashlib.sha256()
-    for part in (source.read_bytes(), " ".join(FLAGS).encode(), version.encode(), _cpu_tag().encode(), platform.machine().encode()):
-        h.update(part)
-        h.update(b"\0")
-    stem = "kernels" if source == SOURCE else source.stem.lstrip("_")
-    return Path(f"{stem}-{h.hexdigest()[:20]}.so")
+        from . import _filter
+    except ImportError as e:  # not built: the numpy filter serves (warned once, when used)
+        return None, f"the compiled float filter core.fixed._filter is not built ({e})"
+    current = header_sha256()
+    if current is not None and _filter.kernels_sha256() != current:  # regenerated, not rebuilt
+        warnings.warn(
+            "core.fixed._filter was built from another core/fixed/_kernels.h than the one beside it "
+            "(run `pip install -e .` after `python -m core.fixed.kernelgen`); it still certifies what it "
+            "was built to certify, but the numpy filter and the C may now differ.",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    return _filter, f"compiled kernels loaded (core.fixed._filter, {_filter.variant()} variant)"
 
 
-def load_source(source: Path) -> tuple[ctypes.CDLL | None, str]:
-    """Compile a C source with :data:`FLAGS` (or find it in the cache) and load it.
-
-    The same cache, naming by hash (source, flags, compiler, CPU) and atomic write as the
-    filter's own kernels, so any C file of the project is built once per machine.
-
-    Returns:
-        (the library, or None; a sentence saying where it was loaded from or why not).
-    """
-    cc = _compiler()
-    if cc is None:
-        return None, "no C compiler found (set CC)"
-    name = _library_path(cc, source)
-    status = "not built"
-    for folder in (cache_dir(), Path(tempfile.gettempdir()) / "ellipsoid-interference"):
-        target = folder / name
-        try:
-            if not target.exists():
-                folder.mkdir(parents=True, exist_ok=True)
-                fd, tmp = tempfile.mkstemp(suffix=".so", dir=folder)
-                os.close(fd)
-                for flags in (FLAGS, PORTABLE_FLAGS):  # a compiler that lacks a flag: portable build
-                    cmd = [cc, *flags, "-o", tmp, str(source), "-lm"]
-                    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300, check=False)
-                    if res.returncode == 0:
-                        break
-                else:
-                    os.unlink(tmp)
-                    return None, f"C compilation failed: {res.stderr.strip()[:500]}"
-                os.replace(tmp, target)  # atomic: concurrent builders agree on the result
-            return ctypes.CDLL(str(target)), f"compiled kernels loaded from {target}"
-        except OSError as e:  # unwritable cache: try the next folder
-            status = f"cannot use {folder}: {e}"
-    return None, status
+_EXT, _STATUS = _load()
 
 
-def _build() -> None:
-    """Compile (or find in the cache) and load the library; record why not otherwise."""
-    try:
-        lib, status = load_source(SOURCE)
-        if lib is None:
-            _state["status"] = status + ("" if "compiler" not in status else ": the numpy filter serves")
-            return
-        for n in (3, 4):
-            fn = getattr(lib, f"classify{n}")
-            fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int64]
-            fn.restype = None
-        _state["lib"] = lib
-        _state["status"] = status
-    except Exception as e:  # noqa: BLE001 - never break classification: numpy serves
-        _state["status"] = f"could not build the compiled kernels: {type(e).__name__}: {e}"
-    finally:
-        _ready.set()
+def available() -> bool:
+    """True when the compiled extension serves; False: warn once (cause and fix), numpy serves."""
+    if _EXT is not None:
+        return True
+    if not _state["warned"]:
+        _state["warned"] = True
+        warnings.warn(
+            f"{_STATUS}: classify runs the numpy filter instead (the same certified answers, about "
+            f"100x slower). Fix: {FIX}.",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+    return False
 
 
 def warm_up(*, wait: bool = True) -> bool:
-    """Build or load the compiled kernels in a background thread (once); optionally wait.
+    """Whether the compiled kernels serve (they load with the module: nothing to wait for).
 
-    Returns True when they are ready (False without a C compiler: the numpy filter serves).
+    Kept for callers that prepared the kernels ahead of time (the scene, the API, Dask workers).
     """
-    with _lock:
-        if _state["thread"] is None:
-            t = threading.Thread(target=_build, name="kernel-build", daemon=True)
-            _state["thread"] = t
-            t.start()
-    if wait:
-        _ready.wait()
-    return _state["lib"] is not None
-
-
-def library(*, wait: bool = True) -> ctypes.CDLL | None:
-    """The loaded library, or None (not ready with ``wait=False``, or no compiler)."""
-    warm_up(wait=wait)
-    return _state["lib"]  # type: ignore[return-value]
+    del wait
+    return _EXT is not None
 
 
 def status() -> str:
     """Why the compiled kernels are or are not in use."""
-    return str(_state["status"])
+    return _STATUS
+
+
+def variant() -> str | None:
+    """The SIMD variant in use ("avx512", "avx2", "baseline"), None without the extension."""
+    return None if _EXT is None else str(_EXT.variant())
+
+
+def variants() -> list[str]:
+    """The variants of this build that this CPU runs, slowest first (empty without the extension)."""
+    return [] if _EXT is None else list(_EXT.variants())
+
+
+def select(name: str) -> None:
+    """Use this SIMD variant (tests compare them; ``ELLIPSOID_SIMD`` chooses one at import).
+
+    Raises:
+        ValueError: unknown, not built, or not supported by this CPU.
+        RuntimeError: the extension is not built.
+    """
+    if _EXT is None:
+        raise RuntimeError(f"{_STATUS}; fix: {FIX}")
+    _EXT.select(name)
 
 
 def set_threads(n: int | None) -> None:
@@ -211,40 +148,40 @@ def _pool(k: int) -> ThreadPoolExecutor:
         return pool  # type: ignore[return-value]
 
 
+def _contiguous(a: np.ndarray) -> np.ndarray:
+    """C-contiguous float64 or float32 (float32 stays: half the bytes, widened exactly in C)."""
+    dtype = np.float32 if a.dtype == np.float32 else np.float64
+    return np.ascontiguousarray(a, dtype=dtype)
+
+
 def rules(a: np.ndarray, b: np.ndarray, *, threads: int | None = None) -> np.ndarray:
-    """Rule ids (int8, -1 undecided) for float64 stacks (N, n, n), split over threads.
+    """Rule ids (int8, -1 undecided) for float64 or float32 stacks (N, n, n), split over threads.
 
     Raises:
-        RuntimeError: the library is not available (check :func:`warm_up` first).
+        RuntimeError: the extension is not built (check :func:`available` first).
     """
-    lib = library(wait=True)
-    if lib is None:
-        raise RuntimeError(f"compiled kernels unavailable: {status()}")
+    if _EXT is None:
+        raise RuntimeError(f"{_STATUS}; fix: {FIX}")
     n = a.shape[-1]
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    b = np.ascontiguousarray(b, dtype=np.float64)
+    a, b = _contiguous(a), _contiguous(b)
+    if a.dtype != b.dtype:
+        a, b = a.astype(np.float64), b.astype(np.float64)
     N = a.shape[0]
     out = np.empty(N, dtype=np.int8)
-    fn = getattr(lib, f"classify{n}")
     k = min(threads or get_threads(), max(1, N // _MIN_CHUNK))
     if k <= 1:
-        fn(a.ctypes.data, b.ctypes.data, out.ctypes.data, N)
+        _EXT.classify(n, a, b, out)
         return out
     bounds = np.linspace(0, N, k + 1).astype(np.int64)
-    stride = 8 * n * n
-
-    def run(lo: int, hi: int) -> None:
-        fn(a.ctypes.data + stride * lo, b.ctypes.data + stride * lo, out.ctypes.data + lo, hi - lo)
-
-    futures = [_pool(k).submit(run, int(lo), int(hi)) for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)]
+    parts = [(int(lo), int(hi)) for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)]
+    futures = [_pool(k).submit(_EXT.classify, n, a[lo:hi], b[lo:hi], out[lo:hi]) for lo, hi in parts]
     for f in futures:
         f.result()
     return out
 
 
 def rule_one(A: np.ndarray, B: np.ndarray) -> int:
-    """Rule id of one contiguous float64 (n, n) pair (-1 undecided); the library must be ready."""
-    lib = _state["lib"]
+    """Rule id of one float64 (n, n) pair (-1 undecided); the extension must be available."""
     out = np.empty(1, dtype=np.int8)
-    getattr(lib, f"classify{A.shape[0]}")(A.ctypes.data, B.ctypes.data, out.ctypes.data, 1)
+    _EXT.classify(A.shape[0], np.ascontiguousarray(A, dtype=np.float64), np.ascontiguousarray(B, dtype=np.float64), out)  # type: ignore[union-attr]
     return int(out[0])

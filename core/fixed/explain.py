@@ -11,16 +11,25 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
 from flint import fmpq
 
-from ..formulae.decision import RULES, sign_variations
+from ..formulae.decision import RULE_LIST, RULES, sign_variations
 from ..formulae.subresultants import hat_scale
-from ..shapes.numbers import format_rational, sign, to_float
+from ..shapes.numbers import format_rational, sign, to_float, to_fmpq
+from . import _kernels as K
+from .errorbound import RADIUS_FACTOR
 from .exact import exact_pair
 from .explanation import Explanation, Quantity
-from .filters import explain_float
+from .filters import first_stage
 
-__all__ = ["Quantity", "Explanation", "explain", "display_float"]
+__all__ = ["Quantity", "Explanation", "explain", "explain_float", "display_float", "HAT_DEGREE_WEIGHT"]
+
+HAT_DEGREE_WEIGHT: dict[tuple[int, str], tuple[int, int]] = {
+    (3, "s0"): (4, 6), (3, "s1"): (2, 4), (3, "s10"): (2, 3),
+    (4, "s0"): (6, 12), (4, "s1"): (4, 10), (4, "s10"): (4, 9),
+}
+"""(degree, weight) of each hat form: hs(mu * lambda^i a_i) = mu^deg lambda^weight hs(a)."""
 
 
 def display_float(v: fmpq) -> float | None:
@@ -76,3 +85,91 @@ def explain(A: Any, B: Any) -> Explanation:
         s10=subs["s10"],
         subresultants_needed=needed,
     )
+
+
+def explain_float(A: Any, B: Any) -> Explanation | None:
+    """Explanation from the float filter if it certifies the pair, else None (exact path then).
+
+    The numbers are those the filter's run computed (:func:`core.fixed.filters.first_stage`, the
+    description the compiled kernels also run): a_i with their bounds, and s0 exactly when the
+    tree asked for it. They come from the power-of-two scaled matrices (where the bounds are
+    proven) and are scaled back exactly; a value that would leave the float range defers to the
+    exact path.
+    """
+    if not (_is_plain_floats(A) and _is_plain_floats(B)):
+        return None
+    a = np.asarray(A, dtype=np.float64)
+    b = np.asarray(B, dtype=np.float64)
+    if a.ndim != 2 or a.shape != b.shape or a.shape[0] not in (3, 4) or a.shape[0] != a.shape[1]:
+        return None
+    n = a.shape[0]
+    run = first_stage(a[None], b[None])
+    code = int(run.rules[0])
+    if code < 0:
+        return None
+    rule = RULE_LIST[code]
+    ea, eb = int(run.a.k[0]), int(run.b.k[0])
+
+    def quantity(name: str, v: float, bd: float, e: int, s: int | None) -> Quantity | None:
+        """V * 2^e with bound bd * 2^e; None if either leaves the normal float range."""
+        with np.errstate(all="ignore"):
+            val, bound = float(np.ldexp(v, e)), float(np.ldexp(bd, e))
+        if not (math.isfinite(val) and math.isfinite(bound)) or (val == 0.0) != (v == 0.0):
+            return None
+        exact_value = to_fmpq(v) * (fmpq(2) ** e if e >= 0 else fmpq(1, 2 ** (-e)))
+        return Quantity(name, val, None, bound, s, format_rational(exact_value))
+
+    vals = [float(run.c[i][0]) for i in range(n + 1)]
+    radii = [float(run.cr[i][0]) for i in range(n + 1)]
+    coeffs = []
+    for i in range(n + 1):
+        v, bd = vals[i], radii[i]
+        s = 1 if v > bd else (-1 if v < -bd else None)
+        q = quantity(f"a{i}", v, bd, -(i * ea + (n - i) * eb), s)
+        if q is None:  # a value beyond the float range: the exact path shows it
+            return None
+        coeffs.append(q)
+    needed = ["s0"] if bool(run.asked_s0[0]) else []
+    s0 = None
+    if needed:
+        an = coeffs[n].approx
+        an_bound = coeffs[n].bound
+        assert an is not None and an_bound is not None  # a_n was certified (< 0) and fits a float
+        hv, hr = getattr(K, f"hat_s0_{n}")(vals, radii)
+        hv0, hb0 = float(hv), float(hr) * RADIUS_FACTOR + getattr(K, f"HAT_S0_{n}_FLOOR")
+        deg, w = HAT_DEGREE_WEIGHT[(n, "s0")]
+        # scaled a_i = mu lambda^i a_i with mu = 2^(n eb), lambda = 2^(ea - eb)
+        e = -(n * eb * deg + (ea - eb) * w)
+        with np.errstate(all="ignore"):
+            hvs, hbs = float(np.ldexp(hv0, e)), float(np.ldexp(hb0, e))
+        # s0 = -a_n c_0 hs0; a_n < 0 is certified, so sign(s0) = sign(hs0)
+        factor = -an * float(hat_scale(n)[0])
+        value = factor * hvs
+        bound = abs(factor) * (hbs + abs(hvs) * (an_bound / abs(an))) * (1 + 2.0**-40)
+        if not (math.isfinite(value) and math.isfinite(bound)) or (value == 0.0) != (hv0 == 0.0):
+            return None
+        s0 = Quantity("s0", value, None, bound, 1 if hv0 > hb0 else (-1 if hv0 < -hb0 else None), format_rational(to_fmpq(value)))
+    return Explanation(
+        n=n,
+        relation=rule.relation,
+        certified_by="float",
+        rule=rule.key,
+        rule_text=rule.text,
+        var=sign_variations([q.sign or 0 for q in reversed(coeffs)]),
+        coefficients=coeffs,
+        s0=s0,
+        subresultants_needed=needed,
+    )
+
+
+def _is_plain_floats(M: Any) -> bool:
+    if isinstance(M, np.ndarray):
+        return M.dtype == np.float64 or (M.dtype.kind in "iu" and M.size > 0 and np.abs(M).max() < 2**53)
+    try:
+        return all(
+            (type(v) is float or type(v) is np.float64 or (type(v) is int and abs(v) < 2**53))
+            for row in M
+            for v in row
+        )
+    except TypeError:
+        return False

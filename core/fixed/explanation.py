@@ -1,6 +1,6 @@
 """The record of one decision: the numbers behind it (:class:`Quantity`) and :class:`Explanation`.
 
-Filled by the float filter (:func:`core.fixed.filters.explain_float`) or by exact arithmetic
+Filled by the float filter (:func:`core.fixed.explain.explain_float`) or by exact arithmetic
 (:func:`core.fixed.explain.explain`); a type of its own so that neither imports the other.
 """
 

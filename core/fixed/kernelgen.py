@@ -1,12 +1,16 @@
-"""Generate ``core/fixed/_kernels.py`` and ``core/fixed/_kernels.c``: the float filter's kernels.
+"""Generate ``core/fixed/_kernels.py`` and ``core/fixed/_kernels.h``: the float filter's kernels.
 
-They are traced from the generic formulas, with the per-pair C driver and the decision tables.
+The straight-line kernels are traced from the ring-generic formulas (numpy source and C); the C
+lane functions are the driver's description (:mod:`core.fixed.driver`) written out through
+:class:`core.fixed.lanes.CLanes`, with the decision tables. The hand-written C that runs them
+over blocks of pairs (``_filter.h``) and the Python extension around it (``_filter.c``) include
+the generated header; ``setup.py`` compiles them when the package is installed.
 
-Run ``python -m core.fixed.kernelgen`` after changing :mod:`core.formulae.pencil`, :mod:`core.formulae.subresultants`,
-:mod:`core.fixed.errorbound` or :mod:`core.formulae.decision`; ``tests/test_filters.py`` fails if the committed
-files are not what this module generates. Committing the generated text (instead of ``exec`` at
-import) keeps every line of the fast path readable and lets the compiled library be cached by
-the hash of its source (:mod:`core.fixed.compiled`).
+Run ``python -m core.fixed.kernelgen`` after changing :mod:`core.formulae.pencil`,
+:mod:`core.formulae.subresultants`, :mod:`core.fixed.errorbound`, :mod:`core.fixed.driver` or
+:mod:`core.formulae.decision` (then reinstall: ``pip install -e .``); ``tests/test_filters.py``
+fails if the committed files are not what this module generates. Committing the generated text
+(instead of ``exec`` at import) keeps every line of the fast path readable.
 """
 
 from __future__ import annotations
@@ -21,17 +25,15 @@ from typing import Any
 
 from ..formulae.pencil import determinant, pencil_coefficients, poly_mul
 from ..formulae.subresultants import hat_s0, hat_s1, hat_s10
-from ..shapes.quadrics import SYMMETRY_TOLERANCE, origin_moved
+from ..shapes.quadrics import origin_moved
 from .errorbound import (
     CERT_T_MAX,
-    CERT_T_MIN,
     LEAF_MAX,
-    NO_SCALE_MIN,
-    RADIUS_FACTOR,
     TRANSLATE_MAX,
     Kernel,
     build_kernel,
 )
+from .lanes import CExpr, CLanes, KernelInfo
 
 __all__ = [
     "pencil_kernel",
@@ -248,24 +250,20 @@ def form_kernel(n: int) -> Kernel:
 
 
 # ---------------------------------------------------------------------------------------------
-# C: the same traced kernels, the prepare step and the per-pair driver (core/fixed/_kernels.c)
+# C: the same traced kernels and the driver's lane functions (core/fixed/_kernels.h)
 
 
-def c_function(k: Kernel, n: int, scalars: Sequence[str] = (), unit: Sequence[str] = ()) -> str:
+def c_function(k: Kernel, n: int, scalars: Sequence[str] = ()) -> str:
     """The kernel's straight-line Python source rewritten as a C function.
 
-    The same operations in the same order: the error constants carry over (compile without
-    contraction, -ffp-contract=off).
-
-    Array inputs are strided (element k of X is ``X[k * s]``: ``s`` = 1 for one pair, the block
-    length for the structure-of-arrays blocks of the fast path), except the ``unit`` ones (local
-    arrays of one lane); matrix leaves ``X[i, j]`` read a row-major n x n layout; the outputs go
-    to the local array ``out``.
+    The same operations in the same order: the error constants carry over (compiled without
+    contraction, -ffp-contract=off). Matrix leaves ``X[i, j]`` read a row-major n x n array (the
+    lane functions pass local arrays of one pair); the outputs go to the array ``out``.
     """
     lines = k.source.rstrip().split("\n")
     params = re.match(r"def \w+\((.*)\):", lines[0]).group(1).split(", ")  # type: ignore[union-attr]
     decl = [f"double {p}" if p in scalars else f"const double *restrict {p}" for p in params]
-    body = [f"static inline __attribute__((always_inline)) void {k.name}({', '.join(decl)}, const int64_t s, double *restrict out) {{"]
+    body = [f"static inline __attribute__((always_inline)) void {k.name}({', '.join(decl)}, double *restrict out) {{"]
     for raw in lines[1:]:
         ln = raw.strip()
         if ln.startswith("return"):
@@ -273,71 +271,11 @@ def c_function(k: Kernel, n: int, scalars: Sequence[str] = (), unit: Sequence[st
                 body.append(f"    out[{i}] = {v};")
             continue
         name, rhs = ln.split(" = ", 1)
-        def stride(name: str) -> str:
-            return "" if name in unit else " * s"
-
-        rhs = re.sub(r"(\w+)\[(\d+), (\d+)\]", lambda m: f"{m.group(1)}[{int(m.group(2)) * n + int(m.group(3))}{stride(m.group(1))}]", rhs)
-        rhs = re.sub(r"(\w+)\[(\d+)\]", lambda m: f"{m.group(1)}[{int(m.group(2))}{stride(m.group(1))}]", rhs)
+        rhs = re.sub(r"(\w+)\[(\d+), (\d+)\]", lambda m: f"{m.group(1)}[{int(m.group(2)) * n + int(m.group(3))}]", rhs)
         rhs = rhs.replace("abs(", "fabs(")
         body.append(f"    const double {name} = {rhs};")
     body.append("}")
     return "\n".join(body) + "\n"
-
-
-def prepare_c(n: int) -> str:
-    """``prepare{n}``: the full prepare step for one pair, in C.
-
-    Validate cheaply, flip to a negative interior, scale by a power of two when the largest
-    entry is outside [NO_SCALE_MIN, LEAF_MAX], symmetrise. Returns 1 (exactly symmetric: exact entries), 2 (symmetric up to rounding:
-    entries are the correctly rounded half sums, the ``leaf_K = 1`` constants apply) or 0
-    (abstain: NaN/inf, M_00 = 0, or an asymmetry not clearly within
-    :data:`core.shapes.quadrics.SYMMETRY_TOLERANCE`). The numpy filter's ``_prepare`` takes the same
-    decisions with the same operations. The tolerance test is conservative:
-    (d^2 (1 + 2^-48) <= tol^2 m_i m_j (1 - 2^-48), with tol^2 m_i m_j >= 2^-1000) on the scaled
-    values implies the exact rule.
-    """
-    idx = [(i, j) for i in range(n) for j in range(i, n)]
-    off = [(i, j) for i, j in idx if i != j]
-    xs = [f"x{i}{j}" for i, j in idx] + [f"y{i}{j}" for i, j in off]
-    tol2 = float(SYMMETRY_TOLERANCE) ** 2
-    L = [f"static inline int prepare{n}(const double *restrict M, double *restrict out) {{"]
-    L += [f"    double x{i}{j} = M[{i * n + j}];" for i, j in idx]
-    L += [f"    double y{i}{j} = M[{j * n + i}];" for i, j in off]
-    L.append("    if ((x00 == 0.0) | " + " | ".join(f"({x} != {x})" for x in xs) + ") return 0;")
-    L.append("    double mx = 0.0;")
-    L += [f"    if (fabs({x}) > mx) mx = fabs({x});" for x in xs]
-    L.append("    if (!(mx <= 1.7976931348623157e308)) return 0;")
-    L.append("    const double f = x00 < 0.0 ? -1.0 : 1.0;")
-    L.append(f"    if (!({float(NO_SCALE_MIN)!r} <= mx && mx <= {float(LEAF_MAX)!r})) {{")
-    L.append("        int e;")
-    L.append("        frexp(mx, &e);")
-    L.append("        const int k = 1 - e;  /* exact power-of-two scaling, entry by entry (2^k may be no float) */")
-    L += [f"        {x} = ldexp({x}, k);" for x in xs]
-    L.append("    }")
-    L.append("    if (" + " & ".join(f"(x{i}{j} == y{i}{j})" for i, j in off) + ") {")
-    L += [f"        out[{i * n + j}] = x{i}{j} * f;" for i, j in idx]
-    L.append("        return 1;")
-    L.append("    }")
-    for i in range(n):
-        row = [f"x{min(i, k)}{max(i, k)}" for k in range(n)] + [f"y{min(i, k)}{max(i, k)}" for k in range(n) if k != i]
-        L.append(f"    double m{i} = 0.0;")
-        L += [f"    if (fabs({v}) > m{i}) m{i} = fabs({v});" for v in row]
-    conds = []
-    for i, j in off:
-        L.append(f"    const double d{i}{j} = fabs(x{i}{j} * f - y{i}{j} * f);")
-        L.append(f"    const double r{i}{j} = {tol2!r} * m{i} * m{j};")
-        conds.append(
-            f"((x{i}{j} == y{i}{j}) | ((r{i}{j} >= 9.332636185032189e-302) & "
-            f"(d{i}{j} * d{i}{j} * 1.0000000000000036 <= r{i}{j} * 0.9999999999999964)))"
-        )
-    L.append("    if (!(" + " & ".join(conds) + ")) return 0;")
-    L.append("    const double h = 0.5 * f;")
-    L += [f"    out[{i * n + i}] = x{i}{i} * f;" for i in range(n)]
-    L += [f"    out[{i * n + j}] = x{i}{j} * h + y{i}{j} * h;" for i, j in off]
-    L.append("    return 2;")
-    L.append("}")
-    return "\n".join(L) + "\n"
-
 
 def generate_module() -> str:
     """Source text of ``core/fixed/_kernels.py`` (the numpy filter runs these on arrays of pairs)."""
@@ -347,7 +285,7 @@ def generate_module() -> str:
         "returns the outputs listed in ``PENCIL{n}_OUTPUTS``; |error of x| <= constant * x_M + floor.\n"
         "The midpoint-radius kernels (``hat_{s}_{n}``, ``translate{n}``, ``pencil_radius{n}``,\n"
         "``pencil_at{n}``, ``form{n}``) return values and radii; |error| <= radius * RADIUS_FACTOR + floor.\n"
-        'See core/fixed/errorbound.py for the proofs; core/fixed/_kernels.c holds the same kernels in C.\n"""\n',
+        'See core/fixed/errorbound.py for the proofs; core/fixed/_kernels.h holds the same kernels in C.\n"""\n',
         "# ruff: noqa",
         "",
     ]
@@ -374,326 +312,162 @@ def generate_module() -> str:
     return "\n".join(parts)
 
 
-_C_HEADER = """/* Float kernels of the certified filter, in C. GENERATED by `python -m core.fixed.kernelgen`: do not edit.
+_C_HEADER = """/* The certified float filter's lane functions, in C. GENERATED by `python -m core.fixed.kernelgen`: do not edit.
  *
- * The straight-line kernels are the traced formulas of core/fixed/_kernels.py (same operations, same
- * order, so the same proven error constants; compile with -ffp-contract=off and without
- * -ffast-math). The decision tables are core.formulae.decision.decide_signs tabulated. core/fixed/compiled.py
- * compiles this file once per machine and source hash and calls classify3/classify4 (the GIL
- * is released: ctypes) from a thread pool.
+ * Two sources, one description each:
+ * - the straight-line kernels (pencil{n}, hat_s0_{n}, pencil_at{n}, form{n}) are the traced
+ *   ring-generic formulas of core/fixed/_kernels.py, the same operations in the same order, so
+ *   their proven error constants (core/fixed/errorbound.py) hold;
+ * - the lane functions (first{n}_*, full{n}_*, second{n}, third{n}_*) are core/fixed/driver.py written out
+ *   in C: prepare, pencil with bounds, validity, the tree (tables of
+ *   core.formulae.decision.decide_signs), s0 where the tree asks, the certificates. The numpy
+ *   filter runs that same description on arrays, and the two agree bit for bit.
  *
- * Layout: blocks of BLOCK pairs are transposed to structure-of-arrays; the branch-free fast path
- * (fast{n}) and certificate pass (cert{n}) run over the lanes of a block and vectorise; pairs the
- * fast path cannot take (scaling, asymmetry beyond its cheap test, abstention of the
- * validity test) go through pair{n}, which takes the same decisions one pair at a time.
+ * Compile without contraction or reassociation (-ffp-contract=off, no -ffast-math): every
+ * operation must round once, as the bounds assume. -fno-math-errno and -fno-trapping-math only
+ * let the compiler vectorise sqrt and the selects; they change no value. Everything is
+ * branch-free, so core/fixed/_filter.h runs each lane function over many pairs at once and the
+ * compiler turns the loop into SIMD across pairs. A lane reads one pair: its row-major n x n
+ * matrices are a[k * s], b[k * s] (k = n i + j; float64, or float32 widened exactly) and its
+ * stage values c[r * s]: columns of blocks stored as structure of arrays.
  */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
-#define RADIUS_FACTOR @RF@
-#define NEED_S0 @NEED_S0@
-#define RULE_SEP @RULE_SEP@
-#define RULE_POINT @RULE_POINT@
-#define CERT_T_MIN @TMIN@
-#define CERT_T_MAX @TMAX@
-#define TRANSLATE_MAX @XMAX@
-#define LEAF_ROUNDING 2.220446049250313e-16 /* 2^-52 >= u / (1 - u): radius of a rounded half sum */
-#define LEAF_UNDERFLOW 1.0e-323           /* >= 2^-1073: subnormal rounding of a scaled entry */
-#define BLOCK 16                          /* pairs per structure-of-arrays block of the fast path */
-#define NEEDS_CERT -8                     /* fast path: valid, tree undecided: try the certificates */
-#define NEEDS_PAIR -9                     /* fast path: not its case: the one-pair path decides */
+#define NEEDS_S0 @NEEDS_S0@   /* first stage: valid, the tree asks for s0 */
+#define NEEDS_CERT @NEEDS_CERT@ /* valid, the tree cannot decide: try the certificates */
+#define NEEDS_FULL @NEEDS_FULL@ /* fast pass: a matrix is not exactly symmetric: the full prepare */
 
 /* Table digit of a certified sign: 0 for -1, 2 for +1, 3 for uncertain (core.formulae.decision.SIGN_CODES). */
-static inline int sign_digit(double v, double b) { return v > b ? 2 : (v < -b ? 0 : 3); }
+static inline int64_t sign_digit(double v, double b) { return v > b ? 2 : (v < -b ? 0 : 3); }
+
+/* e with v in [2^(e-1), 2^e) for a finite v > 0 (frexp's exponent), from the bits: a subnormal
+ * v is first scaled by 2^64 (exact). */
+static inline int64_t frexp_exponent(double v) {
+    const int64_t sub = v < 0x1p-1000;
+    const double w = sub ? v * 0x1p64 : v;
+    uint64_t bits;
+    memcpy(&bits, &w, 8);
+    return (int64_t)((bits >> 52) & 0x7ff) - 1022 - (sub ? 64 : 0);
+}
+
+static inline double max2(double a, double b) { return a > b ? a : b; }
+static inline int64_t imin2(int64_t a, int64_t b) { return a < b ? a : b; }
+static inline int64_t imax2(int64_t a, int64_t b) { return a > b ? a : b; }
+
+/* 2^k for -1022 <= k <= 1023, exact, from the bits. */
+static inline double pow2(int64_t k) {
+    const uint64_t bits = (uint64_t)(k + 1023) << 52;
+    double v;
+    memcpy(&v, &bits, 8);
+    return v;
+}
 """
 
-_C_DRIVER = """
-/* ---- degree @N@: ellipses (3) / ellipsoids (4) ------------------------------------------- */
-static const double PC@N@[@NOUT@] = {@PC@};
-static const double PCR@N@[@NOUT@] = {@PCR@};
-static const double PF@N@ = @PF@, PFR@N@ = @PFR@, HF@N@ = @HF@, PAF@N@ = @PAF@, FF@N@ = @FF@;
-static const int TAB@N@[@TABSIZE@] = {@TAB@};
 
-/* Pencil with certified bounds, validity and the tree on prepared matrices (stride s): writes
- * a_i and their radii to c, cr; returns a rule id, NEEDS_CERT (valid, undecided) or -1 (not
- * certified valid). No control flow: it vectorises over the lanes of a block. */
-static inline __attribute__((always_inline)) int tree@N@(const double *restrict wa, const double *restrict wb, const int rounded,
-                                                       double *restrict c, double *restrict cr, const int64_t s) {
-    double r[@NOUT@], h[2];
-    pencil@N@(wa, wb, s, r);
-    /* constants chosen by selects on unconditional loads */
-    const double F = rounded ? PFR@N@ : PF@N@;
-@BOUNDS@
-    hat_s0_@N@(c, cr, s, h);
-    const int code = TAB@N@[idx * 125 + sign_digit(h[0], h[1] * RADIUS_FACTOR + HF@N@) * 25 + 24];
-    return valid ? (code >= 0 ? code : NEEDS_CERT) : -1;
-}
+def _lane_c(name: str, params: str, build: Any, infos: dict[str, KernelInfo], doc: str) -> str:
+    """A C lane function: ``build(x)`` runs the driver on :class:`CLanes` and returns the result."""
+    x = CLanes(infos, re.findall(r"(\w+)(?:,|$)", params))
+    ret = build(x)
+    lines = [f"/* {doc} */", f"static inline __attribute__((always_inline)) int64_t {name}({params}) {{", *x.lines]
+    lines.append(f"    return {ret.text};")
+    lines.append("}")
+    return "\n".join(lines) + "\n"
 
-/* Centre (Q c = -m, adjugate) and scale k = -m.c - M_dd of a prepared matrix (upper triangle);
- * returns det Q > 0. */
-static inline __attribute__((always_inline)) int centre@N@(const double *restrict w, double *restrict ctr, double *restrict k, const int64_t s) {
-@CENTRE@
-}
 
-static inline __attribute__((always_inline)) double quad@N@(const double *restrict w, const double *restrict u, const int64_t s) {
-@QUAD@
-}
+def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
+    """first{n}_{f64,f32}, second{n}, third{n}_{f64,f32}: the driver's stages in C."""
+    from .driver import NEEDS_FULL, certify, decide, decide_s0, pencil_bounds, prepare, radii
 
-/* Certificates that do not need s0 (spheres, translated and homothetic copies): sep-witness,
- * common-point or -1. Branch-free (vectorises over a block). */
-static inline __attribute__((always_inline)) int cert@N@(const double *restrict wa, const double *restrict wb, const int rnd_a,
-                                                       const int rnd_b, const double *restrict c, const double *restrict cr, const int64_t s) {
-    double ca[@D@], cb[@D@], ka, kb, u[@D@], x[@D@], ra[@NN@], rb[@NN@], q[2], fa[2], fb[2];
-    const int oka = centre@N@(wa, ca, &ka, s), okb = centre@N@(wb, cb, &kb, s);
-@UVEC@
-    const double qa = quad@N@(wa, u, s), qb = quad@N@(wb, u, s);
-    const int ok = oka & okb & (ka > 0.0) & (kb > 0.0);
-    const int pos = (qa > 0.0) & (qb > 0.0);
-    /* every operation unconditional (NaN or inf where a guess makes no sense), then selects:
-     * no control flow, so the loop over the lanes of a block vectorises */
-    const double ta = sqrt(ka / qa), tb = sqrt(kb / qb);
-    const double T = (ta / tb) * (kb / ka);
-    const int tin = pos & (T >= CERT_T_MIN) & (T <= CERT_T_MAX);
-    pencil_at@N@(c, cr, tin ? T : 1.0, s, q);
-    const int sep = ok & tin & (q[0] > q[1] * RADIUS_FACTOR + PAF@N@);
-    const double tt = ta / (ta + tb);
-    const double st = pos ? tt : 0.0; /* concentric shapes: A's centre */
-    /* unrolled (no inner loops: the compiler would not unroll them in a body this large) */
-@XVEC@
-    const double ga = rnd_a ? LEAF_ROUNDING : 0.0, gb = rnd_b ? LEAF_ROUNDING : 0.0;
-    const double ha = rnd_a ? LEAF_UNDERFLOW : 0.0, hb = rnd_b ? LEAF_UNDERFLOW : 0.0;
-    /* radii of the entries: exactly 0 for exact entries (finite times 0) */
-@RADII@
-    form@N@(wa, ra, x, s, fa); /* wa strided; the radii ra and the point x are this lane's */
-    form@N@(wb, rb, x, s, fb);
-    const int point = ok & xin & (fa[0] < -(fa[1] * RADIUS_FACTOR + FF@N@)) & (fb[0] < -(fb[1] * RADIUS_FACTOR + FF@N@));
-    return sep ? RULE_SEP : (point ? RULE_POINT : -1);
-}
+    out = []
+    for suffix, T in (("f64", "double"), ("f32", "float")):
+        entry = lambda p: (lambda i, j: CExpr(f"(double){p}[{i * n + j} * s]", "d"))  # noqa: E731
 
-/* One pair, every case: a rule id (>= 0) or -1 (the exact path decides). */
-static inline int pair@N@(const double *A, const double *B) {
-    double wa[@NN@] = {0}, wb[@NN@] = {0}, c[@N@ + 1], cr[@N@ + 1];
-    const int sa = prepare@N@(A, wa), sb = prepare@N@(B, wb);
-    if (!sa || !sb) return -1;
-    const int code = tree@N@(wa, wb, (sa == 2) | (sb == 2), c, cr, 1);
-    if (code != NEEDS_CERT) return code;
-    return cert@N@(wa, wb, sa == 2, sb == 2, c, cr, 1);
-}
+        def first(x: CLanes, entry: Any = entry, fast: bool = True) -> CExpr:
+            Pa = prepare(x, n, entry("a"), "a", exact_only=fast)
+            Pb = prepare(x, n, entry("b"), "b", exact_only=fast)
+            c, cr, minors = pencil_bounds(x, n, Pa, Pb)
+            code, _, idx = decide(x, n, c, cr, minors, Pa.ok & Pb.ok)
+            if fast:  # a matrix symmetric only up to rounding: the full prepare decides
+                code = x.where(((Pa.ok | Pa.open) & (Pb.ok | Pb.open)) & (Pa.open | Pb.open), NEEDS_FULL, code)
+            for i in range(n + 1):
+                x.lines.append(f"    c[{i} * s] = {c[i].text};")
+                x.lines.append(f"    c[{n + 1 + i} * s] = {cr[i].text};")
+            x.lines.append(f"    *idx_out = {idx.text};")
+            return code
 
-/* The fast path's prepare of one lane (branch-free): both matrices finite, M_00 != 0, largest
- * entry within 2^-1000 .. 2^1000 (scaled by the same power of two as prepare@N@), symmetric or
- * within a cheap sufficient tolerance test. Writes the prepared upper triangles with stride s
- * (the same values as prepare@N@); returns eligibility, and which matrices are rounded. */
-static inline __attribute__((always_inline)) int fastprep@N@(const double *restrict a, const double *restrict b, const int64_t si,
-                                                           double *restrict wa, double *restrict wb, const int64_t s,
-                                                           int *restrict rnd_a, int *restrict rnd_b) {
-@FASTPREP@
-    *rnd_a = !syma;
-    *rnd_b = !symb;
-    return eligible;
-}
+        def third(x: CLanes, entry: Any = entry) -> CExpr:
+            Pa, Pb = prepare(x, n, entry("a"), "a"), prepare(x, n, entry("b"), "b")
+            c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
+            cr = [CExpr(f"c[{n + 1 + i} * s]", "d") for i in range(n + 1)]
+            return certify(x, n, Pa.W, radii(x, Pa.W, Pa.rounded, "a"), Pb.W, radii(x, Pb.W, Pb.rounded, "b"), c, cr)
 
-/* count contiguous pairs (count, @N@, @N@) of float64 -> rule ids (int8, -1 undecided). */
-void classify@N@(const double *A, const double *B, signed char *out, int64_t count) {
-    int64_t i = 0;
-    for (; i + BLOCK <= count; i += BLOCK) {
-        double sa[@NN@ * BLOCK], sb[@NN@ * BLOCK], wa[@NN@ * BLOCK], wb[@NN@ * BLOCK];
-        double c[(@N@ + 1) * BLOCK], cr[(@N@ + 1) * BLOCK];
-        int res[BLOCK], ra[BLOCK], rb[BLOCK];
-        for (int p = 0; p < BLOCK; p++)
-            for (int k = 0; k < @NN@; k++) {
-                sa[k * BLOCK + p] = A[(i + p) * @NN@ + k];
-                sb[k * BLOCK + p] = B[(i + p) * @NN@ + k];
-            }
-        for (int p = 0; p < BLOCK; p++) {
-            const int ok = fastprep@N@(sa + p, sb + p, BLOCK, wa + p, wb + p, BLOCK, ra + p, rb + p);
-            const int code = tree@N@(wa + p, wb + p, ra[p] | rb[p], c + p, cr + p, BLOCK);
-            res[p] = ok ? code : NEEDS_PAIR;
-            res[p] = res[p] == -1 ? NEEDS_PAIR : res[p]; /* validity not certified here: pair@N@ rescales */
-        }
-        int need = 0;
-        for (int p = 0; p < BLOCK; p++) need |= res[p] == NEEDS_CERT;
-        if (need) /* only blocks with undecided lanes pay for the certificates (spheres, copies) */
-            for (int p = 0; p < BLOCK; p++) {
-                const int cc = cert@N@(wa + p, wb + p, ra[p], rb[p], c + p, cr + p, BLOCK);
-                res[p] = res[p] == NEEDS_CERT ? (cc >= 0 ? cc : -1) : res[p];
-            }
-        for (int p = 0; p < BLOCK; p++) out[i + p] = (signed char)res[p];
+        params = f"const {T} *restrict a, const {T} *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out"
+        out.append(_lane_c(
+            f"first{n}_{suffix}", params, first, infos,
+            "Stage 1, fast pass (driver.prepare for exactly symmetric matrices, pencil_bounds, decide): a rule id, "
+            f"NEEDS_S0, NEEDS_CERT, NEEDS_FULL or -1; writes a_0..a_{n} to c[i * s] and their radii to c[({n + 1} + i) * s], "
+            "the table index to *idx_out.",
+        ))
+        out.append(_lane_c(
+            f"full{n}_{suffix}", params, lambda x, first=first: first(x, fast=False), infos,
+            "Stage 1 for the pairs the fast pass left to the full prepare (a matrix symmetric only up to rounding): "
+            "the same outputs, never NEEDS_FULL.",
+        ))
+        out.append(_lane_c(
+            f"third{n}_{suffix}",
+            f"const {T} *restrict a, const {T} *restrict b, const double *restrict c, const int64_t s",
+            third, infos,
+            "Stage 3 (driver.certify, on the pair prepared again): sep-witness, common-point or -1.",
+        ))
+
+    def second(x: CLanes) -> CExpr:
+        c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
+        cr = [CExpr(f"c[{n + 1 + i} * s]", "d") for i in range(n + 1)]
+        return decide_s0(x, n, c, cr, CExpr("idx", "i"))
+
+    out.append(_lane_c(
+        f"second{n}", "const double *restrict c, const int64_t s, const int64_t idx", second, infos,
+        "Stage 2 (driver.decide_s0): the tree with the certified sign of s0: a rule id or NEEDS_CERT.",
+    ))
+    return out
+
+
+def _kernel_infos(n: int) -> dict[str, KernelInfo]:
+    k, kr = pencil_kernel(n), pencil_kernel(n, leaf_K=1)
+    infos = {
+        k.name: KernelInfo(k.outputs, len(k.outputs), k.underflow_floor, tuple(k.constants), tuple(kr.constants), kr.underflow_floor)
     }
-    for (; i < count; i++) out[i] = (signed char)pair@N@(A + (int64_t)@NN@ * i, B + (int64_t)@NN@ * i);
-    for (int64_t j = 0; j < count; j++)
-        if (out[j] == NEEDS_PAIR) out[j] = (signed char)pair@N@(A + (int64_t)@NN@ * j, B + (int64_t)@NN@ * j);
-}
-"""
-
-
-def _fast_prep_c(n: int) -> str:
-    """C statements of ``fastprep{n}``: the branch-free prepare of both matrices into wa, wb."""
-    idx = [(i, j) for i in range(n) for j in range(i, n)]
-    off = [(i, j) for i, j in idx if i != j]
-    tol_lo = float(SYMMETRY_TOLERANCE) * (1 - 2.0**-50)  # exact: 2^-20 - 2^-70
-    assert Fraction(tol_lo) == SYMMETRY_TOLERANCE * (1 - Fraction(1, 2**50))
-    L = []
-    for M, w in (("a", "a"), ("b", "b")):
-        xs = [f"{M}x{i}{j}" for i, j in idx] + [f"{M}y{i}{j}" for i, j in off]
-        L += [f"    const double {M}x{i}{j} = {M}[{i * n + j} * si];" for i, j in idx]
-        L += [f"    const double {M}y{i}{j} = {M}[{j * n + i} * si];" for i, j in off]
-        L.append(f"    const double {M}f = {M}x00 < 0.0 ? -1.0 : 1.0, {M}h = 0.5 * {M}f;")
-        L.append(f"    double {M}mx = 0.0;")
-        L += [f"    {M}mx = fabs({x}) > {M}mx ? fabs({x}) : {M}mx;" for x in xs]
-        # the power of two of prepare (2^(1 - e), e the frexp exponent of the largest entry)
-        # built from the bits, so that no branch remains; 1 when already in range, as prepare
-        L.append(f"    uint64_t {M}mb;")
-        L.append(f"    memcpy(&{M}mb, &{M}mx, 8);")
-        L.append(f"    const uint64_t {M}sb = (uint64_t)(1 - ((int64_t)(({M}mb >> 52) & 0x7ff) - 1022) + 1023) << 52;")
-        L.append(f"    double {M}g;")
-        L.append(f"    memcpy(&{M}g, &{M}sb, 8);")
-        L.append(f"    const double {M}sc = ({float(NO_SCALE_MIN)!r} <= {M}mx) & ({M}mx <= {float(LEAF_MAX)!r}) ? 1.0 : {M}g;")
-        # finite entries (NaN fails every comparison), M_00 != 0, largest entry normal and far
-        # from both ends of the range (the scale factor is then a normal power of two)
-        L.append(
-            f"    const int {M}ok = ({M}x00 != 0.0) & ({M}mx >= 0x1p-1000) & ({M}mx <= 0x1p+1000) & "
-            + " & ".join(f"({x} == {x})" for x in xs)
-            + ";"
-        )
-        L.append(f"    const int sym{w} = " + " & ".join(f"({M}x{i}{j} == {M}y{i}{j})" for i, j in off) + ";")
-        # a cheaper sufficient test than prepare's: |x - y| <= tol max(|x|, |y|) implies
-        # (x - y)^2 <= tol^2 m_i m_j (both m_i and m_j are >= max(|x|, |y|)); rounding covered
-        conds = []
-        for i, j in off:
-            x, y = f"{M}x{i}{j}", f"{M}y{i}{j}"
-            L.append(f"    const double {M}e{i}{j} = fabs({x}) > fabs({y}) ? fabs({x}) : fabs({y});")
-            conds.append(
-                f"(({x} == {y}) | (({M}e{i}{j} >= 1e-270) & "
-                f"(fabs({x} - {y}) * {1 + 2.0**-50!r} <= {M}e{i}{j} * {tol_lo!r})))"
-            )
-        L.append(f"    const int near{w} = " + " & ".join(conds) + ";")
-        L += [f"    w{w}[{i * n + i} * s] = ({M}x{i}{i} * {M}sc) * {M}f;" for i in range(n)]
-        L += [
-            f"    w{w}[{i * n + j} * s] = sym{w} ? ({M}x{i}{j} * {M}sc) * {M}f : ({M}x{i}{j} * {M}sc) * {M}h + ({M}y{i}{j} * {M}sc) * {M}h;"
-            for i, j in off
-        ]
-    L.append("    const int eligible = aok & bok & (syma | neara) & (symb | nearb);")
-    return "\n".join(L)
-
-
-def _bounds_c(n: int, nout: int) -> str:
-    """C statements of ``tree{n}``: certified bounds, validity and the table index, unrolled."""
-    L = []
-    for k in range(0, nout, 2):
-        L.append(f"    const double C{k} = rounded ? PCR{n}[{k}] : PC{n}[{k}];")
-    valid = []
-    for k in range(2 * (n + 1), nout, 2):
-        valid.append(f"(r[{k}] > C{k} * r[{k + 1}] + F)")
-    for i in range(n + 1):
-        L.append(f"    c[{i} * s] = r[{2 * i}];")
-        L.append(f"    cr[{i} * s] = C{2 * i} * r[{2 * i + 1}] + F;")
-    valid += [f"(c[{n} * s] < -cr[{n} * s])", "(c[0] < -cr[0])"]
-    L.append("    const int valid = " + " & ".join(valid) + ";")
-    idx = "0"
-    for i in range(n - 1, 0, -1):
-        idx = f"({idx}) * 5 + sign_digit(c[{i} * s], cr[{i} * s])"
-    L.append(f"    const int idx = {idx};")
-    return "\n".join(L)
-
-
-def _centre_c(n: int) -> str:
-    """C body of ``centre{n}`` (explicit adjugate: the numpy filter does the same operations)."""
-    w = lambda i, j: f"w[{min(i, j) * n + max(i, j)} * s]"  # noqa: E731
-    d = n - 1
-    L = []
-    if d == 2:
-        L.append(f"    const double a00 = {w(1, 1)}, a01 = -{w(0, 1)}, a11 = {w(0, 0)};")
-        L.append(f"    const double det = {w(0, 0)} * {w(1, 1)} - {w(0, 1)} * {w(0, 1)};")
-        L.append(f"    const double m0 = {w(0, 2)}, m1 = {w(1, 2)};")
-        L.append("    ctr[0] = -(a00 * m0 + a01 * m1) / det;")
-        L.append("    ctr[1] = -(a01 * m0 + a11 * m1) / det;")
-        L.append(f"    *k = -(m0 * ctr[0] + m1 * ctr[1]) - {w(2, 2)};")
-    else:
-        L.append(f"    const double a00 = {w(1, 1)} * {w(2, 2)} - {w(1, 2)} * {w(1, 2)};")
-        L.append(f"    const double a01 = {w(0, 2)} * {w(1, 2)} - {w(0, 1)} * {w(2, 2)};")
-        L.append(f"    const double a02 = {w(0, 1)} * {w(1, 2)} - {w(0, 2)} * {w(1, 1)};")
-        L.append(f"    const double a11 = {w(0, 0)} * {w(2, 2)} - {w(0, 2)} * {w(0, 2)};")
-        L.append(f"    const double a12 = {w(0, 1)} * {w(0, 2)} - {w(0, 0)} * {w(1, 2)};")
-        L.append(f"    const double a22 = {w(0, 0)} * {w(1, 1)} - {w(0, 1)} * {w(0, 1)};")
-        L.append(f"    const double det = {w(0, 0)} * a00 + {w(0, 1)} * a01 + {w(0, 2)} * a02;")
-        L.append(f"    const double m0 = {w(0, 3)}, m1 = {w(1, 3)}, m2 = {w(2, 3)};")
-        L.append("    ctr[0] = -(a00 * m0 + a01 * m1 + a02 * m2) / det;")
-        L.append("    ctr[1] = -(a01 * m0 + a11 * m1 + a12 * m2) / det;")
-        L.append("    ctr[2] = -(a02 * m0 + a12 * m1 + a22 * m2) / det;")
-        L.append(f"    *k = -(m0 * ctr[0] + m1 * ctr[1] + m2 * ctr[2]) - {w(3, 3)};")
-    L.append("    return det > 0.0;")
-    return "\n".join(L)
-
-
-def _quad_c(n: int) -> str:
-    """C body of ``quad{n}``: u^T Q u with w strided (stride s), u this lane's own."""
-    w = lambda i, j: f"w[{min(i, j) * n + max(i, j)} * s]"  # noqa: E731
-    d = n - 1
-    terms = [f"{w(i, i)} * u[{i}] * u[{i}]" for i in range(d)]
-    terms += [f"2.0 * {w(i, j)} * u[{i}] * u[{j}]" for i in range(d) for j in range(i + 1, d)]
-    return "    return " + " + ".join(terms) + ";"
+    for kk in (subresultant_kernel(n, "s0"), pencil_at_kernel(n), form_kernel(n)):
+        infos[kk.name] = KernelInfo(kk.outputs, 2 * len(kk.outputs), kk.underflow_floor)
+    return infos
 
 
 def generate_c() -> str:
-    """Source text of ``core/fixed/_kernels.c``."""
-    from ..formulae.decision import NEED_S0, TABLE3, TABLE4, rule_by_key
+    """Source text of ``core/fixed/_kernels.h``."""
+    from .driver import NEEDS_CERT, NEEDS_FULL, NEEDS_S0, TABLES
 
-    head = (
-        _C_HEADER.replace("@RF@", repr(RADIUS_FACTOR))
-        .replace("@NEED_S0@", str(NEED_S0))
-        .replace("@RULE_SEP@", str(rule_by_key("sep-witness").id))
-        .replace("@RULE_POINT@", str(rule_by_key("common-point").id))
-        .replace("@TMIN@", repr(float(CERT_T_MIN)))
-        .replace("@TMAX@", repr(float(CERT_T_MAX)))
-        .replace("@XMAX@", repr(float(TRANSLATE_MAX)))
-    )
-    parts = [head]
-    for n, table in ((3, TABLE3), (4, TABLE4)):
-        k, kr = pencil_kernel(n), pencil_kernel(n, leaf_K=1)
+    parts = [_C_HEADER.replace("@NEEDS_S0@", str(NEEDS_S0)).replace("@NEEDS_CERT@", str(NEEDS_CERT)).replace("@NEEDS_FULL@", str(NEEDS_FULL))]
+    for n in (3, 4):
+        parts.append(f"/* ---- {'ellipses' if n == 3 else 'ellipsoids'}: n = {n} {'-' * 70} */\n")
+        k = pencil_kernel(n)
         h, pa, fm = subresultant_kernel(n, "s0"), pencil_at_kernel(n), form_kernel(n)
-        parts += [c_function(k, n), c_function(h, n), c_function(pa, n, ["T"]), c_function(fm, n, unit=["Mr", "x"]), prepare_c(n)]
-        fill = {
-            "@N@": str(n),
-            "@D@": str(n - 1),
-            "@NN@": str(n * n),
-            "@NOUT@": str(len(k.outputs)),
-            "@PC@": ", ".join(repr(float(c)) for c in k.constants),
-            "@PCR@": ", ".join(repr(float(c)) for c in kr.constants),
-            "@PF@": repr(k.underflow_floor),
-            "@PFR@": repr(kr.underflow_floor),
-            "@HF@": repr(h.underflow_floor),
-            "@PAF@": repr(pa.underflow_floor),
-            "@FF@": repr(fm.underflow_floor),
-            "@TABSIZE@": str(table.size),
-            "@TAB@": ", ".join(str(int(v)) for v in table),
-            "@CENTRE@": _centre_c(n),
-            "@QUAD@": _quad_c(n),
-            "@FASTPREP@": _fast_prep_c(n),
-            "@BOUNDS@": _bounds_c(n, len(k.outputs)),
-            "@UVEC@": "\n".join(f"    u[{i}] = cb[{i}] - ca[{i}];" for i in range(n - 1)),
-            "@XVEC@": "\n".join(
-                [f"    x[{i}] = ca[{i}] + st * u[{i}];" for i in range(n - 1)]
-                + ["    const int xin = " + " & ".join(f"(fabs(x[{i}]) <= TRANSLATE_MAX)" for i in range(n - 1)) + ";"]
-                + [f"    x[{i}] = xin ? x[{i}] : 0.0;" for i in range(n - 1)]
-            ),
-            "@RADII@": "\n".join(
-                f"    ra[{k}] = fabs(wa[{k} * s]) * ga + ha;\n    rb[{k}] = fabs(wb[{k} * s]) * gb + hb;" for k in range(n * n)
-            ),
-        }
-        text = _C_DRIVER
-        for key, val in fill.items():
-            text = text.replace(key, val)
-        parts.append(text)
+        parts += [c_function(k, n), c_function(h, n), c_function(pa, n, ["T"]), c_function(fm, n)]
+        table = [str(int(v)) for v in TABLES[n]]
+        rows = ",\n    ".join(", ".join(table[i : i + 25]) for i in range(0, len(table), 25))
+        parts.append(
+            f"/* core.fixed.driver.TABLES[{n}]: decide_signs with s1, s1,0 pending, at 5 idx + digit of s0. */\n"
+            f"static const int64_t TAB{n}[{len(table)}] = {{\n    {rows}}};\n"
+        )
+        parts += _lane_functions(n, _kernel_infos(n))
     return "\n".join(parts)
 
-
-GENERATED_C_PATH = Path(__file__).with_name("_kernels.c")
+GENERATED_C_PATH = Path(__file__).with_name("_kernels.h")
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Write (default) or ``--check`` the generated modules core/fixed/_kernels.py and core/fixed/_kernels.c."""
+    """Write (default) or ``--check`` the generated files core/fixed/_kernels.py and core/fixed/_kernels.h."""
     args = sys.argv[1:] if argv is None else argv
     outputs = {GENERATED_PATH: generate_module(), GENERATED_C_PATH: generate_c()}
     if "--check" in args:

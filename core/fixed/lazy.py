@@ -4,10 +4,10 @@
 does not need it); this module imports dask only when it is called (``pip install -e ".[dask]"``).
 Each chunk of pairs is one call of the certified classifier (``map_blocks``), so the graph runs
 unchanged on a threaded scheduler, a ``LocalCluster`` or a distributed cluster. The compiled
-kernels are built once per machine (a file cache keyed by source, flags and CPU) and loaded once
-per worker process (:func:`core.fixed.compiled.warm_up` keeps them; every chunk calls it, and
-only the first one in a process waits); :class:`core.bodies.distributed.WarmUp` is a worker
-plugin that loads them when a worker starts, so that no task waits at all.
+kernels are part of the installed package (the extension built by ``pip install``): a worker
+imports them with ``core``, nothing is compiled or waited for;
+:class:`core.bodies.distributed.WarmUp` is a worker plugin that imports them when a worker
+starts.
 
 Chunk size: about 1 M pairs (:data:`PAIR_CHUNK`). One chunk of ellipsoid pairs is then
 2 x 128 MiB of matrices (dask's default chunk size per array) and about 50 ms of work per
@@ -93,10 +93,7 @@ def classify_lazy(block: Callable[..., np.ndarray], A: Any, B: Any, **options: A
 
 
 def _run_block(a: np.ndarray, b: np.ndarray, *, block: Callable[..., np.ndarray], options: dict[str, Any], block_info: Any = None) -> np.ndarray:
-    """One chunk on a worker: load the kernels (once per process), classify, name the pair."""
-    from .compiled import warm_up
-
-    warm_up()  # waits only the first time in this process: every chunk then runs the C filter
+    """One chunk on a worker: classify, name the pair."""
     try:
         return np.asarray(block(a, b, **options), dtype=np.int8).reshape(a.shape[:-2])
     except ValueError as e:

@@ -1,8 +1,9 @@
 /* Certified float filter for the first contact of two ellipsoids (ellipses) in linear motion.
  *
- * Hand-written C, read by core/moving/sweep_filter.py (the proofs are there and here), compiled
- * once per machine by core/fixed/compiled.py with the project's flags: no -ffast-math, no
- * contraction into FMA: every operation rounds once, to nearest, as the bounds assume.
+ * Hand-written C, read by core/moving/sweep_filter.py (the proofs are there and here), built
+ * when the package is installed (setup.py: the extension core.moving._sweep_filter, with
+ * _sweep_module.c) with the project's flags: no -ffast-math, no contraction into FMA
+ * (-ffp-contract=off): every operation rounds once, to nearest, as the bounds assume.
  *
  * Body k: semi-axes r, centre c(t) = c0 + t (c1 - c0), orientation R(q(t) / |q(t)|) with
  * q(t) = (1 - t) q0 + t q1 (3D quaternion wxyz; 2D half-angle number (w, s)). For a pair (A, B)

@@ -20,22 +20,25 @@ larger than its certified error radius. The proofs of the radii are in the C sou
 The search is a Newton-like advance: T maximises P(t_a, .) at the current t_a, the next float
 root of P(., T) is the target, and the advance converges quadratically to a transversal contact.
 
-The kernel is compiled once per machine (:func:`core.fixed.compiled.load_source`); without a C
-compiler every pair is UNDECIDED (the exact path answers all of them, slowly).
+The kernel is the extension ``core.moving._sweep_filter``, built when the package is installed
+(``setup.py``; nothing is compiled at run time) and called through ctypes. Without it every pair
+is UNDECIDED (the exact path answers all of them, slowly) and a :class:`RuntimeWarning` says so
+once, naming the cause and the fix.
 """
 
 from __future__ import annotations
 
 import ctypes
+import importlib
 import threading
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..fixed.compiled import get_threads, load_source
+from ..fixed.compiled import FIX, get_threads
 from .linear import LinearMotions
 
 __all__ = ["NEVER", "CONTACT", "OVERLAP_AT_START", "UNDECIDED", "FilterResult", "first_contacts_float", "filter_status"]
@@ -43,7 +46,6 @@ __all__ = ["NEVER", "CONTACT", "OVERLAP_AT_START", "UNDECIDED", "FilterResult", 
 NEVER, CONTACT, OVERLAP_AT_START, UNDECIDED = 0, 1, 2, -1
 """Status codes of :class:`FilterResult` (the kernel's)."""
 
-SOURCE = Path(__file__).with_name("_sweep_filter.c")
 _MIN_CHUNK = 256
 """Pairs per thread below which a batch is not split."""
 
@@ -66,18 +68,23 @@ class FilterResult:
 
 
 def _library() -> ctypes.CDLL | None:
+    """The compiled kernel (loaded once), or None with a one-time warning saying why."""
     with _lock:
         if not _state["tried"]:
             _state["tried"] = True
+            lib: ctypes.CDLL | None = None
             try:
-                lib, status = load_source(SOURCE)
-            except Exception as e:  # noqa: BLE001 - without the kernel the exact path answers
-                lib, status = None, f"could not build the sweep kernel: {type(e).__name__}: {e}"
-            if lib is not None:
+                module = importlib.import_module("core.moving._sweep_filter")
+                lib = ctypes.CDLL(str(module.__file__))
                 fn = lib.sweep_pairs
                 args: list[Any] = [ctypes.c_int32, ctypes.c_void_p, ctypes.c_int64] + [ctypes.c_void_p] * 3 + [ctypes.c_int64] + [ctypes.c_void_p] * 4
                 fn.argtypes = args
                 fn.restype = ctypes.c_int32
+                status = f"compiled sweep kernel loaded from {module.__file__}"
+            except (ImportError, OSError, AttributeError) as e:
+                lib = None
+                status = f"the compiled sweep kernel is missing ({type(e).__name__}: {e}): exact arithmetic answers every pair"
+                warnings.warn(f"{status}; to fix it, {FIX}", RuntimeWarning, stacklevel=3)
             _state["lib"] = lib
             _state["status"] = status
     return _state["lib"]  # type: ignore[return-value]

@@ -1,1 +1,1 @@
-"""Routers of the HTTP API, one per concept (classify/explain, motion, presets, health, landing)."""
+"""Routers of the HTTP API, one per concept (classify/explain, motion, witness, contacts, sweep, presets, health, landing)."""

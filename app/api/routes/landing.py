@@ -28,16 +28,31 @@ def _scene_link(scene_url: str | None) -> str:
     return '<p id="scene-link" class="muted">The 3D scene is not running on this server (API only).</p>'
 
 
-def _presets(static_dir: Path) -> str:
+def scene_link(scene_url: str, preset: str) -> str:
+    """The scene's link that opens a new tab on ``preset`` (``/c/<configuration>/``).
+
+    Examples:
+        >>> scene_link("http://127.0.0.1:8080", "example-29").startswith("http://127.0.0.1:8080/c/")
+        True
+    """
+    from app.scene.links import link_path
+
+    return scene_url.rstrip("/") + link_path({"preset": preset})
+
+
+def _presets(static_dir: Path, scene_url: str | None) -> str:
     cards = []
     for name, description in preset_summaries():
         esc = html.escape(name)
+        # the card opens the preset in the scene (its picture too), when the scene runs
+        target = html.escape(scene_link(scene_url, name), quote=True) if scene_url else f"/static/img/{esc}.png"
         img = ""
         if (static_dir / "img" / f"{name}.png").is_file():
-            img = f'<a href="/static/img/{esc}.png"><img src="/static/img/{esc}.png" alt="{esc}" loading="lazy"></a>'
+            img = f'<a href="{target}"><img src="/static/img/{esc}.png" alt="{esc}" loading="lazy"></a>'
+        opener = f' <a class="open-scene" href="{target}">Open in the scene</a>' if scene_url else ""
         cards.append(
             f'<figure class="preset" id="preset-{esc}">{img}<figcaption><b>{esc}</b>: '
-            f'{html.escape(description)} <a href="/api/presets/{esc}">JSON</a></figcaption></figure>'
+            f'{html.escape(description)}{opener} <a href="/api/presets/{esc}">JSON</a></figcaption></figure>'
         )
     if not cards:
         return '<p class="muted">No presets available on this server.</p>'
@@ -68,6 +83,6 @@ def landing(request: Request, settings: SettingsDep) -> HTMLResponse:
     page = (static_dir / "index.html").read_text(encoding="utf-8")
     page = page.replace("<!--scene-link-->", _scene_link(settings.scene_url))
     page = page.replace("{{API}}", html.escape(str(request.base_url).rstrip("/")))
-    page = page.replace("<!--presets-->", _presets(static_dir))
+    page = page.replace("<!--presets-->", _presets(static_dir, settings.scene_url))
     page = page.replace("<!--bench-->", _bench(static_dir, settings.bench_dir))
     return HTMLResponse(page)

@@ -1,0 +1,18 @@
+"""Types of the compiled extension core.fixed._filter (core/fixed/_filter.c, built by setup.py)."""
+
+from typing import Any
+
+def classify(n: int, a: Any, b: Any, out: Any, /) -> None:
+    """Rule ids of len(out) pairs of n x n float64 or float32 matrices into the int8 buffer out."""
+
+def variant() -> str:
+    """The SIMD variant in use."""
+
+def variants() -> list[str]:
+    """The variants of this build that this CPU runs, slowest first."""
+
+def select(name: str, /) -> None:
+    """Use this variant (ValueError if unknown or unsupported here)."""
+
+def kernels_sha256() -> str:
+    """First 16 hex digits of the SHA-256 of the _kernels.h this module was built from."""

@@ -1,0 +1,115 @@
+/* One SIMD variant of the filter: the generated lane functions and four block drivers.
+ *
+ * Included by _filter_<variant>.c after it chose the instruction set (a target pragma) and
+ * defined VARIANT; defines classify{3,4}_{f64,f32}_<VARIANT> (rule ids, -1 undecided).
+ */
+#include "_kernels.h"
+
+#define CHUNK 64  /* pairs per block: the stage buffers stay in the L1 cache */
+#define LANES 8   /* pairs between two rounds of prefetching the next block */
+
+#if defined(__GNUC__) && !defined(__clang__)
+#define SHUFFLE 1
+#define SHUFFLE_D(a, b, ...) __builtin_shuffle(a, b, (v8i){__VA_ARGS__})
+#define SHUFFLE_F(a, b, ...) __builtin_shuffle(a, b, (v8i32){__VA_ARGS__})
+#elif defined(__clang__)
+#define SHUFFLE 1
+#define SHUFFLE_D(a, b, ...) __builtin_shufflevector(a, b, __VA_ARGS__)
+#define SHUFFLE_F(a, b, ...) __builtin_shufflevector(a, b, __VA_ARGS__)
+#endif
+#ifdef SHUFFLE
+#define HAVE_TRANSPOSE8 1
+typedef double v8d __attribute__((vector_size(64)));
+typedef float v8f __attribute__((vector_size(32)));
+typedef long long v8i __attribute__((vector_size(64)));
+typedef int v8i32 __attribute__((vector_size(32)));
+
+/* dst[k * ld_dst + p] = src[p * ld_src + k] for p, k < 8: an 8 x 8 transpose in 24 shuffles
+ * (pairs of rows, then quads, then halves), in whatever vector width the variant has. */
+#define TRANSPOSE8(name, E, V, MASK)                                                                    \
+    static inline void name(const E *restrict src, int64_t ld_src, E *restrict dst, int64_t ld_dst) { \
+        V r[8], t[8], u[8];                                                                           \
+        for (int p = 0; p < 8; p++) memcpy(&r[p], src + p * ld_src, sizeof(V));                       \
+        for (int p = 0; p < 8; p += 2) {                                                              \
+            t[p] = SHUFFLE_##MASK(r[p], r[p + 1], 0, 8, 2, 10, 4, 12, 6, 14);                         \
+            t[p + 1] = SHUFFLE_##MASK(r[p], r[p + 1], 1, 9, 3, 11, 5, 13, 7, 15);                     \
+        }                                                                                             \
+        for (int p = 0; p < 8; p += 4)                                                                \
+            for (int q = 0; q < 2; q++) {                                                             \
+                u[p + q] = SHUFFLE_##MASK(t[p + q], t[p + q + 2], 0, 1, 8, 9, 4, 5, 12, 13);          \
+                u[p + q + 2] = SHUFFLE_##MASK(t[p + q], t[p + q + 2], 2, 3, 10, 11, 6, 7, 14, 15);    \
+            }                                                                                         \
+        for (int k = 0; k < 4; k++) {                                                                 \
+            const V lo = SHUFFLE_##MASK(u[k], u[k + 4], 0, 1, 2, 3, 8, 9, 10, 11);                    \
+            const V hi = SHUFFLE_##MASK(u[k], u[k + 4], 4, 5, 6, 7, 12, 13, 14, 15);                  \
+            memcpy(dst + k * ld_dst, &lo, sizeof(V));                                                 \
+            memcpy(dst + (k + 4) * ld_dst, &hi, sizeof(V));                                           \
+        }                                                                                             \
+    }
+TRANSPOSE8(transpose8_f64, double, v8d, D)
+TRANSPOSE8(transpose8_f32, float, v8f, F)
+#endif
+#define GLUE_(a, b) a##_##b
+#define GLUE(a, b) GLUE_(a, b)
+
+#define N 3
+#define T double
+#define FIRST first3_f64
+#define TRANSPOSE8_T transpose8_f64
+#define FULL full3_f64
+#define SECOND second3
+#define THIRD third3_f64
+#define CLASSIFY GLUE(classify3_f64, VARIANT)
+#include "_blocks.h"
+#undef T
+#undef FIRST
+#undef TRANSPOSE8_T
+#undef FULL
+#undef THIRD
+#undef CLASSIFY
+#define T float
+#define FIRST first3_f32
+#define TRANSPOSE8_T transpose8_f32
+#define FULL full3_f32
+#define THIRD third3_f32
+#define CLASSIFY GLUE(classify3_f32, VARIANT)
+#include "_blocks.h"
+#undef N
+#undef T
+#undef FIRST
+#undef TRANSPOSE8_T
+#undef FULL
+#undef SECOND
+#undef THIRD
+#undef CLASSIFY
+
+#define N 4
+#define T double
+#define FIRST first4_f64
+#define TRANSPOSE8_T transpose8_f64
+#define FULL full4_f64
+#define SECOND second4
+#define THIRD third4_f64
+#define CLASSIFY GLUE(classify4_f64, VARIANT)
+#include "_blocks.h"
+#undef T
+#undef FIRST
+#undef TRANSPOSE8_T
+#undef FULL
+#undef THIRD
+#undef CLASSIFY
+#define T float
+#define FIRST first4_f32
+#define TRANSPOSE8_T transpose8_f32
+#define FULL full4_f32
+#define THIRD third4_f32
+#define CLASSIFY GLUE(classify4_f32, VARIANT)
+#include "_blocks.h"
+#undef N
+#undef T
+#undef FIRST
+#undef TRANSPOSE8_T
+#undef FULL
+#undef SECOND
+#undef THIRD
+#undef CLASSIFY

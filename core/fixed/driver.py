@@ -1,0 +1,310 @@
+"""The float filter's driver, written once for numpy and for C: prepare, tree, s0, certificates.
+
+Everything between the matrix entries of a pair and its rule id, as straight-line code on lanes
+(one value per pair) through the operations ``x`` of :mod:`core.fixed.lanes`. Run with
+:class:`~core.fixed.lanes.NumpyLanes` it is the numpy filter (:mod:`core.fixed.filters`); run with
+:class:`~core.fixed.lanes.CLanes` it writes the C lane functions of ``core/fixed/_kernels.h``
+(:mod:`core.fixed.kernelgen`), which ``core/fixed/_filter.h`` calls over blocks of pairs, SIMD
+lanes across pairs. One description, so a certificate is changed in one place, and the two
+agree bit for bit (``tests/test_filters.py``). The straight-line kernels it calls (pencil, s0,
+P(T), X^T M X) are traced from the ring-generic formulas with their error constants
+(:mod:`core.fixed.errorbound`).
+
+Stages of one pair (the C runs each over many pairs at a time, the later ones only on the pairs
+the earlier ones left open):
+
+1. :func:`prepare` both matrices, :func:`pencil_bounds` (a_0..a_n and the validity minors with
+   proven bounds), :func:`decide` (validity, and the paper's tree looked up in
+   :data:`core.formulae.decision.TABLE3` / ``TABLE4`` with s0 pending);
+2. where the tree asks for s0: :func:`decide_s0`;
+3. where a valid pair is still open (s0 vanishes identically for spheres and translated or
+   homothetic copies): :func:`certify` (a T* > 0 with P(T*) > 0, or a point inside both).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..formulae.decision import NEED_S0, TABLE3, TABLE4, rule_by_key
+from ..shapes.quadrics import SYMMETRY_TOLERANCE
+from .errorbound import CERT_T_MAX, CERT_T_MIN, LEAF_MAX, NO_SCALE_MIN, RADIUS_FACTOR, TRANSLATE_MAX
+
+__all__ = [
+    "Prepared",
+    "prepare",
+    "radii",
+    "pencil_bounds",
+    "decide",
+    "decide_s0",
+    "centre",
+    "quad",
+    "certify",
+    "TABLES",
+    "RULE_SEP",
+    "RULE_POINT",
+    "NEEDS_S0",
+    "NEEDS_CERT",
+    "NEEDS_FULL",
+    "LEAF_ROUNDING",
+    "LEAF_UNDERFLOW",
+]
+
+TABLES = {n: t.reshape(-1, 5, 25)[:, :, 24].reshape(-1).astype(np.int64) for n, t in ((3, TABLE3), (4, TABLE4))}
+"""The paper's tree with s1 and s1,0 pending (all the filter asks), indexed by 5 idx + digit of s0
+(digit 4: pending): :data:`core.formulae.decision.TABLE3` / ``TABLE4`` at ``table_index(...)``,
+small enough for the L1 cache and for SIMD gathers."""
+RULE_SEP = rule_by_key("sep-witness").id
+RULE_POINT = rule_by_key("common-point").id
+NEEDS_S0 = NEED_S0
+"""Stage-1 outcome: valid, the tree asks for s0."""
+NEEDS_CERT = -8
+"""Outcome: valid, the tree cannot decide: try the certificates."""
+NEEDS_FULL = -9
+"""Outcome of the fast first pass: a matrix is finite but not exactly symmetric: the full prepare."""
+
+LEAF_ROUNDING = 2.0**-52
+"""Radius of a rounded half sum, relative: 2^-52 >= u / (1 - u)."""
+LEAF_UNDERFLOW = 1.0e-323
+""">= 2^-1073: a scaled entry rounded in the subnormal range."""
+_TOL2 = float(SYMMETRY_TOLERANCE) ** 2
+_DBL_MAX = 1.7976931348623157e308
+
+
+@dataclass
+class Prepared:
+    """One matrix per lane as the filter reads it."""
+
+    W: dict[tuple[int, int], Any]
+    """Upper triangle of 2^k * sign * (symmetric part of M): a negative interior, largest entry
+    in [2^-8, 2^8] (or at most 2), exact for an exactly symmetric M, else rounded half sums."""
+    k: Any
+    """The exponent k (int per lane): W = 2^k * sign * S."""
+    ok: Any
+    """Mask: finite, M_00 != 0, symmetric or clearly within the tolerance."""
+    rounded: Any
+    """Mask: W holds rounded half sums (radii :func:`radii`, the rounded-leaf constants)."""
+    open: Any
+    """Mask (``exact_only``): finite but not exactly symmetric, left to the full prepare."""
+
+
+def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False) -> Prepared:
+    """Validate cheaply, flip to a negative interior, scale by a power of two, symmetrise.
+
+    ``exact_only``: the fast first pass of the C, for exactly symmetric matrices only (most
+    inputs): it skips the tolerance test and the half sums and marks the other finite matrices
+    ``open`` for the full prepare. On an exactly symmetric matrix both give the same W.
+
+    ``entry(i, j)`` reads M[i, j] of each lane as float64 (a float32 input is widened exactly).
+    The scale 2^k (k = 1 - e, M's largest |entry| in [2^(e-1), 2^e)) is applied unless that
+    entry is already in [2^-8, 2^8]; k is clamped to [-1022, 2044] and applied in two exact
+    factors, so the only rounding is a result in the subnormal range (the kernels' underflow
+    floor covers it). The tolerance test is conservative: (d^2 (1 + 2^-48) <= tol^2 m_i m_j
+    (1 - 2^-48), with tol^2 m_i m_j >= 2^-1000) on the scaled values implies the exact rule of
+    :data:`core.shapes.quadrics.SYMMETRY_TOLERANCE`.
+    """
+    idx = [(i, j) for i in range(n) for j in range(i, n)]
+    off = [(i, j) for i, j in idx if i != j]
+    X = {(i, j): x.let(f"{tag}x{i}{j}", entry(i, j)) for i, j in idx}
+    Y = {(i, j): x.let(f"{tag}y{i}{j}", entry(j, i)) for i, j in off}
+    # the fast pass reads the upper triangle for the scale and the finiteness: a lower entry
+    # that differs (NaN included) makes the matrix not exactly symmetric, left to the full pass
+    values = [*X.values()] if exact_only else [*X.values(), *Y.values()]
+    nan_free = values[0] == values[0]
+    mx = x.abs(values[0])
+    for v in values[1:]:
+        nan_free = nan_free & (v == v)
+        mx = x.max(mx, x.abs(v))
+    mx = x.let(f"{tag}mx", mx)
+    finite = x.let(f"{tag}finite", nan_free & (mx <= _DBL_MAX) & (X[0, 0] != 0.0))
+    in_range = (mx >= float(NO_SCALE_MIN)) & (mx <= float(LEAF_MAX))
+    e = x.frexp_exponent(x.where(finite, mx, 1.0))
+    k = x.let(f"{tag}k", x.where(in_range, x.integer(0, mx), x.imin(x.imax(1 - e, -1022), 2044)))
+    k1 = x.let(f"{tag}k1", x.imin(k, 1000))
+    # the sign flip to a negative interior rides on the first factor (exact either way)
+    g1 = x.let(f"{tag}g1", x.where(X[0, 0] < 0.0, -x.pow2(k1), x.pow2(k1)))
+    sym = X[off[0]] == Y[off[0]]
+    for ij in off[1:]:
+        sym = sym & (X[ij] == Y[ij])
+    sym = x.let(f"{tag}sym", sym)
+    if exact_only:
+        # one exact factor (2^k1 = 2^k unless the largest entry is below 2^-999: the full pass)
+        W = {ij: x.let(f"{tag}w{ij[0]}{ij[1]}", v * g1) for ij, v in X.items()}
+        fast = x.let(f"{tag}fast", sym & (mx >= 2.0**-1000))  # i.e. k <= 1000: g2 = 1
+        return Prepared(W, k, x.let(f"{tag}ok", finite & fast), sym & ~sym, x.let(f"{tag}open", finite & ~fast))
+    g2 = x.let(f"{tag}g2", x.pow2(k - k1))
+    XS = {ij: x.let(f"{tag}X{ij[0]}{ij[1]}", (v * g1) * g2) for ij, v in X.items()}
+    YS = {ij: x.let(f"{tag}Y{ij[0]}{ij[1]}", (v * g1) * g2) for ij, v in Y.items()}
+    m = []
+    for i in range(n):
+        row = [XS[min(i, j), max(i, j)] for j in range(n)] + [YS[min(i, j), max(i, j)] for j in range(n) if j != i]
+        acc = x.abs(row[0])
+        for v in row[1:]:
+            acc = x.max(acc, x.abs(v))
+        m.append(x.let(f"{tag}m{i}", acc))
+    near = None
+    for i, j in off:
+        d = x.let(f"{tag}d{i}{j}", x.abs(XS[i, j] - YS[i, j]))
+        r = x.let(f"{tag}r{i}{j}", (_TOL2 * m[i]) * m[j])
+        term = (X[i, j] == Y[i, j]) | ((r >= 2.0**-1000) & (((d * d) * (1 + 2.0**-48)) <= (r * (1 - 2.0**-48))))
+        near = term if near is None else near & term
+    ok = x.let(f"{tag}ok", finite & (sym | near))
+    rounded = x.let(f"{tag}rounded", ok & ~sym)
+    W = {}
+    for i, j in idx:
+        if i == j:
+            W[i, j] = XS[i, j]
+        else:
+            W[i, j] = x.let(f"{tag}w{i}{j}", x.where(sym, XS[i, j], (XS[i, j] * 0.5) + (YS[i, j] * 0.5)))
+    return Prepared(W, k, ok, rounded, sym & ~sym)
+
+
+def radii(x: Any, W: dict[tuple[int, int], Any], rounded: Any, tag: str) -> dict[tuple[int, int], Any]:
+    """Radius of each prepared entry: 0 when exact, else |w| 2^-52 + 1e-323 (a rounded half sum)."""
+    return {ij: x.let(f"{tag}q{ij[0]}{ij[1]}", x.where(rounded, (x.abs(w) * LEAF_ROUNDING) + LEAF_UNDERFLOW, 0.0)) for ij, w in W.items()}
+
+
+def pencil_bounds(x: Any, n: int, Pa: Prepared, Pb: Prepared) -> tuple[list[Any], list[Any], list[tuple[Any, Any]]]:
+    """a_0..a_n of P(T) = det(T A + B) with certified radii, and the validity minors with bounds.
+
+    ``|error of x| <= C_x * x_M + floor`` (permanent style, :mod:`core.fixed.errorbound`); the
+    constants of rounded leaves apply to a pair with a rounded matrix.
+    """
+    name = f"pencil{n}"
+    info = x.info(name)
+    rounded = x.let("rounded", Pa.rounded | Pb.rounded)
+    r = x.call(name, [x.matrix(Pa.W, n, "wa"), x.matrix(Pb.W, n, "wb")])
+    F = x.let("F", x.where(rounded, info.floor_rounded, info.floor))
+    values: dict[str, tuple[Any, Any]] = {}
+    for k, out in enumerate(info.outputs):
+        if out.endswith("_M"):
+            continue
+        C = x.where(rounded, info.constants_rounded[k], info.constants[k])
+        values[out] = (x.let(out, r[k]), x.let(f"{out}r", (C * r[k + 1]) + F))
+    c = [values[f"c{i}"][0] for i in range(n + 1)]
+    cr = [values[f"c{i}"][1] for i in range(n + 1)]
+    minors = [v for key, v in values.items() if key.startswith("d")]
+    return c, cr, minors
+
+
+def decide(x: Any, n: int, c: list[Any], cr: list[Any], minors: list[tuple[Any, Any]], ok: Any) -> tuple[Any, Any, Any]:
+    """Validity and the tree with s0 pending: (code, valid, idx).
+
+    Valid: both matrices prepared, the leading minors of both quadratic blocks positive
+    (Sylvester) and a_n < 0, a_0 < 0 (det A < 0, det B < 0), all certified. ``code`` is a rule
+    id, :data:`NEEDS_S0` or :data:`NEEDS_CERT` for a valid pair, -1 for the others; ``idx`` the
+    table index of the middle signs a_{n-1}..a_1 (base-5 digits: 0 for -, 2 for +, 3 uncertain).
+    """
+    valid = ok
+    for v, bound in minors:
+        valid = valid & (v > bound)
+    valid = x.let("valid", valid & (c[n] < -cr[n]) & (c[0] < -cr[0]))
+    idx = x.digit(c[n - 1], cr[n - 1])
+    for i in range(n - 2, 0, -1):
+        idx = (idx * 5) + x.digit(c[i], cr[i])
+    idx = x.let("idx", idx)
+    code = x.let("code", x.table(TABLES[n], f"TAB{n}", (idx * 5) + 4))
+    open_ = x.where(code == NEED_S0, NEEDS_S0, NEEDS_CERT)
+    return x.let("first", x.where(valid, x.where(code >= 0, code, open_), -1)), valid, idx
+
+
+def decide_s0(x: Any, n: int, c: list[Any], cr: list[Any], idx: Any) -> Any:
+    """The tree with the certified sign of s0 (its sign-equivalent hat form).
+
+    Returns a rule id, or :data:`NEEDS_CERT` when s0 is not certified.
+    """
+    name = f"hat_s0_{n}"
+    v, r = x.call(name, [x.vector(c, "c"), x.vector(cr, "cr")])
+    bound = x.let("s0r", (r * RADIUS_FACTOR) + x.info(name).floor)
+    code = x.let("code_s0", x.table(TABLES[n], f"TAB{n}", (idx * 5) + x.digit(v, bound)))
+    return x.where(code >= 0, code, NEEDS_CERT)
+
+
+def centre(x: Any, n: int, W: dict[tuple[int, int], Any], tag: str) -> tuple[list[Any], Any, Any]:
+    """Float centre (Q c = -m, by the adjugate), scale k = -m.c - M_dd and the mask det Q > 0.
+
+    Estimates: the certificates (and the bounding spheres of :mod:`core.bodies.bounds`) hold
+    for any float centre.
+    """
+    w = lambda i, j: W[min(i, j), max(i, j)]  # noqa: E731
+    if n == 3:
+        a00, a01, a11 = w(1, 1), -w(0, 1), w(0, 0)
+        det = x.let(f"{tag}det", (w(0, 0) * w(1, 1)) - (w(0, 1) * w(0, 1)))
+        m0, m1 = w(0, 2), w(1, 2)
+        ctr = [x.let(f"{tag}c0", -((a00 * m0) + (a01 * m1)) / det), x.let(f"{tag}c1", -((a01 * m0) + (a11 * m1)) / det)]
+        k = x.let(f"{tag}k", -((m0 * ctr[0]) + (m1 * ctr[1])) - w(2, 2))
+    else:
+        a00 = x.let(f"{tag}a00", (w(1, 1) * w(2, 2)) - (w(1, 2) * w(1, 2)))
+        a01 = x.let(f"{tag}a01", (w(0, 2) * w(1, 2)) - (w(0, 1) * w(2, 2)))
+        a02 = x.let(f"{tag}a02", (w(0, 1) * w(1, 2)) - (w(0, 2) * w(1, 1)))
+        a11 = x.let(f"{tag}a11", (w(0, 0) * w(2, 2)) - (w(0, 2) * w(0, 2)))
+        a12 = x.let(f"{tag}a12", (w(0, 1) * w(0, 2)) - (w(0, 0) * w(1, 2)))
+        a22 = x.let(f"{tag}a22", (w(0, 0) * w(1, 1)) - (w(0, 1) * w(0, 1)))
+        det = x.let(f"{tag}det", ((w(0, 0) * a00) + (w(0, 1) * a01)) + (w(0, 2) * a02))
+        m0, m1, m2 = w(0, 3), w(1, 3), w(2, 3)
+        ctr = [
+            x.let(f"{tag}c0", -(((a00 * m0) + (a01 * m1)) + (a02 * m2)) / det),
+            x.let(f"{tag}c1", -(((a01 * m0) + (a11 * m1)) + (a12 * m2)) / det),
+            x.let(f"{tag}c2", -(((a02 * m0) + (a12 * m1)) + (a22 * m2)) / det),
+        ]
+        k = x.let(f"{tag}k", -(((m0 * ctr[0]) + (m1 * ctr[1])) + (m2 * ctr[2])) - w(3, 3))
+    return ctr, k, det > 0.0
+
+
+def quad(x: Any, n: int, W: dict[tuple[int, int], Any], u: list[Any]) -> Any:
+    """u^T Q u: the diagonal terms, then 2 w_ij u_i u_j."""
+    d = n - 1
+    acc = (W[0, 0] * u[0]) * u[0]
+    for i in range(1, d):
+        acc = acc + ((W[i, i] * u[i]) * u[i])
+    for i in range(d):
+        for j in range(i + 1, d):
+            acc = acc + (((2.0 * W[i, j]) * u[i]) * u[j])
+    return acc
+
+
+def certify(
+    x: Any, n: int, WA: dict[tuple[int, int], Any], RA: dict[tuple[int, int], Any],
+    WB: dict[tuple[int, int], Any], RB: dict[tuple[int, int], Any], c: list[Any], cr: list[Any],
+) -> Any:
+    """Rule id (sep-witness, common-point) or -1, for a valid pair the tree left open.
+
+    Candidates from the shapes' centres: with tA, tB the distances (in units of the centre
+    segment) from each centre to its own boundary along the segment, T* = (tA/tB)(kB/kA) is the
+    Perram-Wertheim optimum for spheres and for translated or homothetic copies, and the point
+    at tA / (tA + tB) of the segment lies inside both exactly when such shapes overlap. Both
+    are then verified with certified bounds (P(T*) > 0 with a_n, a_0 < 0: two positive roots;
+    X^T M X < 0 for both); a wrong guess only abstains. Every operation is unconditional (NaN
+    or inf where a guess makes no sense) and then selected: no control flow, so it vectorises.
+    """
+    d = n - 1
+    ca, ka, oka = centre(x, n, WA, "ca")
+    cb, kb, okb = centre(x, n, WB, "cb")
+    ok = x.let("ok", ((oka & okb) & (ka > 0.0)) & (kb > 0.0))
+    u = [x.let(f"u{i}", cb[i] - ca[i]) for i in range(d)]
+    qa = x.let("qa", quad(x, n, WA, u))
+    qb = x.let("qb", quad(x, n, WB, u))
+    pos = x.let("pos", (qa > 0.0) & (qb > 0.0))
+    ta = x.let("ta", x.sqrt(ka / qa))
+    tb = x.let("tb", x.sqrt(kb / qb))
+    T = x.let("T", (ta / tb) * (kb / ka))
+    tin = x.let("tin", (pos & (T >= float(CERT_T_MIN))) & (T <= float(CERT_T_MAX)))
+    name = f"pencil_at{n}"
+    p, pr = x.call(name, [x.vector(c, "c"), x.vector(cr, "cr")], [x.where(tin, T, 1.0)])
+    sep = x.let("sep", (ok & tin) & (p > ((pr * RADIUS_FACTOR) + x.info(name).floor)))
+    s = x.let("s", x.where(pos, ta / (ta + tb), 0.0))  # concentric shapes: A's centre
+    pt = [x.let(f"x{i}", ca[i] + (s * u[i])) for i in range(d)]
+    xin = x.abs(pt[0]) <= float(TRANSLATE_MAX)
+    for i in range(1, d):
+        xin = xin & (x.abs(pt[i]) <= float(TRANSLATE_MAX))
+    xin = x.let("xin", xin)
+    pt = [x.let(f"xs{i}", x.where(xin, pt[i], 0.0)) for i in range(d)]
+    name = f"form{n}"
+    floor = x.info(name).floor
+    point = x.vector(pt, "pt")
+    fa, fra = x.call(name, [x.matrix(WA, n, "fwa"), x.matrix(RA, n, "fra"), point])
+    fb, frb = x.call(name, [x.matrix(WB, n, "fwb"), x.matrix(RB, n, "frb"), point])
+    inside = (fa < -((fra * RADIUS_FACTOR) + floor)) & (fb < -((frb * RADIUS_FACTOR) + floor))
+    return x.let("cert", x.where(sep, RULE_SEP, x.where((ok & xin) & inside, RULE_POINT, -1)))
