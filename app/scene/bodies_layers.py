@@ -139,33 +139,48 @@ class BodyLayers:
         return c
 
     def _draw_points(self) -> None:
-        for h in self._point_nodes.values():
-            h.remove()
-        self._point_nodes = {}
+        """Send the point clouds of the bodies as they are now.
+
+        A cloud that keeps its number of points gets its points and colours as new values (a
+        timeline step: no node is rebuilt in the browser); others are added, and the clouds left
+        empty removed.
+        """
         N = len(self.positions)
-        if N == 0:
-            return
-        mean = np.exp(np.log(np.maximum(self.scales[:, : self.dim], 1e-300)).mean(axis=1))
-        size_class = np.floor(np.log2(mean)).astype(np.int64)
-        rel = self.positions - self.origin
-        if self.dim == 2:  # just under the discs (drawn at z = 0), so a solid is never behind its point
-            rel[:, 2] = -1e-3 * float(np.max(self.reach))
-        colours = self.shown_colours()
-        sep = self.worst == Relation.SEPARATE
-        for group, mask in (("separate", sep), ("contact", ~sep)):
-            for k in np.unique(size_class[mask]):
-                sel = mask & (size_class == k)
-                name = points_node(group, int(k))
-                self._point_nodes[name] = self.scene.add_point_cloud(
-                    name,
-                    _f32(rel[sel]),
-                    colours[sel],
-                    point_size=float(2.0 ** (int(k) + 0.5)),  # viser draws a point 2 * point_size across
-                    point_shape="circle",
-                    point_shading="gradient" if self.dim == 3 else "flat",
-                    precision="float32",
-                    visible=not (group == "separate" and self.separate == "hidden"),
-                )
+        wanted: dict[str, tuple[np.ndarray, np.ndarray, int, bool]] = {}
+        if N:
+            mean = np.exp(np.log(np.maximum(self.scales[:, : self.dim], 1e-300)).mean(axis=1))
+            size_class = np.floor(np.log2(mean)).astype(np.int64)
+            rel = self.positions - self.origin
+            if self.dim == 2:  # just under the discs (drawn at z = 0), so a solid is never behind its point
+                rel[:, 2] = -1e-3 * float(np.max(self.reach))
+            colours = self.shown_colours()
+            sep = self.worst == Relation.SEPARATE
+            for group, mask in (("separate", sep), ("contact", ~sep)):
+                for k in np.unique(size_class[mask]):
+                    sel = mask & (size_class == k)
+                    shown = not (group == "separate" and self.separate == "hidden")
+                    wanted[points_node(group, int(k))] = (_f32(rel[sel]), colours[sel], int(k), shown)
+        for name in [n for n in self._point_nodes if n not in wanted]:
+            self._point_nodes.pop(name).remove()
+        for name, (pts, cols, k, shown) in wanted.items():
+            h = self._point_nodes.get(name)
+            if h is not None and len(h.points) == len(pts):
+                h.points = pts
+                h.colors = cols
+                h.visible = shown
+                continue
+            if h is not None:
+                h.remove()
+            self._point_nodes[name] = self.scene.add_point_cloud(
+                name,
+                pts,
+                cols,
+                point_size=float(2.0 ** (k + 0.5)),  # viser draws a point 2 * point_size across
+                point_shape="circle",
+                point_shading="gradient" if self.dim == 3 else "flat",
+                precision="float32",
+                visible=shown,
+            )
 
     # ------------------------------------------------------------------ solids
     def costs(self) -> tuple[int, int]:
