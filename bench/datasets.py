@@ -50,6 +50,7 @@ for _p in (str(_ROOT), str(_ROOT / "tests")):
 from oracle import oracle_relation  # noqa: E402  (tests/oracle.py: independent ground truth)
 
 from core.shapes.numbers import to_fmpq  # noqa: E402
+from core.shapes.rotation import rotation_numerator  # noqa: E402
 
 __all__ = [
     "Dataset",
@@ -116,15 +117,8 @@ def rotations(rng: np.random.Generator, dim: int, N: int) -> np.ndarray:
         return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
     q = rng.normal(size=(N, 4))
     q /= np.linalg.norm(q, axis=1, keepdims=True)
-    w, x, y, z = q.T
-    return np.stack(
-        [
-            np.stack([w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z], -1),
-        ],
-        -2,
-    )
+    R, _ = rotation_numerator(list(q.T))  # |q| = 1 (to rounding): the numerator is the rotation
+    return np.stack([np.stack(row, -1) for row in R], -2)
 
 
 def quadrics(centers: np.ndarray, axes: np.ndarray, R: np.ndarray) -> np.ndarray:
@@ -453,18 +447,8 @@ def random_motion(dim: int, trans_deg: int, rot_deg: int, *, seed: int = 0) -> d
 
 
 def _rotation_exact(q: list[int], dim: int) -> list[list[fmpq]]:
-    if dim == 2:
-        w, z = (fmpq(v) for v in q)
-        n = w * w + z * z
-        return [[(w * w - z * z) / n, -2 * w * z / n], [2 * w * z / n, (w * w - z * z) / n]]
-    w, x, y, z = (fmpq(v) for v in q)
-    n = w * w + x * x + y * y + z * z
-    rows = [
-        [w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z],
-    ]
-    return [[v / n for v in r] for r in rows]
+    R, n = rotation_numerator([fmpq(v) for v in q])  # 2D: q = (w, z)
+    return [[v / n for v in r] for r in R]
 
 
 def grazing_motion(dim: int, *, depth: Any = 0, seed: int = 0) -> dict[str, Any]:

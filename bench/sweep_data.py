@@ -31,6 +31,7 @@ from fractions import Fraction
 import numpy as np
 
 from bench.bodies_data import random_bodies
+from core.shapes.rotation import rotation_numerator
 
 __all__ = ["Motions", "SPACING", "random_pairs", "grazing_pairs", "start_pairs", "moving_bodies", "concat"]
 
@@ -110,13 +111,7 @@ _TURNS = [(1.0, 0.0, 0.0, 0.0), (1.0, 1.0, 0.0, 0.0), (1.0, 0.0, 1.0, 0.0), (1.0
 
 def _turn(q: tuple[float, ...], v: tuple[float, float, float]) -> tuple[float, float, float]:
     """v rotated by the quarter/half turn q (one of _TURNS): entries 0, +-1 after division by |q|^2."""
-    w, x, y, z = q
-    n = w * w + x * x + y * y + z * z
-    R = [
-        [w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z],
-    ]
+    R, n = rotation_numerator(q)
     return tuple(sum(R[i][k] / n * v[k] for k in range(3)) for i in range(3))  # type: ignore[return-value]
 
 

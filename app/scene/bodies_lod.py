@@ -30,6 +30,8 @@ from typing import Any
 
 import numpy as np
 
+from core.shapes.quadrics import rotation_from_quaternion
+
 __all__ = ["ViewPose", "choose_detail", "FINE_PX", "COARSE_PX", "TRIANGLE_BUDGET"]
 
 FINE_PX = 24.0
@@ -80,12 +82,7 @@ class ViewPose:
             return None
         if not (fov > 0 and aspect > 0 and height > 0 and np.isfinite(wxyz).all() and np.isfinite(position).all()):
             return None
-        w, x, y, z = wxyz / (np.linalg.norm(wxyz) or 1.0)
-        R = np.array([
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ])
+        R = rotation_from_quaternion(wxyz) if wxyz.any() else np.eye(3)
         return cls(position, R, fov, aspect, height)
 
     @property

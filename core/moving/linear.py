@@ -33,6 +33,7 @@ from flint import fmpq, fmpq_poly
 from ..algebra.qsqrt import QSqrtPoly
 from ..shapes.numbers import to_fmpq
 from ..shapes.quadrics import quadric_from_axes
+from ..shapes.rotation import rotation_numerator
 from .expressions import RationalFunction
 from .motions import Motion
 
@@ -286,17 +287,7 @@ def _exact_matrix(c0: list[Fraction], c1: list[Fraction], r: list[Fraction], q0:
     d = len(c0)
     c = [fmpq_poly([_f(a), _f(b - a)]) for a, b in zip(c0, c1, strict=True)]
     q = [fmpq_poly([_f(a), _f(b - a)]) for a, b in zip(q0, q1, strict=True)]
-    if d == 3:
-        w, x, y, z = q
-        R = [
-            [w * w + x * x - y * y - z * z, (x * y - w * z) * 2, (x * z + w * y) * 2],
-            [(x * y + w * z) * 2, w * w - x * x + y * y - z * z, (y * z - w * x) * 2],
-            [(x * z - w * y) * 2, (y * z + w * x) * 2, w * w - x * x - y * y + z * z],
-        ]
-    else:
-        w, s = q
-        R = [[w * w - s * s, -(w * s) * 2], [(w * s) * 2, w * w - s * s]]
-    N = sum((v * v for v in q), fmpq_poly([0]))
+    R, N = rotation_numerator(q)  # 2D: q = (w, s), the quaternion (w, 0, 0, s)
     D = [fmpq(1) / (_f(v) * _f(v)) for v in r]
     Q = [[sum((R[i][k] * R[j][k] * D[k] for k in range(d)), fmpq_poly([0])) for j in range(d)] for i in range(d)]
     den = N * N

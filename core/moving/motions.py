@@ -42,6 +42,7 @@ from ..formulae.pencil import determinant
 from ..shapes.limits import Limits, using
 from ..shapes.numbers import parse_number, to_fmpq
 from ..shapes.quadrics import ShapeParams, axes_from_quadric
+from ..shapes.rotation import rotation_numerator
 from .expressions import RationalFunction, parse_expression
 
 __all__ = [
@@ -366,28 +367,16 @@ def read_interval(interval: Any, limits: Limits | None = None) -> tuple[fmpq | N
 
 
 def _rotation_from_quaternion(q: list[RationalFunction], dim: int) -> RFMatrix:
-    if dim == 2:
-        if len(q) == 4:
-            w, x, y, z = q
-            if not (x.num.is_zero() and y.num.is_zero()):
-                raise ValueError("a 2D quaternion must rotate about z: (w, 0, 0, z)")
-        else:
-            w, z = q
-        n = w * w + z * z
-        if n.num.is_zero():
-            raise ValueError("rotation quaternion is identically zero")
-        c, s = (w * w - z * z) / n, (w * z * 2) / n
-        return [[c, -s], [s, c]]
-    w, x, y, z = q
-    n = w * w + x * x + y * y + z * z
+    if dim == 2 and len(q) == 4:
+        if not (q[1].num.is_zero() and q[2].num.is_zero()):
+            raise ValueError("a 2D quaternion must rotate about z: (w, 0, 0, z)")
+        q = [q[0], q[3]]
+    if len(q) != (4 if dim == 3 else 2):
+        raise ValueError(f"a {dim}D rotation quaternion has {4 if dim == 3 else '2 or 4'} components, got {len(q)}")
+    R, n = rotation_numerator(q)
     if n.num.is_zero():
         raise ValueError("rotation quaternion is identically zero")
-    rows = [
-        [w * w + x * x - y * y - z * z, (x * y - w * z) * 2, (x * z + w * y) * 2],
-        [(x * y + w * z) * 2, w * w - x * x + y * y - z * z, (y * z - w * x) * 2],
-        [(x * z - w * y) * 2, (y * z + w * x) * 2, w * w - x * x - y * y + z * z],
-    ]
-    return [[v / n for v in r] for r in rows]
+    return [[v / n for v in r] for r in R]
 
 
 def _inverse(M: RFMatrix, what: str) -> RFMatrix:

@@ -28,13 +28,14 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 from flint import fmpq
 
 from ..formulae.pencil import determinant
 from .numbers import to_fmpq
+from .rotation import rotation_numerator
 
 __all__ = [
     "SYMMETRY_TOLERANCE",
@@ -68,7 +69,13 @@ class ShapeParams:
     """2D: (angle,) in radians; 3D: unit quaternion (w, x, y, z)."""
 
 
-def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: bool = False) -> Any:
+@overload
+def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: Literal[False] = False) -> np.ndarray: ...
+@overload
+def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: Literal[True]) -> ExactMatrix: ...
+@overload
+def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: bool) -> np.ndarray | ExactMatrix: ...
+def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: bool = False) -> np.ndarray | ExactMatrix:
     """3x3 rotation matrix of quaternion (w, x, y, z); need not be unit (divided by |q|^2).
 
     With ``exact=True`` a rational quaternion gives an exactly orthogonal rational matrix.
@@ -77,23 +84,13 @@ def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: bool = False) -> Any
         >>> rotation_from_quaternion([1, 0, 0, 1], exact=True)[0]   # 90 degrees about z
         [0, -1, 0]
     """
-    w: Any
-    x: Any
-    y: Any
-    z: Any
-    if exact:
-        w, x, y, z = (to_fmpq(v) for v in wxyz)
-    else:
-        w, x, y, z = (float(v) for v in wxyz)
-    n = w * w + x * x + y * y + z * z
+    if len(wxyz) != 4:
+        raise ValueError(f"a quaternion has 4 components (w, x, y, z), got {len(wxyz)}")
+    v: list[Any] = [to_fmpq(a) for a in wxyz] if exact else [float(a) for a in wxyz]
+    R, n = rotation_numerator(v)
     if n == 0:
         raise ValueError("orientation quaternion is zero")
-    rows = [
-        [w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z],
-    ]
-    rows = [[v / n for v in r] for r in rows]
+    rows = [[a / n for a in r] for r in R]
     return rows if exact else np.array(rows, dtype=float)
 
 
@@ -264,13 +261,7 @@ def rotations_from_orientations(o: np.ndarray | None, N: int, d: int) -> np.ndar
         co = np.fromiter((math.cos(t) for t in o.tolist()), dtype=float, count=N)
         si = np.fromiter((math.sin(t) for t in o.tolist()), dtype=float, count=N)
         return np.stack([np.stack([co, -si], axis=1), np.stack([si, co], axis=1)], axis=1)
-    w, x, y, z = o[:, 0], o[:, 1], o[:, 2], o[:, 3]
-    n = w * w + x * x + y * y + z * z
-    rows = [
-        [w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z],
-    ]
+    rows, n = rotation_numerator([o[:, 0], o[:, 1], o[:, 2], o[:, 3]])
     R = np.stack([np.stack([v / n for v in row], axis=1) for row in rows], axis=1)
     return R[:, :2, :2] if d == 2 else R
 
