@@ -15,6 +15,7 @@ from typing import Any
 
 from flint import fmpq, fmpq_poly, fmpz, fmpz_poly
 
+from ..shapes.numbers import sign
 from .polysign import FloatPoly
 
 __all__ = ["QSqrtPoly", "sign_qsqrt", "squarefree_decomposition"]
@@ -59,10 +60,6 @@ def squarefree_decomposition(n: int, trial_primes: int | None = None) -> tuple[i
     return int(k), int(d)
 
 
-def _sgn(x: Any) -> int:
-    return (x > 0) - (x < 0)
-
-
 def sign_qsqrt(a: fmpq, b: fmpq, d: int) -> int:
     """Exact sign of ``a + b sqrt(d)`` for rationals a, b and a positive integer d.
 
@@ -70,13 +67,13 @@ def sign_qsqrt(a: fmpq, b: fmpq, d: int) -> int:
         >>> sign_qsqrt(fmpq(-7, 5), fmpq(1), 2), sign_qsqrt(fmpq(3, 2), fmpq(-1), 2)
         (1, 1)
     """
-    sa, sb = _sgn(a), _sgn(b)
+    sa, sb = sign(a), sign(b)
     if sb == 0 or d == 1:
-        return _sgn(a + b) if d == 1 else sa
+        return sign(a + b) if d == 1 else sa
     if sa == 0 or sa == sb:
         return sb
     # opposite signs: compare a^2 with d b^2
-    return sa * _sgn(a * a - b * b * d)
+    return sa * sign(a * a - b * b * d)
 
 
 def _poly(x: Any) -> fmpq_poly:

@@ -13,6 +13,7 @@ from typing import Any
 
 from flint import fmpq, fmpq_poly, fmpz, fmpz_poly
 
+from ..formulae.decision import sign_variations
 from .algebraic import RealAlgebraic, sign_at
 from .qsqrt import QSqrtPoly
 
@@ -37,18 +38,6 @@ def _exact_div(f: fmpq_poly, g: fmpq_poly) -> fmpq_poly:
     return q
 
 
-def _variations(coeffs: list[fmpz]) -> int:
-    last, count = 0, 0
-    for c in coeffs:
-        if c == 0:
-            continue
-        s = 1 if c > 0 else -1
-        if last and s != last:
-            count += 1
-        last = s
-    return count
-
-
 _X_PLUS_1 = fmpz_poly([1, 1])
 
 
@@ -67,7 +56,7 @@ def _iter_positive_root_boxes(f: fmpz_poly) -> Iterator[tuple[fmpq, fmpq]]:
     """:func:`_positive_root_boxes` lazily, smallest root first (left boxes are explored first)."""
     coeffs = f.coeffs()
     n = len(coeffs) - 1
-    if n < 1 or _variations(coeffs) == 0:
+    if n < 1 or sign_variations(coeffs) == 0:
         return
     # Fujiwara's bound: every root has |x| < 2 max_i |a_{n-i}/a_n|^(1/i) <= 2^k (bit lengths)
     lead_bits = int(abs(coeffs[-1]).bit_length())
@@ -97,7 +86,7 @@ def _iter_positive_root_boxes(f: fmpz_poly) -> Iterator[tuple[fmpq, fmpq]]:
         m = len(hc) - 1
         if m < 1:
             continue
-        v = _variations(fmpz_poly(hc[::-1])(_X_PLUS_1).coeffs())
+        v = sign_variations(fmpz_poly(hc[::-1])(_X_PLUS_1).coeffs())
         if v == 0:
             continue
         if v == 1:

@@ -34,7 +34,7 @@ import numpy as np
 from flint import fmpq
 
 from ..formulae.pencil import determinant
-from .numbers import to_fmpq
+from .numbers import sign, to_fmpq
 from .rotation import rotation_numerator
 
 __all__ = [
@@ -496,7 +496,7 @@ def normalised_quadratic_part(M: Any, *, name: str = "matrix") -> ExactMatrix:
     n = len(rows)
     E = symmetric_part([[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)], name)
     minors = [determinant([row[:k] for row in E[:k]]) for k in range(1, n)]
-    sign = interior_sign([(m > 0) - (m < 0) for m in minors])
+    sign = interior_sign([sign(m) for m in minors])
     if sign == 1:
         return E
     if sign == -1:
@@ -537,7 +537,7 @@ def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
     """
     E = normalised_quadratic_part(M, name=name)
     d = determinant(E)
-    check_determinant_sign((d > 0) - (d < 0), len(E), name)
+    check_determinant_sign(sign(d), len(E), name)
     return E
 
 
