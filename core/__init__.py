@@ -28,11 +28,8 @@ from .bodies.index import BodyIndex as BodyIndex
 from .bodies.result import Contacts as Contacts
 from .bodies.sweep import sweep_contacts as sweep_contacts
 from .bodies.sweep_result import SweepContacts as SweepContacts
-from .fixed.classify import METHODS as METHODS
-from .fixed.classify import ON_INVALID as ON_INVALID
 from .fixed.classify import Certifier as Certifier
 from .fixed.classify import Classification as Classification
-from .fixed.classify import Method as Method
 from .fixed.classify import Stats as Stats
 from .fixed.classify import classify as classify
 from .fixed.classify import classify_detailed as classify_detailed
@@ -52,6 +49,9 @@ from .moving.motions import read_interval as read_interval
 from .moving.motions import read_motion as read_motion
 from .moving.presets import preset as preset
 from .moving.presets import preset_names as preset_names
+from .options import METHODS as METHODS
+from .options import ON_INVALID as ON_INVALID
+from .options import Method as Method
 from .relation import Relation as Relation
 from .shapes.quadrics import ShapeParams as ShapeParams
 from .shapes.quadrics import axes_from_quadric as axes_from_quadric

@@ -3,8 +3,10 @@ mypy, on the code they cover. A finding is a test failure that names it."""
 
 from __future__ import annotations
 
+import inspect
 import subprocess
 import sys
+import typing
 from pathlib import Path
 
 import pytest
@@ -14,6 +16,8 @@ RUFF_PATHS = ["core", "app", "tests", "bench"]
 """Ruff-clean (pyproject's [tool.ruff] config)."""
 MYPY_PATHS = ["core", "app"]
 """mypy-clean."""
+MYPY_STRICT_PATHS = ["core"]
+"""mypy --strict clean: the library is a typed package (core/py.typed)."""
 
 
 def _run(args: list[str]) -> subprocess.CompletedProcess[str]:
@@ -30,3 +34,50 @@ def test_mypy_is_clean():
     pytest.importorskip("mypy", reason="mypy is not installed (pip install -e '.[test]')")
     res = _run([sys.executable, "-m", "mypy", *MYPY_PATHS])
     assert res.returncode == 0, res.stdout[-4000:] + res.stderr[-2000:]
+
+
+def test_mypy_strict_is_clean():
+    pytest.importorskip("mypy", reason="mypy is not installed (pip install -e '.[test]')")
+    res = _run([sys.executable, "-m", "mypy", "--strict", *MYPY_STRICT_PATHS])
+    assert res.returncode == 0, res.stdout[-4000:] + res.stderr[-2000:]
+
+
+def test_core_is_a_typed_package():
+    """core/py.typed exists and ships (package data and the source distribution)."""
+    assert (ROOT / "core" / "py.typed").is_file()
+    assert '"core" = ["py.typed"]' in (ROOT / "pyproject.toml").read_text()
+    assert "include core/py.typed" in (ROOT / "MANIFEST.in").read_text().splitlines()
+
+
+def _public_callables() -> list[tuple[str, object]]:
+    import core
+
+    out: list[tuple[str, object]] = []
+    for name in core.__all__:
+        obj = getattr(core, name)
+        if inspect.isfunction(obj):
+            out.append((name, obj))
+            out += [(f"{name} (overload {k})", f) for k, f in enumerate(typing.get_overloads(obj))]
+        elif inspect.isclass(obj) and obj.__module__.startswith("core."):
+            for attr, member in vars(obj).items():
+                if attr.startswith("_"):
+                    continue
+                f = member.fget if isinstance(member, property) else member
+                f = f.__func__ if isinstance(f, staticmethod | classmethod) else f
+                if inspect.isfunction(f):
+                    out.append((f"{name}.{attr}", f))
+    return out
+
+
+def test_public_functions_never_return_any():
+    """Every public function and method of core says what it returns, and it is never a bare Any."""
+    found = _public_callables()
+    assert len(found) > 50  # the walk reaches the API (functions, overloads, methods)
+    bad = []
+    for name, f in found:
+        hints = typing.get_type_hints(f)
+        if "return" not in hints:
+            bad.append(f"{name}: no return annotation")
+        elif hints["return"] is typing.Any:
+            bad.append(f"{name}: returns Any")
+    assert not bad, bad

@@ -106,7 +106,7 @@ class QSqrtPoly:
         self.p = _poly(p)
         self.q = _poly(q)
         self.d = int(d)
-        self._float: Any = None
+        self._float: FloatPoly | None = None
         if self.d == 1 and not self.q.is_zero():
             self.p = self.p + self.q
             self.q = fmpq_poly()
@@ -117,7 +117,7 @@ class QSqrtPoly:
             return other
         if isinstance(other, int | fmpz | fmpq | fmpq_poly | fmpz_poly):
             return QSqrtPoly(other, 0, self.d)
-        return NotImplemented  # type: ignore[return-value]
+        return NotImplemented  # type: ignore[no-any-return]  # the operators pass it on
 
     def _join(self, other: QSqrtPoly) -> int:
         if self.d == other.d:

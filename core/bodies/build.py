@@ -13,6 +13,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..options import ON_INVALID, check_choice
 from ..shapes.quadrics import axes_row_errors, quadrics_from_axes
 
 __all__ = ["bodies_from_axes"]
@@ -55,8 +56,7 @@ def bodies_from_axes(
         >>> bool(np.isnan(bodies_from_axes([[0, 0], [2, 0]], [[1, 1], [1, -1]], on_invalid="mark")[1]).all())
         True
     """
-    if on_invalid not in ("raise", "mark"):
-        raise ValueError(f"unknown on_invalid {on_invalid!r}; valid options: raise, mark")
+    check_choice(on_invalid, ON_INVALID, "on_invalid")
     if on_invalid == "raise":
         return quadrics_from_axes(centers, semi_axes, orientations)
     errors = axes_row_errors(centers, semi_axes, orientations)

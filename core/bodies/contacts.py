@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..fixed.classify import Method, OnInvalid
+from ..fixed.lazy import is_dask_array
+from ..options import Method, OnInvalid
 from .narrowphase import CHUNK_PAIRS
 from .result import Contacts
 from .search import Progress, search
@@ -89,7 +90,7 @@ def contacts(
         ...
         ValueError: body 2: centre x = 2.5 is more than one box side (Lx = 1.2) from body 0's (x = 0): the centres must lie in one box (wrap them into it first, e.g. x mod Lx)
     """
-    if scheduler is not None or _is_dask(Q):
+    if scheduler is not None or is_dask_array(Q):
         from .distributed import contacts_distributed
 
         return contacts_distributed(
@@ -100,9 +101,4 @@ def contacts(
         Q, box=box, method=method, on_invalid=on_invalid, chunk=chunk,
         progress=None if progress is True else progress or None, max_pairs=max_pairs,
     )
-
-
-def _is_dask(x: Any) -> bool:
-    """A dask collection, recognised without importing dask."""
-    return type(x).__module__.startswith("dask.") and hasattr(x, "__dask_graph__")
 

@@ -53,6 +53,7 @@ from distributed.diagnostics.plugin import WorkerPlugin
 from distributed.diagnostics.progressbar import TextProgressBar
 
 from ..fixed.lazy import PAIR_CHUNK, is_dask_array
+from ..options import check_options
 from .bounds import BoundingSpheres, bounding_spheres
 from .broadphase import _CELL_SLACK, _PAD, BroadPhase, Candidates, TooManyPairs, candidate_pairs
 from .narrowphase import classify_candidates
@@ -66,7 +67,7 @@ from .periodic import (
     shift_error,
 )
 from .result import Contacts
-from .search import Progress, _check, contacts_of, read_bodies
+from .search import Progress, contacts_of, read_bodies
 
 __all__ = ["WarmUp", "register", "contacts_distributed", "BODY_CHUNK"]
 
@@ -141,8 +142,7 @@ def contacts_distributed(
     """
     import time
 
-    _check(method, ("adaptive", "float", "exact"), "method")
-    _check(on_invalid, ("raise", "mark"), "on_invalid")
+    check_options(method, on_invalid)
     t0 = time.perf_counter()
     client, own = _client(scheduler)
     try:

@@ -36,8 +36,9 @@ from typing import Any
 
 import numpy as np
 
-from ..fixed.classify import METHODS, ON_INVALID, Certifier, classify_detailed
+from ..fixed.classify import Certifier, classify_detailed
 from ..fixed.compiled import warm_up
+from ..options import check_options
 from ..relation import Relation
 from .bounds import bounding_spheres
 from .periodic import (
@@ -150,8 +151,7 @@ class BodyIndex:
     """
 
     def __init__(self, Q: Any, box: Any = None, *, method: str = "adaptive", on_invalid: str = "raise") -> None:
-        _check(method, METHODS, "method")
-        _check(on_invalid, ON_INVALID, "on_invalid")
+        check_options(method, on_invalid)
         warm_up(wait=False)
         self.method = method
         self.on_invalid = on_invalid
@@ -641,9 +641,6 @@ class BodyIndex:
         return rel, by
 
 
-def _check(value: str, options: tuple[str, ...], what: str) -> None:
-    if value not in options:
-        raise ValueError(f"unknown {what} {value!r}; valid options: {', '.join(options)}")
 
 
 # ----------------------------------------------------------------------------- small batches

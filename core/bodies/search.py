@@ -8,9 +8,11 @@ from typing import Any
 
 import numpy as np
 
-from ..fixed.classify import METHODS, ON_INVALID, Certifier
+from ..fixed.classify import Certifier
 from ..fixed.compiled import warm_up
+from ..options import check_options
 from ..relation import Relation
+from ..shapes.numbers import binary64_array
 from .bounds import BoundingSpheres, bounding_spheres
 from .broadphase import BroadPhase, Candidates, TooManyPairs
 from .narrowphase import CHUNK_PAIRS, classify_candidates
@@ -40,17 +42,10 @@ def read_bodies(Q: Any) -> np.ndarray:
     arr = np.asarray(Q)
     if arr.ndim != 3 or arr.shape[1] != arr.shape[2] or arr.shape[1] not in (3, 4):
         raise ValueError(f"Q must be an (N, 3, 3) stack of ellipses or (N, 4, 4) of ellipsoids, got shape {arr.shape}")
-    kind = arr.dtype.kind
-    if kind == "f":
-        wide = arr.astype(np.float64)
-        if arr.dtype.itemsize > 8 and not ((wide.astype(arr.dtype) == arr) | np.isnan(arr)).all():
-            raise ValueError("Q holds long doubles that are not float64 values: contacts reads float64 matrices")
-        return wide
-    if kind in "iu":
-        if arr.size and np.abs(arr.astype(object)).max() >= 2**53:
-            raise ValueError("Q holds integers beyond 2^53: contacts reads float64 matrices")
-        return arr.astype(np.float64)
-    raise ValueError(f"Q must hold float numbers, got dtype {arr.dtype}: contacts reads float64 matrices")
+    out = binary64_array(arr)
+    if out is None:
+        raise ValueError(f"Q holds numbers that are not float64 values (dtype {arr.dtype}): contacts reads float64 matrices")
+    return out
 
 
 def search(
@@ -72,8 +67,7 @@ def search(
     (done of the total pairs to examine) runs between chunks of both phases: raising from it
     stops the search there.
     """
-    _check(method, METHODS, "method")
-    _check(on_invalid, ON_INVALID, "on_invalid")
+    check_options(method, on_invalid)
     if max_pairs is not None and (isinstance(max_pairs, bool) or not isinstance(max_pairs, int) or max_pairs < 0):
         raise ValueError(f"max_pairs must be a non-negative integer or None, got {max_pairs!r}")
     t0 = time.perf_counter()
@@ -249,6 +243,3 @@ def contacts_of(
     return found.result(n_bodies, box, spheres)
 
 
-def _check(value: str, options: tuple[str, ...], what: str) -> None:
-    if value not in options:
-        raise ValueError(f"unknown {what} {value!r}; valid options: {', '.join(options)}")

@@ -26,6 +26,7 @@ from ..algebra.algebraic import RealAlgebraic
 from ..fixed.classify import Certifier
 from ..moving.first_contact import FirstContacts, first_contacts
 from ..moving.linear import LinearMotions, read_linear_motions
+from ..options import check_options
 from ..relation import Relation
 from .broadphase import Candidates
 from .periodic import check_box, is_tilted, read_box
@@ -112,10 +113,7 @@ def sweep_contacts(
         >>> bool(res.t_lo[0] <= 0.5 <= res.t_hi[0] <= res.t_lo[0] + 1e-9), res.time(0).decimal(5)
         (True, '0.5')
     """
-    if on_invalid not in ("raise", "mark"):
-        raise ValueError(f"unknown on_invalid {on_invalid!r}; valid options: raise, mark")
-    if method not in ("adaptive", "exact"):
-        raise ValueError(f"unknown method {method!r}; valid options: adaptive, exact")
+    check_options(method, on_invalid, ("adaptive", "exact"))
     t0 = time.perf_counter()
     bodies, bad = read_linear_motions(centers0, centers1, semi_axes, orientations0, orientations1)
     if bad and on_invalid == "raise":

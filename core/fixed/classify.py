@@ -16,18 +16,19 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import Any, Literal
+from typing import Any, overload
 
 import numpy as np
 
 from ..formulae.decision import RULE_RELATION
+from ..options import METHODS, ON_INVALID, Method, OnInvalid, check_options
 from ..relation import Relation
-from ..shapes.numbers import to_fmpq
-from ..shapes.quadrics import validate_quadric
+from ..shapes.numbers import binary64_array
+from ..shapes.quadrics import Matrix, Stack, validate_quadric
 from . import compiled
 from .exact import classify_exact
 from .filters import classify_float
-from .lazy import is_dask_array
+from .lazy import LazyArray, is_dask_array
 
 __all__ = [
     "classify",
@@ -41,10 +42,6 @@ __all__ = [
     "Stats",
 ]
 
-Method = Literal["adaptive", "float", "exact"]
-METHODS: tuple[str, ...] = ("adaptive", "float", "exact")
-OnInvalid = Literal["raise", "mark"]
-ON_INVALID: tuple[str, ...] = ("raise", "mark")
 
 
 class Certifier(IntEnum):
@@ -95,15 +92,6 @@ class Classification:
         return int(np.count_nonzero(self.certified_by == Certifier.EXACT))
 
 
-def _check_choice(value: str, options: tuple[str, ...], what: str) -> None:
-    if value not in options:
-        raise ValueError(f"unknown {what} {value!r}; valid options: {', '.join(options)}")
-
-
-_EXACT_INT = 2**53
-"""Integers of smaller magnitude are exact float64 values."""
-
-
 def _as_array(x: Any, name: str) -> np.ndarray:
     """Float64 array if every entry is exactly a binary64 value, else an object array (exact input).
 
@@ -122,54 +110,23 @@ def _as_array(x: Any, name: str) -> np.ndarray:
 def _read_array(x: Any, name: str) -> np.ndarray:
     if isinstance(x, np.ndarray):
         kind = x.dtype.kind
-        if kind == "f":
-            if x.dtype == np.float64 or x.dtype == np.float32:  # float32: the filter reads it as it is
-                return x
-            if x.dtype.itemsize < 8:  # float16: widening is exact
-                return x.astype(np.float64)
-            wide = x.astype(np.float64)  # long double: float64 only where that is exact
-            same = (wide.astype(x.dtype) == x) | np.isnan(x)
-            return wide if same.all() else x.astype(object)
-        if kind in "iu":
-            if x.size and np.abs(x.astype(object)).max() >= _EXACT_INT:
-                return x.astype(object)
-            return x.astype(np.float64)
+        if x.dtype == np.float64 or x.dtype == np.float32:  # float32: the filter reads it as it is
+            return x
         if kind == "b":
             raise ValueError(f"{name} holds booleans, not numbers")
         if kind == "c":
             raise ValueError(f"{name} holds complex numbers; a quadric matrix is real")
+        if kind in "fiu":
+            f = binary64_array(x)
+            return x.astype(object) if f is None else f
     try:
         arr = np.asarray(x, dtype=object)
     except ValueError:
         raise ValueError(f"{name} is ragged: rows of different lengths") from None
     if arr.ndim < 2:
         return arr
-    flat = arr.reshape(-1)
-    if all(type(v) is float or type(v) is np.float64 for v in flat):
-        return arr.astype(np.float64)
-    out = np.empty(flat.shape, dtype=np.float64)
-    for k, v in enumerate(flat):  # exact inputs that are binary64 values can use the float filter
-        f = _as_exact_float(v)
-        if f is None:
-            return arr
-        out[k] = f
-    return out.reshape(arr.shape)
-
-
-def _as_exact_float(v: Any) -> float | None:
-    """V as a float if it is exactly a (finite) binary64 value, else None."""
-    if type(v) is float or type(v) is np.float64:
-        return float(v)
-    if isinstance(v, bool | np.bool_):
-        return None
-    try:
-        q = to_fmpq(v)
-    except ValueError:
-        return None
-    if abs(q.p) >= _EXACT_INT or q.q & (q.q - 1) or q.q > 2**1074:  # not a float64 dyadic rational
-        return None
-    f = int(q.p) / int(q.q)
-    return f if to_fmpq(f) == q else None
+    f = binary64_array(arr)  # exact inputs that are binary64 values can use the float filter
+    return arr if f is None else f
 
 
 def _single_float_pair(A: Any, B: Any) -> bool:
@@ -186,6 +143,14 @@ def _single_float_pair(A: Any, B: Any) -> bool:
     )
 
 
+@overload
+def classify(A: Matrix, B: Matrix, *, method: Method = ..., on_invalid: OnInvalid = ..., stats: Stats | None = ...) -> Relation: ...
+@overload
+def classify(A: Stack, B: Stack | Matrix, *, method: Method = ..., on_invalid: OnInvalid = ..., stats: Stats | None = ...) -> np.ndarray: ...
+@overload
+def classify(A: Matrix, B: Stack, *, method: Method = ..., on_invalid: OnInvalid = ..., stats: Stats | None = ...) -> np.ndarray: ...
+@overload
+def classify(A: object, B: object, *, method: Method = ..., on_invalid: OnInvalid = ..., stats: Stats | None = ...) -> Relation | np.ndarray | LazyArray: ...
 def classify(
     A: Any,
     B: Any,
@@ -193,7 +158,7 @@ def classify(
     method: Method = "adaptive",
     on_invalid: OnInvalid = "raise",
     stats: Stats | None = None,
-) -> Any:
+) -> Relation | np.ndarray | LazyArray:
     """Certified relative position of two ellipses (3x3) or ellipsoids (4x4).
 
     Args:
@@ -235,8 +200,7 @@ def classify(
         >>> classify([circle(0), [[1, 0, 0], [0, -1, 0], [0, 0, -1]]], circle(5), on_invalid="mark").tolist()
         [0, -2]
     """
-    _check_choice(method, METHODS, "method")
-    _check_choice(on_invalid, ON_INVALID, "on_invalid")
+    check_options(method, on_invalid)
     if is_dask_array(A) or is_dask_array(B):  # lazy: chunk by chunk on the dask workers
         from .lazy import classify_lazy
 
@@ -287,8 +251,7 @@ def classify_detailed(
         >>> r.relation.tolist(), [str(Certifier(c)) for c in r.certified_by]
         ([1, 2], ['exact', 'float'])
     """
-    _check_choice(method, METHODS, "method")
-    _check_choice(on_invalid, ON_INVALID, "on_invalid")
+    check_options(method, on_invalid)
     a = _as_array(A, "A")
     b = _as_array(B, "B")
     n = a.shape[-1]

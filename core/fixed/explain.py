@@ -16,7 +16,7 @@ from flint import fmpq
 
 from ..formulae.decision import RULE_LIST, RULES, sign_variations
 from ..formulae.subresultants import hat_scale
-from ..shapes.numbers import format_rational, sign, to_float, to_fmpq
+from ..shapes.numbers import binary64_array, format_rational, sign, to_float, to_fmpq
 from . import _kernels as K
 from .errorbound import RADIUS_FACTOR
 from .exact import exact_pair
@@ -96,10 +96,9 @@ def explain_float(A: Any, B: Any) -> Explanation | None:
     proven) and are scaled back exactly; a value that would leave the float range defers to the
     exact path.
     """
-    if not (_is_plain_floats(A) and _is_plain_floats(B)):
+    a, b = binary64_array(A, typed=True), binary64_array(B, typed=True)  # exact numbers: the exact explanation
+    if a is None or b is None:
         return None
-    a = np.asarray(A, dtype=np.float64)
-    b = np.asarray(B, dtype=np.float64)
     if a.ndim != 2 or a.shape != b.shape or a.shape[0] not in (3, 4) or a.shape[0] != a.shape[1]:
         return None
     n = a.shape[0]
@@ -160,16 +159,3 @@ def explain_float(A: Any, B: Any) -> Explanation | None:
         s0=s0,
         subresultants_needed=needed,
     )
-
-
-def _is_plain_floats(M: Any) -> bool:
-    if isinstance(M, np.ndarray):
-        return M.dtype == np.float64 or (M.dtype.kind in "iu" and M.size > 0 and np.abs(M).max() < 2**53)
-    try:
-        return all(
-            (type(v) is float or type(v) is np.float64 or (type(v) is int and abs(v) < 2**53))
-            for row in M
-            for v in row
-        )
-    except TypeError:
-        return False

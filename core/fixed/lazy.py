@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -27,6 +27,17 @@ __all__ = ["is_dask_array", "classify_lazy", "as_pairs", "PAIR_CHUNK"]
 
 PAIR_CHUNK = 1 << 20
 """Pairs per chunk when a numpy operand is turned into a dask array (see the module docstring)."""
+
+
+class LazyArray(Protocol):
+    """What :func:`core.classify` returns for dask input: a ``dask.array.Array`` of int8 codes."""
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """The broadcast batch shape."""
+
+    def compute(self, **kwargs: Any) -> np.ndarray:
+        """The codes, computed on the workers."""
 
 
 def is_dask_array(x: Any) -> bool:
@@ -71,7 +82,7 @@ def as_pairs(A: Any, B: Any) -> tuple[Any, Any]:
     return a.rechunk(b.chunks), b
 
 
-def classify_lazy(block: Callable[..., np.ndarray], A: Any, B: Any, **options: Any) -> Any:
+def classify_lazy(block: Callable[..., np.ndarray], A: Any, B: Any, **options: Any) -> LazyArray:
     """A lazy dask array of int8 codes: ``block(a, b, **options)`` on each chunk of pairs.
 
     Args:

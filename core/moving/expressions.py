@@ -22,7 +22,10 @@ ValueError naming the offending text and its 0-based position.
 from __future__ import annotations
 
 import math
+import operator
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 from flint import fmpq, fmpq_poly
@@ -388,7 +391,7 @@ class _Parser:
         hint = f" ({what})" if what else ""
         return ValueError(f"unexpected {shown} at position {tok.pos}: {self.text}{hint}")
 
-    def _at(self, tok: _Token, op: Any) -> RationalFunction:
+    def _at(self, tok: _Token, op: Callable[[], RationalFunction]) -> RationalFunction:
         """Run one step; a limit it would exceed is reported with the operator's position."""
         try:
             return op()
@@ -409,7 +412,7 @@ class _Parser:
         while self._peek().kind == "op" and self._peek().text in "+-":
             tok = self._next()
             g = self._term()
-            f = self._at(tok, lambda f=f, g=g, plus=tok.text == "+": f + g if plus else f - g)
+            f = self._at(tok, partial(operator.add if tok.text == "+" else operator.sub, f, g))
         return f
 
     def _term(self) -> RationalFunction:
@@ -418,11 +421,11 @@ class _Parser:
             tok = self._next()
             g = self._unary()
             if tok.text == "*":
-                f = self._at(tok, lambda f=f, g=g: f * g)
+                f = self._at(tok, partial(operator.mul, f, g))
             else:
                 if g.num.is_zero():
                     raise ValueError(f"division by zero at position {tok.pos}: {self.text}")
-                f = self._at(tok, lambda f=f, g=g: f / g)
+                f = self._at(tok, partial(operator.truediv, f, g))
         return f
 
     def _unary(self) -> RationalFunction:

@@ -32,6 +32,7 @@ from ..algebra.qsqrt import QSqrtPoly
 from ..algebra.realroots import roots_in_order
 from ..fixed.classify import Certifier
 from ..fixed.exact import classify_exact
+from ..options import check_choice
 from ..relation import Relation
 from .analysis import (
     _Case,
@@ -239,8 +240,7 @@ def first_contacts(
     Returns:
         :class:`FirstContacts`.
     """
-    if method not in ("adaptive", "exact"):
-        raise ValueError(f"unknown method {method!r}; valid options: adaptive, exact")
+    check_choice(method, ("adaptive", "exact"), "method")
     M = int(np.asarray(i).size)
     rel = np.full(M, Relation.SEPARATE, np.int8)
     lo = np.full(M, np.nan)

@@ -31,7 +31,7 @@ import numpy as np
 from flint import fmpq, fmpq_poly
 
 from ..algebra.qsqrt import QSqrtPoly
-from ..shapes.numbers import to_fmpq
+from ..shapes.numbers import binary64, binary64_array, to_fmpq
 from ..shapes.quadrics import quadric_from_axes
 from ..shapes.rotation import rotation_numerator
 from .expressions import RationalFunction
@@ -106,7 +106,7 @@ class LinearMotions:
             c = [a + _q(v) for a, v in zip(c, shift, strict=True)]
         q0 = [float(v) for v in self.q0[k]]
         orientation = q0 if self.dim == 3 else [q0[0], 0.0, 0.0, q0[1]]
-        return quadric_from_axes(c, [float(v) for v in self.semi_axes[k]], orientation, exact=True)  # type: ignore[no-any-return]
+        return quadric_from_axes(c, [float(v) for v in self.semi_axes[k]], orientation, exact=True)
 
     def matrix_at(self, k: int, t: Any, shift: Any = None) -> list[list[fmpq]]:
         """Body k's exact matrix at a rational t (optionally moved by ``shift``), without the motion.
@@ -126,7 +126,7 @@ class LinearMotions:
         c = [_f(_q(a)) + tq * (_f(_q(b)) - _f(_q(a))) + e for a, b, e in zip(self.centers0[k], self.centers1[k], s, strict=True)]
         q = [(1 - tq) * _f(_q(a)) + tq * _f(_q(b)) for a, b in zip(self.q0[k], self.q1[k], strict=True)]
         orientation = q if self.dim == 3 else [q[0], fmpq(0), fmpq(0), q[1]]
-        return quadric_from_axes(c, [_f(_q(v)) for v in self.semi_axes[k]], orientation, exact=True)  # type: ignore[no-any-return]
+        return quadric_from_axes(c, [_f(_q(v)) for v in self.semi_axes[k]], orientation, exact=True)
 
     def packed(self) -> np.ndarray:
         """(N, 17) rows c0, c1, r, q0, q1 (3D) or (N, 10) (2D), float64, C order (the filter's input; kept)."""
@@ -205,27 +205,13 @@ def read_linear_motions(
 
 def _floats(x: Any, name: str) -> np.ndarray:
     """float64 array of exactly the given numbers (never rounded)."""
-    arr = np.asarray(x)
-    if arr.dtype.kind == "f":
-        wide = arr.astype(np.float64)
-        if arr.dtype.itemsize > 8 and not ((wide.astype(arr.dtype) == arr) | np.isnan(arr)).all():
-            raise ValueError(f"{name} holds long doubles that are not float64 values")
-        return wide
-    if arr.dtype.kind in "iu":
-        if arr.size and np.abs(arr.astype(object)).max() >= 2**53:
-            raise ValueError(f"{name} holds integers beyond 2^53 (not float64 values)")
-        return arr.astype(np.float64)
-    if arr.dtype.kind == "b":
-        raise ValueError(f"{name} must hold numbers, got booleans")
-    try:
-        out = arr.astype(np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must hold float numbers, got dtype {arr.dtype}") from None
-    if arr.dtype == object:
-        flat = arr.reshape(-1).tolist()
-        for v, f in zip(flat, out.reshape(-1).tolist(), strict=True):
-            if isinstance(v, bool) or (math.isfinite(f) and Fraction(v) != Fraction(f)):
-                raise ValueError(f"{name} holds {v!r}, which is not a float64 value (the parameters are read exactly)")
+    out = binary64_array(x)
+    if out is None:
+        arr = np.asarray(x, dtype=object)
+        bad = next((v for v in arr.reshape(-1).tolist() if binary64(v) is None), None)
+        if isinstance(bad, bool | np.bool_):
+            raise ValueError(f"{name} must hold numbers, got booleans")
+        raise ValueError(f"{name} holds {bad!r}, which is not a float64 value (the parameters are read exactly)")
     return out
 
 

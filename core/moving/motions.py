@@ -473,7 +473,8 @@ def matrix_at(m: Any, t: float) -> np.ndarray:
     for k in range(1, den.shape[1]):
         vd = vd * t + den[:, k]
     n = motion.dim + 1
-    return (vn / vd).reshape(n, n)
+    out: np.ndarray = (vn / vd).reshape(n, n)
+    return out
 
 
 def _to_float(c: fmpq) -> float:

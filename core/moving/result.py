@@ -18,6 +18,7 @@ from ..algebra.algebraic import RealAlgebraic
 from ..algebra.qsqrt import QSqrtPoly
 from ..formulae.decision import RULES
 from ..formulae.subresultants import hat_s0, hat_s1, hat_s10, hat_scale
+from ..options import check_choice
 from ..relation import Relation
 from ..shapes.numbers import to_fmpq
 from .motions import Motion, motion_to_dict
@@ -258,8 +259,7 @@ class MotionAnalysis:
             from .motions import matrix_at_exact
 
             return classify(matrix_at_exact(self.A, tq), matrix_at_exact(self.B, tq))
-        if method != "lookup":
-            raise ValueError(f"unknown method {method!r}; valid options: lookup, classify")
+        check_choice(method, ("lookup", "classify"), "method")
         i = bisect.bisect_left(self._his, tq)
         if i < len(self._points):
             c = self._points[i].compare(tq)

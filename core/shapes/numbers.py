@@ -11,14 +11,25 @@ import math
 import re
 from fractions import Fraction
 from numbers import Integral, Rational, Real
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from flint import fmpq, fmpz
 
 from .limits import LIBRARY, LimitExceeded, Limits
 
-__all__ = ["to_fmpq", "to_float", "format_rational", "floor_log10", "sign", "parse_number", "MAX_DECIMAL_EXPONENT"]
+__all__ = [
+    "to_fmpq",
+    "to_float",
+    "binary64",
+    "binary64_array",
+    "format_rational",
+    "floor_log10",
+    "sign",
+    "parse_number",
+    "MAX_DECIMAL_EXPONENT",
+    "EXACT_INT",
+]
 
 MAX_DECIMAL_EXPONENT = LIBRARY.decimal_exponent
 """Largest |e| accepted in "1.5e<e>" by the library (:data:`core.shapes.limits.LIBRARY`): "1e999999999"
@@ -121,7 +132,7 @@ def to_fmpq(x: Any) -> fmpq:
     if t is int:
         return fmpq(x)
     if t is fmpq:
-        return x
+        return cast(fmpq, x)
     if isinstance(x, bool | np.bool_):
         raise ValueError(f"a boolean is not a number: {x!r}")
     if isinstance(x, fmpz):
@@ -150,6 +161,89 @@ def to_fmpq(x: Any) -> fmpq:
     raise ValueError(f"cannot read {type(x).__name__} {x!r} as a number")
 
 
+EXACT_INT = 2**53
+"""Integers of smaller magnitude are exactly float64 values (the bound the readers use)."""
+
+
+def binary64(v: Any, *, typed: bool = False) -> float | None:
+    """V as a float if its exact value is a binary64 value, else None (never rounds).
+
+    Python floats and float64 scalars are taken as they are (NaN and infinities included); any
+    other number (int, Fraction, fmpq, a numpy scalar of another width, a string such as "0.5")
+    only when it is finite and exactly a float64. Booleans are not numbers (None). ``typed``:
+    only floats and integers count (a Fraction, fmpq or string that happens to be a binary64
+    value gives None: the caller chose exact numbers, and gets the exact path).
+
+    Examples:
+        >>> binary64("0.5"), binary64("0.1"), binary64(2**53 + 1), binary64(True)
+        (0.5, None, None, None)
+    """
+    if type(v) is float or type(v) is np.float64:
+        return float(v)
+    if isinstance(v, bool | np.bool_):
+        return None
+    if isinstance(v, np.floating):  # float16/32/longdouble: NaN and inf are binary64 values too
+        f = float(v)
+        return f if f != f or f == v else None
+    if typed and not isinstance(v, int | np.integer):
+        return None
+    try:
+        q = to_fmpq(v)
+    except (ValueError, TypeError):
+        return None
+    if abs(q.p) >= EXACT_INT or q.q & (q.q - 1) or q.q > 2**1074:  # not a float64 dyadic rational
+        return None
+    f = int(q.p) / int(q.q)
+    return f if to_fmpq(f) == q else None
+
+
+def binary64_array(x: Any, *, typed: bool = False) -> np.ndarray | None:
+    """X as a float64 array if every entry is exactly a binary64 value, else None (never rounds).
+
+    The one test of "plain floats" of the project: float arrays of any width whose values a
+    float64 holds (float16/32 always; a long double only when widening back gives it again),
+    integer arrays below 2^53 in magnitude, and other arrays (lists, object arrays) entry by
+    entry (:func:`binary64`, with ``typed`` passed on). Booleans, complex numbers and ragged
+    input give None.
+
+    Examples:
+        >>> binary64_array([[0.5, 1], ["0.25", 3]])
+        array([[0.5 , 1.  ],
+               [0.25, 3.  ]])
+        >>> binary64_array([0.1, "0.1"]) is None
+        True
+    """
+    if isinstance(x, np.ndarray):
+        arr = x
+    else:
+        try:  # object: a big int next to a float must not be rounded by numpy's own conversion
+            arr = np.asarray(x, dtype=object)
+        except ValueError:  # ragged
+            return None
+    kind = arr.dtype.kind
+    if kind == "f":
+        wide = arr.astype(np.float64)
+        if arr.dtype.itemsize > 8 and not ((wide.astype(arr.dtype) == arr) | np.isnan(arr)).all():
+            return None
+        return wide
+    if kind in "iu":
+        if arr.size and (int(arr.max()) >= EXACT_INT or int(arr.min()) <= -EXACT_INT):
+            return None
+        return arr.astype(np.float64)
+    if kind not in "OU":
+        return None  # booleans, complex, bytes, dates
+    flat = arr.reshape(-1).tolist()
+    if all(type(v) is float for v in flat):
+        return np.array(flat, dtype=np.float64).reshape(arr.shape)
+    out = np.empty(len(flat), dtype=np.float64)
+    for k, v in enumerate(flat):
+        f = binary64(v, typed=typed)
+        if f is None:
+            return None
+        out[k] = f
+    return out.reshape(arr.shape)
+
+
 def sign(x: Any) -> int:
     """-1, 0 or 1: the sign of any ordered number (int, fmpz, fmpq, Fraction, float).
 
@@ -157,7 +251,7 @@ def sign(x: Any) -> int:
         >>> sign(fmpq(-1, 3)), sign(0), sign(2.5)
         (-1, 0, 1)
     """
-    return (x > 0) - (x < 0)
+    return int((x > 0) - (x < 0))
 
 
 def to_float(q: Any) -> float:

@@ -28,10 +28,10 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Literal, overload
+from typing import Any, Literal, TypeAlias, overload
 
 import numpy as np
-from flint import fmpq
+from flint import fmpq, fmpz
 
 from ..formulae.pencil import determinant
 from .numbers import sign, to_fmpq
@@ -39,6 +39,10 @@ from .rotation import rotation_numerator
 
 __all__ = [
     "SYMMETRY_TOLERANCE",
+    "Entry",
+    "Matrix",
+    "Stack",
+    "ExactMatrix",
     "ShapeParams",
     "quadric_from_axes",
     "quadrics_from_axes",
@@ -51,6 +55,13 @@ __all__ = [
 ]
 
 ExactMatrix = list[list[fmpq]]
+"""A matrix of exact rationals, as nested lists."""
+Entry: TypeAlias = int | float | Fraction | fmpq | fmpz | np.floating[Any] | np.integer[Any]
+"""One number of a user's matrix, read exactly (strings such as "3/7" are read too, typed as ``object``)."""
+Matrix: TypeAlias = Sequence[Sequence[Entry]]
+"""One matrix as nested sequences of numbers (a type checker then knows: one pair, one result)."""
+Stack: TypeAlias = Sequence[Matrix] | Sequence[Sequence[Matrix]]
+"""A stack of matrices as nested sequences (then: an array of results)."""
 
 SYMMETRY_TOLERANCE = Fraction(1, 2**20)
 """Largest accepted asymmetry |a_ij - a_ji| / sqrt(m_i m_j) (see the module docstring); the
@@ -70,12 +81,12 @@ class ShapeParams:
 
 
 @overload
-def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: Literal[False] = False) -> np.ndarray: ...
+def rotation_from_quaternion(wxyz: Sequence[Any] | np.ndarray, *, exact: Literal[False] = False) -> np.ndarray: ...
 @overload
-def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: Literal[True]) -> ExactMatrix: ...
+def rotation_from_quaternion(wxyz: Sequence[Any] | np.ndarray, *, exact: Literal[True]) -> ExactMatrix: ...
 @overload
-def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: bool) -> np.ndarray | ExactMatrix: ...
-def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: bool = False) -> np.ndarray | ExactMatrix:
+def rotation_from_quaternion(wxyz: Sequence[Any] | np.ndarray, *, exact: bool) -> np.ndarray | ExactMatrix: ...
+def rotation_from_quaternion(wxyz: Sequence[Any] | np.ndarray, *, exact: bool = False) -> np.ndarray | ExactMatrix:
     """3x3 rotation matrix of quaternion (w, x, y, z); need not be unit (divided by |q|^2).
 
     With ``exact=True`` a rational quaternion gives an exactly orthogonal rational matrix.
@@ -94,13 +105,19 @@ def rotation_from_quaternion(wxyz: Sequence[Any], *, exact: bool = False) -> np.
     return rows if exact else np.array(rows, dtype=float)
 
 
+@overload
+def quadric_from_axes(center: Sequence[Any] | np.ndarray, semi_axes: Sequence[Any] | np.ndarray, orientation: Any = ..., *, exact: Literal[False] = ...) -> np.ndarray: ...
+@overload
+def quadric_from_axes(center: Sequence[Any] | np.ndarray, semi_axes: Sequence[Any] | np.ndarray, orientation: Any = ..., *, exact: Literal[True]) -> ExactMatrix: ...
+@overload
+def quadric_from_axes(center: Sequence[Any] | np.ndarray, semi_axes: Sequence[Any] | np.ndarray, orientation: Any = ..., *, exact: bool) -> np.ndarray | ExactMatrix: ...
 def quadric_from_axes(
-    center: Sequence[Any],
-    semi_axes: Sequence[Any],
+    center: Sequence[Any] | np.ndarray,
+    semi_axes: Sequence[Any] | np.ndarray,
     orientation: Any = None,
     *,
     exact: bool = False,
-) -> Any:
+) -> np.ndarray | ExactMatrix:
     """Matrix of the ellipse/ellipsoid with this centre, semi-axes and orientation.
 
     Args:
@@ -134,7 +151,8 @@ def quadric_from_axes(
         raise ValueError(f"semi-axes must be positive, got {[str(v) for v in r]}")
     R = _orientation_matrix(d, orientation, exact)
     if not exact:  # the float matrix is built by the one vectorised routine (bit for bit)
-        return _assemble_float(np.array([c]), np.array([r]), np.asarray(R, dtype=float)[None])[0]
+        out: np.ndarray = _assemble_float(np.array([c]), np.array([r]), np.asarray(R, dtype=float)[None])[0]
+        return out
     inv_r2 = [1 / (v * v) for v in r]
     Q = [[sum(R[min(i, j)][k] * inv_r2[k] * R[max(i, j)][k] for k in range(d)) for j in range(d)] for i in range(d)]
     Qc = [sum(Q[i][j] * c[j] for j in range(d)) for i in range(d)]
@@ -413,8 +431,8 @@ def _quaternion_from_rotation(R: np.ndarray) -> tuple[float, float, float, float
         s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
         q = ((R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s)
     n = math.sqrt(sum(v * v for v in q))
-    sign = 1.0 if q[0] >= 0 else -1.0
-    return tuple(float(sign * v / n) for v in q)  # type: ignore[return-value]
+    s = 1.0 if q[0] >= 0 else -1.0
+    return tuple(float(s * v / n) for v in q)  # type: ignore[return-value]
 
 
 def symmetric_part(E: ExactMatrix, name: str = "matrix") -> ExactMatrix:
@@ -496,10 +514,10 @@ def normalised_quadratic_part(M: Any, *, name: str = "matrix") -> ExactMatrix:
     n = len(rows)
     E = symmetric_part([[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)], name)
     minors = [determinant([row[:k] for row in E[:k]]) for k in range(1, n)]
-    sign = interior_sign([sign(m) for m in minors])
-    if sign == 1:
+    flip = interior_sign([sign(m) for m in minors])
+    if flip == 1:
         return E
-    if sign == -1:
+    if flip == -1:
         return [[-v for v in row] for row in E]
     raise ValueError(not_a_quadric_message(name, n))
 

@@ -18,17 +18,13 @@ in array form. All of them run through the one filtered evaluation of
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from fractions import Fraction
-from typing import Any, Literal, TypeAlias, overload
+from typing import Literal, TypeAlias, overload
 
-import numpy as np
-from flint import fmpq, fmpz
-
-from ..fixed.classify import Method, OnInvalid
+from ..options import Method, OnInvalid, check_options
 from ..relation import Relation
+from ..shapes.quadrics import Matrix, Stack
 from .distance import DistanceBracket, distance_exact, distance_float
-from .filtered import NoWitness, Pairs, WitnessArray, check_options, filtered, finish, read_pairs
+from .filtered import NoWitness, Pairs, WitnessArray, filtered, finish, read_pairs
 from .plane import SeparatingPlane, no_plane, plane_exact, plane_float
 from .point import ContactPoint, no_point, point_exact, point_float
 from .scale import ContactScale, check_rtol, scale_exact, scale_float
@@ -36,11 +32,6 @@ from .witness import Witness, compose
 
 __all__ = ["contact_scale", "separating_plane", "contact_point", "distance", "witness", "Matrix", "Stack"]
 
-Entry: TypeAlias = int | float | Fraction | fmpq | fmpz | np.floating[Any] | np.integer[Any]
-Matrix: TypeAlias = Sequence[Sequence[Entry]]
-"""One matrix as nested sequences of numbers (a type checker then knows: one pair, one result)."""
-Stack: TypeAlias = Sequence[Matrix] | Sequence[Sequence[Matrix]]
-"""A stack of matrices as nested sequences (then: an object array of results)."""
 Exact: TypeAlias = Literal["adaptive", "exact"]
 
 
@@ -86,6 +77,7 @@ def contact_scale(
         ValueError: an invalid matrix (``on_invalid="raise"``), sizes that differ, a bad option.
 
     Examples:
+        >>> from flint import fmpq
         >>> sphere = lambda x, r: [[1, 0, 0, -x], [0, 1, 0, 0], [0, 0, 1, 0], [-x, 0, 0, x * x - r * r]]
         >>> cs = contact_scale(sphere(0, 1), sphere(5, 1.5))      # mu = 5 / 2.5
         >>> cs.lo, cs.hi, str(cs.relation)
@@ -240,6 +232,7 @@ def distance(
         tangent and overlapping pairs); a stack: an object array of them.
 
     Examples:
+        >>> from flint import fmpq
         >>> circle = lambda x, r: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - r * r]]
         >>> b = distance(circle(0, 1), circle(5, 2))          # 5 - 1 - 2
         >>> b.lo <= 2 <= b.hi, b.hi - b.lo <= b.hi * fmpq(1, 10**12)

@@ -28,28 +28,21 @@ from typing import Any, Literal, TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from ..fixed.classify import (
-    METHODS,
-    ON_INVALID,
-    Certifier,
-    Method,
-    OnInvalid,
-    classify,
-    classify_detailed,
-)
+from ..fixed.classify import Certifier, classify, classify_detailed
+from ..options import Method, OnInvalid
 from ..relation import Relation
+from ..shapes.numbers import binary64_array
 from .centred import centred_pair
 from .contact_function import ContactFunction
 from .floatcert import FloatPairs, prepare
 
-__all__ = ["NoWitness", "NoWitnessKind", "Pairs", "WitnessArray", "read_pairs", "filtered", "finish", "check_choice"]
+__all__ = ["NoWitness", "NoWitnessKind", "Pairs", "WitnessArray", "read_pairs", "filtered", "finish"]
 
 WitnessArray = npt.NDArray[np.object_]
 """Results of a stack: an object array with the batch shape, one result (or NoWitness) per pair."""
 
 NoWitnessKind = Literal["invalid", "none", "undecided", "failed"]
 
-_EXACT_INT = 2**53
 """Integers of smaller magnitude are exact binary64 values."""
 
 
@@ -69,18 +62,6 @@ class NoWitness:
 
     def __bool__(self) -> bool:
         return False
-
-
-def check_choice(value: str, options: tuple[str, ...], what: str) -> None:
-    """ValueError listing the valid options unless ``value`` is one of them."""
-    if value not in options:
-        raise ValueError(f"unknown {what} {value!r}; valid options: {', '.join(options)}")
-
-
-def check_options(method: str, on_invalid: str) -> None:
-    """Check ``method`` and ``on_invalid`` (ValueError naming the valid options)."""
-    check_choice(method, METHODS, "method")
-    check_choice(on_invalid, ON_INVALID, "on_invalid")
 
 
 @dataclass
@@ -125,18 +106,10 @@ class Pairs:
 
 def _as_array(x: Any) -> np.ndarray:
     """Float64 if every entry is exactly a binary64 value, else an object array (never rounds)."""
-    if isinstance(x, np.ndarray):
-        if x.dtype.kind == "f" and x.dtype.itemsize <= 8:
-            return x.astype(np.float64)
-        if x.dtype.kind in "iu" and (x.size == 0 or int(np.abs(x).max()) < _EXACT_INT):
-            return x.astype(np.float64)
-        arr = x.astype(object)
-    else:
-        arr = np.asarray(x, dtype=object)
-    flat = arr.reshape(-1)
-    if all(type(v) is float or type(v) is np.float64 or (type(v) is int and abs(v) < _EXACT_INT) for v in flat):
-        return arr.astype(np.float64)
-    return arr
+    f = binary64_array(x, typed=True)  # exact numbers (Fraction, fmpq, str) keep the exact path
+    if f is not None:
+        return f
+    return x.astype(object) if isinstance(x, np.ndarray) else np.asarray(x, dtype=object)
 
 
 def _flat(x: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:

@@ -46,7 +46,8 @@ from typing import Any, cast
 
 import numpy as np
 
-from ..fixed.classify import Method, Stats, classify
+from ..fixed.classify import Stats, classify
+from ..options import Method
 from ..relation import Relation
 from .floatdet import det_with_bound
 from .floats import (
@@ -551,7 +552,7 @@ def _classify_valid(A: np.ndarray, B: np.ndarray, valid: Any, stats: Stats, meth
     The float filter, and exact arithmetic where it abstains unless ``method`` is "float".
     """
     if not is_array(valid):
-        return int(classify(A, B, method=method, stats=stats)) if valid else int(Relation.UNDECIDED)
+        return int(cast(Relation, classify(A, B, method=method, stats=stats))) if valid else int(Relation.UNDECIDED)  # one pair
     got = np.full(valid.shape, Relation.UNDECIDED, dtype=np.int8)
     if valid.any():
         got[valid] = classify(A[valid], B[valid], method=method, stats=stats)
