@@ -78,7 +78,8 @@ class BoundingSpheres:
     @property
     def valid(self) -> np.ndarray:
         """(N,) bool mask of the bodies that are ellipses/ellipsoids."""
-        return np.isfinite(self.radii)
+        out: np.ndarray = np.isfinite(self.radii)
+        return out
 
 
 class _Ball:
@@ -248,7 +249,8 @@ def _lambda_min_estimate(Q: np.ndarray) -> np.ndarray:
     if d == 2:
         h = (Q[:, 0, 0] + Q[:, 1, 1]) / 2
         w = np.hypot((Q[:, 0, 0] - Q[:, 1, 1]) / 2, Q[:, 0, 1])
-        return h - w
+        low: np.ndarray = h - w
+        return low
     q = np.trace(Q, axis1=1, axis2=2) / 3
     B = Q - q[:, None, None] * np.eye(3)
     p = np.sqrt((B * B).sum(axis=(1, 2)) / 6)
@@ -256,7 +258,8 @@ def _lambda_min_estimate(Q: np.ndarray) -> np.ndarray:
     Bn = B / safe[:, None, None]
     half_det = np.linalg.det(Bn) / 2
     phi = np.arccos(np.clip(half_det, -1.0, 1.0)) / 3
-    return np.where(p > 0, q + 2 * p * np.cos(phi + 2 * np.pi / 3), q)
+    out: np.ndarray = np.where(p > 0, q + 2 * p * np.cos(phi + 2 * np.pi / 3), q)
+    return out
 
 
 def _definite(S: np.ndarray, R: np.ndarray, lam: np.ndarray) -> np.ndarray:
@@ -271,7 +274,7 @@ def _definite(S: np.ndarray, R: np.ndarray, lam: np.ndarray) -> np.ndarray:
             - P[0][1] * (P[0][1] * P[2][2] - P[1][2] * P[0][2])
             + P[0][2] * (P[0][1] * P[1][2] - P[1][1] * P[0][2])
         )
-    ok = np.isfinite(lam) & (lam > 0)
+    ok: np.ndarray = np.isfinite(lam) & (lam > 0)
     for m in minors:
         ok &= m.v > m.r * _RADIUS_FACTOR
     return ok

@@ -149,7 +149,8 @@ class _Block:
 
     def sizes(self) -> np.ndarray:
         """Pairs of each row (int64)."""
-        return self.ca * (self.ca - 1) // 2 if self.upper else self.ca * self.cb
+        out: np.ndarray = self.ca * (self.ca - 1) // 2 if self.upper else self.ca * self.cb
+        return out
 
     @property
     def total(self) -> int:
@@ -349,7 +350,8 @@ def _grid(
 
 def _coords(c: np.ndarray, origin: np.ndarray, h: np.ndarray, n: np.ndarray, periodic: bool) -> np.ndarray:
     x = np.floor((c - origin) / h).astype(np.int64)
-    return np.clip(x, 0, n - 1) if periodic else x
+    out: np.ndarray = np.clip(x, 0, n - 1) if periodic else x
+    return out
 
 
 def _encode(coords: np.ndarray, n: np.ndarray) -> np.ndarray:

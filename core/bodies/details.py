@@ -155,7 +155,8 @@ def _translated(M: np.ndarray, shift: np.ndarray) -> list[list[fmpq]]:
 def _directions(d: int) -> np.ndarray:
     """Unit vectors to the corners, edges and faces of the cube (26 in 3D, 8 in 2D)."""
     v = np.array([u for u in itertools.product((-1.0, 0.0, 1.0), repeat=d) if any(u)])
-    return v / np.linalg.norm(v, axis=1)[:, None]
+    out: np.ndarray = v / np.linalg.norm(v, axis=1)[:, None]
+    return out
 
 
 def _points(B: np.ndarray, A: np.ndarray) -> np.ndarray:

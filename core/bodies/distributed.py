@@ -181,7 +181,7 @@ class _StderrProgressBar(TextProgressBar):
 
     def __init__(self, keys: Any, label: str, **kwargs: Any) -> None:
         self.label = label
-        super().__init__(keys, **kwargs)
+        super().__init__(keys, **kwargs)  # type: ignore[no-untyped-call]  # distributed leaves it unannotated
 
     def _draw_bar(self, remaining: int, all: int, **kwargs: Any) -> None:
         frac = (1 - remaining / all) if all else 1.0

@@ -101,7 +101,7 @@ def search(
         t = time.perf_counter()
         rel, by = classify_candidates(
             Q, batch, L, method, chunk=chunk,
-            progress=None if progress is None else (lambda k, m: progress(done, total)),  # type: ignore[misc]
+            progress=None if progress is None else (lambda k, m: progress(done, total)),
         )
         found.add(batch, rel, by)
         narrow += time.perf_counter() - t

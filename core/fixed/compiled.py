@@ -24,6 +24,7 @@ import warnings
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from types import ModuleType
+from typing import cast
 
 import numpy as np
 
@@ -136,7 +137,7 @@ def set_threads(n: int | None) -> None:
 def get_threads() -> int:
     """Threads a batch is split over."""
     n = _state["threads"] or int(os.environ.get("ELLIPSOID_THREADS", "0") or 0) or os.cpu_count() or 1
-    return int(n)  # type: ignore[call-overload]
+    return int(cast(int, n))
 
 
 def _pool(k: int) -> ThreadPoolExecutor:

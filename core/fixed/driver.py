@@ -228,7 +228,9 @@ def centre(x: Any, n: int, W: dict[tuple[int, int], Any], tag: str) -> tuple[lis
     Estimates: the certificates (and the bounding spheres of :mod:`core.bodies.bounds`) hold
     for any float centre.
     """
-    w = lambda i, j: W[min(i, j), max(i, j)]  # noqa: E731
+    def w(i: int, j: int) -> Any:
+        return W[min(i, j), max(i, j)]
+
     if n == 3:
         a00, a01, a11 = w(1, 1), -w(0, 1), w(0, 0)
         det = x.let(f"{tag}det", (w(0, 0) * w(1, 1)) - (w(0, 1) * w(0, 1)))

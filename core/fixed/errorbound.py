@@ -144,7 +144,7 @@ class _Sym:
         t = self.t
         if isinstance(other, int):
             if op != "*":
-                return NotImplemented
+                return NotImplemented  # type: ignore[no-any-return]  # the operator passes it on
             if other == 0:
                 raise ValueError("multiplication by 0 in a traced formula")
             if other == 1:

@@ -388,6 +388,7 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             Pa = prepare(x, n, entry("a"), "a", exact_only=fast)
             Pb = prepare(x, n, entry("b"), "b", exact_only=fast)
             c, cr, minors = pencil_bounds(x, n, Pa, Pb)
+            code: CExpr
             code, _, idx = decide(x, n, c, cr, minors, Pa.ok & Pb.ok)
             if fast:  # a matrix symmetric only up to rounding: the full prepare decides
                 code = x.where(((Pa.ok | Pa.open) & (Pb.ok | Pb.open)) & (Pa.open | Pb.open), NEEDS_FULL, code)
@@ -401,7 +402,8 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             Pa, Pb = prepare(x, n, entry("a"), "a"), prepare(x, n, entry("b"), "b")
             c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
             cr = [CExpr(f"c[{n + 1 + i} * s]", "d") for i in range(n + 1)]
-            return certify(x, n, Pa.W, radii(x, Pa.W, Pa.rounded, "a"), Pb.W, radii(x, Pb.W, Pb.rounded, "b"), c, cr)
+            code: CExpr = certify(x, n, Pa.W, radii(x, Pa.W, Pa.rounded, "a"), Pb.W, radii(x, Pb.W, Pb.rounded, "b"), c, cr)
+            return code
 
         params = f"const {T} *restrict a, const {T} *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out"
         out.append(_lane_c(
@@ -425,7 +427,8 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
     def second(x: CLanes) -> CExpr:
         c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
         cr = [CExpr(f"c[{n + 1 + i} * s]", "d") for i in range(n + 1)]
-        return decide_s0(x, n, c, cr, CExpr("idx", "i"))
+        code: CExpr = decide_s0(x, n, c, cr, CExpr("idx", "i"))
+        return code
 
     out.append(_lane_c(
         f"second{n}", "const double *restrict c, const int64_t s, const int64_t idx", second, infos,

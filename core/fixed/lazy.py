@@ -98,9 +98,10 @@ def classify_lazy(block: Callable[..., np.ndarray], A: Any, B: Any, **options: A
     import dask.array as da
 
     a, b = as_pairs(A, B)
-    return da.map_blocks(
+    lazy: LazyArray = da.map_blocks(
         _run_block, a, b, dtype=np.int8, drop_axis=[a.ndim - 2, a.ndim - 1], block=block, options=options
     )
+    return lazy
 
 
 def _run_block(a: np.ndarray, b: np.ndarray, *, block: Callable[..., np.ndarray], options: dict[str, Any], block_info: Any = None) -> np.ndarray:
