@@ -306,3 +306,55 @@ def test_every_preset_is_unchanged_by_flips_and_negative_scalings(name):
     for fa, fb in [(factors[0], "1"), ("1", factors[1]), (factors[-1], factors[0])]:
         r = analyse(_matrix_strings(p["A"], fa), _matrix_strings(p["B"], fb), interval)
         assert _summary(r) == base, (fa, fb)
+
+
+# -- one test of "this number is a binary64 value", shared by every reader (issue 23.4) --------
+_WIDE = np.longdouble(1) / 3  # not a float64 value where long double is wider (x86: 80 bits)
+_IS_BINARY64 = [  # (number, its exact value)
+    (0.5, F(1, 2)), (-3, F(-3)), (2**60, F(2**60)), (F(1, 4), F(1, 4)), (fmpq(-3, 8), F(-3, 8)), ("0.125", F(1, 8)),
+    (np.float32(0.1), F(13421773, 134217728)), (np.longdouble(0.5), F(1, 2)), (np.int64(7), F(7)),
+]
+_NOT_BINARY64 = [F(1, 3), "0.1", 2**53 + 1, F(10**400), fmpq(1, 3), True, "x"]
+
+
+@pytest.mark.parametrize(("v", "value"), _IS_BINARY64, ids=lambda x: repr(x)[:20])
+def test_binary64_values_are_read_as_floats_everywhere(v, value):
+    from core.bodies.search import read_bodies
+    from core.moving.linear import read_linear_motions
+    from core.shapes.numbers import binary64, binary64_array
+
+    f = binary64(v)
+    assert f is not None and F(f) == value
+    arr = np.array([[v, 0.0], [1.0, 2.0]], dtype=object)
+    assert binary64_array(arr).dtype == np.float64 and binary64_array(arr)[0, 0] == f
+    # the readers: classify's filter input, the sweep's parameters, the bodies' matrices
+    Q = np.array([[[1, 0, 0], [0, 1, 0], [0, 0, -1]]] * 2, dtype=object)
+    Q[1, 2, 2] = v if f < 0 else -abs(f)
+    assert read_bodies(Q).dtype == np.float64
+    c0 = np.array([[v, 0.0]], dtype=object)
+    assert read_linear_motions(c0, c0, [[1.0, 1.0]])[0].centers0[0, 0] == f
+
+
+@pytest.mark.parametrize("v", _NOT_BINARY64, ids=lambda v: repr(v)[:20])
+def test_other_numbers_are_never_rounded(v):
+    from core.bodies.search import read_bodies
+    from core.moving.linear import read_linear_motions
+    from core.shapes.numbers import binary64, binary64_array
+
+    assert binary64(v) is None
+    assert binary64_array(np.array([[v, 0.0], [1.0, 2.0]], dtype=object)) is None
+    with pytest.raises(ValueError, match="float64"):
+        read_bodies(np.array([[[v, 0, 0], [0, 1, 0], [0, 0, -1]]], dtype=object))
+    with pytest.raises(ValueError, match="float64 value|booleans"):
+        read_linear_motions(np.array([[v, 0.0]], dtype=object), [[0.0, 0.0]], [[1.0, 1.0]])
+
+
+def test_wide_and_big_integer_arrays_are_exact():
+    from core.shapes.numbers import binary64_array
+
+    assert binary64_array(np.array([2**60, 1])) is not None  # a float64 value beyond 2^53
+    assert binary64_array(np.array([2**53 + 1])) is None
+    assert binary64_array(np.array([2**64 - 1], dtype=np.uint64)) is None
+    assert binary64_array([[2**60 + 1, 0.5]]) is None  # numpy's own conversion would round it
+    if np.finfo(np.longdouble).nmant > 52:
+        assert binary64_array(np.array([_WIDE])) is None

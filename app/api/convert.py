@@ -24,7 +24,7 @@ from core import (
     quadric_from_axes,
     validate_quadric,
 )
-from core.shapes.numbers import to_fmpq
+from core.shapes.numbers import binary64, binary64_array, to_fmpq
 
 from .budget import Budget
 from .contacts_schemas import ContactsIn
@@ -79,10 +79,6 @@ def quadric_input(q: list[list[Any]] | ShapeIn) -> Any:
     return quadric_from_axes([fl(v) for v in q.center], [fl(v) for v in q.semi_axes], orientation)
 
 
-_EXACT_FLOAT_INT = 2**53
-"""Integers below this are exactly representable as float64."""
-
-
 def _as_float64_if_exact(m: Any) -> Any:
     """A float64 array when every entry is a JSON float or a float-exact integer, else unchanged.
 
@@ -92,10 +88,8 @@ def _as_float64_if_exact(m: Any) -> Any:
         return m
     if len(m) not in (3, 4) or any(len(row) != len(m) for row in m):
         return m  # not square: validation names the problem
-    flat = [v for row in m for v in row]
-    if all(isinstance(v, float) or (type(v) is int and abs(v) < _EXACT_FLOAT_INT) for v in flat):
-        return np.array(m, dtype=np.float64)
-    return m
+    floats = binary64_array(m, typed=True)  # JSON floats and float-exact integers; strings stay exact
+    return m if floats is None else floats
 
 
 def _size(m: Any) -> int | None:
@@ -128,11 +122,6 @@ def _validated(a: Any, b: Any, where: str) -> None:
         )
 
 
-def _plain(v: Any) -> bool:
-    """A JSON float, or a JSON integer that a float holds exactly."""
-    return type(v) is float or (type(v) is int and abs(v) < _EXACT_FLOAT_INT)
-
-
 def is_plain_pair(pair: PairItem) -> bool:
     """True when every number of the pair is a JSON number (a binary64 value).
 
@@ -146,7 +135,7 @@ def is_plain_pair(pair: PairItem) -> bool:
             values = [*q.center, *q.semi_axes, *(o if isinstance(o, list) else [] if o is None else [o])]
         else:
             values = [v for row in q for v in row]
-        if not all(_plain(v) for v in values):
+        if not all(binary64(v, typed=True) is not None for v in values):  # JSON floats, float-exact ints
             return False
     return True
 

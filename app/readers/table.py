@@ -20,6 +20,8 @@ from typing import IO, Any
 
 import numpy as np
 
+from core.shapes.numbers import binary64_array
+
 from .bodyset import BodySet, from_parameters
 
 __all__ = ["COLUMNS", "read_csv", "read_parquet", "BLOCK_CHARS"]
@@ -152,7 +154,7 @@ def _numbers(column: Any, label: str, name: str) -> np.ndarray:
         raise ValueError(f"{name}: column {label} holds {column.type}, not numbers")
     if column.null_count:
         raise ValueError(f"{name}: column {label} has {column.null_count} missing values")
-    values = column.to_numpy(zero_copy_only=False)
-    if values.dtype.kind in "iu" and values.size and np.abs(values.astype(object)).max() > 2**53:
-        raise ValueError(f"{name}: column {label} holds integers beyond 2^53 (bodies are float64 numbers)")
-    return values.astype(np.float64)
+    values = binary64_array(column.to_numpy(zero_copy_only=False))
+    if values is None:
+        raise ValueError(f"{name}: column {label} holds integers that are not float64 values (bodies are float64 numbers)")
+    return values

@@ -162,7 +162,7 @@ def to_fmpq(x: Any) -> fmpq:
 
 
 EXACT_INT = 2**53
-"""Integers of smaller magnitude are exactly float64 values (the bound the readers use)."""
+"""Integers of smaller magnitude are all float64 values (beyond it, only some are)."""
 
 
 def binary64(v: Any, *, typed: bool = False) -> float | None:
@@ -175,8 +175,8 @@ def binary64(v: Any, *, typed: bool = False) -> float | None:
     value gives None: the caller chose exact numbers, and gets the exact path).
 
     Examples:
-        >>> binary64("0.5"), binary64("0.1"), binary64(2**53 + 1), binary64(True)
-        (0.5, None, None, None)
+        >>> binary64("0.5"), binary64("0.1"), binary64(2**53 + 1), binary64(2**60), binary64(True)
+        (0.5, None, None, 1.152921504606847e+18, None)
     """
     if type(v) is float or type(v) is np.float64:
         return float(v)
@@ -191,10 +191,13 @@ def binary64(v: Any, *, typed: bool = False) -> float | None:
         q = to_fmpq(v)
     except (ValueError, TypeError):
         return None
-    if abs(q.p) >= EXACT_INT or q.q & (q.q - 1) or q.q > 2**1074:  # not a float64 dyadic rational
+    if q.q & (q.q - 1) or q.q > 2**1074:  # not a dyadic rational a float64 can hold
         return None
-    f = int(q.p) / int(q.q)
-    return f if to_fmpq(f) == q else None
+    try:
+        f = int(q.p) / int(q.q)  # correctly rounded
+    except OverflowError:
+        return None
+    return f if math.isfinite(f) and to_fmpq(f) == q else None
 
 
 def binary64_array(x: Any, *, typed: bool = False) -> np.ndarray | None:
@@ -227,9 +230,12 @@ def binary64_array(x: Any, *, typed: bool = False) -> np.ndarray | None:
             return None
         return wide
     if kind in "iu":
+        wide = arr.astype(np.float64)
         if arr.size and (int(arr.max()) >= EXACT_INT or int(arr.min()) <= -EXACT_INT):
-            return None
-        return arr.astype(np.float64)
+            # beyond 2^53 only some integers are float64 values (2^60 is, 2^53 + 1 is not)
+            if any(int(f) != v for f, v in zip(wide.reshape(-1).tolist(), arr.reshape(-1).tolist(), strict=True)):
+                return None
+        return wide
     if kind not in "OU":
         return None  # booleans, complex, bytes, dates
     flat = arr.reshape(-1).tolist()
