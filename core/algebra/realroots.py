@@ -13,7 +13,7 @@ from typing import Any
 
 from flint import fmpq, fmpq_poly, fmpz, fmpz_poly
 
-from ..formulae.decision import sign_variations
+from ..shapes.numbers import sign_variations
 from .algebraic import RealAlgebraic, sign_at
 from .qsqrt import QSqrtPoly
 

@@ -21,15 +21,14 @@ s1 < 0: s1,0 > 0 tangent (24.2), s1,0 < 0 separate (28.1).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from itertools import product
-from typing import Any
 
 import numpy as np
 
 from ..relation import Relation
-from ..shapes.numbers import sign
+from ..shapes.numbers import sign_variations  # Var: defined beside sign, used by the trees
 
 __all__ = [
     "Decision",
@@ -107,33 +106,6 @@ def rule_by_key(key: str) -> Rule:
         return _BY_KEY[key]
     except KeyError:
         raise ValueError(f"unknown rule {key!r}; known: {', '.join(_BY_KEY)}") from None
-
-
-def sign_variations(values: Iterable[Any]) -> int:
-    """Number of sign changes after dropping zeros (Descartes' Var), of sign codes or numbers.
-
-    The one Var of the project: the decision trees read it on sign codes, root isolation
-    (:mod:`core.algebra.realroots`) on integer coefficients.
-
-    Examples:
-        >>> sign_variations([-1, 1, 0, -1])
-        2
-        >>> sign_variations([0, 0])
-        0
-        >>> from flint import fmpz
-        >>> sign_variations([fmpz(3), fmpz(-7), fmpz(0), fmpz(2)])
-        2
-    """
-    last = 0
-    count = 0
-    for v in values:
-        s = sign(v)
-        if s == 0:
-            continue
-        if last != 0 and s != last:
-            count += 1
-        last = s
-    return count
 
 
 def decide_signs(n: int, signs: Sequence[int], s0: int = PENDING, s1: int = PENDING, s10: int = PENDING) -> int:

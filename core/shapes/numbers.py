@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable
 from fractions import Fraction
 from numbers import Integral, Rational, Real
 from typing import Any, cast
@@ -26,6 +27,7 @@ __all__ = [
     "format_rational",
     "floor_log10",
     "sign",
+    "sign_variations",
     "parse_number",
     "MAX_DECIMAL_EXPONENT",
     "EXACT_INT",
@@ -258,6 +260,33 @@ def sign(x: Any) -> int:
         (-1, 0, 1)
     """
     return int((x > 0) - (x < 0))
+
+
+def sign_variations(values: Iterable[Any]) -> int:
+    """Number of sign changes after dropping zeros (Descartes' Var), of sign codes or numbers.
+
+    The one Var of the project: the decision trees (:mod:`core.formulae.decision`) read it on
+    sign codes, root isolation (:mod:`core.algebra.realroots`) on integer coefficients.
+
+    Examples:
+        >>> sign_variations([-1, 1, 0, -1])
+        2
+        >>> sign_variations([0, 0])
+        0
+        >>> from flint import fmpz
+        >>> sign_variations([fmpz(3), fmpz(-7), fmpz(0), fmpz(2)])
+        2
+    """
+    last = 0
+    count = 0
+    for v in values:
+        s = sign(v)
+        if s == 0:
+            continue
+        if last != 0 and s != last:
+            count += 1
+        last = s
+    return count
 
 
 def to_float(q: Any) -> float:
