@@ -190,6 +190,24 @@ def test_unreachable_scheduler_is_a_message(tmp_path):
     no_temporary_files(tmp_path)
 
 
+def test_an_event_is_checked_before_any_browser_starts(tmp_path, monkeypatch):
+    """--event K beyond the motion's events, or for static shapes, is refused before a browser starts."""
+    import app.screenshot as shot_module
+    from app.cli import main
+
+    def no_browser(*a, **k):
+        raise AssertionError("a browser was started for an event the motion does not have")
+
+    monkeypatch.setattr(shot_module, "HeadlessScene", no_browser)
+    with pytest.raises(ValueError, match=r"^--event 3: this motion has 2 events \(1\.\.2\)$"):
+        shot_module.screenshots(shot_module.shots_for(shot_module.SceneConfig.from_dict({"preset": "example-29"}), tmp_path / "a.png", [], [3]))
+    static = shot_module.SceneConfig.from_dict({"preset": None, "event": 1})
+    with pytest.raises(ValueError, match=r"^--event 1: the scene has no motion"):
+        shot_module.screenshots([shot_module.Shot(static, tmp_path / "b.png")])
+    assert main(["screenshot", "--preset", "example-29", "--event", "99", "--out", str(tmp_path / "c.png")]) == 2
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.browser
 def test_screenshot_of_an_event_the_motion_does_not_have_is_refused(tmp_path):
     if not Path("/usr/bin/chromium").exists():
