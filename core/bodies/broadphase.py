@@ -121,11 +121,21 @@ class _Grid:
 
 @dataclass
 class _Side:
-    """Bodies in some order: their ids, centres and radii at positions 0, 1, ..."""
+    """Bodies in some order: their ids, centres and radii at positions 0, 1, ...
+
+    The centres are kept by axis (``axes[a]`` contiguous): the sphere test gathers 1D columns,
+    which numpy does several times faster than rows of a 2D array.
+    """
 
     ids: np.ndarray
-    centers: np.ndarray
+    axes: np.ndarray
+    """(d, N) float64 centre coordinates, one contiguous row per axis."""
     radii: np.ndarray
+
+    @staticmethod
+    def of(ids: np.ndarray, centers: np.ndarray, radii: np.ndarray) -> _Side:
+        """The bodies ``ids`` (positions 0, 1, ... in this order)."""
+        return _Side(ids, np.ascontiguousarray(centers[ids].T), np.ascontiguousarray(radii[ids]))
 
 
 @dataclass
@@ -201,17 +211,18 @@ class BroadPhase:
             for a, members in enumerate(levels):
                 grid = _grid(centers, members, 2 * float(np.max(radii[members])) * _CELL_SLACK, lo, hi, box)
                 # positions in the grid's cell order: neighbouring cells are near in memory
-                mine = _Side(grid.order, centers[grid.order], radii[grid.order])
+                mine = _Side.of(grid.order, centers, radii)
                 half = not grid.periodic or bool((grid.n >= 3).all())
                 plans.append(partial(_inside_cells, grid, mine))
                 for off in [o for o in _offsets(grid, half) if any(o)]:
                     plans.append(partial(_same_level, grid, mine, off, half))
                 for finer in levels[a + 1 :]:
                     coords = _coords(centers[finer], grid.lo, grid.h, grid.n, grid.periodic)
-                    o = np.argsort(_encode(coords, grid.n), kind="stable")
-                    theirs = _Side(finer[o], centers[finer[o]], radii[finer[o]])
+                    fkeys = _encode(coords, grid.n)
+                    o = np.argsort(fkeys, kind="stable")
+                    theirs = _Side.of(finer[o], centers, radii)
                     for off in _offsets(grid, half=False):
-                        plans.append(partial(_query, grid, coords[o], off, theirs, mine))
+                        plans.append(partial(_query, grid, coords[o], fkeys[o], off, theirs, mine))
         self.blocks = [b for b in _map(plans) if b is not None and b.total]
         self.pairs = sum(b.total for b in self.blocks)
         """Pairs of bodies the broad phase examines: every candidate is among them."""
@@ -380,11 +391,22 @@ def _offsets(grid: _Grid, half: bool) -> list[tuple[int, ...]]:
     return all_off
 
 
-def _neighbour_keys(grid: _Grid, coords: np.ndarray, off: tuple[int, ...]) -> np.ndarray:
-    x = coords + np.array(off, dtype=np.int64)
+def _neighbour_keys(grid: _Grid, coords: np.ndarray, keys: np.ndarray, off: tuple[int, ...]) -> np.ndarray:
+    """Keys of the cells at ``off`` from the cells ``coords`` (whose keys are ``keys``).
+
+    In open space the coordinates start at 1 and stop 2 short of the radix, so a neighbour's
+    coordinates stay in [0, n_a) and the mixed-radix key is linear in them: the neighbour's key
+    is the cell's key plus the key of the offset (one addition, the same integer as encoding
+    the shifted coordinates). In a box the coordinates wrap around: encoded after the modulo.
+    """
     if grid.periodic:
+        x = coords + np.array(off, dtype=np.int64)
         x %= grid.n
-    return _encode(x, grid.n)
+        return _encode(x, grid.n)
+    step = 0
+    for a in range(len(off)):
+        step = step * int(grid.n[a]) + off[a]
+    return keys + step
 
 
 def _inside_cells(grid: _Grid, mine: _Side) -> _Block | None:
@@ -402,7 +424,7 @@ def _same_level(grid: _Grid, mine: _Side, off: tuple[int, ...], half: bool) -> _
     With ``half`` (the 13 forward offsets), each unordered pair of bodies comes once over all
     offsets; otherwise (full shell) a pair is met from both cells and kept once.
     """
-    nk = _neighbour_keys(grid, grid.coords, off)
+    nk = _neighbour_keys(grid, grid.coords, grid.keys, off)
     pos = np.minimum(np.searchsorted(grid.keys, nk), grid.keys.size - 1)
     hit = np.flatnonzero(grid.keys[pos] == nk)
     if not hit.size:
@@ -411,13 +433,15 @@ def _same_level(grid: _Grid, mine: _Side, off: tuple[int, ...], half: bool) -> _
     return _Block(mine, mine, grid.start[hit], grid.count[hit], grid.start[b], grid.count[b], dedupe=not half)
 
 
-def _query(grid: _Grid, coords: np.ndarray, off: tuple[int, ...], theirs: _Side, mine: _Side) -> _Block | None:
+def _query(
+    grid: _Grid, coords: np.ndarray, keys: np.ndarray, off: tuple[int, ...], theirs: _Side, mine: _Side
+) -> _Block | None:
     """Pairs (position of a finer body, position in this grid) in neighbouring cells.
 
-    The finer body's cell (``coords``: its coordinates in this grid) and the grid's cell at
-    ``off`` from it.
+    The finer body's cell (``coords``: its coordinates in this grid, ``keys`` their keys) and
+    the grid's cell at ``off`` from it.
     """
-    nk = _neighbour_keys(grid, coords, off)
+    nk = _neighbour_keys(grid, coords, keys, off)
     pos = np.minimum(np.searchsorted(grid.keys, nk), grid.keys.size - 1)
     hit = np.flatnonzero(grid.keys[pos] == nk)
     if not hit.size:
@@ -477,17 +501,27 @@ def _keep(
 
     Returns the survivors as body ids i < j (and j's image).
     """
-    diff = b.centers[q] - a.centers[p]
-    k = None
-    if box is not None:
-        k = -np.rint(diff / box)
-        diff = diff + k * box
-    reach = a.radii[p] + b.radii[q] + pad
-    near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= reach * reach)
-    i, j = a.ids[p[near]], b.ids[q[near]]
+    reach = a.radii.take(p)
+    reach += b.radii.take(q)
+    reach += pad
+    reach *= reach
+    dist = np.zeros(p.size)
+    ks = []
+    for ax in range(d):
+        diff = b.axes[ax].take(q)
+        diff -= a.axes[ax].take(p)
+        if box is not None:
+            k = np.rint(diff / box[ax])
+            np.negative(k, out=k)
+            diff += k * box[ax]
+            ks.append(k)
+        diff *= diff
+        dist += diff
+    near = np.flatnonzero(dist <= reach)
+    i, j = a.ids.take(p.take(near)), b.ids.take(q.take(near))
     swap = i > j
     lo, hi = np.where(swap, j, i).astype(np.int64), np.where(swap, i, j).astype(np.int64)
-    if k is None:
+    if box is None:
         return Candidates(lo, hi, None)
-    kk = k[near].astype(np.int8).reshape(-1, d)
+    kk = np.stack([k.take(near) for k in ks], axis=1).astype(np.int8).reshape(-1, d)
     return Candidates(lo, hi, np.where(swap[:, None], -kk, kk))
