@@ -258,7 +258,7 @@ def _exact_spheres(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     """
     N, n = M.shape[0], M.shape[-1]
     d = n - 1
-    T = np.ascontiguousarray(M.reshape(N, n * n).T)  # entry (i, j) of every body: row i n + j
+    T = M.reshape(N, n * n).T.copy()  # entry (i, j) of every body: row i n + j (a copy: flipped below)
     upper = [(i, j) for i in range(n) for j in range(i, n)]
     with np.errstate(all="ignore"):
         sym = np.ones(N, dtype=bool)

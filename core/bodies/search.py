@@ -42,7 +42,7 @@ def read_bodies(Q: Any) -> np.ndarray:
         raise ValueError(f"Q must be an (N, 3, 3) stack of ellipses or (N, 4, 4) of ellipsoids, got shape {arr.shape}")
     kind = arr.dtype.kind
     if kind == "f":
-        wide = arr.astype(np.float64)
+        wide = arr.astype(np.float64, copy=False)  # float64 input is read in place (never written)
         if arr.dtype.itemsize > 8 and not ((wide.astype(arr.dtype) == arr) | np.isnan(arr)).all():
             raise ValueError("Q holds long doubles that are not float64 values: contacts reads float64 matrices")
         return wide
