@@ -196,7 +196,8 @@ def _float_spheres(
     ill-conditioned bodies); the certification is the same.
 
     ``fast``: the exactly symmetric bodies (most inputs) by :func:`_exact_spheres` (the same
-    proof on the matrices as given), the others by the general path below.
+    proof on the matrices as given, small ones scaled up by a power of two), the others by the
+    general path below.
     """
     if fast:
         c, rho, loose, other = _exact_spheres(M)
@@ -250,8 +251,10 @@ def _exact_spheres(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     so the midpoint-radius arithmetic starts from exact values and carries only the roundings
     of the operations. Each entry is read once into a contiguous column (structure of arrays:
     numpy's fastest layout), and the centre and lambda_min estimates are closed forms on the
-    columns. No scaling is needed: the bound holds for any floats (``_TINY`` covers a product
-    in the subnormal range; an overflow gives inf/NaN: no radius).
+    columns. The bound holds for any floats (``_TINY`` covers a product in the subnormal range;
+    an overflow gives inf/NaN: no radius); a body whose largest entry is below 2^-8 is first
+    scaled up by an exact power of two (its largest entry into [1, 2)), so that ``_TINY`` stays
+    negligible against its size.
 
     ``other`` marks the bodies left to the general path (not exactly symmetric or M_00 = 0);
     their radii are NaN here, as are those of non-finite bodies (left to the exact path).
@@ -267,7 +270,12 @@ def _exact_spheres(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
                 sym &= T[i * n + j] == T[j * n + i]
         ok = sym & np.isfinite(T).all(axis=0) & (T[0] != 0.0)
         other = ~sym | (T[0] == 0.0)
-        T *= np.where(T[0] < 0.0, -1.0, 1.0)  # a positive Q (exact)
+        # a positive Q, and small bodies scaled up by a power of two into [1, 2) (exact: no
+        # result is subnormal); large ones stay as they are (an overflow leaves them to the
+        # general path, which scales with care)
+        mx = np.abs(T).max(axis=0)
+        k = np.where((mx > 0) & (mx < 2.0**-8), np.minimum(1 - np.frexp(mx)[1], 1000), 0)
+        T *= np.where(T[0] < 0.0, -1.0, 1.0) * np.ldexp(1.0, k)
         col = {(i, j): T[i * n + j] for i, j in upper}
         w = lambda i, j: col[min(i, j), max(i, j)]  # noqa: E731
         E = lambda i, j: _Ball(w(i, j), 0.0)  # noqa: E731
@@ -317,8 +325,11 @@ def _radius(g: list[_Ball], f0: _Ball, lam: np.ndarray, lam_est: np.ndarray) -> 
 
 
 def _centre_columns(w: Any, d: int) -> np.ndarray:
-    """(d, N) float centre estimates -Q^-1 m by the adjugate (the formulas of
-    :func:`core.fixed.driver.centre`, on columns)."""
+    """(d, N) float centre estimates -Q^-1 m by the adjugate.
+
+    The formulas of :func:`core.fixed.driver.centre`, on columns (estimates: any float centre
+    is certified by the bound).
+    """
     if d == 2:
         det = w(0, 0) * w(1, 1) - w(0, 1) * w(0, 1)
         m0, m1 = w(0, 2), w(1, 2)
