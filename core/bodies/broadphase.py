@@ -49,6 +49,8 @@ _CELL_SLACK = 1.0 + 2.0**-20
 _MAX_CELLS = 2**30
 """Most cells per axis: keeps the float cell coordinates exact to well under one cell."""
 _PAD = 2.0**-40
+_DENSE_CELLS_PER_BODY = 8
+"""Open space: a table of every cell (8 bytes each) when there are at most this many per body."""
 _PAIRS_PER_CHUNK = 1 << 20
 """Pairs built at once before the sphere test (bounded memory: ~25 MB of temporaries; arrays
 of 8 MB are recycled by the allocator, where larger ones would fault in fresh pages)."""
@@ -118,6 +120,8 @@ class _Grid:
     count: np.ndarray
     coords: np.ndarray
     """(cells, d) integer coordinates of the occupied cells."""
+    body_keys: np.ndarray
+    """Cell key of each body, in the sorted order (positions 0, 1, ...)."""
 
 
 @dataclass
@@ -136,7 +140,7 @@ class _Side:
     @staticmethod
     def of(ids: np.ndarray, centers: np.ndarray, radii: np.ndarray) -> _Side:
         """The bodies ``ids`` (positions 0, 1, ... in this order)."""
-        return _Side(ids, np.ascontiguousarray(centers[ids].T), np.ascontiguousarray(radii[ids]))
+        return _Side(ids, np.take(np.ascontiguousarray(centers.T), ids, axis=1), radii.take(ids))
 
 
 @dataclass
@@ -370,7 +374,7 @@ def _grid(
     sk = keys[o]
     first = np.flatnonzero(np.r_[True, sk[1:] != sk[:-1]])
     count = np.diff(np.r_[first, sk.size])
-    return _Grid(origin, h_axis, n, periodic, members[o], sk[first], first, count, coords[o[first]])
+    return _Grid(origin, h_axis, n, periodic, members[o], sk[first], first, count, coords[o[first]], sk)
 
 
 def _coords(c: np.ndarray, origin: np.ndarray, h: np.ndarray, n: np.ndarray, periodic: bool) -> np.ndarray:
@@ -441,16 +445,30 @@ def _forward_ranges(grid: _Grid, mine: _Side) -> list[Callable[[], _Block | None
     column are consecutive keys, so their bodies are one range of positions in the sorted
     order. The 13 forward offsets of 3D (4 in 2D) and the cell itself are then: the bodies
     after p in its own cell and in the next cell along the last axis (one range), and one range
-    per lexicographically positive column offset (4 in 3D, 1 in 2D), each found by two binary
-    searches per occupied cell. The same pairs as the cell-by-cell offsets, each once, built
-    with a few operations per pair (:func:`_build`, ``single``).
+    per lexicographically positive column offset (4 in 3D, 1 in 2D). The same pairs as the
+    cell-by-cell offsets, each once, built with a few operations per pair (:func:`_build`,
+    ``single``).
+
+    A range's ends are the first positions of keys k + s - 1 and k + s + 2: from a dense table
+    of the first position of every key when the grid has at most a few cells per body (one
+    lookup per body), else by binary search among the occupied cells. Keys past the last cell
+    are clipped to it (no body lies there: the range is the same).
 
     Returns one planning step per range (a block each: arrays of at most N rows, never one
     concatenation of all: fresh large arrays cost page faults).
     """
     d = grid.n.size
-    S = np.append(grid.start, grid.start[-1] + grid.count[-1])  # S[c]: first position of cell c
-    cell_of = np.repeat(np.arange(grid.keys.size), grid.count)
+    cells = int(np.prod(grid.n))
+    if cells <= _DENSE_CELLS_PER_BODY * grid.body_keys.size + 4096:
+        first = np.zeros(cells + 1, dtype=np.int64)  # first[k]: bodies with a key below k
+        np.cumsum(np.bincount(grid.body_keys, minlength=cells), out=first[1:])
+        where: Callable[[np.ndarray], np.ndarray] = lambda k: first[np.minimum(k, cells)]  # noqa: E731
+        keys = grid.body_keys
+    else:
+        S = np.append(grid.start, grid.start[-1] + grid.count[-1])  # S[c]: first position of cell c
+        cell_of = np.repeat(np.arange(grid.keys.size), grid.count)
+        where = lambda k: S[np.searchsorted(grid.keys, k)][cell_of]  # noqa: E731
+        keys = grid.keys
     radix = [int(v) for v in grid.n]
     steps: list[int | None] = [None]  # None: the own range
     for col in itertools.product((-1, 0, 1), repeat=d - 1):
@@ -459,17 +477,19 @@ def _forward_ranges(grid: _Grid, mine: _Side) -> list[Callable[[], _Block | None
             for a in range(d - 1):
                 step = step * radix[a] + col[a]
             steps.append(step * radix[-1])
-    return [partial(_forward_range, grid, mine, S, cell_of, step) for step in steps]
+    return [partial(_forward_range, mine, keys, where, step) for step in steps]
 
 
-def _forward_range(grid: _Grid, mine: _Side, S: np.ndarray, cell_of: np.ndarray, step: int | None) -> _Block | None:
+def _forward_range(
+    mine: _Side, keys: np.ndarray, where: Callable[[np.ndarray], np.ndarray], step: int | None
+) -> _Block | None:
     """The block of one range of :func:`_forward_ranges` (``step``: the column offset's key)."""
     if step is None:  # the bodies after p in its cell and the next one along the last axis
-        lo = np.arange(1, cell_of.size + 1, dtype=np.int64)
-        hi = S[np.searchsorted(grid.keys, grid.keys + 2)][cell_of]
+        hi = where(keys + 2)
+        lo = np.arange(1, hi.size + 1, dtype=np.int64)
     else:
-        lo = S[np.searchsorted(grid.keys, grid.keys + (step - 1))][cell_of]
-        hi = S[np.searchsorted(grid.keys, grid.keys + (step + 2))][cell_of]
+        lo = where(keys + (step - 1))
+        hi = where(keys + (step + 2))
     hi -= lo
     keep = np.flatnonzero(hi > 0)
     if not keep.size:

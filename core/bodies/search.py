@@ -87,6 +87,7 @@ def search(
     if L is not None:
         check_box(spheres.centers, spheres.radii, L)
     plan = BroadPhase(spheres.centers, spheres.radii, box=L)
+    planning = time.perf_counter() - t1
     if max_pairs is not None and plan.pairs > max_pairs:
         raise TooManyPairs(plan.pairs, max_pairs)
     total = plan.pairs
@@ -97,7 +98,7 @@ def search(
     found = ContactsBuilder(plan.d, L is not None, Q.shape[0])
     waiting: list[Candidates] = []
     held = 0
-    broad = narrow = 0.0
+    broad, narrow = planning, 0.0
     done = 0
 
     def classify_waiting(examined: int) -> None:
