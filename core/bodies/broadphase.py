@@ -51,7 +51,7 @@ _MAX_CELLS = 2**30
 _PAD = 2.0**-40
 _DENSE_CELLS_PER_BODY = 8
 """Open space: a table of every cell (8 bytes each) when there are at most this many per body."""
-_PAIRS_PER_CHUNK = 1 << 20
+_PAIRS_PER_CHUNK = 1 << 19
 """Pairs built at once before the sphere test (bounded memory: ~25 MB of temporaries; arrays
 of 8 MB are recycled by the allocator, where larger ones would fault in fresh pages)."""
 
@@ -162,7 +162,8 @@ class _Block:
     upper: bool = False
     dedupe: bool = False
     single: bool = False
-    """Every row is one body (ca = 1): its pairs are built with two repeats and an arange."""
+    """Every row is one body (ca = 1): its pairs are built with two repeats and an arange (sa,
+    sb and cb may then be int32: the plan of a million bodies holds a few million rows)."""
     _ends: np.ndarray | None = field(default=None, repr=False)
 
     def sizes(self) -> np.ndarray:
@@ -178,7 +179,7 @@ class _Block:
     def ends(self) -> np.ndarray:
         """Cumulative pairs of the rows (computed once: every chunk searches it)."""
         if self._ends is None:
-            self._ends = np.cumsum(self.sizes())
+            self._ends = np.cumsum(self.sizes(), dtype=np.int64)
         return self._ends
 
 
@@ -238,7 +239,7 @@ class BroadPhase:
                 for finer in levels[a + 1 :]:
                     coords = _coords(centers[finer], grid.lo, grid.h, grid.n, grid.periodic)
                     fkeys = _encode(coords, grid.n)
-                    o = np.argsort(fkeys, kind="stable")
+                    o = np.argsort(fkeys)
                     theirs = _Side.of(finer[o], centers, radii)
                     for off in _offsets(grid, half=False):
                         plans.append(partial(_query, grid, coords[o], fkeys[o], off, theirs, mine))
@@ -370,7 +371,7 @@ def _grid(
         periodic = True
     coords = _coords(centers[members], origin, h_axis, n, periodic)
     keys = _encode(coords, n)
-    o = np.argsort(keys, kind="stable")
+    o = np.argsort(keys)  # any order inside a cell will do (the default sort is the fastest)
     sk = keys[o]
     first = np.flatnonzero(np.r_[True, sk[1:] != sk[:-1]])
     count = np.diff(np.r_[first, sk.size])
@@ -494,7 +495,9 @@ def _forward_range(
     keep = np.flatnonzero(hi > 0)
     if not keep.size:
         return None
-    return _Block(mine, mine, keep, np.broadcast_to(np.int64(1), keep.shape), lo[keep], hi[keep], single=True)
+    small = np.int32 if mine.ids.size < 2**31 else np.int64  # positions: half the memory of int64
+    rows = keep.astype(small)
+    return _Block(mine, mine, rows, np.broadcast_to(np.int64(1), rows.shape), lo[keep].astype(small), hi[keep].astype(small), single=True)
 
 
 def _same_level(grid: _Grid, mine: _Side, off: tuple[int, ...], half: bool) -> _Block | None:
@@ -539,10 +542,11 @@ def _build(block: _Block, g0: int, g1: int) -> tuple[np.ndarray, np.ndarray]:
     r0 = int(np.searchsorted(ends, g0, side="right"))
     r1 = int(np.searchsorted(ends, g1 - 1, side="right"))
     if block.single:  # one body per row: p repeated, q = sb + (pair index - the row's first)
-        t = np.minimum(ends[r0 : r1 + 1], g1) - np.maximum(ends[r0 : r1 + 1] - tot[r0 : r1 + 1], g0)
-        p = np.repeat(block.sa[r0 : r1 + 1], t)
+        first = ends[r0 : r1 + 1] - tot[r0 : r1 + 1]  # int64: the rows' first pair indices
+        t = np.minimum(ends[r0 : r1 + 1], g1) - np.maximum(first, g0)
+        p = np.repeat(block.sa[r0 : r1 + 1].astype(np.int64), t)
         q = np.arange(g0, g1, dtype=np.int64)
-        q -= np.repeat(ends[r0 : r1 + 1] - tot[r0 : r1 + 1] - block.sb[r0 : r1 + 1], t)
+        q -= np.repeat(first - block.sb[r0 : r1 + 1], t)
         return p, q
     t = tot[r0 : r1 + 1].copy()
     skip = g0 - (int(ends[r0]) - int(tot[r0]))  # pairs of row r0 before g0

@@ -26,8 +26,8 @@ large enough that the threads of the C filter stay busy (a call costs ~0.05 ms o
 ~50 ms of work), small enough for the gathered matrices (2 x 128 MB for ellipsoids)."""
 
 
-_GATHER = 1 << 18
-"""Pairs gathered and classified at once (2 x 32 MB of ellipsoid matrices): buffers of this
+_GATHER = 1 << 17
+"""Pairs gathered and classified at once (2 x 16 MB of ellipsoid matrices): buffers of this
 size are allocated once per call and refilled, since fresh memory costs more than the gather
 (first-touch page faults) on a busy virtual machine; still large enough that the threads of
 the C filter stay busy."""
