@@ -21,6 +21,11 @@ small and rho tight). Everything is computed in float64 with certified bounds:
   radius when the matrix was symmetrised, is carried);
 * rho from upper bounds of |g| and -f0, rounded up.
 
+Most matrices are exactly symmetric: their entries are exact (radius 0), so the same proof runs
+on contiguous columns of the entries with only the operations' roundings carried
+(:func:`_exact_spheres`, the fast path: several times faster than the general one, which also
+carries the symmetrisation's radii and scales every matrix by a power of two).
+
 The same proof certifies validity: Q - lambda I > 0 with lambda > 0 makes Q positive definite,
 and f0 < 0 (certified) gives det M = det Q * min f <= det Q * f0 < 0. A body the float
 computation cannot certify (NaN/inf, asymmetric beyond rounding, very ill-conditioned: axis

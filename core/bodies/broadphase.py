@@ -19,7 +19,9 @@ Conservative, and why (what bounds what):
    coordinate + box side + R), so no pair with |c_i - c_j| <= rho_i + rho_j is ever dropped.
 
 Work and memory: sorting the cell keys (numpy), then per occupied cell its 13 "forward"
-neighbour cells (or all 26 plus an index test when a periodic axis has fewer than 3 cells). The
+neighbour cells (or all 26 plus an index test when a periodic axis has fewer than 3 cells). In
+open space the forward cells of a body are 5 ranges of positions in the sorted order (3D; 2 in
+2D: :func:`_forward_ranges`), each pair built with a few array operations. The
 pairs to examine are *counted* before any is built (:attr:`BroadPhase.pairs`, O(cells): the
 sizes of the neighbouring cells multiplied), so a caller can refuse a crowded set (``max_pairs``:
 :class:`TooManyPairs`) before spending memory on it; they are then built in chunks of at most

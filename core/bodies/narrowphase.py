@@ -1,9 +1,11 @@
 """Narrow phase: the certified classifier on the candidate pairs, in chunks.
 
 Pairs in open space (or with the image k = 0 in a box) go to :func:`core.classify_detailed` in
-batches of ``chunk`` pairs: the matrices of both bodies are gathered chunk by chunk (1 M pairs
-of ellipsoids are 256 MB), and each batch is one call of the compiled filter, which spreads it
-over every core. Pairs with a lattice image go to :func:`core.bodies.periodic.classify_images`.
+batches of at most ``chunk`` (and ``_GATHER``) pairs: the matrices of both bodies are gathered
+into two buffers allocated once per call and refilled batch after batch (1 M pairs of
+ellipsoids would be 256 MB of fresh memory), and each batch is one call of the compiled filter,
+which spreads it over every core. Pairs with a lattice image go to
+:func:`core.bodies.periodic.classify_images`.
 """
 
 from __future__ import annotations
