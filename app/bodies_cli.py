@@ -133,16 +133,15 @@ def _say(args: argparse.Namespace, text: str) -> None:
 def _connect(address: str) -> Any:
     """A ``distributed.Client`` on ``address``, or a one-line error (RuntimeError) within seconds."""
     try:
-        from distributed import Client
+        import distributed  # noqa: F401
     except ImportError:
         raise RuntimeError("--scheduler needs Dask: pip install 'ellipsoid-interference[dask]'") from None
     import logging
 
+    from core.bodies.distributed import connect
+
     logging.getLogger("distributed").setLevel(logging.CRITICAL)  # its retries are not the user's business
-    try:
-        return Client(address, timeout=10)
-    except (OSError, TimeoutError, ValueError) as e:
-        raise RuntimeError(f"cannot reach the Dask scheduler at {address}: {str(e).splitlines()[0] if str(e) else type(e).__name__}") from None
+    return connect(address)
 
 
 def run_contacts(args: argparse.Namespace) -> int:

@@ -313,12 +313,9 @@ def _bodies_model(args: argparse.Namespace) -> object:
         return sweep
     if getattr(args, "bodies", None) is None:
         return None
-    from .readers import read_bodies, usable_box
-    from .scene.bodies import BodiesModel
+    from .scene.bodies_view import load_model
 
-    bodies = read_bodies(args.bodies, frame=getattr(args, "frame", None), format=getattr(args, "format", None))
-    box = args.box if args.box is not None else bodies.box
-    model = BodiesModel(bodies, usable_box(box, bodies.dim, args.bodies), name=str(args.bodies).rsplit("/", 1)[-1])
+    model = load_model(args.bodies, args.box, frame=getattr(args, "frame", None), format=getattr(args, "format", None))
     print(f"Bodies: {model.result.summary()}", file=sys.stderr, flush=True)
     return model
 

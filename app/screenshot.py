@@ -394,9 +394,47 @@ class HeadlessScene:
             return
         an = s.state.analysis
         if s.state.motion is None:
-            raise ValueError(f"--event {event}: the scene has no motion (choose a preset or a configuration with a motion)")
+            raise ValueError(_no_event(event, None))
         if an is not None and not 1 <= event <= len(an.events):
-            raise ValueError(f"--event {event}: this motion has {len(an.events)} event{'s' if len(an.events) != 1 else ''} (1..{len(an.events)})")
+            raise ValueError(_no_event(event, len(an.events)))
+
+
+def _no_event(event: int, count: int | None) -> str:
+    """The message for an --event the motion does not have (``count`` events; None: no motion)."""
+    if count is None:
+        return f"--event {event}: the scene has no motion (choose a preset or a configuration with a motion)"
+    return f"--event {event}: this motion has {count} event{'s' if count != 1 else ''} (1..{count})"
+
+
+def _check_events(shots: Sequence[Shot]) -> None:
+    """Refuse, before a browser starts, an --event that a shot's motion does not have.
+
+    The motion is read and analysed as the scene does (:func:`app.jobs.analyse_job`); a motion
+    that cannot be read or analysed is left to the scene, which says why next to its field.
+    """
+    from core.shapes.limits import SERVER
+
+    from .jobs import analyse_job
+    from .scene.motion import MotionError, load_motion
+
+    counts: dict[int, int | None] = {}
+    for shot in shots:
+        event = shot.event if shot.event is not None else shot.config.event
+        if event is None:
+            continue
+        cfg = shot.config
+        if id(cfg) not in counts:
+            if cfg.motion is None and cfg.preset is None:
+                counts[id(cfg)] = None
+            else:
+                try:
+                    model = load_motion(preset=cfg.preset, motion=cfg.motion, limits=SERVER)
+                    counts[id(cfg)] = len(analyse_job(model.A, model.B, model.interval).events)
+                except (MotionError, ValueError):
+                    continue  # the scene shows the reason; HeadlessScene.check_event stays the guard
+        n = counts[id(cfg)]
+        if n is None or not 1 <= event <= n:
+            raise ValueError(_no_event(event, n))
 
 
 def screenshot(
@@ -447,6 +485,8 @@ def screenshots(
     if not shots:
         return []
     targets = [_output(Path(shot.out)) for shot in shots]  # every path checked before the browser starts
+    if bodies is None:
+        _check_events(shots)  # and every event (seconds of browser start saved on a typo)
     out: list[Path] = []
     t0 = time.perf_counter()
     with HeadlessScene(shots[0].config, width=width, height=height, timeout=timeout, bodies=bodies) as hs:

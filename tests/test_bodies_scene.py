@@ -29,7 +29,7 @@ from app.scene.bodies_lod import ViewPose, choose_detail  # noqa: E402
 from app.scene.bodies_view import NO_PAIRS, BodiesView, load_model  # noqa: E402
 from app.scene.shapes import NEUTRAL, RELATION_COLORS  # noqa: E402
 from bench.bodies_data import demo_bodies, random_bodies  # noqa: E402
-from core import Relation, bodies_from_axes, classify  # noqa: E402
+from core import Relation, bodies_from_axes, classify, contacts  # noqa: E402
 
 ARTIFACTS = Path(__file__).resolve().parent / "artifacts"
 
@@ -265,6 +265,24 @@ def test_view_upload_and_box(server, tmp_path):
     assert "⚠" in view.file_md.content and len(view.model.bodies) == 200  # the old set stays
     view.box_text.value = f"{b.side}, {b.side}"  # from Python: no client, so no recompute
     assert view.load_bytes("up.csv", path.read_bytes()) is None and view.model.box == (b.side, b.side)
+
+
+def test_a_file_with_its_own_box_is_searched_in_it(server, tmp_path):
+    """An extended-XYZ file's Lattice is the periodic box of the view (load_model and upload), shown exactly."""
+    side = 7.123456789012345  # more digits than a rounded display keeps
+    text = (f'2\nLattice="{side!r} 0 0 0 {side!r} 0 0 0 {side!r}" Properties=species:S:1:pos:R:3:aspherical_shape:R:3\n'
+            f"A 0.5 0 0 1 1 1\nB {side - 1.4!r} 0 0 1 1 1\n")  # 1.9 apart through the box face, 5.2 in open space
+    path = tmp_path / "box.xyz"
+    path.write_text(text)
+    want = contacts(read_bodies(path).Q, box=(side, side, side))
+    assert want.relation.tolist() == [Relation.OVERLAP] and len(contacts(read_bodies(path).Q)) == 0  # independent of the view
+    m = load_model(str(path))
+    assert m.box == (side, side, side) and m.result.relation.tolist() == [Relation.OVERLAP]
+    assert load_model(str(path), (20.0, 20.0, 20.0)).box == (20.0, 20.0, 20.0)  # --box overrides the file's
+    view = BodiesView(server, None)
+    assert view.load_bytes("box.xyz", path.read_bytes()) is None
+    assert view.model.box == (side, side, side) and view.model.result.relation.tolist() == [Relation.OVERLAP]
+    assert tuple(float(v) for v in view.box_text.value.split(",")) == (side, side, side)  # the field holds the box exactly
 
 
 needs_chromium = pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian chromium at /usr/bin/chromium")

@@ -481,7 +481,9 @@ def test_camera_follows_the_shapes(hs):
     cam = hs.server_clients()[-1].camera
     page = hs.page
     page.get_by_text("View", exact=True).click()
-    page.get_by_text("Camera follows the shapes", exact=True).click()
+    box = page.get_by_label("Camera follows the shapes", exact=True)
+    box.wait_for(state="visible")  # the folder has opened
+    box.check()  # Playwright checks that the box is ticked in the page afterwards
     until(lambda: s.state.follow, what="follow on")
     before = np.array(cam.look_at)
     s.set_t(0.9)  # A moves from x = 9.8 to x = 0.2

@@ -26,9 +26,10 @@ ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
 
 
-def run(*argv: str, stdin: bytes | None = None, timeout: float = 300) -> subprocess.CompletedProcess[bytes]:
+def run(*argv: str, stdin: bytes | None = None, timeout: float = 300, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[bytes]:
     return subprocess.run(
-        [sys.executable, "-m", "app", *argv], input=stdin, capture_output=True, cwd=ROOT, env=ENV, timeout=timeout, check=False
+        [sys.executable, "-m", "app", *argv], input=stdin, capture_output=True, cwd=ROOT, env={**ENV, **(env or {})}, timeout=timeout,
+        check=False,
     )
 
 
@@ -181,10 +182,30 @@ def test_unreachable_scheduler_is_a_message(tmp_path):
         port = s.getsockname()[1]
     out = tmp_path / "p.csv"
     out.write_text("old\n")
-    one_line_error(run("contacts", str(src), "--out", str(out), "--scheduler", f"tcp://127.0.0.1:{port}", "--quiet"), 1,
+    r = run("contacts", str(src), "--out", str(out), "--scheduler", f"tcp://127.0.0.1:{port}", "--quiet",
+            env={"DASK_ELLIPSOIDS__CONNECT_TIMEOUT": "1s"})  # the documented knob; 10 s by default
+    one_line_error(r, 1,
                    f"cannot reach the Dask scheduler at tcp://127.0.0.1:{port}")
     assert out.read_text() == "old\n"
     no_temporary_files(tmp_path)
+
+
+def test_an_event_is_checked_before_any_browser_starts(tmp_path, monkeypatch):
+    """--event K beyond the motion's events, or for static shapes, is refused before a browser starts."""
+    import app.screenshot as shot_module
+    from app.cli import main
+
+    def no_browser(*a, **k):
+        raise AssertionError("a browser was started for an event the motion does not have")
+
+    monkeypatch.setattr(shot_module, "HeadlessScene", no_browser)
+    with pytest.raises(ValueError, match=r"^--event 3: this motion has 2 events \(1\.\.2\)$"):
+        shot_module.screenshots(shot_module.shots_for(shot_module.SceneConfig.from_dict({"preset": "example-29"}), tmp_path / "a.png", [], [3]))
+    static = shot_module.SceneConfig.from_dict({"preset": None, "event": 1})
+    with pytest.raises(ValueError, match=r"^--event 1: the scene has no motion"):
+        shot_module.screenshots([shot_module.Shot(static, tmp_path / "b.png")])
+    assert main(["screenshot", "--preset", "example-29", "--event", "99", "--out", str(tmp_path / "c.png")]) == 2
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.browser

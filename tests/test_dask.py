@@ -127,6 +127,9 @@ def test_an_unreachable_scheduler_is_a_clear_error():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
+    import dask
+
     Q, _ = _bodies(100)
-    with pytest.raises(RuntimeError, match=f"cannot reach the Dask scheduler at tcp://127.0.0.1:{port}"):
-        contacts(Q, scheduler=f"tcp://127.0.0.1:{port}")
+    with dask.config.set({"ellipsoids.connect-timeout": "1s"}):  # the documented knob; 10 s by default
+        with pytest.raises(RuntimeError, match=f"cannot reach the Dask scheduler at tcp://127.0.0.1:{port}"):
+            contacts(Q, scheduler=f"tcp://127.0.0.1:{port}")

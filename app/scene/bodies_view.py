@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from ..bodyfiles import read_bodies, read_bodies_bytes
+from ..readers import usable_box
 from .bodies import BodiesModel, PairPage
 from .bodies_layers import SEPARATE_MODES, BodyLayers, relation_colour_rows
 from .bodies_lod import ViewPose
@@ -48,10 +49,15 @@ CAMERA_MAX_WAIT = 0.5
 """While the camera keeps moving, the solids are chosen anew at least this often (seconds)."""
 
 
-def load_model(path: str, box: Any = None) -> BodiesModel:
-    """Read a bodies file and search its contacts (``python -m app serve --bodies FILE``)."""
-    bodies = read_bodies(path)
-    return BodiesModel(bodies, box, name=str(path).rsplit("/", 1)[-1])
+def load_model(path: str, box: Any = None, *, frame: int | None = None, format: str | None = None) -> BodiesModel:
+    """Read a bodies file and search its contacts (``python -m app serve --bodies FILE``).
+
+    ``box`` (``--box``) overrides the file's own periodic box (a GSD/LAMMPS/extxyz box is used
+    when none is given).
+    """
+    bodies = read_bodies(path, frame=frame, format=format)
+    box = box if box is not None else bodies.box
+    return BodiesModel(bodies, usable_box(box, bodies.dim, str(path)), name=str(path).rsplit("/", 1)[-1])
 
 
 class BodiesView:
@@ -221,7 +227,7 @@ class BodiesView:
         self._bodies_gui += [view_folder, file_folder]
         with file_folder:
             self.upload = gui.add_upload_button("Open a file of bodies", mime_type=".csv,.npz", hint="CSV (x,y,z,a,b,c,qw,qx,qy,qz or x,y,a,b,angle) or NPZ")
-            self.box_text = gui.add_text("Periodic box", "" if m is None or m.box is None else ", ".join(f"{v:g}" for v in m.box), hint="Lx, Ly(, Lz), or Lx, Ly, Lz, xy, xz, yz (tilted); empty: open space")
+            self.box_text = gui.add_text("Periodic box", _box_text(m.box if m is not None else None), hint="Lx, Ly(, Lz), or Lx, Ly, Lz, xy, xz, yz (tilted); empty: open space")
             self.file_md = gui.add_markdown("")
         self._refresh_list()
         self._show_drawn()
@@ -431,8 +437,13 @@ class BodiesView:
         """Show the bodies of an uploaded file; returns an error message (also shown) or None."""
         try:
             bodies = read_bodies_bytes(content, name)
-            box = _parse_box(self.box_text.value, bodies.dim)
+            if bodies.box is not None:  # the file's own box (GSD, LAMMPS, extxyz) wins, and is shown
+                box = usable_box(bodies.box, bodies.dim, name)
+            else:
+                box = _parse_box(self.box_text.value, bodies.dim)
             model = BodiesModel(bodies, box, name=name)
+            if bodies.box is not None:
+                self.box_text.value = _box_text(box)
         except ValueError as e:
             self.file_md.content = f'<span style="color:#d62728">⚠ {html.escape(str(e))}</span>'
             return str(e)
@@ -586,6 +597,11 @@ def _camera_of(cam: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         return np.array(cam.position), np.array(cam.look_at), np.array(cam.up_direction)
     except Exception:  # noqa: BLE001 - no camera, or no camera message yet
         return None
+
+
+def _box_text(box: Any) -> str:
+    """The box as the field shows it: every side in its shortest exact decimal (read back the same)."""
+    return "" if box is None else ", ".join(repr(float(v)) for v in box)
 
 
 def _parse_box(text: str, dim: int) -> tuple[float, ...] | None:

@@ -227,6 +227,22 @@ class _Runner:
         return results, results
 
 
+def connect(address: str) -> Any:
+    """A ``distributed.Client`` on the scheduler at ``address``, or RuntimeError("cannot reach ...").
+
+    The address is tried for 10 s unless the Dask config key ``ellipsoids.connect-timeout`` says
+    otherwise (e.g. the environment variable ``DASK_ELLIPSOIDS__CONNECT_TIMEOUT=2s``).
+    """
+    import dask
+    from distributed import Client
+
+    try:
+        return Client(address, timeout=dask.config.get("ellipsoids.connect-timeout", default="10s"))
+    except (OSError, TimeoutError, ValueError) as e:
+        first = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise RuntimeError(f"cannot reach the Dask scheduler at {address}: {first}") from None
+
+
 def _client(scheduler: Any) -> tuple[Any, bool]:
     """(Client or None, whether we created it)."""
     if scheduler is None or scheduler in ("threads", "threading", "processes", "synchronous", "sync", "single-threaded"):
@@ -239,12 +255,7 @@ def _client(scheduler: Any) -> tuple[Any, bool]:
                 return None, False
         return None, False
     if isinstance(scheduler, str):
-        from distributed import Client
-
-        try:
-            return Client(scheduler, timeout=10), True
-        except (OSError, TimeoutError) as e:
-            raise RuntimeError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
+        return connect(scheduler), True
     return scheduler, False
 
 
