@@ -21,6 +21,11 @@ small and rho tight). Everything is computed in float64 with certified bounds:
   radius when the matrix was symmetrised, is carried);
 * rho from upper bounds of |g| and -f0, rounded up.
 
+Most matrices are exactly symmetric: their entries are exact (radius 0), so the same proof runs
+on contiguous columns of the entries with only the operations' roundings carried
+(:func:`_exact_spheres`, the fast path: several times faster than the general one, which also
+carries the symmetrisation's radii and scales every matrix by a power of two).
+
 The same proof certifies validity: Q - lambda I > 0 with lambda > 0 makes Q positive definite,
 and f0 < 0 (certified) gives det M = det Q * min f <= det Q * f0 < 0. A body the float
 computation cannot certify (NaN/inf, asymmetric beyond rounding, very ill-conditioned: axis
@@ -33,6 +38,7 @@ det Q / tr adj Q).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -93,17 +99,36 @@ class _Ball:
 
     def __add__(self, o: _Ball) -> _Ball:
         z = self.v + o.v
-        return _Ball(z, self.r + o.r + _U * np.abs(z))
+        return _Ball(z, _radius_sum(self.r, o.r, z))
 
     def __sub__(self, o: _Ball) -> _Ball:
         z = self.v - o.v
-        return _Ball(z, self.r + o.r + _U * np.abs(z))
+        return _Ball(z, _radius_sum(self.r, o.r, z))
 
     def __mul__(self, o: _Ball) -> _Ball:
         z = self.v * o.v
-        if isinstance(o.r, float) and o.r == 0.0:  # an exact factor (a float centre coordinate)
+        if _exact(self.r) and _exact(o.r):  # both factors exact: one rounding
+            return _Ball(z, _U * np.abs(z) + _TINY)
+        if _exact(self.r):
+            return o * self
+        if _exact(o.r):  # an exact factor (a float centre coordinate)
             return _Ball(z, self.r * np.abs(o.v) + (_U * np.abs(z) + _TINY))
         return _Ball(z, np.abs(self.v) * o.r + self.r * (np.abs(o.v) + o.r) + (_U * np.abs(z) + _TINY))
+
+
+def _exact(r: Any) -> bool:
+    """A radius that is the float 0.0: the value is exact."""
+    return isinstance(r, float) and r == 0.0
+
+
+def _radius_sum(r1: Any, r2: Any, z: np.ndarray) -> Any:
+    """Radius of a sum or difference z of two balls (one rounding, plus the operands' radii)."""
+    r = _U * np.abs(z)
+    if not _exact(r1):
+        r += r1
+    if not _exact(r2):
+        r += r2
+    return r
 
 
 def bounding_spheres(Q: np.ndarray) -> BoundingSpheres:
@@ -132,7 +157,7 @@ def bounding_spheres(Q: np.ndarray) -> BoundingSpheres:
     radii = np.full(N, np.nan)
 
     def chunk(s: int) -> np.ndarray:
-        c, rho, loose = _float_spheres(Q[s : s + _CHUNK])
+        c, rho, loose = _float_spheres(Q[s : s + _CHUNK], fast=True)
         ok = np.isfinite(rho)
         centers[s : s + _CHUNK][ok] = c[ok]
         radii[s : s + _CHUNK][ok] = rho[ok]
@@ -165,7 +190,9 @@ def bounding_spheres(Q: np.ndarray) -> BoundingSpheres:
 # float path
 
 
-def _float_spheres(M: np.ndarray, *, careful: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _float_spheres(
+    M: np.ndarray, *, careful: bool = False, fast: bool = False
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(centres, radii, loose) of a chunk of bodies, certified in floats.
 
     A radius is NaN where the float bound certifies nothing; ``loose`` marks radii that the
@@ -174,7 +201,16 @@ def _float_spheres(M: np.ndarray, *, careful: bool = False) -> tuple[np.ndarray,
     ``careful``: estimate the centre and lambda_min with LAPACK (backward stable: good up to
     condition numbers ~10^12) instead of the closed forms (fast, but they lose accuracy on
     ill-conditioned bodies); the certification is the same.
+
+    ``fast``: the exactly symmetric bodies (most inputs) by :func:`_exact_spheres` (the same
+    proof on the matrices as given, small ones scaled up by a power of two), the others by the
+    general path below.
     """
+    if fast:
+        c, rho, loose, other = _exact_spheres(M)
+        if other.any():
+            c[other], rho[other], loose[other] = _float_spheres(M[other], careful=careful)
+        return c, rho, loose
     n = M.shape[-1]
     d = n - 1
     with np.errstate(all="ignore"):
@@ -209,15 +245,155 @@ def _float_spheres(M: np.ndarray, *, careful: bool = False) -> tuple[np.ndarray,
         f0 = _entry(S, R, d, d)
         for i in range(d):
             f0 = f0 + _Ball(c[:, i], 0.0) * (g[i] + _entry(S, R, i, d))
-        f0r = f0.r * _RADIUS_FACTOR
-        ok &= f0.v + f0r < 0  # the body has interior points: with Q > 0, det M < 0
-        G2 = sum((np.abs(gi.v) + gi.r * _RADIUS_FACTOR) ** 2 for gi in g) * _UP  # >= |g|^2
-        F = (-f0.v + f0r) * _UP  # >= -f0 > 0
-        rho = (np.sqrt(G2) * _UP + np.sqrt((G2 + lam * F) * _UP) * _UP) / lam * _UP
-        ok &= np.isfinite(rho)
-        # sqrt(F / lam_est) is the radius with an exact centre and lambda_min
-        loose = ok & (rho > 1.01 * np.sqrt(F / lam_est))
+        rho, loose, good = _radius(g, f0, lam, lam_est)  # f0 < 0: with Q > 0, det M < 0
+        ok &= good
     return c, np.where(ok, rho, np.nan), loose
+
+
+def _exact_spheres(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(centres, radii, loose, other) of the exactly symmetric bodies of a chunk.
+
+    The same certificate as the general path (module docstring), on the matrix as given (its
+    sign flipped to a positive Q, which is exact): every entry is an exact float (radius 0),
+    so the midpoint-radius arithmetic starts from exact values and carries only the roundings
+    of the operations. Each entry is read once into a contiguous column (structure of arrays:
+    numpy's fastest layout), and the centre and lambda_min estimates are closed forms on the
+    columns. The bound holds for any floats (``_TINY`` covers a product in the subnormal range;
+    an overflow gives inf/NaN: no radius); a body whose largest entry is below 2^-8 is first
+    scaled up by an exact power of two (its largest entry into [1, 2)), so that ``_TINY`` stays
+    negligible against its size.
+
+    ``other`` marks the bodies left to the general path (not exactly symmetric or M_00 = 0);
+    their radii are NaN here, as are those of non-finite bodies (left to the exact path).
+    """
+    N, n = M.shape[0], M.shape[-1]
+    d = n - 1
+    T = M.reshape(N, n * n).T.copy()  # entry (i, j) of every body: row i n + j (a copy: flipped below)
+    upper = [(i, j) for i in range(n) for j in range(i, n)]
+    with np.errstate(all="ignore"):
+        sym = np.ones(N, dtype=bool)
+        for i, j in upper:
+            if i != j:
+                sym &= T[i * n + j] == T[j * n + i]
+        ok = sym & np.isfinite(T).all(axis=0) & (T[0] != 0.0)
+        other = ~sym | (T[0] == 0.0)
+        # a positive Q, and small bodies scaled up by a power of two into [1, 2) (exact: no
+        # result is subnormal); large ones stay as they are (an overflow leaves them to the
+        # general path, which scales with care)
+        mx = np.abs(T).max(axis=0)
+        k = np.where((mx > 0) & (mx < 2.0**-8), np.minimum(1 - np.frexp(mx)[1], 1000), 0)
+        T *= np.where(T[0] < 0.0, -1.0, 1.0) * np.ldexp(1.0, k)
+        col: dict[tuple[int, int], np.ndarray] = {(i, j): T[i * n + j] for i, j in upper}
+
+        def w(i: int, j: int) -> np.ndarray:
+            return col[min(i, j), max(i, j)]
+
+        def E(i: int, j: int) -> _Ball:
+            return _Ball(w(i, j), 0.0)
+
+        c = _centre_columns(w, d)
+        lam_est = _lambda_columns(w, d)
+        ok &= np.isfinite(c).all(axis=0) & np.isfinite(lam_est) & (lam_est > 0)
+        c = np.where(ok, c, 0.0)
+        lam = np.full(N, np.nan)
+        rows = np.flatnonzero(ok)
+        for factor in _SHRINK:  # the first lambda whose Q - lambda I is proven definite
+            trial = lam_est[rows] * factor
+            good = _definite_minors([[_Ball(w(i, j)[rows], 0.0) for j in range(d)] for i in range(d)], trial)
+            lam[rows[good]] = trial[good]
+            rows = rows[~good]
+            if not rows.size:
+                break
+        ok &= np.isfinite(lam) & (lam > 0)
+        lam = np.where(ok, lam, 1.0)
+        g: list[_Ball] = []
+        for i in range(d):
+            acc = E(i, d)
+            for j in range(d):
+                acc = acc + E(i, j) * _Ball(c[j], 0.0)
+            g.append(acc)
+        f0 = E(d, d)
+        for i in range(d):
+            f0 = f0 + _Ball(c[i], 0.0) * (g[i] + E(i, d))
+        rho, loose, good = _radius(g, f0, lam, lam_est)
+        ok &= good
+    return np.ascontiguousarray(c.T), np.where(ok, rho, np.nan), loose & ok, other
+
+
+def _radius(g: list[_Ball], f0: _Ball, lam: np.ndarray, lam_est: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rho, loose, ok) from g = Q c~ + m, f0 = f(c~) (certified balls) and lambda <= lambda_min.
+
+    ok: f0 < 0 certified (the body has interior points) and rho finite.
+    """
+    f0r = f0.r * _RADIUS_FACTOR
+    ok = f0.v + f0r < 0
+    G2 = sum((np.abs(gi.v) + gi.r * _RADIUS_FACTOR) ** 2 for gi in g) * _UP  # >= |g|^2
+    F = (-f0.v + f0r) * _UP  # >= -f0 > 0
+    rho = (np.sqrt(G2) * _UP + np.sqrt((G2 + lam * F) * _UP) * _UP) / lam * _UP
+    ok &= np.isfinite(rho)
+    # sqrt(F / lam_est) is the radius with an exact centre and lambda_min
+    loose = ok & (rho > 1.01 * np.sqrt(F / lam_est))
+    return rho, loose, ok
+
+
+def _centre_columns(w: Callable[[int, int], np.ndarray], d: int) -> np.ndarray:
+    """(d, N) float centre estimates -Q^-1 m by the adjugate.
+
+    The formulas of :func:`core.fixed.driver.centre`, on columns (estimates: any float centre
+    is certified by the bound).
+    """
+    if d == 2:
+        det = w(0, 0) * w(1, 1) - w(0, 1) * w(0, 1)
+        m0, m1 = w(0, 2), w(1, 2)
+        return np.stack([-(w(1, 1) * m0 - w(0, 1) * m1) / det, -(-w(0, 1) * m0 + w(0, 0) * m1) / det])
+    a00 = w(1, 1) * w(2, 2) - w(1, 2) * w(1, 2)
+    a01 = w(0, 2) * w(1, 2) - w(0, 1) * w(2, 2)
+    a02 = w(0, 1) * w(1, 2) - w(0, 2) * w(1, 1)
+    a11 = w(0, 0) * w(2, 2) - w(0, 2) * w(0, 2)
+    a12 = w(0, 1) * w(0, 2) - w(0, 0) * w(1, 2)
+    a22 = w(0, 0) * w(1, 1) - w(0, 1) * w(0, 1)
+    det = w(0, 0) * a00 + w(0, 1) * a01 + w(0, 2) * a02
+    m0, m1, m2 = w(0, 3), w(1, 3), w(2, 3)
+    return np.stack([
+        -(a00 * m0 + a01 * m1 + a02 * m2) / det,
+        -(a01 * m0 + a11 * m1 + a12 * m2) / det,
+        -(a02 * m0 + a12 * m1 + a22 * m2) / det,
+    ])
+
+
+def _lambda_columns(w: Callable[[int, int], np.ndarray], d: int) -> np.ndarray:
+    """Float estimates of lambda_min(Q) on columns (the closed forms of :func:`_lambda_min_estimate`)."""
+    if d == 2:
+        two: np.ndarray = (w(0, 0) + w(1, 1)) / 2 - np.hypot((w(0, 0) - w(1, 1)) / 2, w(0, 1))
+        return two
+    q = (w(0, 0) + w(1, 1) + w(2, 2)) / 3
+    b00, b11, b22 = w(0, 0) - q, w(1, 1) - q, w(2, 2) - q
+    b01, b02, b12 = w(0, 1), w(0, 2), w(1, 2)
+    p = np.sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2 * (b01 * b01 + b02 * b02 + b12 * b12)) / 6)
+    safe = np.where(p > 0, p, 1.0)
+    det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02)
+    half_det = det / (safe * safe * safe) / 2
+    phi = np.arccos(np.clip(half_det, -1.0, 1.0)) / 3
+    lam: np.ndarray = np.where(p > 0, q + 2 * p * np.cos(phi + 2 * np.pi / 3), q)
+    return lam
+
+
+def _definite_minors(Q: list[list[_Ball]], lam: np.ndarray) -> np.ndarray:
+    """Mask: Q - lam I proven positive definite (leading minors > their certified radius)."""
+    d = len(Q)
+    L = _Ball(lam, 0.0)
+    P = [[Q[i][j] - L if i == j else Q[i][j] for j in range(d)] for i in range(d)]
+    minors = [P[0][0], P[0][0] * P[1][1] - P[0][1] * P[0][1]]
+    if d == 3:
+        minors.append(
+            P[0][0] * (P[1][1] * P[2][2] - P[1][2] * P[1][2])
+            - P[0][1] * (P[0][1] * P[2][2] - P[1][2] * P[0][2])
+            + P[0][2] * (P[0][1] * P[1][2] - P[1][1] * P[0][2])
+        )
+    ok: np.ndarray = np.isfinite(lam) & (lam > 0)
+    for m in minors:
+        ok &= m.v > m.r * _RADIUS_FACTOR
+    return ok
 
 
 def _entry(S: np.ndarray, R: np.ndarray, i: int, j: int) -> _Ball:
@@ -265,19 +441,7 @@ def _lambda_min_estimate(Q: np.ndarray) -> np.ndarray:
 def _definite(S: np.ndarray, R: np.ndarray, lam: np.ndarray) -> np.ndarray:
     """Mask: Q - lam I proven positive definite (leading minors > their certified radius)."""
     d = S.shape[-1] - 1
-    L = _Ball(lam, 0.0)
-    P = [[_entry(S, R, i, j) - L if i == j else _entry(S, R, i, j) for j in range(d)] for i in range(d)]
-    minors = [P[0][0], P[0][0] * P[1][1] - P[0][1] * P[0][1]]
-    if d == 3:
-        minors.append(
-            P[0][0] * (P[1][1] * P[2][2] - P[1][2] * P[1][2])
-            - P[0][1] * (P[0][1] * P[2][2] - P[1][2] * P[0][2])
-            + P[0][2] * (P[0][1] * P[1][2] - P[1][1] * P[0][2])
-        )
-    ok: np.ndarray = np.isfinite(lam) & (lam > 0)
-    for m in minors:
-        ok &= m.v > m.r * _RADIUS_FACTOR
-    return ok
+    return _definite_minors([[_entry(S, R, i, j) for j in range(d)] for i in range(d)], lam)
 
 
 # -------------------------------------------------------------------------------------------

@@ -19,7 +19,9 @@ Conservative, and why (what bounds what):
    coordinate + box side + R), so no pair with |c_i - c_j| <= rho_i + rho_j is ever dropped.
 
 Work and memory: sorting the cell keys (numpy), then per occupied cell its 13 "forward"
-neighbour cells (or all 26 plus an index test when a periodic axis has fewer than 3 cells). The
+neighbour cells (or all 26 plus an index test when a periodic axis has fewer than 3 cells). In
+open space the forward cells of a body are 5 ranges of positions in the sorted order (3D; 2 in
+2D: :func:`_forward_ranges`), each pair built with a few array operations. The
 pairs to examine are *counted* before any is built (:attr:`BroadPhase.pairs`, O(cells): the
 sizes of the neighbouring cells multiplied), so a caller can refuse a crowded set (``max_pairs``:
 :class:`TooManyPairs`) before spending memory on it; they are then built in chunks of at most
@@ -34,7 +36,7 @@ import itertools
 import math
 from collections.abc import Callable, Generator
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 
 import numpy as np
@@ -49,8 +51,11 @@ _CELL_SLACK = 1.0 + 2.0**-20
 _MAX_CELLS = 2**30
 """Most cells per axis: keeps the float cell coordinates exact to well under one cell."""
 _PAD = 2.0**-40
-_PAIRS_PER_CHUNK = 1 << 22
-"""Pairs built at once before the sphere test (bounded memory: ~100 MB of temporaries)."""
+_DENSE_CELLS_PER_BODY = 8
+"""Open space: a table of every cell (8 bytes each) when there are at most this many per body."""
+_PAIRS_PER_CHUNK = 1 << 19
+"""Pairs built at once before the sphere test (bounded memory: ~25 MB of temporaries; arrays
+of 8 MB are recycled by the allocator, where larger ones would fault in fresh pages)."""
 
 
 class TooManyPairs(ValueError):
@@ -117,15 +122,27 @@ class _Grid:
     count: np.ndarray
     coords: np.ndarray
     """(cells, d) integer coordinates of the occupied cells."""
+    body_keys: np.ndarray
+    """Cell key of each body, in the sorted order (positions 0, 1, ...)."""
 
 
 @dataclass
 class _Side:
-    """Bodies in some order: their ids, centres and radii at positions 0, 1, ..."""
+    """Bodies in some order: their ids, centres and radii at positions 0, 1, ...
+
+    The centres are kept by axis (``axes[a]`` contiguous): the sphere test gathers 1D columns,
+    which numpy does several times faster than rows of a 2D array.
+    """
 
     ids: np.ndarray
-    centers: np.ndarray
+    axes: np.ndarray
+    """(d, N) float64 centre coordinates, one contiguous row per axis."""
     radii: np.ndarray
+
+    @staticmethod
+    def of(ids: np.ndarray, centers: np.ndarray, radii: np.ndarray) -> _Side:
+        """The bodies ``ids`` (positions 0, 1, ... in this order)."""
+        return _Side(ids, np.take(np.ascontiguousarray(centers.T), ids, axis=1), radii.take(ids))
 
 
 @dataclass
@@ -146,15 +163,27 @@ class _Block:
     cb: np.ndarray
     upper: bool = False
     dedupe: bool = False
+    single: bool = False
+    """Every row is one body (ca = 1): its pairs are built with two repeats and an arange (sa,
+    sb and cb may then be int32: the plan of a million bodies holds a few million rows)."""
+    _ends: np.ndarray | None = field(default=None, repr=False)
 
     def sizes(self) -> np.ndarray:
         """Pairs of each row (int64)."""
+        if self.single:
+            return self.cb
         out: np.ndarray = self.ca * (self.ca - 1) // 2 if self.upper else self.ca * self.cb
         return out
 
     @property
     def total(self) -> int:
-        return int(self.sizes().sum())
+        return int(self.ends()[-1]) if self.sa.size else 0
+
+    def ends(self) -> np.ndarray:
+        """Cumulative pairs of the rows (computed once: every chunk searches it)."""
+        if self._ends is None:
+            self._ends = np.cumsum(self.sizes(), dtype=np.int64)
+        return self._ends
 
 
 class BroadPhase:
@@ -202,17 +231,21 @@ class BroadPhase:
             for a, members in enumerate(levels):
                 grid = _grid(centers, members, 2 * float(np.max(radii[members])) * _CELL_SLACK, lo, hi, box)
                 # positions in the grid's cell order: neighbouring cells are near in memory
-                mine = _Side(grid.order, centers[grid.order], radii[grid.order])
+                mine = _Side.of(grid.order, centers, radii)
                 half = not grid.periodic or bool((grid.n >= 3).all())
-                plans.append(partial(_inside_cells, grid, mine))
-                for off in [o for o in _offsets(grid, half) if any(o)]:
-                    plans.append(partial(_same_level, grid, mine, off, half))
+                if not grid.periodic:  # every forward neighbour cell as position ranges
+                    plans.extend(_forward_ranges(grid, mine))
+                else:
+                    plans.append(partial(_inside_cells, grid, mine))
+                    for off in [o for o in _offsets(grid, half) if any(o)]:
+                        plans.append(partial(_same_level, grid, mine, off, half))
                 for finer in levels[a + 1 :]:
                     coords = _coords(centers[finer], grid.lo, grid.h, grid.n, grid.periodic)
-                    o = np.argsort(_encode(coords, grid.n), kind="stable")
-                    theirs = _Side(finer[o], centers[finer[o]], radii[finer[o]])
+                    fkeys = _encode(coords, grid.n)
+                    o = np.argsort(fkeys)
+                    theirs = _Side.of(finer[o], centers, radii)
                     for off in _offsets(grid, half=False):
-                        plans.append(partial(_query, grid, coords[o], off, theirs, mine))
+                        plans.append(partial(_query, grid, coords[o], fkeys[o], off, theirs, mine))
         self.blocks = [b for b in _map(plans) if b is not None and b.total]
         self.pairs = sum(b.total for b in self.blocks)
         """Pairs of bodies the broad phase examines: every candidate is among them."""
@@ -341,11 +374,11 @@ def _grid(
         periodic = True
     coords = _coords(centers[members], origin, h_axis, n, periodic)
     keys = _encode(coords, n)
-    o = np.argsort(keys, kind="stable")
+    o = np.argsort(keys)  # any order inside a cell will do (the default sort is the fastest)
     sk = keys[o]
     first = np.flatnonzero(np.r_[True, sk[1:] != sk[:-1]])
     count = np.diff(np.r_[first, sk.size])
-    return _Grid(origin, h_axis, n, periodic, members[o], sk[first], first, count, coords[o][first])
+    return _Grid(origin, h_axis, n, periodic, members[o], sk[first], first, count, coords[o[first]], sk)
 
 
 def _coords(c: np.ndarray, origin: np.ndarray, h: np.ndarray, n: np.ndarray, periodic: bool) -> np.ndarray:
@@ -382,11 +415,22 @@ def _offsets(grid: _Grid, half: bool) -> list[tuple[int, ...]]:
     return all_off
 
 
-def _neighbour_keys(grid: _Grid, coords: np.ndarray, off: tuple[int, ...]) -> np.ndarray:
-    x = coords + np.array(off, dtype=np.int64)
+def _neighbour_keys(grid: _Grid, coords: np.ndarray, keys: np.ndarray, off: tuple[int, ...]) -> np.ndarray:
+    """Keys of the cells at ``off`` from the cells ``coords`` (whose keys are ``keys``).
+
+    In open space the coordinates start at 1 and stop 2 short of the radix, so a neighbour's
+    coordinates stay in [0, n_a) and the mixed-radix key is linear in them: the neighbour's key
+    is the cell's key plus the key of the offset (one addition, the same integer as encoding
+    the shifted coordinates). In a box the coordinates wrap around: encoded after the modulo.
+    """
     if grid.periodic:
+        x = coords + np.array(off, dtype=np.int64)
         x %= grid.n
-    return _encode(x, grid.n)
+        return _encode(x, grid.n)
+    step = 0
+    for a in range(len(off)):
+        step = step * int(grid.n[a]) + off[a]
+    return keys + step
 
 
 def _inside_cells(grid: _Grid, mine: _Side) -> _Block | None:
@@ -398,13 +442,75 @@ def _inside_cells(grid: _Grid, mine: _Side) -> _Block | None:
     return _Block(mine, mine, s, c, s, c, upper=True)
 
 
+def _forward_ranges(grid: _Grid, mine: _Side) -> list[Callable[[], _Block | None]]:
+    """Open space: each body with every body in its forward neighbour cells, as position ranges.
+
+    The keys are mixed radix with the last axis fastest, and a cell's last coordinate is at
+    least 1 and at most n - 2 (open space): the three cells at last-axis offsets -1, 0, +1 of a
+    column are consecutive keys, so their bodies are one range of positions in the sorted
+    order. The 13 forward offsets of 3D (4 in 2D) and the cell itself are then: the bodies
+    after p in its own cell and in the next cell along the last axis (one range), and one range
+    per lexicographically positive column offset (4 in 3D, 1 in 2D). The same pairs as the
+    cell-by-cell offsets, each once, built with a few operations per pair (:func:`_build`,
+    ``single``).
+
+    A range's ends are the first positions of keys k + s - 1 and k + s + 2: from a dense table
+    of the first position of every key when the grid has at most a few cells per body (one
+    lookup per body), else by binary search among the occupied cells. Keys past the last cell
+    are clipped to it (no body lies there: the range is the same).
+
+    Returns one planning step per range (a block each: arrays of at most N rows, never one
+    concatenation of all: fresh large arrays cost page faults).
+    """
+    d = grid.n.size
+    cells = int(np.prod(grid.n))
+    if cells <= _DENSE_CELLS_PER_BODY * grid.body_keys.size + 4096:
+        first = np.zeros(cells + 1, dtype=np.int64)  # first[k]: bodies with a key below k
+        np.cumsum(np.bincount(grid.body_keys, minlength=cells), out=first[1:])
+        where: Callable[[np.ndarray], np.ndarray] = lambda k: first[np.minimum(k, cells)]  # noqa: E731
+        keys = grid.body_keys
+    else:
+        S = np.append(grid.start, grid.start[-1] + grid.count[-1])  # S[c]: first position of cell c
+        cell_of = np.repeat(np.arange(grid.keys.size), grid.count)
+        where = lambda k: S[np.searchsorted(grid.keys, k)][cell_of]  # noqa: E731
+        keys = grid.keys
+    radix = [int(v) for v in grid.n]
+    steps: list[int | None] = [None]  # None: the own range
+    for col in itertools.product((-1, 0, 1), repeat=d - 1):
+        if col > (0,) * (d - 1):
+            step = 0
+            for a in range(d - 1):
+                step = step * radix[a] + col[a]
+            steps.append(step * radix[-1])
+    return [partial(_forward_range, mine, keys, where, step) for step in steps]
+
+
+def _forward_range(
+    mine: _Side, keys: np.ndarray, where: Callable[[np.ndarray], np.ndarray], step: int | None
+) -> _Block | None:
+    """The block of one range of :func:`_forward_ranges` (``step``: the column offset's key)."""
+    if step is None:  # the bodies after p in its cell and the next one along the last axis
+        hi = where(keys + 2)
+        lo = np.arange(1, hi.size + 1, dtype=np.int64)
+    else:
+        lo = where(keys + (step - 1))
+        hi = where(keys + (step + 2))
+    hi -= lo
+    keep = np.flatnonzero(hi > 0)
+    if not keep.size:
+        return None
+    small = np.int32 if mine.ids.size < 2**31 else np.int64  # positions: half the memory of int64
+    rows = keep.astype(small)
+    return _Block(mine, mine, rows, np.broadcast_to(np.int64(1), rows.shape), lo[keep].astype(small), hi[keep].astype(small), single=True)
+
+
 def _same_level(grid: _Grid, mine: _Side, off: tuple[int, ...], half: bool) -> _Block | None:
     """Pairs between each occupied cell and its neighbour at ``off`` (nonzero).
 
     With ``half`` (the 13 forward offsets), each unordered pair of bodies comes once over all
     offsets; otherwise (full shell) a pair is met from both cells and kept once.
     """
-    nk = _neighbour_keys(grid, grid.coords, off)
+    nk = _neighbour_keys(grid, grid.coords, grid.keys, off)
     pos = np.minimum(np.searchsorted(grid.keys, nk), grid.keys.size - 1)
     hit = np.flatnonzero(grid.keys[pos] == nk)
     if not hit.size:
@@ -413,13 +519,15 @@ def _same_level(grid: _Grid, mine: _Side, off: tuple[int, ...], half: bool) -> _
     return _Block(mine, mine, grid.start[hit], grid.count[hit], grid.start[b], grid.count[b], dedupe=not half)
 
 
-def _query(grid: _Grid, coords: np.ndarray, off: tuple[int, ...], theirs: _Side, mine: _Side) -> _Block | None:
+def _query(
+    grid: _Grid, coords: np.ndarray, keys: np.ndarray, off: tuple[int, ...], theirs: _Side, mine: _Side
+) -> _Block | None:
     """Pairs (position of a finer body, position in this grid) in neighbouring cells.
 
-    The finer body's cell (``coords``: its coordinates in this grid) and the grid's cell at
-    ``off`` from it.
+    The finer body's cell (``coords``: its coordinates in this grid, ``keys`` their keys) and
+    the grid's cell at ``off`` from it.
     """
-    nk = _neighbour_keys(grid, coords, off)
+    nk = _neighbour_keys(grid, coords, keys, off)
     pos = np.minimum(np.searchsorted(grid.keys, nk), grid.keys.size - 1)
     hit = np.flatnonzero(grid.keys[pos] == nk)
     if not hit.size:
@@ -434,9 +542,16 @@ def _build(block: _Block, g0: int, g1: int) -> tuple[np.ndarray, np.ndarray]:
     A row may be cut anywhere: a cell of 10,000 bodies is 50 M pairs, built a chunk at a time.
     """
     tot = block.sizes()
-    ends = np.cumsum(tot)
+    ends = block.ends()
     r0 = int(np.searchsorted(ends, g0, side="right"))
     r1 = int(np.searchsorted(ends, g1 - 1, side="right"))
+    if block.single:  # one body per row: p repeated, q = sb + (pair index - the row's first)
+        first = ends[r0 : r1 + 1] - tot[r0 : r1 + 1]  # int64: the rows' first pair indices
+        t = np.minimum(ends[r0 : r1 + 1], g1) - np.maximum(first, g0)
+        p = np.repeat(block.sa[r0 : r1 + 1].astype(np.int64), t)
+        q = np.arange(g0, g1, dtype=np.int64)
+        q -= np.repeat(first - block.sb[r0 : r1 + 1], t)
+        return p, q
     t = tot[r0 : r1 + 1].copy()
     skip = g0 - (int(ends[r0]) - int(tot[r0]))  # pairs of row r0 before g0
     t[-1] -= int(ends[r1]) - g1  # pairs of row r1 from g1 on
@@ -479,17 +594,27 @@ def _keep(
 
     Returns the survivors as body ids i < j (and j's image).
     """
-    diff = b.centers[q] - a.centers[p]
-    k = None
-    if box is not None:
-        k = -np.rint(diff / box)
-        diff = diff + k * box
-    reach = a.radii[p] + b.radii[q] + pad
-    near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= reach * reach)
-    i, j = a.ids[p[near]], b.ids[q[near]]
+    reach = a.radii.take(p)
+    reach += b.radii.take(q)
+    reach += pad
+    reach *= reach
+    dist = np.zeros(p.size)
+    ks = []
+    for ax in range(d):
+        diff = b.axes[ax].take(q)
+        diff -= a.axes[ax].take(p)
+        if box is not None:
+            k = np.rint(diff / box[ax])
+            np.negative(k, out=k)
+            diff += k * box[ax]
+            ks.append(k)
+        diff *= diff
+        dist += diff
+    near = np.flatnonzero(dist <= reach)
+    i, j = a.ids.take(p.take(near)), b.ids.take(q.take(near))
     swap = i > j
     lo, hi = np.where(swap, j, i).astype(np.int64), np.where(swap, i, j).astype(np.int64)
-    if k is None:
+    if box is None:
         return Candidates(lo, hi, None)
-    kk = k[near].astype(np.int8).reshape(-1, d)
+    kk = np.stack([k.take(near) for k in ks], axis=1).astype(np.int8).reshape(-1, d)
     return Candidates(lo, hi, np.where(swap[:, None], -kk, kk))

@@ -1,9 +1,11 @@
 """Narrow phase: the certified classifier on the candidate pairs, in chunks.
 
 Pairs in open space (or with the image k = 0 in a box) go to :func:`core.classify_detailed` in
-batches of ``chunk`` pairs: the matrices of both bodies are gathered chunk by chunk (1 M pairs
-of ellipsoids are 256 MB), and each batch is one call of the compiled filter, which spreads it
-over every core. Pairs with a lattice image go to :func:`core.bodies.periodic.classify_images`.
+batches of at most ``chunk`` (and ``_GATHER``) pairs: the matrices of both bodies are gathered
+into two buffers allocated once per call and refilled batch after batch (1 M pairs of
+ellipsoids would be 256 MB of fresh memory), and each batch is one call of the compiled filter,
+which spreads it over every core. Pairs with a lattice image go to
+:func:`core.bodies.periodic.classify_images`.
 """
 
 from __future__ import annotations
@@ -24,6 +26,13 @@ CHUNK_PAIRS = PAIR_CHUNK
 """Pairs per classify call (the same as a Dask chunk of pairs, :data:`core.fixed.lazy.PAIR_CHUNK`):
 large enough that the threads of the C filter stay busy (a call costs ~0.05 ms of set-up against
 ~50 ms of work), small enough for the gathered matrices (2 x 128 MB for ellipsoids)."""
+
+
+_GATHER = 1 << 17
+"""Pairs gathered and classified at once (2 x 16 MB of ellipsoid matrices): buffers of this
+size are allocated once per call and refilled, since fresh memory costs more than the gather
+(first-touch page faults) on a busy virtual machine; still large enough that the threads of
+the C filter stay busy."""
 
 
 def classify_candidates(
@@ -55,10 +64,16 @@ def classify_candidates(
     shifted = np.zeros(M, dtype=bool) if cand.image is None else cand.image.any(axis=1)
     plain = np.flatnonzero(~shifted)
     done = 0
-    for s in range(0, plain.size, chunk):
-        rows = plain[s : s + chunk]
+    step = min(chunk, _GATHER)
+    if plain.size:  # the matrices of a batch are gathered into two buffers reused batch after batch
+        shape = (min(step, plain.size), *Q.shape[1:])
+        buf_a, buf_b = np.empty(shape, Q.dtype), np.empty(shape, Q.dtype)
+    for s in range(0, plain.size, step):
+        rows = plain[s : s + step]
         check = None if progress is None else (lambda k, m, done=done: progress(done, M))
-        res = classify_detailed(Q[cand.i[rows]], Q[cand.j[rows]], method=method, progress=check)  # type: ignore[arg-type]
+        a = np.take(Q, cand.i[rows], axis=0, out=buf_a[: rows.size], mode="clip")  # valid indices: no check needed
+        b = np.take(Q, cand.j[rows], axis=0, out=buf_b[: rows.size], mode="clip")
+        res = classify_detailed(a, b, method=method, progress=check)  # type: ignore[arg-type]
         codes[rows], by[rows] = res.relation, res.certified_by
         done += rows.size
         if progress is not None:

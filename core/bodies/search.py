@@ -42,6 +42,8 @@ def read_bodies(Q: Any) -> np.ndarray:
     arr = np.asarray(Q)
     if arr.ndim != 3 or arr.shape[1] != arr.shape[2] or arr.shape[1] not in (3, 4):
         raise ValueError(f"Q must be an (N, 3, 3) stack of ellipses or (N, 4, 4) of ellipsoids, got shape {arr.shape}")
+    if arr.dtype == np.float64:
+        return arr  # read in place (never written)
     out = binary64_array(arr)
     if out is None:
         raise ValueError(f"Q holds numbers that are not float64 values (dtype {arr.dtype}): contacts reads float64 matrices")
@@ -81,6 +83,7 @@ def search(
     if L is not None:
         check_box(spheres.centers, spheres.radii, L)
     plan = BroadPhase(spheres.centers, spheres.radii, box=L)
+    planning = time.perf_counter() - t1
     if max_pairs is not None and plan.pairs > max_pairs:
         raise TooManyPairs(plan.pairs, max_pairs)
     total = plan.pairs
@@ -91,7 +94,7 @@ def search(
     found = ContactsBuilder(plan.d, L is not None, Q.shape[0])
     waiting: list[Candidates] = []
     held = 0
-    broad = narrow = 0.0
+    broad, narrow = planning, 0.0
     done = 0
 
     def classify_waiting(examined: int) -> None:
