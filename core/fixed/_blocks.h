@@ -14,6 +14,7 @@
  */
 
 void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict out, int64_t count) {
+    int full_run = 0; /* the last block tried was mostly symmetric only up to rounding */
     for (int64_t i0 = 0; i0 < count; i0 += CHUNK) {
         const int64_t m = count - i0 < CHUNK ? count - i0 : CHUNK;
         T a[N * N * CHUNK], b[N * N * CHUNK]; /* entry k of pair p at [k * CHUNK + p] */
@@ -40,25 +41,37 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
                 b[k * CHUNK + p] = B[(i0 + p) * N * N + k];
             }
         /* stage 1, every pair: prepare (exactly symmetric matrices), pencil with bounds, validity,
-         * the tree with s0 pending */
+         * the tree with s0 pending; where the previous block was mostly symmetric only up to
+         * rounding (numpy-built matrices come in whole arrays), the full prepare directly (it
+         * takes the same decisions on an exactly symmetric matrix, so the route changes no
+         * answer; every 16th block tries the fast pass again) */
+        const int use_full = full_run && (i0 / CHUNK) % 16 != 0;
+        int64_t k = 0;
         for (int64_t p0 = 0; p0 < m; p0 += LANES) {
             const int64_t p1 = p0 + LANES < m ? p0 + LANES : m;
-            /* the next block streams in from memory while this one computes (no demand load
-             * would start it: the transpose above is the only reader of A and B) */
-            const char *na = (const char *)(A + (i0 + CHUNK + p0) * N * N), *nb = (const char *)(B + (i0 + CHUNK + p0) * N * N);
+            /* the block PF_DIST ahead streams in while this one computes (the transpose above is
+             * the only reader of A and B; small blocks keep the requests spread out) */
+#if PF_DIST > 0
+            const char *na = (const char *)(A + (i0 + PF_DIST * CHUNK + p0) * N * N), *nb = (const char *)(B + (i0 + PF_DIST * CHUNK + p0) * N * N);
             for (int64_t off = 0; off < (p1 - p0) * N * N * (int64_t)sizeof(T); off += 64) {
-                __builtin_prefetch(na + off);
-                __builtin_prefetch(nb + off);
+                __builtin_prefetch(na + off, 0, PF_HINT);
+                __builtin_prefetch(nb + off, 0, PF_HINT);
             }
-            for (int64_t p = p0; p < p1; p++) code[p] = FIRST(a + p, b + p, c + p, CHUNK, idx + p);
+#endif
+            if (use_full)
+                for (int64_t p = p0; p < p1; p++) code[p] = FULL(a + p, b + p, c + p, CHUNK, idx + p);
+            else
+                for (int64_t p = p0; p < p1; p++) code[p] = FIRST(a + p, b + p, c + p, CHUNK, idx + p);
         }
         /* stage 1 again with the full prepare, where a matrix is symmetric only up to rounding */
-        int64_t k = 0;
-        for (int64_t p = 0; p < m; p++) {
-            open[k] = (int32_t)p;
-            k += code[p] == NEEDS_FULL;
+        if (!use_full) {
+            for (int64_t p = 0; p < m; p++) {
+                open[k] = (int32_t)p;
+                k += code[p] == NEEDS_FULL;
+            }
+            full_run = 2 * k > m;
         }
-        if (2 * k > m) { /* most pairs (numpy-built matrices): every lane in place, then select */
+        if (2 * k > m) { /* most pairs: every lane in place, then select */
             double d[2 * (N + 1) * CHUNK];
             int64_t di[CHUNK];
             for (int64_t p = 0; p < m; p++) {
