@@ -3,15 +3,75 @@
  * Included by _variant.h once per (dimension, input type), with these macros defined:
  *   N          3 (ellipses) or 4 (ellipsoids)
  *   T          double or float (float is widened exactly: certified for the float values given)
- *   FIRST, FULL, SECOND, THIRD   the lane functions of _kernels.h for this N and T
+ *   FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
+ *   TRANSPOSE8_T   the 8 x 8 transpose for T (when the compiler has vector shuffles)
  *   CLASSIFY   the name of the function defined here
  *
  * The pairs of a block are first transposed to structure of arrays (entry k of every pair in
  * one row). Each stage is then a loop over pairs whose body is a branch-free lane function, so
- * the compiler turns it into SIMD across pairs, a vector load reading one entry of several pairs. Stage 2 (s0) and stage 3 (the certificates) run only on the pairs
- * the stage before left open: packed first so that the SIMD lanes stay full, or, when most pairs
- * of the block are open, run on every lane in place and selected.
+ * the compiler turns it into SIMD across pairs, a vector load reading one entry of several
+ * pairs. The stages (core/fixed/driver.py): 1 prepare, pencil, validity, the tree with s0
+ * pending; 2 the semi-static s0 test where the tree asks for s0; 3 the certificates where a
+ * valid pair is still open (spheres, translated and homothetic copies); 4 the running-error s0
+ * test where s0 is still needed (near tangency). Each runs only on the pairs the stages before
+ * left to it: packed first so that the SIMD lanes stay full, or, when most pairs of the block
+ * need it, on every lane in place and selected.
  */
+
+/* The pairs p < m of the block for which COND holds, into open[0..k). */
+#define SUBSET(COND)                       \
+    k = 0;                                 \
+    for (int64_t p = 0; p < m; p++) {      \
+        open[k] = (int32_t)p;              \
+        k += (COND);                       \
+    }
+
+/* Rows r < ROWS of the block buffer SRC (T or double) for the subset, packed into DST. */
+#define PACK(DST, SRC, ROWS)                                                       \
+    for (int64_t q = 0; q < k; q++)                                                \
+        for (int r = 0; r < (ROWS); r++) (DST)[r * CHUNK + q] = (SRC)[r * CHUNK + open[q]];
+
+/* An s0 stage (LANE(c, stride, idx) -> code) on the pairs whose code is WHICH. */
+#define S0_STAGE(LANE, WHICH)                                                                 \
+    SUBSET(code[p] == (WHICH))                                                                \
+    if (2 * k > m) {                                                                          \
+        for (int64_t p = 0; p < m; p++) {                                                     \
+            const int64_t r = LANE(c + p, CHUNK, idx[p]);                                     \
+            code[p] = code[p] == (WHICH) ? r : code[p];                                       \
+        }                                                                                     \
+    } else if (k) {                                                                           \
+        double d[2 * (N + 1) * CHUNK];                                                        \
+        int64_t di[CHUNK], dc[CHUNK];                                                         \
+        PACK(d, c, 2 * (N + 1))                                                               \
+        for (int64_t q = 0; q < k; q++) di[q] = idx[open[q]];                                 \
+        for (int64_t q = 0; q < k; q++) dc[q] = LANE(d + q, CHUNK, di[q]);                    \
+        for (int64_t q = 0; q < k; q++) code[open[q]] = dc[q];                                \
+    }
+
+/* The certificates (LANE(a, b, c, stride) -> rule or -1) on the open pairs of one route;
+ * a pair whose s0 is still unknown keeps NEEDS_S0_RADIUS where they fail. */
+#define CERT_STAGE(LANE, ROUTE)                                                                                   \
+    SUBSET((code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && viafull[p] == (ROUTE))                       \
+    if (2 * k > m) {                                                                                              \
+        for (int64_t p = 0; p < m; p++) {                                                                         \
+            const int64_t cert = LANE(a + p, b + p, c + p, CHUNK);                                                \
+            const int64_t open_ = (code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && viafull[p] == (ROUTE); \
+            const int64_t left = code[p] == NEEDS_S0_RADIUS ? NEEDS_S0_RADIUS : -1;                               \
+            code[p] = open_ ? (cert >= 0 ? cert : left) : code[p];                                                \
+        }                                                                                                         \
+    } else if (k) {                                                                                               \
+        T pa[N * N * CHUNK], pb[N * N * CHUNK];                                                                   \
+        double d[2 * (N + 1) * CHUNK];                                                                            \
+        int64_t dc[CHUNK];                                                                                        \
+        PACK(pa, a, N * N)                                                                                        \
+        PACK(pb, b, N * N)                                                                                        \
+        PACK(d, c, 2 * (N + 1))                                                                                   \
+        for (int64_t q = 0; q < k; q++) dc[q] = LANE(pa + q, pb + q, d + q, CHUNK);                               \
+        for (int64_t q = 0; q < k; q++) {                                                                         \
+            const int64_t p = open[q];                                                                            \
+            code[p] = dc[q] >= 0 ? dc[q] : (code[p] == NEEDS_S0_RADIUS ? NEEDS_S0_RADIUS : -1);                   \
+        }                                                                                                         \
+    }
 
 void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict out, int64_t count) {
     int full_run = 0; /* the last block tried was mostly symmetric only up to rounding */
@@ -21,24 +81,25 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
         double c[2 * (N + 1) * CHUNK];        /* a_0..a_n, then their radii: the same layout */
         int64_t code[CHUNK], idx[CHUNK];
         int32_t open[CHUNK];
-        int64_t done = 0;
+        int64_t viafull[CHUNK]; /* the pair went through the full prepare */
+        int64_t done = 0, k = 0;
 #ifdef HAVE_TRANSPOSE8
         for (; done + 8 <= m; done += 8) { /* 8 pairs at a time, 8 entries per shuffle network */
-                for (int k = 0; k + 8 <= N * N; k += 8) {
-                    TRANSPOSE8_T(A + (i0 + done) * N * N + k, N * N, a + k * CHUNK + done, CHUNK);
-                    TRANSPOSE8_T(B + (i0 + done) * N * N + k, N * N, b + k * CHUNK + done, CHUNK);
-                }
-                for (int64_t p = done; p < done + 8; p++)
-                    for (int k = N * N / 8 * 8; k < N * N; k++) {
-                        a[k * CHUNK + p] = A[(i0 + p) * N * N + k];
-                        b[k * CHUNK + p] = B[(i0 + p) * N * N + k];
-                    }
+            for (int e = 0; e + 8 <= N * N; e += 8) {
+                TRANSPOSE8_T(A + (i0 + done) * N * N + e, N * N, a + e * CHUNK + done, CHUNK);
+                TRANSPOSE8_T(B + (i0 + done) * N * N + e, N * N, b + e * CHUNK + done, CHUNK);
             }
+            for (int64_t p = done; p < done + 8; p++)
+                for (int e = N * N / 8 * 8; e < N * N; e++) {
+                    a[e * CHUNK + p] = A[(i0 + p) * N * N + e];
+                    b[e * CHUNK + p] = B[(i0 + p) * N * N + e];
+                }
+        }
 #endif
         for (int64_t p = done; p < m; p++)
-            for (int k = 0; k < N * N; k++) {
-                a[k * CHUNK + p] = A[(i0 + p) * N * N + k];
-                b[k * CHUNK + p] = B[(i0 + p) * N * N + k];
+            for (int e = 0; e < N * N; e++) {
+                a[e * CHUNK + p] = A[(i0 + p) * N * N + e];
+                b[e * CHUNK + p] = B[(i0 + p) * N * N + e];
             }
         /* stage 1, every pair: prepare (exactly symmetric matrices), pencil with bounds, validity,
          * the tree with s0 pending; where the previous block was mostly symmetric only up to
@@ -46,7 +107,6 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
          * takes the same decisions on an exactly symmetric matrix, so the route changes no
          * answer; every 16th block tries the fast pass again) */
         const int use_full = full_run && (i0 / CHUNK) % 16 != 0;
-        int64_t k = 0;
         for (int64_t p0 = 0; p0 < m; p0 += LANES) {
             const int64_t p1 = p0 + LANES < m ? p0 + LANES : m;
             /* the block PF_DIST ahead streams in while this one computes (the transpose above is
@@ -63,12 +123,10 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
             else
                 for (int64_t p = p0; p < p1; p++) code[p] = FIRST(a + p, b + p, c + p, CHUNK, idx + p);
         }
+        for (int64_t p = 0; p < m; p++) viafull[p] = use_full || code[p] == NEEDS_FULL;
         /* stage 1 again with the full prepare, where a matrix is symmetric only up to rounding */
         if (!use_full) {
-            for (int64_t p = 0; p < m; p++) {
-                open[k] = (int32_t)p;
-                k += code[p] == NEEDS_FULL;
-            }
+            SUBSET(code[p] == NEEDS_FULL)
             full_run = 2 * k > m;
         }
         if (2 * k > m) { /* most pairs: every lane in place, then select */
@@ -85,11 +143,8 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
             T pa[N * N * CHUNK], pb[N * N * CHUNK];
             double d[2 * (N + 1) * CHUNK];
             int64_t di[CHUNK], dc[CHUNK];
-            for (int64_t q = 0; q < k; q++)
-                for (int r = 0; r < N * N; r++) {
-                    pa[r * CHUNK + q] = a[r * CHUNK + open[q]];
-                    pb[r * CHUNK + q] = b[r * CHUNK + open[q]];
-                }
+            PACK(pa, a, N * N)
+            PACK(pb, b, N * N)
             for (int64_t q = 0; q < k; q++) dc[q] = FULL(pa + q, pb + q, d + q, CHUNK, di + q);
             for (int64_t q = 0; q < k; q++) {
                 for (int r = 0; r < 2 * (N + 1); r++) c[r * CHUNK + open[q]] = d[r * CHUNK + q];
@@ -97,52 +152,18 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
                 code[open[q]] = dc[q];
             }
         }
-        /* stage 2, where the tree asks for s0 */
-        k = 0;
-        for (int64_t p = 0; p < m; p++) {
-            open[k] = (int32_t)p;
-            k += code[p] == NEEDS_S0;
-        }
-        if (2 * k > m) { /* most pairs (random pairs: Var = 2 is common): every lane, then select */
-            for (int64_t p = 0; p < m; p++) {
-                const int64_t s0 = SECOND(c + p, CHUNK, idx[p]);
-                code[p] = code[p] == NEEDS_S0 ? s0 : code[p];
-            }
-        } else if (k) {
-            double d[2 * (N + 1) * CHUNK];
-            int64_t di[CHUNK], dc[CHUNK];
-            for (int64_t q = 0; q < k; q++) {
-                for (int r = 0; r < 2 * (N + 1); r++) d[r * CHUNK + q] = c[r * CHUNK + open[q]];
-                di[q] = idx[open[q]];
-            }
-            for (int64_t q = 0; q < k; q++) dc[q] = SECOND(d + q, CHUNK, di[q]);
-            for (int64_t q = 0; q < k; q++) code[open[q]] = dc[q];
-        }
-        /* stage 3, valid pairs still open (spheres, translated and homothetic copies) */
-        k = 0;
-        for (int64_t p = 0; p < m; p++) {
-            open[k] = (int32_t)p;
-            k += code[p] == NEEDS_CERT;
-        }
-        if (2 * k > m) { /* most pairs (spheres, copies): every lane in place, then select */
-            for (int64_t p = 0; p < m; p++) {
-                const int64_t cert = THIRD(a + p, b + p, c + p, CHUNK);
-                code[p] = code[p] == NEEDS_CERT ? cert : code[p];
-            }
-        } else if (k) {
-            T pa[N * N * CHUNK], pb[N * N * CHUNK];
-            double d[2 * (N + 1) * CHUNK];
-            int64_t dc[CHUNK];
-            for (int64_t q = 0; q < k; q++) {
-                for (int r = 0; r < N * N; r++) {
-                    pa[r * CHUNK + q] = a[r * CHUNK + open[q]];
-                    pb[r * CHUNK + q] = b[r * CHUNK + open[q]];
-                }
-                for (int r = 0; r < 2 * (N + 1); r++) d[r * CHUNK + q] = c[r * CHUNK + open[q]];
-            }
-            for (int64_t q = 0; q < k; q++) dc[q] = THIRD(pa + q, pb + q, d + q, CHUNK);
-            for (int64_t q = 0; q < k; q++) code[open[q]] = dc[q];
-        }
-        for (int64_t p = 0; p < m; p++) out[i0 + p] = (signed char)code[p];
+        /* stage 2, where the tree asks for s0: the semi-static test */
+        S0_STAGE(SECOND, NEEDS_S0)
+        /* stage 3, valid pairs still open: the certificates, on the prepare each pair took */
+        CERT_STAGE(THIRD_FAST, 0)
+        CERT_STAGE(THIRD, 1)
+        /* stage 4, s0 still needed: the running-error test */
+        S0_STAGE(FOURTH, NEEDS_S0_RADIUS)
+        for (int64_t p = 0; p < m; p++) out[i0 + p] = (signed char)(code[p] == NEEDS_CERT ? -1 : code[p]);
     }
 }
+
+#undef SUBSET
+#undef PACK
+#undef S0_STAGE
+#undef CERT_STAGE

@@ -72,7 +72,9 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #define TRANSPOSE8_T transpose8_f64
 #define FULL full3_f64
 #define SECOND second3
+#define FOURTH fourth3
 #define THIRD third3_f64
+#define THIRD_FAST third3_fast_f64
 #define CLASSIFY GLUE(classify3_f64, VARIANT)
 #include "_blocks.h"
 #undef T
@@ -80,12 +82,14 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #undef TRANSPOSE8_T
 #undef FULL
 #undef THIRD
+#undef THIRD_FAST
 #undef CLASSIFY
 #define T float
 #define FIRST first3_f32
 #define TRANSPOSE8_T transpose8_f32
 #define FULL full3_f32
 #define THIRD third3_f32
+#define THIRD_FAST third3_fast_f32
 #define CLASSIFY GLUE(classify3_f32, VARIANT)
 #include "_blocks.h"
 #undef N
@@ -94,7 +98,9 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #undef TRANSPOSE8_T
 #undef FULL
 #undef SECOND
+#undef FOURTH
 #undef THIRD
+#undef THIRD_FAST
 #undef CLASSIFY
 
 #define N 4
@@ -103,7 +109,9 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #define TRANSPOSE8_T transpose8_f64
 #define FULL full4_f64
 #define SECOND second4
+#define FOURTH fourth4
 #define THIRD third4_f64
+#define THIRD_FAST third4_fast_f64
 #define CLASSIFY GLUE(classify4_f64, VARIANT)
 #include "_blocks.h"
 #undef T
@@ -111,12 +119,14 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #undef TRANSPOSE8_T
 #undef FULL
 #undef THIRD
+#undef THIRD_FAST
 #undef CLASSIFY
 #define T float
 #define FIRST first4_f32
 #define TRANSPOSE8_T transpose8_f32
 #define FULL full4_f32
 #define THIRD third4_f32
+#define THIRD_FAST third4_fast_f32
 #define CLASSIFY GLUE(classify4_f32, VARIANT)
 #include "_blocks.h"
 #undef N
@@ -125,5 +135,7 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #undef TRANSPOSE8_T
 #undef FULL
 #undef SECOND
+#undef FOURTH
 #undef THIRD
+#undef THIRD_FAST
 #undef CLASSIFY
