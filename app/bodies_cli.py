@@ -66,7 +66,7 @@ def add_parsers(sub: Any) -> None:
         "--out", required=True,
         help="output: CSV i,j,relation,certified_by,image_x,image_y,image_z (NPZ for a .npz name), or - for stdout",
     )
-    c.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz] (minimum image); default: the file's box")
+    c.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz], or a tilted box Lx,Ly,Lz,xy,xz,yz (2D: Lx,Ly,xy) (minimum image); default: the file's box")
     add_body_file_options(c)
     c.add_argument("--method", choices=("adaptive", "float", "exact"), default="adaptive")
     c.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bad bodies and go on")
@@ -163,7 +163,7 @@ def run_contacts(args: argparse.Namespace) -> int:
             k, why = next(iter(bodies.errors.items()))
             raise ValueError(f"{source}: {bodies.where(k)}: {why}")
         box = args.box if args.box is not None else bodies.box
-        if box is not None and len(box) != 6 and len(box) != bodies.dim:
+        if box is not None and len(box) != 6 and len(box) != bodies.dim and not (bodies.dim == 2 and len(box) == 3):
             raise ValueError(f"--box has {len(box)} sides but the bodies are {bodies.dim}D")
         box = usable_box(box, bodies.dim, source)
         t1 = time.perf_counter()

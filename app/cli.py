@@ -16,7 +16,9 @@
   self-contained HTML replay of the motion (viser's scene recording and player; no server).
 * ``python -m app contacts BODIES --out PAIRS.csv [--box Lx,Ly,Lz]`` and ``python -m app
   classify PAIRS.npz --out LABELS.npy``: many bodies and files of pairs (:mod:`app.bodies_cli`);
-  ``serve --bodies FILE`` / ``screenshot --bodies FILE`` show many bodies in the scene.
+  ``serve --bodies FILE`` / ``screenshot --bodies FILE`` show many bodies in the scene, and
+  ``serve --bodies START --to END`` / ``screenshot --bodies START --to END [--t T] [--event K]``
+  moving bodies over one step (the timeline, the contact events: :mod:`app.scene.sweep_view`).
 * ``python -m app sweep START.csv END.csv --out EVENTS.csv``: first contact times of moving
   bodies (:mod:`app.sweep_cli`).
 * ``python -m app --version``. The console script ``ellipsoids`` is the same command.
@@ -165,12 +167,18 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--seconds", type=float, default=12.0, help="playing time of the sweep over I (default 12)")
     ex.add_argument("--frames", type=int, default=240, help="time steps recorded (default 240)")
     ex.add_argument("--out", required=True, help="output HTML path")
-    from .bodies_cli import add_body_file_options, add_parsers, box_argument
+    from .bodies_cli import add_body_file_options, add_parsers, box_argument, frame_argument
 
     for parser in (s, sh):  # many bodies (issue 14): the scene opens on the bodies of a file
         parser.add_argument("--bodies", default=None, help="file of many bodies to show (app.readers: CSV, Parquet, NPZ, GSD, LAMMPS, XYZ)")
         parser.add_argument("--box", type=box_argument, default=None, help="periodic box Lx,Ly[,Lz] of --bodies (default: the file's)")
         add_body_file_options(parser)
+        parser.add_argument(  # moving bodies (issue 25): --bodies at t = 0, --to at t = 1
+            "--to", default=None, metavar="END",
+            help="the same bodies at t = 1 (any format of --bodies): the scene animates the step t in [0, 1] and lists "
+            "its contact events (python -m app sweep's input)",
+        )
+        parser.add_argument("--end-frame", type=frame_argument, default=None, help="frame of --to when it is a trajectory (default: --frame)")
     add_parsers(sub)
     from .sweep_cli import add_parser as add_sweep_parser
 
@@ -285,7 +293,24 @@ def _wait_forever() -> None:
 
 
 def _bodies_model(args: argparse.Namespace) -> object:
-    """The bodies of ``--bodies FILE`` with their contacts (``--box``), or None."""
+    """The bodies of ``--bodies FILE`` with their contacts (``--box``), or None.
+
+    With ``--to END``: the moving bodies of a step (:class:`app.scene.sweep_model.SweepModel`,
+    START and END read as ``python -m app sweep`` reads them).
+    """
+    if getattr(args, "to", None) is not None:
+        if getattr(args, "bodies", None) is None:
+            raise ValueError("--to END needs --bodies START (the bodies at t = 0)")
+        from .scene.sweep_model import SweepModel
+        from .sweep_cli import read_moving_bodies
+
+        moving = read_moving_bodies(
+            args.bodies, args.to, frame=getattr(args, "frame", None), end_frame=getattr(args, "end_frame", None),
+            format=getattr(args, "format", None), box=args.box, on_invalid="mark",
+        )
+        sweep = SweepModel(moving)
+        print(f"Moving bodies: {sweep.result.summary()}", file=sys.stderr, flush=True)
+        return sweep
     if getattr(args, "bodies", None) is None:
         return None
     from .readers import read_bodies, usable_box
@@ -305,7 +330,13 @@ def _screenshot(args: argparse.Namespace) -> int:
 
     configs = _listed(args.config)
     ts, events = _listed(args.t), _listed(args.event)
-    if len(configs) > 1:  # a list of configurations: one image each, named after the file
+    if getattr(args, "to", None) is not None:  # moving bodies: --t in the step, --event K the K-th contact event
+        if any(not 0.0 <= t <= 1.0 for t in ts):
+            raise ValueError("--t: moving bodies are shown over the step t in [0, 1]")
+        if any(k < 1 for k in events):
+            raise ValueError("--event is 1-based (the K-th contact event in time order)")
+        shots = shots_for(config_from_args(args), args.out, ts, events)
+    elif len(configs) > 1:  # a list of configurations: one image each, named after the file
         shots = []
         for path in configs:
             cfg = config_from_args(args, path)

@@ -229,6 +229,8 @@ class HeadlessScene:
     def show(self, config: SceneConfig | None = None, *, t: float | str | None = None, event: int | None = None) -> None:
         """Show ``config`` in the same tab (no reload), then t or an event of its motion; wait for it."""
         s = self.session
+        if hasattr(s, "show_bodies"):  # many bodies: moving ones have a time and events
+            return self._show_bodies_at(t, event)
         if config is not None:
             s.load_untrusted(config.to_dict())
             if not s.ready.wait(self.timeout):
@@ -244,6 +246,31 @@ class HeadlessScene:
             error = s.timeline_ctl.apply_text(str(t))
             if error is not None:
                 raise ValueError(error)
+        self.wait_settled()
+
+    def _show_bodies_at(self, t: float | str | None, event: int | None) -> None:
+        """Moving bodies (``--to``): the bodies at t, or the K-th contact event opened; wait for it.
+
+        Raises:
+            ValueError: t or an event for bodies that do not move, t outside [0, 1], no event K.
+        """
+        view = self.session
+        if t is None and event is None:
+            return self.wait_settled()
+        if view.timeline is None:
+            raise ValueError("--t and --event show moving bodies: give the bodies at t = 1 with --to END")
+        if view.pair is not None:
+            view.show_bodies()
+        if event is not None:
+            n = len(view.model.order)
+            if not 1 <= event <= n:
+                raise ValueError(f"--event {event}: the step has {n} contact event{'s' if n != 1 else ''} (1..{n})")
+            view.open_pair(int(view.model.order[event - 1]))
+        else:
+            tf = float(t)  # type: ignore[arg-type]
+            if not 0.0 <= tf <= 1.0:
+                raise ValueError(f"--t {t}: moving bodies are shown over the step t in [0, 1]")
+            view.timeline.set_time(tf)
         self.wait_settled()
 
     # -------------------------------------------------------------- waiting and reading

@@ -24,12 +24,16 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 
-__all__ = ["add_parser", "run_sweep", "unwrapped", "write_events_csv", "read_events_csv", "EVENTS_HEADER"]
+if TYPE_CHECKING:
+    from .readers import BodySet
+
+__all__ = ["add_parser", "run_sweep", "MovingBodies", "read_moving_bodies", "unwrapped", "write_events_csv", "read_events_csv", "EVENTS_HEADER"]
 
 EVENTS_HEADER = "i,j,t_lo,t_hi,relation"
 
@@ -54,63 +58,129 @@ def _say(args: argparse.Namespace, text: str) -> None:
         print(text, file=sys.stderr, flush=True)
 
 
+@dataclass
+class MovingBodies:
+    """START and END read and checked for a sweep: what :func:`core.sweep_contacts` takes, and from where."""
+
+    start: BodySet
+    """The bodies at t = 0 (their parameters)."""
+    end: BodySet
+    """The same bodies at t = 1."""
+    centers1: np.ndarray
+    """END's centres, in a box taken at the nearest image of START's (:func:`unwrapped`)."""
+    box: tuple[float, ...] | None
+    """The periodic box (``--box``, else START's), or None."""
+    errors: dict[int, str]
+    """Row -> why START or END describes no body there (the files' reasons)."""
+    names: tuple[str, str]
+    """How START and END are named in messages."""
+    moved: int = 0
+    """Bodies whose END centre was moved to its nearest image (they crossed a face of the box)."""
+
+    @property
+    def dim(self) -> int:
+        """2 or 3."""
+        return self.start.dim
+
+    def arguments(self) -> tuple[Any, Any, Any, Any, Any]:
+        """(centers0, centers1, semi_axes, orientations0, orientations1) for :func:`core.sweep_contacts`."""
+        return self.start.centers, self.centers1, self.start.semi_axes, self.start.orientations, self.end.orientations
+
+
+def read_moving_bodies(
+    start: str,
+    end: str,
+    *,
+    frame: int | None = None,
+    end_frame: int | None = None,
+    format: str | None = None,
+    box: tuple[float, ...] | None = None,
+    on_invalid: str = "raise",
+) -> MovingBodies:
+    """Read START and END (files of the same bodies at t = 0 and t = 1) and check that they match.
+
+    The one reader of a sweep's files: ``python -m app sweep`` and the scene
+    (``serve --bodies START --to END``) both use it.
+
+    Args:
+        start: file of bodies at t = 0 (any format of :mod:`app.readers`; ``-`` for stdin).
+        end: the same bodies at t = 1.
+        frame: frame of START when it is a trajectory (None: the last).
+        end_frame: frame of END (None: ``frame``).
+        format: reader (None: from the name, else the first bytes).
+        box: periodic box sides (None: START's box, if any).
+        on_invalid: "raise" a ValueError for the first row that is no body, or "mark" (the
+            reasons are in :attr:`MovingBodies.errors`).
+
+    Raises:
+        ValueError: unreadable files, matrices instead of parameters, different numbers of
+            bodies or semi-axes, a bad row (``on_invalid="raise"``), a box that does not fit.
+    """
+    from .readers import read_bodies, usable_box
+
+    if start == "-" and end == "-":
+        raise ValueError("START and END cannot both be standard input")
+    s = read_bodies(start, frame=frame, format=format)
+    e = read_bodies(end, frame=end_frame if end_frame is not None else frame, format=format)
+    names = ("<stdin>" if start == "-" else start, "<stdin>" if end == "-" else end)
+    for b, name in zip((s, e), names, strict=True):
+        if b.centers is None or b.semi_axes is None:
+            raise ValueError(f"{name}: sweep needs the bodies' parameters (centres, semi-axes, orientations), not matrices Q")
+    assert s.centers is not None and e.centers is not None and s.semi_axes is not None and e.semi_axes is not None
+    if s.centers.shape != e.centers.shape:
+        raise ValueError(
+            f"{names[0]} has {len(s)} {s.dim}D bodies but {names[1]} has {len(e)} {e.dim}D bodies: "
+            "END must hold the same bodies, row by row"
+        )
+    same = (s.semi_axes == e.semi_axes) | (np.isnan(s.semi_axes) & np.isnan(e.semi_axes))
+    bad = np.flatnonzero(~same.all(axis=1))
+    if bad.size:
+        k = int(bad[0])
+        raise ValueError(
+            f"{s.where(k)}: the semi-axes differ between {names[0]} ({s.semi_axes[k].tolist()}) and "
+            f"{names[1]} ({e.semi_axes[k].tolist()}): a body keeps its shape during the step"
+        )
+    errors = {k: f"{names[0]}: {why}" for k, why in s.errors.items()}
+    errors.update({k: f"{names[1]}: {why}" for k, why in e.errors.items() if k not in errors})
+    if errors and on_invalid == "raise":
+        k, why = min(errors.items())
+        raise ValueError(f"{s.where(k)}: {why}")
+    box = box if box is not None else s.box
+    if box is not None and len(box) != 6 and len(box) != s.dim:
+        raise ValueError(f"--box has {len(box)} sides but the bodies are {s.dim}D")
+    box = usable_box(box, s.dim, names[0])
+    if box is not None and len(box) == 6:
+        raise ValueError(f"{names[0]}: sweep takes orthogonal boxes only (Lx, Ly, Lz); give --box Lx,Ly,Lz")
+    centers1, moved = e.centers, 0
+    if box is not None:
+        centers1, moved = unwrapped(s.centers, e.centers, np.asarray(box, dtype=np.float64))
+    return MovingBodies(s, e, centers1, None if box is None else tuple(box), errors, names, moved)
+
+
 def run_sweep(args: argparse.Namespace) -> int:
     """``python -m app sweep``: read both files, sweep, write EVENTS, summarise. Returns the exit status."""
     from core import sweep_contacts
 
     from .bodies_cli import ProgressBar
     from .output import Output
-    from .readers import read_bodies, usable_box
 
     if args.start == "-" and args.end == "-":
         raise ValueError("START and END cannot both be standard input")
     out = Output(args.out)  # checked (and its temporary file made) before any work
     with out as f:
         t0 = time.perf_counter()
-        start = read_bodies(args.start, frame=args.frame, format=args.format)
-        end = read_bodies(args.end, frame=args.end_frame if args.end_frame is not None else args.frame, format=args.format)
-        names = ("<stdin>" if args.start == "-" else args.start, "<stdin>" if args.end == "-" else args.end)
-        for b, name in zip((start, end), names, strict=True):
-            if b.centers is None or b.semi_axes is None:
-                raise ValueError(f"{name}: sweep needs the bodies' parameters (centres, semi-axes, orientations), not matrices Q")
-        assert start.centers is not None and end.centers is not None and start.semi_axes is not None and end.semi_axes is not None
-        if start.centers.shape != end.centers.shape:
-            raise ValueError(
-                f"{names[0]} has {len(start)} {start.dim}D bodies but {names[1]} has {len(end)} {end.dim}D bodies: "
-                "END must hold the same bodies, row by row"
-            )
-        same = (start.semi_axes == end.semi_axes) | (np.isnan(start.semi_axes) & np.isnan(end.semi_axes))
-        bad = np.flatnonzero(~same.all(axis=1))
-        if bad.size:
-            k = int(bad[0])
-            raise ValueError(
-                f"{start.where(k)}: the semi-axes differ between {names[0]} ({start.semi_axes[k].tolist()}) and "
-                f"{names[1]} ({end.semi_axes[k].tolist()}): a body keeps its shape during the step"
-            )
-        errors = {k: f"{names[0]}: {why}" for k, why in start.errors.items()}
-        errors.update({k: f"{names[1]}: {why}" for k, why in end.errors.items() if k not in errors})
-        if errors and args.on_invalid == "raise":
-            k, why = min(errors.items())
-            raise ValueError(f"{start.where(k)}: {why}")
-        box = args.box if args.box is not None else start.box
-        if box is not None and len(box) != 6 and len(box) != start.dim:
-            raise ValueError(f"--box has {len(box)} sides but the bodies are {start.dim}D")
-        box = usable_box(box, start.dim, names[0])
-        if box is not None and len(box) == 6:
-            raise ValueError(f"{names[0]}: sweep takes orthogonal boxes only (Lx, Ly, Lz); give --box Lx,Ly,Lz")
+        moving = read_moving_bodies(
+            args.start, args.end, frame=args.frame, end_frame=args.end_frame, format=args.format, box=args.box,
+            on_invalid=args.on_invalid,
+        )
+        start, names, box, errors = moving.start, moving.names, moving.box, moving.errors
         t1 = time.perf_counter()
         kind = "ellipsoids" if start.dim == 3 else "ellipses"
         _say(args, f"read {len(start):,} moving {kind} from {names[0]} and {names[1]} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
-        centers1 = end.centers
-        if box is not None:
-            centers1, moved = unwrapped(start.centers, end.centers, np.asarray(box, dtype=np.float64))
-            if moved:
-                _say(args, f"{moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
+        if moving.moved:
+            _say(args, f"{moving.moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
         progress = None if args.quiet else ProgressBar(sys.stderr, "first contacts", min_total=50_000)
-        res = sweep_contacts(
-            start.centers, centers1, start.semi_axes, start.orientations, end.orientations,
-            box=box, on_invalid=args.on_invalid, progress=progress,
-        )
+        res = sweep_contacts(*moving.arguments(), box=box, on_invalid=args.on_invalid, progress=progress)
         t2 = time.perf_counter()
         write_events_csv(f, res.i, res.j, res.t_lo, res.t_hi, res.relation)
     t3 = time.perf_counter()

@@ -10,8 +10,9 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import read_motion, read_interval           # user text, under limits (one grammar)
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
     from core import warm_up, set_threads                 # compiled filter available?; threads
-    from core import contact_scale, separating_plane, contact_point   # witnesses (core.witness)
+    from core import contact_scale, separating_plane, contact_point, distance   # witnesses (core.witness)
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
+    from core import BodyIndex                            # an index asked about new bodies
     from core import sweep_contacts, SweepContacts, first_contact   # N moving bodies: first contacts
 
 ``core`` imports only numpy, python-flint and the standard library (the float filter's C kernels
@@ -23,6 +24,7 @@ from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: re
 from .bodies.broadphase import TooManyPairs as TooManyPairs
 from .bodies.build import bodies_from_axes as bodies_from_axes
 from .bodies.contacts import contacts as contacts
+from .bodies.index import BodyIndex as BodyIndex
 from .bodies.result import Contacts as Contacts
 from .bodies.sweep import sweep_contacts as sweep_contacts
 from .bodies.sweep_result import SweepContacts as SweepContacts
@@ -58,13 +60,16 @@ from .shapes.quadrics import rotation_from_quaternion as rotation_from_quaternio
 from .shapes.quadrics import validate_quadric as validate_quadric
 from .witness import ContactPoint as ContactPoint
 from .witness import ContactScale as ContactScale
+from .witness import NoWitness as NoWitness
 from .witness import SeparatingPlane as SeparatingPlane
 from .witness import Witness as Witness
 from .witness import contact_point as contact_point
 from .witness import contact_scale as contact_scale
+from .witness import distance as distance
 from .witness import separating_plane as separating_plane
 
 __all__ = [
+    "BodyIndex",
     "METHODS",
     "ON_INVALID",
     "Certifier",
@@ -83,6 +88,7 @@ __all__ = [
     "TooManyPairs",
     "ShapeParams",
     "Stats",
+    "NoWitness",
     "SweepContacts",
     "Witness",
     "analyse",
@@ -92,6 +98,7 @@ __all__ = [
     "contact_point",
     "contact_scale",
     "contacts",
+    "distance",
     "explain",
     "first_contact",
     "motion_from_dict",

@@ -176,7 +176,8 @@ def test_classify_shape_with_float_angle(client):
 # --- /api/explain ---------------------------------------------------------------------------
 
 def q(name, v, sign):
-    return {"name": name, "approx": float(v), "exact": str(v), "bound": None, "sign": sign}
+    text = "0" if v == 0 else f"{v:.5e}"  # six significant digits, as explain writes them at any size
+    return {"name": name, "approx": float(v), "exact": str(v), "bound": None, "sign": sign, "text": text}
 
 
 def test_explain_tangent_circles(client):

@@ -42,6 +42,7 @@ def test_contact_scale_separate(client):
         "margin": 0.5,
         "margin_text": "50 % apart",
         "exact": None,
+        "certified_by": "exact",
     }
 
 
@@ -70,7 +71,9 @@ def test_contact_scale_shapes_and_floats(client):
     assert (r["kind"], r["lo"], r["hi"]) == ("ellipsoid", "5/3", "5/3")  # along x: 5 = mu (2 + 1)
     body = {"a": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]], "b": [[1.0, 0.0, -4.0], [0.0, 1.0, 0.0], [-4.0, 0.0, 15.0]], "rtol": 1e-6}
     r = client.post("/api/contact-scale", json=body).json()
-    assert (r["relation"], r["lo"], r["hi"]) == ("separate", "2", "2")
+    assert (r["relation"], r["lo"], r["hi"]) == ("separate", "2", "2")  # floats bracket it, an exact check pins 2
+    r = client.post("/api/separating-plane", json={k: body[k] for k in ("a", "b")}).json()
+    assert (r["normal"], r["offset"], r["certified_by"]) == (["1", "0"], "2", "float")  # binary64 input: floats certify x = 2
 
 
 def test_separating_plane(client):
@@ -86,6 +89,7 @@ def test_separating_plane(client):
         "support_a": "1",
         "support_b": "2",
         "gap_lower_bound": 1.0,
+        "certified_by": "exact",
     }
 
 
@@ -107,6 +111,7 @@ def test_contact_point_tangent(client):
         "point": [one, zero],
         "normal": [one, zero],
         "pencil_root": one,
+        "certified_by": "exact",
     }
 
 
@@ -151,3 +156,28 @@ def test_witness_routes_refuse_json_edges_like_classify(client, route):
     text = '{"a": [[1, 0, 0], [0, 1, 0], [0, 0, -1]], "b": [[1, 0, -3], [0, 1, 0], [-3, 0, 1e-400]]}'
     r = client.post(route, content=text, headers={"content-type": "application/json"})
     assert r.status_code == 422 and "underflows to 0 as a float" in r.text
+
+
+@pytest.mark.parametrize(
+    "pair",
+    [
+        # issue 21: floats at 1e-300 (JSON numbers: the binary64 values they are)
+        {"a": [[2.0**-1000, 0, 0], [0, 2.0**-1000, 0], [0, 0, -(2.0**-1000)]], "b": [[1e-300, 0, -3e-300], [0, 1e-300, 0], [-3e-300, 0, 8e-300]]},
+        # exact decimal strings far outside the float range: unit circles 3 apart, matrices times 10^+-900
+        {"a": [["1e900", "0", "0"], ["0", "1e900", "0"], ["0", "0", "-1e900"]], "b": [["1e-900", "0", "-3e-900"], ["0", "1e-900", "0"], ["-3e-900", "0", "8e-900"]]},
+        # space scaled by 10^400: the circles' entries reach 10^800
+        {"a": [[1, 0, 0], [0, 1, 0], [0, 0, "-1e800"]], "b": [[1, 0, "-3e400"], [0, 1, 0], ["-3e400", 0, "8e800"]]},
+    ],
+)
+def test_every_route_answers_at_any_scale(client, pair):
+    """explain and every witness route answer pairs that classify answers, with short texts."""
+    r = client.post("/api/explain", json=pair)
+    assert r.status_code == 200, r.text
+    e = r.json()
+    assert e["relation"] == "separate" and all(len(q["text"]) <= 16 for q in e["coefficients"])
+    cs = client.post("/api/contact-scale", json=pair).json()
+    lo, hi = Fraction(cs["lo"]), Fraction(cs["hi"])
+    assert cs["relation"] == "separate" and lo <= Fraction(3, 2) <= hi and hi - lo <= Fraction(1, 10**12) * hi
+    assert client.post("/api/separating-plane", json=pair).status_code == 200
+    assert client.post("/api/witness", json=pair).json()["relation"] == "separate"
+    assert client.post("/api/contact-point", json=pair).status_code == 422  # separate: no common point

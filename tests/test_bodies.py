@@ -312,7 +312,7 @@ def test_periodic_errors_name_the_body():
     with pytest.raises(ValueError, match=r"^body 2: centre x = 3.5 is more than one box side \(Lx = 2.9\)"):
         contacts(Q, box=(2.9, 10))
     with pytest.raises(ValueError, match=r"box: expected 2 positive finite sides"):
-        contacts(Q, box=(4, 4, 4))
+        contacts(Q, box=(4, 4, 4, 4))  # (4, 4, 4) is a tilted 2D box (Lx, Ly, xy)
 
 
 def test_empty_and_single_body():

@@ -102,19 +102,31 @@ def test_gsd_spheres_2d_and_refusals(tmp_path, capsys):
         read_bodies(tmp_path / "poly.gsd")
 
 
-def test_tilted_box_flows_through_and_is_refused_until_the_library_takes_it(tmp_path, capsys):
-    pos, q, typeid, semi, L = hoomd_bodies(50, seed=5)
-    write_gsd(tmp_path / "tilted.gsd", [(pos, q, typeid, semi, L, (0.5, 0.0, 0.25))])
+def test_tilted_box_flows_through_to_contacts_and_the_command(tmp_path):
+    pos, q, typeid, semi, L = hoomd_bodies(300, seed=5)
+    tilt = (0.5, -0.5, 0.25)
+    H = np.array([[L, tilt[0] * L, tilt[1] * L], [0, L, tilt[2] * L], [0, 0, L]], dtype=np.float64)
+    f = np.linalg.solve(H, pos.astype(np.float64).T).T
+    pos = ((f - np.round(f)) @ H.T).astype(np.float32)  # wrapped into the tilted cell, as HOOMD holds them
+    write_gsd(tmp_path / "tilted.gsd", [(pos, q, typeid, semi, L, tilt)])
     s = read_bodies(tmp_path / "tilted.gsd")
-    assert s.box == (float(L), float(L), float(L), 0.5, 0.0, 0.25)  # HOOMD's six numbers, unchanged
-    from app.readers.bodyset import _tilted_boxes
-
-    if _tilted_boxes(3):
-        pytest.skip("the library takes tilted boxes now: the refusal is gone")
-    assert main(["contacts", str(tmp_path / "tilted.gsd"), "--out", str(tmp_path / "p.csv")]) == 2
-    err = capsys.readouterr().err
-    assert "the periodic box is tilted (triclinic)" in err and "tilted boxes are not supported yet" in err
-    assert err.count("\n") == 1 and not (tmp_path / "p.csv").exists()
+    assert s.box == (float(L), float(L), float(L), *tilt)  # HOOMD's six numbers, unchanged
+    want = contacts(bodies_from_axes(pos.astype(np.float64), semi[typeid], q.astype(np.float64)), box=s.box)
+    assert len(want) > 50 and (np.abs(want.image).sum(axis=1) > 0).sum() > 5  # pairs across the tilted faces
+    same_contacts(contacts(s.Q, box=s.box), want)
+    out = tmp_path / "pairs.csv"
+    assert main(["contacts", str(tmp_path / "tilted.gsd"), "--out", str(out), "--quiet"]) == 0
+    rows = [ln.split(",") for ln in out.read_text().splitlines()[1:]]
+    assert [(int(r[0]), int(r[1]), r[2], tuple(int(x) for x in r[4:7])) for r in rows] == [
+        (int(i), int(j), str(Relation(int(r))), tuple(int(x) for x in k)) for i, j, r, k in zip(want.i, want.j, want.relation, want.image, strict=True)
+    ]
+    # LAMMPS: a tilted dump (tilt lengths) becomes the same kind of box, and the command runs on it
+    b = random_bodies(60, dim=3, seed=3)
+    lammps_dump(tmp_path / "t.dump", [(b.centers, 2 * b.semi_axes, b.orientations)], tilt=(1.0, 0.5, 0.25))
+    t = read_bodies(tmp_path / "t.dump")
+    assert t.box is not None and len(t.box) == 6
+    assert main(["contacts", str(tmp_path / "t.dump"), "--out", str(out), "--quiet"]) == 0
+    assert len(out.read_text().splitlines()) == 1 + len(contacts(t.Q, box=t.box))
 
 
 def lammps_dump(path, frames, *, tilt=None, boundary="pp pp pp", order=None):

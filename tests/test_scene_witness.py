@@ -98,7 +98,7 @@ def test_drag_updates_the_margin(server):
 
 
 def test_float_shapes_take_the_float_witness():
-    # float matrices (a drag of float shapes): certified by float_witness, same margin
+    # float matrices (a drag of float shapes): certified by floats (core.witness.witness, adaptive), same margin
     A = ShapeState((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (1.0, 0.0, 0.0, 0.0)).quadric()
     B = ShapeState((3.0, 0.0, 0.0), (1.0, 1.0, 1.0), (1.0, 0.0, 0.0, 0.0)).quadric()
     assert isinstance(A, np.ndarray)

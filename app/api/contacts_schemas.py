@@ -65,8 +65,10 @@ class ContactsIn(BaseModel):
     matrices: list[BodyMatrix] | None = Field(
         default=None, description="or one symmetric 4x4 (3x3) matrix per body, interior X^T A X < 0"
     )
-    box: Annotated[list[FloatNumber], Field(min_length=2, max_length=3)] | None = Field(
-        default=None, description="periodic box sides [Lx, Ly(, Lz)]: minimum image convention"
+    box: Annotated[list[FloatNumber], Field(min_length=2, max_length=6)] | None = Field(
+        default=None,
+        description="periodic box: sides [Lx, Ly(, Lz)], or a tilted box in HOOMD's convention [Lx, Ly, Lz, xy, xz, yz] "
+        "(2D: [Lx, Ly, xy]): minimum image convention",
     )
     method: MethodName = "adaptive"
     on_invalid: Literal["raise", "mark"] = Field(
@@ -83,7 +85,7 @@ class PairOut(BaseModel):
 
     i: int
     j: int
-    """i < j; in a periodic box, j's nearest image (j + image * box)."""
+    """i < j; in a periodic box, j's nearest image (j moved by the lattice vector of ``image``)."""
     relation: PairRelation
     certified_by: CertifiedBy | None
     """Which arithmetic certified the relation: "float" (the filter) or "exact"."""
@@ -92,7 +94,7 @@ class PairOut(BaseModel):
     image_x: int = 0
     image_y: int = 0
     image_z: int = 0
-    """The lattice image k of j as three numbers (j stands at c_j + k L; all 0 in open space, image_z 0 in 2D)."""
+    """The lattice image k of j as three numbers (j stands at c_j + k L, or c_j + k1 a1 + k2 a2 + k3 a3 in a tilted box; all 0 in open space, image_z 0 in 2D)."""
 
 
 class ContactsOut(BaseModel):

@@ -245,8 +245,8 @@ def contacts_matrices(body: ContactsIn) -> np.ndarray:
         return np.zeros((0, 4, 4))
     if widths not in ({10}, {5}):
         raise HTTPException(422, "bodies: every row must be [x, y, z, a, b, c, qw, qx, qy, qz] (3D) or every row [x, y, a, b, angle] (2D)")
-    if body.box is not None and len(body.box) != (3 if 10 in widths else 2):
-        raise HTTPException(422, f"box: {len(body.box)} sides for {'3D' if 10 in widths else '2D'} bodies")
+    if body.box is not None and len(body.box) not in ((3, 6) if 10 in widths else (2, 3, 6)):
+        raise HTTPException(422, f"box: {len(body.box)} numbers for {'3D' if 10 in widths else '2D'} bodies")
     t = np.array(body.bodies, dtype=np.float64)
     d = 3 if t.shape[1] == 10 else 2
     with bad_input("bodies: "):

@@ -208,6 +208,9 @@ class QuantityOut(BaseModel):
     """|exact - approx| <= bound when the float filter computed it."""
     sign: int | None = None
     """Certified sign -1, 0, 1 (None when not certified)."""
+    text: str = ""
+    """The value in scientific notation at any size ("-1.23457e+612"), computed exactly: short
+    even where ``approx`` is None and ``exact`` runs to thousands of digits."""
 
 
 class ExplainOut(BaseModel):

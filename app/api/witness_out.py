@@ -9,14 +9,14 @@ from __future__ import annotations
 import math
 from typing import Any, cast
 
-from core import Relation
-from core.witness import SENTENCES, ContactPoint, ContactScale, margin_text
+from core import Certifier, Relation
+from core.witness import SENTENCES, ContactPoint, ContactScale, SeparatingPlane, margin_text
 from core.witness.numbers import algebraic_dict
 
 from .schemas import AlgebraicOut
-from .witness_schemas import ContactPointOut, ContactScaleOut, Decided, Kind, PlaneOut
+from .witness_schemas import CertifiedBy, ContactPointOut, ContactScaleOut, Decided, Kind, PlaneOut
 
-__all__ = ["scale_out", "point_out", "plane_out", "kind_of", "decided"]
+__all__ = ["scale_out", "point_out", "plane_out", "kind_of", "decided", "certified_by"]
 
 
 def _finite(x: float) -> float | None:
@@ -30,6 +30,11 @@ def _algebraic(d: dict[str, Any]) -> AlgebraicOut:
 def decided(relation: Relation) -> Decided:
     """The API name of a witnessed relation (core's witnesses are of decided pairs only)."""
     return cast(Decided, str(relation))
+
+
+def certified_by(c: Certifier) -> CertifiedBy:
+    """The API name of the arithmetic that certified a witness."""
+    return "float" if c == Certifier.FLOAT else "exact"
 
 
 def kind_of(a: Any) -> Kind:
@@ -48,6 +53,7 @@ def scale_out(cs: ContactScale, kind: Kind, digits: int | None) -> ContactScaleO
         margin=_finite(cs.margin),
         margin_text=margin_text(float(cs.lo), float(cs.hi), cs.relation),
         exact=None if digits is None else _algebraic(algebraic_dict(cs.algebraic(), digits)),
+        certified_by=certified_by(cs.certified_by),
     )
 
 
@@ -60,12 +66,14 @@ def point_out(cp: ContactPoint, digits: int) -> ContactPointOut:
         point=[_algebraic(c) for c in d["point"]],
         normal=None if d["normal"] is None else [_algebraic(c) for c in d["normal"]],
         pencil_root=None if d["pencil_root"] is None else _algebraic(d["pencil_root"]),
+        certified_by=certified_by(cp.certified_by),
     )
 
 
-def plane_out(plane: Any) -> PlaneOut:
-    """A verified separating plane."""
+def plane_out(plane: SeparatingPlane) -> PlaneOut:
+    """A certified separating plane."""
     d = plane.to_dict()
     d["offset_approx"] = _finite(d["offset_approx"])
     d["gap_lower_bound"] = _finite(d["gap_lower_bound"])
+    d["certified_by"] = certified_by(plane.certified_by)
     return PlaneOut(relation="separate", sentence=SENTENCES[Relation.SEPARATE], **d)

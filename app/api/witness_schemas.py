@@ -24,6 +24,8 @@ __all__ = [
 ]
 
 Kind = Literal["ellipse", "ellipsoid"]
+CertifiedBy = Literal["float", "exact"]
+"""Which arithmetic certified a witness: floats with directed rounding, or exact rationals."""
 Decided = Literal["separate", "tangent", "overlap"]
 """The relation of a pair that has a witness (never undecided)."""
 
@@ -74,6 +76,8 @@ class ContactScaleOut(BaseModel):
     """"1.8 % apart", "touching", "overlapping by 3 %"."""
     exact: AlgebraicOut | None = None
     """mu* exactly, when asked for."""
+    certified_by: CertifiedBy = "exact"
+    """Which arithmetic proved the bracket (the bounds are exact rationals either way)."""
 
 
 class PlaneOut(BaseModel):
@@ -94,6 +98,8 @@ class PlaneOut(BaseModel):
     """A lower bound of min n.x over b (> d)."""
     gap_lower_bound: float | None
     """A lower bound of the Euclidean distance between the shapes (support_b - support_a) / |n|."""
+    certified_by: CertifiedBy = "exact"
+    """Which arithmetic proved that the plane separates (its numbers are exact either way)."""
 
 
 class ContactPointOut(BaseModel):
@@ -106,6 +112,8 @@ class ContactPointOut(BaseModel):
     """Tangent: n = (upper rows of a) X, the common normal out of a into b (not unit length)."""
     pencil_root: AlgebraicOut | None = None
     """Tangent: the positive double root T* of det(T a + b) (a, b with negative interiors)."""
+    certified_by: CertifiedBy = "exact"
+    """Which arithmetic proved the point (a tangent pair's is always exact)."""
 
 
 class WitnessOut(BaseModel):

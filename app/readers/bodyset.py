@@ -105,14 +105,15 @@ def file_box(sides: Any, tilts: Any = (0.0, 0.0, 0.0), *, dim: int) -> tuple[flo
 
 
 def usable_box(box: tuple[float, ...] | None, dim: int, source: str = "") -> tuple[float, ...] | None:
-    """The box to hand to :func:`core.contacts`; a tilted box only once the library takes one.
+    """The box to hand to :func:`core.contacts`: the six numbers of a tilted box flow through.
 
-    The six numbers of a tilted box flow through unchanged; until :func:`core.contacts`
-    accepts ``box=(Lx, Ly, Lz, xy, xz, yz)``, such a box is refused here with a message (not
-    silently made orthogonal, which would change which bodies touch).
+    :func:`core.contacts` takes ``box=(Lx, Ly, Lz, xy, xz, yz)`` (the library's box reader is
+    asked), so a tilted box is passed on unchanged, never silently made orthogonal (which
+    would change which bodies touch). Should the reader ever refuse tilted boxes, such a box
+    is refused here with a message.
 
     Raises:
-        ValueError: a tilted box while the library has no tilted boxes.
+        ValueError: a tilted box the library's box reader does not take.
     """
     if box is None or len(box) != 6 or _tilted_boxes(dim):
         return box

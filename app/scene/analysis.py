@@ -11,6 +11,7 @@ slider, plot samples) and answers every question about relations with the result
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable, Hashable, Iterable
@@ -24,7 +25,7 @@ from flint import fmpq
 from core.algebra.algebraic import RealAlgebraic
 from core.algebra.closedform import closed_form, polynomial_text
 from core.moving.result import Event, MotionAnalysis
-from core.shapes.numbers import to_fmpq
+from core.shapes.numbers import format_rational, to_float, to_fmpq
 
 from ..jobs import analyse_job, read_motion_job
 from .motion import MAX_MOTION_TEXT, MotionError, MotionModel
@@ -268,7 +269,10 @@ def _short_rational(text: str) -> str:
     if len(text) <= 10:
         return text
     q = to_fmpq(text)
-    return f"{int(q.p) / int(q.q):.6g}"
+    f = to_float(q)
+    if not math.isfinite(f) or (f == 0 and q != 0):  # beyond the float range: exact mantissa, exponent
+        return format_rational(q)
+    return f"{f:.6g}"
 
 
 class AnalysisCache:

@@ -8,10 +8,14 @@ click ray, and the
 
 What the two-body view certifies: it rebuilds both shapes from their parameters with
 :func:`core.quadric_from_axes`, bit for bit the matrices the search classified, so an open pair
-gets the same label. In a periodic box the second body is shown at its image centre c_j + k L
-rounded to a float, while the search classified the exact translate of its matrix; a pair at
+gets the same label. In a periodic box the second body is shown at its image centre c_j + v(k)
+(k L, or the tilted box's lattice vector) rounded to a float, while the search classified the exact translate of its matrix; a pair at
 the very edge of tangency may then read differently (the view says so). Bodies given as
 matrices (NPZ ``Q``) are shown with parameters recovered in floats (approximate).
+
+:class:`PairList` (the paged, filtered list of pairs, a body's partners, the lookup of a pair)
+and :func:`pick_body`, :func:`relation_colours` serve the moving bodies too
+(:class:`app.scene.sweep_model.SweepModel`, whose pairs are the contact events of a step).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from core.shapes.quadrics import rotations_from_orientations
 from ..bodyfiles import BodySet
 from .state import SceneConfig
 
-__all__ = ["BodiesModel", "PairEntry", "PairPage", "PAGE_SIZE", "RELATION_FILTERS"]
+__all__ = ["BodiesModel", "PairList", "PairEntry", "PairPage", "PAGE_SIZE", "RELATION_FILTERS", "pick_body", "relation_colours"]
 
 PAGE_SIZE = 200
 """Pairs per page of the GUI's list (tangent first, then overlap, then by (i, j))."""
@@ -69,75 +73,23 @@ class PairPage:
         return f"showing {self.start + 1:,}–{self.start + len(self.entries):,} of {self.total:,} {what}"
 
 
-class BodiesModel:
-    """Bodies, their certified contacts and what the view needs to draw and pick them.
+class PairList:
+    """The pairs of a set of bodies as the GUI lists them: pages, filters, partners, lookup.
 
-    Args:
-        bodies: the bodies read from a file.
-        box: periodic box sides, or None.
-        name: what to call the set in the GUI (the file name).
-
-    Raises:
-        ValueError: a bad box or a body too large for it (invalid bodies are marked, not fatal).
+    Subclasses set ``result`` (``.i``, ``.j`` sorted by (i, j), ``.relation``, ``.pairs_of``),
+    ``order`` (the list order: indices into the result), ``bodies`` (a
+    :class:`~app.readers.BodySet`), ``dim`` and ``pair_label``.
     """
 
-    def __init__(self, bodies: BodySet, box: Any = None, name: str = "") -> None:
-        self.bodies = bodies
-        self.name = name or bodies.source
-        self.dim = bodies.dim
-        self.box = None if box is None else tuple(float(v) for v in box)
-        self.result: Contacts = contacts(bodies.Q, box=self.box, on_invalid="mark")
-        self.invalid = {**self.result.invalid, **bodies.errors}
-        self.worst = self.result.per_body()
-        self.positions, self.wxyz, self.scales = self._poses()
-        self._rotations: np.ndarray | None = None
-        res = self.result
-        self.order = np.lexsort((res.j, res.i, -(res.relation == Relation.TANGENT).astype(np.int8)))
-        """Indices of the contacts in list order: tangent first, then by (i, j)."""
+    result: Any
+    order: np.ndarray
+    bodies: BodySet
+    dim: int
 
-    # ------------------------------------------------------------------ drawing
-    def _poses(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(N, 3) positions, (N, 4) unit quaternions and (N, 3) scales (2D: z = 0, scale z = 1)."""
-        b, N, d = self.bodies, len(self.bodies), self.dim
-        if b.centers is not None and b.semi_axes is not None:
-            c, r = b.centers, b.semi_axes
-            if d == 3:
-                q = np.tile([1.0, 0.0, 0.0, 0.0], (N, 1)) if b.orientations is None else np.array(b.orientations, dtype=float)
-            else:
-                half = (np.zeros(N) if b.orientations is None else np.asarray(b.orientations, dtype=float).reshape(N)) / 2
-                q = np.stack([np.cos(half), np.zeros(N), np.zeros(N), np.sin(half)], axis=1)
-        else:  # matrices only: parameters recovered in floats (display)
-            c, r, q = np.zeros((N, d)), np.ones((N, d)), np.tile([1.0, 0.0, 0.0, 0.0], (N, 1))
-            for k in np.flatnonzero(self.worst != Relation.INVALID):
-                p = axes_from_quadric(b.Q[k], validate=False)
-                c[k], r[k] = p.center, p.semi_axes
-                if d == 3:
-                    q[k] = p.orientation
-                else:
-                    q[k] = (math.cos(p.orientation[0] / 2), 0.0, 0.0, math.sin(p.orientation[0] / 2))
-        bad = ~np.isfinite(c).all(axis=1) | ~np.isfinite(r).all(axis=1) | ~(r > 0).all(axis=1) | ~np.isfinite(q).all(axis=1)
-        c = np.where(bad[:, None], 0.0, c)
-        r = np.where(bad[:, None], 1e-3, r)
-        norm = np.linalg.norm(q, axis=1)
-        q = np.where((bad | (norm == 0))[:, None], [1.0, 0.0, 0.0, 0.0], q / np.where(norm > 0, norm, 1.0)[:, None])
-        if d == 2:
-            c = np.concatenate([c, np.zeros((N, 1))], axis=1)
-            r = np.concatenate([r, np.ones((N, 1))], axis=1)
-        return c.astype(np.float64), q.astype(np.float64), r.astype(np.float64)
+    def pair_label(self, k: int) -> str:  # pragma: no cover - every subclass names its pairs
+        """The text of pair k in the list."""
+        raise NotImplementedError
 
-    def extent(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper corners of what is drawn (the box when periodic)."""
-        N = len(self.bodies)
-        if N == 0:
-            return np.zeros(3), np.ones(3)
-        reach = self.scales.max(axis=1)[:, None]
-        lo = (self.positions - reach).min(axis=0)
-        hi = (self.positions + reach).max(axis=0)
-        if self.dim == 2:
-            lo[2], hi[2] = 0.0, 0.0
-        return lo, hi
-
-    # ------------------------------------------------------------------ the list of pairs
     def relation_filters(self) -> tuple[str, ...]:
         """The relation filters that make sense for this set ("undecided" only if present)."""
         extra = ("undecided",) if np.any(self.result.relation == Relation.UNDECIDED) else ()
@@ -177,26 +129,8 @@ class BodiesModel:
         k = res.pairs_of(body)
         return sorted({int(res.j[q]) if int(res.i[q]) == body else int(res.i[q]) for q in k})
 
-    def colours(self) -> np.ndarray:
-        """(N, 3) uint8: each body in the colour of its worst certified relation (grey: invalid)."""
-        from .shapes import NEUTRAL, RELATION_COLORS
-
-        # rows for the codes INVALID (-2), UNDECIDED (-1), SEPARATE, TANGENT, OVERLAP
-        table = np.array([NEUTRAL, NEUTRAL, *(RELATION_COLORS[k] for k in ("separate", "tangent", "overlap"))], dtype=np.uint8)
-        return table[self.worst.astype(np.int64) + 2]
-
-    def pair_label(self, k: int) -> str:
-        """"3 – 17  tangent (exact)" (with the image in a box: "3 – 17 [+x]  overlap (float)")."""
-        res = self.result
-        rel = str(Relation(int(res.relation[k])))
-        by = Certifier(int(res.certified_by[k]))
-        text = f"{res.i[k]} – {res.j[k]}"
-        if res.image is not None and res.image[k].any():
-            text += " [" + " ".join(f"{'+' if v > 0 else '-'}{'xyz'[a]}" for a, v in enumerate(res.image[k]) if v) + "]"
-        return f"{text}  {rel} ({by})"
-
     def pair_between(self, a: int, b: int) -> int | None:
-        """Index of the pair of bodies a and b in the contacts, or None (they are separate)."""
+        """Index of the pair of bodies a and b in the list's result, or None (not a pair)."""
         i, j = min(a, b), max(a, b)
         res = self.result
         lo = int(np.searchsorted(res.i, i, side="left"))
@@ -204,84 +138,38 @@ class BodiesModel:
         hit = lo + np.flatnonzero(res.j[lo:hi] == j)
         return int(hit[0]) if hit.size else None
 
-    def summary(self) -> str:
-        """Markdown: the set, its contacts by relation and how they were certified."""
-        res, c = self.result, self.result.counts
-        kind = "ellipsoids" if self.dim == 3 else "ellipses"
-        box = "" if self.box is None else " in a periodic box " + " × ".join(f"{v:g}" for v in self.box)
-        lines = [
-            f"**{len(self.bodies):,} {kind}**{box}" + (f" from `{self.name}`" if self.name else ""),
-            f"{len(res):,} contacts: **{c.get('tangent', 0):,} tangent**, **{c.get('overlap', 0):,} overlap** "
-            f"({c.get('candidates', 0):,} candidate pairs; certified by the float filter {c.get('float', 0):,}, "
-            f"by exact arithmetic {c.get('exact', 0):,})",
-        ]
-        if self.invalid:
-            lines.append(f"{len(self.invalid)} invalid bodies (grey), e.g. {next(iter(self.invalid.values()))}")
-        return "\n\n".join(lines)
+    # ------------------------------------------------------------------ drawn bodies
+    positions: np.ndarray
+    """(N, 3) centres as drawn (2D: z = 0)."""
+    wxyz: np.ndarray
+    """(N, 4) unit quaternions as drawn."""
+    scales: np.ndarray
+    """(N, 3) semi-axes as drawn (2D: third = 1)."""
+    worst: np.ndarray
+    """(N,) int8 each body's worst relation (its colour)."""
 
-    def contact_segments(self) -> np.ndarray:
-        """(M, 2, 3) the centres of the two bodies of each contact (in a box: j's image)."""
-        res = self.result
-        a = self.positions[res.i]
-        b = self.positions[res.j].copy()
-        if res.image is not None and self.box is not None:
-            shift = res.image.astype(float) * np.array(self.box)
-            b[:, : self.dim] += shift
-        return np.stack([a, b], axis=1)
-
-    # ------------------------------------------------------------------ picking
-    def pick(self, origin: Any, direction: Any) -> int | None:
-        """The body first hit by the ray (drawn shapes; 2D: the z = 0 plane), or None."""
-        o = np.asarray(origin, dtype=float)
-        u = np.asarray(direction, dtype=float)
-        u = u / (np.linalg.norm(u) or 1.0)
-        if self._rotations is None:
-            self._rotations = rotations_from_orientations(self.wxyz, len(self.wxyz), 3)  # body -> world
-        R = self._rotations
-        lo = np.einsum("nji,nj->ni", R, o[None, :] - self.positions)  # ray in body frames
-        du = np.einsum("nji,j->ni", R, u)
+    def extent(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper corners of what is drawn."""
+        N = len(self.bodies)
+        if N == 0:
+            return np.zeros(3), np.ones(3)
+        reach = self.scales.max(axis=1)[:, None]
+        lo = (self.positions - reach).min(axis=0)
+        hi = (self.positions + reach).max(axis=0)
         if self.dim == 2:
-            if abs(u[2]) < 1e-12:
-                return None
-            t = -o[2] / u[2]
-            p = lo + t * du
-            inside = (p[:, 0] / self.scales[:, 0]) ** 2 + (p[:, 1] / self.scales[:, 1]) ** 2 <= 1
-            hits = np.flatnonzero(inside & (t > 0))
-            return int(hits[0]) if hits.size else None
-        a = (du / self.scales) ** 2
-        b = (lo / self.scales) * (du / self.scales)
-        A = a.sum(axis=1)
-        B = 2 * b.sum(axis=1)
-        C = ((lo / self.scales) ** 2).sum(axis=1) - 1
-        disc = B * B - 4 * A * C
-        ok = disc >= 0
-        t = np.where(ok, (-B - np.sqrt(np.where(ok, disc, 0))) / (2 * A), np.inf)
-        t = np.where(t > 0, t, np.inf)
-        k = int(np.argmin(t))
-        return k if np.isfinite(t[k]) else None
+            lo[2], hi[2] = 0.0, 0.0
+        return lo, hi
 
-    # ------------------------------------------------------------------ the two-body view
-    def pair_config(self, k: int) -> tuple[SceneConfig, str]:
-        """A static two-body configuration of pair k, and a note on what it shows."""
-        res = self.result
-        i, j = int(res.i[k]), int(res.j[k])
-        shift = np.zeros(self.dim)
-        if res.image is not None and self.box is not None:
-            shift = res.image[k].astype(float) * np.array(self.box)
-        shapes = {"A": self._shape(i, np.zeros(self.dim)), "B": self._shape(j, shift)}
-        cfg = SceneConfig.from_dict({"dim": self.dim, **shapes, "preset": None, "show_plots": False})
-        rel = str(Relation(int(res.relation[k])))
-        note = f"Bodies **{i}** (A) and **{j}** (B) of `{self.name or 'the set'}`: **{rel}** in the search ({Certifier(int(res.certified_by[k]))})."
-        if shift.any():
-            note += (
-                f" B is the periodic image of body {j} moved by ({', '.join(f'{v:g}' for v in shift)}), its centre "
-                "rounded to a float here; the search certified the exact translate."
-            )
-        if self.bodies.centers is None:
-            note += " Parameters recovered from the matrices in floats (approximate)."
-        return cfg, note
+    def colours(self) -> np.ndarray:
+        """(N, 3) uint8: each body in the colour of its worst certified relation (:func:`relation_colours`)."""
+        return relation_colours(self.worst)
+
+    def pick(self, origin: Any, direction: Any) -> int | None:
+        """The body first hit by the ray (as drawn; 2D: the z = 0 plane), or None."""
+        return pick_body(self.positions, self.wxyz, self.scales, self.dim, origin, direction)
 
     def _shape(self, k: int, shift: np.ndarray) -> dict[str, list[float]]:
+        """Centre (moved by ``shift``), semi-axes and orientation of body k as the file gives them."""
         b = self.bodies
         if b.centers is not None and b.semi_axes is not None:
             center = [float(v) for v in np.asarray(b.centers[k], dtype=float) + shift]
@@ -298,3 +186,167 @@ class BodiesModel:
             "orientation": [float(v) for v in p.orientation],
         }
 
+
+class BodiesModel(PairList):
+    """Bodies, their certified contacts and what the view needs to draw and pick them.
+
+    Args:
+        bodies: the bodies read from a file.
+        box: periodic box sides, or None.
+        name: what to call the set in the GUI (the file name).
+
+    Raises:
+        ValueError: a bad box or a body too large for it (invalid bodies are marked, not fatal).
+    """
+
+    def __init__(self, bodies: BodySet, box: Any = None, name: str = "") -> None:
+        self.bodies = bodies
+        self.name = name or bodies.source
+        self.dim = bodies.dim
+        self.box = None if box is None else tuple(float(v) for v in box)
+        self.result: Contacts = contacts(bodies.Q, box=self.box, on_invalid="mark")
+        self.invalid = {**self.result.invalid, **bodies.errors}
+        self.worst = self.result.per_body()
+        self.positions, self.wxyz, self.scales = self._poses()
+        res = self.result
+        self.order = np.lexsort((res.j, res.i, -(res.relation == Relation.TANGENT).astype(np.int8)))
+        """Indices of the contacts in list order: tangent first, then by (i, j)."""
+
+    # ------------------------------------------------------------------ drawing
+    def _poses(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(N, 3) positions, (N, 4) unit quaternions and (N, 3) scales (2D: z = 0, scale z = 1)."""
+        b, N, d = self.bodies, len(self.bodies), self.dim
+        if b.centers is not None and b.semi_axes is not None:
+            c, r = b.centers, b.semi_axes
+            if d == 3:
+                q = np.tile([1.0, 0.0, 0.0, 0.0], (N, 1)) if b.orientations is None else np.array(b.orientations, dtype=float)
+            else:
+                half = (np.zeros(N) if b.orientations is None else np.asarray(b.orientations, dtype=float).reshape(N)) / 2
+                q = np.stack([np.cos(half), np.zeros(N), np.zeros(N), np.sin(half)], axis=1)
+        else:  # matrices only: parameters recovered in floats (display)
+            c, r, q = np.zeros((N, d)), np.ones((N, d)), np.tile([1.0, 0.0, 0.0, 0.0], (N, 1))
+            for k in np.flatnonzero(self.worst != Relation.INVALID):
+                p = axes_from_quadric(b.Q[k], validate=False)
+                c[k], r[k] = p.center, p.semi_axes
+                if d == 3:
+                    q[k] = p.orientation
+                else:
+                    q[k] = (math.cos(p.orientation[0] / 2), 0.0, 0.0, math.sin(p.orientation[0] / 2))
+        bad = ~np.isfinite(c).all(axis=1) | ~np.isfinite(r).all(axis=1) | ~(r > 0).all(axis=1) | ~np.isfinite(q).all(axis=1)
+        c = np.where(bad[:, None], 0.0, c)
+        r = np.where(bad[:, None], 1e-3, r)
+        norm = np.linalg.norm(q, axis=1)
+        q = np.where((bad | (norm == 0))[:, None], [1.0, 0.0, 0.0, 0.0], q / np.where(norm > 0, norm, 1.0)[:, None])
+        if d == 2:
+            c = np.concatenate([c, np.zeros((N, 1))], axis=1)
+            r = np.concatenate([r, np.ones((N, 1))], axis=1)
+        return c.astype(np.float64), q.astype(np.float64), r.astype(np.float64)
+
+    def box_corner(self) -> np.ndarray:
+        """Lower corner of the periodic box as drawn (the lowest centre)."""
+        return self.positions.min(axis=0)
+
+    def pair_label(self, k: int) -> str:
+        """"3 – 17  tangent (exact)" (with the image in a box: "3 – 17 [+x]  overlap (float)")."""
+        res = self.result
+        rel = str(Relation(int(res.relation[k])))
+        by = Certifier(int(res.certified_by[k]))
+        text = f"{res.i[k]} – {res.j[k]}"
+        if res.image is not None and res.image[k].any():
+            text += " [" + " ".join(f"{'+' if v > 0 else '-'}{'xyz'[a]}" for a, v in enumerate(res.image[k]) if v) + "]"
+        return f"{text}  {rel} ({by})"
+
+    def summary(self) -> str:
+        """Markdown: the set, its contacts by relation and how they were certified."""
+        res, c = self.result, self.result.counts
+        kind = "ellipsoids" if self.dim == 3 else "ellipses"
+        box = "" if self.box is None else " in a periodic box " + " × ".join(f"{v:g}" for v in self.box[: max(self.dim, 3) if len(self.box) == 6 else self.dim])
+        if self.box is not None and len(self.box) == 6:
+            box += " tilted (xy, xz, yz) = (" + ", ".join(f"{v:g}" for v in self.box[3:]) + ")"
+        lines = [
+            f"**{len(self.bodies):,} {kind}**{box}" + (f" from `{self.name}`" if self.name else ""),
+            f"{len(res):,} contacts: **{c.get('tangent', 0):,} tangent**, **{c.get('overlap', 0):,} overlap** "
+            f"({c.get('candidates', 0):,} candidate pairs; certified by the float filter {c.get('float', 0):,}, "
+            f"by exact arithmetic {c.get('exact', 0):,})",
+        ]
+        if self.invalid:
+            lines.append(f"{len(self.invalid)} invalid bodies (grey), e.g. {next(iter(self.invalid.values()))}")
+        return "\n\n".join(lines)
+
+    def contact_segments(self) -> np.ndarray:
+        """(M, 2, 3) the centres of the two bodies of each contact (in a box: j's image)."""
+        res = self.result
+        a = self.positions[res.i]
+        b = self.positions[res.j].copy()
+        shifts = res.shifts()  # the lattice vectors v(k) the search moved j by
+        if shifts is not None:
+            b[:, : self.dim] += shifts
+        return np.stack([a, b], axis=1)
+
+    # ------------------------------------------------------------------ the two-body view
+    def pair_config(self, k: int) -> tuple[SceneConfig, str]:
+        """A static two-body configuration of pair k, and a note on what it shows."""
+        res = self.result
+        i, j = int(res.i[k]), int(res.j[k])
+        shifts = res.shifts()  # the float lattice vectors v(k) the search moved j by
+        shift = np.zeros(self.dim) if shifts is None else shifts[k]
+        shapes = {"A": self._shape(i, np.zeros(self.dim)), "B": self._shape(j, shift)}
+        cfg = SceneConfig.from_dict({"dim": self.dim, **shapes, "preset": None, "show_plots": False})
+        rel = str(Relation(int(res.relation[k])))
+        note = f"Bodies **{i}** (A) and **{j}** (B) of `{self.name or 'the set'}`: **{rel}** in the search ({Certifier(int(res.certified_by[k]))})."
+        if shift.any():
+            note += (
+                f" B is the periodic image of body {j} moved by ({', '.join(f'{v:g}' for v in shift)}), its centre "
+                "rounded to a float here; the search certified the exact translate."
+            )
+        if self.bodies.centers is None:
+            note += " Parameters recovered from the matrices in floats (approximate)."
+        return cfg, note
+
+
+def relation_colours(worst: np.ndarray, pending: Any = None) -> np.ndarray:
+    """(N, 3) uint8 colour of each body's relation code (grey: invalid or undecided).
+
+    Args:
+        worst: (N,) :class:`core.Relation` codes.
+        pending: colour of UNDECIDED codes (None: the grey of invalid bodies).
+    """
+    from .shapes import NEUTRAL, RELATION_COLORS
+
+    # rows for the codes INVALID (-2), UNDECIDED (-1), SEPARATE, TANGENT, OVERLAP
+    rows = [NEUTRAL, NEUTRAL if pending is None else pending, *(RELATION_COLORS[k] for k in ("separate", "tangent", "overlap"))]
+    table = np.array(rows, dtype=np.uint8)
+    return table[np.asarray(worst).astype(np.int64) + 2]
+
+
+def pick_body(positions: np.ndarray, wxyz: np.ndarray, scales: np.ndarray, dim: int, origin: Any, direction: Any) -> int | None:
+    """The body first hit by a ray (bodies as drawn: (N, 3) centres, unit quaternions, semi-axes).
+
+    A display question (floats): in 2D the ray meets the plane z = 0 and the first ellipse
+    containing that point is returned.
+    """
+    o = np.asarray(origin, dtype=float)
+    u = np.asarray(direction, dtype=float)
+    u = u / (np.linalg.norm(u) or 1.0)
+    R = rotations_from_orientations(wxyz, len(wxyz), 3)  # body -> world
+    lo = np.einsum("nji,nj->ni", R, o[None, :] - positions)  # ray in body frames
+    du = np.einsum("nji,j->ni", R, u)
+    if dim == 2:
+        if abs(u[2]) < 1e-12:
+            return None
+        t = -o[2] / u[2]
+        p = lo + t * du
+        inside = (p[:, 0] / scales[:, 0]) ** 2 + (p[:, 1] / scales[:, 1]) ** 2 <= 1
+        hits = np.flatnonzero(inside & (t > 0))
+        return int(hits[0]) if hits.size else None
+    a = (du / scales) ** 2
+    b = (lo / scales) * (du / scales)
+    A = a.sum(axis=1)
+    B = 2 * b.sum(axis=1)
+    C = ((lo / scales) ** 2).sum(axis=1) - 1
+    disc = B * B - 4 * A * C
+    ok = disc >= 0
+    t = np.where(ok, (-B - np.sqrt(np.where(ok, disc, 0))) / (2 * A), np.inf)
+    t = np.where(t > 0, t, np.inf)
+    k = int(np.argmin(t))
+    return k if np.isfinite(t[k]) else None

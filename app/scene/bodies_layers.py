@@ -139,33 +139,48 @@ class BodyLayers:
         return c
 
     def _draw_points(self) -> None:
-        for h in self._point_nodes.values():
-            h.remove()
-        self._point_nodes = {}
+        """Send the point clouds of the bodies as they are now.
+
+        A cloud that keeps its number of points gets its points and colours as new values (a
+        timeline step: no node is rebuilt in the browser); others are added, and the clouds left
+        empty removed.
+        """
         N = len(self.positions)
-        if N == 0:
-            return
-        mean = np.exp(np.log(np.maximum(self.scales[:, : self.dim], 1e-300)).mean(axis=1))
-        size_class = np.floor(np.log2(mean)).astype(np.int64)
-        rel = self.positions - self.origin
-        if self.dim == 2:  # just under the discs (drawn at z = 0), so a solid is never behind its point
-            rel[:, 2] = -1e-3 * float(np.max(self.reach))
-        colours = self.shown_colours()
-        sep = self.worst == Relation.SEPARATE
-        for group, mask in (("separate", sep), ("contact", ~sep)):
-            for k in np.unique(size_class[mask]):
-                sel = mask & (size_class == k)
-                name = points_node(group, int(k))
-                self._point_nodes[name] = self.scene.add_point_cloud(
-                    name,
-                    _f32(rel[sel]),
-                    colours[sel],
-                    point_size=float(2.0 ** (int(k) + 0.5)),  # viser draws a point 2 * point_size across
-                    point_shape="circle",
-                    point_shading="gradient" if self.dim == 3 else "flat",
-                    precision="float32",
-                    visible=not (group == "separate" and self.separate == "hidden"),
-                )
+        wanted: dict[str, tuple[np.ndarray, np.ndarray, int, bool]] = {}
+        if N:
+            mean = np.exp(np.log(np.maximum(self.scales[:, : self.dim], 1e-300)).mean(axis=1))
+            size_class = np.floor(np.log2(mean)).astype(np.int64)
+            rel = self.positions - self.origin
+            if self.dim == 2:  # just under the discs (drawn at z = 0), so a solid is never behind its point
+                rel[:, 2] = -1e-3 * float(np.max(self.reach))
+            colours = self.shown_colours()
+            sep = self.worst == Relation.SEPARATE
+            for group, mask in (("separate", sep), ("contact", ~sep)):
+                for k in np.unique(size_class[mask]):
+                    sel = mask & (size_class == k)
+                    shown = not (group == "separate" and self.separate == "hidden")
+                    wanted[points_node(group, int(k))] = (_f32(rel[sel]), colours[sel], int(k), shown)
+        for name in [n for n in self._point_nodes if n not in wanted]:
+            self._point_nodes.pop(name).remove()
+        for name, (pts, cols, k, shown) in wanted.items():
+            h = self._point_nodes.get(name)
+            if h is not None and len(h.points) == len(pts):
+                h.points = pts
+                h.colors = cols
+                h.visible = shown
+                continue
+            if h is not None:
+                h.remove()
+            self._point_nodes[name] = self.scene.add_point_cloud(
+                name,
+                pts,
+                cols,
+                point_size=float(2.0 ** (k + 0.5)),  # viser draws a point 2 * point_size across
+                point_shape="circle",
+                point_shading="gradient" if self.dim == 3 else "flat",
+                precision="float32",
+                visible=shown,
+            )
 
     # ------------------------------------------------------------------ solids
     def costs(self) -> tuple[int, int]:
@@ -237,10 +252,16 @@ class BodyLayers:
                 self.network.visible = shown
 
     def add_box(self, lo: np.ndarray, sides: tuple[float, ...]) -> None:
-        """Draw the periodic box with its lower corner at ``lo`` (world)."""
-        L = np.array(list(sides) + ([0.0] if len(sides) == 2 else []))
-        corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in ((0, 1) if len(sides) == 3 else (0,))], dtype=float)
-        pts = lo + corners * L - self.origin
+        """Draw the periodic box with its lower corner at ``lo`` (world); a tilted box as its parallelepiped."""
+        from core.bodies.periodic import box_vectors, read_box
+
+        d = self.dim
+        L = read_box(sides, d)
+        assert L is not None
+        vectors = np.zeros((3, 3))
+        vectors[:d, :d] = box_vectors(L, d)  # columns a1, a2[, a3]
+        corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in ((0, 1) if d == 3 else (0,))], dtype=float)
+        pts = lo + corners @ vectors.T - self.origin
         segs = [(a, b) for a in range(len(pts)) for b in range(a + 1, len(pts)) if np.count_nonzero(corners[a] != corners[b]) == 1]
         self.scene.add_line_segments(
             f"{ROOT}/box", _f32(np.array([[pts[a], pts[b]] for a, b in segs])), (90, 90, 90), thickness=1.5, thickness_units="screen"

@@ -13,6 +13,11 @@
   the two bodies' parameters), with a button back to all bodies.
 
 The maths (contacts, the list, picking, configurations) lives in :mod:`app.scene.bodies`.
+
+Moving bodies (``serve --bodies START --to END``: a :class:`~app.scene.sweep_model.SweepModel`)
+are the same view with a Timeline folder (:class:`~app.scene.sweep_view.SweepTimeline`): the
+bodies at t coloured by their certified relation there, the list holds the contact events in
+time order, and an event opens its pair in the two-body view on the pair's exact motion.
 """
 
 from __future__ import annotations
@@ -64,6 +69,8 @@ class BodiesView:
         self.target = target
         self.scene = target.scene
         self.gui = target.gui
+        if getattr(model, "moving", False):  # moving bodies: this tab's own time (the sweep is shared)
+            model = model.for_view()  # type: ignore[union-attr]
         self.model = model
         self.cache = cache
         self.executor = executor
@@ -97,6 +104,8 @@ class BodiesView:
         self._pair_gui: list[Any] = []
         self._session_nodes: dict[str, bool] = {}
         self._bodies_camera: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.timeline: Any = None
+        """The :class:`~app.scene.sweep_view.SweepTimeline` of moving bodies, or None."""
         self.scene.on_click()(self._on_scene_click)
         cam = getattr(target, "camera", None)
         if cam is not None:
@@ -120,6 +129,9 @@ class BodiesView:
                 self.session = None
             self.pair = None
             self._session_nodes = {}
+            if self.timeline is not None:
+                self.timeline.close()
+                self.timeline = None
             self.gui.reset()
             self.scene.reset()
             self.labels = []
@@ -138,7 +150,7 @@ class BodiesView:
             return None
         layers = BodyLayers(self.scene, m.dim, m.positions, m.wxyz, m.scales, m.colours(), m.worst, separate=self.separate)
         if m.box is not None:
-            layers.add_box(m.positions.min(axis=0), m.box)
+            layers.add_box(m.box_corner(), m.box)
         if self.network:
             layers.set_network(True, m.contact_segments(), relation_colour_rows(m.result.relation))
         return layers
@@ -168,12 +180,20 @@ class BodiesView:
         self.pair_note = gui.add_markdown("", order=-999.0, visible=False)
         self._pair_gui = [self.back_button, self.pair_note]
         self.back_button.on_click(lambda ev: self.show_bodies())
-        title = gui.add_markdown("**Many bodies** — certified contacts")
         m = self.model
+        moving = self.moving
+        title = gui.add_markdown(getattr(m, "title", "**Many bodies** — certified contacts"))
         self.summary = gui.add_markdown(m.summary() if m is not None else "Open a file of bodies (CSV or NPZ).")
-        legend = gui.add_html(_legend())
-        contacts_folder = gui.add_folder("Contacts")
-        self._bodies_gui = [title, self.summary, legend, contacts_folder]
+        legend = gui.add_html(_legend(moving))
+        self._bodies_gui = [title, self.summary, legend]
+        if moving:
+            from .sweep_view import SweepTimeline
+
+            self.timeline = SweepTimeline(self)
+            self._bodies_gui.append(self.timeline.folder)
+        contacts_folder = gui.add_folder("Contact events" if moving else "Contacts")
+        self._bodies_gui.append(contacts_folder)
+        what = "event" if moving else "pair"
         with contacts_folder:
             filters = list(m.relation_filters()) if m is not None else ["all"]
             self.relation_box = gui.add_dropdown("Relation", filters, initial_value=self.relation if self.relation in filters else "all",
@@ -181,22 +201,27 @@ class BodiesView:
             self.body_text = gui.add_text("Body", "" if self.body is None else str(self.body),
                                           hint="a body's index: list only its pairs (empty: all bodies)")
             self.list_md = gui.add_markdown("")
-            self.pairs = gui.add_dropdown("Pair", [NO_PAIRS], hint="pick a pair to open it in the two-body view")
+            self.pairs = gui.add_dropdown(what.capitalize(), [NO_PAIRS], hint=f"pick a{'n' if moving else ''} {what} to open its pair in the two-body view"
+                                          + (" at t*, with its exact motion" if moving else ""))
             self.prev_button = gui.add_button("◀ Previous page", disabled=True)
             self.next_button = gui.add_button("Next page ▶", disabled=True)
-            self.open_button = gui.add_button("Open pair", disabled=True)
-            self.body_md = gui.add_markdown("Click a body to list its contacts; click one it touches to open the pair.")
+            self.open_button = gui.add_button(f"Open {what}", disabled=True)
+            self.body_md = gui.add_markdown(
+                "Click a body to list its events; click one it meets to open the pair at its first contact." if moving
+                else "Click a body to list its contacts; click one it touches to open the pair."
+            )
         view_folder = gui.add_folder("View")
         with view_folder:
             self.separate_box = gui.add_dropdown("Separate bodies", list(SEPARATE_MODES), initial_value=self.separate,
                                                  hint="faded: pale; hidden: only bodies in contact are drawn")
-            self.network_box = gui.add_checkbox("Contact network", self.network, hint="a line between the centres of each contact pair")
+            self.network_box = gui.add_checkbox("Contact network", self.network and not moving, visible=not moving,
+                                                hint="a line between the centres of each contact pair")
             self.drawn_md = gui.add_markdown("")
         file_folder = gui.add_folder("File", expand_by_default=m is None)
         self._bodies_gui += [view_folder, file_folder]
         with file_folder:
             self.upload = gui.add_upload_button("Open a file of bodies", mime_type=".csv,.npz", hint="CSV (x,y,z,a,b,c,qw,qx,qy,qz or x,y,a,b,angle) or NPZ")
-            self.box_text = gui.add_text("Periodic box", "" if m is None or m.box is None else ", ".join(f"{v:g}" for v in m.box), hint="Lx, Ly(, Lz); empty: open space")
+            self.box_text = gui.add_text("Periodic box", "" if m is None or m.box is None else ", ".join(f"{v:g}" for v in m.box), hint="Lx, Ly(, Lz), or Lx, Ly, Lz, xy, xz, yz (tilted); empty: open space")
             self.file_md = gui.add_markdown("")
         self._refresh_list()
         self._show_drawn()
@@ -233,7 +258,8 @@ class BodiesView:
             return
         pg = self.listing
         self.page_no = pg.page
-        what = ("pairs" if self.relation == "all" else f"{self.relation} pairs") + ("" if self.body is None else f" of body {self.body}")
+        noun = "events" if self.moving else "pairs"
+        what = (noun if self.relation == "all" else f"{self.relation} {noun}") + ("" if self.body is None else f" of body {self.body}")
         text = pg.caption(what)
         if pg.pages > 1:
             text += f" (page {pg.page + 1:,} of {pg.pages:,})"
@@ -241,6 +267,8 @@ class BodiesView:
         self._set_pair_options(pg.entries)
         self.prev_button.disabled = pg.page == 0
         self.next_button.disabled = pg.page >= pg.pages - 1
+        if self.timeline is not None:  # the events' exact times, for their labels (in the background)
+            self.timeline.want_labels([e.index for e in pg.entries])
 
     def _set_pair_options(self, entries: list[Any]) -> None:
         self._choices = {e.label: e.index for e in entries}
@@ -300,7 +328,7 @@ class BodiesView:
         with self._lock:
             self.network = shown
             m = self.model
-            if self.layers is None or m is None:
+            if self.layers is None or m is None or self.moving:
                 return
             if shown and self.layers.network is None:
                 self.layers.set_network(True, m.contact_segments(), relation_colour_rows(m.result.relation))
@@ -329,9 +357,9 @@ class BodiesView:
             self._timer.start()
 
     def settling(self) -> bool:
-        """True while a camera move waits for its solids (a timer is pending)."""
+        """True while a camera move waits for its solids (a timer is pending), or moving bodies' colours are decided."""
         t = self._timer
-        return t is not None and t.is_alive()
+        return (t is not None and t.is_alive()) or (self.timeline is not None and self.pair is None and self.timeline.busy())
 
     def _on_scene_click(self, ev: Any) -> None:
         if self.model is None or self.pair is not None:
@@ -377,9 +405,12 @@ class BodiesView:
             text = f"Body **{body}** is invalid: {html.escape(why)}"
         elif partners:
             shown = ", ".join(str(p) for p in partners[:12]) + (" …" if len(partners) > 12 else "")
-            text = f"Body **{body}** touches or overlaps {len(partners)} bodies ({shown}): click one, or pick the pair above."
+            if self.moving:
+                text = f"Body **{body}** meets {len(partners)} bodies during the step ({shown}): click one, or pick its event above."
+            else:
+                text = f"Body **{body}** touches or overlaps {len(partners)} bodies ({shown}): click one, or pick the pair above."
         else:
-            text = f"Body **{body}** is separate from all others."
+            text = f"Body **{body}** is separate from all others" + (" during the whole step." if self.moving else ".")
         self.body_md.content = text
         self._label(body)
 
@@ -415,6 +446,9 @@ class BodiesView:
     def _on_box(self, ev: Any) -> None:
         if self.model is None or getattr(ev, "client", None) is None:
             return
+        if self.moving:
+            self.file_md.content = "The box of moving bodies is the one they were swept in (`--box`, or START's)."
+            return
         try:
             box = _parse_box(self.box_text.value, self.model.dim)
             model = BodiesModel(self.model.bodies, box, name=self.model.name)
@@ -427,20 +461,42 @@ class BodiesView:
             self._build_all()
 
     # ------------------------------------------------------------------ one pair
+    @property
+    def moving(self) -> bool:
+        """True when the view shows moving bodies (a timeline, events)."""
+        return bool(getattr(self.model, "moving", False))
+
+    def analysis_cache(self) -> Any:
+        """The analysis cache the two-body view shares (created here when the server gave none)."""
+        if self.cache is None:
+            from .analysis import AnalysisCache
+
+            self.cache = AnalysisCache(self.executor)
+        return self.cache
+
     def open_pair(self, k: int) -> Any:
         """Open pair k (index in the contacts) in the two-body view of this tab.
 
         The bodies, their GUI and the two-body view's nodes are hidden or shown, never rebuilt:
         the first pair builds the two-body :class:`~app.scene.session.Session`, later pairs are
         loaded into it (no shader to compile in the browser: that was most of a second).
+        Moving bodies: the timeline jumps to the pair's first contact t* and the pair opens on
+        its exact motion at t* (:meth:`app.scene.sweep_view.SweepTimeline.open_event`).
         """
+        if self.timeline is not None:
+            return self.timeline.open_event(k)
+        assert self.model is not None
+        cfg, note = self.model.pair_config(k)
+        return self._open_two_body(k, cfg, note)
+
+    def _open_two_body(self, k: int, cfg: Any, note: str, *, motion: Any = None, target: dict[str, Any] | None = None) -> Any:
+        """Show the two-body view on ``cfg`` (and then on ``motion``, at ``target``: event or t)."""
         from .session import Session
 
         with self._lock:
             assert self.model is not None
             if self._timer is not None:
                 self._timer.cancel()
-            cfg, note = self.model.pair_config(k)
             self.ready.clear()
             self._bodies_camera = _camera_of(getattr(self.target, "camera", None)) if self.pair is None else self._bodies_camera
             self.pair = k
@@ -454,12 +510,15 @@ class BodiesView:
             if self.session is None:
                 self.pair_folder = self.gui.add_folder("Two-body view", order=-998.0)
                 with self.pair_folder:
-                    self.session = Session(self.target, cfg, cache=self.cache, executor=self.executor)
+                    self.session = Session(self.target, cfg, cache=self.analysis_cache(), executor=self.executor)
             else:
                 self.pair_folder.visible = True
                 self._show_session_nodes(True)
                 self.session.load(cfg)
-            self.session.frame_camera()
+            if motion is not None:
+                self.session.show_motion(motion, **(target or {}))
+            else:
+                self.session.frame_camera()
             self.ready.set()
             return self.session
 
@@ -511,10 +570,12 @@ class BodiesView:
         Framing(np.array([lo, hi]), self.model.dim).aim(cam, fill=1.35 if self.model.dim == 3 else 1.0, view=(0.55, -1.0, 0.7))
 
     def close(self) -> None:
-        """The tab went away: stop the two-body view's work and the camera timer."""
+        """The tab went away: stop the two-body view's work, the timeline and the camera timer."""
         self._closed = True
         if self._timer is not None:
             self._timer.cancel()
+        if self.timeline is not None:
+            self.timeline.close()
         if self.session is not None:
             self.session.close()
 
@@ -536,13 +597,17 @@ def _parse_box(text: str, dim: int) -> tuple[float, ...] | None:
         sides = tuple(float(p) for p in parts)
     except ValueError:
         raise ValueError(f"periodic box: expected {dim} numbers, got {text!r}") from None
-    if len(sides) != dim:
-        raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies, got {len(sides)}")
+    if len(sides) not in (dim, 6) and not (dim == 2 and len(sides) == 3):
+        raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies (or a tilted box: Lx, Ly, Lz, xy, xz, yz), got {len(sides)}")
     return sides
 
 
-def _legend() -> str:
+def _legend(moving: bool = False) -> str:
     items = [("separate", RELATION_HEX["separate"]), ("tangent", RELATION_HEX["tangent"]), ("overlap", RELATION_HEX["overlap"]), ("invalid", "#969696")]
+    if moving:
+        from .sweep_model import PENDING_COLOUR
+
+        items.append(("deciding", "#{:02x}{:02x}{:02x}".format(*PENDING_COLOUR)))
     spans = "".join(
         f'<span style="display:inline-block;margin-right:10px"><span style="display:inline-block;width:10px;height:10px;'
         f'border-radius:5px;background:{c};margin-right:4px"></span>{n}</span>'

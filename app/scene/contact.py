@@ -15,7 +15,6 @@ kernel of beta A + B (then A X = -(1/beta) B X: the normals are opposite).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -78,17 +77,12 @@ def _short(values: Sequence[Any]) -> str:
     return "(" + ", ".join(out) + ")"
 
 
-def _is_float_matrix(M: Any) -> bool:
-    return isinstance(M, np.ndarray) and M.dtype == np.float64
-
-
 def witness_view(A: Any, B: Any, relation: str) -> WitnessView | None:
     """The certified witness of a pair whose relation ``core`` certified (None if it fails).
 
-    Float shapes go through ``core.witness.float_witness`` (one float preparation, a few tenths
-    of a millisecond); exact shapes (typed or dragged values mixed with exact ones), and what
-    floats cannot certify (rare: gaps at rounding level), through ``core.witness.witness`` (one
-    exact preparation for the margin and the witness).
+    One call of ``core.witness.witness`` (adaptive): float shapes (a drag) are certified by
+    floats with directed rounding in a few tenths of a millisecond, exact shapes (typed values)
+    and what floats cannot certify (gaps at rounding level) by exact rationals.
 
     Args:
         A: matrix of shape A (float array, or exact lists).
@@ -96,25 +90,18 @@ def witness_view(A: Any, B: Any, relation: str) -> WitnessView | None:
         relation: the certified relation ("separate", "tangent", "overlap").
     """
     from core import Relation
-    from core.witness import SENTENCES, float_witness, margin_text
-    from core.witness.witness import witness_of
+    from core.witness import Witness, witness
 
     rel = Relation.parse(relation)
     try:
-        fw = float_witness(A, B, rtol=MARGIN_RTOL) if _is_float_matrix(A) and _is_float_matrix(B) else None
-        if fw is not None and math.isfinite(fw.hi) and (fw.plane is not None or fw.point is not None):
-            view = WitnessView(str(rel), margin_text(fw.lo, fw.hi, rel), (fw.lo, fw.hi), SENTENCES[rel], "")
-            if fw.plane is not None:
-                n, d = fw.plane
-                view.plane = (n, d)
-                view.detail = f"n·x = d with n ≈ {_short([f'{v:.4g}' for v in n])}, d ≈ {d:.4g}"
-            else:
-                view.point, view.point_label = fw.point, "inside both"
-                view.detail = f"≈ {_short([f'{v:.4g}' for v in fw.point or ()])}"
-            return view
-        w = witness_of(A, B, rel, MARGIN_RTOL)
+        w = witness(A, B, rtol=MARGIN_RTOL)
+    except (ValueError, ArithmeticError, RuntimeError):
+        return None
+    if not isinstance(w, Witness) or w.relation != rel:
+        return None
+    try:
         lo, hi = float(w.scale.lo), float(w.scale.hi)
-        view = WitnessView(str(rel), margin_text(lo, hi, rel), (lo, hi), w.sentence, "")
+        view = WitnessView(str(rel), w.margin, (lo, hi), w.sentence, "")
         if w.plane is not None:
             view.plane = w.plane.unit()
             view.detail = f"n·x = d with n = {_short(w.plane.normal)}, d = {_short([w.plane.offset])[1:-1]}"

@@ -113,12 +113,12 @@ def motion_picture(model: MotionModel, analysis: AnalysisView | None, t: float, 
 
         pic.point = _tuple(contact_point(A, B, [float(v) for v in pencil_coefficients(A, B)]))
     if plane and relation == str(Relation.SEPARATE):
-        from core.witness import separating_plane_batch
+        from core.witness import SeparatingPlane, separating_plane
 
-        try:  # the float matrices at t, certified by core.witness (display of a certified plane)
-            pb = separating_plane_batch(np.asarray(A, dtype=float), np.asarray(B, dtype=float))
-            if bool(pb.certified):
-                pic.plane = (np.asarray(pb.normal, dtype=float), float(pb.offset))
+        try:  # the float matrices at t, certified by floats (display of a certified plane)
+            p = separating_plane(np.asarray(A, dtype=float), np.asarray(B, dtype=float), method="float", on_invalid="mark")
+            if isinstance(p, SeparatingPlane):
+                pic.plane = p.unit()
         except (ValueError, ArithmeticError):
             pass
     return pic

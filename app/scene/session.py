@@ -36,7 +36,7 @@ from .control_timeline import TimelineControl
 from .gui import build_gui
 from .lighting import light_scene
 from .markers import WitnessMarkers
-from .motion import MotionError, list_presets, load_motion
+from .motion import MotionError, MotionModel, list_presets, load_motion
 from .panel_view import PanelView, Syncing
 from .picture import Picture, motion_picture, static_picture
 from .shapes import PALETTES, EllipsoidView
@@ -181,6 +181,19 @@ class Session:
                 self.set_dimension(config.dim)
                 self.refresh()
                 self.ready.set()
+
+    def show_motion(self, model: MotionModel, *, t: float | str | None = None, event: int | None = None) -> None:
+        """Show a motion the app built itself (trusted, e.g. a pair of moving bodies), analysed as a preset is.
+
+        Args:
+            model: the motion (its exact A(t), B(t) as given: nothing is re-read).
+            t: time to show (None: the analysis' default).
+            event: event to show instead (1-based).
+        """
+        with self.lock:
+            self.ready.clear()
+            self.state.errors.clear()
+            self.motion_ctl.start(model, t=t, event=event)
 
     def load_untrusted(self, data: dict[str, Any]) -> None:
         """Show a configuration from a link or an uploaded file (user input).

@@ -27,6 +27,7 @@ from flint import (
     fmpz_poly,  # noqa: F401  (the doctests use it)
 )
 
+from ..shapes.numbers import floor_log10
 from ..shapes.numbers import sign as _sgn
 from ..shapes.numbers import to_float as _to_float
 from .qsqrt import QSqrtPoly, _poly
@@ -315,7 +316,7 @@ class RealAlgebraic:
             big = max(abs(lo), abs(hi))
             if big == 0:
                 return "0"
-            e = _floor_log10(big)
+            e = floor_log10(big)
             ulp = _pow10(e - digits + 1)
             if self.value is not None or hi - lo < ulp / 10:
                 break
@@ -364,27 +365,17 @@ def _pow10(k: int) -> fmpq:
     return fmpq(10**k) if k >= 0 else fmpq(1, 10 ** (-k))
 
 
-def _floor_log10(x: fmpq) -> int:
-    """floor(log10(x)) for a positive rational, exactly."""
-    e = len(str(int(x.p))) - len(str(int(x.q)))
-    while _pow10(e) > x:
-        e -= 1
-    while _pow10(e + 1) <= x:
-        e += 1
-    return e
-
-
 def _round_decimal(x: fmpq, digits: int) -> str:
     """X rounded to ``digits`` significant digits, as a plain or scientific decimal string."""
     if x == 0:
         return "0"
     neg = x < 0
     a = -x if neg else x
-    e = _floor_log10(a)
+    e = floor_log10(a)
     shift = digits - 1 - e
     scaled = a * _pow10(shift)
-    n = int((scaled.p * 2 + scaled.q) // (scaled.q * 2))  # round half up
-    s = str(n)
+    n = (scaled.p * 2 + scaled.q) // (scaled.q * 2)  # round half up
+    s = str(n)  # an fmpz: decimal text at any length (str(int) stops at 4300 digits)
     if len(s) > digits:  # rounding carried into a new digit
         e += 1
         s = s[:digits]
@@ -402,21 +393,30 @@ def _round_decimal(x: fmpq, digits: int) -> str:
 
 
 def _exact_decimal(x: fmpq, digits: int) -> str | None:
-    q = int(x.q)
+    """X exactly as a terminating decimal of at most ``digits`` significant digits, else None."""
+    q = x.q
+    twos = fives = 0
     while q % 2 == 0:
         q //= 2
+        twos += 1
     while q % 5 == 0:
         q //= 5
+        fives += 1
     if q != 1:
         return None
     a = -x if x < 0 else x
-    k = 0
-    while (a * fmpq(10) ** k).q != 1:
-        k += 1
-    n = int(a * fmpq(10) ** k)
-    s = str(n)
-    if len(s.lstrip("0")) > digits:
+    k = max(twos, fives)  # a * 10^k is an integer, and k is the least such power
+    if a == 0:
+        return "0"
+    # n = a 10^k ends in a nonzero digit (k is least): it has floor_log10(a) + k + 1 digits, all
+    # significant; decide before writing any (a value like 10^5000 never becomes text here)
+    e = floor_log10(a)
+    if e + k + 1 > digits:
         return None
+    s = str((a * fmpq(10) ** k).p)  # an fmpz: no 4300-digit limit
+    if not -6 <= e < digits + 6:  # far from 1: mantissa and exponent, as _round_decimal writes it
+        s = s.rstrip("0")
+        return ("-" if x < 0 else "") + s[0] + ("." + s[1:] if len(s) > 1 else "") + f"e{e}"
     if k == 0:
         out = s
     else:

@@ -26,6 +26,11 @@ MAX_FACTOR_DEGREE = 200
 """Largest degree of F that is factored to look for a linear or quadratic factor (ms)."""
 
 
+def _digits(n: int) -> str:
+    """Decimal text of an integer of any size (flint's conversion: str(int) stops at 4300 digits)."""
+    return str(fmpz(n))
+
+
 @dataclass(frozen=True)
 class QuadraticForm:
     """A number ``(p + q*sqrt(d)) / r`` in lowest terms.
@@ -49,22 +54,23 @@ class QuadraticForm:
             ('sqrt(5)/2', '-1/3')
         """
         minus = "−" if unicode else "-"
+        p, r, d = _digits(abs(self.p)), _digits(self.r), _digits(self.d)
         if self.q == 0:
-            num = f"{minus if self.p < 0 else ''}{abs(self.p)}"
-            return num if self.r == 1 else f"{num}/{self.r}"
-        root = f"√{self.d}" if unicode else f"sqrt({self.d})"
+            num = f"{minus if self.p < 0 else ''}{p}"
+            return num if self.r == 1 else f"{num}/{r}"
+        root = f"√{d}" if unicode else f"sqrt({d})"
         k = abs(self.q)
-        surd = root if k == 1 else (f"{k}{root}" if unicode else f"{k}*{root}")
+        surd = root if k == 1 else (f"{_digits(k)}{root}" if unicode else f"{_digits(k)}*{root}")
         if self.p == 0:
             num = f"{minus if self.q < 0 else ''}{surd}"
             paren = False
         else:
             sign = minus if self.q < 0 else "+"
-            num = f"{minus if self.p < 0 else ''}{abs(self.p)} {sign} {surd}"
+            num = f"{minus if self.p < 0 else ''}{p} {sign} {surd}"
             paren = True
         if self.r == 1:
             return num
-        return f"({num})/{self.r}" if paren else f"{num}/{self.r}"
+        return f"({num})/{r}" if paren else f"{num}/{r}"
 
     def value(self) -> tuple[fmpq, fmpq, int]:
         """(a, b, d) with the number = a + b sqrt(d), a and b rational."""

@@ -162,7 +162,8 @@ class BroadPhase:
     Args:
         centers: (N, d) float64 sphere centres.
         radii: (N,) float64 radii; NaN marks a body to leave out (invalid).
-        box: periodic box sides (d,), or None for open space. The caller has checked
+        box: periodic box sides (d,), or None for open space (a tilted box, the six numbers of
+            :func:`core.bodies.periodic.read_box`: :mod:`core.bodies.ghosts`). The caller has checked
             (:mod:`core.bodies.periodic`) that the centres span at most one box side per axis and
             that the two largest radii sum to less than half the smallest side (so the minimum
             image is the only image that can touch).
@@ -179,7 +180,14 @@ class BroadPhase:
     def __init__(self, centers: np.ndarray, radii: np.ndarray, *, box: np.ndarray | None = None) -> None:
         centers = np.asarray(centers, dtype=np.float64)
         self.d = centers.shape[1]
+        self.ghosts = None
+        if box is not None and box.size != self.d:  # a tilted box (its six numbers): ghost images, then open space
+            from .ghosts import Ghosts
+
+            self.ghosts = Ghosts(centers, radii, box)
+            centers, radii, box = self.ghosts.centers, self.ghosts.radii, None
         self.box = box
+        """The box of the grids (None for a tilted box: its ghosts are searched in open space)."""
         self.blocks: list[_Block] = []
         self.pad = 0.0
         valid = np.flatnonzero(np.isfinite(radii))
@@ -248,7 +256,10 @@ class BroadPhase:
         if block.dedupe:
             keep = block.a.ids[p] < block.b.ids[q]
             p, q = p[keep], q[keep]
-        return _keep(block.a, p, block.b, q, self.box, self.pad, self.d)
+        cand = _keep(block.a, p, block.b, q, self.box, self.pad, self.d)
+        if self.ghosts is not None:  # bodies and ghosts -> pairs of bodies with images
+            return Candidates(*self.ghosts.resolve(cand.i, cand.j))
+        return cand
 
 
 def candidate_pairs(

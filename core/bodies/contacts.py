@@ -34,11 +34,14 @@ def contacts(
         Q: (N, 4, 4) ellipsoids or (N, 3, 3) ellipses (float arrays; e.g. from
             :func:`core.bodies_from_axes`), or a ``dask.array`` of them (then the search runs on
             the Dask cluster, see ``scheduler``).
-        box: periodic box sides (Lx, Ly[, Lz]) or None for open space. Minimum image
+        box: periodic box sides (Lx, Ly[, Lz]), a tilted box in HOOMD's convention
+            (Lx, Ly, Lz, xy, xz, yz) (2D: (Lx, Ly, xy)), or None for open space. Minimum image
             convention: pairs across faces count (body i with the nearest image of body j, its
-            exact lattice translate: :mod:`core.bodies.periodic`). The centres must lie in one
-            box (a span of at most L per axis) and every body must be small enough (the two
-            largest bounding radii sum to less than half the smallest side): else a ValueError.
+            exact translate by the float lattice vector v(k): :mod:`core.bodies.periodic`). The
+            centres must lie in one box (a span of at most one box length along each box
+            vector) and every body must be small enough (the two largest bounding radii sum to
+            less than half the cell's smallest height: the smallest side of an orthogonal box):
+            else a ValueError.
         method: "adaptive" (default), "float" (may report UNDECIDED pairs) or "exact".
         on_invalid: "raise" a ValueError naming the first body that is not an ellipse/ellipsoid
             (NaN, indefinite, empty...), or "mark": report such bodies in ``.invalid``.

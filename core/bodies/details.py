@@ -94,9 +94,9 @@ def pair_details(Q: np.ndarray, res: Contacts, *, rtol: float = 1e-9) -> PairDet
     """
     Q = np.asarray(Q, dtype=np.float64)
     M = len(res)
-    shifts = np.zeros((M, Q.shape[-1] - 1))
-    if res.image is not None and res.box is not None:
-        shifts = res.image.astype(np.float64) * np.asarray(res.box, dtype=np.float64)  # k in {-1, 0, 1}: exact
+    shifts = res.shifts()  # the exact float vectors v(k) the search moved j by
+    if shifts is None:
+        shifts = np.zeros((M, Q.shape[-1] - 1))
     moved = np.flatnonzero(shifts.any(axis=1))
     lo, hi = _scale_brackets(Q, res.i, res.j, shifts, moved, rtol)
     contained = np.full(M, NO, dtype=np.int8)
@@ -121,8 +121,9 @@ def _scale_brackets(
     lo, hi = np.empty(M), np.empty(M)
     plain = np.setdiff1d(np.arange(M), moved)
     if plain.size:
-        batch = contact_scale(Q[i[plain]], Q[j[plain]], rtol=rtol)
-        lo[plain], hi[plain] = np.asarray(batch.lo, dtype=np.float64), np.asarray(batch.hi, dtype=np.float64)
+        batch = contact_scale(Q[i[plain]], Q[j[plain]], rtol=rtol)  # one ContactScale per pair
+        lo[plain] = [_down(cs.lo) for cs in batch]
+        hi[plain] = [_up(cs.hi) for cs in batch]
     for k in moved.tolist():
         cs = contact_scale(_exact(Q[i[k]]), _translated(Q[j[k]], shifts[k]), rtol=rtol)
         lo[k], hi[k] = _down(cs.lo), _up(cs.hi)

@@ -11,7 +11,10 @@ there; every later task names blocks by their futures, so the task graphs hold n
 2. The longest axis is cut into slabs holding equal numbers of bodies. Partition p *owns* the
    bodies whose centre lies in its slab and also receives the *halo*: the bodies within
    h = 2 R (1 + 2^-20) + pad of the slab on that axis, R the largest bounding radius (in a
-   periodic box, measured across the faces).
+   periodic box, measured across the faces). In a tilted box the slabs cut a fractional
+   coordinate f_a (c = f1 a1 + f2 a2 + f3 a3, a the box vector with the largest height h_a)
+   and the halo is h / h_a in it (two points within 2 R have f_a within 2 R / h_a), with the
+   fractional coordinates' error bound added (:func:`core.bodies.periodic.fractional`).
    Each block sends each partition its members (one small task per block and partition, on
    the worker that holds the block: the plan travels, not the rows).
 3. One task per partition runs the broad phase and the narrow phase on its bodies
@@ -53,7 +56,15 @@ from ..fixed.lazy import PAIR_CHUNK, is_dask_array
 from .bounds import BoundingSpheres, bounding_spheres
 from .broadphase import _CELL_SLACK, _PAD, BroadPhase, Candidates, TooManyPairs, candidate_pairs
 from .narrowphase import classify_candidates
-from .periodic import check_box, read_box
+from .periodic import (
+    box_vectors,
+    cell_heights,
+    check_box,
+    fractional,
+    is_tilted,
+    read_box,
+    shift_error,
+)
 from .result import Contacts
 from .search import Progress, _check, contacts_of, read_bodies
 
@@ -108,7 +119,7 @@ def contacts_distributed(
 
     Args:
         Q: numpy or dask array (N, n, n).
-        box: periodic box sides or None.
+        box: periodic box (sides, or a tilted box's six numbers) or None.
         method: "adaptive", "float" or "exact".
         on_invalid: "raise" or "mark".
         scheduler: a ``distributed.Client``, a scheduler address ("tcp://host:8786"), a
@@ -257,7 +268,9 @@ def _blocks(Q: Any, client: Any) -> tuple[list[Any], list[int], int, int]:
     offsets = list(range(0, N, BODY_CHUNK))
     pieces: list[Any] = [arr[o : o + BODY_CHUNK] for o in offsets]
     if client is not None and pieces:
-        pieces = client.scatter(pieces)  # the matrices travel once; tasks name them by future
+        # The matrices travel once; tasks name them by future. hash=False: a content-hashed key is shared
+        # with an earlier call on the same data, whose release can race this scatter ("lost dependencies").
+        pieces = client.scatter(pieces, hash=False)
     return pieces, offsets, N, n
 
 
@@ -291,7 +304,15 @@ class _Plan:
     hi: float
     halo: float
     side: float | None
-    """The box side along the axis (periodic), else None."""
+    """The box side along the axis (periodic), else None; 1 in a tilted box (fractional coordinates)."""
+    tilted: np.ndarray | None = None
+    """A tilted box: the slabs cut a fractional coordinate (along a box vector), else None."""
+
+    def coordinate(self, centers: np.ndarray) -> np.ndarray:
+        """The coordinate the slabs cut: x[axis], or in a tilted box the fractional f[axis]."""
+        if self.tilted is None:
+            return centers[:, self.axis]
+        return fractional(centers, self.tilted)[0][:, self.axis]
 
     def slab(self, p: int) -> tuple[float, float]:
         return (self.lo if p == 0 else float(self.cuts[p - 1]), self.hi if p == self.count - 1 else float(self.cuts[p]))
@@ -303,9 +324,21 @@ def _plan(spheres: BoundingSpheres, box: np.ndarray | None, count: int) -> _Plan
     if valid.size == 0:
         return _Plan(0, 0, np.zeros(0), 0.0, 0.0, 0.0, None)
     c = spheres.centers[valid]
+    d = c.shape[1]
+    big = float(np.max(spheres.radii[valid]))
+    if is_tilted(box):  # slabs of a fractional coordinate; the halo measured across its faces (the height)
+        assert box is not None
+        f, eps = fractional(c, box)
+        heights = cell_heights(box, d)
+        axis = int(np.argmax(heights))
+        x = f[:, axis]
+        reach = (2 * big + shift_error(box, d)) * _CELL_SLACK + 2 * _PAD * (float(np.max(np.abs(c))) + float(np.abs(box_vectors(box, d)).sum()) + big)
+        halo = reach / heights[axis] * _CELL_SLACK + 4 * eps[axis]
+        count = max(1, min(count, valid.size // 2))
+        cuts = np.quantile(x, np.linspace(0, 1, count + 1)[1:-1]) if count > 1 else np.zeros(0)
+        return _Plan(count, axis, cuts, float(x.min()), float(x.max()), float(halo), 1.0, box)
     axis = int(np.argmax(box)) if box is not None else int(np.argmax(np.ptp(c, axis=0)))
     x = c[:, axis]
-    big = float(np.max(spheres.radii[valid]))
     span = float(np.max(np.abs(c))) + (float(np.max(box)) if box is not None else 0.0)
     halo = 2 * big * _CELL_SLACK + 2 * _PAD * (span + big) + 4 * np.spacing(span)
     count = max(1, min(count, valid.size // 2))
@@ -317,7 +350,7 @@ def _members(block: np.ndarray, spheres: Any, offset: int, plan: _Plan, p: int) 
     """The bodies of one block that partition p needs: (global rows, owned, matrices, centres, radii)."""
     centers, radii = spheres[0], spheres[1]
     valid = np.isfinite(radii)
-    x = centers[:, plan.axis]
+    x = plan.coordinate(np.where(valid[:, None], centers, 0.0))
     slab = np.searchsorted(plan.cuts, x, side="right")  # owner of each body
     a, b = plan.slab(p)
     gap = _gap(x, a, b)

@@ -16,7 +16,7 @@ from ..fixed.classify import classify_detailed
 from ..fixed.lazy import PAIR_CHUNK
 from ..relation import Relation
 from .broadphase import Candidates
-from .periodic import classify_images
+from .periodic import classify_images, lattice_shifts
 
 __all__ = ["classify_candidates", "CHUNK_PAIRS"]
 
@@ -40,7 +40,7 @@ def classify_candidates(
     Args:
         Q: (N, n, n) float64 matrices of valid bodies (validated by :mod:`core.bodies.bounds`).
         cand: the pairs (and, in a box, the image of j).
-        box: the box sides, or None.
+        box: the box (:func:`core.bodies.periodic.read_box`), or None.
         method: "adaptive", "float" or "exact" (as for :func:`core.classify`).
         chunk: pairs per batch.
         progress: optional callable ``progress(done, total)`` after each batch, and (with the
@@ -67,7 +67,7 @@ def classify_candidates(
     for s in range(0, images.size, chunk):
         rows = images[s : s + chunk]
         assert cand.image is not None and box is not None
-        shift = cand.image[rows].astype(np.float64) * box  # k in {-1, 0, 1}: exact floats
+        shift = lattice_shifts(box, cand.image[rows])  # the float vectors v(k) of the images
         codes[rows], by[rows] = classify_images(Q[cand.i[rows]], Q[cand.j[rows]], shift, method)
         done += rows.size
         if progress is not None:

@@ -17,7 +17,8 @@ class Contacts:
     """Every pair of bodies that is not separate, with its certified relation.
 
     Pairs are (i, j) with i < j, sorted by (i, j). In a periodic box the pair is body i with the
-    nearest image of body j, c_j + ``image`` * L.
+    nearest image of body j: j moved by the lattice vector v(``image``) (:meth:`shifts`; k L in
+    an orthogonal box, k1 a1 + k2 a2 + k3 a3 rounded to floats in a tilted one).
     """
 
     i: np.ndarray
@@ -32,9 +33,10 @@ class Contacts:
     n_bodies: int
     """Number of bodies searched (valid or not)."""
     box: np.ndarray | None = None
-    """Periodic box sides, or None in open space."""
+    """Periodic box: its d sides, or the six numbers (Lx, Ly, Lz, xy, xz, yz) of a tilted box
+    (:func:`core.bodies.periodic.read_box`); None in open space."""
     image: np.ndarray | None = None
-    """(M, d) int8 lattice image of j for each pair (periodic box), else None."""
+    """(M, d) int8 lattice image k of j for each pair (periodic box), else None."""
     invalid: dict[int, str] = field(default_factory=dict)
     """Body -> why it is not an ellipse/ellipsoid (``on_invalid="mark"``); such bodies are in
     no pair."""
@@ -64,6 +66,25 @@ class Contacts:
         if self.invalid:
             worst[list(self.invalid)] = Relation.INVALID
         return worst
+
+    def shifts(self) -> np.ndarray | None:
+        """(M, d) float64: the vector v(k) body j of each pair was moved by; None in open space.
+
+        The exact float vectors the search translated j's matrix by
+        (:func:`core.bodies.periodic.lattice_shifts`): k L in an orthogonal box; in a tilted one
+        k1 a1 + k2 a2 + k3 a3 rounded to the nearest float per component.
+
+        Examples:
+            >>> c = Contacts(np.array([0]), np.array([1]), np.array([1], np.int8), np.array([2], np.int8), 2,
+            ...              box=np.array([10.0, 10.0, 0.0, 0.5, 0.0, 0.0]), image=np.array([[0, -1]], np.int8))
+            >>> c.shifts().tolist()
+            [[-5.0, -10.0]]
+        """
+        if self.image is None or self.box is None:
+            return None
+        from .periodic import lattice_shifts
+
+        return lattice_shifts(self.box, self.image)
 
     def pairs_of(self, body: int) -> np.ndarray:
         """Indices (into i, j, relation) of the pairs that contain ``body``."""

@@ -31,6 +31,7 @@ import numpy as np
 from flint import fmpq, fmpq_poly
 
 from ..algebra.qsqrt import QSqrtPoly
+from ..shapes.numbers import to_fmpq
 from ..shapes.quadrics import quadric_from_axes
 from .expressions import RationalFunction
 from .motions import Motion
@@ -105,6 +106,26 @@ class LinearMotions:
         q0 = [float(v) for v in self.q0[k]]
         orientation = q0 if self.dim == 3 else [q0[0], 0.0, 0.0, q0[1]]
         return quadric_from_axes(c, [float(v) for v in self.semi_axes[k]], orientation, exact=True)  # type: ignore[no-any-return]
+
+    def matrix_at(self, k: int, t: Any, shift: Any = None) -> list[list[fmpq]]:
+        """Body k's exact matrix at a rational t (optionally moved by ``shift``), without the motion.
+
+        The same matrix as ``matrix_at_exact(self.motion(k, shift), t)`` (the motion's A(t) at t),
+        built directly from c(t) = c0 + t (c1 - c0) and q(t) = (1 - t) q0 + t q1 (a fraction of
+        the cost of building the motion: the scene colours many bodies at one t this way).
+
+        Examples:
+            >>> from core.moving.motions import matrix_at_exact
+            >>> b, _ = read_linear_motions([[0.0, 0.0]], [[2.0, 0.0]], [[1.0, 1.0]])
+            >>> b.matrix_at(0, "1/2") == matrix_at_exact(b.motion(0), "1/2"), b.matrix_at(0, 0.5)[0]
+            (True, [1, 0, -1])
+        """
+        tq = to_fmpq(t)
+        s = [fmpq(0)] * self.dim if shift is None else [_f(_q(v)) for v in shift]
+        c = [_f(_q(a)) + tq * (_f(_q(b)) - _f(_q(a))) + e for a, b, e in zip(self.centers0[k], self.centers1[k], s, strict=True)]
+        q = [(1 - tq) * _f(_q(a)) + tq * _f(_q(b)) for a, b in zip(self.q0[k], self.q1[k], strict=True)]
+        orientation = q if self.dim == 3 else [q[0], fmpq(0), fmpq(0), q[1]]
+        return quadric_from_axes(c, [_f(_q(v)) for v in self.semi_axes[k]], orientation, exact=True)  # type: ignore[no-any-return]
 
     def packed(self) -> np.ndarray:
         """(N, 17) rows c0, c1, r, q0, q1 (3D) or (N, 10) (2D), float64, C order (the filter's input; kept)."""

@@ -18,7 +18,7 @@ from flint import fmpq, fmpz
 
 from .limits import LIBRARY, LimitExceeded, Limits
 
-__all__ = ["to_fmpq", "to_float", "format_rational", "sign", "parse_number", "MAX_DECIMAL_EXPONENT"]
+__all__ = ["to_fmpq", "to_float", "format_rational", "floor_log10", "sign", "parse_number", "MAX_DECIMAL_EXPONENT"]
 
 MAX_DECIMAL_EXPONENT = LIBRARY.decimal_exponent
 """Largest |e| accepted in "1.5e<e>" by the library (:data:`core.shapes.limits.LIBRARY`): "1e999999999"
@@ -182,34 +182,66 @@ def to_float(q: Any) -> float:
         return math.inf if p > 0 else -math.inf
 
 
+def floor_log10(q: Any) -> int:
+    """floor(log10 |q|) of a nonzero rational, exactly, at any size.
+
+    From the bit lengths (an estimate within one of the answer), corrected by exact comparisons
+    with powers of ten. Never converts a big integer to decimal text, so it works far beyond
+    Python's 4300-digit limit on ``str(int)``.
+
+    Examples:
+        >>> floor_log10(fmpq(1, 3)), floor_log10(fmpz(10) ** 5000), floor_log10(fmpq(-999, 10))
+        (-1, 5000, 1)
+    """
+    if not isinstance(q, fmpq):
+        q = to_fmpq(q)
+    if q == 0:
+        raise ValueError("floor_log10 of zero")
+    p, d = abs(q.p), q.q
+    # log10(p/d) lies in (bits(p) - 1 - bits(d), bits(p) - bits(d) + 1) * log10(2)
+    e = math.floor((int(p.bit_length()) - int(d.bit_length())) * math.log10(2))
+    while _ge_pow10(p, d, e + 1):
+        e += 1
+    while not _ge_pow10(p, d, e):
+        e -= 1
+    return e
+
+
+def _ge_pow10(p: fmpz, d: fmpz, e: int) -> bool:
+    """Whether p / d >= 10^e, exactly (p, d > 0)."""
+    return bool(p >= d * fmpz(10) ** e) if e >= 0 else bool(p * fmpz(10) ** (-e) >= d)
+
+
 def format_rational(q: Any, digits: int = 6) -> str:
     """Scientific text of an exact rational with ``digits`` significant digits, at any size.
 
-    Mantissa and exponent are computed exactly (no float), so values far outside the float
-    range (1e-400, 2^5000) still read as numbers: ``-1.23457e+612``.
+    Mantissa and exponent are computed exactly in integers (no float, no decimal text of a big
+    integer), so values far outside the float range (1e-400, 2^50000) still read as short
+    numbers: ``-1.23457e+612``. The mantissa is rounded to nearest (ties away from zero).
 
     Examples:
         >>> format_rational(fmpq(-1, 3)), format_rational(fmpz(10) ** 400 * 7, 3), format_rational(0)
         ('-3.33333e-01', '7.00e+400', '0')
+        >>> format_rational(fmpq(1, fmpz(3) ** 20000), 3)
+        '3.76e-9543'
     """
     if not isinstance(q, fmpq):
         q = to_fmpq(q)
     if q == 0:
         return "0"
+    if digits < 1:
+        raise ValueError(f"digits must be >= 1, got {digits}")
     sign = "-" if q < 0 else ""
-    p, d = abs(int(q.p)), int(q.q)
-    # exponent e with 10^e <= p/d < 10^(e+1), from the digit counts, corrected by one step
-    e = len(str(p)) - len(str(d))
-    if (p * 10 ** max(0, -e)) < d * 10 ** max(0, e):
-        e -= 1
+    p, d = abs(q.p), q.q
+    e = floor_log10(q)  # 10^e <= p/d < 10^(e+1)
     k = digits - 1 - e  # mantissa digits = round(p/d * 10^k)
-    num, den = (p * 10**k, d) if k >= 0 else (p, d * 10 ** (-k))
+    num, den = (p * fmpz(10) ** k, d) if k >= 0 else (p, d * fmpz(10) ** (-k))
     m, r = divmod(num, den)
     if 2 * r >= den:
         m += 1
-    if m >= 10**digits:  # rounding carried into a new digit (9.999 -> 10.00)
+    if m >= fmpz(10) ** digits:  # rounding carried into a new digit (9.999 -> 10.00)
         m //= 10
         e += 1
-    text = str(m)
+    text = str(m)  # flint's decimal conversion: ``digits`` digits, no size limit
     mant = text[0] + ("." + text[1:] if digits > 1 else "")
     return f"{sign}{mant}e{'+' if e >= 0 else '-'}{abs(e):02d}"

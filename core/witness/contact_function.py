@@ -20,8 +20,15 @@ s* from both sides:
 * below by f at any point (f <= s*),
 * above by the two tangent lines at the ends of the bracket (f lies under each of them).
 
-Everything is exact rational arithmetic; the float estimate that starts it comes from
-:mod:`core.witness.floats`.
+**Scale.** f is invariant under a common similarity of space (delta -> r delta, S -> r^2 S) and
+does not see the matrices' own scale; so the float estimate that starts the exact work is taken
+from the pair brought to unit size by an exact power of two (:func:`unit_exponent`): pairs at
+1e±300 start as well as pairs at 1. **Precision.** The bracket is narrowed by a safeguarded
+Newton iteration (:meth:`ContactFunction.narrow`): each step probes at the Newton point plus and
+minus its predicted error, rounded to a dyadic with just the bits that error needs, and falls
+back to bisection when a step does not halve the bracket. So the bits grow with the accuracy
+reached (quadratically per step), never with the size of the numbers, and every step narrows
+the bracket: the loop always ends, with a certified bracket.
 """
 
 from __future__ import annotations
@@ -32,35 +39,99 @@ from functools import cached_property
 
 from flint import fmpq, fmpq_mat, fmpq_poly
 
+from ..algebra.qsqrt import QSqrtPoly
+from ..algebra.realroots import real_roots
 from ..formulae.pencil import determinant
 from .centred import CentredShape, dot
 from .floats import maximise
-from .numbers import simplest_between
+from .numbers import simplest_between, to_float
 
-__all__ = ["ContactFunction", "Bracket", "dyadic"]
+__all__ = ["ContactFunction", "Bracket", "dyadic", "unit_exponent", "log2_abs"]
+
+_MAX_STEPS = 400
+"""Narrowing steps at most in one call (each at least halves the bracket): a safety net only."""
 
 
 def dyadic(x: fmpq, bits: int) -> fmpq:
     """X rounded to a multiple of 2^-bits (nearest); keeps exact iterates short."""
-    scale = 1 << bits
+    scale = pow2(bits)
     num = x * scale
-    return fmpq((num.p * 2 + num.q) // (num.q * 2), scale)
+    return fmpq((num.p * 2 + num.q) // (num.q * 2)) / scale
+
+
+def log2_abs(q: fmpq) -> int:
+    """An integer within 1 of log2 |q| for q != 0 (from bit lengths, never a float)."""
+    return int(q.p.bit_length()) - int(q.q.bit_length()) if q.p > 0 else int((-q.p).bit_length()) - int(q.q.bit_length())
+
+
+def unit_exponent(delta: fmpq_mat, SA: fmpq_mat, SB: fmpq_mat) -> int:
+    """The exponent e such that the similarity x -> 2^e x brings the pair to about unit size.
+
+    After it, max(|delta_i|, sqrt(S_ii)) is within a factor 4 of 1 (S_ii > 0: S is positive
+    definite). Exact: a power of two changes no digit of a float or a rational.
+
+    Examples:
+        >>> unit_exponent(fmpq_mat([[fmpq(3, 2**400)]]), fmpq_mat([[fmpq(1, 4**400)]]), fmpq_mat([[fmpq(1, 4**401)]]))
+        399
+        >>> fmpq(3, 2**400) * pow2(399)      # delta at unit size
+        3/2
+    """
+    d = delta.nrows()
+    logs = [log2_abs(delta[i, 0]) for i in range(d) if delta[i, 0] != 0]
+    logs += [log2_abs(S[i, i]) // 2 for S in (SA, SB) for i in range(d)]
+    return -max(logs)
+
+
+def pow2(e: int) -> fmpq:
+    """2^e exactly, for any integer e."""
+    return fmpq(1 << e) if e >= 0 else fmpq(1, 1 << -e)
 
 
 @dataclass(frozen=True)
 class Bracket:
-    """lambda* in [lo, hi] (exact signs of f' at the ends) and the implied bounds of s*."""
+    """lambda* in [lo, hi] (exact signs of f' at the ends) and the implied bounds of s*.
+
+    f and f' at both ends are kept: they give s* >= max(f_lo, f_hi) and, by concavity, s* <=
+    the value where the tangent lines at the ends cross.
+    """
 
     lo: fmpq
     hi: fmpq
-    s_lo: fmpq
-    """A value of f inside the bracket: s* >= s_lo."""
-    s_hi: fmpq
-    """Where the tangent lines at lo and hi cross: s* <= s_hi."""
-    best: fmpq
-    """The point of the bracket where f = s_lo (the best lambda known)."""
-    exact: bool
-    """True when f'(best) = 0: lambda* = best and s* = s_lo = s_hi exactly."""
+    f_lo: fmpq
+    d_lo: fmpq
+    """f'(lo) >= 0 (= 0 only for an exact bracket)."""
+    f_hi: fmpq
+    d_hi: fmpq
+    """f'(hi) <= 0."""
+
+    @property
+    def exact(self) -> bool:
+        """True when lambda* is known exactly (lo = hi, f' = 0 there): s* = s_lo = s_hi."""
+        return self.lo == self.hi
+
+    @property
+    def best(self) -> fmpq:
+        """The end where f is larger (the better lambda known)."""
+        return self.lo if self.f_lo >= self.f_hi else self.hi
+
+    @property
+    def s_lo(self) -> fmpq:
+        """A value of f in the bracket: s* >= s_lo."""
+        return max(self.f_lo, self.f_hi)
+
+    @cached_property
+    def s_hi(self) -> fmpq:
+        """Where the tangent lines at lo and hi cross: s* <= s_hi."""
+        if self.exact:
+            return self.f_lo
+        # L_lo (slope d_lo > 0) and L_hi (slope d_hi < 0) cross at x; f <= min(L_lo, L_hi)
+        x = (self.f_hi - self.f_lo + self.d_lo * self.lo - self.d_hi * self.hi) / (self.d_lo - self.d_hi)
+        return max(self.f_lo + self.d_lo * (x - self.lo), self.s_lo)
+
+    @property
+    def width(self) -> fmpq:
+        """The width hi - lo."""
+        return self.hi - self.lo
 
 
 class ContactFunction:
@@ -72,6 +143,8 @@ class ContactFunction:
         >>> cf = ContactFunction(*centred_pair(circle(0, 1), circle(6, 2)))
         >>> cf.values(fmpq(1, 3))[:2]        # lambda* = r_A / (r_A + r_B): f' = 0, f = (6/3)^2
         (4, 0)
+        >>> cf.start().exact, cf.start().s_lo
+        (True, 4)
     """
 
     def __init__(self, A: CentredShape, B: CentredShape) -> None:
@@ -79,7 +152,7 @@ class ContactFunction:
         self.B = B
         self.delta = B.centre - A.centre
         self.D = B.S - A.S
-        self._first: Bracket | None = None
+        self._start: Bracket | None = None
 
     @property
     def coincident(self) -> bool:
@@ -114,86 +187,163 @@ class ContactFunction:
         f2 = -2 * phi - 2 * (1 - 2 * lam) * psi + 2 * w * chi
         return f, f1, f2
 
-    # ---------------------------------------------------------------- brackets
-    def first_bracket(self, bits: int = 40) -> Bracket | None:
-        """A first bracket of lambda*, started from a float estimate; None when the centres coincide.
+    # ---------------------------------------------------------------- floats (estimates only)
+    @cached_property
+    def exponent(self) -> int:
+        """The power of two that brings the pair to unit size (:func:`unit_exponent`)."""
+        return unit_exponent(self.delta, self.A.S, self.B.S)
 
-        Relative width 2^-bits (wider if the estimate is off). Cached: later calls return the
-        first one, whatever ``bits``.
+    def unit_floats(self) -> tuple[list[float], list[list[float]], list[list[float]]]:
+        """(delta, S_A, S_B) of the pair at unit size, as floats (estimates only)."""
+        d = self.A.d
+        r, r2 = pow2(self.exponent), pow2(2 * self.exponent)
+        return (
+            [to_float(self.delta[i, 0] * r) for i in range(d)],
+            [[to_float(self.A.S[i, j] * r2) for j in range(d)] for i in range(d)],
+            [[to_float(self.B.S[i, j] * r2) for j in range(d)] for i in range(d)],
+        )
+
+    @cached_property
+    def float_estimate(self) -> tuple[float, list[float]] | None:
+        """(lambda*, y(lambda*)) estimated in floats at unit size; None when floats fail."""
+        delta, SA, SB = self.unit_floats()
+        try:
+            lam, _, y = maximise(SA, SB, delta)
+        except (ZeroDivisionError, OverflowError, ValueError):
+            return None
+        lam = float(lam)
+        if not (math.isfinite(lam) and all(math.isfinite(v) for v in y)):
+            return None
+        return min(max(lam, 0.0), 1.0), [float(v) for v in y]
+
+    @property
+    def float_guess(self) -> float:
+        """lambda* estimated in floats (0.5 when floats fail): where exact work starts."""
+        est = self.float_estimate
+        return 0.5 if est is None else est[0]
+
+    # ---------------------------------------------------------------- brackets
+    def start(self) -> Bracket | None:
+        """A first bracket of lambda* around the float estimate; None when the centres coincide.
+
+        About 2^-40 wide (relative to min(lambda*, 1 - lambda*)) when the estimate is good,
+        wider when it is not (in the worst case [0, 1]). Cached.
         """
         if self.coincident:
             return None
-        if self._first is None:
-            self._first = self._start(bits)
-        return self._first
+        if self._start is None:
+            self._start = self._first()
+        return self._start
 
-    def _start(self, bits: int) -> Bracket:
-        return self.bracket(self.float_guess, bits=bits)
+    def _end(self, lam: fmpq) -> tuple[fmpq, fmpq]:
+        f, f1, _ = self.values(lam)
+        return f, f1
 
-    @cached_property
-    def float_guess(self) -> float:
-        """lambda* estimated in floats (0.5 when floats fail): where exact work starts."""
-        ca, SA = self.A.floats()
-        cb, SB = self.B.floats()
-        try:
-            guess = float(maximise(SA, SB, [q - p for p, q in zip(ca, cb, strict=True)])[0])
-        except (ZeroDivisionError, OverflowError, ValueError):
-            return 0.5
-        return min(max(guess, 0.0), 1.0) if math.isfinite(guess) else 0.5
-
-    def bracket(self, guess: float, *, bits: int = 40) -> Bracket:
-        """Bracket lambda* around a float guess: width 2^-bits relative, widened until valid.
-
-        The ends are dyadic rationals; the signs of f' there are exact, so the bracket is
-        certified whatever the quality of the guess (in the worst case it grows to [0, 1]).
-        """
+    def _first(self) -> Bracket:
         zero, one = fmpq(0), fmpq(1)
-        g = min(max(fmpq(*float(guess).as_integer_ratio()), zero), one)
-        h = fmpq(1, 1 << bits) * max(min(g, 1 - g), fmpq(1, 1 << 60))
-        while True:
-            lo, hi = max(g - h, zero), min(g + h, one)
-            f_lo, d_lo, _ = self.values(lo)
-            f_hi, d_hi, _ = self.values(hi)
-            if d_lo >= 0 and d_hi <= 0:
-                return self._bracket(lo, hi, (f_lo, d_lo), (f_hi, d_hi))
-            h *= 256
+        g = dyadic(fmpq(*self.float_guess.as_integer_ratio()), 64)
+        h = pow2(-40 + log2_abs(min(g, 1 - g))) if zero < g < one else fmpq(0)
+        seen: list[tuple[fmpq, fmpq, fmpq]] = []
+        if h and zero < g - h and g + h < one:  # the usual case: two evaluations straddle lambda*
+            for x in (g - h, g + h):
+                f, f1 = self._end(x)
+                if f1 == 0:
+                    return Bracket(x, x, f, f1, f, f1)
+                seen.append((x, f, f1))
+            (a, fa, da), (c, fc, dc) = seen
+            if da > 0 > dc:
+                return self._simplest(Bracket(a, c, fa, da, fc, dc))
+        br = Bracket(zero, one, *self._end(zero), *self._end(one))
+        for x, f, f1 in seen:  # what the first probes proved
+            br = Bracket(x, br.hi, f, f1, br.f_hi, br.d_hi) if f1 > 0 else Bracket(br.lo, x, br.f_lo, br.d_lo, f, f1)
+        if h:
+            for _ in range(4):  # widen by 2^8 while the probes do not straddle lambda*
+                h *= 256
+                br, done = self._probe(br, g, h)
+                if done or br.exact:
+                    break
+        return self._simplest(br)
 
-    def refine(self, br: Bracket, bits: int) -> Bracket:
-        """A narrower bracket: one exact Newton step from ``br.best``, rounded to 2^-bits."""
+    def _probe(self, br: Bracket, g: fmpq, h: fmpq) -> tuple[Bracket, bool]:
+        """Evaluate f' at g - h and g + h (at g alone when h = 0); keep what their signs prove.
+
+        Points outside the open bracket are skipped. Returns the narrowed bracket and whether
+        both probes landed on the expected sides (lambda* between them).
+        """
+        hits = 0
+        points = ((g - h, -1), (g + h, 1)) if h else ((g, 0),)
+        for x, side in points:
+            if not br.lo < x < br.hi:
+                continue
+            f, f1 = self._end(x)
+            if f1 == 0:
+                return Bracket(x, x, f, f1, f, f1), True
+            if f1 > 0:
+                br = Bracket(x, br.hi, f, f1, br.f_hi, br.d_hi)
+            else:
+                br = Bracket(br.lo, x, br.f_lo, br.d_lo, f, f1)
+            hits += (f1 > 0) == (side < 0)
+        return br, hits == 2
+
+    def _simplest(self, br: Bracket) -> Bracket:
+        """Test the simplest rational of the bracket: often lambda* itself (spheres, symmetric pairs)."""
         if br.exact:
             return br
-        _, f1, f2 = self.values(br.best, order=2)
-        assert f2 is not None
-        g = dyadic(br.best - f1 / f2, bits) if f2 < 0 else (br.lo + br.hi) / 2
-        g = min(max(g, br.lo), br.hi)
-        h = fmpq(1, 1 << max(bits - 8, 1))
-        while True:
-            lo, hi = max(g - h, br.lo), min(g + h, br.hi)
-            f_lo, d_lo, _ = self.values(lo)
-            f_hi, d_hi, _ = self.values(hi)
-            if d_lo >= 0 and d_hi <= 0:
-                return self._bracket(lo, hi, (f_lo, d_lo), (f_hi, d_hi))
-            h *= 16
+        mid = simplest_between(br.lo, br.hi)
+        if mid.q.bit_length() > 32 or not br.lo < mid < br.hi:
+            return br
+        f, f1 = self._end(mid)
+        if f1 == 0:
+            return Bracket(mid, mid, f, f1, f, f1)
+        if f1 > 0:
+            return Bracket(mid, br.hi, f, f1, br.f_hi, br.d_hi)
+        return Bracket(br.lo, mid, br.f_lo, br.d_lo, f, f1)
 
-    def _bracket(self, lo: fmpq, hi: fmpq, end_lo: tuple[fmpq, fmpq], end_hi: tuple[fmpq, fmpq]) -> Bracket:
-        (f_lo, d_lo), (f_hi, d_hi) = end_lo, end_hi
-        if d_lo == 0:
-            return Bracket(lo, lo, f_lo, f_lo, lo, True)
-        if d_hi == 0:
-            return Bracket(hi, hi, f_hi, f_hi, hi, True)
-        # tangent lines L_lo (slope d_lo > 0) and L_hi (slope d_hi < 0) cross at x; f <= min(L_lo, L_hi)
-        x = (f_hi - f_lo + d_lo * lo - d_hi * hi) / (d_lo - d_hi)
-        s_hi = f_lo + d_lo * (x - lo)
-        s_lo, best = max((f_lo, lo), (f_hi, hi))
-        # a simple rational in the bracket is often lambda* itself (spheres, symmetric pairs)
-        mid = simplest_between(lo, hi)
-        if mid.q.bit_length() <= 32:
-            f_m, d_m, _ = self.values(mid)
-            if d_m == 0:
-                return Bracket(mid, mid, f_m, f_m, mid, True)
-            s_lo, best = max((s_lo, best), (f_m, mid))
-            lo, hi = (mid, hi) if d_m > 0 else (lo, mid)
-        return Bracket(lo, hi, s_lo, max(s_hi, s_lo), best, False)
+    def step(self, br: Bracket) -> Bracket:
+        """One safeguarded Newton step: a bracket at most half as wide (or exact).
+
+        Newton from the better end predicts lambda* to within about (its step)^2 / lambda*; the
+        prediction is probed at plus and minus that error (rounded to a dyadic with just the bits
+        it needs) and widened by 16 while it does not straddle lambda*. A step that leaves the
+        bracket, or does not halve it, is completed by bisection.
+        """
+        if br.exact:
+            return br
+        start = br.width
+        b = br.best
+        _, f1, f2 = self.values(b, order=2)
+        assert f2 is not None
+        x = b - f1 / f2 if f2 < 0 else None
+        if x is not None and br.lo < x < br.hi:
+            e = abs(x - b)
+            scale = min(x, 1 - x)
+            h_exact = max(4 * e * e / scale, br.width / pow2(200))
+            k = -log2_abs(h_exact)  # h = 2^-k, a power of two about the predicted error
+            h = pow2(-k)
+            g = dyadic(x, k + 4)
+            for _ in range(3):
+                br, done = self._probe(br, g, h)
+                if done or br.exact:
+                    break
+                h *= 16
+        if not br.exact and br.width * 2 > start:  # bisection keeps the step honest
+            mid = dyadic((br.lo + br.hi) / 2, max(8, -log2_abs(br.width) + 2))
+            if not br.lo < mid < br.hi:
+                mid = (br.lo + br.hi) / 2
+            br, _ = self._probe(br, mid, fmpq(0))
+        return self._simplest(br)
+
+    def narrow(self, br: Bracket, s_width: fmpq) -> Bracket:
+        """Steps until s_hi - s_lo <= s_width (or lambda* is exact); a certified bracket always.
+
+        At most a few hundred steps (each at least halves the bracket; Newton needs a handful):
+        when that is not enough the bracket reached so far is returned (still certified).
+        """
+        for _ in range(_MAX_STEPS):
+            if br.exact or br.s_hi - br.s_lo <= s_width:
+                return br
+            br = self.step(br)
+        return br
 
     # ---------------------------------------------------------------- polynomials
     @cached_property
@@ -220,17 +370,24 @@ class ContactFunction:
         N, D = self.polynomials
         return N.derivative() * D - N * D.derivative()
 
-    def root_factor(self, br: Bracket) -> fmpq_poly:
-        """The irreducible factor of g that vanishes at lambda* (the one changing sign on the bracket)."""
-        g = self.derivative_numerator
-        for factor, _ in g.factor()[1]:
-            if factor(br.lo) * factor(br.hi) < 0 or (br.exact and factor(br.lo) == 0):
-                return factor
-        raise RuntimeError("no factor of f' changes sign on the bracket of lambda*")
+    def root_factor(self, br: Bracket) -> tuple[fmpq_poly, Bracket]:
+        """The irreducible factor h of G that vanishes at lambda*, and a bracket isolating it.
 
-    def is_tangent(self, br: Bracket) -> bool:
-        """Exactly whether s* = 1: lambda* is then a root of N - D, i.e. its factor divides N - D."""
-        if br.exact:
-            return br.s_lo == 1
-        N, D = self.polynomials
-        return (N - D) % self.root_factor(br) == 0
+        lambda* is a simple root of h, the only root of G where f' changes sign; the bracket
+        is narrowed until h changes sign on it and no other factor does (then lambda* is the
+        only root of h inside), or until lambda* is exact.
+        """
+        factors = [factor for factor, _ in self.derivative_numerator.factor()[1]]
+        while not br.exact:
+            changing = [h for h in factors if h(br.lo) * h(br.hi) < 0]
+            if len(changing) == 1 and not any(h(br.lo) * h(br.hi) == 0 for h in factors):
+                h = changing[0]
+                if sum(1 for _ in _roots_between(h, br)) == 1:
+                    return h, br
+            br = self.step(br)
+        return next(h for h in factors if h(br.lo) == 0), br
+
+
+def _roots_between(h: fmpq_poly, br: Bracket) -> list[object]:
+    """The real roots of h in [lo, hi] (certified isolation)."""
+    return list(real_roots(QSqrtPoly(h), br.lo, br.hi))

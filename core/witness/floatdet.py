@@ -2,56 +2,39 @@
 
 A determinant is evaluated by the ring-generic Laplace formula of :func:`core.formulae.pencil.determinant`;
 its float kernel and error constant are traced from that formula by
-:func:`core.fixed.errorbound.build_kernel` (the machinery behind the filter's kernels), so
+:func:`core.fixed.errorbound.build_kernel` (the machinery behind the filter's kernels) once, by
+:mod:`core.witness.detgen`, and committed as core/witness/_det_kernels.py (checked for drift by
+the tests, as the filter's kernels are), so
 ``|computed - det| <= C * M + floor`` with M >= the permanent of |rows| (product of absolute row
 sums). Each row is first multiplied by a power of two that brings its largest entry into [1, 2)
 (exact; it keeps every leaf <= 2, so nothing overflows and the underflow floor applies), and the
 total exponent is returned so that callers can recover the value itself:
 det(original) = 2^exponent * det(scaled). A sign is certain when |value| > bound;
-:mod:`core.witness.batch` uses it for a certified lower bound of det Q (the smallest eigenvalue).
+:mod:`core.witness.floatcert` uses it for a certified lower bound of det Q (the smallest eigenvalue).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from fractions import Fraction
-from functools import cache
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
-from ..fixed.errorbound import build_kernel
-from ..formulae.pencil import determinant
+from . import _det_kernels
+from .floats import Real
 
 __all__ = ["det_with_bound"]
 
 
-@cache
 def _kernel(n: int) -> tuple[Callable[..., Any], float, float]:
-    """(function, constant, underflow floor) for n x n determinants (generated once)."""
-    names = [f"m{i}{j}" for i in range(n) for j in range(n)]
-
-    def formula(L: dict[str, Any]) -> dict[str, Any]:
-        M = [[L[f"m{i}{j}"] for j in range(n)] for i in range(n)]
-        bound = None
-        for row in M:
-            r = sum((abs(x) for x in row[1:]), abs(row[0]))
-            bound = r if bound is None else bound * r
-        return {"det": determinant(M), "det_M": bound}
-
-    k = build_kernel(
-        f"det{n}",
-        names,
-        formula,
-        style="permanent",
-        leaf_max={nm: Fraction(2) for nm in names},
-        leaf_exprs={f"m{i}{j}": (f"M[{i}, {j}]", "") for i in range(n) for j in range(n)},
-        params=("M",),
-    )
-    namespace: dict[str, Any] = {}
-    exec(compile(k.source, f"<witness det{n} kernel>", "exec"), namespace)  # noqa: S102 - generated here
-    return namespace[f"det{n}"], k.constants[0], k.underflow_floor
+    """(function, constant, underflow floor) for n x n determinants (core/witness/_det_kernels.py)."""
+    try:
+        fn = getattr(_det_kernels, f"det{n}")
+    except AttributeError:
+        raise ValueError(f"no determinant kernel for {n}x{n} matrices (generated sizes: 2, 3)") from None
+    return fn, getattr(_det_kernels, f"DET{n}_CONSTANT"), getattr(_det_kernels, f"DET{n}_FLOOR")
 
 
 class _Rows:
@@ -66,8 +49,8 @@ class _Rows:
         return self.rows[ij[0]][ij[1]]
 
 
-def det_with_bound(M: Any) -> tuple[Any, Any, Any]:
-    """Determinants of n x n float matrices, n = 2..5, certified.
+def det_with_bound(M: Any) -> tuple[Real, Real, int | npt.NDArray[np.int64]]:
+    """Determinants of n x n float matrices, n = 2 or 3, certified.
 
     Args:
         M: nested lists (n x n) of Python floats (one matrix) or of (N,) arrays (N matrices),

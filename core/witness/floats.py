@@ -7,16 +7,17 @@ safeguarded Newton iteration for the maximiser of the contact function (f is con
 f'(0) > 0 > f'(1), see :mod:`core.witness.contact_function`). The estimates only *start*
 certified computations: the exact bracket of
 :class:`~core.witness.contact_function.ContactFunction` or the certified classifications of
-:mod:`core.witness.batch`. Also the type-generic helpers (``where``, ``down``, ``up``, ...)
-that let :mod:`core.witness.batch` run one code on both kinds.
+:mod:`core.witness.floatcert`. Also the type-generic helpers (``where``, ``down``, ``up``, ...)
+that let :mod:`core.witness.floatcert` run one code on both kinds.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = [
     "maximise",
@@ -28,9 +29,13 @@ __all__ = [
     "is_array",
     "lists",
     "stacked",
+    "Real",
 ]
 
 _TOL = 4.0 * 2.0**-52
+
+Real = float | npt.NDArray[np.float64]
+"""A float (one pair) or an (N,) array of floats (a stack): the one code runs on both."""
 
 
 def is_array(x: Any) -> bool:
@@ -38,27 +43,27 @@ def is_array(x: Any) -> bool:
     return isinstance(x, np.ndarray)
 
 
-def where(cond: Any, a: Any, b: Any) -> Any:
+def where(cond: Any, a: Any, b: Any) -> Real:
     """``a if cond else b`` elementwise (np.where for arrays)."""
     if isinstance(cond, bool | np.bool_):
-        return a if cond else b
-    return np.where(cond, a, b)
+        return cast(Real, a if cond else b)
+    return cast(Real, np.where(cond, a, b))
 
 
-def down(x: Any) -> Any:
+def down(x: Any) -> Real:
     """The next float below x: a lower bound of the exact result of one correctly rounded operation."""
-    return np.nextafter(x, -np.inf) if is_array(x) else math.nextafter(x, -math.inf)
+    return cast(Real, np.nextafter(x, -np.inf) if is_array(x) else math.nextafter(x, -math.inf))
 
 
-def up(x: Any) -> Any:
+def up(x: Any) -> Real:
     """The next float above x."""
-    return np.nextafter(x, np.inf) if is_array(x) else math.nextafter(x, math.inf)
+    return cast(Real, np.nextafter(x, np.inf) if is_array(x) else math.nextafter(x, math.inf))
 
 
 def lists(M: np.ndarray) -> list[list[Any]]:
     """(N, n, n) stack -> nested lists of contiguous (N,) arrays; (n, n) -> nested lists of floats."""
     if M.ndim == 2:
-        return M.tolist()
+        return cast(list[list[Any]], M.tolist())
     n = M.shape[-1]
     return [[np.ascontiguousarray(M[:, i, j]) for j in range(n)] for i in range(n)]
 
@@ -89,19 +94,19 @@ def mat_vec(M: list[list[Any]], v: list[Any]) -> list[Any]:
     return [dot(row, v) for row in M]
 
 
-def dot(u: list[Any], v: list[Any]) -> Any:
+def dot(u: list[Any], v: list[Any]) -> Real:
     """Dot product u . v."""
     out = u[0] * v[0]
     for a, b in zip(u[1:], v[1:], strict=True):
         out = out + a * b
-    return out
+    return cast(Real, out)
 
 
 def centred(M: list[list[Any]]) -> tuple[list[Any], list[list[Any]], Any]:
     """(centre c, Q^-1, size k) of a normalised float matrix [[Q, m], [m^T, a]].
 
     The inverse shape matrix is S = k Q^-1. This k = -m.c - a loses digits to cancellation when
-    the centre is far out compared with the size; :mod:`core.witness.batch` encloses it
+    the centre is far out compared with the size; :mod:`core.witness.floatcert` encloses it
     accurately instead.
     """
     d = len(M) - 1
@@ -132,7 +137,7 @@ def _derivatives(SA: Any, SB: Any, delta: list[Any], lam: Any) -> tuple[Any, Any
     return w * phi, f1, f2, y
 
 
-def maximise(SA: Any, SB: Any, delta: list[Any], *, iterations: int = 60) -> tuple[Any, Any, list[Any]]:
+def maximise(SA: Any, SB: Any, delta: list[Any], *, iterations: int = 60) -> tuple[Real, Real, list[Real]]:
     """Float estimate of (lambda*, s* = f(lambda*), y(lambda*)).
 
     Args:

@@ -23,23 +23,29 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+import numpy as np
 from flint import fmpq, fmpq_mat, fmpq_poly
 
 from ..algebra.algebraic import RealAlgebraic
 from ..algebra.qsqrt import QSqrtPoly
 from ..algebra.realroots import real_roots
-from ..fixed.classify import classify
+from ..fixed.classify import Certifier, classify
 from ..formulae.pencil import determinant, pencil_coefficients
 from ..relation import Relation
 from .centred import CentredShape, column
-from .contact_function import ContactFunction
+from .contact_function import ContactFunction, log2_abs, pow2
+from .floatcert import points
 from .numbers import algebraic_dict, simplest_between
 
-__all__ = ["ContactPoint", "contact_point", "tangent_point", "overlap_point"]
+if TYPE_CHECKING:
+    from .filtered import Pairs
 
-_MAX_ROUNDS = 12
+__all__ = ["ContactPoint", "contact_point_pair", "tangent_point", "overlap_point", "point_exact", "point_float", "no_point"]
+
+_MAX_STEPS = 400
+"""Narrowing steps at most (a handful are needed): a safety net."""
 
 
 @dataclass
@@ -54,6 +60,9 @@ class ContactPoint:
     """Tangent: n = M_A x + m_A, the common normal out of A into B (not unit length)."""
     pencil_root: RealAlgebraic | None = None
     """Tangent: the positive double root T* of P(T) = det(T A + B) (A, B normalised)."""
+    certified_by: Certifier = Certifier.EXACT
+    """Exact rationals (always for a tangent pair), or floats with directed rounding (a point
+    inside both; its coordinates are exact rationals either way)."""
 
     @property
     def is_rational(self) -> bool:
@@ -83,6 +92,7 @@ class ContactPoint:
             "point": [algebraic_dict(c, digits) for c in self.point],
             "normal": None if self.normal is None else [algebraic_dict(c, digits) for c in self.normal],
             "pencil_root": None if self.pencil_root is None else algebraic_dict(self.pencil_root, digits),
+            "certified_by": str(self.certified_by),
         }
 
 
@@ -161,81 +171,102 @@ def _inside_both(A: CentredShape, B: CentredShape, x: fmpq_mat) -> bool:
     return A.form(x) < 0 and B.form(x) < 0
 
 
-def _float_candidate(A: CentredShape, B: CentredShape) -> fmpq_mat | None:
-    """x(lambda*) from float arithmetic (a candidate only: checked exactly by the caller)."""
-    from .floats import maximise
+def overlap_point(A: CentredShape, B: CentredShape, cf: ContactFunction | None = None) -> ContactPoint:
+    """A rational point inside both shapes of an overlapping pair (see the module docstring).
 
+    ``cf``: the pair's contact function if already built (its first bracket is cached). The
+    candidates are simple rationals near x(lambda) at the best lambda known; the bracket of
+    lambda* is narrowed a step at a time until one of them is inside both (x(lambda*) is, with
+    depth 1 - s* > 0, and each step at least halves the bracket).
+    """
+    # a length of the order of the smaller semi-axis (S_ii is a squared length), a power of two
+    size = pow2(min(log2_abs(S[i, i]) for S in (A.S, B.S) for i in range(A.d)) // 2)
+    cf = cf or ContactFunction(A, B)
+    if cf.coincident:  # same centre: it is inside both
+        return _rational_point(A.centre)
+    quick = _float_candidate(cf)
+    if quick is not None:
+        for cand in _candidates(quick, size):
+            if _inside_both(A, B, cand):
+                return _rational_point(cand)
+    br = cf.start()
+    assert br is not None
+    for k in range(_MAX_STEPS):
+        for x in (cf.point(br.best), A.centre, B.centre) if k == 0 else (cf.point(br.best),):
+            for cand in _candidates(x, size):
+                if _inside_both(A, B, cand):
+                    return _rational_point(cand)
+        if br.exact:
+            break
+        br = cf.step(br)
+    raise RuntimeError("contact_point: no common interior point found (please report this pair)")
+
+
+def _float_candidate(cf: ContactFunction) -> fmpq_mat | None:
+    """x(lambda*) from floats at unit size, back in world coordinates (a candidate only)."""
+    est = cf.float_estimate
+    if est is None:
+        return None
+    lam, y = est
     try:
-        ca, SA = A.floats()
-        cb, SB = B.floats()
-        lam, _, y = maximise(SA, SB, [q - p for p, q in zip(ca, cb, strict=True)])
-        x = [ca[i] + (1 - lam) * sum(SA[i][j] * y[j] for j in range(A.d)) for i in range(A.d)]
-        return column([fmpq(*float(v).as_integer_ratio()) for v in x])
+        _, SA, _ = cf.unit_floats()
+        d = len(y)
+        off = [(1 - lam) * sum(SA[i][j] * y[j] for j in range(d)) for i in range(d)]
+        r = pow2(-cf.exponent)
+        return column([cf.A.centre[i, 0] + fmpq(*float(v).as_integer_ratio()) * r for i, v in enumerate(off)])
     except (ArithmeticError, ValueError):
         return None
 
 
-def overlap_point(A: CentredShape, B: CentredShape, cf: ContactFunction | None = None) -> ContactPoint:
-    """A rational point inside both shapes of an overlapping pair (see the module docstring).
-
-    ``cf``: the pair's contact function if already built (its first bracket is cached).
-    """
-    size = min(*(A.S[i, i] for i in range(A.d)), *(B.S[i, i] for i in range(B.d)))
-    if cf is not None and cf.first_bracket() is not None:  # cached: x(lambda) at its best lambda
-        quick: fmpq_mat | None = cf.point(cf.first_bracket().best)  # type: ignore[union-attr]
-    else:
-        quick = _float_candidate(A, B)
-    if quick is not None:
-        for cand in _candidates(quick, size):
-            if _inside_both(A, B, cand):
-                return ContactPoint(Relation.OVERLAP, tuple(RealAlgebraic.rational(cand[i, 0]) for i in range(A.d)))
-    cf = cf or ContactFunction(A, B)
-    br = cf.first_bracket()
-    rounds = [A.centre] if br is None else []
-    bits = 64
-    for _ in range(_MAX_ROUNDS):
-        if br is not None:
-            rounds = [cf.point(br.best), A.centre, B.centre]
-        for x in rounds:
-            for cand in _candidates(x, size):
-                if _inside_both(A, B, cand):
-                    return ContactPoint(Relation.OVERLAP, tuple(RealAlgebraic.rational(cand[i, 0]) for i in range(A.d)))
-        if br is None:
-            break
-        bits *= 2
-        br = cf.refine(br, bits)
-    raise RuntimeError("contact_point: no common interior point found (please report this pair)")
+def _rational_point(x: fmpq_mat) -> ContactPoint:
+    return ContactPoint(Relation.OVERLAP, tuple(RealAlgebraic.rational(x[i, 0]) for i in range(x.nrows())))
 
 
-def contact_point(A: Any, B: Any) -> ContactPoint:
-    """Where the pair meets: exact contact point and normal (tangent) or a common interior point (overlap).
-
-    Args:
-        A: one matrix, any input form of :func:`core.classify`.
-        B: the other.
-
-    Returns:
-        :class:`ContactPoint`. Tangent: exact point and common normal (rational, or real
-        algebraic with isolating intervals; decimals to any digits). Overlap: a rational point
-        verified exactly to lie strictly inside both shapes (the witness of overlap).
-
-    Raises:
-        ValueError: the pair is separate (nothing in common; see ``separating_plane``) or invalid.
+def contact_point_pair(A: Any, B: Any) -> ContactPoint:
+    """The exact contact point of one pair (the exact stage alone; :func:`core.witness.contact_point` is the public form).
 
     Examples:
         >>> circle = lambda x, r: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - r * r]]
-        >>> c = contact_point(circle(0, 1), circle(3, 2))          # touch at (1, 0)
+        >>> c = contact_point_pair(circle(0, 1), circle(3, 2))          # touch at (1, 0)
         >>> c.rational_point, [str(v.value) for v in c.normal], str(c.relation)
         ((1, 0), ['1', '0'], 'tangent')
-        >>> contact_point(circle(0, 1), circle(1, 1)).rational_point   # inside both
-        (1/2, 0)
     """
     from .centred import centred_pair
 
-    a, b = centred_pair(A, B)
     rel = classify(A, B)
+    why = no_point(rel)
+    if why is not None:
+        raise ValueError(why)
+    a, b = centred_pair(A, B)
+    return tangent_point(a, b) if rel == Relation.TANGENT else overlap_point(a, b)
+
+
+def no_point(rel: Relation) -> str | None:
+    """Why a pair with relation ``rel`` has no contact point (None: it has one)."""
     if rel == Relation.SEPARATE:
-        raise ValueError("A and B are separate: they have no point in common (separating_plane gives a plane between them)")
-    if rel == Relation.TANGENT:
-        return tangent_point(a, b)
-    return overlap_point(a, b)
+        return "A and B are separate: they have no point in common (separating_plane gives a plane between them)"
+    return None
+
+
+def point_exact(pairs: Pairs, i: int) -> ContactPoint:
+    """The exact stage: pair i's contact point and normal (tangent) or a rational point in both (overlap)."""
+    cf = pairs.contact_function(i)
+    if Relation(int(pairs.relation[i])) == Relation.TANGENT:
+        return tangent_point(cf.A, cf.B)
+    return overlap_point(cf.A, cf.B, cf)
+
+
+def point_float(pairs: Pairs, todo: np.ndarray) -> dict[int, ContactPoint]:
+    """The float stage: for overlapping pairs, a float point certified inside both (vectorised).
+
+    A tangent pair's contact point is exact algebra: the floats leave it to the exact stage.
+    """
+    fp = pairs.floats
+    assert fp is not None
+    mask = todo & (pairs.relation == Relation.OVERLAP)
+    x, ok = points(fp, mask)
+    out: dict[int, ContactPoint] = {}
+    for i in np.flatnonzero(ok & mask):
+        coords = tuple(RealAlgebraic.rational(fmpq(*float(v).as_integer_ratio())) for v in x[i])
+        out[int(i)] = ContactPoint(Relation.OVERLAP, coords, certified_by=Certifier.FLOAT)
+    return out

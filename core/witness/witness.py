@@ -10,18 +10,18 @@ from touching, as a margin a class can read ("1.8 % apart", "overlapping by 3 %"
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
-from ..fixed.classify import classify
+from ..fixed.classify import Certifier
 from ..relation import Relation
+from .filtered import NoWitness
 from .numbers import to_float
-from .plane import SeparatingPlane, plane_from
-from .point import ContactPoint, overlap_point, tangent_point
-from .scale import ContactScale, scale_from, solve_pair
+from .plane import SeparatingPlane
+from .point import ContactPoint
+from .scale import ContactScale
 
-__all__ = ["Witness", "witness", "witness_of", "margin_text", "SENTENCES"]
+__all__ = ["Witness", "compose", "margin_text", "SENTENCES"]
 
 SENTENCES = {
     Relation.SEPARATE: "separate: this plane separates them",
@@ -70,6 +70,8 @@ class Witness:
     """Separate pairs: the verified separating plane."""
     point: ContactPoint | None = None
     """Tangent pairs: the exact contact point and normal; overlap: a rational point in both."""
+    certified_by: Certifier = Certifier.EXACT
+    """FLOAT when floats with directed rounding certified every part, else EXACT."""
 
     @property
     def margin(self) -> str:
@@ -85,55 +87,18 @@ class Witness:
             "contact_scale": self.scale.to_dict(digits),
             "plane": None if self.plane is None else self.plane.to_dict(),
             "point": None if self.point is None else self.point.to_dict(digits),
+            "certified_by": str(self.certified_by),
         }
 
 
-def witness(A: Any, B: Any, *, rtol: float = 1e-12) -> Witness:
-    """The witness of the certified relation of one pair.
-
-    One validation and one bracket of the contact function serve the contact scale and the
-    plane or point.
-
-    Args:
-        A: one matrix, any input form of :func:`core.classify`.
-        B: the other.
-        rtol: relative width of the contact-scale bracket.
-
-    Returns:
-        :class:`Witness`: relation, sentence, contact scale, and the plane (separate) or
-        point (tangent, overlap).
-
-    Raises:
-        ValueError: an invalid matrix.
-
-    Examples:
-        >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
-        >>> w = witness(circle(0), circle(3))
-        >>> w.sentence, w.plane.normal, w.plane.offset, w.margin
-        ('separate: this plane separates them', (1, 0), 3/2, '50 % apart')
-        >>> witness(circle(0), circle(2)).point.rational_point
-        (1, 0)
-    """
-    if not (rtol > 0 and math.isfinite(rtol)):
-        raise ValueError(f"rtol must be a finite number > 0, got {rtol!r}")
-    return witness_of(A, B, classify(A, B), rtol)
-
-
-def witness_of(A: Any, B: Any, rel: Relation, rtol: float = 1e-12) -> Witness:
-    """:func:`witness` for a pair whose relation ``rel`` ``core`` already certified.
-
-    ``rel`` comes from ``classify`` or ``explain``: the scene's path, without classifying twice. The contact
-    scale is computed independently and must agree (RuntimeError otherwise).
-    """
-    cf, br = solve_pair(A, B, rtol)
-    scale = scale_from(cf, br, rtol)
-    if scale.relation != rel:  # two independent certified computations: never expected
-        raise RuntimeError(f"contact scale says {scale.relation}, the classifier {rel}: please report this pair")
-    out = Witness(rel, SENTENCES[rel], scale)
-    if rel == Relation.SEPARATE:
-        out.plane = plane_from(cf, br)
-    elif rel == Relation.TANGENT:
-        out.point = tangent_point(cf.A, cf.B)
-    else:
-        out.point = overlap_point(cf.A, cf.B, cf)
-    return out
+def compose(scale: ContactScale | NoWitness, part: SeparatingPlane | ContactPoint | NoWitness) -> Witness | NoWitness:
+    """The witness of one pair from its contact scale and its plane (separate) or point (otherwise)."""
+    if isinstance(scale, NoWitness):
+        return scale
+    if isinstance(part, NoWitness):
+        return NoWitness(scale.relation, part.kind, part.reason)
+    rel = scale.relation
+    by = Certifier.FLOAT if scale.certified_by == part.certified_by == Certifier.FLOAT else Certifier.EXACT
+    if isinstance(part, SeparatingPlane):
+        return Witness(rel, SENTENCES[rel], scale, plane=part, certified_by=by)
+    return Witness(rel, SENTENCES[rel], scale, point=part, certified_by=by)

@@ -1,0 +1,789 @@
+"""``BodyIndex``: a reusable index of N bodies, asked about new bodies (Monte Carlo, packing).
+
+The inner loop of a Monte Carlo or packing code tries a move and asks whether the moved body
+overlaps anything. ``index = BodyIndex(Q, box=None)`` indexes the bodies once;
+``index.query(Qnew)`` answers, for every new body (row of ``Qnew``), every indexed body it is
+not separate from, with the certified relation (the same answer, pair for pair, as
+:func:`core.contacts` on the union of the indexed and the new bodies); ``index.update(rows,
+Qrows)`` moves indexed bodies in place (an accepted move) without rebuilding anything.
+
+How. Every indexed body has a certified bounding sphere (:mod:`core.bodies.bounds`). The spheres
+sit in a uniform grid: in open space over the region of the bodies (cells of side >= 2 R (1 +
+2^-20), R the largest radius; a centre outside the region goes to the nearest border cell, which
+keeps neighbours neighbours), in a periodic box over the fractional coordinates (c = f1 a1 + f2
+a2 + f3 a3; n_a cells across the box vector a, each at least 2 R thick across its faces), each
+cell a row of a table of body ids (slots grow by doubling when a cell fills). A new body of
+radius r looks in the cells within (r + R) of its own (one ring of 3^d cells when r <= R), keeps
+the bodies whose sphere meets its own (padded for rounding; in a box, the image k of the
+indexed body is the one nearest in fractional coordinates: the only one that can touch, by the
+size rule of :mod:`core.bodies.periodic`), and classifies those candidates with the certified
+classifier, exactly as :func:`core.contacts` does: the indexed body as A, the new body as B,
+moved by the lattice vector v(-k) in a box (:func:`core.bodies.periodic.classify_images`).
+
+Small batches are kept cheap: a few new bodies get their bounding spheres from a short exact
+computation (:func:`_small_spheres`, the proof of :mod:`core.bodies.bounds` in rational
+arithmetic with a float centre and a float eigenvalue estimate), the grid lookup is a handful of
+numpy operations, and the narrow phase is one call of :func:`core.classify_detailed`.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..fixed.classify import METHODS, ON_INVALID, Certifier, classify_detailed
+from ..fixed.compiled import warm_up
+from ..relation import Relation
+from .bounds import bounding_spheres
+from .periodic import (
+    box_vectors_exact,
+    cell_heights,
+    check_sizes,
+    classify_images,
+    fractional,
+    fractional_point,
+    is_tilted,
+    lattice_shifts,
+    read_box,
+    shift_error,
+)
+from .search import read_bodies
+
+__all__ = ["BodyIndex", "IndexPairs"]
+
+_SLACK = 1.0 + 2.0**-16
+"""Cells are this much thicker than twice the largest radius: a new body no larger than the
+largest indexed one then looks one cell away (its m_a is 1 with the 2^-19 allowance)."""
+_PAD = 2.0**-40
+"""Relative padding of the sphere test (its roundings are far smaller)."""
+_CELL_ERROR = 2.0**-19
+"""Error allowed in a cell coordinate computed in floats (module docstring of broadphase)."""
+_MAX_CELLS_PER_BODY = 2
+"""The grid has at most this many cells per indexed body (larger cells beyond)."""
+_MAX_PERIODIC_CELLS = 1024
+"""Most cells across a periodic box per axis (keeps the float cell coordinates' error < 2^-20)."""
+_FAR = 2.0**20
+"""Centres within this many boxes of the origin (fractional coordinates, see _place)."""
+_FAR_MESSAGE = "a body lies too far from the periodic box for float64 fractional coordinates: wrap the centres into the box"
+_SMALL = 16
+"""Up to this many new bodies get their spheres from :func:`_small_spheres`."""
+_MARGIN = 1.0 - 2.0**-20
+
+
+@dataclass
+class IndexPairs:
+    """Every (new body, indexed body) pair that is not separate, with its certified relation.
+
+    Sorted by (i, j). In a periodic box the pair is new body i with the image of indexed body j
+    moved by the lattice vector v(``image``) (:meth:`shifts`).
+    """
+
+    i: np.ndarray
+    """int64 row of the new bodies (``Qnew``)."""
+    j: np.ndarray
+    """int64 indexed body."""
+    relation: np.ndarray
+    """int8 :class:`~core.Relation` codes: TANGENT or OVERLAP (UNDECIDED only with
+    ``method="float"``)."""
+    certified_by: np.ndarray
+    """int8 :class:`~core.Certifier` code of each pair (float filter or exact)."""
+    image: np.ndarray | None = None
+    """(M, d) int8 lattice image k of j (periodic box), else None."""
+    box: np.ndarray | None = None
+    """The index's box (:func:`core.bodies.periodic.read_box`), or None."""
+    invalid: dict[int, str] = field(default_factory=dict)
+    """New body -> why it is not an ellipse/ellipsoid (``on_invalid="mark"``)."""
+    counts: dict[str, int] = field(default_factory=dict)
+    """``candidates`` (pairs whose bounding spheres meet), ``float``, ``exact`` (who certified
+    the candidates), ``undecided``."""
+
+    def __len__(self) -> int:
+        return int(self.i.size)
+
+    def shifts(self) -> np.ndarray | None:
+        """(M, d) float64 lattice vectors v(k) of the images (None in open space)."""
+        if self.image is None or self.box is None:
+            return None
+        return lattice_shifts(self.box, self.image)
+
+    def any(self) -> np.ndarray:
+        """(number of new bodies,) bool: whether each new body touches or overlaps an indexed one."""
+        out = np.zeros(self.counts.get("queries", int(self.i.max()) + 1 if self.i.size else 0), dtype=bool)
+        out[self.i] = True
+        return out
+
+
+class BodyIndex:
+    """An index of bodies (ellipses or ellipsoids) asked which of them new bodies touch.
+
+    Args:
+        Q: (N, 4, 4) ellipsoids or (N, 3, 3) ellipses (float matrices, e.g. from
+            :func:`core.bodies_from_axes`).
+        box: None (open space), periodic box sides, or a tilted box (HOOMD's
+            ``(Lx, Ly, Lz, xy, xz, yz)``; 2D ``(Lx, Ly, xy)``): as :func:`core.contacts`.
+        method: "adaptive" (default), "float" (may report UNDECIDED) or "exact".
+        on_invalid: "raise" a ValueError naming the first body that is no ellipse/ellipsoid, or
+            "mark": leave it out of the index (listed in ``.invalid``); the same for new bodies.
+
+    Raises:
+        ValueError: bad shapes or options, an invalid body, a bad box or a body too large for it.
+
+    The grid is sized when the index is built (its region, its largest body): bodies that later
+    move far outside that region, or grow much larger, keep every answer right but make queries
+    slower; ``BodyIndex(index.Q, box)`` builds a fresh one. The indexed bodies may stand anywhere
+    (also outside the box: the image of a pair is found by rounding fractional coordinates).
+
+    Examples:
+        >>> from core import bodies_from_axes, Relation
+        >>> index = BodyIndex(bodies_from_axes([[0, 0], [3, 0]], [[1, 1], [1, 1]]))
+        >>> hits = index.query(bodies_from_axes([[1.5, 0], [0, 5]], [[0.5, 0.5], [1, 1]]))
+        >>> [(int(i), int(j), str(Relation(r))) for i, j, r in zip(hits.i, hits.j, hits.relation)]
+        [(0, 0, 'tangent'), (0, 1, 'tangent')]
+        >>> index.update([1], bodies_from_axes([[2.5, 0]], [[1, 1]]))   # body 1 moved
+        >>> [str(Relation(r)) for r in index.query(bodies_from_axes([[1.5, 0]], [[0.5, 0.5]])).relation]
+        ['tangent', 'overlap']
+    """
+
+    def __init__(self, Q: Any, box: Any = None, *, method: str = "adaptive", on_invalid: str = "raise") -> None:
+        _check(method, METHODS, "method")
+        _check(on_invalid, ON_INVALID, "on_invalid")
+        warm_up(wait=False)
+        self.method = method
+        self.on_invalid = on_invalid
+        Q = read_bodies(Q)
+        self._Q = np.array(Q, dtype=np.float64, order="C")
+        self.n = int(self._Q.shape[-1])
+        self.d = self.n - 1
+        self.box = read_box(box, self.d)
+        spheres = bounding_spheres(self._Q)
+        if spheres.invalid and on_invalid == "raise":
+            raise ValueError(next(iter(spheres.invalid.values())))
+        self.invalid: dict[int, str] = dict(spheres.invalid)
+        """Indexed body -> why it is no ellipse/ellipsoid (left out of the index)."""
+        if self.box is not None:  # the size rule; the centres may lie anywhere (images by rounding)
+            check_sizes(spheres.radii, self.box, self.d)
+        self._centers = spheres.centers
+        self._radii = spheres.radii
+        valid = np.isfinite(self._radii)
+        self._big = float(np.max(self._radii[valid])) if valid.any() else 0.0
+        self._span = self._extent(self._centers[valid])
+        self._build_grid()
+
+    # ------------------------------------------------------------------ the grid
+    def _build_grid(self) -> None:
+        """Cells sized for the largest radius, and the table of body ids per cell."""
+        d = self.d
+        valid = np.flatnonzero(np.isfinite(self._radii))
+        N = max(valid.size, 1)
+        width = 2 * max(self._big, 1e-300) * _SLACK
+        if self.box is not None:
+            self._vectors = box_vectors_exact(self.box, d)
+            self._tilted = is_tilted(self.box)
+            self._heights = cell_heights(self.box, d)
+            self._limit = (float(np.min(self._heights)) / 2 - shift_error(self.box, d)) * _MARGIN
+            """A new body's radius plus the largest indexed one must stay below this (the size rule)."""
+            n = np.clip(np.floor(self._heights / width), 1, _MAX_PERIODIC_CELLS).astype(np.int64)
+            while float(np.prod(n.astype(float))) > _MAX_CELLS_PER_BODY * N + 27:
+                n = np.maximum(n // 2, 1)
+            self._n = n
+            self._cell = self._heights / n  # thickness of a cell across its faces
+            self._origin = np.zeros(d)
+        else:
+            c = self._centers[valid] if valid.size else np.zeros((1, d))
+            lo, hi = c.min(axis=0), c.max(axis=0)
+            ext = np.maximum(hi - lo, 0.0)
+            h = np.full(d, width)
+            cells = float(np.prod(np.floor(ext / h) + 1))
+            if cells > _MAX_CELLS_PER_BODY * N:
+                h = h * (cells / (_MAX_CELLS_PER_BODY * N)) ** (1.0 / d)
+            h = np.maximum(h, ext / 2**30)
+            self._n = (np.floor(ext / h) + 3).astype(np.int64)  # one empty cell of margin on each side
+            self._cell = h
+            self._origin = lo - h
+        self._offset_cache: dict[tuple[int, ...], np.ndarray] = {}
+        self._strides = np.r_[np.cumprod(self._n[::-1])[::-1][1:], 1].astype(np.int64)  # axis 0 slowest
+        self._nl, self._cell_l, self._origin_l = self._n.tolist(), self._cell.tolist(), self._origin.tolist()
+        self._strides_l = self._strides.tolist()
+        ncells = int(np.prod(self._n))
+        coords, frac = self._place(np.where(np.isfinite(self._centers), self._centers, 0.0))
+        self._frac = frac
+        """Fractional coordinates of the indexed bodies (periodic box), for their images."""
+        flat = coords @ self._strides
+        self._body_cell = np.full(self._Q.shape[0], -1, dtype=np.int64)
+        self._body_slot = np.full(self._Q.shape[0], -1, dtype=np.int64)
+        cell_of = flat[valid]
+        order = np.argsort(cell_of, kind="stable")
+        sorted_cells = cell_of[order]
+        count = np.bincount(sorted_cells, minlength=ncells).astype(np.int64)
+        start = np.cumsum(count) - count
+        rank = np.arange(valid.size) - start[sorted_cells]
+        cap = max(int(count.max()) if count.size else 1, 1) + 1
+        self._table = np.full((ncells, cap), -1, dtype=np.int32)
+        bodies = valid[order]
+        self._table[sorted_cells, rank] = bodies
+        self._count = count
+        self._live = int(valid.size)
+        """Bodies in the grid (valid ones)."""
+        self._body_cell[bodies] = sorted_cells
+        self._body_slot[bodies] = rank
+
+    def _place(self, centers: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """(M, d) int64 cell coordinates, and the fractional coordinates in a periodic box.
+
+        Periodic: floor(f n) modulo n; f off by at most 2^-30 (checked) and |f| <= 2^20, so
+        f n is off by less than 2^10 2^-30 + 2^30 2^-52 < 2^-20 (n <= 1024 cells). Open space:
+        floor((c - origin) / h), clamped to the grid without its margin (both roundings are
+        relative 2^-53 of at most 2^30 cells). Either way each coordinate is off by < 2^-20.
+        """
+        if self.box is not None:
+            f, eps = fractional(centers, self.box)
+            if not ((eps < 2.0**-30).all() and (np.abs(f) <= _FAR).all()):
+                raise ValueError(_FAR_MESSAGE)
+            return np.floor(f * self._n).astype(np.int64) % self._n, f
+        u = np.floor((centers - self._origin) / self._cell)
+        return np.clip(u, 1, self._n - 2).astype(np.int64), None  # the margins stay empty
+
+    def _place_one(self, c: list[float]) -> tuple[list[int], list[float] | None]:
+        """:meth:`_place` of one centre in Python floats (the same operations)."""
+        d = self.d
+        if self.box is not None:
+            f, eps = fractional_point(c, self._vectors)
+            if not all(e < 2.0**-30 and abs(x) <= _FAR for x, e in zip(f, eps, strict=True)):
+                raise ValueError(_FAR_MESSAGE)
+            return [math.floor(f[a] * self._nl[a]) % self._nl[a] for a in range(d)], f
+        o, h, n = self._origin_l, self._cell_l, self._nl
+        return [min(max(math.floor((c[a] - o[a]) / h[a]), 1), n[a] - 2) for a in range(d)], None
+
+    def _offsets(self, m: tuple[int, ...]) -> np.ndarray:
+        """(K, d) distinct cell offsets within m[a] cells along each axis (cached)."""
+        out = self._offset_cache.get(m)
+        if out is None:
+            per_axis: list[Sequence[int]] = []
+            for a in range(self.d):
+                n = int(self._n[a])
+                if self.box is not None and 2 * m[a] + 1 >= n:
+                    per_axis.append(range(n))  # every cell of the axis, once
+                else:
+                    per_axis.append(range(-m[a], m[a] + 1))
+            out = np.array(list(itertools.product(*per_axis)), dtype=np.int64).reshape(-1, self.d)
+            self._offset_cache[m] = out
+        return out
+
+    # ------------------------------------------------------------------ queries
+    def __len__(self) -> int:
+        return int(self._Q.shape[0])
+
+    @property
+    def Q(self) -> np.ndarray:
+        """The indexed matrices (read-only view; change them with :meth:`update`)."""
+        v = self._Q.view()
+        v.setflags(write=False)
+        return v
+
+    def query(self, Qnew: Any, *, exclude: Any = None) -> IndexPairs:
+        """Every indexed body each new body is not separate from, certified.
+
+        Args:
+            Qnew: (M, n, n) new bodies (or one (n, n) matrix: M = 1).
+            exclude: None, or one indexed body per new body to leave out (an int for all, or
+                an (M,) array; -1: none), e.g. the body's own old place in a Monte Carlo move.
+
+        Returns:
+            :class:`IndexPairs`: pairs (i, j) sorted by (i, j), i a row of ``Qnew``, j an
+            indexed body; the same pairs, relations, certifiers and images (j's image k here is
+            minus the image of the new body in ``contacts``) as :func:`core.contacts` on the
+            union ``Q + Qnew``.
+
+        Raises:
+            ValueError: bad shapes, an invalid new body (``on_invalid="raise"``), or a new body
+                too large for the periodic box.
+        """
+        Qn = Qnew
+        if not (type(Qn) is np.ndarray and Qn.dtype == np.float64 and Qn.ndim == 3 and Qn.shape[1] == Qn.shape[2]):
+            Qn = np.asarray(Qnew)
+            Qn = read_bodies(Qn[None] if Qn.ndim == 2 else Qn)
+        if Qn.shape[-1] != self.n:
+            raise ValueError(f"new bodies are {Qn.shape[-1]}x{Qn.shape[-1]} matrices but the index holds {self.n}x{self.n}")
+        M = Qn.shape[0]
+        if M == 1 and (exclude is None or np.ndim(exclude) == 0):
+            one = self._query_one(Qn, -1 if exclude is None else int(exclude))
+            if one is not None:
+                return one
+        centers, radii, invalid = self._spheres(Qn, "new body")
+        ex = None
+        if exclude is not None:
+            ex = np.broadcast_to(np.asarray(exclude, dtype=np.int64), (M,))
+        if M == 1 and np.isfinite(radii[0]):
+            bj, image = self._near_one(centers[0].tolist(), float(radii[0]), -1 if ex is None else int(ex[0]))
+            qi = np.zeros(bj.size, dtype=np.int64)
+        else:
+            qi, bj, image = self._candidates(centers, radii, ex)
+        rel, by = self._classify(Qn, qi, bj, image)
+        keep = np.flatnonzero(rel != Relation.SEPARATE)
+        tally = np.bincount(by, minlength=3).tolist()
+        counts = {
+            "queries": M,
+            "candidates": int(qi.size),
+            "float": tally[Certifier.FLOAT],
+            "exact": tally[Certifier.EXACT],
+            "undecided": int(np.count_nonzero(rel == Relation.UNDECIDED)) if self.method == "float" else 0,
+        }
+        return IndexPairs(
+            qi[keep], bj[keep], rel[keep], by[keep], None if image is None else image[keep], self.box, invalid, counts
+        )
+
+    def _query_one(self, Qn: np.ndarray, exclude: int) -> IndexPairs | None:
+        """:meth:`query` of one new body, with as few array operations as it takes.
+
+        None when the short path does not apply (a body :func:`_small_spheres` does not
+        certify, or one too large for the box): the general path then answers (or raises).
+        """
+        out = _one_sphere(Qn[0].tolist(), self.d)
+        if out is None or (self.box is not None and not out[1] + self._big < self._limit):
+            return None
+        bj, image = self._near_one(out[0], out[1], exclude)
+        qi = np.zeros(bj.size, dtype=np.int64)
+        if image is not None and image.any():
+            rel, by = self._classify(Qn, qi, bj, image)
+        elif bj.size:
+            res = classify_detailed(self._Q[bj], Qn[qi], method=self.method)  # type: ignore[arg-type]
+            rel, by = res.relation, res.certified_by
+        else:
+            rel, by = np.zeros(0, np.int8), np.zeros(0, np.int8)
+        counts = {"queries": 1, "candidates": int(bj.size), "float": int(np.count_nonzero(by == Certifier.FLOAT))}
+        counts["exact"] = int(bj.size) - counts["float"] - int(np.count_nonzero(by == Certifier.NONE))
+        counts["undecided"] = int(np.count_nonzero(rel == Relation.UNDECIDED)) if self.method == "float" else 0
+        keep = rel != Relation.SEPARATE
+        if not keep.all():
+            qi, bj, rel, by = qi[keep], bj[keep], rel[keep], by[keep]
+            image = None if image is None else image[keep]
+        return IndexPairs(qi, bj, rel, by, image, self.box, {}, counts)
+
+    def update(self, rows: Any, Qrows: Any) -> None:
+        """Replace indexed bodies ``rows`` by ``Qrows`` (moved, turned or reshaped), in place.
+
+        Args:
+            rows: indexed body numbers (distinct).
+            Qrows: (len(rows), n, n) their new matrices (or one (n, n) matrix for one row).
+
+        Raises:
+            ValueError: bad rows or shapes, an invalid body (``on_invalid="raise"``; with
+                "mark" it leaves the index and is listed in ``.invalid``), or a body too large
+                for the periodic box. On an error the index is unchanged.
+        """
+        r = np.atleast_1d(np.asarray(rows))
+        if r.dtype.kind not in "iu" or r.ndim != 1:
+            raise ValueError(f"rows must be integer body numbers, got {rows!r}")
+        Qr = np.asarray(Qrows)
+        if Qr.ndim == 2:
+            Qr = Qr[None]
+        Qr = read_bodies(Qr)
+        if Qr.shape[0] != r.size or Qr.shape[-1] != self.n:
+            raise ValueError(f"update: {r.size} rows but Qrows has shape {Qr.shape} (expected ({r.size}, {self.n}, {self.n}))")
+        if r.size and (r.min() < 0 or r.max() >= len(self)):
+            raise ValueError(f"update: rows must be in [0, {len(self)}), got {r.tolist()}")
+        if np.unique(r).size != r.size:
+            raise ValueError("update: rows must be distinct")
+        centers, radii, invalid = self._spheres(Qr, "body", names=r)
+        ok = np.isfinite(radii)
+        coords, frac = self._place(np.where(ok[:, None], centers, 0.0))
+        flat = coords @ self._strides
+        for k, b in enumerate(r.tolist()):
+            self._remove(b)
+            self._Q[b] = Qr[k]
+            self._centers[b] = centers[k]
+            self._radii[b] = radii[k]
+            if frac is not None and self._frac is not None:
+                self._frac[b] = frac[k]
+            self.invalid.pop(b, None)
+            if ok[k]:
+                self._insert(b, int(flat[k]))
+            else:
+                self.invalid[b] = invalid[k]
+        if ok.any():
+            self._big = max(self._big, float(np.max(radii[ok])))
+            self._span = max(self._span, self._extent(centers[ok]))
+
+    def _extent(self, centers: np.ndarray) -> float:
+        """Largest |centre coordinate| (plus 2 x the box's largest number): scales the sphere test's padding."""
+        big = float(np.max(np.abs(centers))) if centers.size else 0.0
+        return big + (2 * float(np.abs(self.box).max()) if self.box is not None else 0.0)
+
+    def _remove(self, b: int) -> None:
+        c = int(self._body_cell[b])
+        if c < 0:
+            return
+        s = int(self._body_slot[b])
+        last = int(self._count[c]) - 1
+        moved = int(self._table[c, last])
+        self._table[c, s] = moved
+        self._body_slot[moved] = s
+        self._table[c, last] = -1
+        self._count[c] = last
+        self._live -= 1
+        self._body_cell[b] = -1
+        self._body_slot[b] = -1
+
+    def _insert(self, b: int, c: int) -> None:
+        s = int(self._count[c])
+        if s == self._table.shape[1]:  # the cell is full: twice the slots for every cell
+            grown = np.full((self._table.shape[0], 2 * s), -1, dtype=np.int32)
+            grown[:, :s] = self._table
+            self._table = grown
+        self._table[c, s] = b
+        self._count[c] = s + 1
+        self._live += 1
+        self._body_cell[b] = c
+        self._body_slot[b] = s
+
+    # ------------------------------------------------------------------ steps of a query
+    def _spheres(self, Qn: np.ndarray, what: str, names: Any = None) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
+        """Certified spheres of new bodies; invalid ones raise or are marked; the box's size rule."""
+        M = Qn.shape[0]
+        if M <= _SMALL:
+            centers, radii = _small_spheres(Qn)
+            rest = np.flatnonzero(~np.isfinite(radii))
+        else:
+            centers, radii = np.full((M, self.d), np.nan), np.full(M, np.nan)
+            rest = np.arange(M)
+        invalid: dict[int, str] = {}
+        if rest.size:
+            s = bounding_spheres(Qn[rest])
+            centers[rest], radii[rest] = s.centers, s.radii
+            for k, why in s.invalid.items():
+                row = int(rest[k])
+                msg = why.replace(f"body {k}", f"{what} {row if names is None else int(names[row])}", 1)
+                if self.on_invalid == "raise":
+                    raise ValueError(msg)
+                invalid[row] = msg
+        if self.box is not None:
+            ok = np.isfinite(radii)
+            too = np.flatnonzero(ok & ~(radii + max(self._big, 0.0) < self._limit))
+            if too.size:
+                k = int(too[0])
+                row = k if names is None else int(names[k])
+                raise ValueError(
+                    f"{what} {row} is too large for the periodic box: its bounding radius {radii[k]:.6g} plus the largest "
+                    f"indexed one, {self._big:.6g}, must be less than half the smallest height of the cell "
+                    f"({float(np.min(self._heights)):.6g} / 2), so that only the nearest image of a body can touch another"
+                )
+        return centers, radii, invalid
+
+    def _candidates(
+        self, centers: np.ndarray, radii: np.ndarray, exclude: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """(new row, indexed body, image of the indexed body) of every pair whose spheres meet.
+
+        Sorted by (new row, indexed body). A new body of radius r looks m_a cells away along
+        axis a, m_a = ceil((r + R) / cell_a + 2^-19): two centres within r + R have cell
+        coordinates (computed in floats, each off by less than 2^-20) at most that far apart.
+        """
+        d = self.d
+        ok = np.flatnonzero(np.isfinite(radii))
+        if not ok.size or not self._live:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64), None if self.box is None else np.zeros((0, d), np.int8)
+        coords, frac = self._place(centers[ok])
+        reach = radii[ok] + self._big
+        m = np.ceil(reach[:, None] / self._cell * (1 + 2.0**-40) + _CELL_ERROR).astype(np.int64)
+        if ok.size == 1:  # one new body: a few small operations
+            offsets = self._offsets(tuple(m[0].tolist()))
+            nb = coords[0] + offsets
+            if self.box is not None:
+                nb %= self._n
+            elif m.max() > 1:  # beyond the margin: leave out cells off the grid
+                nb = nb[((nb >= 0) & (nb < self._n)).all(axis=1)]
+            ids = self._table[nb @ self._strides].ravel()
+            body = ids[ids >= 0].astype(np.int64)
+            qi = np.full(body.size, ok[0], dtype=np.int64)
+        else:
+            first = m[0]
+            same = bool((m == first).all())
+            groups = [np.arange(ok.size)] if same else [np.flatnonzero((m == row).all(axis=1)) for row in np.unique(m, axis=0)]
+            members = self._table[self._table >= 0]  # the bodies cell by cell (slots [0, count) are filled)
+            start = np.cumsum(self._count) - self._count
+            q_parts, b_parts = [], []
+            for g in groups:
+                cells = self._cells(coords[g], tuple(int(x) for x in m[g[0]]))  # (q, K)
+                cnt = self._count[cells]
+                ends = np.cumsum(cnt.reshape(-1))
+                # position in ``members`` of the t-th pair: t + (start of its cell - pairs before its cell)
+                jump = np.repeat((start[cells].reshape(-1) - ends + cnt.reshape(-1)).astype(np.int64), cnt.reshape(-1))
+                b_parts.append(members[np.arange(jump.size) + jump])
+                q_parts.append(np.repeat(ok[g], cnt.sum(axis=1)))
+            qi = q_parts[0] if len(q_parts) == 1 else np.concatenate(q_parts)
+            body = (b_parts[0] if len(b_parts) == 1 else np.concatenate(b_parts)).astype(np.int64)
+        if exclude is not None:
+            keep = body != exclude[qi]
+            qi, body = qi[keep], body[keep]
+        diff = self._centers[body] - centers[qi]
+        k = None
+        if self.box is not None:
+            if is_tilted(self.box):
+                assert frac is not None and self._frac is not None
+                fq = np.empty((centers.shape[0], d))
+                fq[ok] = frac
+                k = -np.rint(self._frac[body] - fq[qi])
+            else:  # fractional coordinates of the difference: as the open broad phase does
+                k = -np.rint(diff / self.box)
+            moved = np.flatnonzero(k.any(axis=1))
+            if moved.size:
+                diff[moved] += lattice_shifts(self.box, self._images(k[moved]))
+        scale = float(np.max(np.abs(centers[ok]))) + self._span + float(np.max(reach))
+        r = radii[qi] + self._radii[body] + _PAD * scale
+        near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= r * r)
+        if near.size > 1:
+            near = near[np.argsort(qi[near] * len(self) + body[near], kind="stable")]
+        return qi[near], body[near], None if k is None else k[near].astype(np.int8)
+
+    def _near_one(self, c: list[float], r: float, exclude: int) -> tuple[np.ndarray, np.ndarray | None]:
+        """:meth:`_candidates` for one new body (centre c, radius r): (indexed bodies, images)."""
+        d = self.d
+        reach = r + self._big
+        m = tuple(math.ceil(reach / self._cell_l[a] * (1 + 2.0**-40) + _CELL_ERROR) for a in range(d))
+        u, f = self._place_one(c)
+        offsets = self._offsets(m)
+        if self.box is not None:
+            cells = ((np.array(u) + offsets) % self._n) @ self._strides
+        elif max(m) == 1:  # within the margin
+            cells = sum(u[a] * self._strides_l[a] for a in range(d)) + self._offsets_flat(m)
+        else:
+            nb = np.array(u) + offsets
+            cells = nb[((nb >= 0) & (nb < self._n)).all(axis=1)] @ self._strides
+        ids = self._table[cells].ravel()
+        body = ids[ids >= 0]
+        if exclude >= 0:
+            body = body[body != exclude]
+        body = body.astype(np.int64)
+        diff = self._centers[body] - np.array(c)
+        k = None
+        if self.box is not None:  # k = -image: the fractional difference rounded (as in _candidates)
+            if self._tilted:
+                assert self._frac is not None and f is not None
+                k = np.rint(self._frac[body] - np.array(f))
+            else:
+                k = np.rint(diff / self.box)
+            if k.any():
+                diff -= lattice_shifts(self.box, self._images(k))  # v(-k) = -v(k)
+        pad = _PAD * (max(abs(x) for x in c) + self._span + reach)
+        rr = self._radii[body] + (r + pad)
+        near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= rr * rr)
+        if near.size > 1:
+            near = near[np.argsort(body[near], kind="stable")]
+        return body[near], None if k is None else (-k[near]).astype(np.int8)
+
+    def _cells(self, coords: np.ndarray, m: tuple[int, ...]) -> np.ndarray:
+        """(q, K) flat cells within m[a] cells of each cell coordinate row, axis by axis.
+
+        Periodic: modulo the counts (the offsets are distinct modulo them). Open space: clipped
+        to the grid, whose outer rows are the empty margin (a clipped cell holds nobody).
+        """
+        q, d = coords.shape
+        total = np.zeros((q,) + (1,) * d, dtype=np.int64)
+        for a in range(d):
+            n = int(self._n[a])
+            if self.box is not None and 2 * m[a] + 1 >= n:
+                steps = np.arange(n)
+            else:
+                steps = np.arange(-m[a], m[a] + 1)
+            u = coords[:, a, None] + steps
+            u = u % n if self.box is not None else np.clip(u, 0, n - 1)
+            shape = [q] + [1] * d
+            shape[1 + a] = steps.size
+            total = total + (u * self._strides_l[a]).reshape(shape)
+        return total.reshape(q, -1)
+
+    def _offsets_flat(self, m: tuple[int, ...]) -> np.ndarray:
+        """Offsets as flat cell steps (open space: within the margin, no wrap)."""
+        key = (-1, *m)
+        out = self._offset_cache.get(key)
+        if out is None:
+            out = self._offsets(m) @ self._strides
+            self._offset_cache[key] = out
+        return out
+
+    def _images(self, k: np.ndarray) -> np.ndarray:
+        """Images k = -rint(fractional difference) as int8 (they must fit).
+
+        The one image that can touch has |df + k| below 1/2 by far more than the coordinates'
+        errors (the size rule's margin), so rounding finds it.
+        """
+        if k.size and not np.abs(k).max() <= 127:
+            raise ValueError("a body lies more than 127 boxes from another: wrap the centres into the box")
+        return k.astype(np.int8)
+
+    def _classify(
+        self, Qn: np.ndarray, qi: np.ndarray, bj: np.ndarray, image: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Certified relations, as :func:`core.contacts` computes them on the union.
+
+        The indexed body is A, the new body B (moved by v(-k) in a box).
+        """
+        M = qi.size
+        rel = np.full(M, Relation.UNDECIDED, dtype=np.int8)
+        by = np.zeros(M, dtype=np.int8)
+        if not M:
+            return rel, by
+        shifted = np.zeros(M, dtype=bool) if image is None else image.any(axis=1)
+        plain = np.flatnonzero(~shifted)
+        if plain.size:
+            res = classify_detailed(self._Q[bj[plain]], Qn[qi[plain]], method=self.method)  # type: ignore[arg-type]
+            rel[plain], by[plain] = res.relation, res.certified_by
+        moved = np.flatnonzero(shifted)
+        if moved.size:
+            assert image is not None and self.box is not None
+            shift = lattice_shifts(self.box, -image[moved].astype(np.int64))
+            rel[moved], by[moved] = classify_images(self._Q[bj[moved]], Qn[qi[moved]], shift, self.method)
+        return rel, by
+
+
+def _check(value: str, options: tuple[str, ...], what: str) -> None:
+    if value not in options:
+        raise ValueError(f"unknown {what} {value!r}; valid options: {', '.join(options)}")
+
+
+# ----------------------------------------------------------------------------- small batches
+
+
+def _small_spheres(Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Certified bounding spheres of a few bodies (NaN where this path does not certify one).
+
+    The proof of :mod:`core.bodies.bounds` (any float centre c, any 0 < lambda <= lambda_min(Q):
+    the body lies within (|g| + sqrt(|g|^2 - lambda f(c))) / lambda of c, g = Q c + m), evaluated
+    exactly in integers: every float is an integer times 2^E (E the smallest exponent in play,
+    at most 0), c is a float estimate (Cramer's rule) and lambda a float eigenvalue estimate
+    shrunk by 2^-10, proven by the leading minors of Q - lambda I (exact); g, f(c), |g|^2 are
+    exact; the square roots are rounded up (integer square roots) and the quotient rounded up
+    to a float. The same proof shows the body valid (Q > 0, f(c) < 0). A body that is not
+    exactly symmetric, not finite, or not proven here gets NaN: the caller asks
+    :func:`core.bodies.bounds.bounding_spheres`, which also names what is wrong.
+    """
+    N, n = Q.shape[0], Q.shape[-1]
+    d = n - 1
+    centers = np.full((N, d), np.nan)
+    radii = np.full(N, np.nan)
+    for k in range(N):
+        out = _one_sphere(Q[k].tolist(), d)
+        if out is not None:
+            centers[k], radii[k] = out
+    return centers, radii
+
+
+def _one_sphere(M: list[list[float]], d: int) -> tuple[list[float], float] | None:
+    """(centre, radius) of one body by the exact integer proof of :func:`_small_spheres`, or None."""
+    if any(M[i][j] != M[j][i] for i in range(d + 1) for j in range(i)):
+        return None
+    if not all(math.isfinite(v) for row in M for v in row):
+        return None
+    if M[0][0] < 0:
+        M = [[-v for v in row] for row in M]
+    if not M[0][0] > 0:
+        return None
+    c = _centre_estimate(M, d)
+    lam_est = _lambda_estimate(M, d)
+    if c is None or not (lam_est > 0 and math.isfinite(lam_est)) or not all(math.isfinite(v) for v in c):
+        return None
+    lams = [lam_est * f for f in (1.0 - 2.0**-10, 1.0 - 2.0**-4, 0.5)]
+    floats = [M[i][j] for i in range(d + 1) for j in range(i, d + 1)] + c + lams
+    E = min([math.frexp(v)[1] - 53 for v in floats if v != 0.0] + [0])
+
+    def whole(x: float) -> int:  # x / 2^E, exactly
+        if x == 0.0:
+            return 0
+        m, e = math.frexp(x)
+        return int(m * 9007199254740992.0) << (e - 53 - E)  # 2^53
+
+    Q = [[whole(M[min(i, j)][max(i, j)]) for j in range(d)] for i in range(d)]
+    m = [whole(M[i][d]) << -E for i in range(d)]  # m / 2^(2E): the scale of Q c
+    C = [whole(v) for v in c]
+    G = [sum(Q[i][j] * C[j] for j in range(d)) + m[i] for i in range(d)]  # g / 2^(2E)
+    F0 = sum(C[i] * (G[i] + m[i]) for i in range(d)) + (whole(M[d][d]) << -2 * E)  # f(c) / 2^(3E)
+    if not F0 < 0:
+        return None
+    for lam in lams:
+        L = whole(lam)
+        if L > 0 and _definite([[Q[i][j] - (L if i == j else 0) for j in range(d)] for i in range(d)], d):
+            break
+    else:
+        return None
+    G2 = sum(v * v for v in G)  # |g|^2 / 2^(4E)
+    num = _ceil_sqrt(G2) + _ceil_sqrt(G2 - L * F0)
+    den = L << -E  # rho <= num / den (module docstring of bounds: rho = (|g| + sqrt(|g|^2 - lambda f)) / lambda)
+    try:
+        rho = num / den
+    except OverflowError:
+        return None
+    p, q = rho.as_integer_ratio()
+    if p * den < num * q:
+        rho = math.nextafter(rho, math.inf)
+    return (c, rho) if math.isfinite(rho) else None
+
+
+def _ceil_sqrt(n: int) -> int:
+    """The smallest integer >= sqrt(n), n >= 0."""
+    r = math.isqrt(n)
+    return r if r * r == n else r + 1
+
+
+def _centre_estimate(M: list[list[float]], d: int) -> list[float] | None:
+    """-Q^-1 m in floats (Cramer's rule): any float vector is a valid centre, a good one is tight."""
+    m = [M[i][d] for i in range(d)]
+    try:
+        if d == 2:
+            a, b, e = M[0][0], M[0][1], M[1][1]
+            det = a * e - b * b
+            return [-(e * m[0] - b * m[1]) / det, -(a * m[1] - b * m[0]) / det]
+        q = [[M[i][j] for j in range(3)] for i in range(3)]
+        adj = [
+            [q[1][1] * q[2][2] - q[1][2] * q[2][1], q[0][2] * q[2][1] - q[0][1] * q[2][2], q[0][1] * q[1][2] - q[0][2] * q[1][1]],
+            [q[1][2] * q[2][0] - q[1][0] * q[2][2], q[0][0] * q[2][2] - q[0][2] * q[2][0], q[0][2] * q[1][0] - q[0][0] * q[1][2]],
+            [q[1][0] * q[2][1] - q[1][1] * q[2][0], q[0][1] * q[2][0] - q[0][0] * q[2][1], q[0][0] * q[1][1] - q[0][1] * q[1][0]],
+        ]
+        det = q[0][0] * adj[0][0] + q[0][1] * adj[1][0] + q[0][2] * adj[2][0]
+        return [-(adj[i][0] * m[0] + adj[i][1] * m[1] + adj[i][2] * m[2]) / det for i in range(3)]
+    except (ZeroDivisionError, OverflowError):
+        return None
+
+
+def _lambda_estimate(M: list[list[float]], d: int) -> float:
+    """Smallest eigenvalue of the quadratic block, in floats (closed forms; only an estimate)."""
+    try:
+        if d == 2:
+            h = (M[0][0] + M[1][1]) / 2
+            return h - math.hypot((M[0][0] - M[1][1]) / 2, M[0][1])
+        q = (M[0][0] + M[1][1] + M[2][2]) / 3
+        b = [[M[i][j] - (q if i == j else 0.0) for j in range(3)] for i in range(3)]
+        p = math.sqrt(sum(b[i][j] ** 2 for i in range(3) for j in range(3)) / 6)
+        if p == 0:
+            return q
+        bn = [[v / p for v in row] for row in b]
+        det = (
+            bn[0][0] * (bn[1][1] * bn[2][2] - bn[1][2] * bn[2][1])
+            - bn[0][1] * (bn[1][0] * bn[2][2] - bn[1][2] * bn[2][0])
+            + bn[0][2] * (bn[1][0] * bn[2][1] - bn[1][1] * bn[2][0])
+        )
+        phi = math.acos(max(-1.0, min(1.0, det / 2))) / 3
+        return q + 2 * p * math.cos(phi + 2 * math.pi / 3)
+    except (ValueError, OverflowError, ZeroDivisionError):
+        return math.nan
+
+
+def _definite(P: list[list[int]], d: int) -> bool:
+    """P positive definite (its leading principal minors are positive; exact integers)."""
+    if not P[0][0] > 0:
+        return False
+    m2 = P[0][0] * P[1][1] - P[0][1] * P[1][0]
+    if not m2 > 0:
+        return False
+    if d == 2:
+        return True
+    m3 = (
+        P[0][0] * (P[1][1] * P[2][2] - P[1][2] * P[2][1])
+        - P[0][1] * (P[1][0] * P[2][2] - P[1][2] * P[2][0])
+        + P[0][2] * (P[1][0] * P[2][1] - P[1][1] * P[2][0])
+    )
+    return m3 > 0

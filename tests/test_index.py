@@ -1,0 +1,248 @@
+"""``BodyIndex``: a reusable index asked about new bodies (core.bodies.index).
+
+The reference is :func:`core.contacts` on the union of the indexed and the new bodies (its own
+tests check it against brute force): the index must give exactly its pairs between an indexed
+and a new body, with the same relations, certifiers and images (the image of the indexed body
+here is minus the image of the new body there), in open space, in orthogonal and tilted
+periodic boxes, one query at a time and in batches, and after moves. The small-batch bounding
+spheres are checked on sampled boundary points and against the bounds module's spheres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bench.bodies_data import random_bodies
+from core import BodyIndex, Certifier, Relation, bodies_from_axes, contacts
+from core.bodies.bounds import bounding_spheres
+from core.bodies.index import _small_spheres
+from core.shapes.quadrics import rotation_from_quaternion
+
+TILTED_3D = (9.0, 8.0, 8.5, 0.4, -0.5, 0.3)
+TILTED_2D = (9.0, 8.0, -0.45)
+
+
+def cell(box, d):
+    """Box vectors as columns (placing bodies; rounding is harmless there)."""
+    if box is None or len(box) == d:
+        return None
+    if d == 2:
+        Lx, Ly, xy = box
+        return np.array([[Lx, xy * Ly], [0, Ly]])
+    Lx, Ly, Lz, xy, xz, yz = box
+    return np.array([[Lx, xy * Ly, xz * Lz], [0, Ly, yz * Lz], [0, 0, Lz]])
+
+
+def bodies(n, d, box, seed, size=0.6):
+    """n random bodies (semi-axes up to ``size``) in one cell of the box (or a cube)."""
+    rng = np.random.default_rng(seed)
+    side = 9.0
+    if box is not None and len(box) == d:
+        c = rng.uniform(0, 1, (n, d)) * np.array(box, dtype=float)
+    elif box is not None:
+        c = rng.uniform(-0.5, 0.5, (n, d)) @ cell(box, d).T
+    else:
+        c = rng.uniform(0, side, (n, d))
+    semi = rng.uniform(0.3, 1.0, (n, d)) * size
+    orient = rng.normal(size=(n, 4)) if d == 3 else rng.uniform(0, np.pi, n)
+    return bodies_from_axes(c, semi, orient)
+
+
+def expected(Q, Qnew, box):
+    """The pairs (new row, indexed body) of contacts on the union, with relation, certifier, image."""
+    N = len(Q)
+    res = contacts(np.concatenate([Q, Qnew]), box=box)
+    out = {}
+    for k in range(len(res)):
+        a, b = int(res.i[k]), int(res.j[k])
+        if a < N <= b:
+            image = None if res.image is None else tuple(-int(x) for x in res.image[k])
+            out[(b - N, a)] = (int(res.relation[k]), int(res.certified_by[k]), image)
+    return out
+
+
+def as_dict(hits):
+    out = {}
+    for k in range(len(hits)):
+        image = None if hits.image is None else tuple(int(x) for x in hits.image[k])
+        out[(int(hits.i[k]), int(hits.j[k]))] = (int(hits.relation[k]), int(hits.certified_by[k]), image)
+    return out
+
+
+CASES = [(3, None), (2, None), (3, (9.0, 8.0, 8.5)), (2, (9.0, 8.0)), (3, TILTED_3D), (2, TILTED_2D)]
+
+
+@pytest.mark.parametrize("d, box", CASES)
+def test_queries_equal_contacts_on_the_union(d, box):
+    Q = bodies(300 if d == 3 else 200, d, box, seed=1)
+    Qnew = bodies(60, d, box, seed=2)
+    index = BodyIndex(Q, box=box)
+    want = expected(Q, Qnew, box)
+    hits = index.query(Qnew)  # a batch
+    assert as_dict(hits) == want
+    assert np.all(np.diff(hits.i * len(Q) + hits.j) > 0)  # sorted by (i, j)
+    one_by_one = {}
+    for k in range(len(Qnew)):  # one at a time: the short path
+        single = index.query(Qnew[k])
+        assert np.all(single.i == 0)
+        one_by_one.update({(k, j): v for (_, j), v in as_dict(single).items()})
+    assert one_by_one == want
+    assert len(want) > 20
+    if box is not None:
+        assert sum(1 for v in want.values() if any(v[2])) >= 3  # pairs across the faces
+        shifts = hits.shifts()
+        assert shifts is not None and shifts.shape == (len(hits), d)
+    assert hits.counts["candidates"] >= len(hits) and hits.counts["queries"] == len(Qnew)
+
+
+@pytest.mark.parametrize("d, box", CASES)
+def test_updates_move_bodies_without_rebuilding(d, box):
+    rng = np.random.default_rng(5)
+    Q = bodies(250, d, box, seed=3)
+    index = BodyIndex(Q, box=box)
+    table = index._table
+    for step in range(4):
+        rows = rng.choice(len(Q), size=40, replace=False)
+        moved = bodies(40, d, box, seed=10 + step)
+        index.update(rows, moved)
+        Q = Q.copy()
+        Q[rows] = moved
+        assert np.array_equal(index.Q, Q)
+    assert index._table is table or index._table.shape[1] > table.shape[1]  # grown only, never rebuilt
+    Qnew = bodies(50, d, box, seed=4)
+    assert as_dict(index.query(Qnew)) == expected(Q, Qnew, box) != {}
+    fresh = BodyIndex(Q, box=box)
+    assert as_dict(fresh.query(Qnew)) == as_dict(index.query(Qnew))
+
+
+def test_monte_carlo_moves_exclude_the_body_itself():
+    """A trial move of body k asks about the moved body against all but k; accepted moves update."""
+    rng = np.random.default_rng(2)
+    b = random_bodies(400, dim=3, fraction=0.2, seed=6)
+    Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
+    box = (b.side,) * 3
+    index = BodyIndex(Q, box=box)
+    accepted = 0
+    for _ in range(60):
+        k = int(rng.integers(len(Q)))
+        c = (b.centers[k] + rng.normal(scale=0.3, size=3)) % b.side
+        trial = bodies_from_axes(c[None], b.semi_axes[k][None], b.orientations[k][None])
+        hits = index.query(trial, exclude=k)
+        assert k not in hits.j.tolist()
+        others = np.delete(np.arange(len(Q)), k)
+        want = expected(Q[others], trial, box)
+        assert as_dict(hits) == {(0, int(others[j])): v for (_, j), v in want.items()}
+        if not len(hits):
+            index.update([k], trial)
+            Q[k], b.centers[k] = trial[0], c
+            accepted += 1
+    assert accepted > 5
+    assert as_dict(index.query(Q[:5])) == expected(Q, Q[:5], box)  # each finds itself: overlap
+    assert all((i, i) in as_dict(index.query(Q[:5])) for i in range(5))
+
+
+def test_touching_exactly_certified_like_contacts():
+    Q = bodies_from_axes([[0, 0, 0], [3, 0, 0]], [[1, 1, 1]] * 2)
+    index = BodyIndex(Q)
+    hits = index.query(bodies_from_axes([[1.5, 0, 0]], [[0.5, 0.5, 0.5]]))
+    assert hits.relation.tolist() == [Relation.TANGENT] * 2 and hits.certified_by.tolist() == [Certifier.EXACT] * 2
+    far = index.query(bodies_from_axes([[1.5, 0, 2.0**-20]], [[0.5, 0.5, 0.5]]))  # its matrix is exact
+    assert len(far) == 0 and far.counts["candidates"] == 2  # the spheres meet; the bodies do not
+    assert index.query(bodies_from_axes([[50, 50, 50]], [[0.5, 0.5, 0.5]])).counts["candidates"] == 0  # off the grid
+    assert index.query(bodies_from_axes([[1.5, 0, 0]], [[0.5, 0.5, 0.5]]), exclude=0).j.tolist() == [1]
+
+
+def test_a_new_body_larger_than_every_indexed_one():
+    """Its reach spans several cells: every body it touches is still found (batch and alone)."""
+    Q = bodies(3000, 3, None, seed=8, size=0.25)
+    rng = np.random.default_rng(3)
+    big = bodies_from_axes(rng.uniform(1, 8, (8, 3)), rng.uniform(0.5, 3.0, (8, 3)), rng.normal(size=(8, 4)))
+    index = BodyIndex(Q)
+    want = expected(Q, big, None)
+    assert as_dict(index.query(big)) == want and len(want) > 100
+    for k in range(len(big)):
+        assert as_dict(index.query(big[k])) == {(0, j): v for (i, j), v in want.items() if i == k}
+    # spheres of radius 2 each touched by six of radius 1/4 at the ends of its axes (exact):
+    # the small ones sit 2.25 away, up to 5 cells of 0.5: a reach one cell short misses some
+    centres = rng.integers(8, 64, (12, 3)) / 8.0
+    ring = np.concatenate([np.eye(3), -np.eye(3)]) * 2.25
+    touching = bodies_from_axes((centres[:, None, :] + ring).reshape(-1, 3), np.full((72, 3), 0.25))
+    spheres = bodies_from_axes(centres, np.full((12, 3), 2.0))
+    index2 = BodyIndex(np.concatenate([bodies(500, 3, None, seed=9, size=0.25), touching]))
+    for k in range(12):
+        hits = index2.query(spheres[k])
+        assert set(range(500 + 6 * k, 506 + 6 * k)) <= set(hits.j[hits.relation == Relation.TANGENT].tolist())
+    index.update([0], big[:1])  # an indexed body grows: queries look further
+    assert as_dict(index.query(Q[5:40])) == expected(index.Q, Q[5:40], None)
+    assert as_dict(index.query(Q[7])) == {(0, j): v for (i, j), v in expected(index.Q, Q[7:8], None).items()}
+
+
+def test_invalid_bodies_raise_or_are_marked():
+    Q = bodies(20, 3, None, seed=1)
+    bad = Q[:3].copy()
+    bad[1] = np.diag([1.0, 1.0, -1.0, -1.0])
+    with pytest.raises(ValueError, match=r"^new body 1 is not an ellipsoid"):
+        BodyIndex(Q).query(bad)
+    marked = BodyIndex(Q, on_invalid="mark").query(bad)
+    assert list(marked.invalid) == [1] and 1 not in marked.i.tolist() and marked.any().tolist() == [True, False, True]
+    with pytest.raises(ValueError, match=r"^body 5 is not an ellipsoid"):
+        BodyIndex(np.concatenate([Q[:5], bad[1:2]]))
+    index = BodyIndex(Q)
+    before = index.Q.copy()
+    with pytest.raises(ValueError, match=r"^body 7 is not an ellipsoid"):
+        index.update([7], bad[1])
+    assert np.array_equal(index.Q, before)  # unchanged on an error
+    with pytest.raises(ValueError, match="rows must be distinct"):
+        index.update([3, 3], Q[:2])
+    with pytest.raises(ValueError, match=r"rows must be in \[0, 20\)"):
+        index.update([20], Q[0])
+    with pytest.raises(ValueError, match="new bodies are 3x3 matrices but the index holds 4x4"):
+        index.query(bodies_from_axes([[0, 0]], [[1, 1]]))
+    marking = BodyIndex(Q, on_invalid="mark")
+    marking.update([7], bad[1])
+    assert 7 in marking.invalid and 7 not in marking.query(Q).j.tolist()
+
+
+def test_size_rule_in_a_box_names_the_body():
+    Q = bodies(30, 3, TILTED_3D, seed=2)
+    index = BodyIndex(Q, box=TILTED_3D)
+    huge = bodies_from_axes([[0, 0, 0]], [[3.5, 3.5, 3.5]])  # 3.5 + 0.6 > 7.24 / 2 (the smallest height)
+    with pytest.raises(ValueError, match=r"^new body 0 is too large for the periodic box"):
+        index.query(huge)
+    with pytest.raises(ValueError, match=r"^body 4 is too large for the periodic box"):
+        index.update([4], huge)
+
+
+def test_small_batch_spheres_are_certified_and_tight():
+    rng = np.random.default_rng(7)
+    for d in (2, 3):
+        b = random_bodies(200, dim=d, ratio=8.0, seed=5)
+        b.centers *= 10.0 ** rng.integers(-3, 5, (200, 1))
+        Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
+        Q[::5] *= -1.0  # flipped signs: the same bodies
+        c, r = _small_spheres(Q)
+        assert np.isfinite(r).all()
+        ref = bounding_spheres(Q)
+        assert np.all(r <= ref.radii * (1 + 1e-6) + 1e-12)  # no looser than the bounds module
+        u = rng.normal(size=(64, d))
+        u /= np.linalg.norm(u, axis=1)[:, None]
+        for k in range(200):
+            if d == 3:
+                R = rotation_from_quaternion(b.orientations[k])
+            else:
+                t = float(b.orientations[k])
+                R = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+            pts = b.centers[k] + (u * b.semi_axes[k]) @ R.T
+            assert np.linalg.norm(pts - c[k], axis=1).max() <= r[k] * (1 + 1e-12)
+            assert r[k] >= b.semi_axes[k].max() * (1 - 1e-9) - np.linalg.norm(c[k] - b.centers[k])
+    asym = Q[:2].copy()
+    asym[0, 0, 1] += 1e-13  # not exactly symmetric: left to bounding_spheres
+    assert np.isnan(_small_spheres(asym)[1][0]) and np.isfinite(_small_spheres(asym)[1][1])
+
+
+def test_empty_index_and_empty_queries():
+    index = BodyIndex(np.zeros((0, 4, 4)))
+    assert len(index.query(bodies(3, 3, None, seed=1))) == 0
+    index = BodyIndex(bodies(10, 3, None, seed=1))
+    assert len(index.query(np.zeros((0, 4, 4)))) == 0
