@@ -331,6 +331,33 @@ def test_numpy_and_every_simd_variant_agree_bit_for_bit(n):
 
 
 @pytest.mark.parametrize("n", [3, 4])
+def test_kernel_writes_relation_codes_and_counts_the_undecided(n):
+    # classify_float's path: the C maps each rule id through a 256-byte table as it finishes a
+    # block and returns how many pairs it left undecided; the same as relations() of the rule ids
+    from core.fixed.filters import _RELATION_OF
+
+    A, B = _mixed(n, seed=5)
+    expected = rules_numpy(A, B)
+    assert (expected == -1).sum() >= 5  # the exactly tangent and invalid pairs: the count is tested
+    chosen = compiled.variant()
+    try:
+        for v in compiled.variants():
+            compiled.select(v)
+            for threads in (1, 3):
+                codes, undecided = compiled.mapped(A, B, _RELATION_OF, threads=threads)
+                assert codes.dtype == np.int8 and (codes == relations(expected)).all(), (v, threads)
+                assert undecided == int((expected == -1).sum()), (v, threads)
+            marks = np.arange(256, dtype=np.uint8).view(np.int8)  # the identity: rule ids as bytes
+            assert (compiled.mapped(A, B, marks, threads=1)[0] == expected).all(), v
+    finally:
+        compiled.select(chosen)
+    from core.fixed import _filter
+
+    with pytest.raises(ValueError, match="256 bytes"):
+        _filter.classify(n, A[:2].copy(), B[:2].copy(), np.empty(2, np.int8), b"\x00" * 10)
+
+
+@pytest.mark.parametrize("n", [3, 4])
 def test_float32_input_is_certified_for_its_own_values(n):
     # float32 entries widen exactly: the C reads them as they are (half the bytes) and agrees
     # with the numpy description on the widened values; labels against the exact path

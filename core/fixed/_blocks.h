@@ -5,7 +5,10 @@
  *   T          double or float (float is widened exactly: certified for the float values given)
  *   FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
  *   TRANSPOSE8_T   the 8 x 8 transpose for T (when the compiler has vector shuffles)
- *   CLASSIFY   the name of the function defined here
+ *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
+ *              rule id of each pair (-1 undecided) to out, or table[rule id as a byte] when table
+ *              is not NULL (the relation codes: no second pass over the output in Python), and
+ *              returns how many pairs are undecided
  *
  * The pairs of a block are first transposed to structure of arrays (entry k of every pair in
  * one row). Each stage is then a loop over pairs whose body is a branch-free lane function, so
@@ -18,12 +21,18 @@
  * need it, on every lane in place and selected.
  */
 
-/* The pairs p < m of the block for which COND holds, into open[0..k). */
-#define SUBSET(COND)                       \
-    k = 0;                                 \
-    for (int64_t p = 0; p < m; p++) {      \
-        open[k] = (int32_t)p;              \
-        k += (COND);                       \
+/* k = how many pairs p < m of the block COND holds for (a vector count, cheap when no pair
+ * needs the stage), and, when they are few enough to be packed (2 k <= m), their indices in
+ * open[0..k); when most pairs need the stage it runs in place and open[] is not read. */
+#define SUBSET(COND)                           \
+    k = 0;                                     \
+    for (int64_t p = 0; p < m; p++) k += (COND); \
+    if (k && 2 * k <= m) {                     \
+        int64_t j_ = 0;                        \
+        for (int64_t p = 0; p < m; p++) {      \
+            open[j_] = (int32_t)p;             \
+            j_ += (COND);                      \
+        }                                      \
     }
 
 /* Rows r < ROWS of the block buffer SRC (T or double) for the subset, packed into DST. */
@@ -73,7 +82,8 @@
         }                                                                                                         \
     }
 
-void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict out, int64_t count) {
+int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict out, int64_t count, const signed char *restrict table) {
+    int64_t undecided = 0;
     int full_run = 0; /* the last block tried was mostly symmetric only up to rounding */
     for (int64_t i0 = 0; i0 < count; i0 += CHUNK) {
         const int64_t m = count - i0 < CHUNK ? count - i0 : CHUNK;
@@ -159,8 +169,13 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
         CERT_STAGE(THIRD, 1)
         /* stage 4, s0 still needed: the running-error test */
         S0_STAGE(FOURTH, NEEDS_S0_RADIUS)
-        for (int64_t p = 0; p < m; p++) out[i0 + p] = (signed char)(code[p] == NEEDS_CERT ? -1 : code[p]);
+        for (int64_t p = 0; p < m; p++) {
+            const int64_t rule = code[p] >= 0 ? code[p] : -1; /* NEEDS_CERT: undecided */
+            undecided += rule < 0;
+            out[i0 + p] = table ? table[(uint8_t)rule] : (signed char)rule;
+        }
     }
+    return undecided;
 }
 
 #undef SUBSET

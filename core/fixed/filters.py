@@ -309,4 +309,13 @@ def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False, thread
     Returns:
         int8 codes of :class:`Relation`, shape (N,). Never a wrong label.
     """
-    return relations(rules_float(a, b, scalar=scalar, threads=threads))
+    if not compiled.available():
+        return relations(rules_float(a, b, scalar=scalar, threads=threads))
+    # the compiled kernels write the relation codes directly and count the undecided pairs
+    codes, undecided = compiled.mapped(a, b, _RELATION_OF, threads=threads)
+    if not scalar and undecided:
+        idx = np.flatnonzero(codes == Relation.UNDECIDED)
+        for s in range(0, idx.size, _CHUNK):
+            part = idx[s : s + _CHUNK]
+            codes[part] = relations(classify_translated(a[part].astype(np.float64), b[part].astype(np.float64)))
+    return codes
