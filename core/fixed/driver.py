@@ -36,7 +36,15 @@ import numpy as np
 
 from ..formulae.decision import NEED_S0, TABLE3, TABLE4, rule_by_key
 from ..shapes.quadrics import SYMMETRY_TOLERANCE
-from .errorbound import CERT_T_MAX, CERT_T_MIN, LEAF_MAX, NO_SCALE_MIN, RADIUS_FACTOR, S0_RHO, TRANSLATE_MAX
+from .errorbound import (
+    CERT_T_MAX,
+    CERT_T_MIN,
+    LEAF_MAX,
+    NO_SCALE_MIN,
+    RADIUS_FACTOR,
+    S0_RHO,
+    TRANSLATE_MAX,
+)
 
 __all__ = [
     "Prepared",

@@ -136,7 +136,8 @@ def _later_stages(n: int, code: np.ndarray, idx: np.ndarray, c: list[np.ndarray]
         code[need] = decide_s0(_X, n, _take(c, need), _take(cr, need), idx[need])
     todo = np.flatnonzero((code == NEEDS_CERT) | (code == NEEDS_S0_RADIUS))
     if todo.size:  # the certificates only where a valid pair is still open
-        cert = np.asarray(certify(_X, n, *matrices(todo), _take(c, todo), _take(cr, todo)), dtype=np.int64)
+        WA, RA, WB, RB = matrices(todo)
+        cert = np.asarray(certify(_X, n, WA, RA, WB, RB, _take(c, todo), _take(cr, todo)), dtype=np.int64)
         code[todo] = np.where(cert >= 0, cert, np.where(code[todo] == NEEDS_S0_RADIUS, NEEDS_S0_RADIUS, -1))
     need = np.flatnonzero(code == NEEDS_S0_RADIUS)
     if need.size:  # s0 with a radius per operation, where it is still needed (near tangency)

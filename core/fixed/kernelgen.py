@@ -461,7 +461,16 @@ def _lane_c(name: str, params: str, build: Any, infos: dict[str, KernelInfo], do
 
 def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
     """first{n}_{f64,f32}, second{n}, third{n}_{f64,f32}: the driver's stages in C."""
-    from .driver import NEEDS_FULL, certify, decide, decide_s0, decide_s0_radius, pencil_bounds, prepare, radii
+    from .driver import (
+        NEEDS_FULL,
+        certify,
+        decide,
+        decide_s0,
+        decide_s0_radius,
+        pencil_bounds,
+        prepare,
+        radii,
+    )
 
     out = []
     for suffix, T in (("f64", "double"), ("f32", "float")):
