@@ -159,13 +159,18 @@ def test_certificate_kernels_bounds_hold(n):
         M = (M + M.T) * 4
         Mr = np.abs(M) * 2.0**-52 * rng.integers(0, 2)
         x = rng.normal(size=n - 1) * 10.0 ** rng.integers(0, 6)
-        v, r = getattr(KK, f"form{n}")(M, Mr, x)
-        bound = r * (1 + 2.0**-40) + getattr(KK, f"FORM{n}_FLOOR")
+        g, f = getattr(KK, f"FORM{n}_CONSTANTS")
+        v, vm = getattr(KK, f"form{n}")(M, Mr, x, g)
+        bound = vm * f + getattr(KK, f"FORM{n}_FLOOR")
         X = [_fq(xi) for xi in x] + [fmpq(1)]
         for sign in (-1, 1):
             Mt = [[_fq(M[i, j]) + sign * _fq(Mr[min(i, j), max(i, j)]) for j in range(n)] for i in range(n)]
             exact = sum(X[i] * Mt[i][j] * X[j] for i in range(n) for j in range(n))
             assert abs(_fq(v) - exact) <= _fq(bound)
+        # the form's bound is not loose: within a few units of its own rounding and the radii
+        perm = sum(abs(X[i]) * (abs(_fq(M[i, j])) * _fq(g) + _fq(Mr[min(i, j), max(i, j)])) * abs(X[j])
+                   for i in range(n) for j in range(n))
+        assert _fq(bound) <= perm * (1 + fmpq(1, 2**40)) + _fq(getattr(KK, f"FORM{n}_FLOOR"))
 
 
 @pytest.mark.parametrize("n", [3, 4])
@@ -182,6 +187,61 @@ def test_subresultant_error_bounds_hold(n, which):
         radii = [float(run.cr[k][i]) for k in range(n + 1)]
         v, bd = _hat(n, which, vals, radii)
         assert abs(fmpq(*float(v).as_integer_ratio()) - exact) <= fmpq(*float(bd).as_integer_ratio())
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_semi_static_s0_bound_holds_for_inputs_within_relative_accuracy(n):
+    """Stage 2's s0 test: for a_i known to relative accuracy rho (S0_RHO), |fl(hs0) - hs0(exact)|
+    <= C s0_M + floor (core.fixed.errorbound.relative_input_constant), checked exactly at the
+    corners of the box of exact inputs and inside it; the perturbation term is what the bound is
+    made of (without it the corners break the bound)."""
+    from core.fixed import _kernels as KK
+    from core.fixed.errorbound import S0_RHO
+
+    rng = np.random.default_rng(50 + n)
+    (C,) = getattr(KK, f"HAT_S0_REL_{n}_CONSTANTS")
+    floor = getattr(KK, f"HAT_S0_REL_{n}_FLOOR")
+    rho = fmpq(S0_RHO.numerator, S0_RHO.denominator)
+    A, B = _random_matrices(rng, n, 40), _random_matrices(rng, n, 40)
+    run = _Run(A, B)
+    worst = fmpq(0)
+    for i in range(len(A)):
+        c = [float(run.c[k][i]) for k in range(n + 1)]
+        v, m = getattr(KK, f"hat_s0_rel_{n}")(c)
+        bound = _fq(C * m + floor)
+        for _ in range(12):
+            signs = rng.choice([-1, 0, 1], n + 1) if _ % 3 else rng.choice([-1, 1], n + 1)
+            exact = hat_s0([_fq(ck) * (1 + int(sg) * rho) for ck, sg in zip(c, signs, strict=True)])
+            err = abs(_fq(v) - exact)
+            assert err <= bound
+            worst = max(worst, err / bound) if bound > 0 else worst
+    assert worst > fmpq(1, 20)  # the inputs' relative error, not the rounding, fills the bound
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_random_pairs_take_the_semi_static_s0_test(n):
+    """Where the tree asks for s0 on random pairs, the cheap test (stage 2) tells its sign: the
+    running-error test (stage 4) is left for near tangency."""
+    from core.fixed.driver import NEEDS_S0_RADIUS, decide, decide_s0, pencil_bounds
+    from core.fixed.lanes import NumpyLanes
+
+    rng = np.random.default_rng(60 + n)
+
+    def shapes(k):  # the benchmark's random pairs: centres in [-4, 4], axes 0.2 .. 3
+        d = n - 1
+        return np.array([
+            quadric_from_axes(rng.uniform(-4, 4, d), rng.uniform(0.2, 3, d), rng.uniform(0, 3) if d == 2 else rng.normal(size=4))
+            for _ in range(k)
+        ])
+
+    run = first_stage(shapes(400), shapes(400))
+    asked = np.flatnonzero(run.asked_s0)
+    assert asked.size > 100
+    X = NumpyLanes()
+    c, cr, minors = pencil_bounds(X, n, run.a, run.b)
+    _, _, idx = decide(X, n, c, cr, minors, run.a.ok & run.b.ok)
+    code = decide_s0(X, n, [v[asked] for v in c], [v[asked] for v in cr], idx[asked])
+    assert (code != NEEDS_S0_RADIUS).mean() > 0.95
 
 
 def test_kernel_tables_are_consistent():
@@ -268,6 +328,33 @@ def test_numpy_and_every_simd_variant_agree_bit_for_bit(n):
     for i in range(300, len(A), 7):
         if expected[i] >= 0:
             assert str(Relation(int(RULE_RELATION[expected[i]]))) == oracle_relation(A[i], B[i])
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_kernel_writes_relation_codes_and_counts_the_undecided(n):
+    # classify_float's path: the C maps each rule id through a 256-byte table as it finishes a
+    # block and returns how many pairs it left undecided; the same as relations() of the rule ids
+    from core.fixed.filters import _RELATION_OF
+
+    A, B = _mixed(n, seed=5)
+    expected = rules_numpy(A, B)
+    assert (expected == -1).sum() >= 5  # the exactly tangent and invalid pairs: the count is tested
+    chosen = compiled.variant()
+    try:
+        for v in compiled.variants():
+            compiled.select(v)
+            for threads in (1, 3):
+                codes, undecided = compiled.mapped(A, B, _RELATION_OF, threads=threads)
+                assert codes.dtype == np.int8 and (codes == relations(expected)).all(), (v, threads)
+                assert undecided == int((expected == -1).sum()), (v, threads)
+            marks = np.arange(256, dtype=np.uint8).view(np.int8)  # the identity: rule ids as bytes
+            assert (compiled.mapped(A, B, marks, threads=1)[0] == expected).all(), v
+    finally:
+        compiled.select(chosen)
+    from core.fixed import _filter
+
+    with pytest.raises(ValueError, match="256 bytes"):
+        _filter.classify(n, A[:2].copy(), B[:2].copy(), np.empty(2, np.int8), b"\x00" * 10)
 
 
 @pytest.mark.parametrize("n", [3, 4])

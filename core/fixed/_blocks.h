@@ -3,62 +3,143 @@
  * Included by _variant.h once per (dimension, input type), with these macros defined:
  *   N          3 (ellipses) or 4 (ellipsoids)
  *   T          double or float (float is widened exactly: certified for the float values given)
- *   FIRST, FULL, SECOND, THIRD   the lane functions of _kernels.h for this N and T
- *   CLASSIFY   the name of the function defined here
+ *   FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
+ *   TRANSPOSE8_T   the 8 x 8 transpose for T (when the compiler has vector shuffles)
+ *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
+ *              rule id of each pair (-1 undecided) to out, or table[rule id as a byte] when table
+ *              is not NULL (the relation codes: no second pass over the output in Python), and
+ *              returns how many pairs are undecided
  *
  * The pairs of a block are first transposed to structure of arrays (entry k of every pair in
  * one row). Each stage is then a loop over pairs whose body is a branch-free lane function, so
- * the compiler turns it into SIMD across pairs, a vector load reading one entry of several pairs. Stage 2 (s0) and stage 3 (the certificates) run only on the pairs
- * the stage before left open: packed first so that the SIMD lanes stay full, or, when most pairs
- * of the block are open, run on every lane in place and selected.
+ * the compiler turns it into SIMD across pairs, a vector load reading one entry of several
+ * pairs. The stages (core/fixed/driver.py): 1 prepare, pencil, validity, the tree with s0
+ * pending; 2 the semi-static s0 test where the tree asks for s0; 3 the certificates where a
+ * valid pair is still open (spheres, translated and homothetic copies); 4 the running-error s0
+ * test where s0 is still needed (near tangency). Each runs only on the pairs the stages before
+ * left to it: packed first so that the SIMD lanes stay full, or, when most pairs of the block
+ * need it, on every lane in place and selected.
  */
 
-void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict out, int64_t count) {
+/* k = how many pairs p < m of the block COND holds for (a vector count, cheap when no pair
+ * needs the stage), and, when they are few enough to be packed (2 k <= m), their indices in
+ * open[0..k); when most pairs need the stage it runs in place and open[] is not read. */
+#define SUBSET(COND)                           \
+    k = 0;                                     \
+    for (int64_t p = 0; p < m; p++) k += (COND); \
+    if (k && 2 * k <= m) {                     \
+        int64_t j_ = 0;                        \
+        for (int64_t p = 0; p < m; p++) {      \
+            open[j_] = (int32_t)p;             \
+            j_ += (COND);                      \
+        }                                      \
+    }
+
+/* Rows r < ROWS of the block buffer SRC (T or double) for the subset, packed into DST. */
+#define PACK(DST, SRC, ROWS)                                                       \
+    for (int64_t q = 0; q < k; q++)                                                \
+        for (int r = 0; r < (ROWS); r++) (DST)[r * CHUNK + q] = (SRC)[r * CHUNK + open[q]];
+
+/* An s0 stage (LANE(c, stride, idx) -> code) on the pairs whose code is WHICH. */
+#define S0_STAGE(LANE, WHICH)                                                                 \
+    SUBSET(code[p] == (WHICH))                                                                \
+    if (2 * k > m) {                                                                          \
+        for (int64_t p = 0; p < m; p++) {                                                     \
+            const int64_t r = LANE(c + p, CHUNK, idx[p]);                                     \
+            code[p] = code[p] == (WHICH) ? r : code[p];                                       \
+        }                                                                                     \
+    } else if (k) {                                                                           \
+        double d[2 * (N + 1) * CHUNK];                                                        \
+        int64_t di[CHUNK], dc[CHUNK];                                                         \
+        PACK(d, c, 2 * (N + 1))                                                               \
+        for (int64_t q = 0; q < k; q++) di[q] = idx[open[q]];                                 \
+        for (int64_t q = 0; q < k; q++) dc[q] = LANE(d + q, CHUNK, di[q]);                    \
+        for (int64_t q = 0; q < k; q++) code[open[q]] = dc[q];                                \
+    }
+
+/* The certificates (LANE(a, b, c, stride) -> rule or -1) on the open pairs of one route;
+ * a pair whose s0 is still unknown keeps NEEDS_S0_RADIUS where they fail. */
+#define CERT_STAGE(LANE, ROUTE)                                                                                   \
+    SUBSET((code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && viafull[p] == (ROUTE))                       \
+    if (2 * k > m) {                                                                                              \
+        for (int64_t p = 0; p < m; p++) {                                                                         \
+            const int64_t cert = LANE(a + p, b + p, c + p, CHUNK);                                                \
+            const int64_t open_ = (code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && viafull[p] == (ROUTE); \
+            const int64_t left = code[p] == NEEDS_S0_RADIUS ? NEEDS_S0_RADIUS : -1;                               \
+            code[p] = open_ ? (cert >= 0 ? cert : left) : code[p];                                                \
+        }                                                                                                         \
+    } else if (k) {                                                                                               \
+        T pa[N * N * CHUNK], pb[N * N * CHUNK];                                                                   \
+        double d[2 * (N + 1) * CHUNK];                                                                            \
+        int64_t dc[CHUNK];                                                                                        \
+        PACK(pa, a, N * N)                                                                                        \
+        PACK(pb, b, N * N)                                                                                        \
+        PACK(d, c, 2 * (N + 1))                                                                                   \
+        for (int64_t q = 0; q < k; q++) dc[q] = LANE(pa + q, pb + q, d + q, CHUNK);                               \
+        for (int64_t q = 0; q < k; q++) {                                                                         \
+            const int64_t p = open[q];                                                                            \
+            code[p] = dc[q] >= 0 ? dc[q] : (code[p] == NEEDS_S0_RADIUS ? NEEDS_S0_RADIUS : -1);                   \
+        }                                                                                                         \
+    }
+
+int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict out, int64_t count, const signed char *restrict table) {
+    int64_t undecided = 0;
+    int full_run = 0; /* the last block tried was mostly symmetric only up to rounding */
     for (int64_t i0 = 0; i0 < count; i0 += CHUNK) {
         const int64_t m = count - i0 < CHUNK ? count - i0 : CHUNK;
         T a[N * N * CHUNK], b[N * N * CHUNK]; /* entry k of pair p at [k * CHUNK + p] */
         double c[2 * (N + 1) * CHUNK];        /* a_0..a_n, then their radii: the same layout */
         int64_t code[CHUNK], idx[CHUNK];
         int32_t open[CHUNK];
-        int64_t done = 0;
+        int64_t viafull[CHUNK]; /* the pair went through the full prepare */
+        int64_t done = 0, k = 0;
 #ifdef HAVE_TRANSPOSE8
         for (; done + 8 <= m; done += 8) { /* 8 pairs at a time, 8 entries per shuffle network */
-                for (int k = 0; k + 8 <= N * N; k += 8) {
-                    TRANSPOSE8_T(A + (i0 + done) * N * N + k, N * N, a + k * CHUNK + done, CHUNK);
-                    TRANSPOSE8_T(B + (i0 + done) * N * N + k, N * N, b + k * CHUNK + done, CHUNK);
-                }
-                for (int64_t p = done; p < done + 8; p++)
-                    for (int k = N * N / 8 * 8; k < N * N; k++) {
-                        a[k * CHUNK + p] = A[(i0 + p) * N * N + k];
-                        b[k * CHUNK + p] = B[(i0 + p) * N * N + k];
-                    }
+            for (int e = 0; e + 8 <= N * N; e += 8) {
+                TRANSPOSE8_T(A + (i0 + done) * N * N + e, N * N, a + e * CHUNK + done, CHUNK);
+                TRANSPOSE8_T(B + (i0 + done) * N * N + e, N * N, b + e * CHUNK + done, CHUNK);
             }
+            for (int64_t p = done; p < done + 8; p++)
+                for (int e = N * N / 8 * 8; e < N * N; e++) {
+                    a[e * CHUNK + p] = A[(i0 + p) * N * N + e];
+                    b[e * CHUNK + p] = B[(i0 + p) * N * N + e];
+                }
+        }
 #endif
         for (int64_t p = done; p < m; p++)
-            for (int k = 0; k < N * N; k++) {
-                a[k * CHUNK + p] = A[(i0 + p) * N * N + k];
-                b[k * CHUNK + p] = B[(i0 + p) * N * N + k];
+            for (int e = 0; e < N * N; e++) {
+                a[e * CHUNK + p] = A[(i0 + p) * N * N + e];
+                b[e * CHUNK + p] = B[(i0 + p) * N * N + e];
             }
         /* stage 1, every pair: prepare (exactly symmetric matrices), pencil with bounds, validity,
-         * the tree with s0 pending */
+         * the tree with s0 pending; where the previous block was mostly symmetric only up to
+         * rounding (numpy-built matrices come in whole arrays), the full prepare directly (it
+         * takes the same decisions on an exactly symmetric matrix, so the route changes no
+         * answer; every 16th block tries the fast pass again) */
+        const int use_full = full_run && (i0 / CHUNK) % 16 != 0;
         for (int64_t p0 = 0; p0 < m; p0 += LANES) {
             const int64_t p1 = p0 + LANES < m ? p0 + LANES : m;
-            /* the next block streams in from memory while this one computes (no demand load
-             * would start it: the transpose above is the only reader of A and B) */
-            const char *na = (const char *)(A + (i0 + CHUNK + p0) * N * N), *nb = (const char *)(B + (i0 + CHUNK + p0) * N * N);
+            /* the block PF_DIST ahead streams in while this one computes (the transpose above is
+             * the only reader of A and B; small blocks keep the requests spread out) */
+#if PF_DIST > 0
+            const char *na = (const char *)(A + (i0 + PF_DIST * CHUNK + p0) * N * N), *nb = (const char *)(B + (i0 + PF_DIST * CHUNK + p0) * N * N);
             for (int64_t off = 0; off < (p1 - p0) * N * N * (int64_t)sizeof(T); off += 64) {
-                __builtin_prefetch(na + off);
-                __builtin_prefetch(nb + off);
+                __builtin_prefetch(na + off, 0, PF_HINT);
+                __builtin_prefetch(nb + off, 0, PF_HINT);
             }
-            for (int64_t p = p0; p < p1; p++) code[p] = FIRST(a + p, b + p, c + p, CHUNK, idx + p);
+#endif
+            if (use_full)
+                for (int64_t p = p0; p < p1; p++) code[p] = FULL(a + p, b + p, c + p, CHUNK, idx + p);
+            else
+                for (int64_t p = p0; p < p1; p++) code[p] = FIRST(a + p, b + p, c + p, CHUNK, idx + p);
         }
+        for (int64_t p = 0; p < m; p++) viafull[p] = use_full || code[p] == NEEDS_FULL;
         /* stage 1 again with the full prepare, where a matrix is symmetric only up to rounding */
-        int64_t k = 0;
-        for (int64_t p = 0; p < m; p++) {
-            open[k] = (int32_t)p;
-            k += code[p] == NEEDS_FULL;
+        if (!use_full) {
+            SUBSET(code[p] == NEEDS_FULL)
+            full_run = 2 * k > m;
         }
-        if (2 * k > m) { /* most pairs (numpy-built matrices): every lane in place, then select */
+        if (2 * k > m) { /* most pairs: every lane in place, then select */
             double d[2 * (N + 1) * CHUNK];
             int64_t di[CHUNK];
             for (int64_t p = 0; p < m; p++) {
@@ -72,11 +153,8 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
             T pa[N * N * CHUNK], pb[N * N * CHUNK];
             double d[2 * (N + 1) * CHUNK];
             int64_t di[CHUNK], dc[CHUNK];
-            for (int64_t q = 0; q < k; q++)
-                for (int r = 0; r < N * N; r++) {
-                    pa[r * CHUNK + q] = a[r * CHUNK + open[q]];
-                    pb[r * CHUNK + q] = b[r * CHUNK + open[q]];
-                }
+            PACK(pa, a, N * N)
+            PACK(pb, b, N * N)
             for (int64_t q = 0; q < k; q++) dc[q] = FULL(pa + q, pb + q, d + q, CHUNK, di + q);
             for (int64_t q = 0; q < k; q++) {
                 for (int r = 0; r < 2 * (N + 1); r++) c[r * CHUNK + open[q]] = d[r * CHUNK + q];
@@ -84,52 +162,23 @@ void CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict ou
                 code[open[q]] = dc[q];
             }
         }
-        /* stage 2, where the tree asks for s0 */
-        k = 0;
+        /* stage 2, where the tree asks for s0: the semi-static test */
+        S0_STAGE(SECOND, NEEDS_S0)
+        /* stage 3, valid pairs still open: the certificates, on the prepare each pair took */
+        CERT_STAGE(THIRD_FAST, 0)
+        CERT_STAGE(THIRD, 1)
+        /* stage 4, s0 still needed: the running-error test */
+        S0_STAGE(FOURTH, NEEDS_S0_RADIUS)
         for (int64_t p = 0; p < m; p++) {
-            open[k] = (int32_t)p;
-            k += code[p] == NEEDS_S0;
+            const int64_t rule = code[p] >= 0 ? code[p] : -1; /* NEEDS_CERT: undecided */
+            undecided += rule < 0;
+            out[i0 + p] = table ? table[(uint8_t)rule] : (signed char)rule;
         }
-        if (2 * k > m) { /* most pairs (random pairs: Var = 2 is common): every lane, then select */
-            for (int64_t p = 0; p < m; p++) {
-                const int64_t s0 = SECOND(c + p, CHUNK, idx[p]);
-                code[p] = code[p] == NEEDS_S0 ? s0 : code[p];
-            }
-        } else if (k) {
-            double d[2 * (N + 1) * CHUNK];
-            int64_t di[CHUNK], dc[CHUNK];
-            for (int64_t q = 0; q < k; q++) {
-                for (int r = 0; r < 2 * (N + 1); r++) d[r * CHUNK + q] = c[r * CHUNK + open[q]];
-                di[q] = idx[open[q]];
-            }
-            for (int64_t q = 0; q < k; q++) dc[q] = SECOND(d + q, CHUNK, di[q]);
-            for (int64_t q = 0; q < k; q++) code[open[q]] = dc[q];
-        }
-        /* stage 3, valid pairs still open (spheres, translated and homothetic copies) */
-        k = 0;
-        for (int64_t p = 0; p < m; p++) {
-            open[k] = (int32_t)p;
-            k += code[p] == NEEDS_CERT;
-        }
-        if (2 * k > m) { /* most pairs (spheres, copies): every lane in place, then select */
-            for (int64_t p = 0; p < m; p++) {
-                const int64_t cert = THIRD(a + p, b + p, c + p, CHUNK);
-                code[p] = code[p] == NEEDS_CERT ? cert : code[p];
-            }
-        } else if (k) {
-            T pa[N * N * CHUNK], pb[N * N * CHUNK];
-            double d[2 * (N + 1) * CHUNK];
-            int64_t dc[CHUNK];
-            for (int64_t q = 0; q < k; q++) {
-                for (int r = 0; r < N * N; r++) {
-                    pa[r * CHUNK + q] = a[r * CHUNK + open[q]];
-                    pb[r * CHUNK + q] = b[r * CHUNK + open[q]];
-                }
-                for (int r = 0; r < 2 * (N + 1); r++) d[r * CHUNK + q] = c[r * CHUNK + open[q]];
-            }
-            for (int64_t q = 0; q < k; q++) dc[q] = THIRD(pa + q, pb + q, d + q, CHUNK);
-            for (int64_t q = 0; q < k; q++) code[open[q]] = dc[q];
-        }
-        for (int64_t p = 0; p < m; p++) out[i0 + p] = (signed char)code[p];
     }
+    return undecided;
 }
+
+#undef SUBSET
+#undef PACK
+#undef S0_STAGE
+#undef CERT_STAGE

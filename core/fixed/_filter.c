@@ -7,9 +7,11 @@
  * asks for a lower variant (tests compare them). No compiler, cache or thread is needed at run
  * time.
  *
- * classify(n, a, b, out): a, b C-contiguous float64 or float32 buffers of count * n * n values,
- * out a writable int8 buffer of count rule ids (-1 undecided). The GIL is released while the
- * kernels run, so core/fixed/compiled.py splits large batches over threads.
+ * classify(n, a, b, out[, table]): a, b C-contiguous float64 or float32 buffers of count * n * n
+ * values, out a writable int8 buffer of count rule ids (-1 undecided), or of table[rule id read
+ * as a byte] when a 256-byte table is given (the relation codes, written as the block is
+ * finished); returns how many pairs are undecided. The GIL is released while the kernels run,
+ * so core/fixed/compiled.py splits large batches over threads.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -17,14 +19,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef void (*kernel64)(const double *, const double *, signed char *, int64_t);
-typedef void (*kernel32)(const float *, const float *, signed char *, int64_t);
+typedef int64_t (*kernel64)(const double *, const double *, signed char *, int64_t, const signed char *);
+typedef int64_t (*kernel32)(const float *, const float *, signed char *, int64_t, const signed char *);
 
 #define DECLARE(v)                                                              \
-    void classify3_f64_##v(const double *, const double *, signed char *, int64_t); \
-    void classify3_f32_##v(const float *, const float *, signed char *, int64_t);   \
-    void classify4_f64_##v(const double *, const double *, signed char *, int64_t); \
-    void classify4_f32_##v(const float *, const float *, signed char *, int64_t);
+    int64_t classify3_f64_##v(const double *, const double *, signed char *, int64_t, const signed char *); \
+    int64_t classify3_f32_##v(const float *, const float *, signed char *, int64_t, const signed char *);   \
+    int64_t classify4_f64_##v(const double *, const double *, signed char *, int64_t, const signed char *); \
+    int64_t classify4_f32_##v(const float *, const float *, signed char *, int64_t, const signed char *);
 DECLARE(baseline)
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define HAVE_X86_VARIANTS 1
@@ -93,8 +95,8 @@ static PyObject *get_variants(PyObject *self, PyObject *noargs) {
 
 static PyObject *classify(PyObject *self, PyObject *args) {
     int n;
-    Py_buffer a, b, out;
-    if (!PyArg_ParseTuple(args, "iy*y*w*", &n, &a, &b, &out)) return NULL;
+    Py_buffer a, b, out, table = {0};
+    if (!PyArg_ParseTuple(args, "iy*y*w*|y*", &n, &a, &b, &out, &table)) return NULL;
     PyObject *result = NULL;
     const Py_ssize_t count = out.len;
     const char *fa = a.format ? a.format : "B", *fb = b.format ? b.format : "B";
@@ -104,24 +106,28 @@ static PyObject *classify(PyObject *self, PyObject *args) {
         PyErr_SetString(PyExc_TypeError, "a and b must both be float64 or both float32");
     } else if (a.len != count * n * n * a.itemsize || b.len != a.len) {
         PyErr_Format(PyExc_ValueError, "a and b must hold %zd pairs of %dx%d matrices", count, n, n);
+    } else if (table.obj && table.len != 256) {
+        PyErr_Format(PyExc_ValueError, "table must hold 256 bytes, got %zd", table.len);
     } else if (!PyBuffer_IsContiguous(&a, 'C') || !PyBuffer_IsContiguous(&b, 'C') || !PyBuffer_IsContiguous(&out, 'C')) {
         PyErr_SetString(PyExc_ValueError, "buffers must be C-contiguous");
     } else {
         (void)fa;
         (void)fb;
         const variant *v = current;
+        const signed char *tab = table.obj ? (const signed char *)table.buf : NULL;
+        int64_t undecided;
         Py_BEGIN_ALLOW_THREADS
         if (a.itemsize == 8)
-            v->f64[n - 3]((const double *)a.buf, (const double *)b.buf, (signed char *)out.buf, (int64_t)count);
+            undecided = v->f64[n - 3]((const double *)a.buf, (const double *)b.buf, (signed char *)out.buf, (int64_t)count, tab);
         else
-            v->f32[n - 3]((const float *)a.buf, (const float *)b.buf, (signed char *)out.buf, (int64_t)count);
+            undecided = v->f32[n - 3]((const float *)a.buf, (const float *)b.buf, (signed char *)out.buf, (int64_t)count, tab);
         Py_END_ALLOW_THREADS
-        result = Py_None;
-        Py_INCREF(result);
+        result = PyLong_FromLongLong((long long)undecided);
     }
     PyBuffer_Release(&a);
     PyBuffer_Release(&b);
     PyBuffer_Release(&out);
+    if (table.obj) PyBuffer_Release(&table);
     return result;
 }
 
@@ -132,7 +138,7 @@ static PyObject *kernels_sha256(PyObject *self, PyObject *noargs) { return PyUni
 
 static PyMethodDef METHODS[] = {
     {"kernels_sha256", kernels_sha256, METH_NOARGS, "First 16 hex digits of the SHA-256 of the _kernels.h this module was built from."},
-    {"classify", classify, METH_VARARGS, "classify(n, a, b, out): rule ids of count pairs into the int8 buffer out (GIL released)."},
+    {"classify", classify, METH_VARARGS, "classify(n, a, b, out[, table]): rule ids (or table[rule id] with a 256-byte table) of count pairs into the int8 buffer out, GIL released; returns how many are undecided."},
     {"variant", get_variant, METH_NOARGS, "The SIMD variant in use."},
     {"variants", get_variants, METH_NOARGS, "The variants of this build that this CPU can run (slowest first)."},
     {"select", select_variant, METH_VARARGS, "select(name): use this variant (ValueError if unknown or unsupported here)."},

@@ -2,8 +2,11 @@
 
 from typing import Any
 
-def classify(n: int, a: Any, b: Any, out: Any, /) -> None:
-    """Rule ids of len(out) pairs of n x n float64 or float32 matrices into the int8 buffer out."""
+def classify(n: int, a: Any, b: Any, out: Any, table: Any = ..., /) -> int:
+    """Rule ids of len(out) pairs of n x n float64 or float32 matrices into the int8 buffer out.
+
+    With a 256-byte table, table[rule id as a byte] instead. Returns how many pairs are undecided.
+    """
 
 def variant() -> str:
     """The SIMD variant in use."""

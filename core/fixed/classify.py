@@ -302,13 +302,14 @@ def _classify_flat(
 ) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
     """Codes, certifiers and invalid reasons for (N, n, n) stacks."""
     N = a.shape[0]
-    codes = np.full(N, Relation.UNDECIDED, dtype=np.int8)
-    by = np.zeros(N, dtype=np.int8)
     if method != "exact" and a.dtype.kind == "f" and b.dtype.kind == "f":
         if a.dtype != b.dtype:  # float32 against float64: widen (exact)
             a, b = a.astype(np.float64), b.astype(np.float64)
         codes = classify_float(a, b, scalar=scalar)
         by = (codes != Relation.UNDECIDED).view(np.int8)  # Certifier.FLOAT is 1, NONE 0
+    else:
+        codes = np.full(N, Relation.UNDECIDED, dtype=np.int8)
+        by = np.zeros(N, dtype=np.int8)
     errors = _resolve(a, b, codes, by, method, scalar, on_invalid, progress)
     return codes, by, errors
 
@@ -328,7 +329,10 @@ def _resolve(
     Returns the invalid reasons (``on_invalid="mark"``) or raises the first.
     """
     errors: dict[int, str] = {}
-    todo = np.flatnonzero(codes == Relation.UNDECIDED)
+    undecided = codes == Relation.UNDECIDED
+    if not undecided.any():  # the usual case: no search for indices
+        return errors
+    todo = np.flatnonzero(undecided)
     for k, i in enumerate(todo):
         if progress is not None:
             progress(k, todo.size)

@@ -29,7 +29,7 @@ from typing import cast
 import numpy as np
 
 __all__ = [
-    "available", "warm_up", "status", "variant", "variants", "select", "rules", "rule_one", "set_threads", "get_threads",
+    "available", "warm_up", "status", "variant", "variants", "select", "rules", "mapped", "rule_one", "set_threads", "get_threads",
     "header_sha256", "FIX", "HEADER",
 ]
 
@@ -161,6 +161,23 @@ def rules(a: np.ndarray, b: np.ndarray, *, threads: int | None = None) -> np.nda
     Raises:
         RuntimeError: the extension is not built (check :func:`available` first).
     """
+    return _run(a, b, None, threads)[0]
+
+
+def mapped(a: np.ndarray, b: np.ndarray, table: np.ndarray, *, threads: int | None = None) -> tuple[np.ndarray, int]:
+    """``table[rule id as a byte]`` per pair (int8; ``table`` has 256 entries) and how many pairs are undecided.
+
+    The lookup happens in the kernel as each block is finished (the relation codes of
+    :func:`core.fixed.filters.classify_float` without a second pass over the output), and the
+    count spares the caller a search for undecided pairs when there are none.
+
+    Raises:
+        RuntimeError: the extension is not built (check :func:`available` first).
+    """
+    return _run(a, b, np.ascontiguousarray(table, dtype=np.int8), threads)
+
+
+def _run(a: np.ndarray, b: np.ndarray, table: np.ndarray | None, threads: int | None) -> tuple[np.ndarray, int]:
     if _EXT is None:
         raise RuntimeError(f"{_STATUS}; fix: {FIX}")
     n = a.shape[-1]
@@ -169,16 +186,14 @@ def rules(a: np.ndarray, b: np.ndarray, *, threads: int | None = None) -> np.nda
         a, b = a.astype(np.float64), b.astype(np.float64)
     N = a.shape[0]
     out = np.empty(N, dtype=np.int8)
+    extra = () if table is None else (table,)
     k = min(threads or get_threads(), max(1, N // _MIN_CHUNK))
     if k <= 1:
-        _EXT.classify(n, a, b, out)
-        return out
+        return out, int(_EXT.classify(n, a, b, out, *extra))
     bounds = np.linspace(0, N, k + 1).astype(np.int64)
     parts = [(int(lo), int(hi)) for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)]
-    futures = [_pool(k).submit(_EXT.classify, n, a[lo:hi], b[lo:hi], out[lo:hi]) for lo, hi in parts]
-    for f in futures:
-        f.result()
-    return out
+    futures = [_pool(k).submit(_EXT.classify, n, a[lo:hi], b[lo:hi], out[lo:hi], *extra) for lo, hi in parts]
+    return out, sum(int(f.result()) for f in futures)
 
 
 def rule_one(A: np.ndarray, B: np.ndarray) -> int:

@@ -16,9 +16,15 @@ the earlier ones left open):
 1. :func:`prepare` both matrices, :func:`pencil_bounds` (a_0..a_n and the validity minors with
    proven bounds), :func:`decide` (validity, and the paper's tree looked up in
    :data:`core.formulae.decision.TABLE3` / ``TABLE4`` with s0 pending);
-2. where the tree asks for s0: :func:`decide_s0`;
+2. where the tree asks for s0: :func:`decide_s0`, the semi-static test (one evaluation of hs0
+   and one of its permanent, for a_i known to relative accuracy 2^-20: random pairs);
 3. where a valid pair is still open (s0 vanishes identically for spheres and translated or
-   homothetic copies): :func:`certify` (a T* > 0 with P(T*) > 0, or a point inside both).
+   homothetic copies): :func:`certify` (a T* > 0 with P(T*) > 0, or a point inside both);
+4. where s0 is still needed and stage 2 could not tell its sign (near tangency):
+   :func:`decide_s0_radius`, the running-error test (a radius for every operation).
+
+Cheap tests first, each later one only on the pairs the earlier ones left (CGAL's static filter
+before the dynamic one): the answers are certified whichever stage gives them.
 """
 
 from __future__ import annotations
@@ -30,7 +36,15 @@ import numpy as np
 
 from ..formulae.decision import NEED_S0, TABLE3, TABLE4, rule_by_key
 from ..shapes.quadrics import SYMMETRY_TOLERANCE
-from .errorbound import CERT_T_MAX, CERT_T_MIN, LEAF_MAX, NO_SCALE_MIN, RADIUS_FACTOR, TRANSLATE_MAX
+from .errorbound import (
+    CERT_T_MAX,
+    CERT_T_MIN,
+    LEAF_MAX,
+    NO_SCALE_MIN,
+    RADIUS_FACTOR,
+    S0_RHO,
+    TRANSLATE_MAX,
+)
 
 __all__ = [
     "Prepared",
@@ -39,6 +53,7 @@ __all__ = [
     "pencil_bounds",
     "decide",
     "decide_s0",
+    "decide_s0_radius",
     "centre",
     "quad",
     "certify",
@@ -48,6 +63,7 @@ __all__ = [
     "NEEDS_S0",
     "NEEDS_CERT",
     "NEEDS_FULL",
+    "NEEDS_S0_RADIUS",
     "LEAF_ROUNDING",
     "LEAF_UNDERFLOW",
 ]
@@ -64,6 +80,9 @@ NEEDS_CERT = -8
 """Outcome: valid, the tree cannot decide: try the certificates."""
 NEEDS_FULL = -9
 """Outcome of the fast first pass: a matrix is finite but not exactly symmetric: the full prepare."""
+NEEDS_S0_RADIUS = -10
+"""Outcome of :func:`decide_s0`: the semi-static test could not tell the sign of s0: the
+certificates, then :func:`decide_s0_radius`."""
 
 LEAF_ROUNDING = 2.0**-52
 """Radius of a rounded half sum, relative: 2^-52 >= u / (1 - u)."""
@@ -211,9 +230,38 @@ def decide(x: Any, n: int, c: list[Any], cr: list[Any], minors: list[tuple[Any, 
 
 
 def decide_s0(x: Any, n: int, c: list[Any], cr: list[Any], idx: Any) -> Any:
-    """The tree with the certified sign of s0 (its sign-equivalent hat form).
+    """The tree with the sign of s0 from the semi-static test (stage 2).
 
-    Returns a rule id, or :data:`NEEDS_CERT` when s0 is not certified.
+    Where every a_i is known to relative accuracy rho = :data:`~core.fixed.errorbound.S0_RHO`
+    (cr_i 2^20 <= |a_i|, exact: cr_i is at least the pencil's underflow floor, so the product by
+    2^20 stays normal), |fl(hs0) - hs0| <= C M + floor with M the permanent of hs0 evaluated
+    alongside (:func:`core.fixed.errorbound.relative_input_constant`): two evaluations of a
+    30-operation program instead of a radius for every operation. Returns a rule id or
+    :data:`NEEDS_S0_RADIUS` (the sign of s0 not told here, or the tree still open with it: one
+    outcome, so that the compiler keeps the loop branch-free).
+    """
+    name = f"hat_s0_rel_{n}"
+    info = x.info(name)
+    v, m = x.call(name, [x.vector(c, "c")])
+    inv_rho = float(1 / S0_RHO)
+    accurate = (cr[0] * inv_rho) <= x.abs(c[0])
+    for i in range(1, n + 1):
+        accurate = accurate & ((cr[i] * inv_rho) <= x.abs(c[i]))
+    # where the a_i are not accurate enough the bound is the largest float: digit 3 (a select
+    # of the bound, not of the digit: the compiler keeps the loop branch-free)
+    bound = x.let("s0b", x.where(accurate, (m * info.constants[0]) + info.floor, _DBL_MAX))
+    digit = x.let("s0d", x.digit(v, bound))
+    code = x.let("code_s0", x.table(TABLES[n], f"TAB{n}", (idx * 5) + digit))
+    # open: s0 unknown, or known and the tree still open (rare: the later stages end the same way)
+    return x.where(code >= 0, code, NEEDS_S0_RADIUS)
+
+
+def decide_s0_radius(x: Any, n: int, c: list[Any], cr: list[Any], idx: Any) -> Any:
+    """The tree with the sign of s0 from the running-error test (stage 4: near tangency).
+
+    Midpoint-radius arithmetic on the a_i with their radii (every operation carries a bound):
+    tighter than :func:`decide_s0` where the a_i are inaccurate or s0 is small. Returns a rule
+    id, or :data:`NEEDS_CERT` when s0 is not certified.
     """
     name = f"hat_s0_{n}"
     v, r = x.call(name, [x.vector(c, "c"), x.vector(cr, "cr")])
@@ -223,7 +271,7 @@ def decide_s0(x: Any, n: int, c: list[Any], cr: list[Any], idx: Any) -> Any:
 
 
 def centre(x: Any, n: int, W: dict[tuple[int, int], Any], tag: str) -> tuple[list[Any], Any, Any]:
-    """Float centre (Q c = -m, by the adjugate), scale k = -m.c - M_dd and the mask det Q > 0.
+    """Float centre (Q c = -m, by the adjugate and one division), scale k = -m.c - M_dd and the mask det Q > 0.
 
     Estimates: the certificates (and the bounding spheres of :mod:`core.bodies.bounds`) hold
     for any float centre.
@@ -234,8 +282,9 @@ def centre(x: Any, n: int, W: dict[tuple[int, int], Any], tag: str) -> tuple[lis
     if n == 3:
         a00, a01, a11 = w(1, 1), -w(0, 1), w(0, 0)
         det = x.let(f"{tag}det", (w(0, 0) * w(1, 1)) - (w(0, 1) * w(0, 1)))
+        inv = x.let(f"{tag}inv", -1.0 / det)
         m0, m1 = w(0, 2), w(1, 2)
-        ctr = [x.let(f"{tag}c0", -((a00 * m0) + (a01 * m1)) / det), x.let(f"{tag}c1", -((a01 * m0) + (a11 * m1)) / det)]
+        ctr = [x.let(f"{tag}c0", ((a00 * m0) + (a01 * m1)) * inv), x.let(f"{tag}c1", ((a01 * m0) + (a11 * m1)) * inv)]
         k = x.let(f"{tag}k", -((m0 * ctr[0]) + (m1 * ctr[1])) - w(2, 2))
     else:
         a00 = x.let(f"{tag}a00", (w(1, 1) * w(2, 2)) - (w(1, 2) * w(1, 2)))
@@ -245,11 +294,12 @@ def centre(x: Any, n: int, W: dict[tuple[int, int], Any], tag: str) -> tuple[lis
         a12 = x.let(f"{tag}a12", (w(0, 1) * w(0, 2)) - (w(0, 0) * w(1, 2)))
         a22 = x.let(f"{tag}a22", (w(0, 0) * w(1, 1)) - (w(0, 1) * w(0, 1)))
         det = x.let(f"{tag}det", ((w(0, 0) * a00) + (w(0, 1) * a01)) + (w(0, 2) * a02))
+        inv = x.let(f"{tag}inv", -1.0 / det)
         m0, m1, m2 = w(0, 3), w(1, 3), w(2, 3)
         ctr = [
-            x.let(f"{tag}c0", -(((a00 * m0) + (a01 * m1)) + (a02 * m2)) / det),
-            x.let(f"{tag}c1", -(((a01 * m0) + (a11 * m1)) + (a12 * m2)) / det),
-            x.let(f"{tag}c2", -(((a02 * m0) + (a12 * m1)) + (a22 * m2)) / det),
+            x.let(f"{tag}c0", (((a00 * m0) + (a01 * m1)) + (a02 * m2)) * inv),
+            x.let(f"{tag}c1", (((a01 * m0) + (a11 * m1)) + (a12 * m2)) * inv),
+            x.let(f"{tag}c2", (((a02 * m0) + (a12 * m1)) + (a22 * m2)) * inv),
         ]
         k = x.let(f"{tag}k", -(((m0 * ctr[0]) + (m1 * ctr[1])) + (m2 * ctr[2])) - w(3, 3))
     return ctr, k, det > 0.0
@@ -289,24 +339,27 @@ def certify(
     qa = x.let("qa", quad(x, n, WA, u))
     qb = x.let("qb", quad(x, n, WB, u))
     pos = x.let("pos", (qa > 0.0) & (qb > 0.0))
-    ta = x.let("ta", x.sqrt(ka / qa))
-    tb = x.let("tb", x.sqrt(kb / qb))
-    T = x.let("T", (ta / tb) * (kb / ka))
+    # tA = sqrt(kA / qA), tB = sqrt(kB / qB), so T* = (tA / tB)(kB / kA) = sqrt(qB kB / (qA kA))
+    # and tA / (tA + tB) = kA T* / (kA T* + kB): one square root and two divisions
+    T = x.let("T", x.sqrt((qb * kb) / (qa * ka)))
     tin = x.let("tin", (pos & (T >= float(CERT_T_MIN))) & (T <= float(CERT_T_MAX)))
     name = f"pencil_at{n}"
     p, pr = x.call(name, [x.vector(c, "c"), x.vector(cr, "cr")], [x.where(tin, T, 1.0)])
     sep = x.let("sep", (ok & tin) & (p > ((pr * RADIUS_FACTOR) + x.info(name).floor)))
-    s = x.let("s", x.where(pos, ta / (ta + tb), 0.0))  # concentric shapes: A's centre
+    kT = x.let("kT", ka * T)
+    s = x.let("s", x.where(pos, kT / (kT + kb), 0.0))  # concentric shapes: A's centre
     pt = [x.let(f"x{i}", ca[i] + (s * u[i])) for i in range(d)]
     xin = x.abs(pt[0]) <= float(TRANSLATE_MAX)
     for i in range(1, d):
         xin = xin & (x.abs(pt[i]) <= float(TRANSLATE_MAX))
     xin = x.let("xin", xin)
     pt = [x.let(f"xs{i}", x.where(xin, pt[i], 0.0)) for i in range(d)]
+    # X^T M X with its bound f * Q(|M| g + R, |x|) (core.fixed.errorbound.form_constants)
     name = f"form{n}"
-    floor = x.info(name).floor
+    info = x.info(name)
+    g, f = info.constants
     point = x.vector(pt, "pt")
-    fa, fra = x.call(name, [x.matrix(WA, n, "fwa"), x.matrix(RA, n, "fra"), point])
-    fb, frb = x.call(name, [x.matrix(WB, n, "fwb"), x.matrix(RB, n, "frb"), point])
-    inside = (fa < -((fra * RADIUS_FACTOR) + floor)) & (fb < -((frb * RADIUS_FACTOR) + floor))
+    fa, fma = x.call(name, [x.matrix(WA, n, "fwa"), x.matrix(RA, n, "fra"), point], [g])
+    fb, fmb = x.call(name, [x.matrix(WB, n, "fwb"), x.matrix(RB, n, "frb"), point], [g])
+    inside = (fa < -((fma * f) + info.floor)) & (fb < -((fmb * f) + info.floor))
     return x.let("cert", x.where(sep, RULE_SEP, x.where((ok & xin) & inside, RULE_POINT, -1)))

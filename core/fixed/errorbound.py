@@ -53,6 +53,10 @@ __all__ = [
     "RADIUS_FACTOR",
     "CERT_T_MIN",
     "CERT_T_MAX",
+    "S0_RHO",
+    "relative_input_constant",
+    "form_constants",
+    "Perm",
 ]
 
 UNIT_ROUNDOFF = Fraction(1, 2**53)
@@ -69,6 +73,13 @@ NO_SCALE_MIN = Fraction(1, 256)
 
 CERT_T_MIN, CERT_T_MAX = Fraction(1, 2**20), Fraction(2**20)
 """The separation certificate evaluates P(T*) only for T* in this range (overflow-free bounds)."""
+
+S0_RHO = Fraction(1, 2**20)
+"""The first s0 test (stage 2) runs only where every a_i is known to this relative accuracy:
+cr_i * 2^20 <= |a_i| (an exact comparison: the product by a power of two is exact, since
+cr_i >= the pencil's underflow floor > 2^-1040 keeps it in the normal range). Random pairs pass
+(their a_i are accurate to ~1e-14); the others, and every pair whose s0 is too small for this
+bound, go to the running-error s0 test after the certificates."""
 
 RADIUS_FACTOR = 1.0 + 2.0**-40
 """Covers the rounding of a computed radius or bound (fewer than 2^12 roundings of nonneg terms)."""
@@ -106,6 +117,88 @@ def gamma_constant(K: int, K_bound: int) -> float:
     if max(K, K_bound) * u >= Fraction(1, 2**20):
         raise ValueError(f"error count {K} too large for float64")
     return round_up(K * u / (1 - K * u) / (1 - u) ** (K_bound + 2))
+
+
+def relative_input_constant(K: int, K_bound: int, degree: int, rho: Fraction) -> float:
+    """Float C with |fl(p(c)) - p(c~)| <= fl(C * fl(M)) + floor for inputs known to relative accuracy rho.
+
+    The s0 test of stage 2 (semi-static, CGAL style: one evaluation of the value and one of its
+    permanent, no radius per operation). Proof, for a straight-line polynomial p of degree at
+    most ``degree`` evaluated on floats c_i with |c~_i - c_i| <= rho |c_i| (c~ the exact inputs):
+    expanded monomial by monomial (with multiplicity, before any cancellation), p = sum_m t_m
+    and M = sum_m |t_m| is the value of the program on |c_i| with every ``-`` turned into ``+``
+    (:class:`Perm`). Each monomial moves by at most ((1 + rho)^degree - 1) |t_m| when its
+    factors move by relative rho, and the rounding of fl(p(c)) is at most gamma_K M (Higham,
+    Lemma 3.1, the error count K of the trace). So |fl(p(c)) - p(c~)| <= (gamma_K + (1 + rho)^degree
+    - 1) M, and M <= fl(M) / (1 - u)^K_bound (non-negative terms), two more roundings for the
+    product C * fl(M) and the floor's addition.
+
+    Examples:
+        >>> 6 * 2.0**-20 < relative_input_constant(10, 10, 6, Fraction(1, 2**20)) < 6.001 * 2.0**-20
+        True
+    """
+    u = UNIT_ROUNDOFF
+    if max(K, K_bound) * u >= Fraction(1, 2**20):
+        raise ValueError(f"error count {K} too large for float64")
+    gamma = K * u / (1 - K * u)
+    return round_up((gamma + (1 + rho) ** degree - 1) / (1 - u) ** (K_bound + 2))
+
+
+def form_constants(K: int, K_bound: int) -> tuple[float, float]:
+    """(g, f) for the certificates' X^T M X with entries known up to radii r_ij and x exact.
+
+    Proof: q(M, x) = X^T M X is linear in M. With M~ the exact entries (|m~_ij - m_ij| <= r_ij)
+    and K the error count of the program, |fl(q) - q(M~, x)| <= gamma_K Q(|M|, |x|) + Q(R, |x|) =
+    Q(gamma_K |M| + R, |x|), Q the program on non-negative entries with ``-`` turned into ``+``
+    (linear in its matrix too). The kernel computes e_ij = fl(fl(|m_ij| g) + r_ij) with g >=
+    gamma_K, then fl(Q(e, |x|)); the two roundings of e are in its error count K_bound (the
+    trace sees them), so Q(gamma_K |M| + R, |x|) <= fl(Q(e, |x|)) / (1 - u)^K_bound, and f covers
+    two more roundings (f * fl(Q) and the floor's addition). Underflow: the trace's floor,
+    added twice (f ~ 1 also scales the companion's own underflow).
+
+    Examples:
+        >>> g, f = form_constants(7, 12)
+        >>> 7 * 2.0**-53 <= g < 8 * 2.0**-53 and 1 < f < 1 + 2.0**-48
+        True
+    """
+    u = UNIT_ROUNDOFF
+    if max(K, K_bound) * u >= Fraction(1, 2**20):
+        raise ValueError(f"error count {K} too large for float64")
+    return round_up(K * u / (1 - K * u)), round_up(1 / (1 - u) ** (K_bound + 2))
+
+
+class Perm:
+    """The permanent of a traced program: ``-`` becomes ``+``, constant factors their absolute value.
+
+    Wraps the leaves (already non-negative: ``abs`` of inputs, or bound entries) so that a
+    ring-generic formula, run on them, traces M = sum of |monomials| (the companion bound of the
+    permanent-style kernels); ``degree`` is the largest total degree of a monomial (leaves 1).
+    """
+
+    __slots__ = ("v", "degree")
+
+    def __init__(self, v: Any, degree: int = 1) -> None:
+        self.v = v
+        self.degree = degree
+
+    def __add__(self, o: Any) -> Perm:
+        if isinstance(o, Perm):
+            return Perm(self.v + o.v, max(self.degree, o.degree))
+        return NotImplemented
+
+    __sub__ = __add__
+
+    def __mul__(self, o: Any) -> Perm:
+        if isinstance(o, Perm):
+            return Perm(self.v * o.v, self.degree + o.degree)
+        if isinstance(o, int):
+            return Perm(self.v * abs(o), self.degree)
+        return NotImplemented
+
+    __rmul__ = __mul__
+
+    def __neg__(self) -> Perm:
+        return self
 
 
 def _is_power_of_two(c: int) -> bool:

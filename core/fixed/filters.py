@@ -30,10 +30,12 @@ from . import compiled
 from .driver import (
     NEEDS_CERT,
     NEEDS_S0,
+    NEEDS_S0_RADIUS,
     Prepared,
     certify,
     decide,
     decide_s0,
+    decide_s0_radius,
     pencil_bounds,
     prepare,
     radii,
@@ -117,15 +119,30 @@ def first_stage(a: np.ndarray, b: np.ndarray) -> FirstStage:
         code, _, idx = decide(_X, n, c, cr, minors, Pa.ok & Pb.ok)
         code = np.asarray(code, dtype=np.int64).copy()
         asked = code == NEEDS_S0
-        need = np.flatnonzero(asked)
-        if need.size:  # s0 only where the tree asks for it
-            code[need] = decide_s0(_X, n, _take(c, need), _take(cr, need), idx[need])
-        todo = np.flatnonzero(code == NEEDS_CERT)
-        if todo.size:  # the certificates only where a valid pair is still open
-            Wa, Wb = _take(Pa.W, todo), _take(Pb.W, todo)
-            Ra, Rb = radii(_X, Wa, Pa.rounded[todo], "a"), radii(_X, Wb, Pb.rounded[todo], "b")
-            code[todo] = certify(_X, n, Wa, Ra, Wb, Rb, _take(c, todo), _take(cr, todo))
+        code = _later_stages(n, code, idx, c, cr, lambda rows: (
+            _take(Pa.W, rows), radii(_X, _take(Pa.W, rows), Pa.rounded[rows], "a"),
+            _take(Pb.W, rows), radii(_X, _take(Pb.W, rows), Pb.rounded[rows], "b"),
+        ))
     return FirstStage(Pa, Pb, c, cr, code.astype(np.int8), asked)
+
+
+def _later_stages(n: int, code: np.ndarray, idx: np.ndarray, c: list[np.ndarray], cr: list[np.ndarray], matrices: Any) -> np.ndarray:
+    """Stages 2-4 of :mod:`core.fixed.driver` on the pairs each one needs (C: the same order).
+
+    ``matrices(rows)`` gives (WA, RA, WB, RB) of those pairs for the certificates.
+    """
+    need = np.flatnonzero(code == NEEDS_S0)
+    if need.size:  # s0, semi-static, only where the tree asks for it
+        code[need] = decide_s0(_X, n, _take(c, need), _take(cr, need), idx[need])
+    todo = np.flatnonzero((code == NEEDS_CERT) | (code == NEEDS_S0_RADIUS))
+    if todo.size:  # the certificates only where a valid pair is still open
+        WA, RA, WB, RB = matrices(todo)
+        cert = np.asarray(certify(_X, n, WA, RA, WB, RB, _take(c, todo), _take(cr, todo)), dtype=np.int64)
+        code[todo] = np.where(cert >= 0, cert, np.where(code[todo] == NEEDS_S0_RADIUS, NEEDS_S0_RADIUS, -1))
+    need = np.flatnonzero(code == NEEDS_S0_RADIUS)
+    if need.size:  # s0 with a radius per operation, where it is still needed (near tangency)
+        code[need] = decide_s0_radius(_X, n, _take(c, need), _take(cr, need), idx[need])
+    return np.where(code == NEEDS_CERT, -1, code)
 
 
 def rules_numpy(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -245,13 +262,8 @@ def classify_translated(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None
         cr = [out[f"c{i}"][1] for i in range(n + 1)]
         minors = [v for key, v in out.items() if key.startswith("d")]
         code, _, idx = decide(_X, n, c, cr, minors, ok)
-        code = np.asarray(code, dtype=np.int64).copy()
-        need = np.flatnonzero(code == NEEDS_S0)
-        if need.size:
-            code[need] = decide_s0(_X, n, _take(c, need), _take(cr, need), idx[need])
-        todo = np.flatnonzero(code == NEEDS_CERT)
-        if todo.size:
-            code[todo] = certify(_X, n, _take(VA, todo), _take(RA, todo), _take(VB, todo), _take(RB, todo), _take(c, todo), _take(cr, todo))
+        code = _later_stages(n, np.asarray(code, dtype=np.int64).copy(), idx, c, cr,
+                             lambda rows: (_take(VA, rows), _take(RA, rows), _take(VB, rows), _take(RB, rows)))
     return code.astype(np.int8)
 
 
@@ -298,4 +310,13 @@ def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False, thread
     Returns:
         int8 codes of :class:`Relation`, shape (N,). Never a wrong label.
     """
-    return relations(rules_float(a, b, scalar=scalar, threads=threads))
+    if not compiled.available():
+        return relations(rules_float(a, b, scalar=scalar, threads=threads))
+    # the compiled kernels write the relation codes directly and count the undecided pairs
+    codes, undecided = compiled.mapped(a, b, _RELATION_OF, threads=threads)
+    if not scalar and undecided:
+        idx = np.flatnonzero(codes == Relation.UNDECIDED)
+        for s in range(0, idx.size, _CHUNK):
+            part = idx[s : s + _CHUNK]
+            codes[part] = relations(classify_translated(a[part].astype(np.float64), b[part].astype(np.float64)))
+    return codes

@@ -29,9 +29,14 @@ from ..shapes.quadrics import origin_moved
 from .errorbound import (
     CERT_T_MAX,
     LEAF_MAX,
+    S0_RHO,
     TRANSLATE_MAX,
     Kernel,
+    Perm,
     build_kernel,
+    form_constants,
+    relative_input_constant,
+    round_up,
 )
 from .lanes import CExpr, CLanes, KernelInfo
 
@@ -40,6 +45,9 @@ __all__ = [
     "pencil_radius_kernel",
     "pencil_at_kernel",
     "form_kernel",
+    "form_info",
+    "hat_s0_relative_kernel",
+    "hat_s0_relative_info",
     "translate_kernel",
     "subresultant_kernel",
     "generate_module",
@@ -219,34 +227,93 @@ def pencil_at_kernel(n: int) -> Kernel:
     )
 
 
+def _form(M: list[list[Any]], X: list[Any], d: int) -> Any:
+    """X^T M X for X = (x, 1), row by row: 2 (m_i + sum_j<i M_ij x_j) x_i + M_ii x_i^2, then M_dd."""
+    acc = M[d][d]
+    for i in range(d):
+        row = M[i][d] * 2
+        for j in range(i):
+            row = row + M[i][j] * X[j] * 2
+        row = row + M[i][i] * X[i]
+        acc = acc + row * X[i]
+    return acc
+
+
 @cache
 def form_kernel(n: int) -> Kernel:
-    """Kernel ``form{n}(M, Mr, x)`` (midpoint-radius): X^T M X for X = (x, 1).
+    """Kernel ``form{n}(M, Mr, x, g)`` (permanent style): X^T M X for X = (x, 1), and its bound.
 
-    M is the prepared matrix (entries with radii), x exact with |x_i| <= TRANSLATE_MAX: the
-    common-point certificate (negative for both shapes means x is inside both).
+    M is a prepared matrix whose exact entries lie within the radii Mr (0 for exact entries, a
+    rounded half sum, or a translated entry), x exact with |x_i| <= TRANSLATE_MAX: the
+    common-point certificate (negative for both shapes means x is inside both). Outputs ``q``
+    and ``q_M`` = Q(e, |x|), the program on e_ij = |m_ij| g + r_ij with every ``-`` turned into
+    ``+``; with (g, f) = ``form_constants(K_q, K_qM)``, |fl(q) - exact| <= f q_M + 2 floor
+    (:func:`core.fixed.errorbound.form_constants`). One value program and one non-negative
+    program: a third of the operations of the midpoint-radius form.
     """
     d = n - 1
     mnames = [_leaf("m", i, j) for i in range(n) for j in range(i, n)]
-    names = mnames + [f"x{i}" for i in range(d)]
+    rnames = [_leaf("r", i, j) for i in range(n) for j in range(i, n)]
+    names = mnames + rnames + [f"x{i}" for i in range(d)] + ["g"]
 
     def formula(L: dict[str, Any]) -> dict[str, Any]:
         M = [[L[_leaf("m", i, j)] for j in range(n)] for i in range(n)]
         X = [L[f"x{i}"] for i in range(d)]
-        acc = M[d][d]
-        for i in range(d):  # 2 (m_i + sum_j<i M_ij x_j) x_i + M_ii x_i^2, row by row
-            row = M[i][d] * 2
-            for j in range(i):
-                row = row + M[i][j] * X[j] * 2
-            row = row + M[i][i] * X[i]
-            acc = acc + row * X[i]
-        return {"q": acc}
+        E = [[Perm(abs(L[_leaf("m", i, j)]) * L["g"] + L[_leaf("r", i, j)]) for j in range(n)] for i in range(n)]
+        return {"q": _form(M, X, d), "q_M": _form(E, [Perm(abs(v)) for v in X], d).v}
 
-    exprs = {nm: (f"M[{nm[1]}, {nm[2]}]", f"Mr[{nm[1]}, {nm[2]}]") for nm in mnames}
-    exprs.update({f"x{i}": (f"x[{i}]", "0.0") for i in range(d)})
-    leaf_max = {nm: Fraction(LEAF_MAX) for nm in mnames}
+    exprs = {nm: (f"M[{nm[1]}, {nm[2]}]", "") for nm in mnames}
+    exprs.update({nm: (f"Mr[{nm[1]}, {nm[2]}]", "") for nm in rnames})
+    exprs.update({f"x{i}": (f"x[{i}]", "") for i in range(d)})
+    exprs["g"] = ("g", "")
+    leaf_max = {nm: Fraction(LEAF_MAX) for nm in mnames + rnames}
     leaf_max.update({f"x{i}": Fraction(TRANSLATE_MAX) for i in range(d)})
-    return build_kernel(f"form{n}", names, formula, style="radius", leaf_max=leaf_max, leaf_exprs=exprs, params=["M", "Mr", "x"])
+    leaf_max["g"] = Fraction(1)
+    return build_kernel(
+        f"form{n}", names, formula, style="permanent", leaf_max=leaf_max, leaf_exprs=exprs, params=["M", "Mr", "x", "g"]
+    )
+
+
+def form_info(n: int) -> tuple[float, float, float]:
+    """(g, f, floor) of :func:`form_kernel`: |fl(q) - exact| <= f q_M + floor (two underflow floors)."""
+    k = form_kernel(n)
+    g, f = form_constants(k.error_counts[0], k.error_counts[1])
+    return g, f, round_up(Fraction(k.underflow_floor) * 2)
+
+
+@cache
+def hat_s0_relative_kernel(n: int) -> Kernel:
+    """Kernel ``hat_s0_rel_{n}(c)`` (permanent style): hs0 and its permanent, for the first s0 test.
+
+    For a_i known to relative accuracy :data:`~core.fixed.errorbound.S0_RHO` (checked by the
+    driver): |fl(hs0) - hs0(exact a)| <= C s0_M + floor with C =
+    ``relative_input_constant(K, K_M, degree, S0_RHO)``. About a third of the operations of the
+    midpoint-radius ``hat_s0_{n}``, which serves the pairs this one cannot decide.
+    """
+    pk = pencil_kernel(n)
+    pr = pencil_radius_kernel(n)
+    names = [f"c{i}" for i in range(n + 1)]
+
+    def formula(L: dict[str, Any]) -> dict[str, Any]:
+        perm = hat_s0([Perm(abs(L[c])) for c in names])
+        return {"s0": hat_s0([L[c] for c in names]), "s0_M": perm.v}
+
+    return build_kernel(
+        f"hat_s0_rel_{n}",
+        names,
+        formula,
+        style="permanent",
+        leaf_max={c: max(pk.output_max[pk.outputs.index(c)], pr.output_max[pr.outputs.index(c)] * 2) for c in names},
+        leaf_exprs={c: (f"c[{i}]", "") for i, c in enumerate(names)},
+        params=["c"],
+    )
+
+
+def hat_s0_relative_info(n: int) -> tuple[float, float]:
+    """(C, floor) of :func:`hat_s0_relative_kernel`."""
+    k = hat_s0_relative_kernel(n)
+    degree = hat_s0([Perm(0) for _ in range(n + 1)]).degree
+    return relative_input_constant(k.error_counts[0], k.error_counts[1], degree, S0_RHO), k.underflow_floor
 
 
 # ---------------------------------------------------------------------------------------------
@@ -284,7 +351,10 @@ def generate_module() -> str:
         "Each ``pencil{n}(A, B)`` reads ``A[i, j]`` (a float, or an array of floats for many pairs) and\n"
         "returns the outputs listed in ``PENCIL{n}_OUTPUTS``; |error of x| <= constant * x_M + floor.\n"
         "The midpoint-radius kernels (``hat_{s}_{n}``, ``translate{n}``, ``pencil_radius{n}``,\n"
-        "``pencil_at{n}``, ``form{n}``) return values and radii; |error| <= radius * RADIUS_FACTOR + floor.\n"
+        "``pencil_at{n}``) return values and radii; |error| <= radius * RADIUS_FACTOR + floor.\n"
+        "``hat_s0_rel_{n}(c)`` returns hs0 and its permanent: |error| <= C * s0_M + floor for a_i known to\n"
+        "relative accuracy S0_RHO; ``form{n}(M, Mr, x, g)`` returns q and q_M: |error| <= f * q_M + floor\n"
+        "with (g, f) = FORM{n}_CONSTANTS.\n"
         'See core/fixed/errorbound.py for the proofs; core/fixed/_kernels.h holds the same kernels in C.\n"""\n',
         "# ruff: noqa",
         "",
@@ -299,11 +369,23 @@ def generate_module() -> str:
         parts.append(f"PENCIL{n}_FLOOR = {k.underflow_floor!r}")
         parts.append("")
         parts.append(k.source)
-        for extra in (translate_kernel(n), pencil_radius_kernel(n), pencil_at_kernel(n), form_kernel(n)):
+        for extra in (translate_kernel(n), pencil_radius_kernel(n), pencil_at_kernel(n)):
             parts.append(f"{extra.name.upper()}_OUTPUTS = {extra.outputs!r}")
             parts.append(f"{extra.name.upper()}_FLOOR = {extra.underflow_floor!r}")
             parts.append("")
             parts.append(extra.source)
+        fm, (g, f, floor) = form_kernel(n), form_info(n)
+        parts.append(f"FORM{n}_OUTPUTS = {fm.outputs!r}")
+        parts.append(f"FORM{n}_CONSTANTS = {(g, f)!r}")
+        parts.append(f"FORM{n}_FLOOR = {floor!r}")
+        parts.append("")
+        parts.append(fm.source)
+        hr, (C, floor) = hat_s0_relative_kernel(n), hat_s0_relative_info(n)
+        parts.append(f"HAT_S0_REL_{n}_OUTPUTS = {hr.outputs!r}")
+        parts.append(f"HAT_S0_REL_{n}_CONSTANTS = {(C,)!r}")
+        parts.append(f"HAT_S0_REL_{n}_FLOOR = {floor!r}")
+        parts.append("")
+        parts.append(hr.source)
         for which in HATS:
             h = subresultant_kernel(n, which)
             parts.append(f"HAT_{which.upper()}_{n}_FLOOR = {h.underflow_floor!r}")
@@ -315,10 +397,10 @@ def generate_module() -> str:
 _C_HEADER = """/* The certified float filter's lane functions, in C. GENERATED by `python -m core.fixed.kernelgen`: do not edit.
  *
  * Two sources, one description each:
- * - the straight-line kernels (pencil{n}, hat_s0_{n}, pencil_at{n}, form{n}) are the traced
+ * - the straight-line kernels (pencil{n}, hat_s0_rel_{n}, hat_s0_{n}, pencil_at{n}, form{n}) are the traced
  *   ring-generic formulas of core/fixed/_kernels.py, the same operations in the same order, so
  *   their proven error constants (core/fixed/errorbound.py) hold;
- * - the lane functions (first{n}_*, full{n}_*, second{n}, third{n}_*) are core/fixed/driver.py written out
+ * - the lane functions (first{n}_*, full{n}_*, second{n}, third{n}_*, fourth{n}) are core/fixed/driver.py written out
  *   in C: prepare, pencil with bounds, validity, the tree (tables of
  *   core.formulae.decision.decide_signs), s0 where the tree asks, the certificates. The numpy
  *   filter runs that same description on arrays, and the two agree bit for bit.
@@ -338,6 +420,7 @@ _C_HEADER = """/* The certified float filter's lane functions, in C. GENERATED b
 #define NEEDS_S0 @NEEDS_S0@   /* first stage: valid, the tree asks for s0 */
 #define NEEDS_CERT @NEEDS_CERT@ /* valid, the tree cannot decide: try the certificates */
 #define NEEDS_FULL @NEEDS_FULL@ /* fast pass: a matrix is not exactly symmetric: the full prepare */
+#define NEEDS_S0_RADIUS @NEEDS_S0_RADIUS@ /* stage 2 could not tell the sign of s0: the certificates, then stage 4 */
 
 /* Table digit of a certified sign: 0 for -1, 2 for +1, 3 for uncertain (core.formulae.decision.SIGN_CODES). */
 static inline int64_t sign_digit(double v, double b) { return v > b ? 2 : (v < -b ? 0 : 3); }
@@ -378,7 +461,16 @@ def _lane_c(name: str, params: str, build: Any, infos: dict[str, KernelInfo], do
 
 def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
     """first{n}_{f64,f32}, second{n}, third{n}_{f64,f32}: the driver's stages in C."""
-    from .driver import NEEDS_FULL, certify, decide, decide_s0, pencil_bounds, prepare, radii
+    from .driver import (
+        NEEDS_FULL,
+        certify,
+        decide,
+        decide_s0,
+        decide_s0_radius,
+        pencil_bounds,
+        prepare,
+        radii,
+    )
 
     out = []
     for suffix, T in (("f64", "double"), ("f32", "float")):
@@ -398,10 +490,16 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             x.lines.append(f"    *idx_out = {idx.text};")
             return code
 
-        def third(x: CLanes, entry: Any = entry) -> CExpr:
-            Pa, Pb = prepare(x, n, entry("a"), "a"), prepare(x, n, entry("b"), "b")
+        def third(x: CLanes, entry: Any = entry, fast: bool = False) -> CExpr:
+            # fast: the pair passed the fast first pass (both matrices exactly symmetric), whose
+            # W is the full prepare's and whose radii are 0
+            Pa, Pb = prepare(x, n, entry("a"), "a", exact_only=fast), prepare(x, n, entry("b"), "b", exact_only=fast)
             c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
             cr = [CExpr(f"c[{n + 1 + i} * s]", "d") for i in range(n + 1)]
+            if fast:
+                zero = {ij: 0.0 for ij in Pa.W}
+                fast_code: CExpr = certify(x, n, Pa.W, zero, Pb.W, zero, c, cr)
+                return fast_code
             code: CExpr = certify(x, n, Pa.W, radii(x, Pa.W, Pa.rounded, "a"), Pb.W, radii(x, Pb.W, Pb.rounded, "b"), c, cr)
             return code
 
@@ -423,6 +521,13 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             third, infos,
             "Stage 3 (driver.certify, on the pair prepared again): sep-witness, common-point or -1.",
         ))
+        out.append(_lane_c(
+            f"third{n}_fast_{suffix}",
+            f"const {T} *restrict a, const {T} *restrict b, const double *restrict c, const int64_t s",
+            lambda x, third=third: third(x, fast=True), infos,
+            "Stage 3 for a pair the fast first pass prepared (exactly symmetric: exact entries, radii 0): the same "
+            "answer as third, cheaper.",
+        ))
 
     def second(x: CLanes) -> CExpr:
         c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
@@ -430,9 +535,19 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
         code: CExpr = decide_s0(x, n, c, cr, CExpr("idx", "i"))
         return code
 
+    def fourth(x: CLanes) -> CExpr:
+        c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
+        cr = [CExpr(f"c[{n + 1 + i} * s]", "d") for i in range(n + 1)]
+        code: CExpr = decide_s0_radius(x, n, c, cr, CExpr("idx", "i"))
+        return code
+
     out.append(_lane_c(
         f"second{n}", "const double *restrict c, const int64_t s, const int64_t idx", second, infos,
-        "Stage 2 (driver.decide_s0): the tree with the certified sign of s0: a rule id or NEEDS_CERT.",
+        "Stage 2 (driver.decide_s0): the tree with the semi-static sign of s0: a rule id, NEEDS_CERT or NEEDS_S0_RADIUS.",
+    ))
+    out.append(_lane_c(
+        f"fourth{n}", "const double *restrict c, const int64_t s, const int64_t idx", fourth, infos,
+        "Stage 4 (driver.decide_s0_radius): the tree with the running-error sign of s0: a rule id or NEEDS_CERT.",
     ))
     return out
 
@@ -442,21 +557,25 @@ def _kernel_infos(n: int) -> dict[str, KernelInfo]:
     infos = {
         k.name: KernelInfo(k.outputs, len(k.outputs), k.underflow_floor, tuple(k.constants), tuple(kr.constants), kr.underflow_floor)
     }
-    for kk in (subresultant_kernel(n, "s0"), pencil_at_kernel(n), form_kernel(n)):
+    for kk in (subresultant_kernel(n, "s0"), pencil_at_kernel(n)):
         infos[kk.name] = KernelInfo(kk.outputs, 2 * len(kk.outputs), kk.underflow_floor)
+    fm, (g, f, floor) = form_kernel(n), form_info(n)
+    infos[fm.name] = KernelInfo(fm.outputs, len(fm.outputs), floor, (g, f))
+    hr, (C, floor) = hat_s0_relative_kernel(n), hat_s0_relative_info(n)
+    infos[hr.name] = KernelInfo(hr.outputs, len(hr.outputs), floor, (C,))
     return infos
 
 
 def generate_c() -> str:
     """Source text of ``core/fixed/_kernels.h``."""
-    from .driver import NEEDS_CERT, NEEDS_FULL, NEEDS_S0, TABLES
+    from .driver import NEEDS_CERT, NEEDS_FULL, NEEDS_S0, NEEDS_S0_RADIUS, TABLES
 
-    parts = [_C_HEADER.replace("@NEEDS_S0@", str(NEEDS_S0)).replace("@NEEDS_CERT@", str(NEEDS_CERT)).replace("@NEEDS_FULL@", str(NEEDS_FULL))]
+    parts = [_C_HEADER.replace("@NEEDS_S0@", str(NEEDS_S0)).replace("@NEEDS_CERT@", str(NEEDS_CERT)).replace("@NEEDS_FULL@", str(NEEDS_FULL)).replace("@NEEDS_S0_RADIUS@", str(NEEDS_S0_RADIUS))]
     for n in (3, 4):
         parts.append(f"/* ---- {'ellipses' if n == 3 else 'ellipsoids'}: n = {n} {'-' * 70} */\n")
         k = pencil_kernel(n)
-        h, pa, fm = subresultant_kernel(n, "s0"), pencil_at_kernel(n), form_kernel(n)
-        parts += [c_function(k, n), c_function(h, n), c_function(pa, n, ["T"]), c_function(fm, n)]
+        h, pa, fm, hr = subresultant_kernel(n, "s0"), pencil_at_kernel(n), form_kernel(n), hat_s0_relative_kernel(n)
+        parts += [c_function(k, n), c_function(hr, n), c_function(h, n), c_function(pa, n, ["T"]), c_function(fm, n, ["g"])]
         table = [str(int(v)) for v in TABLES[n]]
         rows = ",\n    ".join(", ".join(table[i : i + 25]) for i in range(0, len(table), 25))
         parts.append(
