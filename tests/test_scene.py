@@ -111,12 +111,24 @@ def test_typed_values_beyond_the_drawing_range_are_refused(server):
     assert s.set_shape("B", center="1e12, 0, 0") == "separate"  # the edge of the range is accepted
 
 
+def quiet(s: Session, timeout: float = 60.0) -> None:
+    """Wait until no coalesced refresh is due and none is being sent (it holds the session's lock)."""
+    deadline = time.monotonic() + timeout
+    while s.pending():
+        assert time.monotonic() < deadline, "a coalesced refresh never ran"
+        time.sleep(0.01)
+    with s.lock:
+        pass
+
+
 def test_drag_recolours_and_sends_nothing_when_unchanged(server):
     s = Session(server, unit_spheres(3, "3"), count_messages=True)
     assert s.apply_drag("B", (1.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) == "overlap"
     assert colours(s) == {RED}
+    quiet(s)  # the drag's coalesced refresh (witnesses, panel) has been sent
     m = s.messages
     s.apply_drag("B", (1.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))  # same pose again
+    quiet(s)
     assert s.messages == m
     # a rotated ellipsoid: semi-axes (1,1,1) -> rotation is irrelevant, distance 4 -> separate
     assert s.apply_drag("B", (0.0, 4.0, 0.0), (0.0, 1.0, 0.0, 0.0)) == "separate"
