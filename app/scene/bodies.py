@@ -21,6 +21,7 @@ and :func:`pick_body`, :func:`relation_colours` serve the moving bodies too
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any
 
@@ -73,7 +74,7 @@ class PairPage:
         return f"showing {self.start + 1:,}–{self.start + len(self.entries):,} of {self.total:,} {what}"
 
 
-class PairList:
+class PairList(ABC):
     """The pairs of a set of bodies as the GUI lists them: pages, filters, partners, lookup.
 
     Subclasses set ``result`` (``.i``, ``.j`` sorted by (i, j), ``.relation``, ``.pairs_of``),
@@ -86,9 +87,9 @@ class PairList:
     bodies: BodySet
     dim: int
 
-    def pair_label(self, k: int) -> str:  # pragma: no cover - every subclass names its pairs
-        """The text of pair k in the list."""
-        raise NotImplementedError
+    @abstractmethod
+    def pair_label(self, k: int) -> str:
+        """The text of pair k in the list (every subclass names its pairs its own way)."""
 
     def relation_filters(self) -> tuple[str, ...]:
         """The relation filters that make sense for this set ("undecided" only if present)."""
