@@ -224,15 +224,7 @@ def _float_spheres(
             lam_est = _lambda_min_estimate(Qv)
         ok &= np.isfinite(c).all(axis=1) & np.isfinite(lam_est) & (lam_est > 0)
         c = np.where(ok[:, None], c, 0.0)
-        lam = np.full(M.shape[0], np.nan)
-        rows = np.flatnonzero(ok)
-        for factor in _SHRINK:  # the first lambda whose Q - lambda I is proven definite
-            trial = lam_est[rows] * factor
-            good = _definite(S[rows], R[rows], trial)
-            lam[rows[good]] = trial[good]
-            rows = rows[~good]
-            if not rows.size:
-                break
+        lam = _proven_lambda(lam_est, ok, lambda rows, trial: _definite(S[rows], R[rows], trial))
         ok &= np.isfinite(lam) & (lam > 0)
         lam = np.where(ok, lam, 1.0)
         # g = Q c~ + m and f0 = c~.g + m.c~ + g0 with certified radii (c~ is exact: a float)
@@ -295,15 +287,9 @@ def _exact_spheres(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
         lam_est = _lambda_columns(w, d)
         ok &= np.isfinite(c).all(axis=0) & np.isfinite(lam_est) & (lam_est > 0)
         c = np.where(ok, c, 0.0)
-        lam = np.full(N, np.nan)
-        rows = np.flatnonzero(ok)
-        for factor in _SHRINK:  # the first lambda whose Q - lambda I is proven definite
-            trial = lam_est[rows] * factor
-            good = _definite_minors([[_Ball(w(i, j)[rows], 0.0) for j in range(d)] for i in range(d)], trial)
-            lam[rows[good]] = trial[good]
-            rows = rows[~good]
-            if not rows.size:
-                break
+        lam = _proven_lambda(
+            lam_est, ok, lambda rows, trial: _definite_minors([[_Ball(w(i, j)[rows], 0.0) for j in range(d)] for i in range(d)], trial)
+        )
         ok &= np.isfinite(lam) & (lam > 0)
         lam = np.where(ok, lam, 1.0)
         g: list[_Ball] = []
@@ -375,6 +361,26 @@ def _lambda_columns(w: Callable[[int, int], np.ndarray], d: int) -> np.ndarray:
     half_det = det / (safe * safe * safe) / 2
     phi = np.arccos(np.clip(half_det, -1.0, 1.0)) / 3
     lam: np.ndarray = np.where(p > 0, q + 2 * p * np.cos(phi + 2 * np.pi / 3), q)
+    return lam
+
+
+def _proven_lambda(
+    lam_est: np.ndarray, ok: np.ndarray, definite: Callable[[np.ndarray, np.ndarray], np.ndarray]
+) -> np.ndarray:
+    """Per body, the first lam_est * factor (factors ``_SHRINK``) proven <= lambda_min; NaN where none.
+
+    ``definite(rows, trial)`` says, for the bodies ``rows``, whether Q - trial I is proven
+    positive definite; only the bodies marked ``ok`` are tried.
+    """
+    lam = np.full(lam_est.shape[0], np.nan)
+    rows = np.flatnonzero(ok)
+    for factor in _SHRINK:
+        trial = lam_est[rows] * factor
+        good = definite(rows, trial)
+        lam[rows[good]] = trial[good]
+        rows = rows[~good]
+        if not rows.size:
+            break
     return lam
 
 
