@@ -17,7 +17,7 @@ from core.algebra.algebraic import RealAlgebraic
 from core.algebra.closedform import algebraic_from_quadratic
 from core.moving.expressions import parse_expression
 from core.shapes.limits import SERVER
-from core.shapes.numbers import parse_number, to_fmpq
+from core.shapes.numbers import decimal_exponent, floor_log10, parse_number, to_fmpq
 
 __all__ = [
     "Number", "parse_vector", "parse_matrix", "read_time", "time_float", "SHOWN_DIGITS",
@@ -168,21 +168,15 @@ def decimal_text(q: fmpq, max_chars: int = 40) -> str | None:
     Examples:
         >>> decimal_text(fmpq(3, 8)), decimal_text(fmpq(-12, 1)), decimal_text(fmpq(1, 3))
         ('0.375', '-12', None)
-        >>> decimal_text(fmpq(1, 10**30))
-        '1e-30'
+        >>> decimal_text(fmpq(1, 10**30)), decimal_text(fmpq(1, 2**20000)), decimal_text(fmpq(10**5000))
+        ('1e-30', None, '1e5000')
     """
-    p, den = int(q.p), int(q.q)
-    a = b = 0
-    while den % 2 == 0:
-        den //= 2
-        a += 1
-    while den % 5 == 0:
-        den //= 5
-        b += 1
-    if den != 1:
+    k = decimal_exponent(q)
+    if k is None:
         return None
-    k = max(a, b)
-    m = p * 10**k // int(q.q)  # exact: q.q divides 10^k
+    if k > 0 and floor_log10(q) + k + 1 > max_chars:
+        return None  # every one of its digits is significant: too long however it is written
+    m = (q * fmpq(10) ** k).p  # an fmpz: its text has no 4300-digit limit
     sign, digits = ("-" if m < 0 else ""), str(abs(m))
     if k == 0:
         text = sign + digits

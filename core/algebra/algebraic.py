@@ -27,7 +27,7 @@ from flint import (
     fmpz_poly,  # noqa: F401  (the doctests use it)
 )
 
-from ..shapes.numbers import floor_log10
+from ..shapes.numbers import decimal_exponent, floor_log10
 from ..shapes.numbers import sign as _sgn
 from ..shapes.numbers import to_float as _to_float
 from .qsqrt import QSqrtPoly, _poly
@@ -394,18 +394,10 @@ def _round_decimal(x: fmpq, digits: int) -> str:
 
 def _exact_decimal(x: fmpq, digits: int) -> str | None:
     """X exactly as a terminating decimal of at most ``digits`` significant digits, else None."""
-    q = x.q
-    twos = fives = 0
-    while q % 2 == 0:
-        q //= 2
-        twos += 1
-    while q % 5 == 0:
-        q //= 5
-        fives += 1
-    if q != 1:
+    k = decimal_exponent(x)  # x 10^k is an integer, and k is the least such power
+    if k is None:
         return None
     a = -x if x < 0 else x
-    k = max(twos, fives)  # a * 10^k is an integer, and k is the least such power
     if a == 0:
         return "0"
     # n = a 10^k ends in a nonzero digit (k is least): it has floor_log10(a) + k + 1 digits, all

@@ -336,6 +336,23 @@ def floor_log10(q: Any) -> int:
     return e
 
 
+def decimal_exponent(q: fmpq) -> int | None:
+    """The least k >= 0 with q 10^k an integer (q's decimal expansion ends k digits after the point), else None.
+
+    Examples:
+        >>> decimal_exponent(fmpq(3, 8)), decimal_exponent(fmpq(-12)), decimal_exponent(fmpq(1, 3))
+        (3, 0, None)
+    """
+    d = int(q.q)
+    twos = (d & -d).bit_length() - 1  # the power of 2 in d
+    d >>= twos
+    fives = 0
+    while d % 5 == 0:
+        d //= 5
+        fives += 1
+    return max(twos, fives) if d == 1 else None
+
+
 def _ge_pow10(p: fmpz, d: fmpz, e: int) -> bool:
     """Whether p / d >= 10^e, exactly (p, d > 0)."""
     return bool(p >= d * fmpz(10) ** e) if e >= 0 else bool(p * fmpz(10) ** (-e) >= d)
