@@ -124,10 +124,21 @@ class ProgressBar:
         self.stream.flush()
 
 
-def _say(args: argparse.Namespace, text: str) -> None:
+def say(args: argparse.Namespace, text: str) -> None:
     """A message for the user: stderr (stdout carries only data), unless --quiet."""
     if not getattr(args, "quiet", False):
         print(text, file=sys.stderr, flush=True)
+
+
+def warn_invalid(invalid: dict[int, str], where: Any) -> None:
+    """The first ten invalid bodies and why (``where(k)`` names body k in its file), on stderr.
+
+    Warnings about the answer: shown even with --quiet.
+    """
+    for k in sorted(invalid)[:10]:
+        print(f"invalid {where(k)}: {invalid[k]}", file=sys.stderr)
+    if len(invalid) > 10:
+        print(f"... and {len(invalid) - 10} more invalid bodies", file=sys.stderr)
 
 
 def _connect(address: str) -> Any:
@@ -168,7 +179,7 @@ def run_contacts(args: argparse.Namespace) -> int:
         t1 = time.perf_counter()
         what = "ellipsoids" if bodies.dim == 3 else "ellipses"
         frame = f" (frame {bodies.frame})" if bodies.frame is not None else ""
-        _say(args, f"read {len(bodies):,} {what} from {source}{frame} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
+        say(args, f"read {len(bodies):,} {what} from {source}{frame} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
         scheduler = _connect(args.scheduler) if args.scheduler else None
         try:
             progress = None if args.quiet else (True if scheduler is not None else ProgressBar(sys.stderr, "classifying"))
@@ -187,7 +198,7 @@ def run_contacts(args: argparse.Namespace) -> int:
             ts = time.perf_counter()
             d = pair_details(bodies.Q, res)
             details = {"scale_lo": d.scale_lo, "scale_hi": d.scale_hi, "contained": np.array(d.contained_names())}
-            _say(args, f"contact scales and containment of {len(res):,} pairs in {time.perf_counter() - ts:.1f} s")
+            say(args, f"contact scales and containment of {len(res):,} pairs in {time.perf_counter() - ts:.1f} s")
         t2 = time.perf_counter()
         if as_npz:
             write_pairs_npz(f, res.i, res.j, res.relation, res.certified_by, res.image, details)
@@ -196,14 +207,11 @@ def run_contacts(args: argparse.Namespace) -> int:
     t3 = time.perf_counter()
     invalid = dict(res.invalid)
     invalid.update(bodies.errors)  # the reason from the file's parameters, not "NaN"
-    _say(args, f"wrote {len(res):,} pairs to {'<stdout>' if args.out == '-' else args.out}")
-    _say(args, res.summary())
+    say(args, f"wrote {len(res):,} pairs to {'<stdout>' if args.out == '-' else args.out}")
+    say(args, res.summary())
     phases = ", ".join(f"{k} {v:.2f} s" for k, v in res.seconds.items() if k != "total")
-    _say(args, f"time: read {t1 - t0:.2f} s, {phases}, write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
-    for k in sorted(invalid)[:10]:  # warnings about the answer: shown even with --quiet
-        print(f"invalid {bodies.where(k)}: {invalid[k]}", file=sys.stderr)
-    if len(invalid) > 10:
-        print(f"... and {len(invalid) - 10} more invalid bodies", file=sys.stderr)
+    say(args, f"time: read {t1 - t0:.2f} s, {phases}, write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
+    warn_invalid(invalid, bodies.where)
     return 0
 
 
@@ -232,7 +240,7 @@ def run_classify(args: argparse.Namespace) -> int:
     counts = {str(r): int(np.count_nonzero(codes == r)) for r in Relation if np.count_nonzero(codes == r)}
     exact = int(np.count_nonzero(res.certified_by == 2))
     where = "<stdout>" if args.out == "-" else args.out
-    _say(args, f"wrote {codes.size:,} labels to {where} in {time.perf_counter() - t0:.2f} s: {counts}; {exact} certified by exact arithmetic")
+    say(args, f"wrote {codes.size:,} labels to {where} in {time.perf_counter() - t0:.2f} s: {counts}; {exact} certified by exact arithmetic")
     for k in sorted(res.errors)[:10]:
         print(f"invalid pair {k}: {res.errors[k]}", file=sys.stderr)
     return 0

@@ -53,11 +53,6 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
 
 
-def _say(args: argparse.Namespace, text: str) -> None:
-    if not getattr(args, "quiet", False):
-        print(text, file=sys.stderr, flush=True)
-
-
 @dataclass
 class MovingBodies:
     """START and END read and checked for a sweep: what :func:`core.sweep_contacts` takes, and from where."""
@@ -161,7 +156,7 @@ def run_sweep(args: argparse.Namespace) -> int:
     """``python -m app sweep``: read both files, sweep, write EVENTS, summarise. Returns the exit status."""
     from core import sweep_contacts
 
-    from .bodies_cli import ProgressBar
+    from .bodies_cli import ProgressBar, say, warn_invalid
     from .output import Output
 
     if args.start == "-" and args.end == "-":
@@ -176,9 +171,9 @@ def run_sweep(args: argparse.Namespace) -> int:
         start, names, box, errors = moving.start, moving.names, moving.box, moving.errors
         t1 = time.perf_counter()
         kind = "ellipsoids" if start.dim == 3 else "ellipses"
-        _say(args, f"read {len(start):,} moving {kind} from {names[0]} and {names[1]} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
+        say(args, f"read {len(start):,} moving {kind} from {names[0]} and {names[1]} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
         if moving.moved:
-            _say(args, f"{moving.moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
+            say(args, f"{moving.moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
         progress = None if args.quiet else ProgressBar(sys.stderr, "first contacts", min_total=50_000)
         res = sweep_contacts(*moving.arguments(), box=box, on_invalid=args.on_invalid, progress=progress)
         t2 = time.perf_counter()
@@ -186,14 +181,11 @@ def run_sweep(args: argparse.Namespace) -> int:
     t3 = time.perf_counter()
     invalid = dict(res.invalid)
     invalid.update(errors)  # the reason from the files' parameters, not the stand-in's
-    _say(args, f"wrote {len(res):,} first contacts to {'<stdout>' if args.out == '-' else args.out}")
-    _say(args, res.summary())
+    say(args, f"wrote {len(res):,} first contacts to {'<stdout>' if args.out == '-' else args.out}")
+    say(args, res.summary())
     phases = ", ".join(f"{k} {v:.2f} s" for k, v in res.seconds.items() if k != "total")
-    _say(args, f"time: read files {t1 - t0:.2f} s, sweep ({phases}), write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
-    for k in sorted(invalid)[:10]:  # warnings about the answer: shown even with --quiet
-        print(f"invalid {start.where(k)}: {invalid[k]}", file=sys.stderr)
-    if len(invalid) > 10:
-        print(f"... and {len(invalid) - 10} more invalid bodies", file=sys.stderr)
+    say(args, f"time: read files {t1 - t0:.2f} s, sweep ({phases}), write {t3 - t2:.2f} s, total {t3 - t0:.2f} s")
+    warn_invalid(invalid, start.where)
     return 0
 
 
