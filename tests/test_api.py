@@ -683,18 +683,23 @@ def test_slow_analysis_is_stopped_and_healthz_stays_responsive():
 
         th = threading.Thread(target=fire)
         th.start()
-        latencies, seen_running, refused = [], 0, None
+        latencies, seen_running, answered_while_running, refused = [], 0, 0, None
         while th.is_alive():
             t0 = time.monotonic()
             h = c.get("/healthz")
             latencies.append(time.monotonic() - t0)
-            seen_running = max(seen_running, h.json()["analyses_running"])
+            running = h.json()["analyses_running"]
+            seen_running = max(seen_running, running)
+            answered_while_running += running == 1
             if seen_running and refused is None:  # a second analysis is refused while the slot is taken
                 refused = c.post("/api/analyse", json=body)
             time.sleep(0.05)
         th.join()
         assert seen_running == 1
-        assert max(latencies) < 0.5, latencies
+        # never blocked by the job: a /healthz that waited for it would take the whole 1 s budget and
+        # be answered at most once while it runs; a loaded machine may delay one answer, not the median
+        assert answered_while_running >= 3, latencies
+        assert sorted(latencies)[len(latencies) // 2] < 0.25 and max(latencies) < 1.0, latencies
         assert refused is not None and refused.status_code == 503
         assert refused.headers["retry-after"] == "2"
         assert refused.json() == {"detail": "all 1 workers are busy; retry in a moment"}
