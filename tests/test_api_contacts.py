@@ -81,6 +81,21 @@ def test_numbers_must_be_json_floats(client):
     assert r.status_code == 422 and "overflows a float" in r.text
 
 
+def test_integers_are_taken_when_they_are_float64_values(client):
+    """2^55 + 2^31 is exactly a float64 (taken: the same answer as the float); 2^53 + 1 is not
+    (refused, never rounded to a neighbour). Two circles of radius 2^30 whose centres, beyond
+    2^53, are 2^31 apart: tangent."""
+    x, r = 2**55, 2**30
+    rows = [[x, 0, r, r, 0], [x + 2 * r, 0, r, r, 0]]
+    as_int = client.post("/api/contacts", json={"bodies": rows})
+    as_float = client.post("/api/contacts", json={"bodies": [[float(v) for v in row] for row in rows]})
+    assert as_int.status_code == 200 and as_int.json() == as_float.json(), as_int.text
+    assert [p["relation"] for p in as_int.json()["pairs"]] == ["tangent"], as_int.text
+    r = client.post("/api/contacts", json={"bodies": [[2**53 + 1, 0, 1, 1, 0]]})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["msg"].endswith("an integer of 16 digits that is not exactly a float64: bodies are float64 numbers")
+
+
 def test_body_count_and_size_limits():
     with TestClient(create_api(ApiSettings(max_contacts_bodies=3, max_contacts_body_bytes=2000))) as c:
         r = c.post("/api/contacts", json={"bodies": [[k, 0, 0.5, 0.5, 0] for k in range(4)]})

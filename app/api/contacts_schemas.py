@@ -14,6 +14,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
 
+from core.shapes.numbers import binary64
+
 from .json_body import OutOfRange
 from .schemas import CertifiedBy, MethodName
 
@@ -21,20 +23,24 @@ __all__ = ["ContactsIn", "ContactsOut", "PairOut", "FloatNumber"]
 
 
 def checked_float(v: Any) -> float:
-    """A finite JSON number as a float (integers beyond 2^53 and strings are refused)."""
+    """A finite JSON number as the float64 it is exactly.
+
+    Strings, booleans and integers that a float64 cannot hold (2^53 + 1) are refused; 2^60 is a
+    float64 and is taken.
+    """
     if isinstance(v, bool):
         raise ValueError(f"a boolean is not a number: {v!r}")
     if isinstance(v, OutOfRange):
         raise ValueError(v.message.split(";")[0] + ": bodies are float64 numbers")
-    if isinstance(v, int):
-        if abs(v) > 2**53:
-            raise ValueError("integer beyond 2^53: bodies are float64 numbers")
-        return float(v)
-    if isinstance(v, float):
-        if not math.isfinite(v):
-            raise ValueError(f"not a finite number: {v!r}")
-        return v
-    raise ValueError(f"expected a JSON number (bodies are float64 numbers), got {type(v).__name__}")
+    if not isinstance(v, int | float):
+        raise ValueError(f"expected a JSON number (bodies are float64 numbers), got {type(v).__name__}")
+    f = binary64(v, typed=True)  # the one "exactly a float64" test (core.shapes.numbers)
+    if f is None:  # an integer: beyond 2^53 with low bits, or beyond the float64 range
+        digits = f"{len(str(abs(v)))}" if v.bit_length() < 14000 else f"about {v.bit_length() * 30103 // 100000 + 1}"
+        raise ValueError(f"an integer of {digits} digits that is not exactly a float64: bodies are float64 numbers")
+    if not math.isfinite(f):
+        raise ValueError(f"not a finite number: {v!r}")
+    return f
 
 
 FloatNumber = Annotated[float, PlainValidator(checked_float), WithJsonSchema({"type": "number"})]
