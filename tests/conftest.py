@@ -54,6 +54,17 @@ class _SharedScene:
 _SHARED = _SharedScene()
 
 
+def pytest_collection_modifyitems(session, config, items):
+    """Files with browser tests first (each takes 20-90 s; the rest mostly under 10 s).
+
+    pytest-xdist (``--dist loadfile``) hands out whole files in collection order: starting the
+    long files first leaves short ones to fill the end, so no worker waits alone for a long file
+    at the end of the run. The order inside a file is kept; the sort is the same in every worker.
+    """
+    browser_files = {item.nodeid.split("::")[0] for item in items if item.get_closest_marker("browser")}
+    items.sort(key=lambda item: item.nodeid.split("::")[0] not in browser_files)
+
+
 def pytest_runtest_setup(item):
     """Close the shared browser before a test that does not use it (it may start its own)."""
     if "headless_scene" not in getattr(item, "fixturenames", ()):

@@ -35,10 +35,10 @@ def checked_float(v: Any) -> float:
     if not isinstance(v, int | float):
         raise ValueError(f"expected a JSON number (bodies are float64 numbers), got {type(v).__name__}")
     f = binary64(v, typed=True)  # the one "exactly a float64" test (core.shapes.numbers)
-    if f is None:  # an integer: beyond 2^53 with low bits, or beyond the float64 range
+    if f is None and isinstance(v, int):  # beyond 2^53 with low bits, or beyond the float64 range
         digits = f"{len(str(abs(v)))}" if v.bit_length() < 14000 else f"about {v.bit_length() * 30103 // 100000 + 1}"
         raise ValueError(f"an integer of {digits} digits that is not exactly a float64: bodies are float64 numbers")
-    if not math.isfinite(f):
+    if f is None or not math.isfinite(f):  # (a float is always its own float64: None never comes here)
         raise ValueError(f"not a finite number: {v!r}")
     return f
 
