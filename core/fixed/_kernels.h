@@ -40,6 +40,19 @@ static inline int64_t frexp_exponent(double v) {
 }
 
 static inline double max2(double a, double b) { return a > b ? a : b; }
+
+/* |v| as an integer (its bits without the sign): ordered as the doubles for finite v, above
+ * every finite value for inf and NaN; from_bits reads such an integer back as a double. */
+static inline int64_t abs_bits(double v) {
+    uint64_t bits;
+    memcpy(&bits, &v, 8);
+    return (int64_t)(bits & 0x7fffffffffffffffULL);
+}
+static inline double from_bits(int64_t b) {
+    double v;
+    memcpy(&v, &b, 8);
+    return v;
+}
 static inline int64_t imin2(int64_t a, int64_t b) { return a < b ? a : b; }
 static inline int64_t imax2(int64_t a, int64_t b) { return a > b ? a : b; }
 
@@ -456,8 +469,9 @@ static inline __attribute__((always_inline)) int64_t first3_f64(const double *re
     const double ay01 = (double)a[3 * s];
     const double ay02 = (double)a[6 * s];
     const double ay12 = (double)a[7 * s];
-    const double amx = max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax11)), fabs(ax12)), fabs(ax22));
-    const int64_t afinite = ((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax22 == ax22)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -480,8 +494,9 @@ static inline __attribute__((always_inline)) int64_t first3_f64(const double *re
     const double by01 = (double)b[3 * s];
     const double by02 = (double)b[6 * s];
     const double by12 = (double)b[7 * s];
-    const double bmx = max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx11)), fabs(bx12)), fabs(bx22));
-    const int64_t bfinite = ((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx22 == bx22)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -552,8 +567,9 @@ static inline __attribute__((always_inline)) int64_t full3_f64(const double *res
     const double ay01 = (double)a[3 * s];
     const double ay02 = (double)a[6 * s];
     const double ay12 = (double)a[7 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax11)), fabs(ax12)), fabs(ax22)), fabs(ay01)), fabs(ay02)), fabs(ay12));
-    const int64_t afinite = (((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax22 == ax22)) & (ay01 == ay01)) & (ay02 == ay02)) & (ay12 == ay12)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay12));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -591,8 +607,9 @@ static inline __attribute__((always_inline)) int64_t full3_f64(const double *res
     const double by01 = (double)b[3 * s];
     const double by02 = (double)b[6 * s];
     const double by12 = (double)b[7 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx11)), fabs(bx12)), fabs(bx22)), fabs(by01)), fabs(by02)), fabs(by12));
-    const int64_t bfinite = (((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx22 == bx22)) & (by01 == by01)) & (by02 == by02)) & (by12 == by12)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22)), abs_bits(by01)), abs_bits(by02)), abs_bits(by12));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -678,8 +695,9 @@ static inline __attribute__((always_inline)) int64_t third3_f64(const double *re
     const double ay01 = (double)a[3 * s];
     const double ay02 = (double)a[6 * s];
     const double ay12 = (double)a[7 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax11)), fabs(ax12)), fabs(ax22)), fabs(ay01)), fabs(ay02)), fabs(ay12));
-    const int64_t afinite = (((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax22 == ax22)) & (ay01 == ay01)) & (ay02 == ay02)) & (ay12 == ay12)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay12));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -717,8 +735,9 @@ static inline __attribute__((always_inline)) int64_t third3_f64(const double *re
     const double by01 = (double)b[3 * s];
     const double by02 = (double)b[6 * s];
     const double by12 = (double)b[7 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx11)), fabs(bx12)), fabs(bx22)), fabs(by01)), fabs(by02)), fabs(by12));
-    const int64_t bfinite = (((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx22 == bx22)) & (by01 == by01)) & (by02 == by02)) & (by12 == by12)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22)), abs_bits(by01)), abs_bits(by02)), abs_bits(by12));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -837,8 +856,9 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f64(const doubl
     const double ay01 = (double)a[3 * s];
     const double ay02 = (double)a[6 * s];
     const double ay12 = (double)a[7 * s];
-    const double amx = max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax11)), fabs(ax12)), fabs(ax22));
-    const int64_t afinite = ((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax22 == ax22)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -861,8 +881,9 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f64(const doubl
     const double by01 = (double)b[3 * s];
     const double by02 = (double)b[6 * s];
     const double by12 = (double)b[7 * s];
-    const double bmx = max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx11)), fabs(bx12)), fabs(bx22));
-    const int64_t bfinite = ((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx22 == bx22)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -954,8 +975,9 @@ static inline __attribute__((always_inline)) int64_t first3_f32(const float *res
     const double ay01 = (double)a[3 * s];
     const double ay02 = (double)a[6 * s];
     const double ay12 = (double)a[7 * s];
-    const double amx = max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax11)), fabs(ax12)), fabs(ax22));
-    const int64_t afinite = ((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax22 == ax22)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -978,8 +1000,9 @@ static inline __attribute__((always_inline)) int64_t first3_f32(const float *res
     const double by01 = (double)b[3 * s];
     const double by02 = (double)b[6 * s];
     const double by12 = (double)b[7 * s];
-    const double bmx = max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx11)), fabs(bx12)), fabs(bx22));
-    const int64_t bfinite = ((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx22 == bx22)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -1050,8 +1073,9 @@ static inline __attribute__((always_inline)) int64_t full3_f32(const float *rest
     const double ay01 = (double)a[3 * s];
     const double ay02 = (double)a[6 * s];
     const double ay12 = (double)a[7 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax11)), fabs(ax12)), fabs(ax22)), fabs(ay01)), fabs(ay02)), fabs(ay12));
-    const int64_t afinite = (((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax22 == ax22)) & (ay01 == ay01)) & (ay02 == ay02)) & (ay12 == ay12)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay12));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -1089,8 +1113,9 @@ static inline __attribute__((always_inline)) int64_t full3_f32(const float *rest
     const double by01 = (double)b[3 * s];
     const double by02 = (double)b[6 * s];
     const double by12 = (double)b[7 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx11)), fabs(bx12)), fabs(bx22)), fabs(by01)), fabs(by02)), fabs(by12));
-    const int64_t bfinite = (((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx22 == bx22)) & (by01 == by01)) & (by02 == by02)) & (by12 == by12)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22)), abs_bits(by01)), abs_bits(by02)), abs_bits(by12));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -1176,8 +1201,9 @@ static inline __attribute__((always_inline)) int64_t third3_f32(const float *res
     const double ay01 = (double)a[3 * s];
     const double ay02 = (double)a[6 * s];
     const double ay12 = (double)a[7 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax11)), fabs(ax12)), fabs(ax22)), fabs(ay01)), fabs(ay02)), fabs(ay12));
-    const int64_t afinite = (((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax22 == ax22)) & (ay01 == ay01)) & (ay02 == ay02)) & (ay12 == ay12)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay12));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -1215,8 +1241,9 @@ static inline __attribute__((always_inline)) int64_t third3_f32(const float *res
     const double by01 = (double)b[3 * s];
     const double by02 = (double)b[6 * s];
     const double by12 = (double)b[7 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx11)), fabs(bx12)), fabs(bx22)), fabs(by01)), fabs(by02)), fabs(by12));
-    const int64_t bfinite = (((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx22 == bx22)) & (by01 == by01)) & (by02 == by02)) & (by12 == by12)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22)), abs_bits(by01)), abs_bits(by02)), abs_bits(by12));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -1335,8 +1362,9 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f32(const float
     const double ay01 = (double)a[3 * s];
     const double ay02 = (double)a[6 * s];
     const double ay12 = (double)a[7 * s];
-    const double amx = max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax11)), fabs(ax12)), fabs(ax22));
-    const int64_t afinite = ((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax22 == ax22)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -1359,8 +1387,9 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f32(const float
     const double by01 = (double)b[3 * s];
     const double by02 = (double)b[6 * s];
     const double by12 = (double)b[7 * s];
-    const double bmx = max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx11)), fabs(bx12)), fabs(bx22));
-    const int64_t bfinite = ((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx22 == bx22)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -2268,8 +2297,9 @@ static inline __attribute__((always_inline)) int64_t first4_f64(const double *re
     const double ay12 = (double)a[9 * s];
     const double ay13 = (double)a[13 * s];
     const double ay23 = (double)a[14 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax03)), fabs(ax11)), fabs(ax12)), fabs(ax13)), fabs(ax22)), fabs(ax23)), fabs(ax33));
-    const int64_t afinite = ((((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax03 == ax03)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax13 == ax13)) & (ax22 == ax22)) & (ax23 == ax23)) & (ax33 == ax33)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -2303,8 +2333,9 @@ static inline __attribute__((always_inline)) int64_t first4_f64(const double *re
     const double by12 = (double)b[9 * s];
     const double by13 = (double)b[13 * s];
     const double by23 = (double)b[14 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx03)), fabs(bx11)), fabs(bx12)), fabs(bx13)), fabs(bx22)), fabs(bx23)), fabs(bx33));
-    const int64_t bfinite = ((((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx03 == bx03)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx13 == bx13)) & (bx22 == bx22)) & (bx23 == bx23)) & (bx33 == bx33)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -2402,8 +2433,9 @@ static inline __attribute__((always_inline)) int64_t full4_f64(const double *res
     const double ay12 = (double)a[9 * s];
     const double ay13 = (double)a[13 * s];
     const double ay23 = (double)a[14 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax03)), fabs(ax11)), fabs(ax12)), fabs(ax13)), fabs(ax22)), fabs(ax23)), fabs(ax33)), fabs(ay01)), fabs(ay02)), fabs(ay03)), fabs(ay12)), fabs(ay13)), fabs(ay23));
-    const int64_t afinite = ((((((((((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax03 == ax03)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax13 == ax13)) & (ax22 == ax22)) & (ax23 == ax23)) & (ax33 == ax33)) & (ay01 == ay01)) & (ay02 == ay02)) & (ay03 == ay03)) & (ay12 == ay12)) & (ay13 == ay13)) & (ay23 == ay23)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay03)), abs_bits(ay12)), abs_bits(ay13)), abs_bits(ay23));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -2465,8 +2497,9 @@ static inline __attribute__((always_inline)) int64_t full4_f64(const double *res
     const double by12 = (double)b[9 * s];
     const double by13 = (double)b[13 * s];
     const double by23 = (double)b[14 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx03)), fabs(bx11)), fabs(bx12)), fabs(bx13)), fabs(bx22)), fabs(bx23)), fabs(bx33)), fabs(by01)), fabs(by02)), fabs(by03)), fabs(by12)), fabs(by13)), fabs(by23));
-    const int64_t bfinite = ((((((((((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx03 == bx03)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx13 == bx13)) & (bx22 == bx22)) & (bx23 == bx23)) & (bx33 == bx33)) & (by01 == by01)) & (by02 == by02)) & (by03 == by03)) & (by12 == by12)) & (by13 == by13)) & (by23 == by23)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33)), abs_bits(by01)), abs_bits(by02)), abs_bits(by03)), abs_bits(by12)), abs_bits(by13)), abs_bits(by23));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -2592,8 +2625,9 @@ static inline __attribute__((always_inline)) int64_t third4_f64(const double *re
     const double ay12 = (double)a[9 * s];
     const double ay13 = (double)a[13 * s];
     const double ay23 = (double)a[14 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax03)), fabs(ax11)), fabs(ax12)), fabs(ax13)), fabs(ax22)), fabs(ax23)), fabs(ax33)), fabs(ay01)), fabs(ay02)), fabs(ay03)), fabs(ay12)), fabs(ay13)), fabs(ay23));
-    const int64_t afinite = ((((((((((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax03 == ax03)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax13 == ax13)) & (ax22 == ax22)) & (ax23 == ax23)) & (ax33 == ax33)) & (ay01 == ay01)) & (ay02 == ay02)) & (ay03 == ay03)) & (ay12 == ay12)) & (ay13 == ay13)) & (ay23 == ay23)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay03)), abs_bits(ay12)), abs_bits(ay13)), abs_bits(ay23));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -2655,8 +2689,9 @@ static inline __attribute__((always_inline)) int64_t third4_f64(const double *re
     const double by12 = (double)b[9 * s];
     const double by13 = (double)b[13 * s];
     const double by23 = (double)b[14 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx03)), fabs(bx11)), fabs(bx12)), fabs(bx13)), fabs(bx22)), fabs(bx23)), fabs(bx33)), fabs(by01)), fabs(by02)), fabs(by03)), fabs(by12)), fabs(by13)), fabs(by23));
-    const int64_t bfinite = ((((((((((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx03 == bx03)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx13 == bx13)) & (bx22 == bx22)) & (bx23 == bx23)) & (bx33 == bx33)) & (by01 == by01)) & (by02 == by02)) & (by03 == by03)) & (by12 == by12)) & (by13 == by13)) & (by23 == by23)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33)), abs_bits(by01)), abs_bits(by02)), abs_bits(by03)), abs_bits(by12)), abs_bits(by13)), abs_bits(by23));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -2840,8 +2875,9 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f64(const doubl
     const double ay12 = (double)a[9 * s];
     const double ay13 = (double)a[13 * s];
     const double ay23 = (double)a[14 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax03)), fabs(ax11)), fabs(ax12)), fabs(ax13)), fabs(ax22)), fabs(ax23)), fabs(ax33));
-    const int64_t afinite = ((((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax03 == ax03)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax13 == ax13)) & (ax22 == ax22)) & (ax23 == ax23)) & (ax33 == ax33)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -2875,8 +2911,9 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f64(const doubl
     const double by12 = (double)b[9 * s];
     const double by13 = (double)b[13 * s];
     const double by23 = (double)b[14 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx03)), fabs(bx11)), fabs(bx12)), fabs(bx13)), fabs(bx22)), fabs(bx23)), fabs(bx33));
-    const int64_t bfinite = ((((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx03 == bx03)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx13 == bx13)) & (bx22 == bx22)) & (bx23 == bx23)) & (bx33 == bx33)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -3012,8 +3049,9 @@ static inline __attribute__((always_inline)) int64_t first4_f32(const float *res
     const double ay12 = (double)a[9 * s];
     const double ay13 = (double)a[13 * s];
     const double ay23 = (double)a[14 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax03)), fabs(ax11)), fabs(ax12)), fabs(ax13)), fabs(ax22)), fabs(ax23)), fabs(ax33));
-    const int64_t afinite = ((((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax03 == ax03)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax13 == ax13)) & (ax22 == ax22)) & (ax23 == ax23)) & (ax33 == ax33)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -3047,8 +3085,9 @@ static inline __attribute__((always_inline)) int64_t first4_f32(const float *res
     const double by12 = (double)b[9 * s];
     const double by13 = (double)b[13 * s];
     const double by23 = (double)b[14 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx03)), fabs(bx11)), fabs(bx12)), fabs(bx13)), fabs(bx22)), fabs(bx23)), fabs(bx33));
-    const int64_t bfinite = ((((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx03 == bx03)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx13 == bx13)) & (bx22 == bx22)) & (bx23 == bx23)) & (bx33 == bx33)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -3146,8 +3185,9 @@ static inline __attribute__((always_inline)) int64_t full4_f32(const float *rest
     const double ay12 = (double)a[9 * s];
     const double ay13 = (double)a[13 * s];
     const double ay23 = (double)a[14 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax03)), fabs(ax11)), fabs(ax12)), fabs(ax13)), fabs(ax22)), fabs(ax23)), fabs(ax33)), fabs(ay01)), fabs(ay02)), fabs(ay03)), fabs(ay12)), fabs(ay13)), fabs(ay23));
-    const int64_t afinite = ((((((((((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax03 == ax03)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax13 == ax13)) & (ax22 == ax22)) & (ax23 == ax23)) & (ax33 == ax33)) & (ay01 == ay01)) & (ay02 == ay02)) & (ay03 == ay03)) & (ay12 == ay12)) & (ay13 == ay13)) & (ay23 == ay23)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay03)), abs_bits(ay12)), abs_bits(ay13)), abs_bits(ay23));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -3209,8 +3249,9 @@ static inline __attribute__((always_inline)) int64_t full4_f32(const float *rest
     const double by12 = (double)b[9 * s];
     const double by13 = (double)b[13 * s];
     const double by23 = (double)b[14 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx03)), fabs(bx11)), fabs(bx12)), fabs(bx13)), fabs(bx22)), fabs(bx23)), fabs(bx33)), fabs(by01)), fabs(by02)), fabs(by03)), fabs(by12)), fabs(by13)), fabs(by23));
-    const int64_t bfinite = ((((((((((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx03 == bx03)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx13 == bx13)) & (bx22 == bx22)) & (bx23 == bx23)) & (bx33 == bx33)) & (by01 == by01)) & (by02 == by02)) & (by03 == by03)) & (by12 == by12)) & (by13 == by13)) & (by23 == by23)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33)), abs_bits(by01)), abs_bits(by02)), abs_bits(by03)), abs_bits(by12)), abs_bits(by13)), abs_bits(by23));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -3336,8 +3377,9 @@ static inline __attribute__((always_inline)) int64_t third4_f32(const float *res
     const double ay12 = (double)a[9 * s];
     const double ay13 = (double)a[13 * s];
     const double ay23 = (double)a[14 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax03)), fabs(ax11)), fabs(ax12)), fabs(ax13)), fabs(ax22)), fabs(ax23)), fabs(ax33)), fabs(ay01)), fabs(ay02)), fabs(ay03)), fabs(ay12)), fabs(ay13)), fabs(ay23));
-    const int64_t afinite = ((((((((((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax03 == ax03)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax13 == ax13)) & (ax22 == ax22)) & (ax23 == ax23)) & (ax33 == ax33)) & (ay01 == ay01)) & (ay02 == ay02)) & (ay03 == ay03)) & (ay12 == ay12)) & (ay13 == ay13)) & (ay23 == ay23)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay03)), abs_bits(ay12)), abs_bits(ay13)), abs_bits(ay23));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -3399,8 +3441,9 @@ static inline __attribute__((always_inline)) int64_t third4_f32(const float *res
     const double by12 = (double)b[9 * s];
     const double by13 = (double)b[13 * s];
     const double by23 = (double)b[14 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx03)), fabs(bx11)), fabs(bx12)), fabs(bx13)), fabs(bx22)), fabs(bx23)), fabs(bx33)), fabs(by01)), fabs(by02)), fabs(by03)), fabs(by12)), fabs(by13)), fabs(by23));
-    const int64_t bfinite = ((((((((((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx03 == bx03)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx13 == bx13)) & (bx22 == bx22)) & (bx23 == bx23)) & (bx33 == bx33)) & (by01 == by01)) & (by02 == by02)) & (by03 == by03)) & (by12 == by12)) & (by13 == by13)) & (by23 == by23)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33)), abs_bits(by01)), abs_bits(by02)), abs_bits(by03)), abs_bits(by12)), abs_bits(by13)), abs_bits(by23));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
@@ -3584,8 +3627,9 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f32(const float
     const double ay12 = (double)a[9 * s];
     const double ay13 = (double)a[13 * s];
     const double ay23 = (double)a[14 * s];
-    const double amx = max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(ax00), fabs(ax01)), fabs(ax02)), fabs(ax03)), fabs(ax11)), fabs(ax12)), fabs(ax13)), fabs(ax22)), fabs(ax23)), fabs(ax33));
-    const int64_t afinite = ((((((((((((ax00 == ax00) & (ax01 == ax01)) & (ax02 == ax02)) & (ax03 == ax03)) & (ax11 == ax11)) & (ax12 == ax12)) & (ax13 == ax13)) & (ax22 == ax22)) & (ax23 == ax23)) & (ax33 == ax33)) & (amx <= 1.7976931348623157e+308)) & (ax00 != 0.0));
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
@@ -3619,8 +3663,9 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f32(const float
     const double by12 = (double)b[9 * s];
     const double by13 = (double)b[13 * s];
     const double by23 = (double)b[14 * s];
-    const double bmx = max2(max2(max2(max2(max2(max2(max2(max2(max2(fabs(bx00), fabs(bx01)), fabs(bx02)), fabs(bx03)), fabs(bx11)), fabs(bx12)), fabs(bx13)), fabs(bx22)), fabs(bx23)), fabs(bx33));
-    const int64_t bfinite = ((((((((((((bx00 == bx00) & (bx01 == bx01)) & (bx02 == bx02)) & (bx03 == bx03)) & (bx11 == bx11)) & (bx12 == bx12)) & (bx13 == bx13)) & (bx22 == bx22)) & (bx23 == bx23)) & (bx33 == bx33)) & (bmx <= 1.7976931348623157e+308)) & (bx00 != 0.0));
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));

@@ -27,7 +27,7 @@ from ..shapes.numbers import binary64_array
 from ..shapes.quadrics import Matrix, Stack, validate_quadric
 from . import compiled
 from .exact import classify_exact
-from .filters import classify_float
+from .filters import classify_float_counted
 from .lazy import LazyArray, is_dask_array
 
 __all__ = [
@@ -216,7 +216,7 @@ def classify(
         if codes[0] == Relation.UNDECIDED:  # kernels still loading, or the filter abstained
             _resolve(A[None], B[None], codes, np.zeros(1, np.int8), method, True, on_invalid)
         return Relation(int(codes[0]))
-    res = classify_detailed(A, B, method=method, on_invalid=on_invalid)
+    res = _classify(A, B, method, on_invalid, None, certifiers=False)
     if stats is not None:
         stats.pairs += res.relation.size
         stats.escalated += res.escalated + int(np.count_nonzero(res.relation == Relation.UNDECIDED))
@@ -252,6 +252,16 @@ def classify_detailed(
         ([1, 2], ['exact', 'float'])
     """
     check_options(method, on_invalid)
+    return _classify(A, B, method, on_invalid, progress, certifiers=True)
+
+
+def _classify(A: Any, B: Any, method: Method, on_invalid: OnInvalid, progress: Callable[[int, int], None] | None, *, certifiers: bool) -> Classification:
+    """:func:`classify_detailed`, or for :func:`classify` (``certifiers=False``) a leaner result.
+
+    :func:`classify` reads only the relations and the escalation count: when the float filter
+    decides every pair, ``certified_by`` is then a read-only broadcast of FLOAT (no pass over the
+    batch, no second array written).
+    """
     a = _as_array(A, "A")
     b = _as_array(B, "B")
     n = a.shape[-1]
@@ -269,7 +279,7 @@ def classify_detailed(
         raise ValueError(f"batch shapes {a.shape[:-2]} and {b.shape[:-2]} do not broadcast") from None
     scalar = batch_shape == ()
     codes, by, errors = _classify_flat(
-        _flatten(a, batch_shape, n), _flatten(b, batch_shape, n), method, scalar, on_invalid, progress
+        _flatten(a, batch_shape, n), _flatten(b, batch_shape, n), method, scalar, on_invalid, progress, certifiers=certifiers
     )
     return Classification(codes.reshape(batch_shape), by.reshape(batch_shape), errors)
 
@@ -299,13 +309,17 @@ def _classify_flat(
     scalar: bool,
     on_invalid: str,
     progress: Callable[[int, int], None] | None = None,
+    *,
+    certifiers: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
-    """Codes, certifiers and invalid reasons for (N, n, n) stacks."""
+    """Codes, certifiers and invalid reasons for (N, n, n) stacks (``certifiers``: see :func:`_classify`)."""
     N = a.shape[0]
     if method != "exact" and a.dtype.kind == "f" and b.dtype.kind == "f":
         if a.dtype != b.dtype:  # float32 against float64: widen (exact)
             a, b = a.astype(np.float64), b.astype(np.float64)
-        codes = classify_float(a, b, scalar=scalar)
+        codes, all_decided = classify_float_counted(a, b, scalar=scalar)
+        if all_decided and not certifiers:  # the usual case: nothing left, nothing to record
+            return codes, np.broadcast_to(np.int8(Certifier.FLOAT), codes.shape), {}
         by = (codes != Relation.UNDECIDED).view(np.int8)  # Certifier.FLOAT is 1, NONE 0
     else:
         codes = np.full(N, Relation.UNDECIDED, dtype=np.int8)

@@ -131,13 +131,9 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False) -
     # the fast pass reads the upper triangle for the scale and the finiteness: a lower entry
     # that differs (NaN included) makes the matrix not exactly symmetric, left to the full pass
     values = [*X.values()] if exact_only else [*X.values(), *Y.values()]
-    nan_free = values[0] == values[0]
-    mx = x.abs(values[0])
-    for v in values[1:]:
-        nan_free = nan_free & (v == v)
-        mx = x.max(mx, x.abs(v))
+    mx, all_finite = x.abs_max_finite(f"{tag}mx", values)
     mx = x.let(f"{tag}mx", mx)
-    finite = x.let(f"{tag}finite", nan_free & (mx <= _DBL_MAX) & (X[0, 0] != 0.0))
+    finite = x.let(f"{tag}finite", all_finite & (X[0, 0] != 0.0))
     in_range = (mx >= float(NO_SCALE_MIN)) & (mx <= float(LEAF_MAX))
     e = x.frexp_exponent(x.where(finite, mx, 1.0))
     k = x.let(f"{tag}k", x.where(in_range, x.integer(0, mx), x.imin(x.imax(1 - e, -1022), 2044)))

@@ -46,6 +46,7 @@ from .lanes import NumpyLanes
 
 __all__ = [
     "classify_float",
+    "classify_float_counted",
     "rules_float",
     "rules_numpy",
     "classify_float_numpy",
@@ -310,8 +311,18 @@ def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False, thread
     Returns:
         int8 codes of :class:`Relation`, shape (N,). Never a wrong label.
     """
+    return classify_float_counted(a, b, scalar=scalar, threads=threads)[0]
+
+
+def classify_float_counted(a: np.ndarray, b: np.ndarray, *, scalar: bool = False, threads: int | None = None) -> tuple[np.ndarray, bool]:
+    """:func:`classify_float` and whether every pair is decided.
+
+    True: no UNDECIDED code, known without a pass over the codes (the compiled kernels count the
+    pairs they leave); False: some may be undecided.
+    """
     if not compiled.available():
-        return relations(rules_float(a, b, scalar=scalar, threads=threads))
+        codes = relations(rules_float(a, b, scalar=scalar, threads=threads))
+        return codes, False
     # the compiled kernels write the relation codes directly and count the undecided pairs
     codes, undecided = compiled.mapped(a, b, _RELATION_OF, threads=threads)
     if not scalar and undecided:
@@ -319,4 +330,4 @@ def classify_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False, thread
         for s in range(0, idx.size, _CHUNK):
             part = idx[s : s + _CHUNK]
             codes[part] = relations(classify_translated(a[part].astype(np.float64), b[part].astype(np.float64)))
-    return codes
+    return codes, undecided == 0

@@ -436,6 +436,19 @@ static inline int64_t frexp_exponent(double v) {
 }
 
 static inline double max2(double a, double b) { return a > b ? a : b; }
+
+/* |v| as an integer (its bits without the sign): ordered as the doubles for finite v, above
+ * every finite value for inf and NaN; from_bits reads such an integer back as a double. */
+static inline int64_t abs_bits(double v) {
+    uint64_t bits;
+    memcpy(&bits, &v, 8);
+    return (int64_t)(bits & 0x7fffffffffffffffULL);
+}
+static inline double from_bits(int64_t b) {
+    double v;
+    memcpy(&v, &b, 8);
+    return v;
+}
 static inline int64_t imin2(int64_t a, int64_t b) { return a < b ? a : b; }
 static inline int64_t imax2(int64_t a, int64_t b) { return a > b ? a : b; }
 
