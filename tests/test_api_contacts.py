@@ -149,3 +149,16 @@ def test_contacts_over_the_time_budget_is_503_saying_where():
         r"stopped after [\d,]+ of [\d,]+ pairs to examine: over the time budget of 0\.02 s per request; "
         r"send fewer bodies per request", detail
     ) or detail == killed, detail
+
+
+def test_a_body_too_far_from_the_origin_for_its_size_is_refused_not_mislabelled(client):
+    """Unit circles 2 apart are tangent wherever they are; at x = 1e12 their float64 matrices were
+    overlapping shapes (reported "overlap", certified for those matrices) and at x = 1e8 a
+    "degenerate ellipse". Now: tangent up to 2^26 times the semi-axis, a clear refusal beyond."""
+    for x in (1e6, 2.0**26 - 2):
+        r = client.post("/api/contacts", json={"bodies": [[x, 0, 1, 1, 0], [x + 2, 0, 1, 1, 0]]})
+        assert r.status_code == 200 and [p["relation"] for p in r.json()["pairs"]] == ["tangent"], (x, r.text)
+    for x in (1e8, 1e12):
+        r = client.post("/api/contacts", json={"bodies": [[x, 0, 1, 1, 0], [x + 2, 0, 1, 1, 0]]})
+        assert r.status_code == 422, (x, r.text)
+        assert "is more than 2^26 times the smallest semi-axis (1.0) from the origin" in r.text, r.text

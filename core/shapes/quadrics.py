@@ -218,6 +218,14 @@ def _axes_arrays(centers: Any, semi_axes: Any, orientations: Any) -> tuple[np.nd
     return c, r, o
 
 
+FAR_FROM_ORIGIN = 2.0**26
+"""A float shape whose centre is farther from the origin than this many times its smallest
+semi-axis is refused: the constant term of its matrix, c^T S c - 1 with |S| ~ 1/a^2, rounds by up to
+2^-53 (|c|/a)^2, which here reaches the size of the shape itself (unit circles 2 apart at x = 1e12
+became one overlapping pair, at x = 1e8 a "degenerate ellipse"). Below it the matrix is the float
+rounding of the shape, as everywhere; exact parameters (``exact=True``) have no such limit."""
+
+
 def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, first: bool = False) -> dict[int, str]:
     """Row -> why those parameters are no shape (the checks of :func:`quadrics_from_axes`).
 
@@ -241,6 +249,10 @@ def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, f
         (~(np.isfinite(c).all(axis=1) & np.isfinite(r).all(axis=1)),
          lambda k: f"centre and semi-axes must be finite numbers, got {c[k].tolist()} and {r[k].tolist()}"),
         (~(r > 0).all(axis=1), lambda k: f"semi-axes must be positive, got {r[k].tolist()}"),
+        (np.abs(c).max(axis=1, initial=0.0) > FAR_FROM_ORIGIN * r.min(axis=1, initial=np.inf),
+         lambda k: f"centre {c[k].tolist()} is more than 2^26 times the smallest semi-axis ({float(r[k].min())!r}) from "
+                   "the origin: the float64 matrix would not be this shape (its constant term rounds by as much as "
+                   "the shape's own size); place the origin nearer the bodies"),
     ]
     if o is not None and o.ndim == 1:
         checks.append((~np.isfinite(o), lambda k: "orientation angle must be finite"))
