@@ -82,10 +82,10 @@ def test_numbers_must_be_json_floats(client):
 
 
 def test_integers_are_taken_when_they_are_float64_values(client):
-    """2^55 + 2^31 is exactly a float64 (taken: the same answer as the float); 2^53 + 1 is not
-    (refused, never rounded to a neighbour). Two circles of radius 2^30 whose centres, beyond
-    2^53, are 2^31 apart: tangent."""
-    x, r = 2**55, 2**30
+    """2^55 + 2^37 is exactly a float64 (taken: the same answer as the float); 2^53 + 1 is not
+    (refused, never rounded to a neighbour). Two circles of radius 2^36 whose centres, beyond
+    2^53, are 2^37 apart: tangent."""
+    x, r = 2**55, 2**36
     rows = [[x, 0, r, r, 0], [x + 2 * r, 0, r, r, 0]]
     as_int = client.post("/api/contacts", json={"bodies": rows})
     as_float = client.post("/api/contacts", json={"bodies": [[float(v) for v in row] for row in rows]})
@@ -158,7 +158,7 @@ def test_a_body_too_far_from_the_origin_for_its_size_is_refused_not_mislabelled(
     for x in (1e6, 2.0**26 - 2):
         r = client.post("/api/contacts", json={"bodies": [[x, 0, 1, 1, 0], [x + 2, 0, 1, 1, 0]]})
         assert r.status_code == 200 and [p["relation"] for p in r.json()["pairs"]] == ["tangent"], (x, r.text)
-    for x in (1e8, 1e12):
+    for x in (2.0**26 + 1, 1e8, 1e12):
         r = client.post("/api/contacts", json={"bodies": [[x, 0, 1, 1, 0], [x + 2, 0, 1, 1, 0]]})
         assert r.status_code == 422, (x, r.text)
         assert "is more than 2^26 times the smallest semi-axis (1.0) from the origin" in r.text, r.text

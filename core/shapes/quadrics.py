@@ -220,10 +220,13 @@ def _axes_arrays(centers: Any, semi_axes: Any, orientations: Any) -> tuple[np.nd
 
 FAR_FROM_ORIGIN = 2.0**26
 """A float shape whose centre is farther from the origin than this many times its smallest
-semi-axis is refused: the constant term of its matrix, c^T S c - 1 with |S| ~ 1/a^2, rounds by up to
-2^-53 (|c|/a)^2, which here reaches the size of the shape itself (unit circles 2 apart at x = 1e12
-became one overlapping pair, at x = 1e8 a "degenerate ellipse"). Below it the matrix is the float
-rounding of the shape, as everywhere; exact parameters (``exact=True``) have no such limit."""
+semi-axis is refused. The constant term of its matrix, c^T S c - 1 with |S| ~ 1/a^2, rounds by a
+few times 2^-53 (|c|/a)^2 relative to the shape's size, which from here on reaches the size of the
+shape itself: the matrix may be any shape or none (unit circles 2 apart at x = 1e12 became one
+overlapping pair, at x = 1e8 a "degenerate ellipse"). Below it the label is certified for the
+float matrix, which is the shape to within that relative error (ill-conditioned bodies, such as a
+1e-6 sphere at (5, 5, 5), stay accepted: their bounding spheres go to exact arithmetic); exact
+parameters (``exact=True``) have no such limit."""
 
 
 def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, first: bool = False) -> dict[int, str]:
