@@ -162,7 +162,8 @@ def _forget_pool_in_child() -> None:
     _state["pool"] = None
 
 
-os.register_at_fork(after_in_child=_forget_pool_in_child)
+if hasattr(os, "register_at_fork"):  # POSIX; Windows has no fork
+    os.register_at_fork(after_in_child=_forget_pool_in_child)
 
 
 def _contiguous(a: np.ndarray) -> np.ndarray:
