@@ -4,7 +4,7 @@
  *   N          3 (ellipses) or 4 (ellipsoids)
  *   T          double or float (float is widened exactly: certified for the float values given)
  *   FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
- *   TRANSPOSE8_T   the 8 x 8 transpose for T (when the compiler has vector shuffles)
+ *   TP, TRANSPOSE_T   pairs per transpose for T (8, 4, or 0: element by element) and the TP x TP transpose
  *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
  *              rule id of each pair (-1 undecided) to out, or table[rule id as a byte] when table
  *              is not NULL (the relation codes: no second pass over the output in Python), and
@@ -114,14 +114,14 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
         const char *pf_a = (const char *)(A + (i0 + PF_DIST * CHUNK) * N * N), *pf_b = (const char *)(B + (i0 + PF_DIST * CHUNK) * N * N);
 #endif
         PREFETCH(0)
-#ifdef HAVE_TRANSPOSE8
-        for (; done + 8 <= m; done += 8) { /* 8 pairs at a time, 8 entries per shuffle network */
-            for (int e = 0; e + 8 <= N * N; e += 8) {
-                TRANSPOSE8_T(A + (i0 + done) * N * N + e, N * N, a + e * CHUNK + done, CHUNK);
-                TRANSPOSE8_T(B + (i0 + done) * N * N + e, N * N, b + e * CHUNK + done, CHUNK);
+#if TP > 0
+        for (; done + TP <= m; done += TP) { /* TP pairs at a time, TP entries per shuffle network */
+            for (int e = 0; e + TP <= N * N; e += TP) {
+                TRANSPOSE_T(A + (i0 + done) * N * N + e, N * N, a + e * CHUNK + done, CHUNK);
+                TRANSPOSE_T(B + (i0 + done) * N * N + e, N * N, b + e * CHUNK + done, CHUNK);
             }
-            for (int64_t p = done; p < done + 8; p++)
-                for (int e = N * N / 8 * 8; e < N * N; e++) {
+            for (int64_t p = done; p < done + TP; p++)
+                for (int e = N * N / TP * TP; e < N * N; e++) {
                     a[e * CHUNK + p] = A[(i0 + p) * N * N + e];
                     b[e * CHUNK + p] = B[(i0 + p) * N * N + e];
                 }
