@@ -41,7 +41,7 @@ class _SharedScene:
             from app.scene.state import SceneConfig
             from app.screenshot import HeadlessScene
 
-            scene = HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1300, height=950, timeout=90)
+            scene = HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1000, height=720, timeout=90)
             self.scene = scene.__enter__()
         return self.scene
 

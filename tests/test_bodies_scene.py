@@ -317,7 +317,7 @@ def bodies_page(demo_file):
     from app.screenshot import HeadlessScene
 
     m = load_model(str(demo_file))
-    with HeadlessScene(SceneConfig(), bodies=m, width=1300, height=950, timeout=120) as hs:
+    with HeadlessScene(SceneConfig(), bodies=m, width=1000, height=720, timeout=120) as hs:
         yield hs, m
 
 

@@ -305,14 +305,15 @@ def test_dragging_a_gizmo_certifies_the_shape_the_fields_show(headless_scene):
     B and the readout name the certified relation, and the fields show B's new centre exactly
     (decimals, no "≈") with the exact oracle on that text equal to the readout."""
     hs = headless_scene
-    cfg = {"preset": None, "A": {"center": ["0", "0", "0"], "semi_axes": ["1", "1", "1"]},
-           "B": {"center": ["3", "0", "0"], "semi_axes": ["1", "1", "1"]}}
+    # B left of A: its +x arrow points at A, in the middle of the canvas (not under the GUI panel)
+    cfg = {"preset": None, "A": {"center": ["3", "0", "0"], "semi_axes": ["1", "1", "1"]},
+           "B": {"center": ["0", "0", "0"], "semi_axes": ["1", "1", "1"]}}
     s = hs.goto(link_path(cfg))
     page = hs.page
     d = Driver(hs, random.Random(0))
     d.open_shape_folders()
     assert readout_relation(page) == "separate"
-    pts = page.evaluate(ARROW_JS, ["/shapes/B", -1.6])
+    pts = page.evaluate(ARROW_JS, ["/shapes/B", 1.6])
     assert pts is not None, "no gizmo arrow on B"
     page.mouse.move(*pts["from"])
     page.mouse.down()
@@ -321,11 +322,11 @@ def test_dragging_a_gizmo_certifies_the_shape_the_fields_show(headless_scene):
         y = pts["from"][1] + (pts["to"][1] - pts["from"][1]) * k / 10
         page.mouse.move(x, y)
     page.mouse.up()
-    until(lambda: s.state.shapes["B"].center[0] < 2, what="B dragged towards A")
+    until(lambda: s.state.shapes["B"].center[0] > 1, what="B dragged towards A")
     d.log.append("drag B")
     d.check()  # fields exact, oracle on their text = readout
     centre = field_text(page, s.ui.shapes["B"].fields["center"])
-    assert not centre.startswith("≈") and float(numbers(centre)[0]) < 2, centre
+    assert not centre.startswith("≈") and float(numbers(centre)[0]) > 1, centre
     assert readout_relation(page) == "overlap"
     assert s.views["B"].label.text == "B · overlap"  # the label sent to the page (viser keeps no ref to read it back)
     np.testing.assert_allclose(hs.drawn_pose("B")[:3], [float(v) for v in numbers(centre)], atol=1e-12)  # drawn as shown

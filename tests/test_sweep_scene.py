@@ -388,7 +388,7 @@ def sweep_page(scene_files):
     from app.screenshot import HeadlessScene
 
     m = SweepModel(read_moving_bodies(str(scene_files[0]), str(scene_files[1])))
-    with HeadlessScene(SceneConfig(), bodies=m, width=1300, height=950, timeout=120) as hs:
+    with HeadlessScene(SceneConfig(), bodies=m, width=1000, height=720, timeout=120) as hs:
         yield hs, m
 
 
