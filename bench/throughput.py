@@ -118,6 +118,14 @@ def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -
     rows: list[dict[str, Any]] = []
     random_rate: dict[int, float] = {}
     random_data: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    chosen = compiled.variant()
+
+    def using(v: str | None, A: np.ndarray, B: np.ndarray) -> None:
+        """classify on the SIMD variant v (the other variants run in the same rounds)."""
+        if v is not None:
+            compiled.select(v)
+        core.classify(A, B)
+
     for dim in (3, 2):
         ds = D.random_pairs(dim, n_lab, seed=11)
         A, B = _tile(ds, size)
@@ -129,15 +137,19 @@ def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -
             with _one_cpu():
                 core.set_threads(1)
                 fns = {
-                    "certified": lambda A=A, B=B: core.classify(A, B),
-                    "float32": lambda A=A32, B=B32: core.classify(A, B),
+                    "certified": lambda A=A, B=B: using(chosen, A, B),
+                    "float32": lambda A=A32, B=B32: using(chosen, A, B),
                     "baseline": lambda A=A, B=B: baseline.baseline_codes(A, B),
                     "read": lambda A=A, B=B: baseline.read_all(A, B),
+                    # every SIMD variant this CPU runs (a CPU without AVX-512 runs avx2)
+                    **{f"variant {v}": (lambda v=v, A=A, B=B: using(v, A, B)) for v in compiled.variants() if v != chosen},
                 }
                 for key, rate in _rounds(fns, size, 1).items():
                     one[key] = max(one.get(key, 0.0), rate)
                 for key, rate in _rounds(fns, size, 1, clock=time.process_time).items():
                     cpu[key] = max(cpu.get(key, 0.0), rate)
+                if chosen is not None:
+                    compiled.select(chosen)
             core.set_threads(None)
             for key, rate in _rounds({
                 "certified": lambda A=A, B=B: core.classify(A, B),
@@ -151,7 +163,8 @@ def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -
         random_data[dim] = (A, B)
         rows.append({"kind": "random", "dim": dim, "all": every["certified"], "one": one["certified"],
                      "baseline": one["baseline"], "read": one["read"], "f32_one": one["float32"], "f32_all": every["float32"],
-                     "baseline_right": agree, "f32_right": right32, "cores": cores, "cpu": cpu})
+                     "baseline_right": agree, "f32_right": right32, "cores": cores, "cpu": cpu,
+                     "variants": {k.split(" ", 1)[1]: v for k, v in one.items() if k.startswith("variant ")}})
         log(f"# random {dim}D: one core {one['certified'] / 1e6:.1f} M/s = {one['certified'] / one['baseline']:.2f}x the C tree "
             f"({one['baseline'] / 1e6:.1f}); all cores {every['certified'] / 1e6:.1f} = {every['certified'] / one['read']:.2f} of the "
             f"read ({one['read'] / 1e6:.0f}); float32 {one['float32'] / 1e6:.1f} / {every['float32'] / 1e6:.1f}")
@@ -247,6 +260,13 @@ def format_throughput(tp: dict[str, Any]) -> str:
         if c:
             L.append(f"| random {r['dim']}D | {1e9 / c['certified']:.0f} ms per 1 M pairs | {1e9 / c['baseline']:.0f} ms | "
                      f"{c['certified'] / c['baseline']:.2f}x | {1e9 / c['read']:.0f} ms | {1e9 / c['float32']:.0f} ms |")
+    if any(r.get("variants") for r in tp["rows"]):
+        L.append(f"\nThe other SIMD variants this CPU runs, on one core in the same rounds (what a CPU without the "
+                 f"{tp['variant']} instructions gets; `ELLIPSOID_SIMD=<variant>` chooses one at import):\n")
+        L.append("| data | variant | certified, one core | ratio to the C tree |\n|---|---|---:|---:|")
+        for r in tp["rows"]:
+            for v, rate in r.get("variants", {}).items():
+                L.append(f"| random {r['dim']}D | {v} | {rate / 1e6:.2f} M/s | {rate / r['baseline']:.2f}x |")
     L.append("\n| structured data | pairs/s (every core) | vs random | escalated to exact | wrong |\n|---|---:|---:|---:|---:|")
     for s in tp["structured"]:
         L.append(f"| {s['name']} | {s['rate'] / 1e6:.2f} M/s | {s['ratio']:.2f}x | {s['escalated']} / {s['n']} | {s['wrong']} |")
