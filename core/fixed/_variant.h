@@ -82,7 +82,6 @@ typedef int v8i32 __attribute__((vector_size(32)));
     }
 TRANSPOSE8(transpose8_f64, double, v8d, D)
 TRANSPOSE8(transpose8_f32, float, v8f, F)
-
 #endif
 #define TRANSPOSE_NAME_(tp, type) transpose##tp##_##type
 #define TRANSPOSE_NAME(tp, type) TRANSPOSE_NAME_(tp, type)
