@@ -4,7 +4,7 @@
  *   N          3 (ellipses) or 4 (ellipsoids)
  *   T          double or float (float is widened exactly: certified for the float values given)
  *   FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
- *   TP, TRANSPOSE_T   pairs per transpose for T (8, 4, or 0: element by element) and the TP x TP transpose
+ *   TP, TRANSPOSE_T   pairs per transpose for T (8, or 0: element by element) and the TP x TP transpose
  *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
  *              rule id of each pair (-1 undecided) to out, or table[rule id as a byte] when table
  *              is not NULL (the relation codes: no second pass over the output in Python), and
