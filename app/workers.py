@@ -31,7 +31,29 @@ from typing import TYPE_CHECKING, Any, cast
 if TYPE_CHECKING:
     from multiprocessing.context import ForkContext, ForkServerContext, SpawnContext
 
-__all__ = ["WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerStopped", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
+__all__ = ["JOB_MODULES", "WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerStopped", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
+
+JOB_MODULES: tuple[str, ...] = (
+    "core",
+    "core.moving.analysis",
+    "core.witness",
+    "app.jobs",
+    "app.api.convert",
+    "app.api.witness_out",
+    "app.api.contacts_schemas",
+    "app.api.sweep_schemas",
+    "app.api.limits",
+    "app.scene.motion",
+    "core.moving._sweep_filter",
+)
+"""What the fork server imports once, for every job of :mod:`app.jobs` and its arguments.
+
+One list for the process, not one per pool: multiprocessing has one fork server per process,
+started by the first pool that runs a job, and it ignores a later pool's preload. When the
+scene's pool came first, each API job imported FastAPI, pydantic and the witness code again
+in its child (~0.7 s of CPU per request). A module that cannot be imported is skipped by the
+fork server (the compiled sweep filter of an install without it). tests/test_workers.py runs
+every job in a process that imported only these and fails if one needs more."""
 
 _POLL_S = 0.1
 """How often a waiting caller checks the budget, the child and the cancel event."""
@@ -149,7 +171,6 @@ class WorkerPool:
         max_jobs: jobs that may run at the same time.
         memory_mb: address-space limit of each child (None: none).
         start_method: multiprocessing start method ("forkserver" where available).
-        preload: modules the fork server imports once, so children start warm.
         max_waiting: callers that may wait for a slot (first come, first served); one more is
             refused at once. 0: refuse whenever every slot is taken.
         max_wait_s: longest wait in the queue before :class:`WorkerBusy`.
@@ -171,7 +192,6 @@ class WorkerPool:
         *,
         memory_mb: int | None = None,
         start_method: str | None = None,
-        preload: tuple[str, ...] = ("core",),
         max_waiting: int = 0,
         max_wait_s: float = 10.0,
     ) -> None:
@@ -179,8 +199,8 @@ class WorkerPool:
             start_method = "forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn"
         # every context get_context returns for a method name has .Process (typeshed's BaseContext has not)
         self._ctx = cast("ForkServerContext | SpawnContext | ForkContext", mp.get_context(start_method))
-        if start_method == "forkserver" and preload:
-            self._ctx.set_forkserver_preload(list(preload))
+        if start_method == "forkserver":  # children start warm: see JOB_MODULES
+            self._ctx.set_forkserver_preload(list(JOB_MODULES))
         self._memory_mb = memory_mb
         self._running: set[Any] = set()
         self._lock = threading.Lock()

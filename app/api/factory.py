@@ -46,7 +46,6 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     workers = WorkerPool(
         settings.max_concurrent_analyses,
         memory_mb=settings.memory_limit_mb,
-        preload=("core", "core.moving.analysis", "core.witness", "app.jobs", "app.api.convert", "app.api.witness_out"),
         max_waiting=settings.max_queued_analyses,
         max_wait_s=settings.queue_wait_s,
     )

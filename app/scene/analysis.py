@@ -1,7 +1,7 @@
 """The exact analysis of a loaded motion, run off the GUI thread and shown by the timeline.
 
 :class:`AnalysisCache` runs ``core.analyse`` once per motion and interval, in worker processes
-(:class:`app.workers.WorkerPool`, whose fork server preloads ``core`` and :mod:`app.jobs`:
+(:class:`app.workers.WorkerPool`, whose fork server preloads :data:`app.workers.JOB_MODULES`:
 a job starts in milliseconds), and shares the results among the tabs of a server. The result
 is ``core``'s own :class:`~core.moving.result.MotionAnalysis`, pickled back unchanged;
 :class:`AnalysisView` adds only what drawing needs (floats of the event times, the window of the
@@ -279,8 +279,8 @@ class AnalysisCache:
     """Analyses by motion key, shared by the tabs of one server; each runs once, off the GUI thread.
 
     With ``processes=True`` each analysis (and each typed motion's reading) runs in a child
-    process of a :class:`app.workers.WorkerPool` (forkserver with ``core`` and
-    :mod:`app.jobs` preloaded; killed after its budget), so a long exact computation never
+    process of a :class:`app.workers.WorkerPool` (forkserver with :data:`app.workers.JOB_MODULES`
+    preloaded; killed after its budget), so a long exact computation never
     holds the GIL of the process serving the tabs. Otherwise it runs in a worker thread.
     """
 
@@ -310,7 +310,7 @@ class AnalysisCache:
         if processes:
             from app.workers import WorkerPool
 
-            self._pool = WorkerPool(2, memory_mb=memory_mb, preload=("core", "core.moving.analysis", "app.jobs"))
+            self._pool = WorkerPool(2, memory_mb=memory_mb)
 
     def warm(self) -> None:
         """Start the worker pool's fork server now, in the background.
