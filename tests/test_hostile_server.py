@@ -390,8 +390,10 @@ def test_sigterm_with_heavy_work_in_flight_answers_503_and_exits_within_5_s():
             want = (min(k + 1, 2), max(k - 1, 0))
             wait_until(lambda want=want: (lambda h: (h["analyses_running"], h["analyses_waiting"]))(health(s)) == want,
                        f"{name} in place")
+        # the two API jobs, once the scene's start-up jobs (warm-up, preset prefetch) under the
+        # same fork server are done
+        wait_until(lambda: len(job_processes(s.proc.pid)) == 2, "only the two API jobs running")
         below = descendants(s.proc.pid)
-        assert len(job_processes(s.proc.pid)) == 2
         t0 = time.monotonic()
         s.proc.send_signal(signal.SIGTERM)
         s.proc.wait(30)
