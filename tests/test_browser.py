@@ -14,6 +14,7 @@ import os
 import numpy as np
 import pytest
 
+from app.scene.links import link_path
 from app.scene.state import SceneConfig
 
 pytestmark = [
@@ -67,56 +68,57 @@ def input_with_value(page, value: str):
     return page.locator("input").nth(idx)
 
 
-@pytest.fixture(scope="module")
-def headless():
-    from app.screenshot import HeadlessScene
+@pytest.fixture
+def headless(headless_scene):
+    """Open a configuration in the session's shared scene and tab (tests/conftest.py); return it."""
 
-    return HeadlessScene
+    def open_on(config: SceneConfig):
+        headless_scene.goto(link_path(config))
+        return headless_scene
+
+    return open_on
 
 
 def test_scene_loads_and_typing_a_centre_changes_colour(headless, tmp_path):
-    with headless(static_config("4"), width=1200, height=800, timeout=60) as hs:
-        assert hs.session.state.relation == "separate"
-        assert hs.mesh_color("A") == hs.mesh_color("B") == HEX["separate"]
-        assert dominant_hue_share(hs.canvas_pixels(), HUE["separate"]) > 0.8
-        page = hs.page
-        page.get_by_text("Shape B", exact=True).click()
-        box = input_with_value(page, "4, 0, 0")  # viser's text labels are not tied to their inputs
-        box.fill("2.5, 0, 0")
-        box.press("Enter")
-        page.wait_for_function(
-            "() => { const r = window.__viserMutable.nodeRefFromName['/shapes/B/mesh']; let h = null;"
-            " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
-            f" return h === '{HEX['overlap']}'; }}"
-        )
-        assert hs.session.state.relation == "overlap"
-        hs.wait_settled()
-        assert dominant_hue_share(hs.canvas_pixels(), HUE["overlap"]) > 0.8
-        box.fill("3, 0, 0")  # exactly tangent: 2 + 1
-        box.press("Enter")
-        page.wait_for_function(
-            "() => { const r = window.__viserMutable.nodeRefFromName['/shapes/B/mesh']; let h = null;"
-            " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
-            f" return h === '{HEX['tangent']}'; }}"
-        )
-        assert "TANGENT" in hs.session.ui.readout.content
-        hs.save(tmp_path / "typed.png")
+    hs = headless(static_config("4"))
+    assert hs.session.state.relation == "separate"
+    assert hs.mesh_color("A") == hs.mesh_color("B") == HEX["separate"]
+    assert dominant_hue_share(hs.canvas_pixels(), HUE["separate"]) > 0.8
+    page = hs.page
+    page.get_by_text("Shape B", exact=True).click()
+    box = input_with_value(page, "4, 0, 0")  # viser's text labels are not tied to their inputs
+    box.fill("2.5, 0, 0")
+    box.press("Enter")
+    page.wait_for_function(
+        "() => { const r = window.__viserMutable.nodeRefFromName['/shapes/B/mesh']; let h = null;"
+        " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
+        f" return h === '{HEX['overlap']}'; }}"
+    )
+    assert hs.session.state.relation == "overlap"
+    hs.wait_settled()
+    assert dominant_hue_share(hs.canvas_pixels(), HUE["overlap"]) > 0.8
+    box.fill("3, 0, 0")  # exactly tangent: 2 + 1
+    box.press("Enter")
+    page.wait_for_function(
+        "() => { const r = window.__viserMutable.nodeRefFromName['/shapes/B/mesh']; let h = null;"
+        " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
+        f" return h === '{HEX['tangent']}'; }}"
+    )
+    assert "TANGENT" in hs.session.ui.readout.content
+    hs.save(tmp_path / "typed.png")
 
 
 def test_two_tabs_have_their_own_shapes(headless):
-    with headless(static_config("4"), width=900, height=600, timeout=60) as hs:
-        second = hs.page.context.new_page()
-        second.goto(hs.page.url)
-        deadline = 60
-        second.wait_for_function(
-            "() => window.__viserMutable?.nodeRefFromName?.['/shapes/B/mesh'] != null", timeout=deadline * 1000
-        )
-        sessions = list(hs.scene.sessions.values())
-        assert len(sessions) == 2
-        first, other = (s for s in sessions)
+    hs = headless(static_config("4"))
+    second = hs.page.context.new_page()
+    try:
+        first, other = hs.session, hs.goto(link_path(static_config("4")), page=second)
+        second.wait_for_function("() => window.__viserMutable?.nodeRefFromName?.['/shapes/B/mesh'] != null", timeout=60_000)
+        assert first is not other and len(hs.server_clients()) >= 2
         first.set_shape("B", center="1, 0, 0")
         assert first.state.relation == "overlap"
         assert other.state.relation == "separate"
+    finally:
         second.close()
 
 
@@ -143,78 +145,58 @@ def wait_colour(page, relation: str, node: str = "/shapes/A/mesh") -> None:
 def test_example_29_colours(headless):
     """Paper, Example 29: separate on [0, alpha1), overlap on (alpha1, alpha2), tangent at alpha1."""
     cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.3, "gizmos": False, "show_plots": False})
-    with headless(cfg, width=1000, height=700, timeout=60) as hs:
-        steps = [
-            (None, "separate"),  # t = 0.3 from the configuration
-            (lambda: hs.session.set_t(0.7), "overlap"),
-            (lambda: hs.page.get_by_role("button", name="Jump to α1", exact=False).click(), "tangent"),
-        ]
-        for act, relation in steps:
-            if act is not None:
-                act()
-            wait_colour(hs.page, relation)
-            wait_colour(hs.page, relation, "/shapes/B/mesh")
-            assert hs.session.state.relation == relation
-            hs.wait_settled()
-            assert dominant_hue_share(hs.canvas_pixels(), HUE[relation]) > 0.7, relation
-        assert abs(hs.session.state.t - T_TANGENT) < 1e-12 and hs.session.state.event == 1
-
-
-@pytest.mark.skipif(not _preset_available("example-29"), reason="core.moving.presets has no example-29 yet")
-def test_screenshot_command_contract(tmp_path):
-    """``python -m app screenshot --preset example-29 --t 0.7 --out shot.png`` writes the PNG."""
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    out = tmp_path / "shot.png"
-    root = Path(__file__).resolve().parents[1]
-    r = subprocess.run(
-        [sys.executable, "-m", "app", "screenshot", "--preset", "example-29", "--t", "0.7", "--out", str(out),
-         "--width", "800", "--height", "600"],
-        check=False, cwd=root, capture_output=True, text=True, timeout=180,
-    )
-    assert r.returncode == 0, r.stderr
-    data = out.read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    assert int.from_bytes(data[16:20], "big") == 800 and int.from_bytes(data[20:24], "big") == 600
+    hs = headless(cfg)
+    steps = [
+        (None, "separate"),  # t = 0.3 from the configuration
+        (lambda: hs.session.set_t(0.7), "overlap"),
+        (lambda: hs.page.get_by_role("button", name="Jump to α1", exact=False).click(), "tangent"),
+    ]
+    for act, relation in steps:
+        if act is not None:
+            act()
+        wait_colour(hs.page, relation)
+        wait_colour(hs.page, relation, "/shapes/B/mesh")
+        assert hs.session.state.relation == relation
+        hs.wait_settled()
+        assert dominant_hue_share(hs.canvas_pixels(), HUE[relation]) > 0.7, relation
+    assert abs(hs.session.state.t - T_TANGENT) < 1e-12 and hs.session.state.event == 1
 
 
 @pytest.mark.skipif(not _preset_available("example-29"), reason="core.moving.presets has no example-29 yet")
 def test_analysis_shows_intervals_and_jump_to_event(headless):
     cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.2, "gizmos": False})
-    with headless(cfg, width=1200, height=900, timeout=60) as hs:
-        an = hs.session.state.analysis
-        assert [s[2] for s in an.segments] == ["separate", "overlap", "separate"]
-        assert len(an.events) == 2
-        assert abs(an.events[0].t - T_TANGENT) < 1e-9
-        assert abs(an.events[1].t - (12 + 2 * math.sqrt(2)) / 17) < 1e-9
-        bar = hs.page.locator("svg rect")
-        assert bar.count() == 3
-        fills = [bar.nth(i).get_attribute("fill") for i in range(3)]
-        assert fills == [HEX["separate"], HEX["overlap"], HEX["separate"]]
-        hs.page.get_by_role("button", name="Jump to α2", exact=False).click()
-        hs.page.wait_for_function(
-            "() => { const r = window.__viserMutable.nodeRefFromName['/shapes/A/mesh']; let h = null;"
-            " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
-            f" return h === '{HEX['tangent']}'; }}"
-        )
-        assert hs.session.state.event == 2
+    hs = headless(cfg)
+    an = hs.session.state.analysis
+    assert [s[2] for s in an.segments] == ["separate", "overlap", "separate"]
+    assert len(an.events) == 2
+    assert abs(an.events[0].t - T_TANGENT) < 1e-9
+    assert abs(an.events[1].t - (12 + 2 * math.sqrt(2)) / 17) < 1e-9
+    bar = hs.page.locator("svg rect")
+    assert bar.count() == 3
+    fills = [bar.nth(i).get_attribute("fill") for i in range(3)]
+    assert fills == [HEX["separate"], HEX["overlap"], HEX["separate"]]
+    hs.page.get_by_role("button", name="Jump to α2", exact=False).click()
+    hs.page.wait_for_function(
+        "() => { const r = window.__viserMutable.nodeRefFromName['/shapes/A/mesh']; let h = null;"
+        " r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
+        f" return h === '{HEX['tangent']}'; }}"
+    )
+    assert hs.session.state.event == 2
 
 
 @pytest.mark.skipif(not _preset_available("circles-crossing"), reason="core.moving.presets has no circles-crossing yet")
 def test_choosing_a_preset_in_the_dropdown_shows_its_intervals(headless):
-    with headless(static_config("4"), width=1200, height=900, timeout=60) as hs:
-        page = hs.page
-        hs.session.ready.clear()
-        page.get_by_text("Preset", exact=True).click()  # opens the Mantine combobox
-        page.get_by_role("option", name="circles-crossing").click()
-        assert hs.session.ready.wait(60)
-        # unit circles at (t, 0) and (-t, 0) on [-2, 2]: separate, overlap for |t| < 1, separate
-        page.wait_for_function("() => document.querySelectorAll('svg rect').length === 3")
-        bar = page.locator("svg rect")
-        assert [bar.nth(i).get_attribute("fill") for i in range(3)] == [HEX["separate"], HEX["overlap"], HEX["separate"]]
-        assert hs.session.state.dim == 2
+    hs = headless(static_config("4"))
+    page = hs.page
+    hs.session.ready.clear()
+    page.get_by_text("Preset", exact=True).click()  # opens the Mantine combobox
+    page.get_by_role("option", name="circles-crossing").click()
+    assert hs.session.ready.wait(60)
+    # unit circles at (t, 0) and (-t, 0) on [-2, 2]: separate, overlap for |t| < 1, separate
+    page.wait_for_function("() => document.querySelectorAll('svg rect').length === 3")
+    bar = page.locator("svg rect")
+    assert [bar.nth(i).get_attribute("fill") for i in range(3)] == [HEX["separate"], HEX["overlap"], HEX["separate"]]
+    assert hs.session.state.dim == 2
 
 
 def test_shared_presenter_scene_is_seen_by_every_tab(tmp_path):
@@ -267,3 +249,23 @@ def test_presenter_mode_dimension_switch_and_every_camera_browser():
             until(lambda cam=cam: np.allclose(cam.up_direction, (0, 1, 0), atol=1e-6), what="camera up")
             until(lambda cam=cam: abs(cam.position[0] - cam.look_at[0]) < 1e-6 and cam.position[2] > 1, what="from above")
         second.close()
+
+
+@pytest.mark.skipif(not _preset_available("example-29"), reason="core.moving.presets has no example-29 yet")
+def test_screenshot_command_contract(tmp_path):
+    """``python -m app screenshot --preset example-29 --t 0.7 --out shot.png`` writes the PNG."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    out = tmp_path / "shot.png"
+    root = Path(__file__).resolve().parents[1]
+    r = subprocess.run(
+        [sys.executable, "-m", "app", "screenshot", "--preset", "example-29", "--t", "0.7", "--out", str(out),
+         "--width", "800", "--height", "600"],
+        check=False, cwd=root, capture_output=True, text=True, timeout=180,
+    )
+    assert r.returncode == 0, r.stderr
+    data = out.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert int.from_bytes(data[16:20], "big") == 800 and int.from_bytes(data[20:24], "big") == 600
