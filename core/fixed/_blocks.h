@@ -4,6 +4,7 @@
  *   N          3 (ellipses) or 4 (ellipsoids)
  *   T          double or float (float is widened exactly: certified for the float values given)
  *   FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
+ *   CHUNK      pairs per block (CHUNK3 or CHUNK4 of _variant.h)
  *   TP, TRANSPOSE_T   pairs per transpose for T (8, or 0: element by element) and the TP x TP transpose
  *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
  *              rule id of each pair (-1 undecided) to out, or table[rule id as a byte] when table
@@ -147,6 +148,9 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
             else
                 for (int64_t p = p0; p < p1; p++) code[p] = FIRST(a + p, b + p, c + p, CHUNK, idx + p);
         }
+#if LANES >= CHUNK
+        PREFETCH(3) /* one round per block: part 3 here */
+#endif
         for (int64_t p = 0; p < m; p++) viafull[p] = use_full || code[p] == NEEDS_FULL;
         /* stage 1 again with the full prepare, where a matrix is symmetric only up to rounding */
         if (!use_full) {
