@@ -3,7 +3,7 @@
  * Included by _variant.h once per (dimension, input type), with these macros defined:
  *   N          3 (ellipses) or 4 (ellipsoids)
  *   T          double or float (float is widened exactly: certified for the float values given)
- *   FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
+ *   FIRST_NOSCALE, FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
  *   CHUNK      pairs per block (CHUNK3 or CHUNK4 of _variant.h)
  *   TP, TRANSPOSE_T   pairs per transpose for T (8, or 0: element by element) and the TP x TP transpose
  *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
@@ -15,7 +15,8 @@
  * one row). Each stage is then a loop over pairs whose body is a branch-free lane function, so
  * the compiler turns it into SIMD across pairs, a vector load reading one entry of several
  * pairs. The stages (core/fixed/driver.py): 1 prepare, pencil, validity, the tree with s0
- * pending; 2 the semi-static s0 test where the tree asks for s0; 3 the certificates where a
+ * pending (first without the scaling, where every largest entry is already in [2^-8, 2^8]; then
+ * scaled where one is not; then the full prepare where a matrix is symmetric only up to rounding); 2 the semi-static s0 test where the tree asks for s0; 3 the certificates where a
  * valid pair is still open (spheres, translated and homothetic copies); 4 the running-error s0
  * test where s0 is still needed (near tangency). Each runs only on the pairs the stages before
  * left to it: packed first so that the SIMD lanes stay full, or, when most pairs of the block
@@ -83,6 +84,33 @@
         }                                                                                                         \
     }
 
+/* Stage 1 again with LANE on the pairs whose code is WHICH (k and open[] from SUBSET): when most
+ * pairs need it every lane in place, then select; else the pairs packed. */
+#define AGAIN(LANE, WHICH)                                                                                  \
+    if (2 * k > m) {                                                                                        \
+        double d[2 * (N + 1) * CHUNK];                                                                      \
+        int64_t di[CHUNK];                                                                                  \
+        for (int64_t p = 0; p < m; p++) {                                                                   \
+            const int64_t again = LANE(a + p, b + p, d + p, CHUNK, di + p);                                 \
+            const int64_t take = code[p] == (WHICH);                                                        \
+            for (int r = 0; r < 2 * (N + 1); r++) c[r * CHUNK + p] = take ? d[r * CHUNK + p] : c[r * CHUNK + p]; \
+            idx[p] = take ? di[p] : idx[p];                                                                 \
+            code[p] = take ? again : code[p];                                                               \
+        }                                                                                                   \
+    } else if (k) {                                                                                         \
+        T pa[N * N * CHUNK], pb[N * N * CHUNK];                                                             \
+        double d[2 * (N + 1) * CHUNK];                                                                      \
+        int64_t di[CHUNK], dc[CHUNK];                                                                       \
+        PACK(pa, a, N * N)                                                                                  \
+        PACK(pb, b, N * N)                                                                                  \
+        for (int64_t q = 0; q < k; q++) dc[q] = LANE(pa + q, pb + q, d + q, CHUNK, di + q);                 \
+        for (int64_t q = 0; q < k; q++) {                                                                   \
+            for (int r = 0; r < 2 * (N + 1); r++) c[r * CHUNK + open[q]] = d[r * CHUNK + q];                \
+            idx[open[q]] = di[q];                                                                           \
+            code[open[q]] = dc[q];                                                                          \
+        }                                                                                                   \
+    }
+
 /* Part J (of 8) of the block PF_DIST ahead, of A and of B, into the cache. The parts are
  * requested at eight points spread over the work on this block (transpose, the two rounds of
  * stage 1, stages 2 to 4, output) a few lines at a time, so that the stream from memory overlaps
@@ -102,7 +130,8 @@
 
 int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict out, int64_t count, const signed char *restrict table) {
     int64_t undecided = 0;
-    int full_run = 0; /* the last block tried was mostly symmetric only up to rounding */
+    int full_run = 0;   /* the last block tried was mostly symmetric only up to rounding */
+    int scaled_run = 0; /* the last block tried had mostly entries outside [2^-8, 2^8] */
     for (int64_t i0 = 0; i0 < count; i0 += CHUNK) {
         const int64_t m = count - i0 < CHUNK ? count - i0 : CHUNK;
         T a[N * N * CHUNK], b[N * N * CHUNK]; /* entry k of pair p at [k * CHUNK + p] */
@@ -140,45 +169,34 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
          * takes the same decisions on an exactly symmetric matrix, so the route changes no
          * answer; every 16th block tries the fast pass again) */
         const int use_full = full_run && (i0 / CHUNK) % 16 != 0;
+        /* the same for inputs whose entries are mostly outside [2^-8, 2^8] (the scaled pass directly) */
+        const int use_scaled = !use_full && scaled_run && (i0 / CHUNK) % 16 != 0;
         for (int64_t p0 = 0; p0 < m; p0 += LANES) {
             const int64_t p1 = p0 + LANES < m ? p0 + LANES : m;
             PREFETCH(p0 ? 3 : 2)
             if (use_full)
                 for (int64_t p = p0; p < p1; p++) code[p] = FULL(a + p, b + p, c + p, CHUNK, idx + p);
-            else
+            else if (use_scaled)
                 for (int64_t p = p0; p < p1; p++) code[p] = FIRST(a + p, b + p, c + p, CHUNK, idx + p);
+            else
+                for (int64_t p = p0; p < p1; p++) code[p] = FIRST_NOSCALE(a + p, b + p, c + p, CHUNK, idx + p);
         }
 #if LANES >= CHUNK
         PREFETCH(3) /* one round per block: part 3 here */
 #endif
+        /* stage 1 again with the scaling, where a largest entry is outside [2^-8, 2^8] (and where
+         * a matrix is not exactly symmetric: the scaled pass sends those on to the full prepare) */
+        if (!use_full && !use_scaled) {
+            SUBSET(code[p] == NEEDS_SCALE)
+            scaled_run = 2 * k > m;
+            AGAIN(FIRST, NEEDS_SCALE)
+        }
         for (int64_t p = 0; p < m; p++) viafull[p] = use_full || code[p] == NEEDS_FULL;
         /* stage 1 again with the full prepare, where a matrix is symmetric only up to rounding */
         if (!use_full) {
             SUBSET(code[p] == NEEDS_FULL)
             full_run = 2 * k > m;
-        }
-        if (2 * k > m) { /* most pairs: every lane in place, then select */
-            double d[2 * (N + 1) * CHUNK];
-            int64_t di[CHUNK];
-            for (int64_t p = 0; p < m; p++) {
-                const int64_t full = FULL(a + p, b + p, d + p, CHUNK, di + p);
-                const int64_t take = code[p] == NEEDS_FULL;
-                for (int r = 0; r < 2 * (N + 1); r++) c[r * CHUNK + p] = take ? d[r * CHUNK + p] : c[r * CHUNK + p];
-                idx[p] = take ? di[p] : idx[p];
-                code[p] = take ? full : code[p];
-            }
-        } else if (k) {
-            T pa[N * N * CHUNK], pb[N * N * CHUNK];
-            double d[2 * (N + 1) * CHUNK];
-            int64_t di[CHUNK], dc[CHUNK];
-            PACK(pa, a, N * N)
-            PACK(pb, b, N * N)
-            for (int64_t q = 0; q < k; q++) dc[q] = FULL(pa + q, pb + q, d + q, CHUNK, di + q);
-            for (int64_t q = 0; q < k; q++) {
-                for (int r = 0; r < 2 * (N + 1); r++) c[r * CHUNK + open[q]] = d[r * CHUNK + q];
-                idx[open[q]] = di[q];
-                code[open[q]] = dc[q];
-            }
+            AGAIN(FULL, NEEDS_FULL)
         }
         PREFETCH(4)
         /* stage 2, where the tree asks for s0: the semi-static test */
@@ -201,6 +219,7 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
 }
 
 #undef SUBSET
+#undef AGAIN
 #undef PREFETCH
 #undef PF_BYTES
 #undef PACK

@@ -25,6 +25,7 @@
 #define NEEDS_CERT -8 /* valid, the tree cannot decide: try the certificates */
 #define NEEDS_FULL -9 /* fast pass: a matrix is not exactly symmetric: the full prepare */
 #define NEEDS_S0_RADIUS -10 /* stage 2 could not tell the sign of s0: the certificates, then stage 4 */
+#define NEEDS_SCALE -11 /* unscaled first try: a matrix outside [2^-8, 2^8] (or not exactly symmetric): the fast pass */
 
 /* Table digit of a certified sign: 0 for -1, 2 for +1, 3 for uncertain (core.formulae.decision.SIGN_CODES). */
 static inline int64_t sign_digit(double v, double b) { return v > b ? 2 : (v < -b ? 0 : 3); }
@@ -556,6 +557,88 @@ static inline __attribute__((always_inline)) int64_t first3_f64(const double *re
     return ((((aok | aopen) & (bok | bopen)) & (aopen | bopen)) ? -9 : first);
 }
 
+/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; NEEDS_SCALE for the other pairs. */
+static inline __attribute__((always_inline)) int64_t first3_noscale_f64(const double *restrict a, const double *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax11 = (double)a[4 * s];
+    const double ax12 = (double)a[5 * s];
+    const double ax22 = (double)a[8 * s];
+    const double ay01 = (double)a[3 * s];
+    const double ay02 = (double)a[6 * s];
+    const double ay12 = (double)a[7 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 256.0))) & (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12)));
+    const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
+    const int64_t aopen = (!aok);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx11 = (double)b[4 * s];
+    const double bx12 = (double)b[5 * s];
+    const double bx22 = (double)b[8 * s];
+    const double by01 = (double)b[3 * s];
+    const double by02 = (double)b[6 * s];
+    const double by12 = (double)b[7 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 256.0))) & (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12)));
+    const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
+    const int64_t bopen = (!bok);
+    const int64_t rounded = ((aok & (!aok)) | (bok & (!bok)));
+    double wa[9];
+    wa[0] = ax00;
+    wa[1] = ax01;
+    wa[2] = ax02;
+    wa[4] = ax11;
+    wa[5] = ax12;
+    wa[8] = ax22;
+    double wb[9];
+    wb[0] = bx00;
+    wb[1] = bx01;
+    wb[2] = bx02;
+    wb[4] = bx11;
+    wb[5] = bx12;
+    wb[8] = bx22;
+    double r_pencil3[12];
+    pencil3(wa, wb, r_pencil3);
+    const double F = (rounded ? 1.31150496e-316 : 1.31150496e-316);
+    const double c0 = r_pencil3[0];
+    const double c0r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[1]) + F);
+    const double c1 = r_pencil3[2];
+    const double c1r = (((rounded ? 1.1102230246251597e-15 : 7.771561172376113e-16) * r_pencil3[3]) + F);
+    const double c2 = r_pencil3[4];
+    const double c2r = (((rounded ? 1.1102230246251597e-15 : 7.771561172376113e-16) * r_pencil3[5]) + F);
+    const double c3 = r_pencil3[6];
+    const double c3r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[7]) + F);
+    const double dA2 = r_pencil3[8];
+    const double dA2r = (((rounded ? 4.440892098500632e-16 : 2.220446049250315e-16) * r_pencil3[9]) + F);
+    const double dB2 = r_pencil3[10];
+    const double dB2r = (((rounded ? 4.440892098500632e-16 : 2.220446049250315e-16) * r_pencil3[11]) + F);
+    const double c0s = (c0 * bsign);
+    const double c1s = (c1 * asign);
+    const double c2s = (c2 * bsign);
+    const double c3s = (c3 * asign);
+    const int64_t valid = (((((aok & bok) & (dA2 > dA2r)) & (dB2 > dB2r)) & (c3s < (-c3r))) & (c0s < (-c0r)));
+    const int64_t idx = ((sign_digit(c2s, c2r) * 5) + sign_digit(c1s, c1r));
+    const int64_t code = TAB3[((idx * 5) + 4)];
+    const int64_t first = (valid ? ((code >= 0) ? code : ((code == -3) ? -3 : -8)) : -1);
+    c[0 * s] = c0s;
+    c[4 * s] = c0r;
+    c[1 * s] = c1s;
+    c[5 * s] = c1r;
+    c[2 * s] = c2s;
+    c[6 * s] = c2r;
+    c[3 * s] = c3s;
+    c[7 * s] = c3r;
+    *idx_out = idx;
+    return ((aopen | bopen) ? -11 : first);
+}
+
 /* Stage 1 for the pairs the fast pass left to the full prepare (a matrix symmetric only up to rounding): the same outputs, never NEEDS_FULL. */
 static inline __attribute__((always_inline)) int64_t full3_f64(const double *restrict a, const double *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
     const double ax00 = (double)a[0 * s];
@@ -1060,6 +1143,88 @@ static inline __attribute__((always_inline)) int64_t first3_f32(const float *res
     c[7 * s] = c3r;
     *idx_out = idx;
     return ((((aok | aopen) & (bok | bopen)) & (aopen | bopen)) ? -9 : first);
+}
+
+/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; NEEDS_SCALE for the other pairs. */
+static inline __attribute__((always_inline)) int64_t first3_noscale_f32(const float *restrict a, const float *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax11 = (double)a[4 * s];
+    const double ax12 = (double)a[5 * s];
+    const double ax22 = (double)a[8 * s];
+    const double ay01 = (double)a[3 * s];
+    const double ay02 = (double)a[6 * s];
+    const double ay12 = (double)a[7 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 256.0))) & (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12)));
+    const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
+    const int64_t aopen = (!aok);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx11 = (double)b[4 * s];
+    const double bx12 = (double)b[5 * s];
+    const double bx22 = (double)b[8 * s];
+    const double by01 = (double)b[3 * s];
+    const double by02 = (double)b[6 * s];
+    const double by12 = (double)b[7 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 256.0))) & (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12)));
+    const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
+    const int64_t bopen = (!bok);
+    const int64_t rounded = ((aok & (!aok)) | (bok & (!bok)));
+    double wa[9];
+    wa[0] = ax00;
+    wa[1] = ax01;
+    wa[2] = ax02;
+    wa[4] = ax11;
+    wa[5] = ax12;
+    wa[8] = ax22;
+    double wb[9];
+    wb[0] = bx00;
+    wb[1] = bx01;
+    wb[2] = bx02;
+    wb[4] = bx11;
+    wb[5] = bx12;
+    wb[8] = bx22;
+    double r_pencil3[12];
+    pencil3(wa, wb, r_pencil3);
+    const double F = (rounded ? 1.31150496e-316 : 1.31150496e-316);
+    const double c0 = r_pencil3[0];
+    const double c0r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[1]) + F);
+    const double c1 = r_pencil3[2];
+    const double c1r = (((rounded ? 1.1102230246251597e-15 : 7.771561172376113e-16) * r_pencil3[3]) + F);
+    const double c2 = r_pencil3[4];
+    const double c2r = (((rounded ? 1.1102230246251597e-15 : 7.771561172376113e-16) * r_pencil3[5]) + F);
+    const double c3 = r_pencil3[6];
+    const double c3r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[7]) + F);
+    const double dA2 = r_pencil3[8];
+    const double dA2r = (((rounded ? 4.440892098500632e-16 : 2.220446049250315e-16) * r_pencil3[9]) + F);
+    const double dB2 = r_pencil3[10];
+    const double dB2r = (((rounded ? 4.440892098500632e-16 : 2.220446049250315e-16) * r_pencil3[11]) + F);
+    const double c0s = (c0 * bsign);
+    const double c1s = (c1 * asign);
+    const double c2s = (c2 * bsign);
+    const double c3s = (c3 * asign);
+    const int64_t valid = (((((aok & bok) & (dA2 > dA2r)) & (dB2 > dB2r)) & (c3s < (-c3r))) & (c0s < (-c0r)));
+    const int64_t idx = ((sign_digit(c2s, c2r) * 5) + sign_digit(c1s, c1r));
+    const int64_t code = TAB3[((idx * 5) + 4)];
+    const int64_t first = (valid ? ((code >= 0) ? code : ((code == -3) ? -3 : -8)) : -1);
+    c[0 * s] = c0s;
+    c[4 * s] = c0r;
+    c[1 * s] = c1s;
+    c[5 * s] = c1r;
+    c[2 * s] = c2s;
+    c[6 * s] = c2r;
+    c[3 * s] = c3s;
+    c[7 * s] = c3r;
+    *idx_out = idx;
+    return ((aopen | bopen) ? -11 : first);
 }
 
 /* Stage 1 for the pairs the fast pass left to the full prepare (a matrix symmetric only up to rounding): the same outputs, never NEEDS_FULL. */
@@ -2415,6 +2580,119 @@ static inline __attribute__((always_inline)) int64_t first4_f64(const double *re
     return ((((aok | aopen) & (bok | bopen)) & (aopen | bopen)) ? -9 : first);
 }
 
+/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; NEEDS_SCALE for the other pairs. */
+static inline __attribute__((always_inline)) int64_t first4_noscale_f64(const double *restrict a, const double *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax03 = (double)a[3 * s];
+    const double ax11 = (double)a[5 * s];
+    const double ax12 = (double)a[6 * s];
+    const double ax13 = (double)a[7 * s];
+    const double ax22 = (double)a[10 * s];
+    const double ax23 = (double)a[11 * s];
+    const double ax33 = (double)a[15 * s];
+    const double ay01 = (double)a[4 * s];
+    const double ay02 = (double)a[8 * s];
+    const double ay03 = (double)a[12 * s];
+    const double ay12 = (double)a[9 * s];
+    const double ay13 = (double)a[13 * s];
+    const double ay23 = (double)a[14 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 256.0))) & ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23)));
+    const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
+    const int64_t aopen = (!aok);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx03 = (double)b[3 * s];
+    const double bx11 = (double)b[5 * s];
+    const double bx12 = (double)b[6 * s];
+    const double bx13 = (double)b[7 * s];
+    const double bx22 = (double)b[10 * s];
+    const double bx23 = (double)b[11 * s];
+    const double bx33 = (double)b[15 * s];
+    const double by01 = (double)b[4 * s];
+    const double by02 = (double)b[8 * s];
+    const double by03 = (double)b[12 * s];
+    const double by12 = (double)b[9 * s];
+    const double by13 = (double)b[13 * s];
+    const double by23 = (double)b[14 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 256.0))) & ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23)));
+    const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
+    const int64_t bopen = (!bok);
+    const int64_t rounded = ((aok & (!aok)) | (bok & (!bok)));
+    double wa[16];
+    wa[0] = ax00;
+    wa[1] = ax01;
+    wa[2] = ax02;
+    wa[3] = ax03;
+    wa[5] = ax11;
+    wa[6] = ax12;
+    wa[7] = ax13;
+    wa[10] = ax22;
+    wa[11] = ax23;
+    wa[15] = ax33;
+    double wb[16];
+    wb[0] = bx00;
+    wb[1] = bx01;
+    wb[2] = bx02;
+    wb[3] = bx03;
+    wb[5] = bx11;
+    wb[6] = bx12;
+    wb[7] = bx13;
+    wb[10] = bx22;
+    wb[11] = bx23;
+    wb[15] = bx33;
+    double r_pencil4[18];
+    pencil4(wa, wb, r_pencil4);
+    const double F = (rounded ? 8.9127970781e-313 : 8.9127970781e-313);
+    const double c0 = r_pencil4[0];
+    const double c0r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[1]) + F);
+    const double c1 = r_pencil4[2];
+    const double c1r = (((rounded ? 1.7763568394002587e-15 : 1.3322676295501928e-15) * r_pencil4[3]) + F);
+    const double c2 = r_pencil4[4];
+    const double c2r = (((rounded ? 1.9984014443252912e-15 : 1.554312234475225e-15) * r_pencil4[5]) + F);
+    const double c3 = r_pencil4[6];
+    const double c3r = (((rounded ? 1.7763568394002587e-15 : 1.3322676295501928e-15) * r_pencil4[7]) + F);
+    const double c4 = r_pencil4[8];
+    const double c4r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[9]) + F);
+    const double dA2 = r_pencil4[10];
+    const double dA2r = (((rounded ? 4.440892098500633e-16 : 2.2204460492503155e-16) * r_pencil4[11]) + F);
+    const double dA3 = r_pencil4[12];
+    const double dA3r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil4[13]) + F);
+    const double dB2 = r_pencil4[14];
+    const double dB2r = (((rounded ? 4.440892098500633e-16 : 2.2204460492503155e-16) * r_pencil4[15]) + F);
+    const double dB3 = r_pencil4[16];
+    const double dB3r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil4[17]) + F);
+    const double sab = (asign * bsign);
+    const double c1s = (c1 * sab);
+    const double c3s = (c3 * sab);
+    const double dA3s = (dA3 * asign);
+    const double dB3s = (dB3 * bsign);
+    const int64_t valid = (((((((aok & bok) & (dA2 > dA2r)) & (dA3s > dA3r)) & (dB2 > dB2r)) & (dB3s > dB3r)) & (c4 < (-c4r))) & (c0 < (-c0r)));
+    const int64_t idx = ((((sign_digit(c3s, c3r) * 5) + sign_digit(c2, c2r)) * 5) + sign_digit(c1s, c1r));
+    const int64_t code = TAB4[((idx * 5) + 4)];
+    const int64_t first = (valid ? ((code >= 0) ? code : ((code == -3) ? -3 : -8)) : -1);
+    c[0 * s] = c0;
+    c[5 * s] = c0r;
+    c[1 * s] = c1s;
+    c[6 * s] = c1r;
+    c[2 * s] = c2;
+    c[7 * s] = c2r;
+    c[3 * s] = c3s;
+    c[8 * s] = c3r;
+    c[4 * s] = c4;
+    c[9 * s] = c4r;
+    *idx_out = idx;
+    return ((aopen | bopen) ? -11 : first);
+}
+
 /* Stage 1 for the pairs the fast pass left to the full prepare (a matrix symmetric only up to rounding): the same outputs, never NEEDS_FULL. */
 static inline __attribute__((always_inline)) int64_t full4_f64(const double *restrict a, const double *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
     const double ax00 = (double)a[0 * s];
@@ -3165,6 +3443,119 @@ static inline __attribute__((always_inline)) int64_t first4_f32(const float *res
     c[9 * s] = c4r;
     *idx_out = idx;
     return ((((aok | aopen) & (bok | bopen)) & (aopen | bopen)) ? -9 : first);
+}
+
+/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; NEEDS_SCALE for the other pairs. */
+static inline __attribute__((always_inline)) int64_t first4_noscale_f32(const float *restrict a, const float *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax03 = (double)a[3 * s];
+    const double ax11 = (double)a[5 * s];
+    const double ax12 = (double)a[6 * s];
+    const double ax13 = (double)a[7 * s];
+    const double ax22 = (double)a[10 * s];
+    const double ax23 = (double)a[11 * s];
+    const double ax33 = (double)a[15 * s];
+    const double ay01 = (double)a[4 * s];
+    const double ay02 = (double)a[8 * s];
+    const double ay03 = (double)a[12 * s];
+    const double ay12 = (double)a[9 * s];
+    const double ay13 = (double)a[13 * s];
+    const double ay23 = (double)a[14 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 256.0))) & ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23)));
+    const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
+    const int64_t aopen = (!aok);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx03 = (double)b[3 * s];
+    const double bx11 = (double)b[5 * s];
+    const double bx12 = (double)b[6 * s];
+    const double bx13 = (double)b[7 * s];
+    const double bx22 = (double)b[10 * s];
+    const double bx23 = (double)b[11 * s];
+    const double bx33 = (double)b[15 * s];
+    const double by01 = (double)b[4 * s];
+    const double by02 = (double)b[8 * s];
+    const double by03 = (double)b[12 * s];
+    const double by12 = (double)b[9 * s];
+    const double by13 = (double)b[13 * s];
+    const double by23 = (double)b[14 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 256.0))) & ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23)));
+    const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
+    const int64_t bopen = (!bok);
+    const int64_t rounded = ((aok & (!aok)) | (bok & (!bok)));
+    double wa[16];
+    wa[0] = ax00;
+    wa[1] = ax01;
+    wa[2] = ax02;
+    wa[3] = ax03;
+    wa[5] = ax11;
+    wa[6] = ax12;
+    wa[7] = ax13;
+    wa[10] = ax22;
+    wa[11] = ax23;
+    wa[15] = ax33;
+    double wb[16];
+    wb[0] = bx00;
+    wb[1] = bx01;
+    wb[2] = bx02;
+    wb[3] = bx03;
+    wb[5] = bx11;
+    wb[6] = bx12;
+    wb[7] = bx13;
+    wb[10] = bx22;
+    wb[11] = bx23;
+    wb[15] = bx33;
+    double r_pencil4[18];
+    pencil4(wa, wb, r_pencil4);
+    const double F = (rounded ? 8.9127970781e-313 : 8.9127970781e-313);
+    const double c0 = r_pencil4[0];
+    const double c0r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[1]) + F);
+    const double c1 = r_pencil4[2];
+    const double c1r = (((rounded ? 1.7763568394002587e-15 : 1.3322676295501928e-15) * r_pencil4[3]) + F);
+    const double c2 = r_pencil4[4];
+    const double c2r = (((rounded ? 1.9984014443252912e-15 : 1.554312234475225e-15) * r_pencil4[5]) + F);
+    const double c3 = r_pencil4[6];
+    const double c3r = (((rounded ? 1.7763568394002587e-15 : 1.3322676295501928e-15) * r_pencil4[7]) + F);
+    const double c4 = r_pencil4[8];
+    const double c4r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[9]) + F);
+    const double dA2 = r_pencil4[10];
+    const double dA2r = (((rounded ? 4.440892098500633e-16 : 2.2204460492503155e-16) * r_pencil4[11]) + F);
+    const double dA3 = r_pencil4[12];
+    const double dA3r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil4[13]) + F);
+    const double dB2 = r_pencil4[14];
+    const double dB2r = (((rounded ? 4.440892098500633e-16 : 2.2204460492503155e-16) * r_pencil4[15]) + F);
+    const double dB3 = r_pencil4[16];
+    const double dB3r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil4[17]) + F);
+    const double sab = (asign * bsign);
+    const double c1s = (c1 * sab);
+    const double c3s = (c3 * sab);
+    const double dA3s = (dA3 * asign);
+    const double dB3s = (dB3 * bsign);
+    const int64_t valid = (((((((aok & bok) & (dA2 > dA2r)) & (dA3s > dA3r)) & (dB2 > dB2r)) & (dB3s > dB3r)) & (c4 < (-c4r))) & (c0 < (-c0r)));
+    const int64_t idx = ((((sign_digit(c3s, c3r) * 5) + sign_digit(c2, c2r)) * 5) + sign_digit(c1s, c1r));
+    const int64_t code = TAB4[((idx * 5) + 4)];
+    const int64_t first = (valid ? ((code >= 0) ? code : ((code == -3) ? -3 : -8)) : -1);
+    c[0 * s] = c0;
+    c[5 * s] = c0r;
+    c[1 * s] = c1s;
+    c[6 * s] = c1r;
+    c[2 * s] = c2;
+    c[7 * s] = c2r;
+    c[3 * s] = c3s;
+    c[8 * s] = c3r;
+    c[4 * s] = c4;
+    c[9 * s] = c4r;
+    *idx_out = idx;
+    return ((aopen | bopen) ? -11 : first);
 }
 
 /* Stage 1 for the pairs the fast pass left to the full prepare (a matrix symmetric only up to rounding): the same outputs, never NEEDS_FULL. */

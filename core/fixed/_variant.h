@@ -101,6 +101,7 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #define CHUNK CHUNK3
 #define T double
 #define FIRST first3_f64
+#define FIRST_NOSCALE first3_noscale_f64
 #define TP TP_F64
 #define TRANSPOSE_T TRANSPOSE_F64
 #define FULL full3_f64
@@ -112,6 +113,7 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #include "_blocks.h"
 #undef T
 #undef FIRST
+#undef FIRST_NOSCALE
 #undef TP
 #undef TRANSPOSE_T
 #undef FULL
@@ -120,6 +122,7 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #undef CLASSIFY
 #define T float
 #define FIRST first3_f32
+#define FIRST_NOSCALE first3_noscale_f32
 #define TP TP_F32
 #define TRANSPOSE_T TRANSPOSE_F32
 #define FULL full3_f32
@@ -131,6 +134,7 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #undef CHUNK
 #undef T
 #undef FIRST
+#undef FIRST_NOSCALE
 #undef TP
 #undef TRANSPOSE_T
 #undef FULL
@@ -144,6 +148,7 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #define CHUNK CHUNK4
 #define T double
 #define FIRST first4_f64
+#define FIRST_NOSCALE first4_noscale_f64
 #define TP TP_F64
 #define TRANSPOSE_T TRANSPOSE_F64
 #define FULL full4_f64
@@ -155,6 +160,7 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #include "_blocks.h"
 #undef T
 #undef FIRST
+#undef FIRST_NOSCALE
 #undef TP
 #undef TRANSPOSE_T
 #undef FULL
@@ -163,6 +169,7 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #undef CLASSIFY
 #define T float
 #define FIRST first4_f32
+#define FIRST_NOSCALE first4_noscale_f32
 #define TP TP_F32
 #define TRANSPOSE_T TRANSPOSE_F32
 #define FULL full4_f32
@@ -174,6 +181,7 @@ TRANSPOSE8(transpose8_f32, float, v8f, F)
 #undef CHUNK
 #undef T
 #undef FIRST
+#undef FIRST_NOSCALE
 #undef TP
 #undef TRANSPOSE_T
 #undef FULL

@@ -64,6 +64,7 @@ __all__ = [
     "NEEDS_CERT",
     "NEEDS_FULL",
     "NEEDS_S0_RADIUS",
+    "NEEDS_SCALE",
     "LEAF_ROUNDING",
     "LEAF_UNDERFLOW",
 ]
@@ -83,6 +84,10 @@ NEEDS_FULL = -9
 NEEDS_S0_RADIUS = -10
 """Outcome of :func:`decide_s0`: the semi-static test could not tell the sign of s0: the
 certificates, then :func:`decide_s0_radius`."""
+
+NEEDS_SCALE = -11
+"""Outcome of the C's unscaled first pass: a matrix's largest entry is outside [2^-8, 2^8] (or
+the matrix is not exactly symmetric, or not finite): the scaled fast pass decides."""
 
 LEAF_ROUNDING = 2.0**-52
 """Radius of a rounded half sum, relative: 2^-52 >= u / (1 - u)."""
@@ -106,15 +111,26 @@ class Prepared:
     rounded: Any
     """Mask: W holds rounded half sums (radii :func:`radii`, the rounded-leaf constants)."""
     open: Any
-    """Mask (``exact_only``): finite but not exactly symmetric, left to the full prepare."""
+    """Mask (``exact_only``): finite but not exactly symmetric, left to the full prepare;
+    (``unscaled``) not prepared by the unscaled pass, left to the scaled one."""
+    sign: Any = None
+    """``unscaled`` only: -1.0 where M_00 < 0, else 1.0, the flip to a negative interior that W
+    does not carry (:func:`pencil_bounds` applies it to the results)."""
 
 
-def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False) -> Prepared:
+def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False, unscaled: bool = False) -> Prepared:
     """Validate cheaply, flip to a negative interior, scale by a power of two, symmetrise.
 
     ``exact_only``: the fast first pass of the C, for exactly symmetric matrices only (most
     inputs): it skips the tolerance test and the half sums and marks the other finite matrices
     ``open`` for the full prepare. On an exactly symmetric matrix both give the same W.
+
+    ``unscaled`` (with ``exact_only``; the C's first try): only exactly symmetric matrices whose
+    largest entry is already in [2^-8, 2^8] (k = 0, most inputs) are prepared, the others are
+    ``open`` for the scaled pass. W is M itself, not sign * M: the sign is applied to the
+    pencil's results instead (:func:`pencil_bounds`), which is the same rounding, so the values
+    are bit for bit those of the scaled pass; the pass skips the exponent, the scale and the
+    2 n^2 products.
 
     ``entry(i, j)`` reads M[i, j] of each lane as float64 (a float32 input is widened exactly).
     The scale 2^k (k = 1 - e, M's largest |entry| in [2^(e-1), 2^e)) is applied unless that
@@ -135,6 +151,13 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False) -
     mx = x.let(f"{tag}mx", mx)
     finite = x.let(f"{tag}finite", all_finite & (X[0, 0] != 0.0))
     in_range = (mx >= float(NO_SCALE_MIN)) & (mx <= float(LEAF_MAX))
+    if unscaled:
+        sym_u = X[off[0]] == Y[off[0]]
+        for ij in off[1:]:
+            sym_u = sym_u & (X[ij] == Y[ij])
+        ok_u = x.let(f"{tag}ok", finite & in_range & sym_u)
+        sign = x.let(f"{tag}sign", x.where(X[0, 0] < 0.0, -1.0, 1.0))
+        return Prepared(dict(X), x.integer(0, mx), ok_u, ok_u & ~ok_u, x.let(f"{tag}open", ~ok_u), sign)
     e = x.frexp_exponent(x.where(finite, mx, 1.0))
     k = x.let(f"{tag}k", x.where(in_range, x.integer(0, mx), x.imin(x.imax(1 - e, -1022), 2044)))
     k1 = x.let(f"{tag}k1", x.imin(k, 1000))
@@ -198,6 +221,15 @@ def pencil_bounds(x: Any, n: int, Pa: Prepared, Pb: Prepared) -> tuple[list[Any]
             continue
         C = x.where(rounded, info.constants_rounded[k], info.constants[k])
         values[out] = (x.let(out, r[k]), x.let(f"{out}r", (C * r[k + 1]) + F))
+    if Pa.sign is not None:  # unscaled W: a value of degree d in A's entries takes sign_A^d
+        sab = None
+        for key, (v, bound) in list(values.items()):
+            da, db = (int(key[1:]), n - int(key[1:])) if key[0] == "c" else ((int(key[2:]), 0) if key[1] == "A" else (0, int(key[2:])))
+            if da % 2 and db % 2:
+                sab = sab if sab is not None else x.let("sab", Pa.sign * Pb.sign)
+                values[key] = (x.let(f"{key}s", v * sab), bound)
+            elif da % 2 or db % 2:
+                values[key] = (x.let(f"{key}s", v * (Pa.sign if da % 2 else Pb.sign)), bound)
     c = [values[f"c{i}"][0] for i in range(n + 1)]
     cr = [values[f"c{i}"][1] for i in range(n + 1)]
     minors = [v for key, v in values.items() if key.startswith("d")]

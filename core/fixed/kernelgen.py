@@ -421,6 +421,7 @@ _C_HEADER = """/* The certified float filter's lane functions, in C. GENERATED b
 #define NEEDS_CERT @NEEDS_CERT@ /* valid, the tree cannot decide: try the certificates */
 #define NEEDS_FULL @NEEDS_FULL@ /* fast pass: a matrix is not exactly symmetric: the full prepare */
 #define NEEDS_S0_RADIUS @NEEDS_S0_RADIUS@ /* stage 2 could not tell the sign of s0: the certificates, then stage 4 */
+#define NEEDS_SCALE @NEEDS_SCALE@ /* unscaled first try: a matrix outside [2^-8, 2^8] (or not exactly symmetric): the fast pass */
 
 /* Table digit of a certified sign: 0 for -1, 2 for +1, 3 for uncertain (core.formulae.decision.SIGN_CODES). */
 static inline int64_t sign_digit(double v, double b) { return v > b ? 2 : (v < -b ? 0 : 3); }
@@ -476,6 +477,7 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
     """first{n}_{f64,f32}, second{n}, third{n}_{f64,f32}: the driver's stages in C."""
     from .driver import (
         NEEDS_FULL,
+        NEEDS_SCALE,
         certify,
         decide,
         decide_s0,
@@ -489,13 +491,15 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
     for suffix, T in (("f64", "double"), ("f32", "float")):
         entry = lambda p: (lambda i, j: CExpr(f"(double){p}[{i * n + j} * s]", "d"))  # noqa: E731
 
-        def first(x: CLanes, entry: Any = entry, fast: bool = True) -> CExpr:
-            Pa = prepare(x, n, entry("a"), "a", exact_only=fast)
-            Pb = prepare(x, n, entry("b"), "b", exact_only=fast)
+        def first(x: CLanes, entry: Any = entry, fast: bool = True, unscaled: bool = False) -> CExpr:
+            Pa = prepare(x, n, entry("a"), "a", exact_only=fast, unscaled=unscaled)
+            Pb = prepare(x, n, entry("b"), "b", exact_only=fast, unscaled=unscaled)
             c, cr, minors = pencil_bounds(x, n, Pa, Pb)
             code: CExpr
             code, _, idx = decide(x, n, c, cr, minors, Pa.ok & Pb.ok)
-            if fast:  # a matrix symmetric only up to rounding: the full prepare decides
+            if unscaled:  # a matrix outside [2^-8, 2^8], not exactly symmetric or not finite
+                code = x.where(Pa.open | Pb.open, NEEDS_SCALE, code)
+            elif fast:  # a matrix symmetric only up to rounding: the full prepare decides
                 code = x.where(((Pa.ok | Pa.open) & (Pb.ok | Pb.open)) & (Pa.open | Pb.open), NEEDS_FULL, code)
             for i in range(n + 1):
                 x.lines.append(f"    c[{i} * s] = {c[i].text};")
@@ -522,6 +526,12 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             "Stage 1, fast pass (driver.prepare for exactly symmetric matrices, pencil_bounds, decide): a rule id, "
             f"NEEDS_S0, NEEDS_CERT, NEEDS_FULL or -1; writes a_0..a_{n} to c[i * s] and their radii to c[({n + 1} + i) * s], "
             "the table index to *idx_out.",
+        ))
+        out.append(_lane_c(
+            f"first{n}_noscale_{suffix}", params, lambda x, first=first: first(x, unscaled=True), infos,
+            "Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair "
+            "of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; "
+            "NEEDS_SCALE for the other pairs.",
         ))
         out.append(_lane_c(
             f"full{n}_{suffix}", params, lambda x, first=first: first(x, fast=False), infos,
@@ -581,9 +591,13 @@ def _kernel_infos(n: int) -> dict[str, KernelInfo]:
 
 def generate_c() -> str:
     """Source text of ``core/fixed/_kernels.h``."""
-    from .driver import NEEDS_CERT, NEEDS_FULL, NEEDS_S0, NEEDS_S0_RADIUS, TABLES
+    from .driver import NEEDS_CERT, NEEDS_FULL, NEEDS_S0, NEEDS_S0_RADIUS, NEEDS_SCALE, TABLES
 
-    parts = [_C_HEADER.replace("@NEEDS_S0@", str(NEEDS_S0)).replace("@NEEDS_CERT@", str(NEEDS_CERT)).replace("@NEEDS_FULL@", str(NEEDS_FULL)).replace("@NEEDS_S0_RADIUS@", str(NEEDS_S0_RADIUS))]
+    codes = {"NEEDS_S0": NEEDS_S0, "NEEDS_CERT": NEEDS_CERT, "NEEDS_FULL": NEEDS_FULL, "NEEDS_S0_RADIUS": NEEDS_S0_RADIUS, "NEEDS_SCALE": NEEDS_SCALE}
+    header = _C_HEADER
+    for name, value in codes.items():
+        header = header.replace(f"@{name}@", str(value))
+    parts = [header]
     for n in (3, 4):
         parts.append(f"/* ---- {'ellipses' if n == 3 else 'ellipsoids'}: n = {n} {'-' * 70} */\n")
         k = pencil_kernel(n)
