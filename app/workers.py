@@ -14,6 +14,10 @@ Children never outlive the server: each asks the kernel for SIGKILL when its par
 (``prctl(PR_SET_PDEATHSIG)``; its parent is the fork server, which exits when the server
 process goes, even on SIGKILL), with a watchdog thread polling the parent pid as a fallback;
 :meth:`WorkerPool.shutdown` kills the running jobs and refuses new ones.
+
+Children run at a lower CPU priority (:data:`JOB_NICE`): when the machine is busy, the server's
+own threads (``/healthz``, short requests, the scene's interaction) get the CPU before a job;
+an idle machine gives jobs all of it.
 """
 
 from __future__ import annotations
@@ -136,8 +140,17 @@ def _die_with_parent() -> None:
     threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
 
 
+JOB_NICE = 10
+"""Niceness added to each job's process (Linux CFS: a nice-10 job gets ~1/10 of a core against
+a busy nice-0 server thread, and every idle cycle)."""
+
+
 def _child(conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_mb: int | None) -> None:
     _die_with_parent()
+    try:
+        os.nice(JOB_NICE)
+    except (AttributeError, OSError):  # pragma: no cover - a platform without nice
+        pass
     if memory_mb is not None:
         try:
             import resource
