@@ -151,22 +151,19 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False, u
     mx = x.let(f"{tag}mx", mx)
     finite = x.let(f"{tag}finite", all_finite & (X[0, 0] != 0.0))
     in_range = (mx >= float(NO_SCALE_MIN)) & (mx <= float(LEAF_MAX))
+    sym = X[off[0]] == Y[off[0]]
+    for ij in off[1:]:
+        sym = sym & (X[ij] == Y[ij])
+    sym = x.let(f"{tag}sym", sym)
     if unscaled:
-        sym_u = X[off[0]] == Y[off[0]]
-        for ij in off[1:]:
-            sym_u = sym_u & (X[ij] == Y[ij])
-        ok_u = x.let(f"{tag}ok", finite & in_range & sym_u)
+        ok = x.let(f"{tag}ok", finite & in_range & sym)
         sign = x.let(f"{tag}sign", x.where(X[0, 0] < 0.0, -1.0, 1.0))
-        return Prepared(dict(X), x.integer(0, mx), ok_u, ok_u & ~ok_u, x.let(f"{tag}open", ~ok_u), sign)
+        return Prepared(dict(X), x.integer(0, mx), ok, ok & ~ok, x.let(f"{tag}open", ~ok), sign)
     e = x.frexp_exponent(x.where(finite, mx, 1.0))
     k = x.let(f"{tag}k", x.where(in_range, x.integer(0, mx), x.imin(x.imax(1 - e, -1022), 2044)))
     k1 = x.let(f"{tag}k1", x.imin(k, 1000))
     # the sign flip to a negative interior rides on the first factor (exact either way)
     g1 = x.let(f"{tag}g1", x.where(X[0, 0] < 0.0, -x.pow2(k1), x.pow2(k1)))
-    sym = X[off[0]] == Y[off[0]]
-    for ij in off[1:]:
-        sym = sym & (X[ij] == Y[ij])
-    sym = x.let(f"{tag}sym", sym)
     if exact_only:
         # one exact factor (2^k1 = 2^k unless the largest entry is below 2^-999: the full pass)
         W = {ij: x.let(f"{tag}w{ij[0]}{ij[1]}", v * g1) for ij, v in X.items()}
@@ -224,16 +221,24 @@ def pencil_bounds(x: Any, n: int, Pa: Prepared, Pb: Prepared) -> tuple[list[Any]
     if Pa.sign is not None:  # unscaled W: a value of degree d in A's entries takes sign_A^d
         sab = None
         for key, (v, bound) in list(values.items()):
-            da, db = (int(key[1:]), n - int(key[1:])) if key[0] == "c" else ((int(key[2:]), 0) if key[1] == "A" else (0, int(key[2:])))
-            if da % 2 and db % 2:
+            odd_a, odd_b = (d % 2 == 1 for d in _degrees(key, n))
+            if odd_a and odd_b:
                 sab = sab if sab is not None else x.let("sab", Pa.sign * Pb.sign)
                 values[key] = (x.let(f"{key}s", v * sab), bound)
-            elif da % 2 or db % 2:
-                values[key] = (x.let(f"{key}s", v * (Pa.sign if da % 2 else Pb.sign)), bound)
+            elif odd_a or odd_b:
+                values[key] = (x.let(f"{key}s", v * (Pa.sign if odd_a else Pb.sign)), bound)
     c = [values[f"c{i}"][0] for i in range(n + 1)]
     cr = [values[f"c{i}"][1] for i in range(n + 1)]
     minors = [v for key, v in values.items() if key.startswith("d")]
     return c, cr, minors
+
+
+def _degrees(key: str, n: int) -> tuple[int, int]:
+    """Degrees in A's and in B's entries of a pencil output: ``c{i}`` (i, n - i), ``dA{k}`` (k, 0), ``dB{k}`` (0, k)."""
+    if key[0] == "c":
+        return int(key[1:]), n - int(key[1:])
+    k = int(key[2:])
+    return (k, 0) if key[1] == "A" else (0, k)
 
 
 def decide(x: Any, n: int, c: list[Any], cr: list[Any], minors: list[tuple[Any, Any]], ok: Any) -> tuple[Any, Any, Any]:
