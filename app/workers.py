@@ -15,9 +15,9 @@ Children never outlive the server: each asks the kernel for SIGKILL when its par
 process goes, even on SIGKILL), with a watchdog thread polling the parent pid as a fallback;
 :meth:`WorkerPool.shutdown` kills the running jobs and refuses new ones.
 
-Children run at a lower CPU priority (:data:`JOB_NICE`): when the machine is busy, the server's
-own threads (``/healthz``, short requests, the scene's interaction) get the CPU before a job;
-an idle machine gives jobs all of it.
+Children run under Linux's batch scheduling policy (``SCHED_BATCH``): they keep their fair
+share of the CPU (a job's budget means the same on a busy machine), but a server thread that
+wakes up (``/healthz``, a short request, the scene's interaction) is not kept waiting behind them.
 """
 
 from __future__ import annotations
@@ -140,17 +140,21 @@ def _die_with_parent() -> None:
     threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
 
 
-JOB_NICE = 10
-"""Niceness added to each job's process (Linux CFS: a nice-10 job gets ~1/10 of a core against
-a busy nice-0 server thread, and every idle cycle)."""
+def _batch_policy() -> None:
+    """This process under ``SCHED_BATCH``: CPU-bound, never preempting a waking server thread.
+
+    Not a lower priority (``nice``): a niced job would get a fraction of its share whenever any
+    other process is busy, and run out of its wall-clock budget on a loaded machine.
+    """
+    try:
+        os.sched_setscheduler(0, os.SCHED_BATCH, os.sched_param(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        pass
 
 
 def _child(conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_mb: int | None) -> None:
     _die_with_parent()
-    try:
-        os.nice(JOB_NICE)
-    except (AttributeError, OSError):  # pragma: no cover - a platform without nice
-        pass
+    _batch_policy()
     if memory_mb is not None:
         try:
             import resource
