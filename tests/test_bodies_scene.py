@@ -22,6 +22,8 @@ import pytest
 
 viser = pytest.importorskip("viser")
 
+from test_browser_scene import choose  # noqa: E402
+
 from app.bodyfiles import BodySet, read_bodies, write_bodies_csv  # noqa: E402
 from app.scene.bodies import PAGE_SIZE, BodiesModel  # noqa: E402
 from app.scene.bodies_layers import FINE_NODE, NETWORK_NODE, BodyLayers, points_node  # noqa: E402
@@ -336,12 +338,6 @@ def until(cond, timeout: float = 60.0, what: str = "") -> None:
 
 def text_shown(page, fragment: str) -> None:
     page.wait_for_function("(f) => document.body.innerText.includes(f)", arg=fragment, timeout=60_000)
-
-
-def choose(page, label: str, option: str) -> None:
-    """Pick ``option`` in the dropdown labelled ``label`` (Mantine combobox)."""
-    page.get_by_text(label, exact=True).click()
-    page.get_by_role("option", name=" ".join(option.split()), exact=True).click()
 
 
 def set_field(page, label: str, text: str) -> None:

@@ -68,12 +68,29 @@ def node(hs, name: str) -> dict:
     return hs.page.evaluate(NODE_JS, name)
 
 
-def choose(page, label: str, option: str, folder: str | None = None) -> None:
-    """Pick ``option`` in the dropdown labelled ``label`` (opening ``folder`` first)."""
+def choose(page, label: str, option: str, folder: str | None = None, timeout: float = 120.0) -> None:
+    """Pick ``option`` in the dropdown labelled ``label`` (opening ``folder`` first).
+
+    A re-render of the panel (the server's answer to the previous action) can close the list
+    as it opens: while no list is open and the option has not shown, the label is clicked again.
+    """
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
     if folder is not None and not page.get_by_text(label, exact=True).is_visible():
         page.get_by_text(folder, exact=True).click()
+    wanted = page.get_by_role("option", name=" ".join(option.split()), exact=True)
+    deadline = time.monotonic() + timeout
     page.get_by_text(label, exact=True).click()
-    page.get_by_role("option", name=option, exact=True).click()
+    while True:
+        try:
+            wanted.wait_for(state="visible", timeout=5000)
+            break
+        except PlaywrightTimeout:
+            if time.monotonic() > deadline:
+                raise
+            if not page.get_by_role("listbox").first.is_visible():  # closed, not slow: open it again
+                page.get_by_text(label, exact=True).click()
+    wanted.click()
 
 
 TEXT_INPUT = "(e, v) => e.value === v && e.offsetParent !== null && e.getAttribute('inputmode') !== 'decimal'"
