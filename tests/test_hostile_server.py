@@ -80,6 +80,7 @@ class Probes:
         self.failures: list[str] = []
         self.memory: list[float] = []
         self._stop = threading.Event()
+        self._first = threading.Event()  # one /healthz answered: the probes run before the attack starts
         self._threads = [threading.Thread(target=self._health, daemon=True), threading.Thread(target=self._rss, daemon=True)]
 
     def _health(self) -> None:
@@ -93,6 +94,7 @@ class Probes:
                 except httpx.HTTPError as e:
                     self.failures.append(repr(e))
                 self.latencies.append(time.monotonic() - t0)
+                self._first.set()
                 self._stop.wait(0.05)
 
     def _rss(self) -> None:
@@ -103,6 +105,7 @@ class Probes:
     def __enter__(self) -> Probes:
         for th in self._threads:
             th.start()
+        self._first.wait(30)  # a state, not a sleep: on a loaded machine the thread may start late
         return self
 
     def __exit__(self, *exc: object) -> None:
