@@ -215,7 +215,8 @@ def make_figures(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
         ax.set_xlabel("gap exponent k (negative: overlapping side)")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("fraction of pairs")
-    axes[1].legend(fontsize=7)
+    if axes[1].get_legend_handles_labels()[0]:  # a run without near-tangent 3D rows has nothing to name
+        axes[1].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(outdir / "near_tangent.png", dpi=110)
     plt.close(fig)

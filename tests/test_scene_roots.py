@@ -108,14 +108,17 @@ def test_roots_panel_in_a_session_only_when_switched_on():
         s = Session(server, SceneConfig.from_dict({"preset": "example-29", "event": 1}))
         assert s.ready.wait(120)
         r = s.ui.roots
-        s.panel.show(s.state)
+        with s.lock:  # the session's timer may draw the panel at the same time
+            s.panel.show(s.state)
         assert r.plane is None and r.locus_plot is None and not r._cache
         r.show_roots.value = True
-        s.panel.show(s.state)
+        with s.lock:  # the session's timer may draw the panel at the same time
+            s.panel.show(s.state)
         assert r.plane is not None and r.locus_plot is not None
         assert "a positive double root" in r.words.content and "Var(" in r.words.content and "Rule:" in r.words.content
         r.show_roots.value = False
-        s.panel.show(s.state)
+        with s.lock:  # the session's timer may draw the panel at the same time
+            s.panel.show(s.state)
         assert r.plane is None and r.locus_plot is None
         s.close()
     finally:
@@ -139,7 +142,8 @@ def test_rounded_fields_give_the_exact_matrix_one_click_away():
     try:
         s = Session(server, SceneConfig.from_dict({"preset": "example-29", "t": "1/5"}))
         assert s.ready.wait(120)
-        s.panel.show(s.state)
+        with s.lock:  # the session's timer may draw the panel at the same time
+            s.panel.show(s.state)
         sg = s.ui.shapes["A"]
         assert sg.fields["center"].value.startswith("≈ ") and sg.exact.visible
         copied = html.unescape(re.search(r'data-copy="([^"]*)"', sg.exact.content).group(1))
@@ -173,7 +177,8 @@ def test_touch_then_static_shapes_the_controls_say_the_state():
         while not (s.state.motion is not None and s.state.analysis is not None and s.state.event is not None):
             assert time.monotonic() < deadline, "no touch motion"
             time.sleep(0.02)
-        s.panel.show(s.state)
+        with s.lock:  # the session's timer may draw the panel at the same time
+            s.panel.show(s.state)
         assert s.state.relation == "tangent"
         assert s.ui.motion.preset.value == TOUCH and TOUCH in s.ui.motion.preset.options
         ev = s.state.analysis.events[s.state.event - 1]
@@ -181,7 +186,8 @@ def test_touch_then_static_shapes_the_controls_say_the_state():
         assert s.ui.view.gizmo_note.visible
         s.ui.motion.preset.value = STATIC  # re-picking "(static shapes)" works
         assert s.state.motion is None and s.ui.motion.preset.value == STATIC
-        s.panel.show(s.state)
+        with s.lock:  # the session's timer may draw the panel at the same time
+            s.panel.show(s.state)
         texts = {n: {k: h.value for k, h in s.ui.shapes[n].fields.items()} for n in "AB"}
         assert not any(v.startswith("≈") for t in texts.values() for k, v in t.items() if k != "matrix"), texts
         from test_browser_fields import shape_matrix
