@@ -390,6 +390,34 @@ def test_preset_pick_sends_one_grid_and_the_panel_after_the_picture(server):
         cache.shutdown()
 
 
+def test_pending_until_the_deferred_panel_is_drawn(server):
+    """pending() stays true while the timer's thread draws the panel: a test (or a screenshot)
+    that waits on it must not go on before the readout is sent (a loaded run saw pending() false
+    mid-draw and missed the readout's message)."""
+    import threading
+
+    s = Session(server, unit_spheres(3, "3"))
+    try:
+        until_idle(s)
+        inside, release = threading.Event(), threading.Event()
+        show = s.panel.show
+
+        def slow_show(st, **kw):
+            inside.set()
+            assert release.wait(30)
+            show(st, **kw)
+
+        s.panel.show = slow_show
+        s.refresh(defer=True)
+        assert inside.wait(30), "the deferred panel was not drawn"
+        assert s.pending(), "pending() was false while the panel was being drawn"
+        release.set()
+        until_idle(s)
+        assert not s.pending()
+    finally:
+        s.close()
+
+
 def until_idle(s: Session, timeout: float = 30.0) -> None:
     deadline = time.monotonic() + timeout
     while s.pending():

@@ -337,25 +337,38 @@ class Session:
     def _flush(self) -> None:
         """The coalesced part of refresh: witnesses after a drag, the panel, the plot cursor."""
         try:
-            with self.lock, self.batch():
-                self._timer = None
-                if self.closed:
-                    return
-                st = self.state
-                if self._witness_due:
-                    self._witness_due = False
-                    if st.motion is None:
-                        self._draw(static_picture(st.shapes, quick=False, plane=st.separating_plane))
-                if self._panels_due:
-                    self._panels_due = self._plots_due = False
-                    self.panel.show(st)
-                elif self._plots_due:
-                    self._plots_due = False
-                    self.panel.show_plots(st)
+            with self.lock:
+                drawn = False
+                try:
+                    with self.batch():
+                        self._flush_due()
+                    drawn = True
+                finally:
+                    # pending() stays true until the panel is drawn (a caller waiting for the
+                    # refresh must not see it done while the timer's thread is still drawing)
+                    self._timer = None
+                    if drawn and not self.closed:
+                        self._schedule(self.PANEL_PERIOD)  # something asked again meanwhile
         except RuntimeError as e:  # the tab or the server went away while the timer waited
             if "removed" not in str(e) and "closed" not in str(e):
                 raise
             self.closed = True
+
+    def _flush_due(self) -> None:
+        """What :meth:`_flush` draws: the due witnesses, panel and plot cursor (lock held)."""
+        if self.closed:
+            return
+        st = self.state
+        if self._witness_due:
+            self._witness_due = False
+            if st.motion is None:
+                self._draw(static_picture(st.shapes, quick=False, plane=st.separating_plane))
+        if self._panels_due:
+            self._panels_due = self._plots_due = False
+            self.panel.show(st)
+        elif self._plots_due:
+            self._plots_due = False
+            self.panel.show_plots(st)
 
     # ------------------------------------------------------------------ entry points
     def apply_drag(self, name: str, position: tuple[float, ...], wxyz: tuple[float, ...]) -> str | None:
