@@ -831,8 +831,7 @@ def test_leaving_a_motion_certifies_exactly_what_the_fields_show(server):
     s.ui.motion.preset.value = STATIC
     assert s.state.motion is None and "exactly the decimals their fields show" in s.state.status
     s.ui.shapes["A"].fields["center"].value = "0, 2"
-    with s.lock:  # the session's timer may draw the panel at the same time
-        s.panel.show(s.state)
+    s.show_panel()
     texts = {n: {k: h.value for k, h in s.ui.shapes[n].fields.items()} for n in "AB"}
     assert texts["A"]["semi_axes"] == texts["B"]["semi_axes"] == "1, 1", texts
     assert texts["A"]["center"] == "0, 2"

@@ -108,17 +108,14 @@ def test_roots_panel_in_a_session_only_when_switched_on():
         s = Session(server, SceneConfig.from_dict({"preset": "example-29", "event": 1}))
         assert s.ready.wait(120)
         r = s.ui.roots
-        with s.lock:  # the session's timer may draw the panel at the same time
-            s.panel.show(s.state)
+        s.show_panel()
         assert r.plane is None and r.locus_plot is None and not r._cache
         r.show_roots.value = True
-        with s.lock:  # the session's timer may draw the panel at the same time
-            s.panel.show(s.state)
+        s.show_panel()
         assert r.plane is not None and r.locus_plot is not None
         assert "a positive double root" in r.words.content and "Var(" in r.words.content and "Rule:" in r.words.content
         r.show_roots.value = False
-        with s.lock:  # the session's timer may draw the panel at the same time
-            s.panel.show(s.state)
+        s.show_panel()
         assert r.plane is None and r.locus_plot is None
         s.close()
     finally:
@@ -142,8 +139,7 @@ def test_rounded_fields_give_the_exact_matrix_one_click_away():
     try:
         s = Session(server, SceneConfig.from_dict({"preset": "example-29", "t": "1/5"}))
         assert s.ready.wait(120)
-        with s.lock:  # the session's timer may draw the panel at the same time
-            s.panel.show(s.state)
+        s.show_panel()
         sg = s.ui.shapes["A"]
         assert sg.fields["center"].value.startswith("≈ ") and sg.exact.visible
         copied = html.unescape(re.search(r'data-copy="([^"]*)"', sg.exact.content).group(1))
@@ -177,8 +173,7 @@ def test_touch_then_static_shapes_the_controls_say_the_state():
         while not (s.state.motion is not None and s.state.analysis is not None and s.state.event is not None):
             assert time.monotonic() < deadline, "no touch motion"
             time.sleep(0.02)
-        with s.lock:  # the session's timer may draw the panel at the same time
-            s.panel.show(s.state)
+        s.show_panel()
         assert s.state.relation == "tangent"
         assert s.ui.motion.preset.value == TOUCH and TOUCH in s.ui.motion.preset.options
         ev = s.state.analysis.events[s.state.event - 1]
@@ -186,8 +181,7 @@ def test_touch_then_static_shapes_the_controls_say_the_state():
         assert s.ui.view.gizmo_note.visible
         s.ui.motion.preset.value = STATIC  # re-picking "(static shapes)" works
         assert s.state.motion is None and s.ui.motion.preset.value == STATIC
-        with s.lock:  # the session's timer may draw the panel at the same time
-            s.panel.show(s.state)
+        s.show_panel()
         texts = {n: {k: h.value for k, h in s.ui.shapes[n].fields.items()} for n in "AB"}
         assert not any(v.startswith("≈") for t in texts.values() for k, v in t.items() if k != "matrix"), texts
         from test_browser_fields import shape_matrix

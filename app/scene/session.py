@@ -354,6 +354,11 @@ class Session:
                 raise
             self.closed = True
 
+    def show_panel(self) -> None:
+        """Draw the whole panel now, under the lock (the timer's thread may be drawing it too)."""
+        with self.lock:
+            self.panel.show(self.state)
+
     def _flush_due(self) -> None:
         """What :meth:`_flush` draws: the due witnesses, panel and plot cursor (lock held)."""
         if self.closed:
