@@ -56,12 +56,46 @@ def field_text(page, handle) -> str:
     return value
 
 
+_HANDLED: dict[str, int] = {}
+"""Handle uuid -> update callbacks the server has finished (:func:`_count_updates`)."""
+
+
+def _count_updates(handle) -> None:
+    """Count the server's update callbacks of ``handle`` as they finish (wrapped once).
+
+    viser runs them in a thread pool after it stores the new value, so neither the value nor
+    the session's idle state says that the edit was handled; the count does.
+    """
+    impl = handle._impl
+    if impl.uuid in _HANDLED:
+        return
+    assert impl.update_cb, f"field {handle.label!r} has no server callback to wait for"
+    _HANDLED[impl.uuid] = 0
+
+    def wrap(cb):
+        def run(event):
+            try:
+                return cb(event)
+            finally:
+                _HANDLED[impl.uuid] += 1
+
+        return run
+
+    impl.update_cb[:] = [wrap(cb) for cb in impl.update_cb]
+
+
 def type_field(page, handle, text: str) -> None:
-    """Type ``text`` into the field of ``handle`` in the page and press Enter."""
+    """Type ``text`` into the field of ``handle`` in the page, press Enter, and wait until the
+    server has handled it (Enter reaches the server over the websocket later: a check before
+    that would read the old readout beside the new text)."""
+    _count_updates(handle)
+    before, changed = _HANDLED[handle._impl.uuid], handle.value != text
     box = page.locator(f'[aria-labelledby="label-{handle._impl.uuid}"]')
     box.wait_for(state="visible")
     box.fill(text)
     box.press("Enter")
+    if changed:  # viser calls back only on a new value
+        until(lambda: _HANDLED[handle._impl.uuid] >= before + len(handle._impl.update_cb), what=f"the server to handle {text!r}")
 
 
 def readout_relation(page) -> str:
