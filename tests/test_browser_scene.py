@@ -142,6 +142,22 @@ def assert_pose(hs, name: str, position, scale=None) -> None:
 
 
 # ---------------------------------------------------------------------------- defect 1
+def test_a_new_tab_runs_the_client_from_the_browser_cache(hs, monkeypatch):
+    """The client's code and style are files the browser keeps (app/scene/page.py): a new tab in
+    the same browser asks the server for neither, and runs the code from the file, not inline."""
+    import app.scene.links as links
+
+    open_on(hs, {"preset": "example-29", "t": 0.3})  # the browser has fetched the files at least once
+    asked: list[str] = []
+    real = links.client_asset_response
+    monkeypatch.setattr(links, "client_asset_response", lambda request, name: (asked.append(name), real(request, name))[1])
+    s = open_on(hs, {"preset": "example-30", "t": 0.5})
+    assert asked == []
+    assert s.state.relation is not None and hs.page.evaluate("() => window.__viserMutable != null")
+    srcs = hs.page.evaluate("() => Array.from(document.scripts).map(e => e.src).filter(u => u.includes('/_client/'))")
+    assert len(srcs) == 1 and srcs[0].endswith(".js")
+
+
 def test_dimension_switch_then_tangent_circles_are_drawn_where_certified(hs):
     """Defect 1: after View -> Dimension -> 2D the shapes keep no pose of the 3D scene; two unit
     circles typed 2 apart are certified TANGENT and drawn touching, the contact point between them."""

@@ -28,6 +28,7 @@ from collections.abc import Callable
 from typing import Any
 from urllib.parse import urlsplit
 
+from .page import CLIENT_PREFIX, client_asset_response, page_response
 from .state import SceneConfig
 
 __all__ = ["encode_config", "decode_config", "TabStore", "Router", "MAX_LINK_CHARS", "link_path"]
@@ -139,7 +140,8 @@ class Router:
 
     * ``GET /`` (the page, not the websocket) -> 302 to ``/s/<new id>/`` (the query kept);
     * ``GET /c/<token>/`` -> the token is stored for a new tab id, 302 to ``/s/<id>/``;
-    * ``GET /s/<id>/...`` -> viser's page (the client is one self-contained ``index.html``).
+    * ``GET /s/<id>/...`` -> viser's page (:mod:`app.scene.page`);
+    * ``GET /_client/<hash>.js`` / ``.css`` -> the client's code and style (cached by browsers).
 
     Args:
         store: where tabs keep their configurations.
@@ -157,11 +159,11 @@ class Router:
             if request.headers.get("Upgrade", "").lower() == "websocket":
                 return inner(connection, request) if inner is not None else None
             parts = urlsplit(request.path)
+            if parts.path.startswith(CLIENT_PREFIX):  # the client's code and style, one for every tab
+                return client_asset_response(request, parts.path[len(CLIENT_PREFIX) :])
             if not self.enabled:  # presenter mode: one page, still with its labels tied to inputs
                 if parts.path in ("", "/", "/index.html"):
-                    from .page import page_response
-
-                    return page_response(request)
+                    return page_response(request, CLIENT_PREFIX.lstrip("/"))
                 return inner(connection, request) if inner is not None else None
             query = f"?{parts.query}" if parts.query else ""
             # relative redirects: the same request works behind a proxy that serves the scene
@@ -181,10 +183,8 @@ class Router:
             m = _TAB.match(parts.path)
             if m is not None:  # the page itself, or a file next to it
                 rest = parts.path[m.end():]
-                if rest in ("", "index.html"):
-                    from .page import page_response
-
-                    return page_response(request)  # viser's page with labels tied to inputs
+                if rest in ("", "index.html"):  # viser's page with labels tied to inputs; the
+                    return page_response(request, "../.." + CLIENT_PREFIX)  # client relative: proxies
                 request = dataclasses.replace(request, path="/" + rest + query)
             return inner(connection, request) if inner is not None else None
 

@@ -1,21 +1,33 @@
-"""The scene's page: viser's client with a few lines of our own script.
+"""The scene's page: viser's client with a few lines of our own script, its code cacheable.
 
 viser's text inputs carry a ``<label for=ID>`` whose ID is not the input's id (Mantine gives
 the input its own), so screen readers and ``get_by_label`` found no label for any field. The
 script here ties each label to the input in its row (``aria-labelledby``, and the input takes
 the label's ``for`` id when no element has it), and keeps doing so as the panel changes (a
 ``MutationObserver``). :class:`app.scene.links.Router` serves this page for every tab address.
+
+viser 1.1 ships its client as one ``index.html`` holding the code (2.5 MB of JavaScript and
+150 KB of CSS) zstd-compressed and base-88 encoded, which the page decodes with a WebAssembly
+inflater and runs as an inline module on every load: nothing of it can be cached, so each tab
+(and each reload) downloads 670 KB and compiles the whole client again (~1 s of CPU on the
+2-core test machines). The page served here is viser's loader without the payload; the code
+and the style are files named by their content hash (``_client/<hash>.js`` / ``.css``, served
+with ``Cache-Control: immutable``), so a browser fetches them once and reuses its compiled
+code. Pages of an unknown layout are served as viser ships them.
 """
 
 from __future__ import annotations
 
 import gzip
+import hashlib
 import http
+import re
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-__all__ = ["LABELS_JS", "page_html", "page_response"]
+__all__ = ["CLIENT_PREFIX", "LABELS_JS", "client_asset_response", "page_html", "page_response"]
 
 LABELS_JS = """
 (() => {
@@ -38,34 +50,172 @@ LABELS_JS = """
 """Ties every field's label to its input (accessibility), on load and on every panel change."""
 
 
+CLIENT_PREFIX = "/_client/"
+"""Where the client's code and style are served (``<prefix><sha256 prefix>.js`` / ``.css``)."""
+
+_PAYLOAD = re.compile(r'<script data-p="([^"]*)" data-ss="(\d+)" data-cs="(\d+)">')
+_DECODE_AND_RUN = re.compile(r"const a=de\(d\.p\);.*inst\.exports\.free\(up\);", re.S)
+_DIR = "__CLIENT_DIR__"
+_BASE88 = (
+    "!#$%()*+,-./0123456789:;=?@ABCDEFGHIJKLMNOPQRSTUVWXYZ[\\]^_abcdefghijklmnopqrstuvwxyz{|}~"
+)
+
+
+@dataclass(frozen=True)
+class _Client:
+    """viser's page split into a small loader page and the two files it loads."""
+
+    loader: str
+    """index.html with the payload removed; :data:`_DIR` marks where the files' folder goes."""
+    js: bytes
+    css: bytes
+    name: str
+    """The files' name: a prefix of the SHA-256 of both."""
+
+
+def _base88(text: str) -> bytes:
+    """Decode viser's base-88 (five characters -> four bytes, a short tail -> one fewer)."""
+    value = {c: i for i, c in enumerate(_BASE88)}
+    out = bytearray()
+    full = len(text) - len(text) % 5
+    for i in range(0, full, 5):
+        v = 0
+        for ch in text[i : i + 5]:
+            v = v * 88 + value[ch]
+        out += v.to_bytes(4, "big")
+    if len(text) > full:
+        v = 0
+        for ch in text[full:]:
+            v = v * 88 + value[ch]
+        out += v.to_bytes(len(text) - full - 1, "big")
+    return bytes(out)
+
+
 @lru_cache(maxsize=1)
-def page_html() -> bytes:
-    """Viser's ``index.html`` with :data:`LABELS_JS` before ``</head>`` (read once)."""
+def _client() -> _Client | None:
+    """Split viser's client into loader, code and style.
+
+    None when the page is not laid out as viser 1.1.1 lays it out: then it is served whole.
+    """
     import viser
 
-    page = (Path(viser.__file__).parent / "client" / "build" / "index.html").read_text(encoding="utf-8")
+    page = (Path(viser.__file__).parent / "client" / "build" / "index.html").read_text(
+        encoding="utf-8"
+    )
+    m = _PAYLOAD.search(page)
+    if m is None or len(_DECODE_AND_RUN.findall(page)) != 1 or len(_BASE88) != 88:
+        return None
+    try:
+        import zstandard  # a dependency of viser
+
+        ss, cs = int(m.group(2)), int(m.group(3))
+        raw = zstandard.ZstdDecompressor().decompress(_base88(m.group(1)), max_output_size=ss + cs)
+    except Exception:  # noqa: BLE001 - any surprise: serve viser's page unchanged
+        return None
+    if len(raw) != ss + cs:
+        return None
+    name = hashlib.sha256(raw).hexdigest()[:20]
+    # the loader still builds the zstd module the client uses (globalThis.__viserZstdWasm), then
+    # runs the client from its file instead of decoding it; the style is linked in the head
+    run = (
+        'const e=document.createElement("script");e.type="module";'
+        'e.src="__CLIENT_DIR__' + name + '.js";document.head.appendChild(e);'
+    )
+    loader = page[: m.start()] + '<script data-p="" data-ss="0" data-cs="0">' + page[m.end() :]
+    loader = _DECODE_AND_RUN.sub(lambda _: run, loader, count=1)
+    links = (
+        '<link rel="stylesheet" href="__CLIENT_DIR__' + name + '.css">'
+        '<link rel="modulepreload" href="__CLIENT_DIR__' + name + '.js">'
+    )
+    loader = loader.replace("<title>", links + "<title>", 1)
+    return _Client(loader=loader, js=raw[ss:], css=raw[:ss], name=name)
+
+
+@lru_cache(maxsize=4)
+def page_html(client_dir: str = CLIENT_PREFIX) -> bytes:
+    """The page: viser's loader running the client from ``client_dir``, :data:`LABELS_JS` added.
+
+    ``client_dir`` is a URL path, relative to the page or absolute; viser's whole page (with
+    :data:`LABELS_JS`) when its layout is unknown.
+    """
+    import viser
+
+    client = _client()
+    if client is not None:
+        page = client.loader.replace(_DIR, client_dir)
+    else:
+        page = (Path(viser.__file__).parent / "client" / "build" / "index.html").read_text(
+            encoding="utf-8"
+        )
     script = f"<script>{LABELS_JS}</script>"
     return page.replace("</head>", script + "</head>", 1).encode("utf-8")
 
 
-@lru_cache(maxsize=1)
-def _gzipped() -> bytes:
-    return gzip.compress(page_html())
+@lru_cache(maxsize=8)
+def _gzipped(client_dir: str) -> bytes:
+    return gzip.compress(page_html(client_dir))
 
 
-def page_response(request: Any) -> Any:
-    """A ``websockets`` HTTP response with the page (gzip when the browser takes it)."""
+@lru_cache(maxsize=4)
+def _asset(name: str) -> tuple[bytes, bytes, str] | None:
+    """(body, gzipped body, content type) of ``<hash>.js`` / ``<hash>.css``, or None."""
+    client = _client()
+    if client is None:
+        return None
+    if name == client.name + ".js":
+        return client.js, gzip.compress(client.js), "text/javascript; charset=utf-8"
+    if name == client.name + ".css":
+        return client.css, gzip.compress(client.css), "text/css; charset=utf-8"
+    return None
+
+
+def _response(request: Any, body: bytes, gzipped: bytes, content_type: str, cache: str) -> Any:
     from websockets.datastructures import Headers
     from websockets.http11 import Response
 
     use_gzip = "gzip" in request.headers.get("Accept-Encoding", "")
-    body = _gzipped() if use_gzip else page_html()
+    data = gzipped if use_gzip else body
     headers = Headers(
         **{
-            "Content-Type": "text/html; charset=utf-8",
-            "Content-Length": str(len(body)),
+            "Content-Type": content_type,
+            "Content-Length": str(len(data)),
             "Content-Encoding": "gzip" if use_gzip else "identity",
-            "Cache-Control": "no-store",
+            "Cache-Control": cache,
+            "Connection": "close",  # the websockets server closes after an HTTP answer: say so
         }
     )
-    return Response(http.HTTPStatus.OK, "OK", headers, body)
+    return Response(http.HTTPStatus.OK, "OK", headers, data)
+
+
+def page_response(request: Any, client_dir: str = CLIENT_PREFIX) -> Any:
+    """A ``websockets`` HTTP response with the page (gzip when the browser takes it), never cached.
+
+    The client's files it names are cached (see :func:`client_asset_response`).
+    """
+    return _response(
+        request, page_html(client_dir), _gzipped(client_dir), "text/html; charset=utf-8", "no-store"
+    )
+
+
+def client_asset_response(request: Any, name: str) -> Any:
+    """The client's code or style ``name`` (``<hash>.js`` / ``.css``), or 404.
+
+    Cacheable for good: the name changes with the content.
+    """
+    asset = _asset(name)
+    if asset is None:
+        from websockets.datastructures import Headers
+        from websockets.http11 import Response
+
+        body = b"no such client file\n"
+        headers = Headers(
+            **{
+                "Content-Type": "text/plain",
+                "Content-Length": str(len(body)),
+                "Cache-Control": "no-store",
+                "Connection": "close",
+            }
+        )
+        return Response(http.HTTPStatus.NOT_FOUND, "Not Found", headers, body)
+    body, gzipped, content_type = asset
+    return _response(request, body, gzipped, content_type, "public, max-age=31536000, immutable")
