@@ -128,6 +128,9 @@ class HeadlessScene:
         shared: presenter mode (one scene for every tab).
         prefetch: analyse every preset when the server starts, as ``serve`` does (off: only
             what is shown is analysed, the right thing for screenshots).
+        dpr: device pixel ratio the canvas renders at (viser's ``fixedDpr``): 1 for pictures;
+            the browser tests take 0.5 (a quarter of the pixels: software WebGL draws a frame in
+            about half the CPU time, and they read colours and three.js state, not detail).
     """
 
     def __init__(
@@ -140,8 +143,12 @@ class HeadlessScene:
         shared: bool = False,
         bodies: Any = None,
         prefetch: bool = False,
+        dpr: float = 1.0,
     ) -> None:
+        if not 0.1 <= dpr <= 4:
+            raise ValueError(f"dpr must be in [0.1, 4], not {dpr}")
         self.config = config
+        self.dpr = dpr
         self.prefetch = prefetch
         self.bodies = bodies
         """Many bodies to show instead of ``config`` (:mod:`app.scene.bodies_view`), or None."""
@@ -203,7 +210,7 @@ class HeadlessScene:
     @property
     def url(self) -> str:
         """The scene's root URL (with the flags a headless capture needs)."""
-        return f"http://127.0.0.1:{self.scene.port}/?fixedDpr=1&hideViserLogo"
+        return f"http://127.0.0.1:{self.scene.port}/?fixedDpr={self.dpr:g}&hideViserLogo"
 
     def goto(self, path: str, page: Any = None) -> Any:
         """Open ``path`` of the scene in ``page`` (default: the tab); return the new tab's session.
@@ -213,7 +220,7 @@ class HeadlessScene:
         """
         page = page or self.page
         before = max(self.scene.sessions, default=-1)
-        page.goto(f"http://127.0.0.1:{self.scene.port}{path}{'&' if '?' in path else '?'}fixedDpr=1&hideViserLogo")
+        page.goto(f"http://127.0.0.1:{self.scene.port}{path}{'&' if '?' in path else '?'}fixedDpr={self.dpr:g}&hideViserLogo")
         page.add_style_tag(content=_HIDE_TOAST)
         session = self.scene.wait_for_session(self.timeout, after=before) if not self.shared else self.scene.shared
         if page is self.page:

@@ -19,6 +19,13 @@ settings.register_profile("dev", max_examples=300, deadline=None, suppress_healt
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
+TEST_DPR = 0.5
+"""Device pixel ratio of the test tabs' canvas: a quarter of the pixels of a picture, so that
+software WebGL draws each frame in about half the CPU time (measured 0.15 -> 0.08 CPU-s per frame
+at 1000 x 720); the tests read colours, three.js state and the panel, not detail. Pictures
+(``app.screenshot``, the screenshot tests) keep 1."""
+
+
 def _chromium() -> bool:
     return os.path.exists("/usr/bin/chromium")
 
@@ -41,7 +48,7 @@ class _SharedScene:
             from app.scene.state import SceneConfig
             from app.screenshot import HeadlessScene
 
-            scene = HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1000, height=720, timeout=90)
+            scene = HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1000, height=720, timeout=90, dpr=TEST_DPR)
             self.scene = scene.__enter__()
         return self.scene
 

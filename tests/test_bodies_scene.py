@@ -317,9 +317,10 @@ def bodies_page(demo_file):
         pytest.skip("needs Debian chromium at /usr/bin/chromium")
     from app.scene.state import SceneConfig
     from app.screenshot import HeadlessScene
+    from conftest import TEST_DPR
 
     m = load_model(str(demo_file))
-    with HeadlessScene(SceneConfig(), bodies=m, width=1000, height=720, timeout=120) as hs:
+    with HeadlessScene(SceneConfig(), bodies=m, width=1000, height=720, timeout=120, dpr=TEST_DPR) as hs:
         yield hs, m
 
 

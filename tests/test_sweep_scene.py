@@ -386,9 +386,10 @@ def sweep_page(scene_files):
         pytest.skip("needs Debian chromium at /usr/bin/chromium")
     from app.scene.state import SceneConfig
     from app.screenshot import HeadlessScene
+    from conftest import TEST_DPR
 
     m = SweepModel(read_moving_bodies(str(scene_files[0]), str(scene_files[1])))
-    with HeadlessScene(SceneConfig(), bodies=m, width=1000, height=720, timeout=120) as hs:
+    with HeadlessScene(SceneConfig(), bodies=m, width=1000, height=720, timeout=120, dpr=TEST_DPR) as hs:
         yield hs, m
 
 

@@ -119,5 +119,4 @@ class Contacts:
 
     def certified_counts(self) -> dict[str, int]:
         """Reported pairs per certifier: ``{"float": ..., "exact": ...}``."""
-        by = np.bincount(self.certified_by.astype(np.int64), minlength=3)
-        return {str(Certifier(k)): int(by[k]) for k in (Certifier.FLOAT, Certifier.EXACT)}
+        return Certifier.counts(self.certified_by)

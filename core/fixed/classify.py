@@ -57,6 +57,12 @@ class Certifier(IntEnum):
     def __str__(self) -> str:
         return self.name.lower()
 
+    @staticmethod
+    def counts(certified_by: np.ndarray) -> dict[str, int]:
+        """Pairs per certifier in an array of codes: ``{"float": ..., "exact": ...}``."""
+        by = np.bincount(np.asarray(certified_by, dtype=np.int64).ravel(), minlength=3)
+        return {str(Certifier(k)): int(by[k]) for k in (Certifier.FLOAT, Certifier.EXACT)}
+
 
 class Stats:
     """Counters of filter calls and failures (CGAL's profiler), filled when passed to classify."""
