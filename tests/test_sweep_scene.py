@@ -27,6 +27,7 @@ from oracle import oracle_relation  # noqa: E402
 
 from app.bodyfiles import write_bodies_csv  # noqa: E402
 from app.scene.analysis import AnalysisView  # noqa: E402
+from app.scene.bodies_lod import ViewPose  # noqa: E402
 from app.scene.bodies_view import BodiesView  # noqa: E402
 from app.scene.sweep_model import PENDING_COLOUR, SweepModel, compare_times, same_time  # noqa: E402
 from app.sweep_cli import read_moving_bodies  # noqa: E402
@@ -325,6 +326,22 @@ def test_two_tabs_have_their_own_time(server, model):
         a.close()
         b.close()
         other.stop()
+
+
+def test_a_closed_view_sends_nothing(server, model, monkeypatch):
+    """The tab went away: a moment the worker finishes or a camera timer that fires afterwards
+    draws nothing (viser would queue the messages on a closed connection and warn)."""
+    view = BodiesView(server, model)
+    tl = view.timeline
+    assert tl is not None and view.layers is not None and tl.wait_certified(60)
+    pose = ViewPose.looking_at([10.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], fov=1.0, aspect=1.5, height_px=720)
+    view.close()
+    sent: list[str] = []
+    monkeypatch.setattr(type(view.layers), "set_bodies", lambda *a, **k: sent.append("set_bodies"))
+    monkeypatch.setattr(type(view.layers), "set_pose", lambda *a, **k: sent.append("set_pose"))
+    tl._draw(model.current)
+    view.set_pose(pose)
+    assert sent == []
 
 
 def test_cli_to_needs_bodies_and_matching_files(scene_files, tmp_path, capsys):

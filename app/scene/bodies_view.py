@@ -164,8 +164,8 @@ class BodiesView:
     def set_pose(self, pose: ViewPose | None) -> None:
         """Choose the solids for this camera pose (the tab's camera calls it when it stops)."""
         with self._lock:
-            if self.layers is None or self.pair is not None or pose is None:
-                return
+            if self._closed or self.layers is None or self.pair is not None or pose is None:
+                return  # closed: a camera timer that fired as the tab went away draws nothing
             self.layers.set_pose(pose)
             self._last_pose = time.monotonic()
             self._show_drawn()

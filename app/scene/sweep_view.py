@@ -100,7 +100,13 @@ class SweepTimeline:
         return m
 
     def _draw(self, m: Moment) -> None:
-        """Send the bodies of moment m (view lock held): points, solids, the selected body's label."""
+        """Send the bodies of moment m (view lock held): points, solids, the selected body's label.
+
+        Nothing once the view is closed: the worker may finish a moment after its tab went away,
+        and messages to a closed connection are never delivered (viser warns about each).
+        """
+        if self._closed:
+            return
         view = self.view
         if view.layers is not None:
             model = self.model
