@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 import os
-import time
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +21,8 @@ import pytest
 
 viser = pytest.importorskip("viser")
 
+import browser_helpers  # noqa: E402
+from browser_helpers import field_input, text_shown, until  # noqa: E402
 from test_browser_scene import choose  # noqa: E402
 
 from app.bodyfiles import BodySet, read_bodies, write_bodies_csv  # noqa: E402
@@ -313,15 +314,7 @@ NODE_JS = """(n) => {
 @pytest.fixture(scope="module")
 def bodies_page(demo_file):
     """One browser and one server for the browser tests of this module, on the demo bodies."""
-    if not os.path.exists("/usr/bin/chromium"):
-        pytest.skip("needs Debian chromium at /usr/bin/chromium")
-    from app.scene.state import SceneConfig
-    from app.screenshot import HeadlessScene
-    from conftest import TEST_DPR
-
-    m = load_model(str(demo_file))
-    with HeadlessScene(SceneConfig(), bodies=m, width=1000, height=720, timeout=120, dpr=TEST_DPR) as hs:
-        yield hs, m
+    yield from browser_helpers.bodies_page(load_model(str(demo_file)))
 
 
 def fresh_tab(hs):
@@ -329,28 +322,9 @@ def fresh_tab(hs):
     return hs.goto("/")
 
 
-def until(cond, timeout: float = 60.0, what: str = "") -> None:
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what or cond}")
-        time.sleep(0.02)
-
-
-def text_shown(page, fragment: str) -> None:
-    page.wait_for_function("(f) => document.body.innerText.includes(f)", arg=fragment, timeout=60_000)
-
-
 def set_field(page, label: str, text: str) -> None:
     """Type ``text`` into the text field labelled ``label`` and press Enter."""
-    idx = page.evaluate(
-        """(l) => {
-          const label = Array.from(document.querySelectorAll('label')).find(e => e.textContent === l && e.offsetParent !== null);
-          const input = label?.closest('.mantine-Flex-root')?.querySelector('input');
-          return Array.from(document.querySelectorAll('input')).indexOf(input);
-        }""", label)
-    assert idx >= 0, f"no field labelled {label!r}"
-    box = page.locator("input").nth(idx)
+    box = field_input(page, label)
     box.fill(text)
     box.press("Enter")
 

@@ -12,10 +12,10 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable
 
 import numpy as np
 import pytest
+from browser_helpers import text_shown, until
 
 from app.scene.links import link_path
 
@@ -49,14 +49,6 @@ CHARTS_JS = """() => Object.values(window.__viserTestpoints?.uplots ?? {}).filte
 def hs(headless_scene):
     """The session's one browser and scene (tests/conftest.py)."""
     return headless_scene
-
-
-def until(cond: Callable[[], object], timeout: float = 60.0, what: str = "") -> None:
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what or cond}")
-        time.sleep(0.02)
 
 
 def open_on(hs, config: dict):
@@ -127,10 +119,6 @@ def set_field(page, label: str, text: str) -> None:
 
 def open_folder(page, title: str) -> None:
     page.get_by_text(title, exact=True).click()
-
-
-def text_shown(page, fragment: str, timeout: float = 30.0) -> None:
-    page.wait_for_function("(f) => document.body.innerText.includes(f)", arg=fragment, timeout=timeout * 1000)
 
 
 def assert_pose(hs, name: str, position, scale=None) -> None:

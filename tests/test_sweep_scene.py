@@ -13,7 +13,6 @@ sphere grazing another at t = 1/2, one leaving another at 1/3).
 from __future__ import annotations
 
 import os
-import time
 from fractions import Fraction
 from pathlib import Path
 
@@ -23,6 +22,8 @@ from flint import fmpq
 
 viser = pytest.importorskip("viser")
 
+import browser_helpers  # noqa: E402
+from browser_helpers import field_input, text_shown, until  # noqa: E402
 from oracle import oracle_relation  # noqa: E402
 
 from app.bodyfiles import write_bodies_csv  # noqa: E402
@@ -399,39 +400,12 @@ POINT_COLOURS_JS = """() => {
 @pytest.fixture(scope="module")
 def sweep_page(scene_files):
     """One browser and one server for the browser tests of this module, on the moving scene."""
-    if not os.path.exists("/usr/bin/chromium"):
-        pytest.skip("needs Debian chromium at /usr/bin/chromium")
-    from app.scene.state import SceneConfig
-    from app.screenshot import HeadlessScene
-    from conftest import TEST_DPR
-
-    m = SweepModel(read_moving_bodies(str(scene_files[0]), str(scene_files[1])))
-    with HeadlessScene(SceneConfig(), bodies=m, width=1000, height=720, timeout=120, dpr=TEST_DPR) as hs:
-        yield hs, m
-
-
-def until(cond, timeout: float = 120.0, what: str = "") -> None:
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what or cond}")
-        time.sleep(0.02)
-
-
-def text_shown(page, fragment: str) -> None:
-    page.wait_for_function("(f) => document.body.innerText.includes(f)", arg=fragment, timeout=120_000)
+    yield from browser_helpers.bodies_page(SweepModel(read_moving_bodies(str(scene_files[0]), str(scene_files[1]))))
 
 
 def set_slider(page, label: str, value: str) -> None:
     """Type ``value`` into the number box of the slider labelled ``label`` and press Enter."""
-    idx = page.evaluate(
-        """(l) => {
-          const label = Array.from(document.querySelectorAll('label')).find(e => e.textContent === l && e.offsetParent !== null);
-          const input = label?.closest('.mantine-Flex-root')?.querySelector('input[inputmode="decimal"]');
-          return Array.from(document.querySelectorAll('input')).indexOf(input);
-        }""", label)
-    assert idx >= 0, f"no slider labelled {label!r}"
-    box = page.locator("input").nth(idx)
+    box = field_input(page, label, 'input[inputmode="decimal"]')
     box.fill(value)
     box.press("Enter")
 

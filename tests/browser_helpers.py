@@ -1,0 +1,53 @@
+"""Waiting on a page's state and opening a headless browser on many bodies: shared by the browser tests.
+
+Every wait is on a state (a condition, a text on the page), never a fixed sleep; the timeouts are
+upper bounds for a loaded machine, so a passing test never waits for them.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import pytest
+
+from conftest import TEST_DPR
+
+
+def until(cond: Callable[[], object], timeout: float = 120.0, what: str = "") -> None:
+    """Poll ``cond`` every 20 ms until it is true; fail naming ``what`` after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while not cond():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what or cond}")
+        time.sleep(0.02)
+
+
+def text_shown(page: Any, fragment: str, timeout: float = 120.0) -> None:
+    """Wait until the page's text contains ``fragment``."""
+    page.wait_for_function("(f) => document.body.innerText.includes(f)", arg=fragment, timeout=timeout * 1000)
+
+
+def bodies_page(model: Any) -> Iterator[tuple[Any, Any]]:
+    """A scene server on ``model`` (many bodies) and one headless tab on it, for a module fixture."""
+    if not os.path.exists("/usr/bin/chromium"):
+        pytest.skip("needs Debian chromium at /usr/bin/chromium")
+    from app.scene.state import SceneConfig
+    from app.screenshot import HeadlessScene
+
+    with HeadlessScene(SceneConfig(), bodies=model, width=1000, height=720, timeout=120, dpr=TEST_DPR) as hs:
+        yield hs, model
+
+
+def field_input(page: Any, label: str, selector: str = "input") -> Any:
+    """The visible input (``selector`` inside the row) of the field labelled ``label``."""
+    idx = page.evaluate(
+        """([l, sel]) => {
+          const label = Array.from(document.querySelectorAll('label')).find(e => e.textContent === l && e.offsetParent !== null);
+          const input = label?.closest('.mantine-Flex-root')?.querySelector(sel);
+          return Array.from(document.querySelectorAll('input')).indexOf(input);
+        }""", [label, selector])
+    assert idx >= 0, f"no field labelled {label!r}"
+    return page.locator("input").nth(idx)
