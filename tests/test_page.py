@@ -124,19 +124,21 @@ def test_unknown_client_files_are_404_never_the_page(scenes):
             assert r.headers["cache-control"] == "no-store"
 
 
+def _clear_caches() -> None:
+    for cached in (page._client, page.page_html, page._gzipped, page._assets):
+        cached.cache_clear()
+
+
 def test_a_page_of_another_layout_is_served_whole(monkeypatch):
     """A viser whose page is not laid out as 1.1.1's: the page as it ships (no split), not an error."""
-    page._client.cache_clear()
-    page.page_html.cache_clear()
-    page._gzipped.cache_clear()
+    _clear_caches()
     try:
         monkeypatch.setattr(page, "_PAYLOAD", re.compile("no such payload"))
         html = page.page_html("../../_client/").decode("utf-8")
         assert page._client() is None
         assert 'data-p="' in html and len(html) > len(VISER_PAGE) and "_client/" not in html
         assert page.LABELS_JS in html
+        assert page._assets() == {}  # no client files to serve: every name is 404
     finally:
         monkeypatch.undo()
-        page._client.cache_clear()
-        page.page_html.cache_clear()
-        page._gzipped.cache_clear()
+        _clear_caches()

@@ -27,7 +27,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-__all__ = ["CLIENT_PREFIX", "LABELS_JS", "client_asset_response", "page_html", "page_response"]
+__all__ = ["CLIENT_PREFIX", "LABELS_JS", "client_asset_response", "page_html", "page_response", "warm"]
 
 LABELS_JS = """
 (() => {
@@ -119,14 +119,11 @@ def _client() -> _Client | None:
     # runs the client from its file instead of decoding it; the style is linked in the head
     run = (
         'const e=document.createElement("script");e.type="module";'
-        'e.src="__CLIENT_DIR__' + name + '.js";document.head.appendChild(e);'
+        f'e.src="{_DIR}{name}.js";document.head.appendChild(e);'
     )
     loader = page[: m.start()] + '<script data-p="" data-ss="0" data-cs="0">' + page[m.end() :]
     loader = _DECODE_AND_RUN.sub(lambda _: run, loader, count=1)
-    links = (
-        '<link rel="stylesheet" href="__CLIENT_DIR__' + name + '.css">'
-        '<link rel="modulepreload" href="__CLIENT_DIR__' + name + '.js">'
-    )
+    links = f'<link rel="stylesheet" href="{_DIR}{name}.css"><link rel="modulepreload" href="{_DIR}{name}.js">'
     loader = loader.replace("<title>", links + "<title>", 1)
     return _Client(loader=loader, js=raw[ss:], css=raw[:ss], name=name)
 
@@ -156,17 +153,29 @@ def _gzipped(client_dir: str) -> bytes:
     return gzip.compress(page_html(client_dir))
 
 
-@lru_cache(maxsize=4)
-def _asset(name: str) -> tuple[bytes, bytes, str] | None:
-    """(body, gzipped body, content type) of ``<hash>.js`` / ``<hash>.css``, or None."""
+@lru_cache(maxsize=1)
+def _assets() -> dict[str, tuple[bytes, bytes, str]]:
+    """``<hash>.js`` and ``<hash>.css`` -> (body, gzipped body, content type).
+
+    Empty when the page is served whole. Built once: a request for another name is a lookup.
+    """
     client = _client()
     if client is None:
-        return None
-    if name == client.name + ".js":
-        return client.js, gzip.compress(client.js), "text/javascript; charset=utf-8"
-    if name == client.name + ".css":
-        return client.css, gzip.compress(client.css), "text/css; charset=utf-8"
-    return None
+        return {}
+    return {
+        client.name + ".js": (client.js, gzip.compress(client.js), "text/javascript; charset=utf-8"),
+        client.name + ".css": (client.css, gzip.compress(client.css), "text/css; charset=utf-8"),
+    }
+
+
+def warm() -> None:
+    """Build the page and the client's files now, not in the first request (once per process).
+
+    The scene server calls it in a thread when it starts.
+    """
+    for client_dir in ("../.." + CLIENT_PREFIX, CLIENT_PREFIX.lstrip("/")):  # tab pages, presenter mode
+        _gzipped(client_dir)
+    _assets()
 
 
 def _response(request: Any, body: bytes, gzipped: bytes, content_type: str, cache: str) -> Any:
@@ -202,7 +211,7 @@ def client_asset_response(request: Any, name: str) -> Any:
 
     Cacheable for good: the name changes with the content.
     """
-    asset = _asset(name)
+    asset = _assets().get(name)
     if asset is None:
         from websockets.datastructures import Headers
         from websockets.http11 import Response

@@ -21,7 +21,7 @@ from typing import Any
 
 import viser
 
-from . import wire
+from . import page, wire
 from .analysis import AnalysisCache
 from .links import Router, TabStore, tab_id_of
 from .session import Session
@@ -208,6 +208,8 @@ def start_scene(
     if port and not _port_free(host, port):
         raise PortBusy(f"the scene's port {port} on {host} is already in use: stop the program using it or choose another with --port")
     warm_up(wait=False)  # compile the float filter in the background; drags use exact meanwhile
+    # the page and the client's files (~0.5 s to build): ready before the first tab asks for them
+    threading.Thread(target=page.warm, name="scene-page", daemon=True).start()
     store = TabStore()
     router = Router(store, enabled=not shared)
     policy = OriginPolicy(host, allow_origins)
