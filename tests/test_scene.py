@@ -418,6 +418,21 @@ def test_pending_until_the_deferred_panel_is_drawn(server):
         s.close()
 
 
+def test_a_closed_session_draws_nothing(server):
+    """The tab went away: a refresh that comes afterwards (an analysis or a click finishing late)
+    sends nothing (viser would queue the messages on a closed connection and warn)."""
+    s = Session(server, unit_spheres(3, "3"))
+    until_idle(s)
+    s.close()
+    sent: list[str] = []
+    for v in s.views.values():
+        v.set_pose = lambda *a, **k: sent.append("pose")
+        v.set_relation = lambda *a, **k: sent.append("relation")
+    s.panel.show = lambda *a, **k: sent.append("panel")
+    assert s.refresh() == "separate"  # the relation last drawn
+    assert sent == [] and not s.pending()
+
+
 def until_idle(s: Session, timeout: float = 30.0) -> None:
     deadline = time.monotonic() + timeout
     while s.pending():

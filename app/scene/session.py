@@ -281,6 +281,8 @@ class Session:
         """
         with self.lock, self.batch():
             st = self.state
+            if self.closed:  # the tab went away: messages to it would never be delivered
+                return st.relation
             if st.motion is None:
                 pic = static_picture(st.shapes, quick=dragged is not None, plane=st.separating_plane)
             else:
