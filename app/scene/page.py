@@ -95,7 +95,8 @@ def _base88(text: str) -> bytes:
 def _client() -> _Client | None:
     """Split viser's client into loader, code and style.
 
-    None when the page is not laid out as viser 1.1.1 lays it out: then it is served whole.
+    None when the page is not laid out as viser 1.1.1 lays it out (the payload, one decode-and-run
+    block, one ``<title>`` before which the style is linked): then it is served whole.
     """
     import viser
 
@@ -103,7 +104,7 @@ def _client() -> _Client | None:
         encoding="utf-8"
     )
     m = _PAYLOAD.search(page)
-    if m is None or len(_DECODE_AND_RUN.findall(page)) != 1 or len(_BASE88) != 88:
+    if m is None or len(_DECODE_AND_RUN.findall(page)) != 1 or page.count("<title>") != 1:
         return None
     try:
         import zstandard  # a dependency of viser
