@@ -28,7 +28,13 @@ from collections.abc import Callable
 from typing import Any
 from urllib.parse import urlsplit
 
-from .page import CLIENT_PREFIX, client_asset_response, page_response
+from .page import (
+    CLIENT_PREFIX,
+    SHARED_CLIENT_DIR,
+    TAB_CLIENT_DIR,
+    client_asset_response,
+    page_response,
+)
 from .state import SceneConfig
 
 __all__ = ["encode_config", "decode_config", "TabStore", "Router", "MAX_LINK_CHARS", "link_path"]
@@ -163,7 +169,7 @@ class Router:
                 return client_asset_response(request, parts.path[len(CLIENT_PREFIX) :])
             if not self.enabled:  # presenter mode: one page, still with its labels tied to inputs
                 if parts.path in ("", "/", "/index.html"):
-                    return page_response(request, CLIENT_PREFIX.lstrip("/"))
+                    return page_response(request, SHARED_CLIENT_DIR)
                 return inner(connection, request) if inner is not None else None
             query = f"?{parts.query}" if parts.query else ""
             # relative redirects: the same request works behind a proxy that serves the scene
@@ -184,7 +190,7 @@ class Router:
             if m is not None:  # the page itself, or a file next to it
                 rest = parts.path[m.end():]
                 if rest in ("", "index.html"):  # viser's page with labels tied to inputs; the
-                    return page_response(request, "../.." + CLIENT_PREFIX)  # client relative: proxies
+                    return page_response(request, TAB_CLIENT_DIR)  # client relative: proxies
                 request = dataclasses.replace(request, path="/" + rest + query)
             return inner(connection, request) if inner is not None else None
 

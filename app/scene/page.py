@@ -27,7 +27,10 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-__all__ = ["CLIENT_PREFIX", "LABELS_JS", "client_asset_response", "page_html", "page_response", "warm"]
+__all__ = [
+    "CLIENT_PREFIX", "LABELS_JS", "SHARED_CLIENT_DIR", "TAB_CLIENT_DIR", "client_asset_response", "page_html",
+    "page_response", "warm",
+]
 
 LABELS_JS = """
 (() => {
@@ -52,6 +55,10 @@ LABELS_JS = """
 
 CLIENT_PREFIX = "/_client/"
 """Where the client's code and style are served (``<prefix><sha256 prefix>.js`` / ``.css``)."""
+TAB_CLIENT_DIR = "../.." + CLIENT_PREFIX
+"""The files as a tab's page (``/s/<id>/``) names them: relative, so a proxy's prefix is kept."""
+SHARED_CLIENT_DIR = CLIENT_PREFIX.lstrip("/")
+"""The files as the presenter-mode page (``/``) names them."""
 
 _PAYLOAD = re.compile(r'<script data-p="([^"]*)" data-ss="(\d+)" data-cs="(\d+)">')
 _DECODE_AND_RUN = re.compile(r"const a=de\(d\.p\);.*inst\.exports\.free\(up\);", re.S)
@@ -92,17 +99,21 @@ def _base88(text: str) -> bytes:
 
 
 @lru_cache(maxsize=1)
+def _viser_page() -> str:
+    """The ``index.html`` viser ships (read once)."""
+    import viser
+
+    return (Path(viser.__file__).parent / "client" / "build" / "index.html").read_text(encoding="utf-8")
+
+
+@lru_cache(maxsize=1)
 def _client() -> _Client | None:
     """Split viser's client into loader, code and style.
 
     None when the page is not laid out as viser 1.1.1 lays it out (the payload, one decode-and-run
     block, one ``<title>`` before which the style is linked): then it is served whole.
     """
-    import viser
-
-    page = (Path(viser.__file__).parent / "client" / "build" / "index.html").read_text(
-        encoding="utf-8"
-    )
+    page = _viser_page()
     m = _PAYLOAD.search(page)
     if m is None or len(_DECODE_AND_RUN.findall(page)) != 1 or page.count("<title>") != 1:
         return None
@@ -136,15 +147,8 @@ def page_html(client_dir: str = CLIENT_PREFIX) -> bytes:
     ``client_dir`` is a URL path, relative to the page or absolute; viser's whole page (with
     :data:`LABELS_JS`) when its layout is unknown.
     """
-    import viser
-
     client = _client()
-    if client is not None:
-        page = client.loader.replace(_DIR, client_dir)
-    else:
-        page = (Path(viser.__file__).parent / "client" / "build" / "index.html").read_text(
-            encoding="utf-8"
-        )
+    page = client.loader.replace(_DIR, client_dir) if client is not None else _viser_page()
     script = f"<script>{LABELS_JS}</script>"
     return page.replace("</head>", script + "</head>", 1).encode("utf-8")
 
@@ -174,12 +178,14 @@ def warm() -> None:
 
     The scene server calls it in a thread when it starts.
     """
-    for client_dir in ("../.." + CLIENT_PREFIX, CLIENT_PREFIX.lstrip("/")):  # tab pages, presenter mode
+    for client_dir in (TAB_CLIENT_DIR, SHARED_CLIENT_DIR):
         _gzipped(client_dir)
     _assets()
 
 
-def _response(request: Any, body: bytes, gzipped: bytes, content_type: str, cache: str) -> Any:
+def _response(
+    request: Any, body: bytes, gzipped: bytes, content_type: str, cache: str, status: http.HTTPStatus = http.HTTPStatus.OK
+) -> Any:
     from websockets.datastructures import Headers
     from websockets.http11 import Response
 
@@ -194,7 +200,7 @@ def _response(request: Any, body: bytes, gzipped: bytes, content_type: str, cach
             "Connection": "close",  # the websockets server closes after an HTTP answer: say so
         }
     )
-    return Response(http.HTTPStatus.OK, "OK", headers, data)
+    return Response(status, status.phrase, headers, data)
 
 
 def page_response(request: Any, client_dir: str = CLIENT_PREFIX) -> Any:
@@ -214,18 +220,7 @@ def client_asset_response(request: Any, name: str) -> Any:
     """
     asset = _assets().get(name)
     if asset is None:
-        from websockets.datastructures import Headers
-        from websockets.http11 import Response
-
         body = b"no such client file\n"
-        headers = Headers(
-            **{
-                "Content-Type": "text/plain",
-                "Content-Length": str(len(body)),
-                "Cache-Control": "no-store",
-                "Connection": "close",
-            }
-        )
-        return Response(http.HTTPStatus.NOT_FOUND, "Not Found", headers, body)
+        return _response(request, body, gzip.compress(body), "text/plain", "no-store", http.HTTPStatus.NOT_FOUND)
     body, gzipped, content_type = asset
     return _response(request, body, gzipped, content_type, "public, max-age=31536000, immutable")
