@@ -210,7 +210,12 @@ class HeadlessScene:
     @property
     def url(self) -> str:
         """The scene's root URL (with the flags a headless capture needs)."""
-        return f"http://127.0.0.1:{self.scene.port}/?fixedDpr={self.dpr:g}&hideViserLogo"
+        return f"http://127.0.0.1:{self.scene.port}/?{self._flags}"
+
+    @property
+    def _flags(self) -> str:
+        """The page's query flags for a headless capture: the pixel ratio, no viser logo."""
+        return f"fixedDpr={self.dpr:g}&hideViserLogo"
 
     def goto(self, path: str, page: Any = None) -> Any:
         """Open ``path`` of the scene in ``page`` (default: the tab); return the new tab's session.
@@ -220,7 +225,7 @@ class HeadlessScene:
         """
         page = page or self.page
         before = max(self.scene.sessions, default=-1)
-        page.goto(f"http://127.0.0.1:{self.scene.port}{path}{'&' if '?' in path else '?'}fixedDpr={self.dpr:g}&hideViserLogo")
+        page.goto(f"http://127.0.0.1:{self.scene.port}{path}{'&' if '?' in path else '?'}{self._flags}")
         page.add_style_tag(content=_HIDE_TOAST)
         session = self.scene.wait_for_session(self.timeout, after=before) if not self.shared else self.scene.shared
         if page is self.page:
