@@ -3,6 +3,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
+#include <immintrin.h>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #if defined(__clang__)
@@ -11,9 +12,12 @@
 #pragma GCC target("avx2")
 #endif
 #define VARIANT avx2
-/* doubles element by element (3D 77 ms per 1 M pairs with the 8 x 8 network, 35 ms without;
- * a 4 x 4 network of 32-byte shuffles 52 ms); floats: the 8 x 8 network fits the 32-byte registers (37 against 40 ms) */
-#define TP_F64 0
+/* doubles: the 4 x 4 transpose whose lane-crossing step rides on the loads (TP_F64 4 in
+ * _variant.h): 1 M random 3D pairs on one core 27-31 against 36-37 M/s element by element
+ * (2026-12-03; earlier: 77 ms per 1 M pairs with the 8 x 8 network, 35 ms element by element, 52 ms
+ * with a 4 x 4 network of four 32-byte shuffles); floats: the 8 x 8 network fits the 32-byte
+ * registers (37 against 40 ms) */
+#define TP_F64 4
 #include "_variant.h"
 #if defined(__clang__)
 #pragma clang attribute pop

@@ -43,10 +43,11 @@
 #define SHUFFLE_F(a, b, ...) __builtin_shufflevector(a, b, __VA_ARGS__)
 #endif
 /* Pairs (and entries) per transpose when a block is turned to structure of arrays: 8 (an 8 x 8
- * shuffle network) or 0 (element by element). Each variant picks what its registers hold: a
- * network wider than the registers goes through memory (measured 2026-12-02 on an AMD EPYC with
- * AVX-512, 1 M random 3D pairs on one core: the AVX2 variant 77 ms with the 64-byte network of
- * doubles, 35 ms element by element; see _filter_avx2.c and _filter_base.c). */
+ * shuffle network), 4 (doubles only: a 4 x 4 transpose in 32-byte registers whose lane-crossing
+ * step rides on the loads, AVX) or 0 (element by element). Each variant picks what its registers
+ * hold: a network wider than the registers goes through memory (measured 2026-12-02 on an AMD
+ * EPYC with AVX-512, 1 M random 3D pairs on one core: the AVX2 variant 77 ms with the 64-byte
+ * network of doubles, 35 ms element by element; see _filter_avx2.c and _filter_base.c). */
 #ifndef TP_F64
 #define TP_F64 8
 #endif
@@ -89,6 +90,22 @@ typedef int v8i32 __attribute__((vector_size(32)));
     }
 TRANSPOSE8(transpose8_f64, double, v8d, D)
 TRANSPOSE8(transpose8_f32, float, v8f, F)
+#endif
+#if TP_F64 == 4
+/* dst[k * ld_dst + p] = src[p * ld_src + k] for p, k < 4: rows p and p + 2 are loaded as 16-byte
+ * halves into one 32-byte register (the lane-crossing step done by the loads), then 4 in-lane
+ * unpacks. 2 shuffles per 4 doubles where the 8 x 8 network of 64-byte registers takes 3, and
+ * in-lane ones (a 64-byte shuffle costs two 32-byte ones on AMD Zen 4). */
+static inline void transpose4_f64(const double *restrict src, int64_t ld_src, double *restrict dst, int64_t ld_dst) {
+    const __m256d r0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(src)), _mm_loadu_pd(src + 2 * ld_src), 1);
+    const __m256d r1 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(src + ld_src)), _mm_loadu_pd(src + 3 * ld_src), 1);
+    const __m256d r2 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(src + 2)), _mm_loadu_pd(src + 2 * ld_src + 2), 1);
+    const __m256d r3 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(src + ld_src + 2)), _mm_loadu_pd(src + 3 * ld_src + 2), 1);
+    _mm256_storeu_pd(dst, _mm256_unpacklo_pd(r0, r1));
+    _mm256_storeu_pd(dst + ld_dst, _mm256_unpackhi_pd(r0, r1));
+    _mm256_storeu_pd(dst + 2 * ld_dst, _mm256_unpacklo_pd(r2, r3));
+    _mm256_storeu_pd(dst + 3 * ld_dst, _mm256_unpackhi_pd(r2, r3));
+}
 #endif
 #define TRANSPOSE_NAME_(tp, type) transpose##tp##_##type
 #define TRANSPOSE_NAME(tp, type) TRANSPOSE_NAME_(tp, type)
