@@ -107,10 +107,34 @@ static inline void transpose4_f64(const double *restrict src, int64_t ld_src, do
     _mm256_storeu_pd(dst + 3 * ld_dst, _mm256_unpackhi_pd(r2, r3));
 }
 #endif
+#ifdef F32_LOAD_HALVES
+/* The 8 x 8 transpose of floats (dst[k * ld_dst + p] = src[p * ld_src + k] for p, k < 8) whose
+ * lane-crossing step rides on the loads: rows p and p + 4 as 16-byte halves of one register,
+ * then 16 in-lane shuffles (the network above: 24, 8 of them lane-crossing). AVX. */
+static inline void transpose8h_f32(const float *restrict src, int64_t ld_src, float *restrict dst, int64_t ld_dst) {
+    for (int h = 0; h < 8; h += 4) { /* entries h..h+3 */
+        __m256 r[4], t[4];
+        for (int p = 0; p < 4; p++)
+            r[p] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(src + p * ld_src + h)), _mm_loadu_ps(src + (p + 4) * ld_src + h), 1);
+        t[0] = _mm256_unpacklo_ps(r[0], r[1]);
+        t[1] = _mm256_unpackhi_ps(r[0], r[1]);
+        t[2] = _mm256_unpacklo_ps(r[2], r[3]);
+        t[3] = _mm256_unpackhi_ps(r[2], r[3]);
+        _mm256_storeu_ps(dst + h * ld_dst, _mm256_shuffle_ps(t[0], t[2], 0x44));
+        _mm256_storeu_ps(dst + (h + 1) * ld_dst, _mm256_shuffle_ps(t[0], t[2], 0xEE));
+        _mm256_storeu_ps(dst + (h + 2) * ld_dst, _mm256_shuffle_ps(t[1], t[3], 0x44));
+        _mm256_storeu_ps(dst + (h + 3) * ld_dst, _mm256_shuffle_ps(t[1], t[3], 0xEE));
+    }
+}
+#endif
 #define TRANSPOSE_NAME_(tp, type) transpose##tp##_##type
 #define TRANSPOSE_NAME(tp, type) TRANSPOSE_NAME_(tp, type)
 #define TRANSPOSE_F64 TRANSPOSE_NAME(TP_F64, f64)
+#ifdef F32_LOAD_HALVES
+#define TRANSPOSE_F32 transpose8h_f32
+#else
 #define TRANSPOSE_F32 TRANSPOSE_NAME(TP_F32, f32)
+#endif
 #define GLUE_(a, b) a##_##b
 #define GLUE(a, b) GLUE_(a, b)
 
