@@ -9,8 +9,8 @@ isolation, on matrices that core builds exactly from the text) must equal the re
 motion the fields must be marked as rounded ("≈"), the Preset must name what runs, and at a
 rational t typed in the t box the oracle on the motion's exact matrices at t must equal it.
 
-``SCENE_FIELDS_SEED`` / ``SCENE_FIELDS_STEPS`` choose another sequence (default: seed 22, 28 steps,
-about a minute on two shared cores).
+``SCENE_FIELDS_SEED`` / ``SCENE_FIELDS_STEPS`` choose another sequence (default: seed 22 and the CI
+size of 12 steps, ~17 s in the suite; long runs: ``SCENE_FIELDS_STEPS=200``, see the README).
 """
 
 from __future__ import annotations
