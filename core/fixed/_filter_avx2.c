@@ -3,9 +3,9 @@
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
-#include <immintrin.h>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h> /* the transposes of _variant.h whose lane-crossing step rides on the loads */
 #if defined(__clang__)
 #pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
 #else
@@ -15,8 +15,7 @@
 /* doubles: the 4 x 4 transpose whose lane-crossing step rides on the loads (TP_F64 4 in
  * _variant.h): 1 M random 3D pairs on one core 27-31 against 36-37 M/s element by element
  * (2026-12-03; earlier: 77 ms per 1 M pairs with the 8 x 8 network, 35 ms element by element, 52 ms
- * with a 4 x 4 network of four 32-byte shuffles); floats: the 8 x 8 network fits the 32-byte
- * registers (37 against 40 ms) */
+ * with a 4 x 4 network of four 32-byte shuffles) */
 #define TP_F64 4
 /* floats: the 8 x 8 transpose whose lane-crossing step rides on the loads (transpose8h_f32):
  * 1 M random pairs, one core, interleaved runs (2026-12-03): AVX-512 3D 32.7-33.8 -> 34.9-36.0 M/s,
