@@ -5,7 +5,7 @@
  *   T          double or float (float is widened exactly: certified for the float values given)
  *   FIRST_NOSCALE, FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
  *   CHUNK      pairs per block (CHUNK3 or CHUNK4 of _variant.h)
- *   TP, TRANSPOSE_T   pairs per transpose for T (8, or 0: element by element) and the TP x TP transpose
+ *   TP, TRANSPOSE_T   pairs per transpose for T (4 for doubles, 8 for floats, or 0: element by element) and the TP x TP transpose
  *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
  *              rule id of each pair (-1 undecided) to out, or table[rule id as a byte] when table
  *              is not NULL (the relation codes: no second pass over the output in Python), and

@@ -17,10 +17,10 @@
  * (2026-12-03; earlier: 77 ms per 1 M pairs with the 8 x 8 network, 35 ms element by element, 52 ms
  * with a 4 x 4 network of four 32-byte shuffles) */
 #define TP_F64 4
-/* floats: the 8 x 8 transpose whose lane-crossing step rides on the loads (transpose8h_f32):
+/* floats: the 8 x 8 transpose whose lane-crossing step rides on the loads (TP_F32 8 in _variant.h):
  * 1 M random pairs, one core, interleaved runs (2026-12-03): AVX-512 3D 32.7-33.8 -> 34.9-36.0 M/s,
  * 2D 62.6-65.6 -> 65.5-69.9 M/s; AVX2 2D 40-54 -> 62-63 M/s (3D within the host's noise) */
-#define F32_LOAD_HALVES 1
+#define TP_F32 8
 #include "_variant.h"
 #if defined(__clang__)
 #pragma clang attribute pop

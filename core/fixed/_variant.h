@@ -33,69 +33,24 @@
 #define PF_HINT 3 /* __builtin_prefetch locality: into L1 */
 #endif
 
-#if defined(__GNUC__) && !defined(__clang__)
-#define SHUFFLE 1
-#define SHUFFLE_D(a, b, ...) __builtin_shuffle(a, b, (v8i){__VA_ARGS__})
-#define SHUFFLE_F(a, b, ...) __builtin_shuffle(a, b, (v8i32){__VA_ARGS__})
-#elif defined(__clang__)
-#define SHUFFLE 1
-#define SHUFFLE_D(a, b, ...) __builtin_shufflevector(a, b, __VA_ARGS__)
-#define SHUFFLE_F(a, b, ...) __builtin_shufflevector(a, b, __VA_ARGS__)
-#endif
-/* Pairs (and entries) per transpose when a block is turned to structure of arrays: 8 (an 8 x 8
- * shuffle network), 4 (doubles only: a 4 x 4 transpose in 32-byte registers whose lane-crossing
- * step rides on the loads, AVX) or 0 (element by element). Each variant picks what its registers
- * hold: a network wider than the registers goes through memory (measured 2026-12-02 on an AMD
- * EPYC with AVX-512, 1 M random 3D pairs on one core: the AVX2 variant 77 ms with the 64-byte
- * network of doubles, 35 ms element by element; see _filter_avx2.c and _filter_base.c). */
+/* Pairs (and entries) per transpose when a block is turned to structure of arrays: TP_F64 4 (a
+ * 4 x 4 transpose of doubles), TP_F32 8 (an 8 x 8 transpose of floats), both in 32-byte
+ * registers with their lane-crossing step riding on the loads (AVX: the variant that sets them
+ * includes immintrin.h), or 0 (element by element, the default and the baseline's). Measured on
+ * an AMD EPYC (Zen 4, which executes a 64-byte shuffle as two 32-byte halves), 1 M random 3D pairs
+ * on one core: an 8 x 8 network of 64-byte shuffles for the doubles was ~30 % of the AVX-512
+ * filter's time (35.2 M/s, the 4 x 4 transpose 40.0 M/s); in the AVX2 variant that network went
+ * through memory (77 ms per 1 M pairs, element by element 35 ms); see the variants' files. */
 #ifndef TP_F64
-#define TP_F64 8
+#define TP_F64 0
 #endif
 #ifndef TP_F32
-#define TP_F32 8
-#endif
-#ifndef SHUFFLE
-#undef TP_F64
-#undef TP_F32
-#define TP_F64 0
 #define TP_F32 0
-#endif
-#ifdef SHUFFLE
-typedef double v8d __attribute__((vector_size(64)));
-typedef float v8f __attribute__((vector_size(32)));
-typedef long long v8i __attribute__((vector_size(64)));
-typedef int v8i32 __attribute__((vector_size(32)));
-
-/* dst[k * ld_dst + p] = src[p * ld_src + k] for p, k < 8: an 8 x 8 transpose in 24 shuffles
- * (pairs of rows, then quads, then halves), in whatever vector width the variant has. */
-#define TRANSPOSE8(name, E, V, MASK)                                                                    \
-    static inline void name(const E *restrict src, int64_t ld_src, E *restrict dst, int64_t ld_dst) { \
-        V r[8], t[8], u[8];                                                                           \
-        for (int p = 0; p < 8; p++) memcpy(&r[p], src + p * ld_src, sizeof(V));                       \
-        for (int p = 0; p < 8; p += 2) {                                                              \
-            t[p] = SHUFFLE_##MASK(r[p], r[p + 1], 0, 8, 2, 10, 4, 12, 6, 14);                         \
-            t[p + 1] = SHUFFLE_##MASK(r[p], r[p + 1], 1, 9, 3, 11, 5, 13, 7, 15);                     \
-        }                                                                                             \
-        for (int p = 0; p < 8; p += 4)                                                                \
-            for (int q = 0; q < 2; q++) {                                                             \
-                u[p + q] = SHUFFLE_##MASK(t[p + q], t[p + q + 2], 0, 1, 8, 9, 4, 5, 12, 13);          \
-                u[p + q + 2] = SHUFFLE_##MASK(t[p + q], t[p + q + 2], 2, 3, 10, 11, 6, 7, 14, 15);    \
-            }                                                                                         \
-        for (int k = 0; k < 4; k++) {                                                                 \
-            const V lo = SHUFFLE_##MASK(u[k], u[k + 4], 0, 1, 2, 3, 8, 9, 10, 11);                    \
-            const V hi = SHUFFLE_##MASK(u[k], u[k + 4], 4, 5, 6, 7, 12, 13, 14, 15);                  \
-            memcpy(dst + k * ld_dst, &lo, sizeof(V));                                                 \
-            memcpy(dst + (k + 4) * ld_dst, &hi, sizeof(V));                                           \
-        }                                                                                             \
-    }
-TRANSPOSE8(transpose8_f64, double, v8d, D)
-TRANSPOSE8(transpose8_f32, float, v8f, F)
 #endif
 #if TP_F64 == 4
 /* dst[k * ld_dst + p] = src[p * ld_src + k] for p, k < 4: rows p and p + 2 are loaded as 16-byte
  * halves into one 32-byte register (the lane-crossing step done by the loads), then 4 in-lane
- * unpacks. 2 shuffles per 4 doubles where the 8 x 8 network of 64-byte registers takes 3, and
- * in-lane ones (a 64-byte shuffle costs two 32-byte ones on AMD Zen 4). */
+ * unpacks. */
 static inline void transpose4_f64(const double *restrict src, int64_t ld_src, double *restrict dst, int64_t ld_dst) {
     const __m256d r0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(src)), _mm_loadu_pd(src + 2 * ld_src), 1);
     const __m256d r1 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(src + ld_src)), _mm_loadu_pd(src + 3 * ld_src), 1);
@@ -107,11 +62,11 @@ static inline void transpose4_f64(const double *restrict src, int64_t ld_src, do
     _mm256_storeu_pd(dst + 3 * ld_dst, _mm256_unpackhi_pd(r2, r3));
 }
 #endif
-#ifdef F32_LOAD_HALVES
-/* The 8 x 8 transpose of floats (dst[k * ld_dst + p] = src[p * ld_src + k] for p, k < 8) whose
- * lane-crossing step rides on the loads: rows p and p + 4 as 16-byte halves of one register,
- * then 16 in-lane shuffles (the network above: 24, 8 of them lane-crossing). AVX. */
-static inline void transpose8h_f32(const float *restrict src, int64_t ld_src, float *restrict dst, int64_t ld_dst) {
+#if TP_F32 == 8
+/* dst[k * ld_dst + p] = src[p * ld_src + k] for p, k < 8: rows p and p + 4 as 16-byte halves of
+ * one 32-byte register, then 16 in-lane shuffles (a network of 32-byte shuffles takes 24, 8 of
+ * them lane-crossing). */
+static inline void transpose8_f32(const float *restrict src, int64_t ld_src, float *restrict dst, int64_t ld_dst) {
     for (int h = 0; h < 8; h += 4) { /* entries h..h+3 */
         __m256 r[4], t[4];
         for (int p = 0; p < 4; p++)
@@ -130,11 +85,7 @@ static inline void transpose8h_f32(const float *restrict src, int64_t ld_src, fl
 #define TRANSPOSE_NAME_(tp, type) transpose##tp##_##type
 #define TRANSPOSE_NAME(tp, type) TRANSPOSE_NAME_(tp, type)
 #define TRANSPOSE_F64 TRANSPOSE_NAME(TP_F64, f64)
-#ifdef F32_LOAD_HALVES
-#define TRANSPOSE_F32 transpose8h_f32
-#else
 #define TRANSPOSE_F32 TRANSPOSE_NAME(TP_F32, f32)
-#endif
 #define GLUE_(a, b) a##_##b
 #define GLUE(a, b) GLUE_(a, b)
 
