@@ -41,6 +41,12 @@
  * on one core: an 8 x 8 network of 64-byte shuffles for the doubles was ~30 % of the AVX-512
  * filter's time (35.2 M/s, the 4 x 4 transpose 40.0 M/s); in the AVX2 variant that network went
  * through memory (77 ms per 1 M pairs, element by element 35 ms); see the variants' files. */
+/* F64_BEGIN / F64_END: what a variant puts around its float64 functions (GCC option pragmas, as
+ * _Pragma); nothing by default. */
+#ifndef F64_BEGIN
+#define F64_BEGIN
+#define F64_END
+#endif
 #ifndef TP_F64
 #define TP_F64 0
 #endif
@@ -102,7 +108,9 @@ static inline void transpose8_f32(const float *restrict src, int64_t ld_src, flo
 #define THIRD third3_f64
 #define THIRD_FAST third3_fast_f64
 #define CLASSIFY GLUE(classify3_f64, VARIANT)
+F64_BEGIN
 #include "_blocks.h"
+F64_END
 #undef T
 #undef FIRST
 #undef FIRST_NOSCALE
@@ -149,7 +157,9 @@ static inline void transpose8_f32(const float *restrict src, int64_t ld_src, flo
 #define THIRD third4_f64
 #define THIRD_FAST third4_fast_f64
 #define CLASSIFY GLUE(classify4_f64, VARIANT)
+F64_BEGIN
 #include "_blocks.h"
+F64_END
 #undef T
 #undef FIRST
 #undef FIRST_NOSCALE
