@@ -433,6 +433,31 @@ def test_a_closed_session_draws_nothing(server):
     assert sent == [] and not s.pending()
 
 
+def test_close_waits_for_a_deferred_draw_in_flight(server):
+    """close() returns only once a deferred panel the timer's thread is drawing is sent: whoever
+    closed the tab may stop the server next, and a draw finishing after that queued its messages
+    on a closed connection (viser's "Queued a GuiUpdateMessage on a closed connection" warning,
+    seen in a CI run of test_update_costs_are_small)."""
+    import threading
+
+    s = Session(server, unit_spheres(3, "3"))
+    until_idle(s)
+    inside, drawn = threading.Event(), threading.Event()
+    show = s.panel.show
+
+    def slow_show(st, **kw):
+        inside.set()
+        time.sleep(0.3)  # a draw in progress when close() is called (the test waits on events)
+        show(st, **kw)
+        drawn.set()
+
+    s.panel.show = slow_show
+    s.refresh(defer=True)
+    assert inside.wait(30), "the deferred panel was not drawn"
+    s.close()
+    assert drawn.is_set(), "close() returned while the timer's thread was still drawing"
+
+
 def until_idle(s: Session, timeout: float = 30.0) -> None:
     deadline = time.monotonic() + timeout
     while s.pending():

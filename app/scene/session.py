@@ -434,8 +434,14 @@ class Session:
                     framing.aim(cam)
 
     def close(self) -> None:
-        """Stop playback and ignore pending analyses (the tab went away)."""
+        """Stop playback and ignore pending analyses (the tab went away).
+
+        Returns once a deferred draw the timer's thread has begun is sent (it holds the lock): the
+        caller may stop the server next, and messages queued after that go nowhere (viser warns).
+        """
         self.closed = True
         timer = self._timer
         if timer is not None:
             timer.cancel()
+        with self.lock:  # a draw in flight ends; any later one sees `closed` and draws nothing
+            pass
