@@ -165,6 +165,14 @@ def certified_valid(a: np.ndarray, b: np.ndarray) -> np.ndarray:
             Pb = prepare(_X, n, _entries(b[part]), "b")
             c, cr, minors = pencil_bounds(_X, n, Pa, Pb)
             out[part] = decide(_X, n, c, cr, minors, Pa.ok & Pb.ok)[1]
+        # then the second stage's proof, on both shapes moved so that A is centred near the origin
+        # (an exact congruence of determinant 1: minors and det unchanged, the entries' rounding
+        # carried as radii), where centres far from the origin make det A, det B cancellations
+        rest = np.flatnonzero(~out)
+        for s in range(0, rest.size, _CHUNK):
+            rows = rest[s : s + _CHUNK]
+            c, cr, minors, ok, *_ = _translated_pencil(a[rows].astype(np.float64), b[rows].astype(np.float64), None)
+            out[rows] = decide(_X, n, c, cr, minors, ok)[1]
     return out
 
 
@@ -263,31 +271,42 @@ def classify_translated(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None
     """
     n = a.shape[-1]
     with np.errstate(all="ignore"):
-        Pa = prepare(_X, n, _entries(a), "a")
-        Pb = prepare(_X, n, _entries(b), "b")
-        ra, rb = radii(_X, Pa.W, Pa.rounded, "a"), radii(_X, Pb.W, Pb.rounded, "b")
-        ctr, _, okc = _centre(_X, n, Pa.W, "c")
-        centre = np.stack(ctr, axis=1)
-        ok = Pa.ok & Pb.ok & okc & np.isfinite(centre).all(axis=1) & (np.abs(centre) <= TRANSLATE_MAX).all(axis=1)
-        centre = np.where(ok[:, None], centre, 0.0)  # any float vector is exact: it is the chosen t
-        b_moved, radius_b = Pb.W, rb
-        if shift_b is not None:  # origin at -s: B moves by +s (s is exact, entries gain radii)
-            s = np.asarray(shift_b, dtype=np.float64)
-            ok &= np.isfinite(s).all(axis=1) & (np.abs(s) <= TRANSLATE_MAX).all(axis=1)
-            b_moved, radius_b = _translated(Pb.W, rb, np.where(ok[:, None], -s, 0.0), n)
-        VA, RA = _translated(Pa.W, ra, centre, n)
-        VB, RB = _translated(b_moved, radius_b, centre, n)
-        fn, outputs, floor = getattr(K, f"pencil_radius{n}"), getattr(K, f"PENCIL_RADIUS{n}_OUTPUTS"), getattr(K, f"PENCIL_RADIUS{n}_FLOOR")
-        res = fn(VA, RA, VB, RB)
-        k = len(outputs)
-        out = {name: (v, np.asarray(r) * RADIUS_FACTOR + floor) for name, v, r in zip(outputs, res[:k], res[k:], strict=True)}
-        c = [out[f"c{i}"][0] for i in range(n + 1)]
-        cr = [out[f"c{i}"][1] for i in range(n + 1)]
-        minors = [v for key, v in out.items() if key.startswith("d")]
+        c, cr, minors, ok, VA, RA, VB, RB = _translated_pencil(a, b, shift_b)
         code, _, idx = decide(_X, n, c, cr, minors, ok)
         code = _later_stages(n, np.asarray(code, dtype=np.int64).copy(), idx, c, cr,
                              lambda rows: (_take(VA, rows), _take(RA, rows), _take(VB, rows), _take(RB, rows)))
     return code.astype(np.int8)
+
+
+def _translated_pencil(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple[Any, ...]:
+    """The second stage's pencil on both shapes moved so that A is centred near the origin.
+
+    Returns a_0..a_n with their bounds, the validity minors, the pairs the move applies to, and
+    the translated matrices with their radii (:func:`classify_translated`, :func:`certified_valid`).
+    """
+    n = a.shape[-1]
+    Pa = prepare(_X, n, _entries(a), "a")
+    Pb = prepare(_X, n, _entries(b), "b")
+    ra, rb = radii(_X, Pa.W, Pa.rounded, "a"), radii(_X, Pb.W, Pb.rounded, "b")
+    ctr, _, okc = _centre(_X, n, Pa.W, "c")
+    centre = np.stack(ctr, axis=1)
+    ok = Pa.ok & Pb.ok & okc & np.isfinite(centre).all(axis=1) & (np.abs(centre) <= TRANSLATE_MAX).all(axis=1)
+    centre = np.where(ok[:, None], centre, 0.0)  # any float vector is exact: it is the chosen t
+    b_moved, radius_b = Pb.W, rb
+    if shift_b is not None:  # origin at -s: B moves by +s (s is exact, entries gain radii)
+        s = np.asarray(shift_b, dtype=np.float64)
+        ok &= np.isfinite(s).all(axis=1) & (np.abs(s) <= TRANSLATE_MAX).all(axis=1)
+        b_moved, radius_b = _translated(Pb.W, rb, np.where(ok[:, None], -s, 0.0), n)
+    VA, RA = _translated(Pa.W, ra, centre, n)
+    VB, RB = _translated(b_moved, radius_b, centre, n)
+    fn, outputs, floor = getattr(K, f"pencil_radius{n}"), getattr(K, f"PENCIL_RADIUS{n}_OUTPUTS"), getattr(K, f"PENCIL_RADIUS{n}_FLOOR")
+    res = fn(VA, RA, VB, RB)
+    k = len(outputs)
+    out = {name: (v, np.asarray(r) * RADIUS_FACTOR + floor) for name, v, r in zip(outputs, res[:k], res[k:], strict=True)}
+    c = [out[f"c{i}"][0] for i in range(n + 1)]
+    cr = [out[f"c{i}"][1] for i in range(n + 1)]
+    minors = [v for key, v in out.items() if key.startswith("d")]
+    return c, cr, minors, ok, VA, RA, VB, RB
 
 
 def _second_stage(a: np.ndarray, b: np.ndarray, rules: np.ndarray) -> np.ndarray:
