@@ -602,3 +602,36 @@ def test_float_method_validates_exactly_only_what_the_filter_could_not_prove(n, 
             with pytest.raises(ValueError) as e:
                 classify(MA[i], MB[i], method="float")
             assert str(e.value) == error
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_integer_matrices_of_the_exact_path_are_positive_multiples_of_the_exact_symmetric_part(n):
+    """The exact path's shortcut for float64 input (integers, no rationals) against the general
+    reader (``normalised_quadratic_part``, fmpq): where the shortcut applies it gives c * E with
+    one c > 0 (so every sign downstream is E's); where it declines, the input is non-finite,
+    asymmetric beyond rounding, or not definite (the general path then raises)."""
+    from core.fixed.exact import _float_int_matrix
+    from core.shapes.quadrics import normalised_quadratic_part
+
+    A, B = _mixed(n, seed=13)
+    NA, NB = _near_symmetric(n)
+    zeros = np.zeros((2, n, n))
+    zeros[1, 0, 0] = -0.0
+    taken = 0
+    with np.errstate(over="ignore"):  # some entries overflow to inf: hostile input too
+        scaled = [*(A[:40] * 2.0**-1060), *(B[:40] * 2.0**1000)]
+    for M in [*A, *B, *NA, *NB, *zeros, *scaled]:
+        ints = _float_int_matrix(np.ascontiguousarray(M))
+        try:
+            E = normalised_quadratic_part(M)
+        except ValueError:
+            E = None
+        if ints is None:
+            assert E is None or not np.isfinite(M).all() or not np.array_equal(M, M.T) or not M.any(), M
+            continue
+        assert E is not None, M
+        k, l = next((i, j) for i in range(n) for j in range(n) if E[i][j] != 0)
+        c = fmpq(ints[k][l]) / E[k][l]
+        assert c > 0 and all(fmpq(ints[i][j]) == c * E[i][j] for i in range(n) for j in range(n)), M
+        taken += 1
+    assert taken > 500
