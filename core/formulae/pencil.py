@@ -64,18 +64,19 @@ def determinant(M: Matrix) -> Any:
     return out
 
 
-def _minor2(A: Matrix, B: Matrix, r0: int, r1: int, j: int, k: int) -> list[Any]:
-    """Det of rows (r0, r1), columns (j, k) of T A + B, as [c0, c1, c2] in T."""
-    c2 = A[r0][j] * A[r1][k] - A[r0][k] * A[r1][j]
-    c1 = (A[r0][j] * B[r1][k] + B[r0][j] * A[r1][k]) - (A[r0][k] * B[r1][j] + B[r0][k] * A[r1][j])
-    c0 = B[r0][j] * B[r1][k] - B[r0][k] * B[r1][j]
-    return [c0, c1, c2]
+_COLUMNS3 = tuple((j, *[c for c in range(3) if c != j], j % 2 == 1) for j in range(3))
+"""3x3: (column j of row 0, the two columns of its minor in rows 1-2, whether the term is subtracted)."""
+_COLUMNS4 = tuple(
+    (j, k, *[c for c in range(4) if c not in (j, k)], (j + k + 1) % 2 == 1) for j in range(4) for k in range(j + 1, 4)
+)
+"""4x4: (columns j < k of rows 0-1, the complementary columns of rows 2-3, whether subtracted)."""
 
 
-def _add_into(acc: list[Any] | None, p: list[Any], negate: bool) -> list[Any]:
-    if acc is None:
-        return [-c for c in p] if negate else list(p)
-    return [a - c for a, c in zip(acc, p, strict=False)] if negate else [a + c for a, c in zip(acc, p, strict=False)]
+def _accumulate(acc: list[Any], term: list[Any], negate: bool) -> list[Any]:
+    """Coefficient-wise acc + term, or acc - term (the first term starts acc, negated if subtracted)."""
+    if not acc:
+        return [-c for c in term] if negate else term
+    return [a - c for a, c in zip(acc, term, strict=True)] if negate else [a + c for a, c in zip(acc, term, strict=True)]
 
 
 def pencil_coefficients(A: Matrix, B: Matrix) -> list[Any]:
@@ -94,26 +95,44 @@ def pencil_coefficients(A: Matrix, B: Matrix) -> list[Any]:
         >>> pencil_coefficients(A, A)                       # det((T+1) A) = -(T+1)^3
         [-1, -3, -3, -1]
     """
+    # written out (no helper call or list per 2x2 minor): the exact path calls this once per pair.
+    # The operations and their order must stay as they are: the float kernels are traced from
+    # them (core.fixed.kernelgen; test_generated_files_are_current fails on any change)
     n = len(A)
     if n == 3:
-        acc: list[Any] | None = None
-        for j in range(3):
-            k0, k1 = [c for c in range(3) if c != j]
-            minor = _minor2(A, B, 1, 2, k0, k1)
-            term = poly_mul([B[0][j], A[0][j]], minor)
-            acc = _add_into(acc, term, negate=(j % 2 == 1))
-        assert acc is not None
-        return acc
+        A1, A2, B1, B2 = A[1], A[2], B[1], B[2]
+        out: list[Any] = []
+        for j, k0, k1, negate in _COLUMNS3:
+            c2 = A1[k0] * A2[k1] - A1[k1] * A2[k0]
+            c1 = (A1[k0] * B2[k1] + B1[k0] * A2[k1]) - (A1[k1] * B2[k0] + B1[k1] * A2[k0])
+            c0 = B1[k0] * B2[k1] - B1[k1] * B2[k0]
+            b, a = B[0][j], A[0][j]
+            # poly_mul's order: every product of b, then a's, each added as it comes
+            p0, p1, p2 = b * c0, b * c1, b * c2
+            s1 = p1 + a * c0
+            s2 = p2 + a * c1
+            term = [p0, s1, s2, a * c2]
+            out = _accumulate(out, term, bool(negate))
+        return out
     if n == 4:
         # Laplace expansion along rows (0, 1) against the complementary rows (2, 3):
         # det M = sum_{j<k} (-1)^(j+k+1) M[01; jk] M[23; complement(jk)].
-        acc = None
-        for j in range(4):
-            for k in range(j + 1, 4):
-                cj, ck = [c for c in range(4) if c not in (j, k)]
-                top = _minor2(A, B, 0, 1, j, k)
-                bottom = _minor2(A, B, 2, 3, cj, ck)
-                acc = _add_into(acc, poly_mul(top, bottom), negate=((j + k + 1) % 2 == 1))
-        assert acc is not None
-        return acc
+        A0, A1, A2, A3, B0, B1, B2, B3 = A[0], A[1], A[2], A[3], B[0], B[1], B[2], B[3]
+        out = []
+        for j, k, cj, ck, negate in _COLUMNS4:
+            t2 = A0[j] * A1[k] - A0[k] * A1[j]
+            t1 = (A0[j] * B1[k] + B0[j] * A1[k]) - (A0[k] * B1[j] + B0[k] * A1[j])
+            t0 = B0[j] * B1[k] - B0[k] * B1[j]
+            u2 = A2[cj] * A3[ck] - A2[ck] * A3[cj]
+            u1 = (A2[cj] * B3[ck] + B2[cj] * A3[ck]) - (A2[ck] * B3[cj] + B2[ck] * A3[cj])
+            u0 = B2[cj] * B3[ck] - B2[ck] * B3[cj]
+            o0, o1, o2 = t0 * u0, t0 * u1, t0 * u2  # poly_mul's order, as above
+            o1 = o1 + t1 * u0
+            o2 = o2 + t1 * u1
+            o3 = t1 * u2
+            o2 = o2 + t2 * u0
+            o3 = o3 + t2 * u1
+            term = [o0, o1, o2, o3, t2 * u2]
+            out = _accumulate(out, term, bool(negate))
+        return out
     raise ValueError(f"pencil needs 3x3 (ellipse) or 4x4 (ellipsoid) matrices, got {n}x{n}")
