@@ -85,29 +85,31 @@ def _float_int_matrix(M: Any) -> list[list[int]] | None:
     """
     if type(M) is not np.ndarray or M.dtype != np.float64 or M.ndim != 2 or M.shape[0] != M.shape[1]:
         return None
+    n = M.shape[0]
     try:
-        ratios = [[v.as_integer_ratio() for v in row] for row in M.tolist()]
+        ratios = [v.as_integer_ratio() for v in M.ravel().tolist()]  # row-major
     except (OverflowError, ValueError):  # inf, NaN
         return None
-    den = max(q for row in ratios for _, q in row)
-    ints = [[p * (den // q) for p, q in row] for row in ratios]
-    n = len(ints)
-    if not any(any(row) for row in ints):
+    den = max([q for _, q in ratios])
+    ints = [p * (den // q) for p, q in ratios]
+    if not any(ints):
         return None
-    if any(ints[i][j] != ints[j][i] for i in range(n) for j in range(i + 1, n)):
+    trans = [v for j in range(n) for v in ints[j::n]]  # the transpose, row-major
+    if ints != trans:
         tol = SYMMETRY_TOLERANCE
-        m_row = [max(max(abs(ints[i][k]), abs(ints[k][i])) for k in range(n)) for i in range(n)]
+        m_row = [max(max(abs(ints[i * n + k]), abs(ints[k * n + i])) for k in range(n)) for i in range(n)]
         for i in range(n):
             for j in range(i + 1, n):
-                d = ints[i][j] - ints[j][i]
+                d = ints[i * n + j] - ints[j * n + i]
                 if d * d * tol.denominator**2 > tol.numerator**2 * m_row[i] * m_row[j]:
                     return None  # beyond rounding: the general path raises with the message
-    ints = [[ints[i][j] + ints[j][i] for j in range(n)] for i in range(n)]
-    minors = [determinant([row[:k] for row in ints[:k]]) for k in range(1, n)]
+    S = [x + y for x, y in zip(ints, trans, strict=True)]
+    rows = [S[i * n : (i + 1) * n] for i in range(n)]
+    minors = [determinant([row[:k] for row in rows[:k]]) for k in range(1, n)]
     orient = interior_sign([sign(d) for d in minors])
     if orient is None:
         return None
-    return ints if orient == 1 else [[-v for v in row] for row in ints]
+    return rows if orient == 1 else [[-v for v in row] for row in rows]
 
 
 def exact_pair(A: Any, B: Any, *, scaled: bool = True) -> ExactPair:
