@@ -383,10 +383,15 @@ def test_sigterm_with_heavy_work_in_flight_answers_503_and_exits_within_5_s():
         except httpx.HTTPError as e:
             answers[name] = repr(e)
 
-    c = np.array(np.meshgrid(np.arange(21.0), np.arange(21.0), np.arange(22.0), indexing="ij")).reshape(3, -1).T
-    lattice = {"bodies": [[*p, 0.5, 0.5, 0.5, 1.0, 0.0, 0.0, 0.0] for p in c.tolist()]}
+    # 9,842 balls on a face-centred cubic lattice, radius fl(sqrt(1/2)): each of the 54,756
+    # neighbouring pairs is tangent but for the rounding of the radius, so every one needs exact
+    # arithmetic (~5 s here; the simple cubic lattice of the test above answers in ~2 s since the
+    # exact path got faster, too soon to be surely in flight when the signal comes)
+    g = np.array(np.meshgrid(np.arange(27.0), np.arange(27.0), np.arange(27.0), indexing="ij")).reshape(3, -1).T
+    r = float(np.sqrt(0.5))
+    fcc = {"bodies": [[*p, r, r, r, 1.0, 0.0, 0.0, 0.0] for p in g[g.sum(axis=1) % 2 == 0].tolist()]}
     requests = [
-        ("contacts", "/api/contacts", lattice),  # seconds of exact arithmetic
+        ("contacts", "/api/contacts", fcc),  # seconds of exact arithmetic
         ("analysis", "/api/analyse", slow_motion()),  # ~9 s here
         ("queued analysis", "/api/analyse", slow_motion()),
     ]
