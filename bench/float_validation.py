@@ -1,5 +1,6 @@
 """method="float" on the static benchmark's hard sets: exact validation of every undecided pair
-(before 91b630c) against exact validation only where the filter's validity proof does not hold.
+(the policy before 91b630c, with today's exact validation) against exact validation only where
+the filter's validity proof does not hold.
 
 ``python -m bench.float_validation`` prints a markdown table: pairs/s of the tiled stack
 (:func:`bench.static.run_method`, quick sizes, one core), near-tangent rows summed over the gaps;

@@ -635,3 +635,30 @@ def test_integer_matrices_of_the_exact_path_are_positive_multiples_of_the_exact_
         assert c > 0 and all(fmpq(ints[i][j]) == c * E[i][j] for i in range(n) for j in range(n)), M
         taken += 1
     assert taken > 500
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_validity_in_integers_agrees_with_the_rational_reader(n):
+    """valid_float_matrix (the integer shortcut of the exact validation) against validate_quadric
+    (fmpq): True only for valid matrices, and for every valid one among hostile, scaled,
+    near-tolerance, flipped, empty (det > 0) and point (det = 0) ellipses/ellipsoids."""
+    from core.fixed.exact import valid_float_matrix
+    from core.shapes.quadrics import validate_quadric
+
+    A, B = _mixed(n, seed=17)
+    NA, NB = _near_symmetric(n)
+    empty = np.array([np.diag([1.0] * (n - 1) + [1.0]), np.diag([-1.0] * (n - 1) + [-1.0])])  # no real points
+    point = np.diag([1.0] * (n - 1) + [0.0])[None]  # det = 0
+    with np.errstate(over="ignore"):
+        scaled = [*(A[:40] * 2.0**-1060), *(B[:40] * 2.0**1000)]
+    seen = {True: 0, False: 0}
+    for M in [*A, *B, *NA, *NB, *empty, *point, *scaled]:
+        try:
+            validate_quadric(M)
+            valid = True
+        except ValueError:
+            valid = False
+        got = valid_float_matrix(np.ascontiguousarray(M))
+        assert got == valid, M  # on these inputs the shortcut never has to decline a valid matrix
+        seen[valid] += 1
+    assert seen[True] > 500 and seen[False] >= 8, seen

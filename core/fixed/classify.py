@@ -26,7 +26,7 @@ from ..relation import Relation
 from ..shapes.numbers import binary64_array
 from ..shapes.quadrics import Matrix, Stack, validate_quadric
 from . import compiled
-from .exact import classify_exact
+from .exact import classify_exact, valid_float_matrix
 from .filters import certified_valid, classify_float_counted
 from .lazy import LazyArray, is_dask_array
 
@@ -304,6 +304,8 @@ def _where(i: int, scalar: bool) -> str:
 
 def _validate_pair(a: Any, b: Any) -> None:
     """Raise ValueError (naming A or B) unless both matrices are valid ellipses/ellipsoids."""
+    if valid_float_matrix(a) and valid_float_matrix(b):  # float64: exact, in integers
+        return
     validate_quadric(a, name="A")
     validate_quadric(b, name="B")
 
