@@ -885,3 +885,28 @@ def test_leaving_a_motion_certifies_exactly_what_the_fields_show(server):
     cfg = s.snapshot().to_dict()
     assert cfg["A"]["semi_axes"] == cfg["B"]["semi_axes"] == ["1", "1"] and cfg["A"]["center"] == ["0", "2"]
     s.close()
+
+
+def test_a_closed_session_aims_no_camera(server):
+    """After close() no framing moves a camera (the button's, or following a playing motion from
+    a draw already under way): the client is gone, and viser warned "Queued a GuiUpdateMessage on
+    a closed connection" (a CI run, from test_camera_follows_the_shapes)."""
+    moved: list[str] = []
+
+    class Camera:  # records what would be sent to the tab
+        def __setattr__(self, name, value):
+            moved.append(name)
+            object.__setattr__(self, name, value)
+
+    s = Session(server, SceneConfig.from_dict({"preset": "example-29", "t": 0.3}))
+    until_idle(s)
+    s._cameras = lambda: [Camera()]
+    s.frame_camera(around_shapes=True)
+    assert moved, "the fake camera was not aimed while the tab was open"  # the test can see a move
+    s.ui.view.follow.value = True
+    moved.clear()
+    s.close()
+    s.frame_camera(around_shapes=True)
+    s.frame_camera()
+    s.keys_ctl.follow()  # what a playing motion's draw runs while following
+    assert moved == []

@@ -418,6 +418,8 @@ class Session:
             around_shapes: frame the shapes drawn now only (following a motion).
         """
         with self.lock:
+            if self.closed:  # the tab went away (close() holds the lock while it marks that)
+                return
             st = self.state
             if st.motion is not None and not around_shapes:
                 an = st.analysis
