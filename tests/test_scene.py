@@ -910,3 +910,24 @@ def test_a_closed_session_aims_no_camera(server):
     s.frame_camera()
     s.keys_ctl.follow()  # what a playing motion's draw runs while following
     assert moved == []
+
+
+def test_an_edit_is_not_lost_to_a_draw_before_its_handler_reads_it(server):
+    """viser stores a tab's edit in the field's handle, then calls the handler, which waits for the
+    session lock; a deferred draw holding the lock then must not put the state's old text back
+    (the handler read it and the edit was lost: seen once in CI, two circles typed to touch never
+    became tangent)."""
+    s = Session(server, unit_spheres(3, "3"))
+    until_idle(s)
+    field = s.ui.shapes["B"].fields["center"]
+    assert field.value == "3, 0, 0"
+    field._impl.value = "2, 0, 0"  # what viser does with the tab's message before the handler runs
+    s.refresh()  # a draw first (the deferred panel of an earlier edit)
+    assert field.value == "2, 0, 0"  # the edit is still there for its handler
+    s.shapes_ctl.on_shape_text("B", "center")  # the handler, now
+    until_idle(s)
+    assert s.state.shapes["B"].center == (2, 0, 0) and s.state.relation == "tangent"
+    assert field.value == "2, 0, 0"
+    s.set_shape("B", center="5/2, 0, 0")  # a change from the server side is shown again
+    until_idle(s)
+    assert field.value == "5/2, 0, 0"  # as typed (the scene keeps typed text)

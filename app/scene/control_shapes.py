@@ -106,7 +106,7 @@ class ShapeControl:
         """A Shape field was edited: read it exactly; an error stays next to the field."""
         if self.s.syncing.active:
             return
-        value = self.s.ui.shapes[name].fields[key].value
+        value = self.s.panel.take(self.s.ui.shapes[name].fields[key])
         try:
             self.set_shape(name, **{key: value})
         except ValueError as e:

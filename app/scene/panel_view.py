@@ -84,6 +84,9 @@ class PanelView:
         self._on_event = on_event
         self.plots = PlotsView(gui_api, gui.plots.folder)
         self._last: dict[int, str] = {}
+        self._taken: dict[int, Any] = {}
+        """Per field the user types into: the value the server last showed in it or read from it.
+        A field showing anything else holds an edit its handler has not read yet (see set_field)."""
         self._motion_shown: object = None
         self._analysis_shown: object = None
         self._palette_shown: str | None = None
@@ -98,6 +101,25 @@ class PanelView:
             return
         with self._syncing():
             handle.value = value
+
+    def set_field(self, handle: Any, text: str) -> None:
+        """A field the user types into shows ``text``, unless it holds an edit not yet read.
+
+        viser stores a tab's edit in the handle and then calls its handler, which waits for the
+        session lock while a deferred draw may hold it: overwriting the field then (the state does
+        not have the edit yet) would lose the edit, the handler reading back the old text. The
+        handler reads the field with :meth:`take`; its refresh then shows the state's text.
+        """
+        if handle.value != self._taken.get(id(handle), handle.value):
+            return
+        self._taken[id(handle)] = text
+        self.set_value(handle, text)
+
+    def take(self, handle: Any) -> Any:
+        """The value of a field the user typed into, as its handler reads it (see :meth:`set_field`)."""
+        value = handle.value
+        self._taken[id(handle)] = value
+        return value
 
     def set_text(self, handle: Any, text: str) -> None:
         """Markdown/HTML content, sent only when it changed."""
@@ -186,7 +208,7 @@ class PanelView:
                 continue  # keep the text the user is correcting
             texts = state.shapes[name].field_texts()
             for key, text in texts.items():
-                self.set_value(sg.fields[key], text)
+                self.set_field(sg.fields[key], text)
             self._show_exact(state, name, sg, any(t.startswith(APPROX) for t in texts.values()))
 
     def _show_exact(self, state: AppState, name: str, sg: Any, rounded: bool) -> None:
