@@ -22,7 +22,12 @@ pytestmark = pytest.mark.dask
 
 @pytest.fixture(scope="module")
 def client():
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    import dask
+
+    # a worker that stops answering is restarted after 60 s, not Dask's 5 min (a CI run under load once
+    # saw a worker fall silent for 596 s); the search then starts again (test_a_search_outlives_...)
+    with dask.config.set({"distributed.scheduler.worker-ttl": "60s"}):
+        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
     c = distributed.Client(cluster)
     yield c
     c.close()
@@ -119,6 +124,35 @@ def test_contacts_on_dask_show_progress_when_asked(client, capsys):
     contacts(Q, scheduler="threads", progress=True)  # a local scheduler: dask.diagnostics' bar
     err = capsys.readouterr()
     assert "100%" in err.err and err.out == ""
+
+
+def test_a_search_outlives_one_lost_worker_and_names_a_second_loss(client, monkeypatch):
+    """Workers restarted mid-search lose the scattered data: the search warns and starts again once."""
+    from distributed.client import FutureCancelledError
+
+    from core.bodies import distributed as dist
+
+    Q, _ = _bodies(3000, seed=5)
+    local = contacts(Q)
+    restarts = []
+
+    def restart_once(done, total):
+        if not restarts:
+            restarts.append(done)
+            client.restart()  # every future of the search is cancelled, the scattered block is gone
+
+    with pytest.warns(RuntimeWarning, match="a Dask worker was lost with data of this search; starting it again"):
+        _same(contacts(Q, scheduler=client, partitions=3, progress=restart_once), local)
+    assert restarts == [1]
+
+    def lost(self, tasks, label, *, final=False):  # a loss in every attempt (a second restart is slow under load)
+        raise FutureCancelledError("_partition_task-0", reason="already forgotten")
+
+    with monkeypatch.context() as m:
+        m.setattr(dist._Runner, "compute", lost)
+        with pytest.warns(RuntimeWarning), pytest.raises(RuntimeError, match=r"^the Dask cluster lost a worker holding this search's data in each of 2 attempt\(s\)"):
+            contacts(Q, scheduler=client, partitions=3)
+    _same(contacts(Q, scheduler=client, partitions=3), local)  # the cluster serves again
 
 
 def test_an_unreachable_scheduler_is_a_clear_error():

@@ -27,6 +27,10 @@ there; every later task names blocks by their futures, so the task graphs hold n
    search does (:func:`core.bodies.search.contacts_of`): the same pairs, relations, certifiers
    and counts as ``contacts(Q)`` on one machine.
 
+A worker lost while it held the search's data (a crash, a restart, or the scheduler's
+``distributed.scheduler.worker-ttl`` after it stopped answering) cancels the futures that needed
+the data: the search warns and starts again once from step 1, then raises RuntimeError.
+
 Progress (``progress=True``): Dask's own progress bar (``distributed``'s on a cluster, or
 ``dask.diagnostics.ProgressBar`` on a local scheduler), drawn on stderr, one bar per step; a
 callable ``progress(done, total)`` is called instead as the partition tasks finish.
@@ -43,12 +47,15 @@ or ``contacts(Q, scheduler=Client("tcp://SCHEDULER:8786"))``.
 from __future__ import annotations
 
 import sys
+import time
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import dask
 import numpy as np
+from distributed.client import FutureCancelledError
 from distributed.diagnostics.plugin import WorkerPlugin
 from distributed.diagnostics.progressbar import TextProgressBar
 
@@ -70,6 +77,11 @@ from .result import Contacts
 from .search import Progress, contacts_of, read_bodies
 
 __all__ = ["WarmUp", "register", "contacts_distributed", "BODY_CHUNK"]
+
+_RETRIES = 1
+"""Times a search starts again after a worker was lost with its data (scattered blocks are not
+recomputed: the futures that needed them are cancelled). A worker can be lost by a crash, a
+restart, or the scheduler's ``distributed.scheduler.worker-ttl`` when it stops answering."""
 
 BODY_CHUNK = 1 << 18
 """Bodies per chunk when numpy input is handed to Dask (32 MiB of ellipsoid matrices)."""
@@ -138,42 +150,59 @@ def contacts_distributed(
 
     Raises:
         ValueError: bad input (as :func:`core.contacts`).
-        RuntimeError: the scheduler at an address cannot be reached.
+        RuntimeError: the scheduler at an address cannot be reached, or workers holding the
+            search's data were lost twice (the first time the search starts again, warning).
     """
-    import time
-
     check_options(method, on_invalid)
-    t0 = time.perf_counter()
     client, own = _client(scheduler)
     try:
         if client is not None:
             register(client)
         run = _Runner(client, scheduler if isinstance(scheduler, str) and client is None else None, progress)
-        blocks, offsets, N, n = _blocks(Q, client)
-        L = read_box(box, n - 1)
-        sphere_handles, parts = run.compute([dask.delayed(_block_spheres)(b, o) for b, o in zip(blocks, offsets, strict=True)], "bounds")
-        spheres = _merged(parts, n - 1)
-        if spheres.invalid and on_invalid == "raise":
-            raise ValueError(next(iter(spheres.invalid.values())))
-        if L is not None:
-            check_box(spheres.centers, spheres.radii, L)
-        if max_pairs is not None and (pairs := BroadPhase(spheres.centers, spheres.radii, box=L).pairs) > max_pairs:
-            raise TooManyPairs(pairs, max_pairs)
-        t1 = time.perf_counter()
-        plan = _plan(spheres, L, partitions or _default_partitions(client))
-        tasks = []
-        for p in range(plan.count):
-            pieces = [dask.delayed(_members)(b, s, o, plan, p) for b, s, o in zip(blocks, sphere_handles, offsets, strict=True)]
-            tasks.append(dask.delayed(_partition_task)(pieces, L, method, chunk))
-        _, results = run.compute(tasks, "contacts", final=True) if tasks else (None, [])
-        t2 = time.perf_counter()
-        cand, rel, by = _concatenate(results, n - 1, L is not None)
-        out = contacts_of(cand, rel, by, N, L, spheres)
-        out.seconds = {"bounds": t1 - t0, "partitions": t2 - t1, "total": time.perf_counter() - t0}
-        return out
+        for attempt in range(1 + _RETRIES):
+            try:
+                return _search(run, Q, box, method, on_invalid, partitions, chunk, max_pairs)
+            except FutureCancelledError as e:
+                if client is None or attempt == _RETRIES:
+                    raise RuntimeError(
+                        f"the Dask cluster lost a worker holding this search's data in each of {attempt + 1} "
+                        f"attempt(s) (a lost worker: a crash, a restart, or silent past distributed.scheduler.worker-ttl): {e}"
+                    ) from e
+                warnings.warn(f"a Dask worker was lost with data of this search; starting it again ({e})", RuntimeWarning, stacklevel=2)
+        raise AssertionError("unreachable")
     finally:
         if own and client is not None:
             client.close()
+
+
+def _search(
+    run: _Runner, Q: Any, box: Any, method: str, on_invalid: str, partitions: int | None, chunk: int, max_pairs: int | None
+) -> Contacts:
+    """One whole search (module docstring, steps 1-4): data scattered, bounds, partitions, result."""
+    t0 = time.perf_counter()
+    client = run.client
+    blocks, offsets, N, n = _blocks(Q, client)
+    L = read_box(box, n - 1)
+    sphere_handles, parts = run.compute([dask.delayed(_block_spheres)(b, o) for b, o in zip(blocks, offsets, strict=True)], "bounds")
+    spheres = _merged(parts, n - 1)
+    if spheres.invalid and on_invalid == "raise":
+        raise ValueError(next(iter(spheres.invalid.values())))
+    if L is not None:
+        check_box(spheres.centers, spheres.radii, L)
+    if max_pairs is not None and (pairs := BroadPhase(spheres.centers, spheres.radii, box=L).pairs) > max_pairs:
+        raise TooManyPairs(pairs, max_pairs)
+    t1 = time.perf_counter()
+    plan = _plan(spheres, L, partitions or _default_partitions(client))
+    tasks = []
+    for p in range(plan.count):
+        pieces = [dask.delayed(_members)(b, s, o, plan, p) for b, s, o in zip(blocks, sphere_handles, offsets, strict=True)]
+        tasks.append(dask.delayed(_partition_task)(pieces, L, method, chunk))
+    _, results = run.compute(tasks, "contacts", final=True) if tasks else (None, [])
+    t2 = time.perf_counter()
+    cand, rel, by = _concatenate(results, n - 1, L is not None)
+    out = contacts_of(cand, rel, by, N, L, spheres)
+    out.seconds = {"bounds": t1 - t0, "partitions": t2 - t1, "total": time.perf_counter() - t0}
+    return out
 
 
 class _StderrProgressBar(TextProgressBar):
