@@ -5,18 +5,23 @@ integer in quadratic time (or refuses it with a bare error), and reports a deepl
 a generic parse error. :class:`JsonRoute` reads bodies with hooks instead: a number that a float
 cannot hold, or an integer over the edge limit, becomes an :class:`OutOfRange` marker that the
 number validator (:func:`app.api.schemas.checked_number`) refuses with a message naming the
-field; a body nested too deeply is a 400 that says so.
+field; a body nested too deeply is a 400 that says so. A large body is read and validated as
+the route's model in a worker thread, one at a time, so a burst of them leaves the event loop
+(and ``/healthz``) answering.
 """
 
 from __future__ import annotations
 
+import asyncio
 import json
+import weakref
 from collections.abc import Callable, Coroutine
 from typing import Any
 
 import anyio
 from fastapi import HTTPException, Request, Response
 from fastapi.routing import APIRoute
+from pydantic import BaseModel, ValidationError
 
 from core.shapes.limits import SERVER
 
@@ -84,28 +89,82 @@ def read_json(body: bytes | str) -> Any:
 
 INLINE_BYTES = 64 * 1024
 """Bodies up to this size are read on the event loop (microseconds); larger ones in a worker
-thread, so that the server's other requests (``/healthz``, small classifications) are answered
-meanwhile: the reader's hooks are Python code, which yields the interpreter lock every few ms,
-and 10,000 moving bodies (1 MB) take ~0.2 s to read on a quiet core (a loaded run once saw
-/healthz wait 1.6 s behind one)."""
+thread, read *and validated* there (:class:`JsonRoute`), so that the server's other requests
+(``/healthz``, small classifications) are answered meanwhile: 10,000 moving bodies (4 MB) take
+~0.2 s to read and ~0.15 s to validate on a quiet core (a loaded run once saw /healthz wait 1.6 s
+behind one)."""
+
+_READERS = 1
+"""Large bodies read at once (the others wait their turn). A reader holds the interpreter lock
+most of the time: with a burst of 12 bodies of 4 MB read in 12 threads, the event loop got the
+lock 1/13 of the time and /healthz took 1.0-1.4 s on a quiet machine; with one reader it competes with one thread
+(tests/test_hostile_server.py, ``test_a_burst_of_the_largest_bodies_leaves_healthz_answering``)."""
+
+_limiters: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, anyio.CapacityLimiter] = weakref.WeakKeyDictionary()
+
+
+def _reader_limiter() -> anyio.CapacityLimiter:
+    """The readers' limiter of the running event loop (a limiter serves the loop it was made in)."""
+    loop = asyncio.get_running_loop()
+    limiter = _limiters.get(loop)
+    if limiter is None:
+        limiter = _limiters[loop] = anyio.CapacityLimiter(_READERS)
+    return limiter
+
+
+def _read_checked(body: bytes, model: type[BaseModel] | None) -> Any:
+    """The body read, and validated as ``model`` when it can be: the model instance, else the data.
+
+    FastAPI validates what :meth:`Request.json` returns: a model instance passes as it is
+    (microseconds), while invalid data is validated again by FastAPI, on the loop, so that every
+    422 has the one format of the API.
+    """
+    data = read_json(body)
+    if model is None:
+        return data
+    try:
+        return model.model_validate(data)
+    except ValidationError:
+        return data
 
 
 class _JsonRequest(Request):
+    model: type[BaseModel] | None = None
+    """The route's body model (a single, not embedded, pydantic model), else None."""
+
     async def json(self) -> Any:
         if not hasattr(self, "_json"):
             body = await self.body()
-            self._json = read_json(body) if len(body) <= INLINE_BYTES else await anyio.to_thread.run_sync(read_json, body)
+            if len(body) <= INLINE_BYTES:
+                self._json = read_json(body)
+            else:
+                self._json = await anyio.to_thread.run_sync(_read_checked, body, self.model, limiter=_reader_limiter())
         return self._json
 
 
 class JsonRoute(APIRoute):
-    """APIRoute whose handler reads JSON with :func:`read_json` (FastAPI's custom-route hook)."""
+    """APIRoute whose handler reads JSON with :func:`read_json` (FastAPI's custom-route hook).
+
+    A large body is read and validated in a worker thread, one body at a time.
+    """
 
     def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
         """The default handler, given a request that parses its body with :func:`read_json`."""
         handler = super().get_route_handler()
+        model = _body_model(self)
 
         async def route_handler(request: Request) -> Response:
-            return await handler(_JsonRequest(request.scope, request.receive))
+            wrapped = _JsonRequest(request.scope, request.receive)
+            wrapped.model = model
+            return await handler(wrapped)
 
         return route_handler
+
+
+def _body_model(route: APIRoute) -> type[BaseModel] | None:
+    """The pydantic model of a route's whole body (one body parameter, not embedded), else None."""
+    field = route.body_field
+    if field is None or getattr(route, "_embed_body_fields", True):
+        return None
+    annotation = field.field_info.annotation
+    return annotation if isinstance(annotation, type) and issubclass(annotation, BaseModel) else None
