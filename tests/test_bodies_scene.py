@@ -217,6 +217,28 @@ def test_layers_points_for_all_solids_for_the_near(server):
     assert layers.network is not None and len(layers.network.points) == 2
 
 
+def test_a_tab_closed_while_a_pair_opens_leaves_no_session_running(server, demo_file):
+    """close() waits for a pair being opened and closes its new session; after it nothing opens.
+
+    Was: close() read ``self.session`` while another thread was building the first one, so that
+    session (its timers, its analyses) outlived the tab and drew on a closed connection.
+    """
+    import threading
+
+    m = load_model(str(demo_file))
+    view = BodiesView(server, m)
+    closer = threading.Thread(target=view.close)
+    with view._lock:  # a pair is being opened on a handler's thread (the lock it holds meanwhile)
+        closer.start()
+        closer.join(0.3)
+        assert closer.is_alive(), "close() returned while a pair was being opened"
+        session = view.open_pair(0)
+        assert session is not None and not session.closed
+    closer.join(30)
+    assert not closer.is_alive() and session.closed
+    assert view.open_pair(1) is None and view.session is session  # closed: nothing new is built
+
+
 def test_view_pages_filters_selects_opens_and_back(server, demo_file):
     m = load_model(str(demo_file))
     view = BodiesView(server, m)

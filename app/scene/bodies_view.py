@@ -129,6 +129,8 @@ class BodiesView:
     def _build_all(self) -> None:
         """Build the view of all bodies (a new file or box: the two-body view goes too)."""
         with self._lock:
+            if self._closed:
+                return
             self.ready.clear()
             if self.session is not None:
                 self.session.close()
@@ -505,6 +507,8 @@ class BodiesView:
         from .session import Session
 
         with self._lock:
+            if self._closed:  # the tab went away: a session built now would never be closed
+                return None
             assert self.model is not None
             if self._timer is not None:
                 self._timer.cancel()
@@ -581,14 +585,19 @@ class BodiesView:
         Framing(np.array([lo, hi]), self.model.dim).aim(cam, fill=1.35 if self.model.dim == 3 else 1.0, view=(0.55, -1.0, 0.7))
 
     def close(self) -> None:
-        """The tab went away: stop the two-body view's work, the timeline and the camera timer."""
-        self._closed = True
-        if self._timer is not None:
-            self._timer.cancel()
-        if self.timeline is not None:
-            self.timeline.close()
-        if self.session is not None:
-            self.session.close()
+        """The tab went away: stop the two-body view's work, the timeline and the camera timer.
+
+        Under the view's lock: a pair being opened meanwhile (its two-body session being built)
+        finishes first and its session is closed here; after this nothing opens or builds.
+        """
+        with self._lock:
+            self._closed = True
+            if self._timer is not None:
+                self._timer.cancel()
+            if self.timeline is not None:
+                self.timeline.close()
+            if self.session is not None:
+                self.session.close()
 
 
 def _camera_of(cam: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
