@@ -292,6 +292,41 @@ def test_view_upload_and_box(server, tmp_path):
     assert view.load_bytes("up.csv", path.read_bytes()) is None and view.model.box == (b.side, b.side)
 
 
+def test_a_tabs_file_is_searched_in_a_budgeted_worker_never_in_the_server(server, tmp_path, monkeypatch):
+    """Was: an uploaded file's contacts were found in the process serving every tab, unbounded: 5,000
+    bodies at one point (12,497,500 pairs) took seconds and gigabytes there. Now a worker process
+    searches it, under a pair limit (refused before any pair is built) and a time budget."""
+    import os
+
+    from app.scene import bodies as bodies_mod
+    from app.scene.analysis import AnalysisCache
+
+    cache = AnalysisCache(processes=True)
+    try:
+        view = BodiesView(server, None, cache=cache)
+        crowd = tmp_path / "crowd.csv"
+        write_bodies_csv(crowd, np.zeros((5000, 3)), np.ones((5000, 3)), np.tile([1.0, 0, 0, 0], (5000, 1)))
+        searched_in: list[int] = []
+        real = bodies_mod.contacts
+        monkeypatch.setattr(bodies_mod, "contacts", lambda *a, **k: (searched_in.append(os.getpid()), real(*a, **k))[1])
+        err = view.load_bytes("crowd.csv", crowd.read_bytes())
+        assert err == ("crowd.csv: 5,000 bodies give 12,497,500 pairs to examine (bodies crowded together), over the scene's "
+                       "limit of 5,000,000: find their contacts with `python -m app contacts` or `core.contacts`")
+        assert view.model is None and "⚠" in view.file_md.content and searched_in == []  # not in this process
+        # a lattice of touching spheres: 10,512 tangencies decided exactly, over a budget made short for the test
+        g = np.arange(16, dtype=float) * 2.0
+        c = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+        lattice = tmp_path / "lattice.csv"
+        write_bodies_csv(lattice, c, np.ones_like(c), np.tile([1.0, 0, 0, 0], (len(c), 1)))
+        monkeypatch.setattr("app.scene.bodies_view.UPLOAD_SECONDS", 0.3)
+        assert view.load_bytes("lattice.csv", lattice.read_bytes()) == "finding the contacts of lattice.csv took over 0.3 s and was stopped"
+        monkeypatch.setattr("app.scene.bodies_view.UPLOAD_SECONDS", 60.0)
+        assert view.load_bytes("lattice.csv", lattice.read_bytes()) is None and searched_in == []
+        assert len(view.model.result) == 3 * 16 * 16 * 15 and set(view.model.result.relation.tolist()) == {Relation.TANGENT}
+    finally:
+        cache.shutdown()
+
+
 def test_a_file_with_its_own_box_is_searched_in_it(server, tmp_path):
     """An extended-XYZ file's Lattice is the periodic box of the view (load_model and upload), shown exactly."""
     side = 7.123456789012345  # more digits than a rounded display keeps

@@ -344,8 +344,8 @@ def test_scene_model_in_a_tilted_box_shows_the_image_at_its_lattice_vector():
 def test_scene_draws_the_tilted_cell_and_takes_a_typed_tilted_box(tmp_path):
     viser = pytest.importorskip("viser")
     from app.readers.bodyset import from_parameters
-    from app.scene.bodies import BodiesModel
-    from app.scene.bodies_view import BodiesView, _parse_box
+    from app.scene.bodies import BodiesModel, parse_box
+    from app.scene.bodies_view import BodiesView
 
     box = (8.0, 8.0, 8.0, 0.5, -0.25, 0.375)
     c = np.array([[0.0, 0.0, 0.0], [2.0, 1.0, 0.5]])
@@ -370,9 +370,9 @@ def test_scene_draws_the_tilted_cell_and_takes_a_typed_tilted_box(tmp_path):
         assert len(ends) == 8 and got == {tuple(x) for x in (corners - corners.mean(axis=0)).round(4)}
     finally:
         server.stop()
-    assert _parse_box("8, 8, 8, 0.5, -0.25, 0.375", 3) == box and _parse_box("5 5 0.5", 2) == (5.0, 5.0, 0.5)
+    assert parse_box("8, 8, 8, 0.5, -0.25, 0.375", 3) == box and parse_box("5 5 0.5", 2) == (5.0, 5.0, 0.5)
     with pytest.raises(ValueError, match="expected 3 sides for 3D bodies"):
-        _parse_box("8, 8, 8, 1", 3)
+        parse_box("8, 8, 8, 1", 3)
 
 
 def test_moving_bodies_refuse_a_tilted_box_clearly():

@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable, Hashable, Iterable
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar, cast
 
 import numpy as np
 from flint import fmpq
@@ -30,6 +30,8 @@ from core.shapes.numbers import format_rational, to_float, to_fmpq
 from ..jobs import analyse_job, read_motion_job
 from .motion import MAX_MOTION_TEXT, MotionError, MotionModel
 from .readout import explanation_at
+
+T = TypeVar("T")
 
 __all__ = ["AnalysisCache", "AnalysisView", "EventView", "PLOT_SAMPLES"]
 
@@ -448,6 +450,26 @@ class AnalysisCache:
             raise
         except ValueError as e:  # core's message: the motion cannot be analysed on I
             raise MotionError(str(e), "A") from None
+
+    def run(self, fn: Callable[..., T], *args: Any, timeout: float, what: str) -> T:
+        """``fn(*args)`` in a worker process under a time and memory budget (here without a pool).
+
+        For work a tab brings that is not a motion (a file of bodies): its ValueError comes back
+        as it is; a busy pool, the budget spent, or the worker dying becomes a ValueError that
+        says so, naming ``what`` ("reading bodies.csv").
+        """
+        if self._pool is None:
+            return fn(*args)
+        from app.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerTimeout
+
+        try:
+            return cast(T, self._pool.run(fn, *args, timeout=timeout))
+        except WorkerBusy as e:
+            raise ValueError(f"{e}: try again in a moment") from None
+        except WorkerTimeout:
+            raise ValueError(f"{what} took over {timeout:g} s and was stopped") from None
+        except (WorkerDied, WorkerFailed) as e:  # e.g. "the job ran out of memory (limit 2048 MB)"
+            raise ValueError(f"{what} failed: {e}") from None
 
     def shutdown(self) -> None:
         """Kill running analysis processes."""

@@ -28,12 +28,13 @@ from typing import Any
 import numpy as np
 
 from core import Certifier, Contacts, Relation, axes_from_quadric, contacts
+from core.bodies.broadphase import TooManyPairs
 from core.shapes.quadrics import rotations_from_orientations
 
 from ..bodyfiles import BodySet
 from .state import SceneConfig
 
-__all__ = ["BodiesModel", "PairList", "PairEntry", "PairPage", "PAGE_SIZE", "RELATION_FILTERS", "pick_body", "relation_colours"]
+__all__ = ["BodiesModel", "UPLOAD_PAIRS", "UPLOAD_SECONDS", "UPLOAD_BYTES", "parse_box", "tab_bodies_job", "PairList", "PairEntry", "PairPage", "PAGE_SIZE", "RELATION_FILTERS", "pick_body", "relation_colours"]
 
 PAGE_SIZE = 200
 """Pairs per page of the GUI's list (tangent first, then overlap, then by (i, j))."""
@@ -72,6 +73,52 @@ class PairPage:
         if len(self.entries) == self.total:
             return f"showing all {self.total:,} {what}"
         return f"showing {self.start + 1:,}–{self.start + len(self.entries):,} of {self.total:,} {what}"
+
+
+UPLOAD_BYTES = 64 * 1024 * 1024
+"""Largest file a tab may upload to the bodies view (about a million bodies as CSV)."""
+UPLOAD_PAIRS = 5_000_000
+"""Most pairs the broad phase may examine for bodies a tab brings (a file, or a box typed for
+them): counted before any is built, so a crowded file is refused at once instead of filling the
+server's memory (10,000 bodies at random give ~50,000; 10,000 at one point 49,995,000)."""
+UPLOAD_SECONDS = 60.0
+"""Time budget of reading a tab's file and finding its contacts (a worker process, killed then)."""
+
+
+def parse_box(text: str, dim: int) -> tuple[float, ...] | None:
+    """The periodic box typed in the GUI ("10, 10, 10"), or None when empty."""
+    parts = [p for p in str(text).replace(",", " ").split() if p]
+    if not parts:
+        return None
+    try:
+        sides = tuple(float(p) for p in parts)
+    except ValueError:
+        raise ValueError(f"periodic box: expected {dim} numbers, got {text!r}") from None
+    if len(sides) not in (dim, 6) and not (dim == 2 and len(sides) == 3):
+        raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies (or a tilted box: Lx, Ly, Lz, xy, xz, yz), got {len(sides)}")
+    return sides
+
+
+def tab_bodies_job(source: bytes | BodySet, name: str, box_text: str) -> BodiesModel:
+    """The model of bodies a tab brings: the bytes of an uploaded file, or bodies with a typed box.
+
+    Run in a worker process under :data:`UPLOAD_SECONDS` (the scene's
+    :meth:`app.scene.analysis.AnalysisCache.run`), with :data:`UPLOAD_PAIRS`: the file is
+    the tab's, its work must not be the server's. A file's own box (GSD, LAMMPS, extxyz) wins
+    over the typed one.
+
+    Raises:
+        ValueError: an unreadable file, a bad box, or too many pairs to examine.
+    """
+    from ..bodyfiles import read_bodies_bytes
+    from ..readers import usable_box
+
+    if isinstance(source, bytes | bytearray):
+        bodies = read_bodies_bytes(bytes(source), name)
+        box = usable_box(bodies.box, bodies.dim, name) if bodies.box is not None else parse_box(box_text, bodies.dim)
+    else:
+        bodies, box = source, parse_box(box_text, source.dim)
+    return BodiesModel(bodies, box, name=name, max_pairs=UPLOAD_PAIRS)
 
 
 class PairList(ABC):
@@ -196,16 +243,26 @@ class BodiesModel(PairList):
         box: periodic box sides, or None.
         name: what to call the set in the GUI (the file name).
 
+        max_pairs: most pairs the broad phase may examine (None: no limit); the scene's limit
+            for a file a tab uploads (:data:`UPLOAD_PAIRS`).
+
     Raises:
-        ValueError: a bad box or a body too large for it (invalid bodies are marked, not fatal).
+        ValueError: a bad box or a body too large for it (invalid bodies are marked, not fatal),
+            or more pairs to examine than ``max_pairs`` (counted before any is built).
     """
 
-    def __init__(self, bodies: BodySet, box: Any = None, name: str = "") -> None:
+    def __init__(self, bodies: BodySet, box: Any = None, name: str = "", *, max_pairs: int | None = None) -> None:
         self.bodies = bodies
         self.name = name or bodies.source
         self.dim = bodies.dim
         self.box = None if box is None else tuple(float(v) for v in box)
-        self.result: Contacts = contacts(bodies.Q, box=self.box, on_invalid="mark")
+        try:
+            self.result: Contacts = contacts(bodies.Q, box=self.box, on_invalid="mark", max_pairs=max_pairs)
+        except TooManyPairs as e:
+            raise ValueError(
+                f"{self.name}: {len(bodies):,} bodies give {e.pairs:,} pairs to examine (bodies crowded together), over "
+                f"the scene's limit of {e.limit:,}: find their contacts with `python -m app contacts` or `core.contacts`"
+            ) from None
         self.invalid = {**self.result.invalid, **bodies.errors}
         self.worst = self.result.per_body()
         self.positions, self.wxyz, self.scales = self._poses()

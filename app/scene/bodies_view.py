@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from ..bodyfiles import read_bodies, read_bodies_bytes
+from ..bodyfiles import BodySet, read_bodies
 from ..readers import usable_box
-from .bodies import BodiesModel, PairPage
+from .bodies import UPLOAD_BYTES, UPLOAD_SECONDS, BodiesModel, PairPage, tab_bodies_job
 from .bodies_layers import SEPARATE_MODES, BodyLayers, relation_colour_rows
 from .bodies_lod import ViewPose
 from .camera import Framing
@@ -436,16 +436,20 @@ class BodiesView:
         self.load_bytes(f.name, f.content)
 
     def load_bytes(self, name: str, content: bytes) -> str | None:
-        """Show the bodies of an uploaded file; returns an error message (also shown) or None."""
+        """Show the bodies of an uploaded file; returns an error message (also shown) or None.
+
+        The file is the tab's: it is read and its contacts found in a worker process, under
+        :data:`~app.scene.bodies.UPLOAD_SECONDS`, :data:`~app.scene.bodies.UPLOAD_PAIRS` and
+        :data:`~app.scene.bodies.UPLOAD_BYTES` (:func:`~app.scene.bodies.tab_bodies_job`).
+        """
         try:
-            bodies = read_bodies_bytes(content, name)
-            if bodies.box is not None:  # the file's own box (GSD, LAMMPS, extxyz) wins, and is shown
-                box = usable_box(bodies.box, bodies.dim, name)
-            else:
-                box = _parse_box(self.box_text.value, bodies.dim)
-            model = BodiesModel(bodies, box, name=name)
-            if bodies.box is not None:
-                self.box_text.value = _box_text(box)
+            if len(content) > UPLOAD_BYTES:
+                raise ValueError(f"{name} is too large ({len(content):,} bytes, the limit is {UPLOAD_BYTES:,}): "
+                                 "find its contacts with `python -m app contacts`, or start the scene on it (--bodies)")
+            self.file_md.content = f"Reading {html.escape(name)} and finding its contacts…"
+            model = self._tab_bodies(content, name)
+            if model.bodies.box is not None:  # the file's own box (GSD, LAMMPS, extxyz) wins, and is shown
+                self.box_text.value = _box_text(model.box)
         except ValueError as e:
             self.file_md.content = f'<span style="color:#d62728">⚠ {html.escape(str(e))}</span>'
             return str(e)
@@ -456,6 +460,12 @@ class BodiesView:
             self._build_all()
         return None
 
+    def _tab_bodies(self, source: bytes | BodySet, name: str) -> BodiesModel:
+        """:func:`~app.scene.bodies.tab_bodies_job` with the typed box, in a worker process."""
+        return self.analysis_cache().run(
+            tab_bodies_job, source, name, str(self.box_text.value), timeout=UPLOAD_SECONDS, what=f"finding the contacts of {name}"
+        )
+
     def _on_box(self, ev: Any) -> None:
         if self.model is None or getattr(ev, "client", None) is None:
             return
@@ -463,8 +473,7 @@ class BodiesView:
             self.file_md.content = "The box of moving bodies is the one they were swept in (`--box`, or START's)."
             return
         try:
-            box = _parse_box(self.box_text.value, self.model.dim)
-            model = BodiesModel(self.model.bodies, box, name=self.model.name)
+            model = self._tab_bodies(self.model.bodies, self.model.name)
         except ValueError as e:
             self.file_md.content = f'<span style="color:#d62728">⚠ {html.escape(str(e))}</span>'
             return
@@ -611,20 +620,6 @@ def _camera_of(cam: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
 def _box_text(box: Any) -> str:
     """The box as the field shows it: every side in its shortest exact decimal (read back the same)."""
     return "" if box is None else ", ".join(repr(float(v)) for v in box)
-
-
-def _parse_box(text: str, dim: int) -> tuple[float, ...] | None:
-    """The periodic box typed in the GUI ("10, 10, 10"), or None when empty."""
-    parts = [p for p in str(text).replace(",", " ").split() if p]
-    if not parts:
-        return None
-    try:
-        sides = tuple(float(p) for p in parts)
-    except ValueError:
-        raise ValueError(f"periodic box: expected {dim} numbers, got {text!r}") from None
-    if len(sides) not in (dim, 6) and not (dim == 2 and len(sides) == 3):
-        raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies (or a tilted box: Lx, Ly, Lz, xy, xz, yz), got {len(sides)}")
-    return sides
 
 
 def _legend(moving: bool = False) -> str:
