@@ -67,6 +67,44 @@ def test_builder_mark_gives_nan_rows_that_contacts_reports():
     assert list(res.invalid) == [1] and "body 1" in res.invalid[1] and len(res) == 0
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_builder_beyond_the_range_of_1_over_r2_keeps_the_shape(dim):
+    """Was: semi-axes past ~1e±154 made 1/r^2 overflow or underflow, so a valid body became a matrix of
+    inf/0 ("not a finite number", "not an ellipsoid"). Now such a body is built at its own power-of-2
+    scale: the matrix is a positive multiple of the exact one, entry for entry within a few ulps
+    (checked in rationals against quadric_from_axes(exact=True)), and the pairs classify as the
+    geometry says; bodies the plain form holds keep their bits."""
+    rng = np.random.default_rng(7)
+    q = rng.normal(size=(4,)) if dim == 3 else [math.cos(0.35), 0.0, 0.0, math.sin(0.35)]  # 2D: a turn about z
+    for scale in (2.0**-700, 1e-300, 1e-160, 1e160, 1e300, 2.0**700):
+        c = rng.uniform(-3, 3, dim) * scale
+        r = rng.uniform(0.5, 2, dim) * scale
+        F = quadric_from_axes(c, r, q)
+        assert np.isfinite(F).all() and (np.abs(np.diag(F)) >= np.finfo(float).tiny).all(), scale
+        E = quadric_from_axes(c, r, q, exact=True)  # the exact matrix of the same floats
+        # both in the coordinates y = x / scale, where every entry of the exact matrix is of order 1
+        D = [fmpq(*float(scale).as_integer_ratio())] * dim + [fmpq(1)]
+        G = [[E[i][j] * D[i] * D[j] for j in range(dim + 1)] for i in range(dim + 1)]
+        Fq = [[fmpq(*float(F[i, j]).as_integer_ratio()) * D[i] * D[j] for j in range(dim + 1)] for i in range(dim + 1)]
+        lam = Fq[0][0] / G[0][0]  # F = lam E up to rounding: entry errors within 2^-44 of the largest entry
+        big = max(abs(G[i][j]) for i in range(dim + 1) for j in range(dim + 1))
+        assert lam > 0 and all(abs(Fq[i][j] / lam - G[i][j]) <= big / 2**44 for i in range(dim + 1) for j in range(dim + 1)), scale
+        gap = float(r[0]) * 2.0  # along axis 0 of an axis-aligned pair: apart by 3 r, by 1.5 r
+        far = bodies_from_axes([np.zeros(dim), np.eye(dim)[0] * 1.5 * gap], [r, r])
+        near = bodies_from_axes([np.zeros(dim), np.eye(dim)[0] * 0.75 * gap], [r, r])
+        assert classify(far[0], far[1]) == Relation.SEPARATE and classify(near[0], near[1]) == Relation.OVERLAP, scale
+        assert [len(contacts(far)), len(contacts(near))] == [0, 1]
+    b = random_bodies(200, dim=dim, seed=5)
+    assert build(b).tobytes() == _plain_build(b).tobytes()  # in range: the plain formula's bits
+
+
+def _plain_build(b):
+    from core.shapes.quadrics import _assemble_plain, rotations_from_orientations
+
+    c, r = np.asarray(b.centers, float), np.asarray(b.semi_axes, float)
+    return _assemble_plain(c, r, rotations_from_orientations(b.orientations, *c.shape))
+
+
 # ------------------------------------------------------------------------------ bounding spheres
 
 

@@ -290,7 +290,8 @@ class BroadPhase:
         if block.dedupe:
             keep = block.a.ids[p] < block.b.ids[q]
             p, q = p[keep], q[keep]
-        cand = _keep(block.a, p, block.b, q, self.box, self.pad, self.d)
+        with np.errstate(over="ignore"):  # squares past 1e308 (bodies near 1e154): inf, and the test stays conservative
+            cand = _keep(block.a, p, block.b, q, self.box, self.pad, self.d)
         if self.ghosts is not None:  # bodies and ghosts -> pairs of bodies with images
             return Candidates(*self.ghosts.resolve(cand.i, cand.j))
         return cand

@@ -340,7 +340,32 @@ def _assemble_float(c: np.ndarray, r: np.ndarray, R: np.ndarray) -> np.ndarray:
 
     The float operations of the one-shape formula, elementwise: the upper triangle of Q is
     summed over k in order and mirrored (rounding must not make the matrix non-symmetric).
+
+    A shape whose matrix in this form is not representable (1/r^2 overflows or underflows: semi-axes
+    beyond about 2^±511, e.g. 1e-160 or 1e160) is built at the scale s = 2^e of its largest
+    number instead and put back exactly: with Q', m', k' its matrix for c / s, r / s, the matrix
+    s D M' D (D = diag(1/s, .., 1/s, 1)) = [[Q' / s, m'], [m'^T, s k']] describes the same shape
+    (a positive multiple), every entry a normal float. Shapes the plain form holds are unchanged.
     """
+    with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):  # found and mended below
+        M = _assemble_plain(c, r, R)
+    d = c.shape[1]
+    Q_diag = np.abs(M[:, np.arange(d), np.arange(d)])
+    out_of_range = ~np.isfinite(M).all(axis=(1, 2)) | (Q_diag < np.finfo(np.float64).tiny).any(axis=1)
+    fixable = out_of_range & np.isfinite(c).all(axis=1) & np.isfinite(r).all(axis=1) & (r > 0).all(axis=1)
+    if fixable.any():
+        k = np.flatnonzero(fixable)
+        big = np.maximum(np.abs(c[k]).max(axis=1), r[k].max(axis=1))
+        s = np.ldexp(1.0, np.frexp(big)[1])[:, None]  # a power of 2: the divisions below are exact
+        Ms = _assemble_plain(c[k] / s, r[k] / s, R[k])
+        Ms[:, :d, :d] /= s[:, :, None]
+        Ms[:, d, d] *= s[:, 0]
+        M[k] = Ms
+    return M
+
+
+def _assemble_plain(c: np.ndarray, r: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """:func:`_assemble_float`'s formula as written, in floats (non-finite where it overflows)."""
     N, d = c.shape
     inv_r2 = 1 / (r * r)
     M = np.empty((N, d + 1, d + 1))
