@@ -242,7 +242,6 @@ class BodiesModel(PairList):
         bodies: the bodies read from a file.
         box: periodic box sides, or None.
         name: what to call the set in the GUI (the file name).
-
         max_pairs: most pairs the broad phase may examine (None: no limit); the scene's limit
             for a file a tab uploads (:data:`UPLOAD_PAIRS`).
 
