@@ -339,7 +339,7 @@ def test_a_burst_of_the_largest_bodies_leaves_healthz_answering(server):
     async def burst() -> list[httpx.Response]:
         async with httpx.AsyncClient(timeout=GUARD_S) as c:
             headers = {"Content-Type": "application/json"}
-            return await asyncio.gather(*(c.post(f"{server.api}/api/sweep", content=content, headers=headers) for _ in range(16)))
+            return await asyncio.gather(*(c.post(f"{server.api}/api/sweep", content=content, headers=headers) for _ in range(12)))
 
     with Probes(server) as probes:
         answers = asyncio.run(burst())
