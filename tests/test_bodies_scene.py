@@ -327,6 +327,29 @@ def test_a_tabs_file_is_searched_in_a_budgeted_worker_never_in_the_server(server
         cache.shutdown()
 
 
+def test_a_typed_box_is_budgeted_for_a_tabs_file_not_for_the_servers(server, tmp_path, monkeypatch):
+    """A box typed for the server's own bodies (--bodies) is searched here without limits; for
+    bodies a tab uploaded, in the budgeted worker (AnalysisCache.run)."""
+    from types import SimpleNamespace
+
+    from app.scene.analysis import AnalysisCache
+
+    b = random_bodies(200, dim=2, seed=3)
+    path = tmp_path / "up.csv"
+    write_bodies_csv(path, b.centers, b.semi_axes, b.orientations)
+    ran: list[str] = []
+    real = AnalysisCache.run
+    monkeypatch.setattr(AnalysisCache, "run", lambda self, fn, *a, **k: (ran.append(fn.__name__), real(self, fn, *a, **k))[1])
+    view = BodiesView(server, load_model(str(path)))  # the server's file
+    view.box_text.value = f"{b.side}, {b.side}"
+    view._on_box(SimpleNamespace(client=object()))  # as a tab's edit arrives
+    assert view.model.box == (b.side, b.side) and ran == []
+    assert view.load_bytes("up.csv", path.read_bytes()) is None and ran == ["tab_bodies_job"]
+    view.box_text.value = ""
+    view._on_box(SimpleNamespace(client=object()))
+    assert view.model.box is None and ran == ["tab_bodies_job"] * 2
+
+
 def test_a_file_with_its_own_box_is_searched_in_it(server, tmp_path):
     """An extended-XYZ file's Lattice is the periodic box of the view (load_model and upload), shown exactly."""
     side = 7.123456789012345  # more digits than a rounded display keeps

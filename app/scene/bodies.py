@@ -99,13 +99,14 @@ def parse_box(text: str, dim: int) -> tuple[float, ...] | None:
     return sides
 
 
-def tab_bodies_job(source: bytes | BodySet, name: str, box_text: str) -> BodiesModel:
+def tab_bodies_job(source: bytes | BodySet, name: str, box_text: str, max_pairs: int | None = UPLOAD_PAIRS) -> BodiesModel:
     """The model of bodies a tab brings: the bytes of an uploaded file, or bodies with a typed box.
 
     Run in a worker process under :data:`UPLOAD_SECONDS` (the scene's
     :meth:`app.scene.analysis.AnalysisCache.run`), with :data:`UPLOAD_PAIRS`: the file is
     the tab's, its work must not be the server's. A file's own box (GSD, LAMMPS, extxyz) wins
-    over the typed one.
+    over the typed one. ``max_pairs`` None: the bodies are the server's own (``--bodies``), only
+    the box is the tab's.
 
     Raises:
         ValueError: an unreadable file, a bad box, or too many pairs to examine.
@@ -118,7 +119,7 @@ def tab_bodies_job(source: bytes | BodySet, name: str, box_text: str) -> BodiesM
         box = usable_box(bodies.box, bodies.dim, name) if bodies.box is not None else parse_box(box_text, bodies.dim)
     else:
         bodies, box = source, parse_box(box_text, source.dim)
-    return BodiesModel(bodies, box, name=name, max_pairs=UPLOAD_PAIRS)
+    return BodiesModel(bodies, box, name=name, max_pairs=max_pairs)
 
 
 class PairList(ABC):

@@ -101,6 +101,8 @@ class BodiesView:
         """The page of pairs the list shows."""
         self._lock = threading.RLock()
         self._closed = False
+        self._from_tab = False
+        """The bodies shown came from this tab's upload (else the server's file): their work is budgeted."""
         self._choices: dict[str, int] = {}
         self._syncing = False
         self._timer: threading.Timer | None = None
@@ -455,16 +457,22 @@ class BodiesView:
             return str(e)
         with self._lock:
             self.model = model
+            self._from_tab = True
             self.selected = self.body = None
             self.relation, self.page_no = "all", 0
             self._build_all()
         return None
 
     def _tab_bodies(self, source: bytes | BodySet, name: str) -> BodiesModel:
-        """:func:`~app.scene.bodies.tab_bodies_job` with the typed box, in a worker process."""
-        return self.analysis_cache().run(
-            tab_bodies_job, source, name, str(self.box_text.value), timeout=UPLOAD_SECONDS, what=f"finding the contacts of {name}"
-        )
+        """:func:`~app.scene.bodies.tab_bodies_job` with the typed box.
+
+        In a worker process for a tab's file; here, without limits, for the server's own bodies
+        (``--bodies``: a presenter's million, which a worker's memory cap could refuse).
+        """
+        box = str(self.box_text.value)
+        if isinstance(source, BodySet) and not self._from_tab:
+            return tab_bodies_job(source, name, box, None)
+        return self.analysis_cache().run(tab_bodies_job, source, name, box, timeout=UPLOAD_SECONDS, what=f"finding the contacts of {name}")
 
     def _on_box(self, ev: Any) -> None:
         if self.model is None or getattr(ev, "client", None) is None:
