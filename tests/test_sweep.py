@@ -320,3 +320,17 @@ def test_2d_angles_are_half_angle_numbers():
 def test_pairs_spacing_keeps_pair_sets_independent():
     m = grazing_pairs(2, seed=1)
     assert m.centers0[2, 0] - m.centers0[0, 0] == SPACING
+
+
+@pytest.mark.parametrize("exponent", [-990, -700, 0, 700, 990])
+def test_sweep_at_any_float_scale(exponent):
+    """Was: past about 1e154 the swept ball's |c1 - c0| overflowed ("its swept volume is beyond the
+    float range"). Three unit spheres scaled by 2^e: sphere 1 moves from 3 to 1.5 on the x axis, so it
+    meets sphere 0 at t = 2/3 exactly, and it overlaps sphere 2 (at 4.5) from the start."""
+    s = 2.0**exponent
+    c0 = np.array([[0.0, 0, 0], [3.0, 0, 0], [4.5, 0, 0]]) * s
+    c1 = c0 + np.array([[0.0, 0, 0], [-1.5, 0, 0], [0.0, 0, 0]]) * s
+    res = sweep_contacts(c0, c1, np.full((3, 3), s))
+    assert list(zip(res.i.tolist(), res.j.tolist(), res.relation.tolist(), strict=True)) == [
+        (0, 1, Relation.TANGENT), (1, 2, Relation.OVERLAP)]
+    assert res.time(0).compare(fmpq(2, 3)) == 0 and res.time(1).compare(0) == 0

@@ -62,12 +62,23 @@ def swept_spheres(bodies: LinearMotions, valid: np.ndarray) -> SweptSpheres:
     """
     c0, c1 = bodies.centers0, bodies.centers1
     with np.errstate(all="ignore"):
-        m = (c0 + c1) * 0.5
-        half = np.sqrt(((c1 - c0) ** 2).sum(axis=1)) * 0.5
+        m = c0 * 0.5 + c1 * 0.5  # halves first: (c0 + c1) overflows past 9e307
+        half = _norm(c1 * 0.5 - c0 * 0.5)
         reach = bodies.semi_axes.max(axis=1)
-        R = (reach + half) * (1 + _MARGIN) + _MARGIN * np.sqrt((m * m).sum(axis=1)) + 2.0**-1000
+        R = (reach + half) * (1 + _MARGIN) + _MARGIN * _norm(m) + 2.0**-1000
     ok = valid & np.isfinite(R) & np.isfinite(m).all(axis=1)
     return SweptSpheres(np.where(ok[:, None], m, np.nan), np.where(ok, R, np.nan), reach)
+
+
+def _norm(v: np.ndarray) -> np.ndarray:
+    """|v| of each row, finite up to the float range.
+
+    Computed at the power of 2 of the row's largest entry: an exact scaling, so the roundings are
+    those of sqrt(sum v^2) wherever that does not overflow.
+    """
+    big = np.abs(v).max(axis=1)
+    s = np.where((big > 0) & np.isfinite(big), np.ldexp(1.0, np.frexp(big)[1]), 1.0)
+    return np.sqrt(((v / s[:, None]) ** 2).sum(axis=1)) * s
 
 
 def swept_plan(spheres: SweptSpheres, box: np.ndarray | None, *, max_pairs: int | None = None) -> BroadPhase:
