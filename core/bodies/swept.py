@@ -78,7 +78,8 @@ def _norm(v: np.ndarray) -> np.ndarray:
     """
     big = np.abs(v).max(axis=1)
     s = np.where((big > 0) & np.isfinite(big), np.ldexp(1.0, np.frexp(big)[1]), 1.0)
-    return np.sqrt(((v / s[:, None]) ** 2).sum(axis=1)) * s
+    out: np.ndarray = np.sqrt(((v / s[:, None]) ** 2).sum(axis=1)) * s
+    return out
 
 
 def swept_plan(spheres: SweptSpheres, box: np.ndarray | None, *, max_pairs: int | None = None) -> BroadPhase:
