@@ -246,3 +246,30 @@ def test_empty_index_and_empty_queries():
     assert len(index.query(bodies(3, 3, None, seed=1))) == 0
     index = BodyIndex(bodies(10, 3, None, seed=1))
     assert len(index.query(np.zeros((0, 4, 4)))) == 0
+
+
+@pytest.mark.parametrize("scale", [2.0**-700, 1e-160, 1e160, 2.0**700])
+def test_an_index_at_any_float_scale_finds_the_contacts_without_warnings(scale):
+    """Bodies past ~1e±154 (their squared distances overflow): the index answers what it answers at
+    scale 1 (three unit spheres in a row, the middle one overlapping both ends; new bodies asked
+    one at a time and together) and no RuntimeWarning reaches the user (was: 'overflow encountered
+    in multiply' from the near test, whose inf keeps it conservative)."""
+    import warnings
+
+    c = np.array([[0.0, 0, 0], [1.5, 0, 0], [3.0, 0, 0], [9.0, 0, 0]])
+    r = np.ones((4, 3))
+    new_c, new_r = np.array([[4.5, 0, 0], [0.0, 3.0, 0]]), np.ones((2, 3))
+
+    def answers(s):
+        index = BodyIndex(bodies_from_axes(c * s, r * s))
+        together = index.query(bodies_from_axes(new_c * s, new_r * s))
+        one = index.query(bodies_from_axes(new_c[:1] * s, new_r[:1] * s))
+        return (together.i.tolist(), together.j.tolist(), together.relation.tolist(),
+                one.i.tolist(), one.j.tolist(), one.relation.tolist())
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = answers(scale)
+    want = answers(1.0)
+    assert want == ([0], [2], [int(Relation.OVERLAP)], [0], [2], [int(Relation.OVERLAP)])
+    assert got == want

@@ -535,7 +535,8 @@ class BodyIndex:
                 diff[moved] += lattice_shifts(self.box, self._images(k[moved]))
         scale = float(np.max(np.abs(centers[ok]))) + self._span + float(np.max(reach))
         r = radii[qi] + self._radii[body] + _PAD * scale
-        near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= r * r)
+        with np.errstate(over="ignore"):  # squares past 1e308 (bodies near 1e154): inf, and the test stays conservative
+            near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= r * r)
         if near.size > 1:
             near = near[np.argsort(qi[near] * len(self) + body[near], kind="stable")]
         return qi[near], body[near], None if k is None else k[near].astype(np.int8)
@@ -571,7 +572,8 @@ class BodyIndex:
                 diff -= lattice_shifts(self.box, self._images(k))  # v(-k) = -v(k)
         pad = _PAD * (max(abs(x) for x in c) + self._span + reach)
         rr = self._radii[body] + (r + pad)
-        near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= rr * rr)
+        with np.errstate(over="ignore"):  # as in _candidates
+            near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= rr * rr)
         if near.size > 1:
             near = near[np.argsort(body[near], kind="stable")]
         return body[near], None if k is None else (-k[near]).astype(np.int8)
