@@ -375,10 +375,57 @@ def test_scene_draws_the_tilted_cell_and_takes_a_typed_tilted_box(tmp_path):
         parse_box("8, 8, 8, 1", 3)
 
 
-def test_moving_bodies_refuse_a_tilted_box_clearly():
+@pytest.mark.parametrize("box", [(8.0, 8.0, 8.0, 0.5, -0.25, 0.375), (8.0, 8.0, 0.75), (8.0, 8.0, 8.0, 1.5, -1.25, 0.875)])
+def test_moving_bodies_in_a_tilted_box_equal_their_explicit_images(box):
+    """Was: sweep_contacts refused tilted boxes. Now each pair's image k is chosen at the midpoints
+    and j's whole path moves by v(k); the reference places all 3^d images of every body explicitly
+    in open space (dyadic box and centres, so that c + v(k) is exact) and sweeps them there: the
+    same pairs, images and first contact brackets. Bodies sit near the faces, edges and corners."""
     from core import sweep_contacts
 
-    c = np.array([[0.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
-    with pytest.raises(ValueError, match=r"^box: tilted \(triclinic\) boxes are not supported for moving bodies yet"):
-        sweep_contacts(c, c + 0.5, np.full((2, 3), 0.5), box=(10, 10, 10, 0.5, 0, 0))
-    assert len(sweep_contacts(c, c + 0.5, np.full((2, 3), 0.5), box=(10, 10, 10, 0, 0, 0))) == 0  # no tilt: orthorhombic
+    d = 2 if len(box) == 3 else 3
+    L = read_box(box, d)
+    H = basis(box, d)
+    rng = np.random.default_rng(int(sum(box) * 8))
+    n = 40
+    h = float(np.min(cell_heights(L, d)))  # sizes within the one-image rule: swept radii below h / 4
+    r = rng.uniform(0.06, 0.15, (n, d)) * h
+    f = rng.uniform(-0.45, 0.45, (n, d))  # the midpoints' fractional coordinates
+    for m in range(1, n // 2, 2):  # m's image k passes near m - 1 (across a face, edge or corner k)
+        k = rng.integers(-1, 2, d) if m % 4 == 1 else rng.choice([-1, 1], d)
+        if k.any():
+            t = (r[m - 1].mean() + r[m].mean()) * rng.uniform(0.8, 1.2) / np.linalg.norm(H @ k)
+            f[m - 1] = np.where(k != 0, (0.5 - 0.5 * t) * k, f[m - 1])
+            f[m] = f[m - 1] + (t - 1) * k
+    half = np.round(rng.uniform(-0.04, 0.04, (n, d)) * h * 2**10) / 2**10  # half the displacement
+    mid = np.round((f @ H.T) * 2**10) / 2**10
+    c0, c1 = mid - half, mid + half
+    o0, o1 = (rng.normal(size=(n, 4)), rng.normal(size=(n, 4))) if d == 3 else (rng.uniform(0, 3, n), rng.uniform(0, 3, n))
+    res = sweep_contacts(c0, c1, r, o0, o1, box=box)
+    images = list(itertools.product((-1, 0, 1), repeat=d))
+    v = lattice_shifts(L, np.array(images))
+    assert all(Fraction(float(x)) == y for k, row in zip(images, v, strict=True) for x, y in zip(row, exact_vector(box, k), strict=True))
+    big = sweep_contacts(np.concatenate([c0 + s for s in v]), np.concatenate([c1 + s for s in v]), np.concatenate([r] * len(v)),
+                         np.concatenate([o0] * len(v)), np.concatenate([o1] * len(v)))
+    home = images.index((0,) * d)
+    want = {}
+    for a, b, lo, hi, rel in zip(big.i.tolist(), big.j.tolist(), big.t_lo.tolist(), big.t_hi.tolist(), big.relation.tolist(), strict=True):
+        (ia, ka), (ib, kb) = divmod(a, n)[::-1], divmod(b, n)[::-1]
+        if ka == home and ia < ib:  # body ia against image kb of body ib
+            want[(ia, ib)] = (images[kb], lo, hi, rel)
+        elif kb == home and ib < ia:  # body ib against image ka of body ia
+            want[(ib, ia)] = (images[ka], lo, hi, rel)
+    got = {(int(i), int(j)): (tuple(int(x) for x in k), lo, hi, int(rel))
+           for i, j, k, lo, hi, rel in zip(res.i, res.j, res.image, res.t_lo, res.t_hi, res.relation, strict=True)}
+    assert got.keys() == want.keys()
+    for key, (k, lo, hi, rel) in got.items():
+        wk, wlo, whi, wrel = want[key]
+        assert k == wk and rel == wrel and lo <= whi and wlo <= hi, (key, got[key], want[key])  # the certified brackets meet
+    across = [k for k, *_ in got.values() if any(k)]
+    assert len(across) >= 3 and any(sum(map(abs, k)) >= 2 for k in across)  # across faces and edges or corners
+    shifts = res.shifts()
+    assert shifts is not None and shifts.tobytes() == lattice_shifts(L, res.image).tobytes()
+    assert res.box is not None and res.box.tolist() == L.tolist()
+    k = next(k for k in range(len(res)) if res.t_lo[k] > 0)  # an exact time on request, with the pair's image
+    t = res.time(k)
+    assert t.compare(fmpq(*float(res.t_lo[k]).as_integer_ratio())) >= 0 and t.compare(fmpq(*float(res.t_hi[k]).as_integer_ratio())) <= 0

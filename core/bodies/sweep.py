@@ -29,7 +29,7 @@ from ..moving.linear import LinearMotions, read_linear_motions
 from ..options import check_options
 from ..relation import Relation
 from .broadphase import Candidates
-from .periodic import check_box, is_tilted, read_box
+from .periodic import check_box, lattice_shifts, read_box
 from .sweep_result import SweepContacts
 from .swept import approaching, swept_plan, swept_spheres
 
@@ -67,12 +67,15 @@ def sweep_contacts(
             R(q(t) / |q(t)|), a rational motion (2D: the half-angle number (cos(theta / 2),
             sin(theta / 2)) interpolated alike: the body turns from theta0 to theta1).
             None: constant orientation. See :mod:`core.moving.linear`.
-        box: periodic box sides (Lx, Ly[, Lz]) or None. Minimum image over the whole step:
-            the image of j is chosen once, from the midpoints of the paths, and kept during the
-            step. Limits (else a ValueError names the body): the midpoints span at most one box
-            side per axis, and the two largest swept radii (largest semi-axis plus half the
-            displacement) sum to less than half the smallest side, so that only that image can
-            meet body i. Orthorhombic boxes only.
+        box: periodic box sides (Lx, Ly[, Lz]), a tilted box in HOOMD's convention
+            (Lx, Ly, Lz, xy, xz, yz; 2D: Lx, Ly, xy), or None (:func:`core.bodies.periodic.read_box`).
+            Minimum image over the whole step: the image k of j is chosen once, from the
+            midpoints of the paths, and j's whole path is moved by its lattice vector v(k)
+            (:func:`core.bodies.periodic.lattice_shifts`, as in :func:`core.contacts`). Limits
+            (else a ValueError names the body): the midpoints span at most one box vector along
+            each (fractional coordinates), and the two largest swept radii (largest semi-axis
+            plus half the displacement) sum to less than half the cell's smallest height (the
+            smallest side of an orthogonal box), so that only that image can meet body i.
         on_invalid: "raise" a ValueError naming the first bad row (not a number, a semi-axis
             <= 0, a zero quaternion, an orientation path through zero), or "mark": report such
             rows in ``.invalid`` and search the rest.
@@ -120,8 +123,6 @@ def sweep_contacts(
         raise ValueError(next(iter(bad.values())))
     N, d = bodies.centers0.shape
     L = read_box(box, d)
-    if is_tilted(L):  # read_box takes tilted boxes for contacts(); the swept search is orthorhombic only
-        raise ValueError("box: tilted (triclinic) boxes are not supported for moving bodies yet: give the sides (Lx, Ly[, Lz]) of an orthorhombic box")
     valid = np.ones(N, dtype=bool)
     valid[list(bad)] = False
     spheres = swept_spheres(bodies, valid)
@@ -214,7 +215,7 @@ class _Found:
     def add(self, cand: Candidates, progress: Progress | None, total: int) -> None:
         """First contacts of a batch; its pairs that meet are kept (with their exact times)."""
         t = time.perf_counter()
-        shift = None if cand.image is None or self.box is None else cand.image.astype(np.float64) * self.box
+        shift = None if cand.image is None or self.box is None else lattice_shifts(self.box, cand.image)
         fc = first_contacts(
             self.bodies, cand.i, cand.j, shift, method=self.method,
             progress=None if progress is None else (lambda k, m: progress(self.done, total)),

@@ -12,6 +12,7 @@ from ..fixed.classify import Certifier
 from ..moving.first_contact import first_contact
 from ..moving.linear import LinearMotions
 from ..relation import Relation
+from .periodic import lattice_shifts
 
 __all__ = ["SweepContacts"]
 
@@ -22,7 +23,8 @@ class SweepContacts:
 
     Pairs are (i, j) with i < j, sorted by (i, j). t* is the first t in [0, 1] at which the
     pair is not separate (0 when they already touch or overlap at t = 0); in a periodic box the
-    pair is body i with the image of body j moved by ``image`` * L during the whole step.
+    pair is body i with the image of body j moved by the lattice vector of ``image`` during the
+    whole step (:meth:`shifts`: ``image`` * L in an orthogonal box).
     """
 
     i: np.ndarray
@@ -42,7 +44,8 @@ class SweepContacts:
     bodies: LinearMotions = field(repr=False)
     """The bodies, read exactly (what :meth:`time` computes with)."""
     box: np.ndarray | None = None
-    """Periodic box sides, or None in open space."""
+    """Periodic box: its d sides, or the six numbers (Lx, Ly, Lz, xy, xz, yz) of a tilted box
+    (:func:`core.bodies.periodic.read_box`); None in open space."""
     image: np.ndarray | None = None
     """(M, d) int8 lattice image of j for each pair (periodic box), else None."""
     invalid: dict[int, str] = field(default_factory=dict)
@@ -76,12 +79,24 @@ class SweepContacts:
             if lo == hi:
                 self._times[k] = RealAlgebraic.rational(lo)
             else:
-                shift = None if self.image is None or self.box is None else self.image[k].astype(np.float64) * self.box
+                shifts = self.shifts()
+                shift = None if shifts is None else shifts[k]
                 e = first_contact(self.bodies.motion(int(self.i[k])), self.bodies.motion(int(self.j[k]), shift), (lo, hi))
                 if e is None:  # pragma: no cover - the bracket is certified
                     raise RuntimeError(f"pair {k}: no contact in its certified bracket [{lo}, {hi}]")
                 self._times[k] = e.time
         return self._times[k]
+
+    def shifts(self) -> np.ndarray | None:
+        """(M, d) float64: the vector v(k) body j of each pair was moved by; None in open space.
+
+        The float vectors the sweep moved j's path by (:func:`core.bodies.periodic.lattice_shifts`,
+        as :meth:`core.Contacts.shifts`): k L in an orthogonal box; in a tilted one
+        k1 a1 + k2 a2 + k3 a3 rounded to the nearest float per component.
+        """
+        if self.image is None or self.box is None:
+            return None
+        return lattice_shifts(self.box, self.image)
 
     def pairs_of(self, body: int) -> np.ndarray:
         """Indices (into i, j, ...) of the pairs that contain ``body``."""

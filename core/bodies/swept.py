@@ -31,6 +31,7 @@ import numpy as np
 
 from ..moving.linear import LinearMotions
 from .broadphase import BroadPhase, Candidates, TooManyPairs
+from .periodic import lattice_shifts
 
 __all__ = ["SweptSpheres", "swept_spheres", "swept_plan", "swept_pairs", "approaching"]
 
@@ -125,7 +126,7 @@ def approaching(bodies: LinearMotions, spheres: SweptSpheres, cand: Candidates, 
         return cand
     i, j = cand.i, cand.j
     c0, c1 = bodies.centers0, bodies.centers1
-    s = np.zeros((found, c0.shape[1])) if cand.image is None or box is None else cand.image.astype(np.float64) * box
+    s = np.zeros((found, c0.shape[1])) if cand.image is None or box is None else lattice_shifts(box, cand.image)
     with np.errstate(all="ignore"):
         d0 = (c0[j] + s) - c0[i]
         d1 = (c1[j] + s) - c1[i]
