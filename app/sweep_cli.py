@@ -1,6 +1,6 @@
 """The ``sweep`` sub-command of ``python -m app``: first contact times among moving bodies.
 
-``python -m app sweep START END --out EVENTS.csv [--box Lx,Ly,Lz] [--frame K] [--end-frame K]
+``python -m app sweep START END --out EVENTS.csv [--box Lx,Ly,Lz[,xy,xz,yz]] [--frame K] [--end-frame K]
 [--format F] [--on-invalid mark] [--quiet]``
 
 START and END are files of bodies as for ``contacts`` (any format of :mod:`app.readers`: CSV
@@ -8,9 +8,10 @@ with the columns ``x,y,z,a,b,c,qw,qx,qy,qz`` or ``x,y,a,b,angle``, Parquet, NPZ,
 LAMMPS dump, extended XYZ): row k of START is body k at t = 0, row k of END the same body at
 t = 1 (same semi-axes, row by row). They may be two frames of one trajectory (``--frame``,
 ``--end-frame``). Each body moves on the straight line between its centres and turns along
-q(t) = (1 - t) q0 + t q1 (:func:`core.sweep_contacts`). The box is ``--box``, else START's; in a
-box, a body whose end centre is more than half a side away on an axis (a wrapped trajectory:
-it crossed a face) is taken at the nearest image of its end centre (:func:`unwrapped`).
+q(t) = (1 - t) q0 + t q1 (:func:`core.sweep_contacts`). The box is ``--box``, else START's
+(orthogonal, or tilted in HOOMD's convention); in a box, a body whose end centre is more than half
+a box vector away along one (a wrapped trajectory: it crossed a face) is taken at the nearest
+image of its end centre (:func:`unwrapped`).
 
 EVENTS is CSV ``i,j,t_lo,t_hi,relation`` (or ``-``: standard output): every pair that touches or
 overlaps during the step, t_lo <= t* <= t_hi (floats written so that they read back exactly),
@@ -46,7 +47,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("start", help="bodies at t = 0 (any format of app.readers: CSV, Parquet, NPZ, GSD, LAMMPS, XYZ), or - for stdin")
     s.add_argument("end", help="the same bodies at t = 1 (same rows, same semi-axes)")
     s.add_argument("--out", required=True, help=f"output CSV {EVENTS_HEADER}, or - for stdout")
-    s.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz] (minimum image over the step); default: START's box")
+    s.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz], or a tilted box Lx,Ly,Lz,xy,xz,yz (2D: Lx,Ly,xy) (minimum image over the step); default: START's box")
     add_body_file_options(s)
     s.add_argument("--end-frame", type=frame_argument, default=None, help="frame of END when it is a trajectory (default: --frame)")
     s.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bad bodies and go on")
@@ -144,11 +145,13 @@ def read_moving_bodies(
     if box is not None and len(box) != 6 and len(box) != s.dim:
         raise ValueError(f"--box has {len(box)} sides but the bodies are {s.dim}D")
     box = usable_box(box, s.dim, names[0])
-    if box is not None and len(box) == 6:
-        raise ValueError(f"{names[0]}: sweep takes orthogonal boxes only (Lx, Ly, Lz); give --box Lx,Ly,Lz")
     centers1, moved = e.centers, 0
     if box is not None:
-        centers1, moved = unwrapped(s.centers, e.centers, np.asarray(box, dtype=np.float64))
+        from core.bodies.periodic import read_box
+
+        L = read_box(box, s.dim)
+        assert L is not None  # a box was given
+        centers1, moved = unwrapped(s.centers, e.centers, L)
     return MovingBodies(s, e, centers1, None if box is None else tuple(box), errors, names, moved)
 
 
@@ -190,21 +193,32 @@ def run_sweep(args: argparse.Namespace) -> int:
 
 
 def unwrapped(c0: np.ndarray, c1: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, int]:
-    """END's centres moved by whole box sides so that each body moves by its minimum image.
+    """END's centres moved by whole lattice vectors so that each body moves by its minimum image.
 
     Trajectories in a periodic box store wrapped positions: a body that crosses a face between
-    two frames jumps by about one side. Its end centre is taken as c1 - k L, k = round((c1 - c0) / L)
-    (computed in float64: the nearest float to that image). Returns (centres, how many moved).
+    two frames jumps by about one box vector. Its end centre is taken as c1 - v(k), k the
+    rounded difference of the fractional coordinates (orthogonal box: k = round((c1 - c0) / L)),
+    v(k) the box's lattice vector (:func:`core.bodies.periodic.lattice_shifts`; the subtraction
+    in float64: the nearest float to that image). ``box`` as :func:`core.bodies.periodic.read_box`
+    gives it. Returns (centres, how many moved).
 
     Examples:
         >>> c, n = unwrapped(np.array([[9.5, 5.0]]), np.array([[0.25, 5.0]]), np.array([10.0, 10.0]))
         >>> c.tolist(), n
         ([[10.25, 5.0]], 1)
+        >>> tilted = np.array([10.0, 10.0, 0.0, 0.5, 0.0, 0.0])     # 2D, a2 = (5, 10): crossed the top face
+        >>> c, n = unwrapped(np.array([[5.0, 9.5]]), np.array([[0.0, 0.25]]), tilted)
+        >>> c.tolist(), n
+        ([[5.0, 10.25]], 1)
     """
-    k = np.rint((c1 - c0) / box)
+    from core.bodies.periodic import fractional, is_tilted, lattice_shifts
+
+    with np.errstate(invalid="ignore", over="ignore"):
+        k = np.rint(fractional(c1, box)[0] - fractional(c0, box)[0]) if is_tilted(box) else np.rint((c1 - c0) / box)
+    k[~np.isfinite(k)] = 0  # a row that is not a body: left to the reader's message
     moved = np.flatnonzero((k != 0).any(axis=1))
     out = c1.copy()
-    out[moved] = c1[moved] - k[moved] * box
+    out[moved] = c1[moved] - lattice_shifts(box, k[moved].astype(np.int64))
     return out, int(moved.size)
 
 

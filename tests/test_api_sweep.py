@@ -158,6 +158,20 @@ def test_across_the_face_of_a_periodic_box(client):
     assert status == 200 and open_space["pairs"] == []
 
 
+def test_across_the_face_of_a_tilted_box(client):
+    """Box (10, 10, 10, xy = 0.5): a2 = (5, 10, 0). Body 1 moves from (6, 7) to (6, 9.5); its image -a2
+    comes from (1, -3) to (1, -0.5), |1 - (-3 + 2.5 t)| = 2 at t = 4/5. The same bodies in the
+    orthogonal box (10, 10, 10) or in open space never meet (the tilt decides)."""
+    body = {"start": [sphere(1, 1, 5), sphere(6, 7, 5)], "end": [sphere(1, 1, 5), sphere(6, 9.5, 5)], "box": [10, 10, 10, 0.5, 0, 0]}
+    status, out = post(client, body)
+    assert status == 200, out
+    assert out["pairs"] == [pair_out(0, 1, "tangent", "float", None, image=[0, -1, 0], image_y=-1,
+                                     **bracketed(out["pairs"][0], Fraction(4, 5)))]
+    for other in ([10, 10, 10], None):
+        status, moved = post(client, {**body, "box": other})
+        assert status == 200 and moved["pairs"] == []
+
+
 def same_root(out: dict[str, Any], alpha: Any) -> bool:
     """The answer's algebraic number is alpha: a common factor of both polynomials changes sign
     on an interval inside both isolating intervals (so its root there is both numbers)."""
@@ -205,7 +219,7 @@ def test_a_rotating_body_against_the_exact_motion_analysis(client):
          "end row 0: expected [x, y, z, a, b, c, qw, qx, qy, qz] or [x, y, z, a, b, c] (the start rows are 3D), got 5 numbers"),
         ({"start": [sphere(0), sphere(3)], "end": [sphere(0), [3, 0, 0, 1, 1, 2]]},
          "end row 1: semi-axes [1.0, 1.0, 2.0] differ from start's [1.0, 1.0, 1.0]: a body keeps its shape during the step"),
-        ({"start": [[0, 0, 1, 1, 0]], "end": [[0, 0, 1, 1, 0]], "box": [5, 5, 5]}, "box: 3 sides for 2D bodies"),
+        ({"start": [[0, 0, 1, 1, 0]], "end": [[0, 0, 1, 1, 0]], "box": [5, 5, 5, 5]}, "box: 4 numbers for 2D bodies"),
         ({"start": [[0, 0, 1, -1, 0]], "end": [[0, 0, 1, -1, 0]]}, "row 0: semi-axes must be positive, got [1.0, -1.0]"),
         ({"start": [[0, 0, 0, 1, 1, 1, 0, 0, 0, 0]], "end": [[0, 0, 0, 1, 1, 1]]},
          "row 0: start's orientation: the quaternion is zero"),

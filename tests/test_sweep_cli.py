@@ -100,6 +100,25 @@ def test_sweep_command_unwraps_a_periodic_trajectory(tmp_path, capsys):
     assert (i.tolist(), j.tolist(), rel.tolist()) == ([0], [1], [Relation.OVERLAP])  # 0.75 apart at t = 0
 
 
+def test_sweep_command_in_a_tilted_box_unwraps_along_the_box_vectors(tmp_path, capsys):
+    """A tilted box (8, 8, 8, xy = 0.5: a2 = (4, 8, 0)): body 1 crosses the face y = 8 and is stored
+    wrapped by a2. Unwrapped along a2 it moves from (5, 7.75, 4) to (5, 8.5, 4); its image -a2
+    comes from y = -0.25 towards body 0 at (1, 1, 4): 1.25 - 0.75 t = 1, tangent at t* = 1/3
+    exactly. (Unwrapping by whole sides, as in an orthogonal box, would move it 4 along x.)"""
+    c0 = np.array([[1.0, 1.0, 4.0], [5.0, 7.75, 4.0]])
+    c1 = np.array([[1.0, 1.0, 4.0], [1.0, 0.5, 4.0]])  # (5, 8.5, 4) - a2, as a simulation stores it
+    r = np.array([[0.5, 0.5, 0.5]] * 2)
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (2, 1))
+    write_bodies_csv(tmp_path / "s.csv", c0, r, q)
+    write_bodies_csv(tmp_path / "e.csv", c1, r, q)
+    out = tmp_path / "ev.csv"
+    assert main(["sweep", str(tmp_path / "s.csv"), str(tmp_path / "e.csv"), "--out", str(out), "--box", "8,8,8,0.5,0,0"]) == 0
+    assert "1 bodies crossed a face" in capsys.readouterr().err
+    i, j, lo, hi, rel = read_events_csv(out)
+    assert (i.tolist(), j.tolist(), rel.tolist()) == ([0], [1], [Relation.TANGENT])
+    assert Fraction(lo[0]) <= Fraction(1, 3) <= Fraction(hi[0]) and hi[0] - lo[0] <= 1e-9
+
+
 def test_sweep_command_errors(tmp_path, capsys):
     m = grazing_pairs(2, seed=1)
     start, end = write_pair(tmp_path, m)

@@ -181,6 +181,27 @@ def test_colours_use_the_sweeps_own_exact_matrices():
             assert b.matrix_at(k, "2/9", shift) == matrix_at_exact(b.motion(k, shift), "2/9")
 
 
+def test_a_tilted_box_moves_the_image_by_its_lattice_vector(tmp_path):
+    """Box (8, 8, 8, xy = 0.5): a2 = (4, 8, 0). Body 1 crosses the face y = 8 (END stored wrapped by
+    a2); its image -a2 comes from y = -0.25 to 0.5 towards body 0 at (1, 1, 4): tangent at t* = 1/3
+    exactly, overlapping after. The scene's pair, motion, colours and picture use v(k) = -a2."""
+    r = [[0.5, 0.5, 0.5]] * 2
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (2, 1))
+    write_bodies_csv(tmp_path / "s.csv", np.array([[1.0, 1.0, 4.0], [5.0, 7.75, 4.0]]), np.array(r), q)
+    write_bodies_csv(tmp_path / "e.csv", np.array([[1.0, 1.0, 4.0], [1.0, 0.5, 4.0]]), np.array(r), q)
+    m = SweepModel(read_moving_bodies(str(tmp_path / "s.csv"), str(tmp_path / "e.csv"), box=(8.0, 8.0, 8.0, 0.5, 0.0, 0.0)))
+    assert len(m.result) == 1 and m.result.image[0].tolist() == [0, -1, 0]
+    assert same_time(m.time(0), RealAlgebraic.rational(fmpq(1, 3)))
+    mm = m.pair_motion(0)
+    r2 = analyse(mm.A, mm.B, interval=(0, 1))
+    assert same_time(r2.events[0].time, m.time(0)) and r2.events[0].relation == Relation.TANGENT
+    cfg, _ = m.pair_config(0)
+    assert np.allclose(cfg.B.center, [1.0, -0.25, 4.0])  # body 1 at t = 0 moved by -a2 = (-4, -8, 0)
+    assert [m.worst_at(certified(m, t)).tolist() for t in (0.25, 1 / 3, 0.5)] == [[0, 0], [0, 0], [2, 2]]  # float(1/3) < 1/3
+    assert m.worst_at(certified(m, m.time(0), event=0)).tolist() == [1, 1]  # at t* itself
+    assert "tilted (xy, xz, yz) = (0.5, 0, 0)" in m.summary()
+
+
 def test_event_time_colours_at_the_exact_irrational_t(model):
     """At t* = (3 - sqrt 3)/4 of pair 2-3: 2, 3 tangent; 0, 1 overlap (3 - 4t = sqrt 3 < 2); 6, 7
     overlap (1 + 3t = (13 - 3 sqrt 3)/4 < 2); the rest separate."""

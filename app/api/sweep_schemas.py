@@ -55,8 +55,10 @@ class SweepIn(BaseModel):
         "straight line; the orientation along q(t) = (1 - t) q0 + t q1 (2D: the angle turns from angle0 to angle1). "
         "In a periodic box give the end unwrapped (the start plus the displacement)",
     )
-    box: Annotated[list[FloatNumber], Field(min_length=2, max_length=3)] | None = Field(
-        default=None, description="periodic box sides [Lx, Ly(, Lz)]: minimum image over the whole step"
+    box: Annotated[list[FloatNumber], Field(min_length=2, max_length=6)] | None = Field(
+        default=None,
+        description="periodic box: sides [Lx, Ly(, Lz)], or a tilted box in HOOMD's convention [Lx, Ly, Lz, xy, xz, yz] "
+        "(2D: [Lx, Ly, xy]): minimum image over the whole step",
     )
     method: Literal["adaptive", "exact"] = Field(
         default="adaptive",
@@ -143,8 +145,8 @@ def sweep_arguments(body: SweepIn) -> SweepArguments:
         if len(row) not in (full, bare):
             want = f"{_ROW_3D} or [x, y, z, a, b, c]" if d == 3 else f"{_ROW_2D} or [x, y, a, b]"
             raise ValueError(f"end row {k}: expected {want} (the start rows are {d}D), got {len(row)} numbers")
-    if body.box is not None and len(body.box) != d:
-        raise ValueError(f"box: {len(body.box)} sides for {d}D bodies")
+    if body.box is not None and len(body.box) not in ((3, 6) if d == 3 else (2, 3, 6)):  # as /api/contacts
+        raise ValueError(f"box: {len(body.box)} numbers for {d}D bodies")
     s = np.array(body.start, dtype=np.float64).reshape(n, full)
     c0, r = s[:, :d], s[:, d : 2 * d]
     o0 = s[:, 2 * d :] if d == 3 else s[:, 2 * d]

@@ -99,6 +99,22 @@ def parse_box(text: str, dim: int) -> tuple[float, ...] | None:
     return sides
 
 
+def box_phrase(box: tuple[float, ...] | None, dim: int) -> str:
+    """" in a periodic box 10 × 10 × 10" (tilted: "... tilted (xy, xz, yz) = (0.5, 0, 0)"); "" in open space.
+
+    Examples:
+        >>> box_phrase((8.0, 8.0, 0.0, 0.5, 0.0, 0.0), 2)
+        ' in a periodic box 8 × 8 tilted (xy) = (0.5)'
+    """
+    if box is None:
+        return ""
+    text = " in a periodic box " + " × ".join(f"{v:g}" for v in box[:dim])
+    if len(box) == 6:
+        names, tilts = ("xy", box[3:4]) if dim == 2 else ("xy, xz, yz", box[3:])
+        text += f" tilted ({names}) = (" + ", ".join(f"{v:g}" for v in tilts) + ")"
+    return text
+
+
 def tab_bodies_job(source: bytes | BodySet, name: str, box_text: str, max_pairs: int | None = UPLOAD_PAIRS) -> BodiesModel:
     """The model of bodies a tab brings: the bytes of an uploaded file, or bodies with a typed box.
 
@@ -318,9 +334,7 @@ class BodiesModel(PairList):
         """Markdown: the set, its contacts by relation and how they were certified."""
         res, c = self.result, self.result.counts
         kind = "ellipsoids" if self.dim == 3 else "ellipses"
-        box = "" if self.box is None else " in a periodic box " + " × ".join(f"{v:g}" for v in self.box[: max(self.dim, 3) if len(self.box) == 6 else self.dim])
-        if self.box is not None and len(self.box) == 6:
-            box += " tilted (xy, xz, yz) = (" + ", ".join(f"{v:g}" for v in self.box[3:]) + ")"
+        box = box_phrase(self.box, self.dim)
         lines = [
             f"**{len(self.bodies):,} {kind}**{box}" + (f" from `{self.name}`" if self.name else ""),
             f"{len(res):,} contacts: **{c.get('tangent', 0):,} tangent**, **{c.get('overlap', 0):,} overlap** "

@@ -43,11 +43,12 @@ from flint import fmpq
 from core import Certifier, Relation, analyse, classify, sweep_contacts
 from core.algebra.algebraic import RealAlgebraic
 from core.algebra.closedform import closed_form
+from core.bodies.periodic import lattice_shifts
 from core.bodies.sweep_result import SweepContacts
 from core.moving.motions import Motion, motion_to_dict
 from core.moving.signs import Signs, decide_with
 
-from .bodies import PairList
+from .bodies import PairList, box_phrase
 from .motion import MotionModel
 from .state import SceneConfig
 
@@ -230,7 +231,7 @@ class SweepModel(PairList):
         """Markdown: the set, its contact events and how they were certified."""
         res, c = self.result, self.result.counts
         kind = "ellipsoids" if self.dim == 3 else "ellipses"
-        box = "" if self.box is None else " in a periodic box " + " × ".join(f"{v:g}" for v in self.box)
+        box = box_phrase(self.box, self.dim)
         at0 = int(np.count_nonzero(res.t_hi == 0.0))
         lines = [
             f"**{len(self.bodies):,} moving {kind}**{box}" + (f" from `{self.name}`" if self.name else ""),
@@ -442,34 +443,37 @@ class SweepModel(PairList):
         """
         key = (body, image)
         if key not in m._matrices:
-            shift = None if not any(image) or self.box is None else np.array(image, dtype=float) * np.array(self.box)
-            m._matrices[key] = self.result.bodies.matrix_at(body, tq, shift)
+            m._matrices[key] = self.result.bodies.matrix_at(body, tq, self._shift(image))
         return m._matrices[key]
 
     def motion(self, body: int, image: tuple[int, ...] = ()) -> Motion:
-        """Body's exact motion (moved by image * L in a box): the sweep's own (kept, LRU)."""
+        """Body's exact motion (moved by the lattice vector of ``image`` in a box): the sweep's own (kept, LRU)."""
         key = (body, tuple(image))
         with self._lock:
             got = self._motions.get(key)
             if got is not None:
                 self._motions.move_to_end(key)
                 return got
-        shift = None if not any(image) or self.box is None else np.array(image, dtype=float) * np.array(self.box)
-        m = self.result.bodies.motion(body, shift)
+        m = self.result.bodies.motion(body, self._shift(image))
         with self._lock:
             self._motions[key] = m
             while len(self._motions) > _MOTIONS_KEPT:
                 self._motions.popitem(last=False)
         return m
 
+    def _shift(self, image: tuple[int, ...]) -> np.ndarray | None:
+        """The lattice vector v(image) the sweep moves a body's path by (None: no image, or open space)."""
+        if not any(image) or self.result.box is None:
+            return None
+        return lattice_shifts(self.result.box, np.array([image]))[0]
+
     # ------------------------------------------------------------------ the two-body view
     def pair_config(self, k: int) -> tuple[SceneConfig, str]:
         """The pair at t = 0 as static shapes (the two-body view is then given its motion), and a note."""
         res = self.result
         i, j = int(res.i[k]), int(res.j[k])
-        shift = np.zeros(self.dim)
-        if res.image is not None and self.box is not None:
-            shift = res.image[k].astype(float) * np.array(self.box)
+        shifts = res.shifts()  # the lattice vectors v(k) the sweep moved j's path by
+        shift = np.zeros(self.dim) if shifts is None else shifts[k]
         shapes = {"A": self._shape(i, np.zeros(self.dim)), "B": self._shape(j, shift)}
         cfg = SceneConfig.from_dict({"dim": self.dim, **shapes, "preset": None, "show_plots": False})
         rel = Relation(int(res.relation[k]))
