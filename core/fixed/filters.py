@@ -252,11 +252,57 @@ def _translated(M: Entries, Mr: Entries, t: np.ndarray, n: int) -> tuple[Entries
     return {ij: np.ldexp(v, 1 - e) for ij, v in V.items()}, {ij: np.ldexp(r, 1 - e) + _TINY_RADIUS for ij, r in R.items()}
 
 
+def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Both shapes in units of their own size: the same congruence by diag(1, .., 1, 2^e) per pair.
+
+    X^T M X < 0 with X = (x, 1) ~ (2^e x, 2^e): scaling space by a power of two keeps the relative
+    position; it multiplies the last column and row by 2^e and the corner by 2^2e. Bodies of size
+    s far from 1 (1e9, 1e-150) have |Q| ~ 1/s^2, |m| ~ |c|/s^2 and a corner ~ |c|^2/s^2: entries
+    spread over decades that the bounds, relative to the largest entry, cannot follow. 2^e is
+    the power of two nearest the geometric mean over both shapes of 1/size, size^2 =
+    max(|corner| / |Q|, (|m| / |Q|)^2) (about |c|^2 + r^2). A pair is scaled only where every
+    scaled entry (and ``shift_b``, which scales with space) is exact; else it keeps e = 0.
+    Returns (a, b, shift_b) in the new units.
+    """
+    n = a.shape[-1]
+    d = n - 1
+
+    def log_size(M: np.ndarray) -> np.ndarray:  # log2 of the size, in logarithms (no overflow)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            q = np.log2(np.abs(M[:, :d, :d]).max(axis=(1, 2)))
+            m = np.log2(np.abs(M[:, :d, d]).max(axis=1))
+            k = np.log2(np.abs(M[:, d, d]))
+            out = np.maximum(0.5 * (k - q), m - q)
+        return np.where(np.isfinite(out), out, 0.0)
+
+    e = -np.rint(0.5 * (log_size(a) + log_size(b)))
+    e = np.clip(np.where(np.isfinite(e), e, 0.0), -1000, 1000).astype(np.int64)
+    if not e.any():
+        return a, b, shift_b
+    g = np.zeros((len(e), n, n), dtype=np.int64)  # the exponent of each entry's factor
+    g[:, :, d] += e[:, None]
+    g[:, d, :] += e[:, None]
+    a2, b2 = np.ldexp(a, g), np.ldexp(b, g)
+    exact = (np.ldexp(a2, -g) == a).all(axis=(1, 2)) & (np.ldexp(b2, -g) == b).all(axis=(1, 2))
+    exact &= np.isfinite(a2).all(axis=(1, 2)) & np.isfinite(b2).all(axis=(1, 2))
+    exact &= ((a2 == 0) | (np.abs(a2) >= np.finfo(np.float64).tiny)).all(axis=(1, 2))  # no subnormal: exact to the bit
+    exact &= ((b2 == 0) | (np.abs(b2) >= np.finfo(np.float64).tiny)).all(axis=(1, 2))
+    if shift_b is not None:
+        s = np.asarray(shift_b, dtype=np.float64)
+        s2 = np.ldexp(s, e[:, None])
+        exact &= (np.ldexp(s2, -e[:, None]) == s).all(axis=1) & np.isfinite(s2).all(axis=1)
+        shift_b = np.where(exact[:, None], s2, s)
+    keep = exact[:, None, None]
+    return np.where(keep, a2, a), np.where(keep, b2, b), shift_b
+
+
 def classify_translated(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None = None) -> np.ndarray:
     """Second stage: rule ids after moving both shapes so that A is centred near the origin.
 
-    The relation is invariant under a common translation. Far from the origin (centres at 1e6)
-    the entries c^T Q c dominate the first stage's bound; after moving the origin to (a float
+    The relation is invariant under a common translation and a common scaling. Far from the
+    origin (centres at 1e6) the entries c^T Q c dominate the first stage's bound, and bodies far
+    from size 1 (1e9, 1e-150) spread their entries over decades; after scaling space by a power
+    of two to the bodies' size (:func:`_balanced`) and moving the origin to (a float
     approximation of) A's centre, with every entry's rounding error carried as a radius
     (:mod:`core.fixed.errorbound`, midpoint-radius), most such pairs are certified without exact
     arithmetic, by the tree or by the certificates of :mod:`core.fixed.driver`. -1 where no
@@ -285,6 +331,7 @@ def _translated_pencil(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None)
     the translated matrices with their radii (:func:`classify_translated`, :func:`certified_valid`).
     """
     n = a.shape[-1]
+    a, b, shift_b = _balanced(a, b, shift_b)
     Pa = prepare(_X, n, _entries(a), "a")
     Pb = prepare(_X, n, _entries(b), "b")
     ra, rb = radii(_X, Pa.W, Pa.rounded, "a"), radii(_X, Pb.W, Pb.rounded, "b")
