@@ -96,6 +96,12 @@ def test_builder_beyond_the_range_of_1_over_r2_keeps_the_shape(dim):
         assert [len(contacts(far)), len(contacts(near))] == [0, 1]
     b = random_bodies(200, dim=dim, seed=5)
     assert build(b).tobytes() == _plain_build(b).tobytes()  # in range: the plain formula's bits
+    import warnings
+
+    with warnings.catch_warnings():  # semi-axes near the top of the range: no overflow warning reaches the user
+        warnings.simplefilter("error")
+        huge = bodies_from_axes([np.zeros(dim), np.eye(dim)[0] * 2.0**1001], [[2.0**1000] * dim] * 2)
+    assert classify(huge[0], huge[1]) == Relation.TANGENT
 
 
 def _plain_build(b):

@@ -229,6 +229,12 @@ float matrix, which is the shape to within that relative error (ill-conditioned 
 parameters (``exact=True``) have no such limit."""
 
 
+def _far_limit(r: np.ndarray) -> np.ndarray:
+    """FAR_FROM_ORIGIN times each row's smallest semi-axis (inf past the float range: no centre is that far)."""
+    with np.errstate(over="ignore"):
+        return np.asarray(FAR_FROM_ORIGIN * r.min(axis=1, initial=np.inf), dtype=np.float64)
+
+
 def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, first: bool = False) -> dict[int, str]:
     """Row -> why those parameters are no shape (the checks of :func:`quadrics_from_axes`).
 
@@ -252,7 +258,7 @@ def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, f
         (~(np.isfinite(c).all(axis=1) & np.isfinite(r).all(axis=1)),
          lambda k: f"centre and semi-axes must be finite numbers, got {c[k].tolist()} and {r[k].tolist()}"),
         (~(r > 0).all(axis=1), lambda k: f"semi-axes must be positive, got {r[k].tolist()}"),
-        (np.abs(c).max(axis=1, initial=0.0) > FAR_FROM_ORIGIN * r.min(axis=1, initial=np.inf),
+        (np.abs(c).max(axis=1, initial=0.0) > _far_limit(r),
          lambda k: f"centre {c[k].tolist()} is more than 2^26 times the smallest semi-axis ({float(r[k].min())!r}) from "
                    "the origin: the float64 matrix would not be this shape (its constant term rounds by as much as "
                    "the shape's own size); place the origin nearer the bodies"),
