@@ -87,7 +87,7 @@ class SweepPairOut(BaseModel):
 
     i: int
     j: int
-    """i < j; in a periodic box, j's image (j + image * box) during the whole step."""
+    """i < j; in a periodic box, j's image (j moved by the lattice vector of ``image``: image * box in an orthogonal box) during the whole step."""
     t_lo: float
     """t_lo <= t* (certified; the float reads back exactly)."""
     t_hi: float
