@@ -565,6 +565,25 @@ def test_the_float_filter_certifies_bodies_at_any_float_scale(dim):
                 assert (f != Relation.UNDECIDED).mean() >= 0.95, (ds.name, e, (f == Relation.UNDECIDED).sum())
 
 
+
+def test_the_numpy_fallback_agrees_at_any_float_scale(monkeypatch):
+    """The balanced first stage runs compiled, or as its numpy twin without the extension: the
+    same rule ids for pairs far from size 1 (and the translated stage after either)."""
+    from core.fixed.filters import rules_float
+
+    sets = [D.random_pairs(3, 80, seed=7), D.near_tangent_pairs(3, 40, gap=1e-8, sign=1, seed=8), D.random_pairs(2, 80, seed=9)]
+    cases = [(_space_scaled(ds.A, e, np.full(len(ds.A), -e)), _space_scaled(ds.B, e, np.full(len(ds.B), -e + 3)))
+             for ds in sets for e in (-700, 400)]
+    with np.errstate(over="ignore"):  # _mixed makes an inf on purpose
+        cases += [_mixed(3, seed=5), _mixed(4, seed=6)]  # every case of the prepare step, scaled entries among them
+    compiled_rules = [rules_float(A, B) for A, B in cases]
+    assert all((r >= 0).mean() > 0.5 for r in compiled_rules)
+    monkeypatch.setattr(compiled, "_EXT", None)
+    monkeypatch.setattr(compiled, "_STATUS", "the compiled float filter core.fixed._filter is not built (test)")
+    monkeypatch.setitem(compiled._state, "warned", True)
+    assert all((rules_float(A, B) == r).all() for (A, B), r in zip(cases, compiled_rules, strict=True))
+
+
 def _exact_validity_error(A, B):
     """The exact verdict on a pair's input (independent of the filter): None, or the error."""
     from core.shapes.quadrics import validate_quadric

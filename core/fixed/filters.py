@@ -252,7 +252,7 @@ def _translated(M: Entries, Mr: Entries, t: np.ndarray, n: int) -> tuple[Entries
     return {ij: np.ldexp(v, 1 - e) for ij, v in V.items()}, {ij: np.ldexp(r, 1 - e) + _TINY_RADIUS for ij, r in R.items()}
 
 
-def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
     """Both shapes in units of their own size: the same congruence by diag(1, .., 1, 2^e) per pair.
 
     X^T M X < 0 with X = (x, 1) ~ (2^e x, 2^e): scaling space by a power of two keeps the relative
@@ -262,7 +262,7 @@ def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple
     the power of two nearest the geometric mean over both shapes of 1/size, size^2 =
     max(|corner| / |Q|, (|m| / |Q|)^2) (about |c|^2 + r^2). A pair is scaled only where every
     scaled entry (and ``shift_b``, which scales with space) is exact; else it keeps e = 0.
-    Returns (a, b, shift_b) in the new units.
+    Returns (a, b, shift_b) in the new units and the mask of the pairs scaled (e != 0).
     """
     n = a.shape[-1]
     d = n - 1
@@ -278,22 +278,36 @@ def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple
     e = -np.rint(0.5 * (log_size(a) + log_size(b)))
     e = np.clip(np.where(np.isfinite(e), e, 0.0), -1000, 1000).astype(np.int64)
     if not e.any():
-        return a, b, shift_b
-    g = np.zeros((len(e), n, n), dtype=np.int64)  # the exponent of each entry's factor
-    g[:, :, d] += e[:, None]
-    g[:, d, :] += e[:, None]
-    a2, b2 = np.ldexp(a, g), np.ldexp(b, g)
-    exact = (np.ldexp(a2, -g) == a).all(axis=(1, 2)) & (np.ldexp(b2, -g) == b).all(axis=(1, 2))
-    exact &= np.isfinite(a2).all(axis=(1, 2)) & np.isfinite(b2).all(axis=(1, 2))
-    exact &= ((a2 == 0) | (np.abs(a2) >= np.finfo(np.float64).tiny)).all(axis=(1, 2))  # no subnormal: exact to the bit
-    exact &= ((b2 == 0) | (np.abs(b2) >= np.finfo(np.float64).tiny)).all(axis=(1, 2))
+        return a, b, shift_b, e != 0
+    tiny = np.finfo(np.float64).tiny
+
+    def times(x: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The products x 2^k, and per pair whether they are exact.
+
+        Exact: finite, and normal unless x is 0 (a power of two changes only the exponent there; a
+        subnormal result may drop bits, so it counts as inexact).
+        """
+        y = np.ldexp(x, k)
+        ok = np.isfinite(y) & ((x == 0) | (np.abs(y) >= tiny))
+        return y, ok.reshape(len(e), -1).all(axis=1)
+
+    exact = np.ones(len(e), dtype=bool)
+    out = []
+    for M in (a, b):  # only the last row and column change
+        M2 = np.array(M, dtype=np.float64)
+        col, ok1 = times(M[:, :d, d], e[:, None])
+        row, ok2 = times(M[:, d, :d], e[:, None])
+        corner, ok3 = times(M[:, d, d], 2 * e)
+        M2[:, :d, d], M2[:, d, :d], M2[:, d, d] = col, row, corner
+        exact &= ok1 & ok2 & ok3
+        out.append(M2)
     if shift_b is not None:
         s = np.asarray(shift_b, dtype=np.float64)
-        s2 = np.ldexp(s, e[:, None])
-        exact &= (np.ldexp(s2, -e[:, None]) == s).all(axis=1) & np.isfinite(s2).all(axis=1)
+        s2, ok = times(s, e[:, None])
+        exact &= ok
         shift_b = np.where(exact[:, None], s2, s)
     keep = exact[:, None, None]
-    return np.where(keep, a2, a), np.where(keep, b2, b), shift_b
+    return np.where(keep, out[0], a), np.where(keep, out[1], b), shift_b, exact & (e != 0)
 
 
 def classify_translated(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None = None) -> np.ndarray:
@@ -331,7 +345,7 @@ def _translated_pencil(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None)
     the translated matrices with their radii (:func:`classify_translated`, :func:`certified_valid`).
     """
     n = a.shape[-1]
-    a, b, shift_b = _balanced(a, b, shift_b)
+    a, b, shift_b, _ = _balanced(a, b, shift_b)
     Pa = prepare(_X, n, _entries(a), "a")
     Pb = prepare(_X, n, _entries(b), "b")
     ra, rb = radii(_X, Pa.W, Pa.rounded, "a"), radii(_X, Pb.W, Pb.rounded, "b")
@@ -356,12 +370,26 @@ def _translated_pencil(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None)
     return c, cr, minors, ok, VA, RA, VB, RB
 
 
-def _second_stage(a: np.ndarray, b: np.ndarray, rules: np.ndarray) -> np.ndarray:
-    """Run :func:`classify_translated` on the pairs the first stage left undecided."""
+def _second_stage(a: np.ndarray, b: np.ndarray, rules: np.ndarray, threads: int | None = None) -> np.ndarray:
+    """Run :func:`classify_translated` on the pairs the first stage left undecided.
+
+    The pairs that :func:`_balanced` scales (bodies far from size 1) first go through the first
+    stage again in their own units (compiled, or its numpy twin: the same answers), the
+    translated stage only for what it still leaves.
+    """
     idx = np.flatnonzero(rules < 0)
+    first = (lambda x, y: compiled.rules(x, y, threads=threads)) if compiled.available() else rules_numpy
     for s in range(0, idx.size, _CHUNK):
         part = idx[s : s + _CHUNK]
-        rules[part] = classify_translated(a[part].astype(np.float64), b[part].astype(np.float64))
+        A, B = a[part].astype(np.float64), b[part].astype(np.float64)
+        A2, B2, _, moved = _balanced(A, B, None)
+        if moved.any():
+            rows = np.flatnonzero(moved)
+            rules[part[rows]] = first(A2[rows], B2[rows])
+            left = rules[part] < 0
+            part, A, B = part[left], A[left], B[left]
+        if part.size:
+            rules[part] = classify_translated(A, B)
     return rules
 
 
@@ -382,7 +410,7 @@ def rules_float(a: np.ndarray, b: np.ndarray, *, scalar: bool = False, threads: 
     else:
         rules = rules_numpy(a, b)
     if not scalar and (rules < 0).any():
-        rules = _second_stage(a, b, rules)
+        rules = _second_stage(a, b, rules, threads)
     return rules
 
 
@@ -415,7 +443,6 @@ def classify_float_counted(a: np.ndarray, b: np.ndarray, *, scalar: bool = False
     codes, undecided = compiled.mapped(a, b, _RELATION_OF, threads=threads)
     if not scalar and undecided:
         idx = np.flatnonzero(codes == Relation.UNDECIDED)
-        for s in range(0, idx.size, _CHUNK):
-            part = idx[s : s + _CHUNK]
-            codes[part] = relations(classify_translated(a[part].astype(np.float64), b[part].astype(np.float64)))
+        rules = np.full(idx.size, -1, dtype=np.int8)
+        codes[idx] = relations(_second_stage(a[idx], b[idx], rules, threads))
     return codes, undecided == 0
