@@ -200,6 +200,7 @@ def test_a_tilted_box_moves_the_image_by_its_lattice_vector(tmp_path):
     assert [m.worst_at(certified(m, t)).tolist() for t in (0.25, 1 / 3, 0.5)] == [[0, 0], [0, 0], [2, 2]]  # float(1/3) < 1/3
     assert m.worst_at(certified(m, m.time(0), event=0)).tolist() == [1, 1]  # at t* itself
     assert "tilted (xy, xz, yz) = (0.5, 0, 0)" in m.summary()
+    assert m.pair_label(0).startswith("0 – 1 [-a2]  t* = 1/3")  # the image by box vectors: j moved by -a2
 
 
 def test_event_time_colours_at_the_exact_irrational_t(model):

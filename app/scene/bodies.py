@@ -29,6 +29,7 @@ import numpy as np
 
 from core import Certifier, Contacts, Relation, axes_from_quadric, contacts
 from core.bodies.broadphase import TooManyPairs
+from core.bodies.periodic import is_tilted
 from core.shapes.quadrics import rotations_from_orientations
 
 from ..bodyfiles import BodySet
@@ -97,6 +98,23 @@ def parse_box(text: str, dim: int) -> tuple[float, ...] | None:
     if len(sides) not in (dim, 6) and not (dim == 2 and len(sides) == 3):
         raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies (or a tilted box: Lx, Ly, Lz, xy, xz, yz), got {len(sides)}")
     return sides
+
+
+def image_text(image: np.ndarray | None, k: int, box: np.ndarray | None) -> str:
+    """" [+x -y]": the image of pair k's second body ("" if none), by box vectors in a tilted box.
+
+    In a tilted box the image counts box vectors, not axes: " [+a1 -a2]" (j moved by a1 - a2).
+
+    Examples:
+        >>> image_text(np.array([[1, -1, 0]]), 0, np.array([8.0, 8.0, 8.0]))
+        ' [+x -y]'
+        >>> image_text(np.array([[0, -1, 0]]), 0, np.array([8.0, 8.0, 8.0, 0.5, 0.0, 0.0]))
+        ' [-a2]'
+    """
+    if image is None or not image[k].any():
+        return ""
+    names = ("a1", "a2", "a3") if is_tilted(box) else ("x", "y", "z")
+    return " [" + " ".join(f"{'+' if v > 0 else '-'}{names[a]}" for a, v in enumerate(image[k]) if v) + "]"
 
 
 def box_phrase(box: tuple[float, ...] | None, dim: int) -> str:
@@ -325,10 +343,7 @@ class BodiesModel(PairList):
         res = self.result
         rel = str(Relation(int(res.relation[k])))
         by = Certifier(int(res.certified_by[k]))
-        text = f"{res.i[k]} – {res.j[k]}"
-        if res.image is not None and res.image[k].any():
-            text += " [" + " ".join(f"{'+' if v > 0 else '-'}{'xyz'[a]}" for a, v in enumerate(res.image[k]) if v) + "]"
-        return f"{text}  {rel} ({by})"
+        return f"{res.i[k]} – {res.j[k]}{image_text(res.image, k, res.box)}  {rel} ({by})"
 
     def summary(self) -> str:
         """Markdown: the set, its contacts by relation and how they were certified."""

@@ -48,7 +48,7 @@ from core.bodies.sweep_result import SweepContacts
 from core.moving.motions import Motion, motion_to_dict
 from core.moving.signs import Signs, decide_with
 
-from .bodies import PairList, box_phrase
+from .bodies import PairList, box_phrase, image_text
 from .motion import MotionModel
 from .state import SceneConfig
 
@@ -222,9 +222,7 @@ class SweepModel(PairList):
     def pair_label(self, k: int) -> str:
         """"3 – 17  t* = 1/3  tangent" (a box image: "3 – 17 [+x]  t* ≈ 0.4187…  tangent")."""
         res = self.result
-        text = f"{res.i[k]} – {res.j[k]}"
-        if res.image is not None and res.image[k].any():
-            text += " [" + " ".join(f"{'+' if v > 0 else '-'}{'xyz'[a]}" for a, v in enumerate(res.image[k]) if v) + "]"
+        text = f"{res.i[k]} – {res.j[k]}{image_text(res.image, k, res.box)}"
         return f"{text}  t* {self.time_text(k, exact=False)}  {Relation(int(res.relation[k]))}"
 
     def summary(self) -> str:
