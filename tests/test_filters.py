@@ -10,7 +10,7 @@ from flint import fmpq
 from strategies import dyadic_tangent_pair
 
 import bench.datasets as D
-from core import Relation, classify, classify_detailed, explain, quadric_from_axes
+from core import Relation, bodies_from_axes, classify, classify_detailed, explain, quadric_from_axes
 from core.fixed import _kernels as K
 from core.fixed import compiled
 from core.fixed.errorbound import RADIUS_FACTOR, UNIT_ROUNDOFF, gamma_constant
@@ -720,3 +720,24 @@ def test_validity_in_integers_agrees_with_the_rational_reader(n):
         assert got == valid, M  # on these inputs the shortcut never has to decline a valid matrix
         seen[valid] += 1
     assert seen[True] > 500 and seen[False] >= 8, seen
+
+
+def test_scaled_pairs_refuse_what_the_exact_path_refuses():
+    """The scaling for bodies far from size 1 never turns a refused matrix into an accepted one:
+    asymmetries around the tolerance (relative to rows the scaling changes unequally), at scales
+    1 .. 1e150, give the exact path's error or its label, stacked and one pair at a time."""
+    def outcome(f):
+        try:
+            return ("label", np.asarray(f()).tolist())
+        except ValueError as e:
+            return ("error", str(e).split(":")[0])
+
+    for s in (1.0, 1e6, 1e9, 1e30, 1e150):
+        Q = bodies_from_axes([[1.0 * s, 2 * s, 3 * s], [4 * s, 2 * s, 3 * s]], [[1.0 * s] * 3, [1.5 * s] * 3])
+        for factor in (1 + 1e-9, 1 + 1e-6, 1 + 1e-3, 1.5, 3.0, 100.0):
+            A, B = Q[0].copy(), Q[1].copy()
+            A[0, 3] *= factor  # A symmetric only up to this factor
+            for a, b in ((A[None], B[None]), (A, B)):
+                got = outcome(lambda a=a, b=b: classify(a, b))
+                want = outcome(lambda a=a, b=b: classify(a, b, method="exact"))
+                assert got == want, (s, factor, got, want)

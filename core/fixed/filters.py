@@ -260,9 +260,11 @@ def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple
     s far from 1 (1e9, 1e-150) have |Q| ~ 1/s^2, |m| ~ |c|/s^2 and a corner ~ |c|^2/s^2: entries
     spread over decades that the bounds, relative to the largest entry, cannot follow. 2^e is
     the power of two nearest the geometric mean over both shapes of 1/size, size^2 =
-    max(|corner| / |Q|, (|m| / |Q|)^2) (about |c|^2 + r^2). A pair is scaled only where every
-    scaled entry (and ``shift_b``, which scales with space) is exact; else it keeps e = 0.
-    Returns (a, b, shift_b) in the new units and the mask of the pairs scaled (e != 0).
+    max(|corner| / |Q|, (|m| / |Q|)^2) (about |c|^2 + r^2). A pair is scaled only where both
+    matrices are exactly symmetric (the tolerance for matrices symmetric up to rounding is relative
+    to rows that the scaling changes unequally, so it could accept what the exact path refuses)
+    and every scaled entry (and ``shift_b``, which scales with space) is exact; else it keeps
+    e = 0. Returns (a, b, shift_b) in the new units and the mask of the pairs scaled (e != 0).
     """
     n = a.shape[-1]
     d = n - 1
@@ -291,7 +293,7 @@ def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple
         ok = np.isfinite(y) & ((x == 0) | (np.abs(y) >= tiny))
         return y, ok.reshape(len(e), -1).all(axis=1)
 
-    exact = np.ones(len(e), dtype=bool)
+    exact = (a == np.swapaxes(a, 1, 2)).all(axis=(1, 2)) & (b == np.swapaxes(b, 1, 2)).all(axis=(1, 2))
     out = []
     for M in (a, b):  # only the last row and column change
         M2 = np.array(M, dtype=np.float64)
