@@ -130,6 +130,29 @@ def test_bounding_spheres_contain_sampled_boundary_points():
         assert s.radii[k] <= b.semi_axes[k].max() * 1.001  # and tight (lambda shrunk by 2^-10)
 
 
+@pytest.mark.parametrize("k", [-700, -300, 300, 700])
+def test_bounding_spheres_at_any_float_scale_in_floats(k):
+    """Was: bodies far from size 1 spread their entries over decades the float bound could not
+    follow, so each sphere took exact arithmetic (100,000 bodies at 1e150: 37 s) or LAPACK's path
+    (1e-150: 1.9 s). Now the same proof runs in the bodies' own units (space scaled by a power of
+    two, exact): every sphere in floats, containing boundary points sampled from the parameters
+    (scaled exactly by 2^k), and as tight as at scale 1."""
+    rng = np.random.default_rng(7)
+    b = random_bodies(200, dim=3, ratio=8.0, seed=5)
+    f = 2.0**k
+    Q = bodies_from_axes(np.asarray(b.centers) * f, np.asarray(b.semi_axes) * f, b.orientations)
+    s = bounding_spheres(Q)
+    assert not s.invalid and s.exact == 0
+    u = rng.normal(size=(64, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    for j in range(0, 200, 7):
+        R = rotation_from_quaternion(b.orientations[j])
+        pts = (b.centers[j] + (u * b.semi_axes[j]) @ R.T) * f
+        dist = np.linalg.norm((pts - s.centers[j]) / f, axis=1) * f  # without squares past the float range
+        assert dist.max() <= s.radii[j]
+        assert s.radii[j] <= b.semi_axes[j].max() * f * 1.001
+
+
 def test_bounding_spheres_of_ill_conditioned_flipped_and_invalid_bodies():
     axes = np.array([[1e-4, 1, 1], [1e-2, 1e-2, 1], [1, 1, 1], [1e-6, 1, 1]])
     q = np.random.default_rng(0).normal(size=(4, 4))

@@ -47,7 +47,7 @@ import numpy as np
 from flint import fmpq, fmpq_mat
 
 from ..fixed.compiled import get_threads
-from ..fixed.filters import centres, prepared
+from ..fixed.filters import centres, log2_size, prepared, space_scaled
 from ..shapes.numbers import to_float
 from ..shapes.quadrics import validate_quadric
 
@@ -171,12 +171,21 @@ def bounding_spheres(Q: np.ndarray) -> BoundingSpheres:
     else:
         todo = [chunk(s) for s in starts]
     rest = np.concatenate(todo) if todo else np.zeros(0, dtype=np.int64)
-    if rest.size:  # ill-conditioned bodies: LAPACK's estimates, still certified in floats
+    for careful in (False, True):
+        none = rest[~np.isfinite(radii[rest])]
+        if none.size:  # bodies far from size 1: the same proof in their own units (exact scaling)
+            c, rho = _scaled_spheres(Q[none], careful=careful)
+            ok = np.isfinite(rho)
+            centers[none[ok]], radii[none[ok]] = c[ok], rho[ok]
+            rest = rest[~np.isin(rest, none[ok])]
+        if careful or not rest.size:
+            break
+        # ill-conditioned bodies (and loose spheres): LAPACK's estimates, still certified in floats
         c, rho, _ = _float_spheres(Q[rest], careful=True)
         better = np.isfinite(rho) & ~(rho >= radii[rest])  # a loose sphere is kept if not beaten
         centers[rest[better]] = c[better]
         radii[rest[better]] = rho[better]
-        rest = rest[~np.isfinite(radii[rest])]
+    rest = rest[~np.isfinite(radii[rest])]
     invalid: dict[int, str] = {}
     for k in rest.tolist():
         try:
@@ -188,6 +197,41 @@ def bounding_spheres(Q: np.ndarray) -> BoundingSpheres:
 
 # -------------------------------------------------------------------------------------------
 # float path
+
+
+def _scaled_spheres(M: np.ndarray, *, careful: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(centres, radii) of bodies far from size 1, certified in their own units; NaN radius where not.
+
+    A body of size s (1e150, 1e-150) spreads its entries over decades (|Q| ~ 1/s^2, the corner
+    ~ |c|^2/s^2) that the float bounds cannot follow. Space scaled by 2^e ~ 1/s
+    (:func:`core.fixed.filters.space_scaled`, exact, else no radius here) turns the body into
+    2^e times itself; its sphere (c', rho') there gives (2^-e c', 2^-e rho') here: the centre
+    where that is exact, the radius rounded up. ``careful``: LAPACK's estimates
+    (:func:`_float_spheres`), else the fast closed forms.
+    """
+    e = np.clip(-np.rint(log2_size(M)), -1000, 1000).astype(np.int64)
+    M2, exact = space_scaled(M, e)
+    exact &= e != 0
+    with np.errstate(divide="ignore", invalid="ignore"):  # and the matrix by a power of two: largest entry in [1, 2)
+        _, f = np.frexp(np.abs(M2).max(axis=(1, 2)))
+        M3 = np.ldexp(M2, (1 - f)[:, None, None])
+        exact &= (np.isfinite(M3) & ((M2 == 0) | (np.abs(M3) >= np.finfo(np.float64).tiny))).all(axis=(1, 2))
+    M2 = M3
+    c = np.full((len(M), M.shape[-1] - 1), np.nan)
+    rho = np.full(len(M), np.nan)
+    if not exact.any():
+        return c, rho
+    rows = np.flatnonzero(exact)
+    c2, rho2, _ = _float_spheres(M2[rows], careful=careful, fast=not careful)
+    k = -e[rows]
+    with np.errstate(over="ignore"):
+        cb = np.ldexp(c2, k[:, None])
+        rb = np.ldexp(rho2, k)
+        back = (np.ldexp(cb, -k[:, None]) == c2).all(axis=1) & np.isfinite(cb).all(axis=1)  # the centre exact
+        rb = np.where(np.ldexp(rb, -k) >= rho2, rb, np.nextafter(rb, np.inf))  # the radius rounded up
+    ok = back & np.isfinite(rb)
+    c[rows[ok]], rho[rows[ok]] = cb[ok], rb[ok]
+    return c, rho
 
 
 def _float_spheres(

@@ -252,64 +252,68 @@ def _translated(M: Entries, Mr: Entries, t: np.ndarray, n: int) -> tuple[Entries
     return {ij: np.ldexp(v, 1 - e) for ij, v in V.items()}, {ij: np.ldexp(r, 1 - e) + _TINY_RADIUS for ij, r in R.items()}
 
 
-def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
-    """Both shapes in units of their own size: the same congruence by diag(1, .., 1, 2^e) per pair.
+def log2_size(M: np.ndarray) -> np.ndarray:
+    """log2 of each body's size (about sqrt(|c|^2 + r^2)), from its matrix: 0 where undefined.
 
-    X^T M X < 0 with X = (x, 1) ~ (2^e x, 2^e): scaling space by a power of two keeps the relative
-    position; it multiplies the last column and row by 2^e and the corner by 2^2e. Bodies of size
-    s far from 1 (1e9, 1e-150) have |Q| ~ 1/s^2, |m| ~ |c|/s^2 and a corner ~ |c|^2/s^2: entries
-    spread over decades that the bounds, relative to the largest entry, cannot follow. 2^e is
-    the power of two nearest the geometric mean over both shapes of 1/size, size^2 =
-    max(|corner| / |Q|, (|m| / |Q|)^2) (about |c|^2 + r^2). A pair is scaled only where both
-    matrices are exactly symmetric (the tolerance for matrices symmetric up to rounding is relative
-    to rows that the scaling changes unequally, so it could accept what the exact path refuses)
-    and every scaled entry (and ``shift_b``, which scales with space) is exact; else it keeps
-    e = 0. Returns (a, b, shift_b) in the new units and the mask of the pairs scaled (e != 0).
+    For [[Q, m], [m^T, g0]]: max(log2 |g0| - log2 |Q|, log2 |m| - log2 |Q|) over the largest
+    entries, halved for the corner; in logarithms, so that no square overflows.
     """
-    n = a.shape[-1]
-    d = n - 1
+    d = M.shape[-1] - 1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = np.log2(np.abs(M[:, :d, :d]).max(axis=(1, 2)))
+        m = np.log2(np.abs(M[:, :d, d]).max(axis=1))
+        k = np.log2(np.abs(M[:, d, d]))
+        out = np.maximum(0.5 * (k - q), m - q)
+    return np.where(np.isfinite(out), out, 0.0)
 
-    def log_size(M: np.ndarray) -> np.ndarray:  # log2 of the size, in logarithms (no overflow)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            q = np.log2(np.abs(M[:, :d, :d]).max(axis=(1, 2)))
-            m = np.log2(np.abs(M[:, :d, d]).max(axis=1))
-            k = np.log2(np.abs(M[:, d, d]))
-            out = np.maximum(0.5 * (k - q), m - q)
-        return np.where(np.isfinite(out), out, 0.0)
 
-    e = -np.rint(0.5 * (log_size(a) + log_size(b)))
+def space_scaled(M: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The bodies scaled by 2^e (x -> 2^e x): the congruence by diag(1, .., 1, 2^e), and where it is exact.
+
+    X^T M X < 0 with X = (x, 1) ~ (2^e x, 2^e): the last column and row times 2^e, the corner
+    times 2^2e. Returns (M', exact): exact where the matrix is exactly symmetric (the tolerance
+    for matrices symmetric up to rounding is relative to rows this changes unequally) and every
+    changed entry is finite and normal unless 0 (a power of two changes only the exponent there;
+    a subnormal result may drop bits, so it counts as inexact).
+    """
+    d = M.shape[-1] - 1
+    tiny = np.finfo(np.float64).tiny
+    exact = (M == np.swapaxes(M, 1, 2)).all(axis=(1, 2))
+    out = np.array(M, dtype=np.float64)
+    for idx, k in (((slice(None), slice(None, d), d), e[:, None]), ((slice(None), d, slice(None, d)), e[:, None]),
+                   ((slice(None), d, d), 2 * e)):
+        x = M[idx]
+        y = np.ldexp(x, k)
+        out[idx] = y
+        exact &= (np.isfinite(y) & ((x == 0) | (np.abs(y) >= tiny))).reshape(len(e), -1).all(axis=1)
+    return out, exact
+
+
+def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+    """Both shapes in units of their own size: the same :func:`space_scaled` for both, per pair.
+
+    Bodies of size s far from 1 (1e9, 1e-150) have |Q| ~ 1/s^2, |m| ~ |c|/s^2 and a corner
+    ~ |c|^2/s^2: entries spread over decades that the bounds, relative to the largest entry,
+    cannot follow. Scaling space by 2^e, the power of two nearest the geometric mean over both
+    shapes of 1/size (:func:`log2_size`), keeps the relative position and brings them to order 1.
+    A pair is scaled only where :func:`space_scaled` is exact for both matrices and for
+    ``shift_b`` (which scales with space); else it keeps e = 0. Returns (a, b, shift_b) in the
+    new units and the mask of the pairs scaled (e != 0).
+    """
+    e = -np.rint(0.5 * (log2_size(a) + log2_size(b)))
     e = np.clip(np.where(np.isfinite(e), e, 0.0), -1000, 1000).astype(np.int64)
     if not e.any():
         return a, b, shift_b, e != 0
-    tiny = np.finfo(np.float64).tiny
-
-    def times(x: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The products x 2^k, and per pair whether they are exact.
-
-        Exact: finite, and normal unless x is 0 (a power of two changes only the exponent there; a
-        subnormal result may drop bits, so it counts as inexact).
-        """
-        y = np.ldexp(x, k)
-        ok = np.isfinite(y) & ((x == 0) | (np.abs(y) >= tiny))
-        return y, ok.reshape(len(e), -1).all(axis=1)
-
-    exact = (a == np.swapaxes(a, 1, 2)).all(axis=(1, 2)) & (b == np.swapaxes(b, 1, 2)).all(axis=(1, 2))
-    out = []
-    for M in (a, b):  # only the last row and column change
-        M2 = np.array(M, dtype=np.float64)
-        col, ok1 = times(M[:, :d, d], e[:, None])
-        row, ok2 = times(M[:, d, :d], e[:, None])
-        corner, ok3 = times(M[:, d, d], 2 * e)
-        M2[:, :d, d], M2[:, d, :d], M2[:, d, d] = col, row, corner
-        exact &= ok1 & ok2 & ok3
-        out.append(M2)
+    a2, exact = space_scaled(a, e)
+    b2, exact_b = space_scaled(b, e)
+    exact &= exact_b
     if shift_b is not None:
         s = np.asarray(shift_b, dtype=np.float64)
-        s2, ok = times(s, e[:, None])
-        exact &= ok
+        s2 = np.ldexp(s, e[:, None])
+        exact &= (np.isfinite(s2) & ((s == 0) | (np.abs(s2) >= np.finfo(np.float64).tiny))).all(axis=1)
         shift_b = np.where(exact[:, None], s2, s)
     keep = exact[:, None, None]
-    return np.where(keep, out[0], a), np.where(keep, out[1], b), shift_b, exact & (e != 0)
+    return np.where(keep, a2, a), np.where(keep, b2, b), shift_b, exact & (e != 0)
 
 
 def classify_translated(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None = None) -> np.ndarray:
