@@ -260,6 +260,20 @@ def test_contacts_equal_brute_force_open(dim, seed):
     assert len(res) > 50
 
 
+@pytest.mark.parametrize("k", [-1000, -700, 700, 900])
+def test_contacts_at_any_float_scale_equal_brute_force_as_fast_as_at_scale_1(k):
+    """Bodies scaled by 2^k: the pairs of every-pair classification (no broad phase, no bounding
+    spheres), every sphere in floats, and the broad phase as tight as at scale 1 (was: squares
+    past the float range kept ~6x the candidates at 2^-900 .. 2^-1000 and 2^900)."""
+    b = random_bodies(260, dim=3, fraction=0.35, ratio=3.0, seed=3)
+    f = 2.0**k
+    Q = bodies_from_axes(np.asarray(b.centers) * f, np.asarray(b.semi_axes) * f, b.orientations)
+    res = contacts(Q)
+    assert _as_set(res) == _brute_open(Q) and len(res) > 50
+    assert res.counts["exact_bounds"] == 0
+    assert res.counts["candidates"] == contacts(build(b)).counts["candidates"]
+
+
 def test_contacts_polydisperse_and_flipped_signs_equal_brute_force():
     rng = np.random.default_rng(4)
     b = random_bodies(200, dim=3, seed=9)

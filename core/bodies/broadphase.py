@@ -220,12 +220,18 @@ class BroadPhase:
         """The box of the grids (None for a tilted box: its ghosts are searched in open space)."""
         self.blocks: list[_Block] = []
         self.pad = 0.0
+        self.scale: float | None = None
+        """A power of two the sphere test multiplies its lengths by before squaring them, for
+        bodies whose squares would leave the float range (sizes beyond about 2^±400); None: 1."""
         valid = np.flatnonzero(np.isfinite(radii))
         plans: list[Callable[[], _Block | None]] = []
         if valid.size >= 2:
             big = float(np.max(radii[valid]))
             span = float(np.max(np.abs(centers[valid]))) + (float(np.max(box)) if box is not None else 0.0)
             self.pad = _PAD * (span + big)
+            reach = 2 * big + self.pad
+            if not 2.0**-400 <= reach <= 2.0**400:  # lengths near 1 after it (reach < 1, and every pair's >= pad > 2^-44)
+                self.scale = math.ldexp(1.0, -math.frexp(reach)[1])
             levels = _levels(radii, valid, big)
             lo, hi = centers[valid].min(axis=0), centers[valid].max(axis=0)
             for a, members in enumerate(levels):
@@ -291,7 +297,7 @@ class BroadPhase:
             keep = block.a.ids[p] < block.b.ids[q]
             p, q = p[keep], q[keep]
         with np.errstate(over="ignore"):  # squares past 1e308 (bodies near 1e154): inf, and the test stays conservative
-            cand = _keep(block.a, p, block.b, q, self.box, self.pad, self.d)
+            cand = _keep(block.a, p, block.b, q, self.box, self.pad, self.d, self.scale)
         if self.ghosts is not None:  # bodies and ghosts -> pairs of bodies with images
             return Candidates(*self.ghosts.resolve(cand.i, cand.j))
         return cand
@@ -589,15 +595,20 @@ def _triangle(k: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _keep(
-    a: _Side, p: np.ndarray, b: _Side, q: np.ndarray, box: np.ndarray | None, pad: float, d: int
+    a: _Side, p: np.ndarray, b: _Side, q: np.ndarray, box: np.ndarray | None, pad: float, d: int,
+    scale: float | None = None,
 ) -> Candidates:
     """Sphere test (padded, minimum image in a box) of positions p of ``a`` against q of ``b``.
 
-    Returns the survivors as body ids i < j (and j's image).
+    ``scale``: a power of two both lengths are multiplied by before squaring (exact for the
+    reach, which stays >= 2^-41 after it; a distance that underflows only comes out shorter:
+    conservative). Returns the survivors as body ids i < j (and j's image).
     """
     reach = a.radii.take(p)
     reach += b.radii.take(q)
     reach += pad
+    if scale is not None:
+        reach *= scale
     reach *= reach
     dist = np.zeros(p.size)
     ks = []
@@ -609,6 +620,8 @@ def _keep(
             np.negative(k, out=k)
             diff += k * box[ax]
             ks.append(k)
+        if scale is not None:
+            diff *= scale
         diff *= diff
         dist += diff
     near = np.flatnonzero(dist <= reach)
