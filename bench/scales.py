@@ -6,8 +6,8 @@ orientations) built with ``bodies_from_axes`` at scale s (centres and semi-axes 
 arithmetic; the table counts both, times the call and checks every label against
 ``method="exact"``::
 
-    python -m bench.scales                 # 1,000 pairs per scale
-    python -m bench.scales --pairs 5000
+    python -m bench.scales                 # 1,000 pairs per scale; contacts of 20,000 bodies
+    python -m bench.scales --pairs 5000 --bodies 0
 
 The float filter's second stage scales space by the power of two nearest the bodies' size
 (``core.fixed.filters._balanced``), so far from size 1 the filter still certifies (before that
@@ -25,7 +25,7 @@ import numpy as np
 import core
 from core import Certifier, classify_detailed
 
-__all__ = ["SCALES", "run_scales", "format_scales"]
+__all__ = ["SCALES", "run_scales", "format_scales", "run_contacts", "format_contacts"]
 
 SCALES = (2.0**-1000, 1e-300, 1e-150, 1e-30, 1e-9, 1.0, 1e9, 1e30, 1e150, 1e300, 2.0**1000)
 
@@ -63,13 +63,45 @@ def format_scales(rows: list[dict[str, Any]]) -> str:
     return "\n".join(out)
 
 
+def run_contacts(bodies: int = 20_000, seed: int = 1) -> list[dict[str, Any]]:
+    """``contacts`` of the same random bodies (packing fraction 0.3) at each scale: time, phases, pairs = scale 1."""
+    from bench.bodies_data import random_bodies
+
+    b = random_bodies(bodies, seed=seed)
+    rows, first = [], None
+    for s in SCALES:
+        Q = core.bodies_from_axes(np.asarray(b.centers) * s, np.asarray(b.semi_axes) * s, b.orientations)
+        t = time.perf_counter()
+        res = core.contacts(Q)
+        total = time.perf_counter() - t
+        pairs = res.to_rows()
+        first = pairs if first is None else first
+        rows.append({"scale": s, "seconds": total, "phases": dict(res.seconds), "candidates": res.counts["candidates"],
+                     "exact_bounds": res.counts["exact_bounds"], "exact": res.counts["exact"], "same": pairs == first})
+    return rows
+
+
+def format_contacts(rows: list[dict[str, Any]]) -> str:
+    """The markdown table of :func:`run_contacts`."""
+    out = ["| scale s | contacts | bounding spheres | candidates | spheres exact | pairs exact | pairs = at the first scale |",
+           "|---:|---:|---:|---:|---:|---:|---|"]
+    for r in rows:
+        out.append(f"| {r['scale']:.3g} | {r['seconds']:.2f} s | {r['phases'].get('bounds', 0):.2f} s | {r['candidates']:,} | "
+                   f"{r['exact_bounds']:,} | {r['exact']:,} | {'yes' if r['same'] else 'NO'} |")
+    return "\n".join(out)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Print the table."""
+    """Print the tables."""
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--pairs", type=int, default=1000)
+    p.add_argument("--bodies", type=int, default=20_000, help="bodies for the contacts table (0: skip it)")
     args = p.parse_args(argv)
     print(f"# {args.pairs:,} random ellipsoid pairs per scale, bodies_from_axes(c * s, r * s, q), classify (adaptive)")
     print(format_scales(run_scales(args.pairs)))
+    if args.bodies:
+        print(f"\n# contacts of {args.bodies:,} random ellipsoids (packing fraction 0.3) at each scale, one call each")
+        print(format_contacts(run_contacts(args.bodies)))
     return 0
 
 
