@@ -334,3 +334,20 @@ def test_sweep_at_any_float_scale(exponent):
     assert list(zip(res.i.tolist(), res.j.tolist(), res.relation.tolist(), strict=True)) == [
         (0, 1, Relation.TANGENT), (1, 2, Relation.OVERLAP)]
     assert res.time(0).compare(fmpq(2, 3)) == 0 and res.time(1).compare(0) == 0
+
+
+@pytest.mark.parametrize("scale", [1e150, 2.0**700, 1e-150, 1.0])
+def test_sweep_at_any_float_scale_finds_every_pair_that_meets(scale):
+    """Was: at 1e150 the relative-motion test squared cross products past the float range (inf, not
+    NaN) and dropped pairs that meet: 1,690 of 6,605 contacts of 5,000 moving bodies went missing,
+    also with method="exact" (the test runs before the narrow phase). Reference: the narrow phase
+    on every pair (no broad phase, no relative-motion test), the bodies as the user scales them."""
+    mv = moving_bodies(240, fraction=0.25, dim=3, rotate=True, seed=2)
+    c0, c1, r = (np.asarray(x) * scale for x in (mv.centers0, mv.centers1, mv.semi_axes))
+    res = sweep_contacts(c0, c1, r, mv.orientations0, mv.orientations1)
+    bodies, _ = read_linear_motions(c0, c1, r, mv.orientations0, mv.orientations1)
+    i, j = np.triu_indices(len(c0), 1)
+    every = first_contacts(bodies, i, j)
+    meet = every.relation != Relation.SEPARATE
+    assert set(zip(res.i.tolist(), res.j.tolist(), strict=True)) == set(zip(i[meet].tolist(), j[meet].tolist(), strict=True))
+    assert meet.sum() > 40

@@ -120,7 +120,12 @@ def swept_pairs(
 
 
 def approaching(bodies: LinearMotions, spheres: SweptSpheres, cand: Candidates, box: np.ndarray | None) -> Candidates:
-    """The candidates whose centres come within a_i + a_j of each other at one same t (step 3)."""
+    """The candidates whose centres come within a_i + a_j of each other at one same t (step 3).
+
+    Lengths beyond 2^±400 are multiplied by a power of two per pair before they are squared
+    (exact; an underflow moves a length by at most 2^-1074, within the 2^-1000 floor), so that a
+    square or a cross product past the float range cannot drop a pair.
+    """
     found = len(cand)
     if not found:
         return cand
@@ -132,6 +137,13 @@ def approaching(bodies: LinearMotions, spheres: SweptSpheres, cand: Candidates, 
         d1 = (c1[j] + s) - c1[i]
         e = d1 - d0
         size = np.abs(c0[i]) + np.abs(c0[j]) + np.abs(c1[i]) + np.abs(c1[j]) + np.abs(s)
+        reach = (spheres.reach[i] + spheres.reach[j]) * (1 + _MARGIN)
+        big = np.maximum(np.maximum(np.abs(d0).max(axis=1), np.abs(d1).max(axis=1)), np.maximum(size.max(axis=1), reach))
+        far = np.isfinite(big) & (big > 0) & ((big > 2.0**400) | (big < 2.0**-400))
+        if far.any():  # in units of the pair's largest length
+            sigma = np.where(far, np.ldexp(1.0, -np.frexp(np.where(far, big, 1.0))[1]), 1.0)
+            d0, d1, e, size = d0 * sigma[:, None], d1 * sigma[:, None], e * sigma[:, None], size * sigma[:, None]
+            reach = reach * sigma
         eps = 4 * _U * np.sqrt(np.einsum("ij,ij->i", size, size)) + 2.0**-1000
         n0 = np.sqrt(np.einsum("ij,ij->i", d0, d0))
         n1 = np.sqrt(np.einsum("ij,ij->i", d1, d1))
@@ -148,7 +160,6 @@ def approaching(bodies: LinearMotions, spheres: SweptSpheres, cand: Candidates, 
         away0 = np.einsum("ij,ij->i", d0, e) > tol  # |d(t)| increases on [0, 1]: the minimum is |d0|
         toward1 = np.einsum("ij,ij->i", d1, e) < -tol  # decreases: the minimum is |d1|
         low = np.where(away0, n0, np.where(toward1, n1, line)) * (1 - _MARGIN) - eps
-        reach = (spheres.reach[i] + spheres.reach[j]) * (1 + _MARGIN)
         keep = ~(low > reach)  # NaN (overflow) keeps the pair
     rows = np.flatnonzero(keep)
     return Candidates(i[rows], j[rows], None if cand.image is None else cand.image[rows])
