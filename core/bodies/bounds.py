@@ -47,7 +47,7 @@ import numpy as np
 from flint import fmpq, fmpq_mat
 
 from ..fixed.compiled import get_threads
-from ..fixed.filters import centres, log2_size, prepared, space_scaled
+from ..fixed.filters import centres, log2_size, prepared, space_scaled, times_power_of_two
 from ..shapes.numbers import to_float
 from ..shapes.quadrics import validate_quadric
 
@@ -171,20 +171,24 @@ def bounding_spheres(Q: np.ndarray) -> BoundingSpheres:
     else:
         todo = [chunk(s) for s in starts]
     rest = np.concatenate(todo) if todo else np.zeros(0, dtype=np.int64)
-    for careful in (False, True):
+
+    def in_own_units(rest: np.ndarray, careful: bool) -> np.ndarray:
+        """Bodies far from size 1 without a sphere: the same proof in their own units; the rest left."""
         none = rest[~np.isfinite(radii[rest])]
-        if none.size:  # bodies far from size 1: the same proof in their own units (exact scaling)
+        if none.size:
             c, rho = _scaled_spheres(Q[none], careful=careful)
             ok = np.isfinite(rho)
             centers[none[ok]], radii[none[ok]] = c[ok], rho[ok]
             rest = rest[~np.isin(rest, none[ok])]
-        if careful or not rest.size:
-            break
-        # ill-conditioned bodies (and loose spheres): LAPACK's estimates, still certified in floats
+        return rest
+
+    rest = in_own_units(rest, careful=False)
+    if rest.size:  # ill-conditioned bodies (and loose spheres): LAPACK's estimates, still certified in floats
         c, rho, _ = _float_spheres(Q[rest], careful=True)
         better = np.isfinite(rho) & ~(rho >= radii[rest])  # a loose sphere is kept if not beaten
         centers[rest[better]] = c[better]
         radii[rest[better]] = rho[better]
+        rest = in_own_units(rest, careful=True)
     rest = rest[~np.isfinite(radii[rest])]
     invalid: dict[int, str] = {}
     for k in rest.tolist():
@@ -210,26 +214,21 @@ def _scaled_spheres(M: np.ndarray, *, careful: bool) -> tuple[np.ndarray, np.nda
     (:func:`_float_spheres`), else the fast closed forms.
     """
     e = np.clip(-np.rint(log2_size(M)), -1000, 1000).astype(np.int64)
-    M2, exact = space_scaled(M, e)
+    M1, exact = space_scaled(M, e)
     exact &= e != 0
-    with np.errstate(divide="ignore", invalid="ignore"):  # and the matrix by a power of two: largest entry in [1, 2)
-        _, f = np.frexp(np.abs(M2).max(axis=(1, 2)))
-        M3 = np.ldexp(M2, (1 - f)[:, None, None])
-        exact &= (np.isfinite(M3) & ((M2 == 0) | (np.abs(M3) >= np.finfo(np.float64).tiny))).all(axis=(1, 2))
-    M2 = M3
+    _, f = np.frexp(np.abs(M1).max(axis=(1, 2)))  # and the matrix by a power of two: largest entry in [1, 2)
+    M2, ok = times_power_of_two(M1, (1 - f)[:, None, None])
+    exact &= ok.all(axis=(1, 2))
     c = np.full((len(M), M.shape[-1] - 1), np.nan)
     rho = np.full(len(M), np.nan)
     if not exact.any():
         return c, rho
     rows = np.flatnonzero(exact)
     c2, rho2, _ = _float_spheres(M2[rows], careful=careful, fast=not careful)
-    k = -e[rows]
-    with np.errstate(over="ignore"):
-        cb = np.ldexp(c2, k[:, None])
-        rb = np.ldexp(rho2, k)
-        back = (np.ldexp(cb, -k[:, None]) == c2).all(axis=1) & np.isfinite(cb).all(axis=1)  # the centre exact
-        rb = np.where(np.ldexp(rb, -k) >= rho2, rb, np.nextafter(rb, np.inf))  # the radius rounded up
-    ok = back & np.isfinite(rb)
+    cb, c_exact = times_power_of_two(c2, -e[rows][:, None])
+    rb, r_exact = times_power_of_two(rho2, -e[rows])
+    rb = np.where(r_exact, rb, np.nextafter(rb, np.inf))  # the radius rounded up
+    ok = c_exact.all(axis=1) & np.isfinite(rb)
     c[rows[ok]], rho[rows[ok]] = cb[ok], rb[ok]
     return c, rho
 

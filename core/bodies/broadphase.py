@@ -601,7 +601,7 @@ def _keep(
     """Sphere test (padded, minimum image in a box) of positions p of ``a`` against q of ``b``.
 
     ``scale``: a power of two both lengths are multiplied by before squaring (exact for the
-    reach, which stays >= 2^-41 after it; a distance that underflows only comes out shorter:
+    reach, which stays above 2^-44 after it; a distance that underflows only comes out shorter:
     conservative). Returns the survivors as body ids i < j (and j's image).
     """
     reach = a.radii.take(p)

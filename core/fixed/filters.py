@@ -267,25 +267,32 @@ def log2_size(M: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(out), out, 0.0)
 
 
+def times_power_of_two(x: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The products x 2^k, and elementwise whether each is exact: finite, and normal unless x is 0.
+
+    A power of two changes only the exponent of a normal result; a subnormal one may drop bits
+    (counted as inexact), an overflow gives inf.
+    """
+    with np.errstate(over="ignore"):
+        y = np.ldexp(x, k)
+    return y, np.isfinite(y) & ((x == 0) | (np.abs(y) >= np.finfo(np.float64).tiny))
+
+
 def space_scaled(M: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The bodies scaled by 2^e (x -> 2^e x): the congruence by diag(1, .., 1, 2^e), and where it is exact.
 
     X^T M X < 0 with X = (x, 1) ~ (2^e x, 2^e): the last column and row times 2^e, the corner
     times 2^2e. Returns (M', exact): exact where the matrix is exactly symmetric (the tolerance
     for matrices symmetric up to rounding is relative to rows this changes unequally) and every
-    changed entry is finite and normal unless 0 (a power of two changes only the exponent there;
-    a subnormal result may drop bits, so it counts as inexact).
+    changed entry is exact (:func:`times_power_of_two`).
     """
     d = M.shape[-1] - 1
-    tiny = np.finfo(np.float64).tiny
     exact = (M == np.swapaxes(M, 1, 2)).all(axis=(1, 2))
     out = np.array(M, dtype=np.float64)
     for idx, k in (((slice(None), slice(None, d), d), e[:, None]), ((slice(None), d, slice(None, d)), e[:, None]),
                    ((slice(None), d, d), 2 * e)):
-        x = M[idx]
-        y = np.ldexp(x, k)
-        out[idx] = y
-        exact &= (np.isfinite(y) & ((x == 0) | (np.abs(y) >= tiny))).reshape(len(e), -1).all(axis=1)
+        out[idx], ok = times_power_of_two(M[idx], k)
+        exact &= ok.reshape(len(e), -1).all(axis=1)
     return out, exact
 
 
@@ -309,8 +316,8 @@ def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple
     exact &= exact_b
     if shift_b is not None:
         s = np.asarray(shift_b, dtype=np.float64)
-        s2 = np.ldexp(s, e[:, None])
-        exact &= (np.isfinite(s2) & ((s == 0) | (np.abs(s2) >= np.finfo(np.float64).tiny))).all(axis=1)
+        s2, ok = times_power_of_two(s, e[:, None])
+        exact &= ok.all(axis=1)
         shift_b = np.where(exact[:, None], s2, s)
     keep = exact[:, None, None]
     return np.where(keep, a2, a), np.where(keep, b2, b), shift_b, exact & (e != 0)
