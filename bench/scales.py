@@ -6,8 +6,8 @@ orientations) built with ``bodies_from_axes`` at scale s (centres and semi-axes 
 arithmetic; the table counts both, times the call and checks every label against
 ``method="exact"``::
 
-    python -m bench.scales                 # 1,000 pairs per scale; contacts of 20,000 bodies
-    python -m bench.scales --pairs 5000 --bodies 0
+    python -m bench.scales                 # 1,000 pairs per scale; contacts of 20,000 bodies; 5,000 moving
+    python -m bench.scales --pairs 5000 --bodies 0 --moving 0
 
 The float filter's second stage scales space by the power of two nearest the bodies' size
 (``core.fixed.filters._balanced``), so far from size 1 the filter still certifies (before that
@@ -25,7 +25,7 @@ import numpy as np
 import core
 from core import Certifier, classify_detailed
 
-__all__ = ["SCALES", "run_scales", "format_scales", "run_contacts", "format_contacts"]
+__all__ = ["SCALES", "run_scales", "format_scales", "run_contacts", "format_contacts", "run_sweep", "format_sweep"]
 
 SCALES = (2.0**-1000, 1e-300, 1e-150, 1e-30, 1e-9, 1.0, 1e9, 1e30, 1e150, 1e300, 2.0**1000)
 
@@ -91,17 +91,49 @@ def format_contacts(rows: list[dict[str, Any]]) -> str:
     return "\n".join(out)
 
 
+def run_sweep(bodies: int = 5_000, seed: int = 0) -> list[dict[str, Any]]:
+    """``sweep_contacts`` of the same moving bodies (:func:`bench.sweep_data.moving_bodies`) at each scale:
+    time, broad-phase pairs, candidates, pairs certified exactly; contacts and relations = the first scale's."""
+    from bench.sweep_data import moving_bodies
+
+    m = moving_bodies(bodies, seed=seed)
+    rows, first = [], None
+    for s in SCALES:
+        t = time.perf_counter()
+        res = core.sweep_contacts(m.centers0 * s, m.centers1 * s, m.semi_axes * s, m.orientations0, m.orientations1)
+        total = time.perf_counter() - t
+        found = (res.i.tolist(), res.j.tolist(), res.relation.tolist())
+        first = found if first is None else first
+        rows.append({"scale": s, "seconds": total, "broad": res.counts["broad"], "candidates": res.counts["candidates"],
+                     "exact": res.counts["exact"], "contacts": res.counts["contacts"], "same": found == first})
+    return rows
+
+
+def format_sweep(rows: list[dict[str, Any]]) -> str:
+    """The markdown table of :func:`run_sweep`."""
+    out = ["| scale s | sweep_contacts | swept balls meet | candidates | pairs exact | contacts | = at the first scale |",
+           "|---:|---:|---:|---:|---:|---:|---|"]
+    for r in rows:
+        out.append(f"| {r['scale']:.3g} | {r['seconds']:.2f} s | {r['broad']:,} | {r['candidates']:,} | {r['exact']:,} | "
+                   f"{r['contacts']:,} | {'yes' if r['same'] else 'NO'} |")
+    return "\n".join(out)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print the tables."""
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--pairs", type=int, default=1000)
     p.add_argument("--bodies", type=int, default=20_000, help="bodies for the contacts table (0: skip it)")
+    p.add_argument("--moving", type=int, default=5_000, help="moving bodies for the sweep_contacts table (0: skip it)")
     args = p.parse_args(argv)
     print(f"# {args.pairs:,} random ellipsoid pairs per scale, bodies_from_axes(c * s, r * s, q), classify (adaptive)")
     print(format_scales(run_scales(args.pairs)))
     if args.bodies:
         print(f"\n# contacts of {args.bodies:,} random ellipsoids (packing fraction 0.3) at each scale, one call each")
         print(format_contacts(run_contacts(args.bodies)))
+    if args.moving:
+        print(f"\n# sweep_contacts of {args.moving:,} random moving, turning ellipsoids (packing fraction 0.3) at each scale, one call each")
+        print(format_sweep(run_sweep(args.moving)))
     return 0
 
 

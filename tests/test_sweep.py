@@ -351,3 +351,28 @@ def test_sweep_at_any_float_scale_finds_every_pair_that_meets(scale):
     meet = every.relation != Relation.SEPARATE
     assert set(zip(res.i.tolist(), res.j.tolist(), strict=True)) == set(zip(i[meet].tolist(), j[meet].tolist(), strict=True))
     assert meet.sum() > 40
+
+
+@pytest.mark.parametrize("dim", [3, 2])
+def test_sweep_far_from_size_1_is_certified_in_floats_with_the_pairs_of_size_1(dim):
+    """Was: bodies of size 2^-1000 or 1e-300 took 82 s for 2,000 bodies instead of 0.05 s: the swept
+    balls had an absolute 2^-1000 added (5x the candidates at 2^-1000), the relative-motion test's
+    squared cross products underflowed below 2^-400 (12 % more candidates at 1e-100), and the
+    moving filter added its underflow term (2^-1022) to the centre offsets before their scaling to
+    the bodies' size, so it abstained on every pair that meets during the step and exact arithmetic
+    answered them (~90 ms each). Scaled by a power of two, the geometry and so each first contact
+    t* are exactly those of size 1: the same candidates, every one certified by the float filter,
+    and brackets (t_lo, t_hi] that overlap those of size 1 (both hold t*)."""
+    mv = moving_bodies(300, fraction=0.3, dim=dim, rotate=True, seed=4)
+    ref = sweep_contacts(*mv.arguments())
+    assert ref.counts["exact"] == 0 and (ref.t_lo < ref.t_hi).sum() > 20  # contacts during the step
+    for e in (-1000, -700, -330, 700, 1000):
+        s = 2.0**e
+        res = sweep_contacts(mv.centers0 * s, mv.centers1 * s, mv.semi_axes * s, mv.orientations0, mv.orientations1)
+        assert res.counts["candidates"] == ref.counts["candidates"] and res.counts["broad"] == ref.counts["broad"], e
+        assert res.counts["exact"] == 0, (e, res.counts)
+        assert (res.i == ref.i).all() and (res.j == ref.j).all() and (res.relation == ref.relation).all(), e
+        assert ((res.t_lo <= ref.t_hi) & (ref.t_lo <= res.t_hi)).all(), e
+    for s in (1e-300, 1e-100):  # not powers of two: the same counts
+        res = sweep_contacts(mv.centers0 * s, mv.centers1 * s, mv.semi_axes * s, mv.orientations0, mv.orientations1)
+        assert res.counts["exact"] == 0 and res.counts["candidates"] == ref.counts["candidates"], (s, res.counts)

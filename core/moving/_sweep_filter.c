@@ -370,6 +370,13 @@ typedef struct {
     int deg;
 } pair;
 
+/* x * inv (inv a power of two) is exact: finite, and normal unless x is 0 (a subnormal product
+ * may drop bits) */
+static inline int scaled_exactly(double x, double inv) {
+    double y = x * inv;
+    return isfinite(y) && (x == 0.0 || fabs(y) >= 0x1p-1022);
+}
+
 static int load_pair(pair *p, int d, const double *ra, const double *rb, const double *shift) {
     double big = 0.0;
     for (int a = 0; a < d; a++) big = fmax(big, fmax(ra[2 * d + a], rb[2 * d + a]));
@@ -380,11 +387,21 @@ static int load_pair(pair *p, int d, const double *ra, const double *rb, const d
     p->d = d; p->n = d + 1; p->moves = 0;
     if (!load_body(&p->A, ra, d, inv) || !load_body(&p->B, rb, d, inv)) return 0;
     for (int a = 0; a < d; a++) {
-        ball s = bx(shift ? shift[a] : 0.0);
-        ball x0 = bsub(badd(bx(rb[a]), s), bx(ra[a]));
-        ball x1 = bsub(badd(bx(rb[d + a]), s), bx(ra[d + a]));
-        p->d0[a] = (ball){x0.v * inv, x0.r * inv + ETA};
-        p->d1[a] = (ball){x1.v * inv, x1.r * inv + ETA};
+        const double sh = shift ? shift[a] : 0.0;
+        if (scaled_exactly(rb[a], inv) && scaled_exactly(rb[d + a], inv) && scaled_exactly(ra[a], inv) &&
+            scaled_exactly(ra[d + a], inv) && scaled_exactly(sh, inv)) {
+            /* the differences in the scaled units: their underflow terms (ETA) are relative to
+             * order 1 there, not to the bodies' size (at size 1e-300, ETA is 2^-25 of it) */
+            ball s = bx(sh * inv);
+            p->d0[a] = bsub(badd(bx(rb[a] * inv), s), bx(ra[a] * inv));
+            p->d1[a] = bsub(badd(bx(rb[d + a] * inv), s), bx(ra[d + a] * inv));
+        } else {
+            ball s = bx(sh);
+            ball x0 = bsub(badd(bx(rb[a]), s), bx(ra[a]));
+            ball x1 = bsub(badd(bx(rb[d + a]), s), bx(ra[d + a]));
+            p->d0[a] = (ball){x0.v * inv, x0.r * inv + ETA};
+            p->d1[a] = (ball){x1.v * inv, x1.r * inv + ETA};
+        }
         if (!(fabs(p->d0[a].v) <= 0x1p+60 && fabs(p->d1[a].v) <= 0x1p+60)) return 0;
         if (rb[a] != rb[d + a] || ra[a] != ra[d + a]) p->moves = 1;
     }
