@@ -741,3 +741,72 @@ def test_scaled_pairs_refuse_what_the_exact_path_refuses():
                 got = outcome(lambda a=a, b=b: classify(a, b))
                 want = outcome(lambda a=a, b=b: classify(a, b, method="exact"))
                 assert got == want, (s, factor, got, want)
+
+
+def test_the_compiled_change_of_units_is_its_numpy_twin_bit_for_bit(monkeypatch):
+    """The second stage's scaling of space to the bodies' size runs as one compiled loop
+    (``balance`` in core/fixed/_filter.c; the numpy array passes cost ~0.9 us a pair: 100,000
+    pairs at 1e9 took 99 ms against 7 ms at scale 1). Both must give the same e, the same
+    matrices and shifts bit for bit: pairs at 2^-1000 .. 2^1000, with periodic shifts, and every
+    edge of the rule (non-finite, zero, asymmetric, subnormal entries, centred bodies with m = 0,
+    a zero corner, exponents at the clip of +-1000, changed entries that overflow or underflow, or
+    that round up to the smallest normal number)."""
+    from core.fixed import filters
+    from core.shapes.quadrics import quadrics_from_axes
+
+    if not compiled.balance_available():
+        pytest.skip("the compiled extension (with balance) is not built")
+    rng = np.random.default_rng(11)
+    cases = []
+    for dim in (2, 3):
+        N = 300
+        c, r = rng.uniform(-5, 5, (2 * N, dim)), rng.uniform(0.3, 2, (2 * N, dim))
+        q = rng.normal(size=(2 * N, 4)) if dim == 3 else rng.uniform(0, 6, 2 * N)
+        for s in (2.0**-1000, 1e-300, 1e-9, 1.0, 3e7, 1e150, 2.0**1000):
+            Q = quadrics_from_axes(c * s, r * s, q)
+            shift = rng.uniform(-10, 10, (N, dim)) * s
+            cases.append((Q[:N], Q[N:], shift))
+        A, B = quadrics_from_axes(c, r, q)[:N].copy(), quadrics_from_axes(c * 1e120, r * 1e120, q)[N:].copy()
+        d = dim
+        A[0, 0, 0] = np.nan
+        A[1, d, d] = np.inf
+        A[2] = 0.0
+        A[3, 0, 1] += 1e-3  # not symmetric
+        A[4, :d, d] = A[4, d, :d] = 0.0  # centred: m = 0
+        A[5, d, d] = 0.0  # zero corner
+        A[6, d, d] = 1e-310  # a subnormal corner
+        A[7, :d, :d] *= 2.0**-1040  # Q subnormal: a huge body
+        A[8, :d, :d] *= 2.0**1000  # changed entries underflow
+        A[9, d, :d] = A[9, :d, d] = 1e300  # changed entries overflow
+        A[10, :d, :d] = 2.0**-1074  # e beyond the clip
+        for M in (A, B):  # e = -1000 (clipped), and m's second entry times 2^-1000 rounds up to 2^-1022
+            M[11] = 0.0
+            M[11, :d, :d] = np.eye(d) * 2.0**-1000
+            M[11, 0, d] = M[11, d, 0] = 2.0**1000
+            M[11, 1, d] = M[11, d, 1] = (2 - 2.0**-52) * 2.0**-23
+        cases.append((A, B, rng.uniform(-1e120, 1e120, (N, d))))
+    for A, B, shift in cases:
+        for s in (None, shift):
+            got = filters._balanced(A, B, s)
+            with monkeypatch.context() as m:
+                m.setattr(compiled, "balance_available", lambda: False)
+                want = filters._balanced(A, B, s)
+            assert (got[3] == want[3]).all()
+            for x, y in zip(got[:3], want[:3], strict=True):
+                assert (x is None) == (y is None)
+                if x is not None:
+                    assert np.array_equal(x.view(np.int64), np.asarray(y, dtype=np.float64).view(np.int64))
+    moved = [filters._balanced(A, B, None)[3].mean() for A, B, _ in cases]
+    assert min(moved[:7]) > 0.5  # not vacuous: most pairs move at every scale (bodies of size ~5 at scale 1)
+
+
+def test_a_power_of_two_that_rounds_up_to_the_smallest_normal_is_not_exact():
+    """x 2^k exactly halfway below 2^-1022 rounds (to even) up to 2^-1022, a normal number: the
+    check "finite and normal" called it exact, so a scaled matrix could differ from the true one
+    by 2^-1075. The way back (y 2^-k == x) tells; an exact product still passes."""
+    from core.fixed.filters import times_power_of_two
+
+    x = np.array([(2 - 2.0**-52) * 2.0**-23, 1.5 * 2.0**-21, 0.0])
+    y, ok = times_power_of_two(x, np.array([-1000, -1000, -1000]))
+    assert y[0] == 2.0**-1022  # rounded up to the smallest normal
+    assert ok.tolist() == [False, True, True]

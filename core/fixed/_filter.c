@@ -12,9 +12,16 @@
  * as a byte] when a 256-byte table is given (the relation codes, written as the block is
  * finished); returns how many pairs are undecided. The GIL is released while the kernels run,
  * so core/fixed/compiled.py splits large batches over threads.
+ *
+ * balance(n, a, b, a_out, b_out, e_out[, shift, shift_out]): the second stage's change of units
+ * (core/fixed/filters.py: _balanced, whose numpy code is the twin of this loop, bit for bit): each
+ * pair of float64 matrices with space scaled by 2^e, e from the bodies' sizes, where that is
+ * exact; returns how many pairs moved (e != 0 in e_out).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <float.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -131,6 +138,153 @@ static PyObject *classify(PyObject *self, PyObject *args) {
     return result;
 }
 
+/* frexp's exponent of a finite x != 0 (x in [2^(E-1), 2^E)): from the bits where x is normal */
+static inline int exponent_of(double x) {
+    uint64_t bits;
+    memcpy(&bits, &x, 8);
+    const int biased = (int)((bits >> 52) & 0x7ff);
+    if (biased) return biased - 1022;
+    int e;
+    frexp(x, &e); /* subnormal */
+    return e;
+}
+
+/* Twice log2 of a body's size from its n x n matrix [[Q, m], [m^T, g]] (row-major), by the frexp
+ * exponents E of its largest entries: max(E(g) - E(Q), 2 (E(m) - E(Q))), a term skipped where m or
+ * g is zero; 0 where undefined (a non-finite entry, Q zero, m and g zero). The numpy twin is
+ * core.fixed.filters.twice_log2_size. */
+static inline __attribute__((always_inline)) int64_t twice_log2_size(const double *M, int n) {
+    const int d = n - 1;
+    double q = 0.0, m = 0.0;
+    for (int k = 0; k < n * n; k++)
+        if (!isfinite(M[k])) return 0;
+    for (int i = 0; i < d; i++) {
+        for (int j = 0; j < d; j++) q = fabs(M[i * n + j]) > q ? fabs(M[i * n + j]) : q;
+        m = fabs(M[i * n + d]) > m ? fabs(M[i * n + d]) : m;
+    }
+    const double g = fabs(M[d * n + d]);
+    if (q == 0.0 || (m == 0.0 && g == 0.0)) return 0;
+    const int eq = exponent_of(q);
+    int64_t s = INT64_MIN;
+    if (g != 0.0) s = (int64_t)exponent_of(g) - eq;
+    if (m != 0.0) {
+        const int64_t t = 2 * ((int64_t)exponent_of(m) - eq);
+        s = t > s ? t : s;
+    }
+    return s;
+}
+
+/* 2^k for -1022 <= k <= 1023 (a normal number, exact) */
+static inline double pow2(int64_t k) {
+    const uint64_t bits = (uint64_t)(k + 1023) << 52;
+    double x;
+    memcpy(&x, &bits, 8);
+    return x;
+}
+
+/* x 2^k, and whether that is exact (filters.times_power_of_two): finite, normal unless x is 0, and
+ * scaled back it is x again (a product just below 2^-1022 may round up to it). One multiplication
+ * by 2^k rounds once, as ldexp does: the same bits. */
+static inline int times_pow2(double x, int64_t k, double *y) {
+    if (k >= -1022 && k <= 1022) {
+        *y = x * pow2(k);
+        return isfinite(*y) && (x == 0.0 || fabs(*y) >= DBL_MIN) && *y * pow2(-k) == x;
+    }
+    *y = ldexp(x, (int)k);
+    return isfinite(*y) && (x == 0.0 || fabs(*y) >= DBL_MIN) && ldexp(*y, (int)-k) == x;
+}
+
+/* tmp = M with space scaled by 2^e (last column and row times 2^e, the corner times 2^2e); whether
+ * M is exactly symmetric and every changed entry exact (filters.space_scaled) */
+static inline __attribute__((always_inline)) int space_scaled(const double *M, double *tmp, int n, int64_t e) {
+    const int d = n - 1;
+    int exact = 1;
+    memcpy(tmp, M, sizeof(double) * n * n);
+    for (int i = 0; i < n; i++) /* the diagonal too: NaN == NaN is false, as in numpy's M == M^T */
+        for (int j = i; j < n; j++) exact &= M[i * n + j] == M[j * n + i];
+    for (int i = 0; i < d; i++) {
+        exact &= times_pow2(M[i * n + d], e, &tmp[i * n + d]);
+        exact &= times_pow2(M[d * n + i], e, &tmp[d * n + i]);
+    }
+    exact &= times_pow2(M[d * n + d], 2 * e, &tmp[d * n + d]);
+    return exact;
+}
+
+/* the pairs of A, B (and shifts S) with space scaled per pair into A2, B2 (S2), e into E; the
+ * outputs may be the inputs (scaled in place) */
+static inline __attribute__((always_inline)) int64_t balance_pairs(int n, const double *A, const double *B, double *A2, double *B2,
+                                                                   int64_t *E, const double *S, double *S2, int64_t count) {
+    int64_t moved = 0;
+    const int d = n - 1, nn = n * n;
+    for (int64_t p = 0; p < count; p++) {
+        const double *a = A + p * nn, *b = B + p * nn;
+        double ta[16], tb[16], ts[3];
+        const int64_t s = twice_log2_size(a, n) + twice_log2_size(b, n);
+        double r = -nearbyint((double)s * 0.25); /* round half to even, as numpy's rint */
+        r = r < -1000.0 ? -1000.0 : (r > 1000.0 ? 1000.0 : r);
+        int64_t e = (int64_t)r;
+        int exact = e != 0;
+        if (exact) exact = space_scaled(a, ta, n, e) & space_scaled(b, tb, n, e);
+        if (exact && S)
+            for (int i = 0; i < d; i++) exact &= times_pow2(S[p * d + i], e, &ts[i]);
+        if (exact) {
+            memcpy(A2 + p * nn, ta, sizeof(double) * nn);
+            memcpy(B2 + p * nn, tb, sizeof(double) * nn);
+            if (S) memcpy(S2 + p * d, ts, sizeof(double) * d);
+        } else {
+            e = 0;
+            if (A2 != A) memcpy(A2 + p * nn, a, sizeof(double) * nn);
+            if (B2 != B) memcpy(B2 + p * nn, b, sizeof(double) * nn);
+            if (S && S2 != S) memcpy(S2 + p * d, S + p * d, sizeof(double) * d);
+        }
+        E[p] = e;
+        moved += e != 0;
+    }
+    return moved;
+}
+
+/* balance_pairs with n a constant (its loops unrolled) */
+static int64_t balance3(const double *A, const double *B, double *A2, double *B2, int64_t *E, const double *S, double *S2, int64_t count) {
+    return balance_pairs(3, A, B, A2, B2, E, S, S2, count);
+}
+static int64_t balance4(const double *A, const double *B, double *A2, double *B2, int64_t *E, const double *S, double *S2, int64_t count) {
+    return balance_pairs(4, A, B, A2, B2, E, S, S2, count);
+}
+
+static PyObject *balance(PyObject *self, PyObject *args) {
+    int n;
+    Py_buffer a, b, a2, b2, e, s = {0}, s2 = {0};
+    if (!PyArg_ParseTuple(args, "iy*y*w*w*w*|y*w*", &n, &a, &b, &a2, &b2, &e, &s, &s2)) return NULL;
+    PyObject *result = NULL;
+    const Py_ssize_t count = e.len / 8;
+    if (n != 3 && n != 4) {
+        PyErr_Format(PyExc_ValueError, "n must be 3 or 4, got %d", n);
+    } else if (e.len != count * 8 || a.len != count * n * n * 8 || b.len != a.len || a2.len != a.len || b2.len != a.len) {
+        PyErr_Format(PyExc_ValueError, "a, b, a_out and b_out must hold %zd pairs of %dx%d float64 matrices", count, n, n);
+    } else if ((s.obj != NULL) != (s2.obj != NULL) || (s.obj && (s.len != count * (n - 1) * 8 || s2.len != s.len))) {
+        PyErr_Format(PyExc_ValueError, "shift and shift_out must both hold %zd float64 vectors of %d", count, n - 1);
+    } else if (!PyBuffer_IsContiguous(&a, 'C') || !PyBuffer_IsContiguous(&b, 'C') || !PyBuffer_IsContiguous(&a2, 'C') ||
+               !PyBuffer_IsContiguous(&b2, 'C') || !PyBuffer_IsContiguous(&e, 'C') ||
+               (s.obj && (!PyBuffer_IsContiguous(&s, 'C') || !PyBuffer_IsContiguous(&s2, 'C')))) {
+        PyErr_SetString(PyExc_ValueError, "buffers must be C-contiguous");
+    } else {
+        int64_t moved;
+        Py_BEGIN_ALLOW_THREADS
+        moved = (n == 3 ? balance3 : balance4)((const double *)a.buf, (const double *)b.buf, (double *)a2.buf, (double *)b2.buf, (int64_t *)e.buf,
+                              s.obj ? (const double *)s.buf : NULL, s.obj ? (double *)s2.buf : NULL, (int64_t)count);
+        Py_END_ALLOW_THREADS
+        result = PyLong_FromLongLong((long long)moved);
+    }
+    PyBuffer_Release(&a);
+    PyBuffer_Release(&b);
+    PyBuffer_Release(&a2);
+    PyBuffer_Release(&b2);
+    PyBuffer_Release(&e);
+    if (s.obj) PyBuffer_Release(&s);
+    if (s2.obj) PyBuffer_Release(&s2);
+    return result;
+}
+
 #ifndef KERNELS_SHA256
 #define KERNELS_SHA256 "unknown"
 #endif
@@ -139,6 +293,7 @@ static PyObject *kernels_sha256(PyObject *self, PyObject *noargs) { return PyUni
 static PyMethodDef METHODS[] = {
     {"kernels_sha256", kernels_sha256, METH_NOARGS, "First 16 hex digits of the SHA-256 of the _kernels.h this module was built from."},
     {"classify", classify, METH_VARARGS, "classify(n, a, b, out[, table]): rule ids (or table[rule id] with a 256-byte table) of count pairs into the int8 buffer out, GIL released; returns how many are undecided."},
+    {"balance", balance, METH_VARARGS, "balance(n, a, b, a_out, b_out, e_out[, shift, shift_out]): pairs with space scaled by 2^e to the bodies' size where exact (e_out 0 elsewhere), GIL released; returns how many moved."},
     {"variant", get_variant, METH_NOARGS, "The SIMD variant in use."},
     {"variants", get_variants, METH_NOARGS, "The variants of this build that this CPU can run (slowest first)."},
     {"select", select_variant, METH_VARARGS, "select(name): use this variant (ValueError if unknown or unsupported here)."},

@@ -8,6 +8,13 @@ def classify(n: int, a: Any, b: Any, out: Any, table: Any = ..., /) -> int:
     With a 256-byte table, table[rule id as a byte] instead. Returns how many pairs are undecided.
     """
 
+def balance(n: int, a: Any, b: Any, a_out: Any, b_out: Any, e_out: Any, shift: Any = ..., shift_out: Any = ..., /) -> int:
+    """The second stage's change of units (core.fixed.filters._balanced) of len(e_out) float64 pairs.
+
+    a_out, b_out (and shift_out) get the pairs with space scaled by 2^e, e_out the int64 e (0 where
+    the scaling is not exact or not needed). Returns how many pairs moved.
+    """
+
 def variant() -> str:
     """The SIMD variant in use."""
 

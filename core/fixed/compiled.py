@@ -29,7 +29,7 @@ from typing import cast
 import numpy as np
 
 __all__ = [
-    "available", "warm_up", "status", "variant", "variants", "select", "rules", "mapped", "rule_one", "set_threads", "get_threads",
+    "available", "balance_available", "balance", "pool", "warm_up", "status", "variant", "variants", "select", "rules", "mapped", "rule_one", "set_threads", "get_threads",
     "header_sha256", "FIX", "HEADER",
 ]
 
@@ -140,7 +140,8 @@ def get_threads() -> int:
     return int(cast(int, n))
 
 
-def _pool(k: int) -> ThreadPoolExecutor:
+def pool(k: int) -> ThreadPoolExecutor:
+    """The filter's thread pool, with at least ``k`` threads (one per core by default)."""
     with _lock:
         pool = _state["pool"]
         if pool is None or pool._max_workers < k:  # type: ignore[attr-defined]
@@ -211,10 +212,32 @@ def _run(a: np.ndarray, b: np.ndarray, table: np.ndarray | None, threads: int | 
     # (the first call of a process was 1.2-2x the second with every part in the pool)
     bounds = np.linspace(0, N, k + 1).astype(np.int64)
     parts = [(int(lo), int(hi)) for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)]
-    futures = [_pool(k - 1).submit(_EXT.classify, n, a[lo:hi], b[lo:hi], out[lo:hi], *extra) for lo, hi in parts[1:]]
+    futures = [pool(k - 1).submit(_EXT.classify, n, a[lo:hi], b[lo:hi], out[lo:hi], *extra) for lo, hi in parts[1:]]
     lo, hi = parts[0]
     undecided = int(_EXT.classify(n, a[lo:hi], b[lo:hi], out[lo:hi], *extra))  # this thread takes a part too
     return out, undecided + sum(int(f.result()) for f in futures)
+
+
+def balance_available() -> bool:
+    """True when the extension has ``balance`` (a build older than it: the numpy twin serves)."""
+    return _EXT is not None and hasattr(_EXT, "balance")
+
+
+def balance(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+    """:func:`core.fixed.filters._balanced` in one compiled loop (the extension's ``balance``).
+
+    Returns (a, b, shift_b) with space scaled per pair where exact, and the mask of the pairs
+    scaled. ``a``, ``b``: C-contiguous float64 stacks.
+    """
+    n, N = a.shape[-1], a.shape[0]
+    a2, b2, e = np.empty_like(a), np.empty_like(b), np.empty(N, dtype=np.int64)
+    if shift_b is None:
+        _EXT.balance(n, a, b, a2, b2, e)  # type: ignore[union-attr]
+        return a2, b2, None, e != 0
+    s = np.ascontiguousarray(shift_b, dtype=np.float64).reshape(N, n - 1)
+    s2 = np.empty_like(s)
+    _EXT.balance(n, a, b, a2, b2, e, s, s2)  # type: ignore[union-attr]
+    return a2, b2, s2, e != 0
 
 
 def rule_one(A: np.ndarray, B: np.ndarray) -> int:

@@ -252,30 +252,43 @@ def _translated(M: Entries, Mr: Entries, t: np.ndarray, n: int) -> tuple[Entries
     return {ij: np.ldexp(v, 1 - e) for ij, v in V.items()}, {ij: np.ldexp(r, 1 - e) + _TINY_RADIUS for ij, r in R.items()}
 
 
-def log2_size(M: np.ndarray) -> np.ndarray:
-    """log2 of each body's size (about sqrt(|c|^2 + r^2)), from its matrix: 0 where undefined.
+def twice_log2_size(M: np.ndarray) -> np.ndarray:
+    """Twice log2 of each body's size (about sqrt(|c|^2 + r^2)), an int64 from its matrix: 0 where undefined.
 
-    For [[Q, m], [m^T, g0]]: max(log2 |g0| - log2 |Q|, log2 |m| - log2 |Q|) over the largest
-    entries, halved for the corner; in logarithms, so that no square overflows.
+    For [[Q, m], [m^T, g]], by the frexp exponents E of the largest entries: max(E(g) - E(Q),
+    2 (E(m) - E(Q))), a term skipped where m or g is zero; 0 for a non-finite entry, a zero Q, or
+    m and g both zero. Exponents, not logarithms: no square overflows, and the C twin in
+    ``core/fixed/_filter.c`` (``balance``) gets the same integers on any platform.
     """
     d = M.shape[-1] - 1
-    with np.errstate(divide="ignore", invalid="ignore"):
-        q = np.log2(np.abs(M[:, :d, :d]).max(axis=(1, 2)))
-        m = np.log2(np.abs(M[:, :d, d]).max(axis=1))
-        k = np.log2(np.abs(M[:, d, d]))
-        out = np.maximum(0.5 * (k - q), m - q)
-    return np.where(np.isfinite(out), out, 0.0)
+    with np.errstate(invalid="ignore"):
+        q = np.abs(M[:, :d, :d]).max(axis=(1, 2))
+        m = np.abs(M[:, :d, d]).max(axis=1)
+        g = np.abs(M[:, d, d])
+    eq = np.frexp(q)[1].astype(np.int64)
+    low = np.iinfo(np.int64).min
+    s = np.maximum(np.where(g != 0, np.frexp(g)[1] - eq, low), np.where(m != 0, 2 * (np.frexp(m)[1] - eq), low))
+    ok = np.isfinite(M).all(axis=(1, 2)) & (q != 0) & ((m != 0) | (g != 0))
+    return np.where(ok, s, 0).astype(np.int64)
+
+
+def log2_size(M: np.ndarray) -> np.ndarray:
+    """log2 of each body's size, to a power of two (:func:`twice_log2_size` halved): 0 where undefined."""
+    out: np.ndarray = 0.5 * twice_log2_size(M)
+    return out
 
 
 def times_power_of_two(x: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The products x 2^k, and elementwise whether each is exact: finite, and normal unless x is 0.
+    """The products x 2^k, and elementwise whether each is exact (finite, normal, x again scaled back).
 
-    A power of two changes only the exponent of a normal result; a subnormal one may drop bits
-    (counted as inexact), an overflow gives inf.
+    Exact means finite, normal unless x is 0, and x again when scaled back. A power of two changes only the exponent of a normal result; a subnormal one may drop bits
+    (counted as inexact), an overflow gives inf, and a product just below 2^-1022 may round up to
+    it (normal, but not x 2^k: the way back tells).
     """
-    with np.errstate(over="ignore"):
+    with np.errstate(over="ignore", under="ignore"):
         y = np.ldexp(x, k)
-    return y, np.isfinite(y) & ((x == 0) | (np.abs(y) >= np.finfo(np.float64).tiny))
+        back = np.ldexp(y, -np.asarray(k))
+    return y, np.isfinite(y) & ((x == 0) | (np.abs(y) >= np.finfo(np.float64).tiny)) & (back == x)
 
 
 def space_scaled(M: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -301,14 +314,20 @@ def _balanced(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple
 
     Bodies of size s far from 1 (1e9, 1e-150) have |Q| ~ 1/s^2, |m| ~ |c|/s^2 and a corner
     ~ |c|^2/s^2: entries spread over decades that the bounds, relative to the largest entry,
-    cannot follow. Scaling space by 2^e, the power of two nearest the geometric mean over both
-    shapes of 1/size (:func:`log2_size`), keeps the relative position and brings them to order 1.
-    A pair is scaled only where :func:`space_scaled` is exact for both matrices and for
-    ``shift_b`` (which scales with space); else it keeps e = 0. Returns (a, b, shift_b) in the
-    new units and the mask of the pairs scaled (e != 0).
+    cannot follow. Scaling space by 2^e, e = -rint((S_a + S_b) / 4) with S = :func:`twice_log2_size`
+    (about the geometric mean over both shapes of 1/size), keeps the relative position and brings
+    them to order 1. A pair is scaled only where :func:`space_scaled` is exact for both matrices
+    and for ``shift_b`` (which scales with space); else it keeps e = 0. Returns (a, b, shift_b)
+    in the new units and the mask of the pairs scaled (e != 0). The compiled extension runs the
+    same steps per pair in one loop (``balance`` in ``core/fixed/_filter.c``: the same integers
+    and floats, ~50x faster than these array passes); this numpy code is its twin.
     """
-    e = -np.rint(0.5 * (log2_size(a) + log2_size(b)))
-    e = np.clip(np.where(np.isfinite(e), e, 0.0), -1000, 1000).astype(np.int64)
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    b = np.ascontiguousarray(b, dtype=np.float64)
+    if compiled.balance_available():
+        return compiled.balance(a, b, shift_b)
+    e = -np.rint((twice_log2_size(a) + twice_log2_size(b)) * 0.25)
+    e = np.clip(e, -1000, 1000).astype(np.int64)
     if not e.any():
         return a, b, shift_b, e != 0
     a2, exact = space_scaled(a, e)
@@ -388,21 +407,34 @@ def _second_stage(a: np.ndarray, b: np.ndarray, rules: np.ndarray, threads: int 
 
     The pairs that :func:`_balanced` scales (bodies far from size 1) first go through the first
     stage again in their own units (compiled, or its numpy twin: the same answers), the
-    translated stage only for what it still leaves.
+    translated stage only for what it still leaves. Chunks of pairs run on the compiled filter's
+    threads (each writes its own rows of ``rules``; the compiled calls release the GIL).
     """
     idx = np.flatnonzero(rules < 0)
-    first = (lambda x, y: compiled.rules(x, y, threads=threads)) if compiled.available() else rules_numpy
-    for s in range(0, idx.size, _CHUNK):
-        part = idx[s : s + _CHUNK]
-        A, B = a[part].astype(np.float64), b[part].astype(np.float64)
+    first = (lambda x, y: compiled.rules(x, y, threads=1)) if compiled.available() else rules_numpy
+
+    def run(part: np.ndarray) -> None:
+        A, B = np.asarray(a[part], dtype=np.float64), np.asarray(b[part], dtype=np.float64)
         A2, B2, _, moved = _balanced(A, B, None)
         if moved.any():
-            rows = np.flatnonzero(moved)
-            rules[part[rows]] = first(A2[rows], B2[rows])
+            if moved.all():
+                rules[part] = first(A2, B2)
+            else:
+                rows = np.flatnonzero(moved)
+                rules[part[rows]] = first(A2[rows], B2[rows])
             left = rules[part] < 0
             part, A, B = part[left], A[left], B[left]
         if part.size:
             rules[part] = classify_translated(A, B)
+
+    chunks = [idx[s : s + _CHUNK] for s in range(0, idx.size, _CHUNK)]
+    k = min(threads or compiled.get_threads(), len(chunks))
+    if k <= 1:
+        for part in chunks:
+            run(part)
+    else:
+        for f in [compiled.pool(k).submit(run, part) for part in chunks]:
+            f.result()
     return rules
 
 

@@ -370,11 +370,11 @@ typedef struct {
     int deg;
 } pair;
 
-/* x * inv (inv a power of two) is exact: finite, and normal unless x is 0 (a subnormal product
- * may drop bits) */
+/* x * inv (inv a power of two) is exact: finite, normal unless x is 0 (a subnormal product may
+ * drop bits), and x again when divided back (a product just below 2^-1022 may round up to it) */
 static inline int scaled_exactly(double x, double inv) {
     double y = x * inv;
-    return isfinite(y) && (x == 0.0 || fabs(y) >= 0x1p-1022);
+    return isfinite(y) && (x == 0.0 || fabs(y) >= 0x1p-1022) && y / inv == x;
 }
 
 static int load_pair(pair *p, int d, const double *ra, const double *rb, const double *shift) {
