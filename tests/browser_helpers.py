@@ -30,6 +30,28 @@ def text_shown(page: Any, fragment: str, timeout: float = 120.0) -> None:
     page.wait_for_function("(f) => document.body.innerText.includes(f)", arg=fragment, timeout=timeout * 1000)
 
 
+def tick(page: Any, label: str, is_on: Callable[[], object], timeout: float = 120.0, patience: float = 15.0) -> None:
+    """Tick the checkbox labelled ``label`` until the server says so (``is_on``) and the page shows it.
+
+    Not Playwright's ``check()``: viser ticks the box in the page when the click's update has gone
+    round, which under load is later than ``check()`` looks. A click is repeated only when, ``patience``
+    seconds after the last one, neither the server nor the page has it ticked (a click lost, never one
+    in flight: it is undone only if slower than ``patience``).
+    """
+    box = page.get_by_label(label, exact=True)
+    box.wait_for(state="visible")
+    deadline = time.monotonic() + timeout
+    last_click = -float("inf")
+    while not (is_on() and box.is_checked()):
+        now = time.monotonic()
+        if now > deadline:
+            raise AssertionError(f"timed out ticking {label!r} (server: {bool(is_on())}, page: {box.is_checked()})")
+        if now - last_click > patience and not is_on() and not box.is_checked():
+            box.click()
+            last_click = time.monotonic()
+        time.sleep(0.02)
+
+
 def bodies_page(model: Any) -> Iterator[tuple[Any, Any]]:
     """A scene server on ``model`` (many bodies) and one headless tab on it, for a module fixture."""
     if not os.path.exists("/usr/bin/chromium"):

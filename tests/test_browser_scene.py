@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 import pytest
-from browser_helpers import text_shown, until
+from browser_helpers import text_shown, tick, until
 
 from app.scene.links import link_path
 
@@ -440,10 +440,7 @@ def test_camera_follows_the_shapes(hs):
     cam = hs.server_clients()[-1].camera
     page = hs.page
     page.get_by_text("View", exact=True).click()
-    box = page.get_by_label("Camera follows the shapes", exact=True)
-    box.wait_for(state="visible")  # the folder has opened
-    box.check()  # Playwright checks that the box is ticked in the page afterwards
-    until(lambda: s.state.follow, what="follow on")
+    tick(page, "Camera follows the shapes", lambda: s.state.follow)  # the folder opens, the click goes round
     before = np.array(cam.look_at)
     s.set_t(0.9)  # A moves from x = 9.8 to x = 0.2
     until(lambda: np.linalg.norm(np.array(cam.look_at) - before) > 2, what="camera moved")
