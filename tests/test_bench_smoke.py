@@ -176,3 +176,17 @@ def test_throughput_section_and_rows_replace_the_old_ones(tmp_path):
     assert text.index("| first classify") < text.index("## Reading")
     throughput.write_section(tp, report, command="test")  # again: the rows are replaced, not added
     assert report.read_text().count("| first classify of 400 pairs") == 1
+
+
+def test_stage_timer_finds_every_stage_boundary_of_the_block_driver():
+    """bench.stage_cycles puts a time stamp before each of its marks in core/fixed/_blocks.h: every
+    mark is there once, in the order of the stages (a reordered or renamed stage breaks the table)."""
+    from bench import stage_cycles
+
+    text = (stage_cycles.FIXED / "_blocks.h").read_text()
+    body = text[text.index("int64_t CLASSIFY("):]
+    places = [body.find("        " + mark) for mark in stage_cycles.MARKS]
+    assert all(p >= 0 for p in places), [m for m, p in zip(stage_cycles.MARKS, places, strict=True) if p < 0]
+    assert places == sorted(places)
+    assert all(body.count("        " + mark) == 1 for mark in stage_cycles.MARKS)
+    assert len(stage_cycles.STAGES) == len(stage_cycles.MARKS) - 1

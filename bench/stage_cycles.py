@@ -1,0 +1,153 @@
+"""Cycles per pair in each stage of the compiled filter, by data set (where the time goes).
+
+The block driver (``core/fixed/_blocks.h``) is compiled once more into a small program with a
+time-stamp read (``rdtsc``) between its stages (:data:`MARKS`):
+transpose, the unscaled first pass, the scaled and full first passes again (with the subsets'
+bookkeeping), the semi-static s0 test, the certificates, the running-error s0 test and the
+output. The program runs the chosen SIMD variant on one core over ``--pairs`` pairs (each data
+set tiled) and keeps the fastest of ``--rounds`` runs: on a shared machine, the run least
+disturbed. The reads cost ~25 cycles per block (8 ellipsoid pairs): compare rows, not totals
+with ``bench.throughput``. x86-64 with gcc only.
+
+    python -m bench.stage_cycles [--dim 3] [--pairs 1000000] [--rounds 7]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from bench import datasets as D
+
+ROOT = Path(__file__).resolve().parent.parent
+FIXED = ROOT / "core" / "fixed"
+FLAGS = ["-O3", "-std=c99", "-ffp-contract=off", "-fno-fast-math", "-fno-math-errno", "-fno-trapping-math"]
+"""The extension's flags (setup.py)."""
+STAGES = ("transpose", "first pass", "scaled / full again", "s0 semi-static", "certificates", "s0 radius + output")
+MARKS = ("PREFETCH(0)", "PREFETCH(1)", "/* stage 1 again with the scaling", "PREFETCH(4)", "PREFETCH(5)", "PREFETCH(6)", "PREFETCH(7)")
+"""Where the time stamps go in _blocks.h (before each, at the start of its line)."""
+
+_MAIN = r"""
+#define _POSIX_C_SOURCE 199309L
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <x86intrin.h>
+static uint64_t acc[8], last;
+#define TICK(i) do { uint64_t t_ = __rdtsc(); if (i) acc[i] += t_ - last; last = t_; } while (0)
+@VARIANT@
+int main(int argc, char **argv) {
+    const int64_t n = atoll(argv[3]), rounds = atoll(argv[4]), e = @E@;
+    FILE *fa = fopen(argv[1], "rb"), *fb = fopen(argv[2], "rb");
+    fseek(fa, 0, SEEK_END);
+    const int64_t m = ftell(fa) / (8 * e);
+    rewind(fa);
+    double *A0 = malloc(m * e * 8), *B0 = malloc(m * e * 8), *A = malloc(n * e * 8), *B = malloc(n * e * 8);
+    if (fread(A0, 8, m * e, fa) != (size_t)(m * e) || fread(B0, 8, m * e, fb) != (size_t)(m * e)) return 1;
+    for (int64_t i = 0; i < n; i++) {
+        memcpy(A + e * i, A0 + e * (i % m), 8 * e);
+        memcpy(B + e * i, B0 + e * (i % m), 8 * e);
+    }
+    signed char *out = malloc(n);
+    uint64_t best[8] = {0}, best_total = UINT64_MAX;
+    for (int64_t r = 0; r < rounds; r++) {
+        memset(acc, 0, sizeof acc);
+        const uint64_t t0 = __rdtsc();
+        @CLASSIFY@(A, B, out, n, NULL);
+        const uint64_t t1 = __rdtsc();
+        if (t1 - t0 < best_total) {
+            best_total = t1 - t0;
+            memcpy(best, acc, sizeof acc);
+        }
+    }
+    printf("%.2f", (double)best_total / n);
+    for (int i = 1; i <= 6; i++) printf(" %.2f", (double)best[i] / n);
+    printf("\n");
+    return 0;
+}
+"""
+
+_VARIANTS = {
+    "avx2": '#pragma GCC target("avx2")\n#define F64_BEGIN _Pragma("GCC push_options") _Pragma("GCC optimize(\\"schedule-insns\\", '
+            '\\"sched-pressure\\")")\n#define F64_END _Pragma("GCC pop_options")\n#include <immintrin.h>\n#define VARIANT avx2\n'
+            '#define TP_F64 4\n#define TP_F32 8\n#include "variant.h"\n',
+    "baseline": '#define VARIANT baseline\n#include "variant.h"\n',
+}
+
+
+def build(variant: str, dim: int, work: Path) -> Path:
+    """The timed program: _blocks.h with a TICK at each mark, the variant's settings, our main."""
+    blocks = (FIXED / "_blocks.h").read_text()
+    for i, mark in enumerate(MARKS):
+        if mark not in blocks:
+            raise RuntimeError(f"_blocks.h changed: no {mark!r} to time")
+        blocks = blocks.replace("        " + mark, f"        TICK({i}); " + mark, 1)
+    (work / "blocks.h").write_text(blocks)
+    text = (FIXED / "_variant.h").read_text()
+    text = text.replace('"_blocks.h"', '"blocks.h"').replace('"_kernels.h"', f'"{FIXED / "_kernels.h"}"')
+    (work / "variant.h").write_text(text)
+    n = dim + 1
+    main = _MAIN.replace("@VARIANT@", _VARIANTS[variant]).replace("@E@", str(n * n)).replace("@CLASSIFY@", f"classify{n}_f64_{variant}")
+    (work / "main.c").write_text(main)
+    exe = work / f"stages_{variant}_{dim}"
+    subprocess.run(["gcc", *FLAGS, "-I", str(work), "-o", str(exe), str(work / "main.c"), "-lm"], check=True, capture_output=True)
+    return exe
+
+
+def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str = "avx2", labelled: int = 400) -> list[dict[str, object]]:
+    """Cycles per pair by stage, one row per data set (random, then the structured kinds)."""
+    work = Path(tempfile.mkdtemp(prefix="stages-"))
+    try:
+        exe = build(variant, dim, work)
+        sets = [D.random_pairs(dim, labelled, seed=11)] + [D.structured_pairs(dim, labelled, kind=k, seed=12) for k in D.STRUCTURED_KINDS]
+        rows = []
+        for ds in sets:
+            fa, fb = work / "a.bin", work / "b.bin"
+            np.ascontiguousarray(ds.A, dtype=np.float64).tofile(fa)
+            np.ascontiguousarray(ds.B, dtype=np.float64).tofile(fb)
+            cpu = ["taskset", "-c", str(min(os.sched_getaffinity(0)))] if shutil.which("taskset") else []
+            out = subprocess.run([*cpu, str(exe), str(fa), str(fb), str(pairs), str(rounds)], check=True, capture_output=True, text=True).stdout
+            total, *stages = (float(v) for v in out.split())
+            rows.append({"name": ds.name, "total": total, **dict(zip(STAGES, stages, strict=True))})
+        return rows
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def format_rows(rows: list[dict[str, object]]) -> str:
+    """A markdown table: cycles per pair, then each row's total as a fraction of the random row's."""
+    head = "| data | " + " | ".join(STAGES) + " | total | random / this |"
+    lines = [head, "|---|" + "---:|" * (len(STAGES) + 2)]
+    base = float(rows[0]["total"])  # type: ignore[arg-type]
+    for r in rows:
+        cells = " | ".join(f"{float(r[s]):.1f}" for s in STAGES)  # type: ignore[arg-type]
+        lines.append(f"| {r['name']} | {cells} | {float(r['total']):.1f} | {base / float(r['total']):.2f}x |")  # type: ignore[arg-type]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--dim", type=int, default=3, choices=(2, 3))
+    p.add_argument("--pairs", type=int, default=1_000_000)
+    p.add_argument("--rounds", type=int, default=7)
+    p.add_argument("--variant", default="avx2", choices=tuple(_VARIANTS))
+    a = p.parse_args(argv)
+    if platform.machine() not in ("x86_64", "AMD64") or shutil.which("gcc") is None:
+        print("needs x86-64 and gcc")
+        return 1
+    print(f"cycles per pair (rdtsc), {a.variant}, {a.dim}D, {a.pairs:,} pairs, fastest of {a.rounds} runs, one core")
+    print(format_rows(run(a.dim, a.pairs, a.rounds, a.variant)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
