@@ -9,7 +9,7 @@ set tiled) and keeps the fastest of ``--rounds`` runs: on a shared machine, the 
 disturbed. The reads cost ~25 cycles per block (8 ellipsoid pairs): compare rows, not totals
 with ``bench.throughput``. x86-64 with gcc only.
 
-    python -m bench.stage_cycles [--dim 3] [--pairs 1000000] [--rounds 7]
+    python -m bench.stage_cycles [--dim 3] [--pairs 1000000] [--rounds 7] [--define CHUNK4=16]
 """
 
 from __future__ import annotations
@@ -84,7 +84,7 @@ _VARIANTS = {
 }
 
 
-def build(variant: str, dim: int, work: Path) -> Path:
+def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = ()) -> Path:
     """The timed program: _blocks.h with a TICK at each mark, the variant's settings, our main."""
     blocks = (FIXED / "_blocks.h").read_text()
     for i, mark in enumerate(MARKS):
@@ -99,15 +99,16 @@ def build(variant: str, dim: int, work: Path) -> Path:
     main = _MAIN.replace("@VARIANT@", _VARIANTS[variant]).replace("@E@", str(n * n)).replace("@CLASSIFY@", f"classify{n}_f64_{variant}")
     (work / "main.c").write_text(main)
     exe = work / f"stages_{variant}_{dim}"
-    subprocess.run(["gcc", *FLAGS, "-I", str(work), "-o", str(exe), str(work / "main.c"), "-lm"], check=True, capture_output=True)
+    subprocess.run(["gcc", *FLAGS, *(f"-D{d}" for d in defines), "-I", str(work), "-o", str(exe), str(work / "main.c"), "-lm"], check=True, capture_output=True)
     return exe
 
 
-def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str = "avx2", labelled: int = 400) -> list[dict[str, object]]:
+def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str = "avx2", labelled: int = 400,
+        defines: tuple[str, ...] = ()) -> list[dict[str, object]]:
     """Cycles per pair by stage, one row per data set (random, then the structured kinds)."""
     work = Path(tempfile.mkdtemp(prefix="stages-"))
     try:
-        exe = build(variant, dim, work)
+        exe = build(variant, dim, work, defines)
         sets = [D.random_pairs(dim, labelled, seed=11)] + [D.structured_pairs(dim, labelled, kind=k, seed=12) for k in D.STRUCTURED_KINDS]
         rows = []
         for ds in sets:
@@ -140,12 +141,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--pairs", type=int, default=1_000_000)
     p.add_argument("--rounds", type=int, default=7)
     p.add_argument("--variant", default="avx2", choices=tuple(_VARIANTS))
+    p.add_argument("--define", action="append", default=[], metavar="NAME=VALUE",
+                   help="a macro of core/fixed/_variant.h for an experiment (CHUNK4=16, PF_DIST=4, ...)")
     a = p.parse_args(argv)
     if platform.machine() not in ("x86_64", "AMD64") or shutil.which("gcc") is None:
         print("needs x86-64 and gcc")
         return 1
-    print(f"cycles per pair (rdtsc), {a.variant}, {a.dim}D, {a.pairs:,} pairs, fastest of {a.rounds} runs, one core")
-    print(format_rows(run(a.dim, a.pairs, a.rounds, a.variant)))
+    extra = f", {' '.join(a.define)}" if a.define else ""
+    print(f"cycles per pair (rdtsc), {a.variant}, {a.dim}D, {a.pairs:,} pairs, fastest of {a.rounds} runs, one core{extra}")
+    print(format_rows(run(a.dim, a.pairs, a.rounds, a.variant, defines=tuple(a.define))))
     return 0
 
 
