@@ -3,7 +3,7 @@
  * Included by _variant.h once per (dimension, input type), with these macros defined:
  *   N          3 (ellipses) or 4 (ellipsoids)
  *   T          double or float (float is widened exactly: certified for the float values given)
- *   FIRST_NOSCALE, FIRST, FULL, SECOND, THIRD, THIRD_FAST, POINT, POINT_FAST, FOURTH   the lane functions of _kernels.h for this N and T
+ *   FIRST_NOSCALE, FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
  *   CHUNK      pairs per block (CHUNK3 or CHUNK4 of _variant.h)
  *   TP, TRANSPOSE_T   pairs per transpose for T (4 for doubles, 8 for floats, or 0: element by element) and the TP x TP transpose
  *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
@@ -59,16 +59,15 @@
         for (int64_t q = 0; q < k; q++) code[open[q]] = dc[q];                                \
     }
 
-/* A certificate (LANE(a, b, c, stride) -> rule or -1) on the open pairs of one route. Where it
- * fails a pair stays open for the next certificate (LAST 0), or, after the last one (LAST 1),
- * becomes undecided (-1) unless its s0 is still unknown (NEEDS_S0_RADIUS: stage 4). */
-#define CERT_STAGE(LANE, ROUTE, LAST)                                                                             \
+/* The certificates (LANE(a, b, c, stride) -> rule or -1) on the open pairs of one route;
+ * a pair whose s0 is still unknown keeps NEEDS_S0_RADIUS where they fail. */
+#define CERT_STAGE(LANE, ROUTE)                                                                                   \
     SUBSET((code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && viafull[p] == (ROUTE))                       \
     if (2 * k > m) {                                                                                              \
         for (int64_t p = 0; p < m; p++) {                                                                         \
             const int64_t cert = LANE(a + p, b + p, c + p, CHUNK);                                                \
             const int64_t open_ = (code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && viafull[p] == (ROUTE); \
-            const int64_t left = !(LAST) || code[p] == NEEDS_S0_RADIUS ? code[p] : -1;                            \
+            const int64_t left = code[p] == NEEDS_S0_RADIUS ? NEEDS_S0_RADIUS : -1;                               \
             code[p] = open_ ? (cert >= 0 ? cert : left) : code[p];                                                \
         }                                                                                                         \
     } else if (k) {                                                                                               \
@@ -81,7 +80,7 @@
         for (int64_t q = 0; q < k; q++) dc[q] = LANE(pa + q, pb + q, d + q, CHUNK);                               \
         for (int64_t q = 0; q < k; q++) {                                                                         \
             const int64_t p = open[q];                                                                            \
-            code[p] = dc[q] >= 0 ? dc[q] : (!(LAST) || code[p] == NEEDS_S0_RADIUS ? code[p] : -1);                \
+            code[p] = dc[q] >= 0 ? dc[q] : (code[p] == NEEDS_S0_RADIUS ? NEEDS_S0_RADIUS : -1);                   \
         }                                                                                                         \
     }
 
@@ -203,17 +202,9 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
         /* stage 2, where the tree asks for s0: the semi-static test */
         S0_STAGE(SECOND, NEEDS_S0)
         PREFETCH(5)
-        /* stage 3, valid pairs still open: the certificates, on the prepare each pair took; T*
-         * first (most spheres and copies), the common point (two quadratic forms with their
-         * bounds, half the cost) only on the pairs T* left */
-        k = 0;
-        for (int64_t p = 0; p < m; p++) k += code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS;
-        if (k) { /* most blocks of random pairs have none: one count instead of four */
-            CERT_STAGE(THIRD_FAST, 0, 0)
-            CERT_STAGE(THIRD, 1, 0)
-            CERT_STAGE(POINT_FAST, 0, 1)
-            CERT_STAGE(POINT, 1, 1)
-        }
+        /* stage 3, valid pairs still open: the certificates, on the prepare each pair took */
+        CERT_STAGE(THIRD_FAST, 0)
+        CERT_STAGE(THIRD, 1)
         PREFETCH(6)
         /* stage 4, s0 still needed: the running-error test */
         S0_STAGE(FOURTH, NEEDS_S0_RADIUS)

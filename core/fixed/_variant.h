@@ -107,8 +107,6 @@ static inline void transpose8_f32(const float *restrict src, int64_t ld_src, flo
 #define FOURTH fourth3
 #define THIRD third3_f64
 #define THIRD_FAST third3_fast_f64
-#define POINT point3_f64
-#define POINT_FAST point3_fast_f64
 #define CLASSIFY GLUE(classify3_f64, VARIANT)
 F64_BEGIN
 #include "_blocks.h"
@@ -121,8 +119,6 @@ F64_END
 #undef FULL
 #undef THIRD
 #undef THIRD_FAST
-#undef POINT
-#undef POINT_FAST
 #undef CLASSIFY
 #define T float
 #define FIRST first3_f32
@@ -132,8 +128,6 @@ F64_END
 #define FULL full3_f32
 #define THIRD third3_f32
 #define THIRD_FAST third3_fast_f32
-#define POINT point3_f32
-#define POINT_FAST point3_fast_f32
 #define CLASSIFY GLUE(classify3_f32, VARIANT)
 #include "_blocks.h"
 #undef N
@@ -148,8 +142,6 @@ F64_END
 #undef FOURTH
 #undef THIRD
 #undef THIRD_FAST
-#undef POINT
-#undef POINT_FAST
 #undef CLASSIFY
 
 #define N 4
@@ -164,8 +156,6 @@ F64_END
 #define FOURTH fourth4
 #define THIRD third4_f64
 #define THIRD_FAST third4_fast_f64
-#define POINT point4_f64
-#define POINT_FAST point4_fast_f64
 #define CLASSIFY GLUE(classify4_f64, VARIANT)
 F64_BEGIN
 #include "_blocks.h"
@@ -178,8 +168,6 @@ F64_END
 #undef FULL
 #undef THIRD
 #undef THIRD_FAST
-#undef POINT
-#undef POINT_FAST
 #undef CLASSIFY
 #define T float
 #define FIRST first4_f32
@@ -189,8 +177,6 @@ F64_END
 #define FULL full4_f32
 #define THIRD third4_f32
 #define THIRD_FAST third4_fast_f32
-#define POINT point4_f32
-#define POINT_FAST point4_fast_f32
 #define CLASSIFY GLUE(classify4_f32, VARIANT)
 #include "_blocks.h"
 #undef N
@@ -205,6 +191,4 @@ F64_END
 #undef FOURTH
 #undef THIRD
 #undef THIRD_FAST
-#undef POINT
-#undef POINT_FAST
 #undef CLASSIFY

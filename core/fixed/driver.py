@@ -19,8 +19,7 @@ the earlier ones left open):
 2. where the tree asks for s0: :func:`decide_s0`, the semi-static test (one evaluation of hs0
    and one of its permanent, for a_i known to relative accuracy 2^-20: random pairs);
 3. where a valid pair is still open (s0 vanishes identically for spheres and translated or
-   homothetic copies): :func:`certify_sep` (a T* > 0 with P(T*) > 0), then, on the pairs it
-   leaves, :func:`certify_point` (a point inside both);
+   homothetic copies): :func:`certify` (a T* > 0 with P(T*) > 0, or a point inside both);
 4. where s0 is still needed and stage 2 could not tell its sign (near tangency):
    :func:`decide_s0_radius`, the running-error test (a radius for every operation).
 
@@ -57,8 +56,7 @@ __all__ = [
     "decide_s0_radius",
     "centre",
     "quad",
-    "certify_sep",
-    "certify_point",
+    "certify",
     "TABLES",
     "RULE_SEP",
     "RULE_POINT",
@@ -352,13 +350,19 @@ def quad(x: Any, n: int, W: dict[tuple[int, int], Any], u: list[Any]) -> Any:
     return acc
 
 
-def _guess(x: Any, n: int, WA: dict[tuple[int, int], Any], WB: dict[tuple[int, int], Any]) -> tuple[Any, ...]:
-    """The guesses both certificates verify, from the shapes' centres.
+def certify(
+    x: Any, n: int, WA: dict[tuple[int, int], Any], RA: dict[tuple[int, int], Any],
+    WB: dict[tuple[int, int], Any], RB: dict[tuple[int, int], Any], c: list[Any], cr: list[Any],
+) -> Any:
+    """Rule id (sep-witness, common-point) or -1, for a valid pair the tree left open.
 
-    With tA, tB the distances (in units of the centre segment) from each centre to its own
-    boundary along the segment, T* = (tA/tB)(kB/kA) is the Perram-Wertheim optimum for spheres
-    and for translated or homothetic copies, and the point at tA / (tA + tB) of the segment lies
-    inside both exactly when such shapes overlap. Returns (ok, ca, ka, kb, u, pos, T).
+    Candidates from the shapes' centres: with tA, tB the distances (in units of the centre
+    segment) from each centre to its own boundary along the segment, T* = (tA/tB)(kB/kA) is the
+    Perram-Wertheim optimum for spheres and for translated or homothetic copies, and the point
+    at tA / (tA + tB) of the segment lies inside both exactly when such shapes overlap. Both
+    are then verified with certified bounds (P(T*) > 0 with a_n, a_0 < 0: two positive roots;
+    X^T M X < 0 for both); a wrong guess only abstains. Every operation is unconditional (NaN
+    or inf where a guess makes no sense) and then selected: no control flow, so it vectorises.
     """
     d = n - 1
     ca, ka, oka = centre(x, n, WA, "ca")
@@ -371,37 +375,10 @@ def _guess(x: Any, n: int, WA: dict[tuple[int, int], Any], WB: dict[tuple[int, i
     # tA = sqrt(kA / qA), tB = sqrt(kB / qB), so T* = (tA / tB)(kB / kA) = sqrt(qB kB / (qA kA))
     # and tA / (tA + tB) = kA T* / (kA T* + kB): one square root and two divisions
     T = x.let("T", x.sqrt((qb * kb) / (qa * ka)))
-    return ok, ca, ka, kb, u, pos, T
-
-
-def certify_sep(x: Any, n: int, WA: dict[tuple[int, int], Any], WB: dict[tuple[int, int], Any], c: list[Any], cr: list[Any]) -> Any:
-    """RULE_SEP or -1: P(T*) > 0 with certified bounds (two positive roots, a_n, a_0 < 0 known).
-
-    Both guesses are verified with certified bounds, so a wrong guess only abstains. Every
-    operation is unconditional (NaN or inf where a guess makes no sense) and then selected: no
-    control flow, so it vectorises. Run first, alone, so that the point's two quadratic forms
-    (half the cost of both certificates) run only on the pairs it leaves: most spheres and
-    copies are decided here.
-    """
-    ok, _, _, _, _, pos, T = _guess(x, n, WA, WB)
     tin = x.let("tin", (pos & (T >= float(CERT_T_MIN))) & (T <= float(CERT_T_MAX)))
     name = f"pencil_at{n}"
     p, pr = x.call(name, [x.vector(c, "c"), x.vector(cr, "cr")], [x.where(tin, T, 1.0)])
     sep = x.let("sep", (ok & tin) & (p > ((pr * RADIUS_FACTOR) + x.info(name).floor)))
-    return x.let("cert", x.where(sep, RULE_SEP, -1))
-
-
-def certify_point(
-    x: Any, n: int, WA: dict[tuple[int, int], Any], RA: dict[tuple[int, int], Any],
-    WB: dict[tuple[int, int], Any], RB: dict[tuple[int, int], Any],
-) -> Any:
-    """RULE_POINT or -1: the guessed point X has X^T M X < 0 for both, with certified bounds.
-
-    Run on the pairs :func:`certify_sep` left (the answer of both is sep-witness where it
-    holds, else this one).
-    """
-    d = n - 1
-    ok, ca, ka, kb, u, pos, T = _guess(x, n, WA, WB)
     kT = x.let("kT", ka * T)
     s = x.let("s", x.where(pos, kT / (kT + kb), 0.0))  # concentric shapes: A's centre
     pt = [x.let(f"x{i}", ca[i] + (s * u[i])) for i in range(d)]
@@ -418,4 +395,4 @@ def certify_point(
     fa, fma = x.call(name, [x.matrix(WA, n, "fwa"), x.matrix(RA, n, "fra"), point], [g])
     fb, fmb = x.call(name, [x.matrix(WB, n, "fwb"), x.matrix(RB, n, "frb"), point], [g])
     inside = (fa < -((fma * f) + info.floor)) & (fb < -((fmb * f) + info.floor))
-    return x.let("cert", x.where((ok & xin) & inside, RULE_POINT, -1))
+    return x.let("cert", x.where(sep, RULE_SEP, x.where((ok & xin) & inside, RULE_POINT, -1)))

@@ -400,7 +400,7 @@ _C_HEADER = """/* The certified float filter's lane functions, in C. GENERATED b
  * - the straight-line kernels (pencil{n}, hat_s0_rel_{n}, hat_s0_{n}, pencil_at{n}, form{n}) are the traced
  *   ring-generic formulas of core/fixed/_kernels.py, the same operations in the same order, so
  *   their proven error constants (core/fixed/errorbound.py) hold;
- * - the lane functions (first{n}_*, full{n}_*, second{n}, third{n}_*, point{n}_*, fourth{n}) are core/fixed/driver.py written out
+ * - the lane functions (first{n}_*, full{n}_*, second{n}, third{n}_*, fourth{n}) are core/fixed/driver.py written out
  *   in C: prepare, pencil with bounds, validity, the tree (tables of
  *   core.formulae.decision.decide_signs), s0 where the tree asks, the certificates. The numpy
  *   filter runs that same description on arrays, and the two agree bit for bit.
@@ -474,12 +474,11 @@ def _lane_c(name: str, params: str, build: Any, infos: dict[str, KernelInfo], do
 
 
 def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
-    """first{n}_*, full{n}_*, second{n}, third{n}_*, point{n}_*, fourth{n}: the driver's stages in C."""
+    """first{n}_{f64,f32}, second{n}, third{n}_{f64,f32}: the driver's stages in C."""
     from .driver import (
         NEEDS_FULL,
         NEEDS_SCALE,
-        certify_point,
-        certify_sep,
+        certify,
         decide,
         decide_s0,
         decide_s0_radius,
@@ -510,20 +509,15 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
 
         def third(x: CLanes, entry: Any = entry, fast: bool = False) -> CExpr:
             # fast: the pair passed the fast first pass (both matrices exactly symmetric), whose
-            # W is the full prepare's (and whose radii are 0)
+            # W is the full prepare's and whose radii are 0
             Pa, Pb = prepare(x, n, entry("a"), "a", exact_only=fast), prepare(x, n, entry("b"), "b", exact_only=fast)
             c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
             cr = [CExpr(f"c[{n + 1 + i} * s]", "d") for i in range(n + 1)]
-            code: CExpr = certify_sep(x, n, Pa.W, Pb.W, c, cr)
-            return code
-
-        def point(x: CLanes, entry: Any = entry, fast: bool = False) -> CExpr:
-            Pa, Pb = prepare(x, n, entry("a"), "a", exact_only=fast), prepare(x, n, entry("b"), "b", exact_only=fast)
             if fast:
                 zero = {ij: 0.0 for ij in Pa.W}
-                fast_code: CExpr = certify_point(x, n, Pa.W, zero, Pb.W, zero)
+                fast_code: CExpr = certify(x, n, Pa.W, zero, Pb.W, zero, c, cr)
                 return fast_code
-            code: CExpr = certify_point(x, n, Pa.W, radii(x, Pa.W, Pa.rounded, "a"), Pb.W, radii(x, Pb.W, Pb.rounded, "b"))
+            code: CExpr = certify(x, n, Pa.W, radii(x, Pa.W, Pa.rounded, "a"), Pb.W, radii(x, Pb.W, Pb.rounded, "b"), c, cr)
             return code
 
         params = f"const {T} *restrict a, const {T} *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out"
@@ -548,27 +542,14 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             f"third{n}_{suffix}",
             f"const {T} *restrict a, const {T} *restrict b, const double *restrict c, const int64_t s",
             third, infos,
-            "Stage 3 (driver.certify_sep, on the pair prepared again): sep-witness or -1.",
+            "Stage 3 (driver.certify, on the pair prepared again): sep-witness, common-point or -1.",
         ))
         out.append(_lane_c(
             f"third{n}_fast_{suffix}",
             f"const {T} *restrict a, const {T} *restrict b, const double *restrict c, const int64_t s",
             lambda x, third=third: third(x, fast=True), infos,
-            "Stage 3 for a pair the fast first pass prepared (exactly symmetric: exact entries): the same "
+            "Stage 3 for a pair the fast first pass prepared (exactly symmetric: exact entries, radii 0): the same "
             "answer as third, cheaper.",
-        ))
-        out.append(_lane_c(
-            f"point{n}_{suffix}",
-            f"const {T} *restrict a, const {T} *restrict b, const double *restrict c, const int64_t s",
-            point, infos,
-            "Stage 3, second half (driver.certify_point, where third left the pair open): common-point or -1.",
-        ))
-        out.append(_lane_c(
-            f"point{n}_fast_{suffix}",
-            f"const {T} *restrict a, const {T} *restrict b, const double *restrict c, const int64_t s",
-            lambda x, point=point: point(x, fast=True), infos,
-            "Stage 3, second half, for a pair the fast first pass prepared (exact entries, radii 0): the same "
-            "answer as point, cheaper.",
         ))
 
     def second(x: CLanes) -> CExpr:
