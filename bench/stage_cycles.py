@@ -6,8 +6,15 @@ transpose, the unscaled first pass, the scaled and full first passes again (with
 bookkeeping), the semi-static s0 test, the certificates, the running-error s0 test and the
 output. The program runs the chosen SIMD variant on one core over ``--pairs`` pairs (each data
 set tiled) and keeps the fastest of ``--rounds`` runs: on a shared machine, the run least
-disturbed. The reads cost ~25 cycles per block (8 ellipsoid pairs): compare rows, not totals
-with ``bench.throughput``. x86-64 with gcc only.
+disturbed. The same driver built without the time stamps gives the last columns.
+
+Where the time goes, not whether a change is faster: the time stamps cost cycles and change the
+code GCC writes for the whole driver (its register allocation and scheduling), and a change to
+one stage can move the others' speed in the extension as built while this table shows them
+unchanged (seen 2026-12-04: a split of the certificates measured 3-5 % faster here, while the
+extension ran random pairs 28 % slower). Judge a change by the kernel as built, interleaved
+with the old one (``bench.throughput``, or the two .so files called through ctypes). x86-64 with
+gcc only.
 
     python -m bench.stage_cycles [--dim 3] [--pairs 1000000] [--rounds 7] [--define CHUNK4=16]
 """
@@ -28,23 +35,32 @@ from bench import datasets as D
 
 ROOT = Path(__file__).resolve().parent.parent
 FIXED = ROOT / "core" / "fixed"
-FLAGS = ["-O3", "-std=c99", "-ffp-contract=off", "-fno-fast-math", "-fno-math-errno", "-fno-trapping-math"]
-"""The extension's flags (setup.py)."""
+FLAGS = ["-fwrapv", "-fPIC", "-O3", "-std=c99", "-ffp-contract=off", "-fno-fast-math", "-fno-math-errno", "-fno-trapping-math"]
+"""The extension's flags: Python's (sysconfig CFLAGS: -fwrapv, -fPIC change the code GCC writes) and setup.py's."""
 STAGES = ("transpose", "first pass", "scaled / full again", "s0 semi-static", "certificates", "s0 radius + output")
 MARKS = ("PREFETCH(0)", "PREFETCH(1)", "/* stage 1 again with the scaling", "PREFETCH(4)", "PREFETCH(5)", "PREFETCH(6)", "PREFETCH(7)")
 """Where the time stamps go in _blocks.h (before each, at the start of its line)."""
 
-_MAIN = r"""
-#define _POSIX_C_SOURCE 199309L
+_DRIVER = r"""
 #include <math.h>
+#include <stdint.h>
+#include <string.h>
+#include <x86intrin.h>
+uint64_t stage_acc[8], stage_last;
+#define TICK(i) do { uint64_t t_ = __rdtsc(); if (i) stage_acc[i] += t_ - stage_last; stage_last = t_; } while (0)
+@VARIANT@
+"""
+"""The timed block driver, a unit of its own as in the extension (with the caller in the same
+unit GCC would specialise it: the table pointer is a constant there)."""
+
+_MAIN = r"""
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <x86intrin.h>
-static uint64_t acc[8], last;
-#define TICK(i) do { uint64_t t_ = __rdtsc(); if (i) acc[i] += t_ - last; last = t_; } while (0)
-@VARIANT@
+extern uint64_t stage_acc[8];
+int64_t @CLASSIFY@(const double *A, const double *B, signed char *out, int64_t count, const signed char *table);
 int main(int argc, char **argv) {
     const int64_t n = atoll(argv[3]), rounds = atoll(argv[4]), e = @E@;
     FILE *fa = fopen(argv[1], "rb"), *fb = fopen(argv[2], "rb");
@@ -60,13 +76,13 @@ int main(int argc, char **argv) {
     signed char *out = malloc(n);
     uint64_t best[8] = {0}, best_total = UINT64_MAX;
     for (int64_t r = 0; r < rounds; r++) {
-        memset(acc, 0, sizeof acc);
+        memset(stage_acc, 0, sizeof stage_acc);
         const uint64_t t0 = __rdtsc();
         @CLASSIFY@(A, B, out, n, NULL);
         const uint64_t t1 = __rdtsc();
         if (t1 - t0 < best_total) {
             best_total = t1 - t0;
-            memcpy(best, acc, sizeof acc);
+            memcpy(best, stage_acc, sizeof stage_acc);
         }
     }
     printf("%.2f", (double)best_total / n);
@@ -84,8 +100,8 @@ _VARIANTS = {
 }
 
 
-def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = ()) -> Path:
-    """The timed program: _blocks.h with a TICK at each mark, the variant's settings, our main."""
+def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = (), *, stamps: bool = True) -> Path:
+    """The timed program: _blocks.h with a TICK at each mark (none: ``stamps`` False), the variant's settings, our main."""
     blocks = (FIXED / "_blocks.h").read_text()
     for i, mark in enumerate(MARKS):
         if mark not in blocks:
@@ -96,10 +112,15 @@ def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = ()) -> 
     text = text.replace('"_blocks.h"', '"blocks.h"').replace('"_kernels.h"', f'"{FIXED / "_kernels.h"}"')
     (work / "variant.h").write_text(text)
     n = dim + 1
-    main = _MAIN.replace("@VARIANT@", _VARIANTS[variant]).replace("@E@", str(n * n)).replace("@CLASSIFY@", f"classify{n}_f64_{variant}")
-    (work / "main.c").write_text(main)
-    exe = work / f"stages_{variant}_{dim}"
-    subprocess.run(["gcc", *FLAGS, *(f"-D{d}" for d in defines), "-I", str(work), "-o", str(exe), str(work / "main.c"), "-lm"], check=True, capture_output=True)
+    driver = _DRIVER.replace("@VARIANT@", _VARIANTS[variant])
+    if not stamps:
+        driver = driver.replace("#define TICK(i) do {", "#define TICK(i) do { } while (0)\n#define UNUSED_TICK(i) do {")
+    (work / "driver.c").write_text(driver)
+    (work / "main.c").write_text(_MAIN.replace("@E@", str(n * n)).replace("@CLASSIFY@", f"classify{n}_f64_{variant}"))
+    exe = work / f"stages_{variant}_{dim}_{int(stamps)}"
+    cc = ["gcc", *FLAGS, *(f"-D{d}" for d in defines), "-I", str(work)]
+    subprocess.run([*cc, "-c", "-o", str(work / "driver.o"), str(work / "driver.c")], check=True, capture_output=True)
+    subprocess.run([*cc, "-o", str(exe), str(work / "main.c"), str(work / "driver.o"), "-lm"], check=True, capture_output=True)
     return exe
 
 
@@ -109,6 +130,7 @@ def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str = "a
     work = Path(tempfile.mkdtemp(prefix="stages-"))
     try:
         exe = build(variant, dim, work, defines)
+        plain = build(variant, dim, work, defines, stamps=False)
         sets = [D.random_pairs(dim, labelled, seed=11)] + [D.structured_pairs(dim, labelled, kind=k, seed=12) for k in D.STRUCTURED_KINDS]
         rows = []
         for ds in sets:
@@ -118,7 +140,8 @@ def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str = "a
             cpu = ["taskset", "-c", str(min(os.sched_getaffinity(0)))] if shutil.which("taskset") else []
             out = subprocess.run([*cpu, str(exe), str(fa), str(fb), str(pairs), str(rounds)], check=True, capture_output=True, text=True).stdout
             total, *stages = (float(v) for v in out.split())
-            rows.append({"name": ds.name, "total": total, **dict(zip(STAGES, stages, strict=True))})
+            out = subprocess.run([*cpu, str(plain), str(fa), str(fb), str(pairs), str(rounds)], check=True, capture_output=True, text=True).stdout
+            rows.append({"name": ds.name, "total": total, "plain": float(out.split()[0]), **dict(zip(STAGES, stages, strict=True))})
         return rows
     finally:
         shutil.rmtree(work, ignore_errors=True)
@@ -126,12 +149,13 @@ def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str = "a
 
 def format_rows(rows: list[dict[str, object]]) -> str:
     """A markdown table: cycles per pair, then each row's total as a fraction of the random row's."""
-    head = "| data | " + " | ".join(STAGES) + " | total | random / this |"
-    lines = [head, "|---|" + "---:|" * (len(STAGES) + 2)]
-    base = float(rows[0]["total"])  # type: ignore[arg-type]
+    head = "| data | " + " | ".join(STAGES) + " | total | without time stamps | random / this (without) |"
+    lines = [head, "|---|" + "---:|" * (len(STAGES) + 3)]
+    base = float(rows[0]["plain"])  # type: ignore[arg-type]
     for r in rows:
         cells = " | ".join(f"{float(r[s]):.1f}" for s in STAGES)  # type: ignore[arg-type]
-        lines.append(f"| {r['name']} | {cells} | {float(r['total']):.1f} | {base / float(r['total']):.2f}x |")  # type: ignore[arg-type]
+        lines.append(f"| {r['name']} | {cells} | {float(r['total']):.1f} | {float(r['plain']):.1f} | "  # type: ignore[arg-type]
+                     f"{base / float(r['plain']):.2f}x |")  # type: ignore[arg-type]
     return "\n".join(lines)
 
 
