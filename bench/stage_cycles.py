@@ -47,7 +47,11 @@ _DRIVER = r"""
 #include <string.h>
 #include <x86intrin.h>
 uint64_t stage_acc[8], stage_last;
+#ifdef STAMPS
 #define TICK(i) do { uint64_t t_ = __rdtsc(); if (i) stage_acc[i] += t_ - stage_last; stage_last = t_; } while (0)
+#else
+#define TICK(i) do { } while (0)
+#endif
 @VARIANT@
 """
 """The timed block driver, a unit of its own as in the extension (with the caller in the same
@@ -100,11 +104,12 @@ _VARIANTS = {
 }
 
 
-def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = (), *, stamps: bool = True) -> Path:
-    """The timed program: _blocks.h with a TICK at each mark (none: ``stamps`` False), the variant's settings, our main."""
+def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = ()) -> tuple[Path, Path]:
+    """The timed programs: _blocks.h with a TICK at each mark, the variant's settings, our main;
+    built with the time stamps (``-DSTAMPS``) and without."""
     blocks = (FIXED / "_blocks.h").read_text()
     for i, mark in enumerate(MARKS):
-        if mark not in blocks:
+        if "        " + mark not in blocks:
             raise RuntimeError(f"_blocks.h changed: no {mark!r} to time")
         blocks = blocks.replace("        " + mark, f"        TICK({i}); " + mark, 1)
     (work / "blocks.h").write_text(blocks)
@@ -112,16 +117,16 @@ def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = (), *, 
     text = text.replace('"_blocks.h"', '"blocks.h"').replace('"_kernels.h"', f'"{FIXED / "_kernels.h"}"')
     (work / "variant.h").write_text(text)
     n = dim + 1
-    driver = _DRIVER.replace("@VARIANT@", _VARIANTS[variant])
-    if not stamps:
-        driver = driver.replace("#define TICK(i) do {", "#define TICK(i) do { } while (0)\n#define UNUSED_TICK(i) do {")
-    (work / "driver.c").write_text(driver)
+    (work / "driver.c").write_text(_DRIVER.replace("@VARIANT@", _VARIANTS[variant]))
     (work / "main.c").write_text(_MAIN.replace("@E@", str(n * n)).replace("@CLASSIFY@", f"classify{n}_f64_{variant}"))
-    exe = work / f"stages_{variant}_{dim}_{int(stamps)}"
-    cc = ["gcc", *FLAGS, *(f"-D{d}" for d in defines), "-I", str(work)]
-    subprocess.run([*cc, "-c", "-o", str(work / "driver.o"), str(work / "driver.c")], check=True, capture_output=True)
-    subprocess.run([*cc, "-o", str(exe), str(work / "main.c"), str(work / "driver.o"), "-lm"], check=True, capture_output=True)
-    return exe
+    exes = []
+    for stamps in (True, False):
+        cc = ["gcc", *FLAGS, *(f"-D{d}" for d in defines), *(["-DSTAMPS"] if stamps else []), "-I", str(work)]
+        obj, exe = work / f"driver_{int(stamps)}.o", work / f"stages_{variant}_{dim}_{int(stamps)}"
+        subprocess.run([*cc, "-c", "-o", str(obj), str(work / "driver.c")], check=True, capture_output=True)
+        subprocess.run([*cc, "-o", str(exe), str(work / "main.c"), str(obj), "-lm"], check=True, capture_output=True)
+        exes.append(exe)
+    return exes[0], exes[1]
 
 
 def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str = "avx2", labelled: int = 400,
@@ -129,19 +134,23 @@ def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str = "a
     """Cycles per pair by stage, one row per data set (random, then the structured kinds)."""
     work = Path(tempfile.mkdtemp(prefix="stages-"))
     try:
-        exe = build(variant, dim, work, defines)
-        plain = build(variant, dim, work, defines, stamps=False)
+        exe, plain = build(variant, dim, work, defines)
+        cpu = ["taskset", "-c", str(min(os.sched_getaffinity(0)))] if shutil.which("taskset") else []
+        fa, fb = work / "a.bin", work / "b.bin"
+
+        def timed(prog: Path) -> list[float]:
+            """The program's output on the pairs in fa, fb: total cycles per pair, then the stages'."""
+            cmd = [*cpu, str(prog), str(fa), str(fb), str(pairs), str(rounds)]
+            return [float(v) for v in subprocess.run(cmd, check=True, capture_output=True, text=True).stdout.split()]
+
         sets = [D.random_pairs(dim, labelled, seed=11)] + [D.structured_pairs(dim, labelled, kind=k, seed=12) for k in D.STRUCTURED_KINDS]
         rows = []
         for ds in sets:
-            fa, fb = work / "a.bin", work / "b.bin"
             np.ascontiguousarray(ds.A, dtype=np.float64).tofile(fa)
             np.ascontiguousarray(ds.B, dtype=np.float64).tofile(fb)
-            cpu = ["taskset", "-c", str(min(os.sched_getaffinity(0)))] if shutil.which("taskset") else []
-            out = subprocess.run([*cpu, str(exe), str(fa), str(fb), str(pairs), str(rounds)], check=True, capture_output=True, text=True).stdout
-            total, *stages = (float(v) for v in out.split())
-            out = subprocess.run([*cpu, str(plain), str(fa), str(fb), str(pairs), str(rounds)], check=True, capture_output=True, text=True).stdout
-            rows.append({"name": ds.name, "total": total, "plain": float(out.split()[0]), **dict(zip(STAGES, stages, strict=True))})
+            total, *stages = timed(exe)
+            plain_total = timed(plain)[0]
+            rows.append({"name": ds.name, "total": total, "plain": plain_total, **dict(zip(STAGES, stages, strict=True))})
         return rows
     finally:
         shutil.rmtree(work, ignore_errors=True)
