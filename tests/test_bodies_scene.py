@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -402,11 +403,27 @@ def fresh_tab(hs):
     return hs.goto("/")
 
 
-def set_field(page, label: str, text: str) -> None:
-    """Type ``text`` into the text field labelled ``label`` and press Enter."""
-    box = field_input(page, label)
-    box.fill(text)
-    box.press("Enter")
+def set_field(page, label: str, text: str, handle=None, patience: float = 15.0) -> None:
+    """Type ``text`` into the text field labelled ``label`` and press Enter.
+
+    With the server's ``handle`` of the field: until the server has the text, typing again when it
+    has not arrived ``patience`` s after the last try (a panel re-rendered by the previous action's
+    answer can drop the keys; the same text twice changes nothing).
+    """
+    deadline = time.monotonic() + 120
+    while True:
+        box = field_input(page, label)
+        box.fill(text)
+        box.press("Enter")
+        if handle is None:
+            return
+        tried = time.monotonic()
+        while handle.value != text and time.monotonic() - tried < patience:
+            time.sleep(0.02)
+        if handle.value == text:
+            return
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out setting {label} to {text!r} (the server has {handle.value!r})")
 
 
 def caption(page_of_pairs, what: str) -> str:
@@ -458,8 +475,9 @@ def test_browser_page_the_list_search_a_body_filter_by_relation(bodies_page):
     until(lambda: view.listing is not None and view.listing.total == m.page("overlap").total, what="overlap filter")
     assert all("overlap" in label for label in view.pairs.options)
     choose(page, "Relation", "all")
+    until(lambda: view.relation == "all", what="all pairs")
     body = int(m.result.j[m.order[0]])  # a body of the layer: it has tangent pairs
-    set_field(page, "Body", str(body))
+    set_field(page, "Body", str(body), view.body_text)
     text_shown(page, caption(m.page(body=body), f"pairs of body {body}"))
     until(lambda: view.body == body, what="body filter")
     assert {e.index for e in view.listing.entries} == set(m.result.pairs_of(body).tolist())
@@ -521,9 +539,10 @@ def test_browser_open_pair_shows_the_label_core_contacts_certified(bodies_page):
     hs.wait_settled()
     assert view.relation == "tangent"  # the list kept its filter
     choose(page, "Relation", "all")
+    until(lambda: view.relation == "all", what="all pairs")
     k = int(np.flatnonzero(m.result.relation == Relation.OVERLAP)[0])
     body = int(m.result.i[k])
-    set_field(page, "Body", str(body))
+    set_field(page, "Body", str(body), view.body_text)
     until(lambda: view.body == body and view.relation == "all", what="body filter")
     text_shown(page, f"pairs of body {body}")  # the browser has the body's pairs
     label = m.pair_label(k)
