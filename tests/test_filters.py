@@ -246,11 +246,17 @@ def test_random_pairs_take_the_semi_static_s0_test(n):
 
 
 def test_kernel_tables_are_consistent():
+    # the underflow floors stay far under any value the filter certifies: an unscaled matrix has
+    # its largest entry >= NO_SCALE_MIN = 2^-8, so a kernel of degree <= 24 in the entries meets
+    # values around 2^-192 or larger; the floors (2^-536 at most with LEAF_MAX = 2^24) lie 2^300 below
+    from core.fixed.errorbound import LEAF_MAX, NO_SCALE_MIN
+
+    assert NO_SCALE_MIN == F(1, 2**8) and LEAF_MAX <= 2**24
     for n in (3, 4):
         outputs, consts = getattr(K, f"PENCIL{n}_OUTPUTS"), getattr(K, f"PENCIL{n}_CONSTANTS")
-        assert len(outputs) == len(consts) and 0 < getattr(K, f"PENCIL{n}_FLOOR") < 2.0**-850
+        assert len(outputs) == len(consts) and 0 < getattr(K, f"PENCIL{n}_FLOOR") < 2.0**-900
         for which in ("s0", "s1", "s10"):
-            assert 0 < getattr(K, f"HAT_{which.upper()}_{n}_FLOOR") < 2.0**-850
+            assert 0 < getattr(K, f"HAT_{which.upper()}_{n}_FLOOR") < 2.0**-192 * 2.0**-300
     assert K.PENCIL4_OUTPUTS[:2] == ("c0", "c0_M")
 
 
@@ -408,6 +414,34 @@ def test_vector_kernel_agrees_with_the_exact_path_on_benchmark_and_near_tangent_
         assert (codes[decided] == ds.truth[decided]).all(), ds.name
         if ds.family == "tangent":
             assert not decided.any()  # a float filter never certifies tangency
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_pairs_with_large_entries_are_certified_without_the_scaling(dim):
+    """Matrices whose largest entry lies in (2^8, 2^24] (bodies far from the origin, as in a
+    simulation box) now take the unscaled first pass (LEAF_MAX = 2^24, was 2^8): the benchmark's
+    sets and near-tangent pairs with every matrix multiplied by an exact 2^j (the relation does
+    not change) are decided alike by every SIMD variant and the numpy description, every decided
+    label is the oracle's, and random pairs are decided as at size 1."""
+    from core.fixed.errorbound import LEAF_MAX
+
+    rng = np.random.default_rng(70 + dim)
+    for ds in _benchmark_sets(dim) + _near_tangent_sets(dim):
+        N = len(ds.A)
+        # largest entry of each matrix moved into [2^9, 2^24) by an exact power of two
+        A, B = (np.ldexp(M, (rng.integers(10, 25, N) - np.frexp(np.abs(M).max(axis=(1, 2)))[1])[:, None, None]) for M in (ds.A, ds.B))
+        top = np.abs(np.concatenate([A, B])).max(axis=(1, 2))
+        assert ((top >= 2.0**9) & (top < LEAF_MAX)).all(), ds.name
+        expected = rules_numpy(A, B)
+        for v, got in _every_variant(A, B).items():
+            assert (got == expected).all(), (ds.name, v)
+        codes = relations(expected)
+        decided = codes != Relation.UNDECIDED
+        assert (codes[decided] == ds.truth[decided]).all(), ds.name
+        if ds.family == "random":
+            assert decided.mean() >= 0.95, ds.name
+        if ds.family == "tangent":
+            assert not decided.any()
 
 
 def test_numpy_fallback_warns_once_naming_cause_and_fix(monkeypatch):

@@ -15,7 +15,7 @@
  * one row). Each stage is then a loop over pairs whose body is a branch-free lane function, so
  * the compiler turns it into SIMD across pairs, a vector load reading one entry of several
  * pairs. The stages (core/fixed/driver.py): 1 prepare, pencil, validity, the tree with s0
- * pending (first without the scaling, where every largest entry is already in [2^-8, 2^8]; then
+ * pending (first without the scaling, where every largest entry is already in [2^-8, 2^24]; then
  * scaled where one is not; then the full prepare where a matrix is symmetric only up to rounding); 2 the semi-static s0 test where the tree asks for s0; 3 the certificates where a
  * valid pair is still open (spheres, translated and homothetic copies); 4 the running-error s0
  * test where s0 is still needed (near tangency). Each runs only on the pairs the stages before
@@ -131,7 +131,7 @@
 int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict out, int64_t count, const signed char *restrict table) {
     int64_t undecided = 0;
     int full_run = 0;   /* the last block tried was mostly symmetric only up to rounding */
-    int scaled_run = 0; /* the last block tried had mostly entries outside [2^-8, 2^8] */
+    int scaled_run = 0; /* the last block tried had mostly entries outside [2^-8, 2^24] */
     for (int64_t i0 = 0; i0 < count; i0 += CHUNK) {
         const int64_t m = count - i0 < CHUNK ? count - i0 : CHUNK;
         T a[N * N * CHUNK], b[N * N * CHUNK]; /* entry k of pair p at [k * CHUNK + p] */
@@ -169,7 +169,7 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
          * takes the same decisions on an exactly symmetric matrix, so the route changes no
          * answer; every 16th block tries the fast pass again) */
         const int use_full = full_run && (i0 / CHUNK) % 16 != 0;
-        /* the same for inputs whose entries are mostly outside [2^-8, 2^8] (the scaled pass directly) */
+        /* the same for inputs whose entries are mostly outside [2^-8, 2^24] (the scaled pass directly) */
         const int use_scaled = !use_full && scaled_run && (i0 / CHUNK) % 16 != 0;
         for (int64_t p0 = 0; p0 < m; p0 += LANES) {
             const int64_t p1 = p0 + LANES < m ? p0 + LANES : m;
@@ -184,7 +184,7 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
 #if LANES >= CHUNK
         PREFETCH(3) /* one round per block: part 3 here */
 #endif
-        /* stage 1 again with the scaling, where a largest entry is outside [2^-8, 2^8] (and where
+        /* stage 1 again with the scaling, where a largest entry is outside [2^-8, 2^24] (and where
          * a matrix is not exactly symmetric: the scaled pass sends those on to the full prepare) */
         if (!use_full && !use_scaled) {
             SUBSET(code[p] == NEEDS_SCALE)

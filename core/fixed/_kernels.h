@@ -25,7 +25,7 @@
 #define NEEDS_CERT -8 /* valid, the tree cannot decide: try the certificates */
 #define NEEDS_FULL -9 /* fast pass: a matrix is not exactly symmetric: the full prepare */
 #define NEEDS_S0_RADIUS -10 /* stage 2 could not tell the sign of s0: the certificates, then stage 4 */
-#define NEEDS_SCALE -11 /* unscaled first try: a matrix outside [2^-8, 2^8] (or not exactly symmetric): the fast pass */
+#define NEEDS_SCALE -11 /* unscaled first try: a matrix outside [2^-8, 2^24] (or not exactly symmetric): the fast pass */
 
 /* Table digit of a certified sign: 0 for -1, 2 for +1, 3 for uncertain (core.formulae.decision.SIGN_CODES). */
 static inline int64_t sign_digit(double v, double b) { return v > b ? 2 : (v < -b ? 0 : 3); }
@@ -474,7 +474,7 @@ static inline __attribute__((always_inline)) int64_t first3_f64(const double *re
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double aw00 = (ax00 * ag1);
@@ -499,7 +499,7 @@ static inline __attribute__((always_inline)) int64_t first3_f64(const double *re
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bw00 = (bx00 * bg1);
@@ -528,7 +528,7 @@ static inline __attribute__((always_inline)) int64_t first3_f64(const double *re
     wb[8] = bw22;
     double r_pencil3[12];
     pencil3(wa, wb, r_pencil3);
-    const double F = (rounded ? 1.31150496e-316 : 1.31150496e-316);
+    const double F = (rounded ? 5.6322182142932096e-307 : 5.6322182142932096e-307);
     const double c0 = r_pencil3[0];
     const double c0r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[1]) + F);
     const double c1 = r_pencil3[2];
@@ -557,7 +557,7 @@ static inline __attribute__((always_inline)) int64_t first3_f64(const double *re
     return ((((aok | aopen) & (bok | bopen)) & (aopen | bopen)) ? -9 : first);
 }
 
-/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; NEEDS_SCALE for the other pairs. */
+/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^24], without the scaling; NEEDS_SCALE for the other pairs. */
 static inline __attribute__((always_inline)) int64_t first3_noscale_f64(const double *restrict a, const double *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
     const double ax00 = (double)a[0 * s];
     const double ax01 = (double)a[1 * s];
@@ -572,7 +572,7 @@ static inline __attribute__((always_inline)) int64_t first3_noscale_f64(const do
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 256.0))) & asym);
+    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 16777216.0))) & asym);
     const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
     const int64_t aopen = (!aok);
     const double bx00 = (double)b[0 * s];
@@ -588,7 +588,7 @@ static inline __attribute__((always_inline)) int64_t first3_noscale_f64(const do
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 256.0))) & bsym);
+    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 16777216.0))) & bsym);
     const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
     const int64_t bopen = (!bok);
     const int64_t rounded = ((aok & (!aok)) | (bok & (!bok)));
@@ -608,7 +608,7 @@ static inline __attribute__((always_inline)) int64_t first3_noscale_f64(const do
     wb[8] = bx22;
     double r_pencil3[12];
     pencil3(wa, wb, r_pencil3);
-    const double F = (rounded ? 1.31150496e-316 : 1.31150496e-316);
+    const double F = (rounded ? 5.6322182142932096e-307 : 5.6322182142932096e-307);
     const double c0 = r_pencil3[0];
     const double c0r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[1]) + F);
     const double c1 = r_pencil3[2];
@@ -656,7 +656,7 @@ static inline __attribute__((always_inline)) int64_t full3_f64(const double *res
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double ag2 = pow2((ak - ak1));
@@ -696,7 +696,7 @@ static inline __attribute__((always_inline)) int64_t full3_f64(const double *res
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bg2 = pow2((bk - bk1));
@@ -740,7 +740,7 @@ static inline __attribute__((always_inline)) int64_t full3_f64(const double *res
     wb[8] = bX22;
     double r_pencil3[12];
     pencil3(wa, wb, r_pencil3);
-    const double F = (rounded ? 1.31150496e-316 : 1.31150496e-316);
+    const double F = (rounded ? 5.6322182142932096e-307 : 5.6322182142932096e-307);
     const double c0 = r_pencil3[0];
     const double c0r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[1]) + F);
     const double c1 = r_pencil3[2];
@@ -784,7 +784,7 @@ static inline __attribute__((always_inline)) int64_t third3_f64(const double *re
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double ag2 = pow2((ak - ak1));
@@ -824,7 +824,7 @@ static inline __attribute__((always_inline)) int64_t third3_f64(const double *re
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bg2 = pow2((bk - bk1));
@@ -885,7 +885,7 @@ static inline __attribute__((always_inline)) int64_t third3_f64(const double *re
     const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
     double r_pencil_at3[2];
     pencil_at3(c_1, cr, (tin ? T : 1.0), r_pencil_at3);
-    const int64_t sep = ((ok & tin) & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 4.9386053663595506e-303)));
+    const int64_t sep = ((ok & tin) & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
     const double kT = (cak * T);
     const double s_1 = (pos ? (kT / (kT + cbk)) : 0.0);
     const double x0 = (cac0 + (s_1 * u0));
@@ -926,7 +926,7 @@ static inline __attribute__((always_inline)) int64_t third3_f64(const double *re
     frb[8] = bq22;
     double r_form3_1[2];
     form3(fwb, frb, pt, 5.551115123125787e-16, r_form3_1);
-    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form3[0] < (-((r_form3[1] * 1.000000000000001) + 1.18480733363781e-302))) & (r_form3_1[0] < (-((r_form3_1[1] * 1.000000000000001) + 1.18480733363781e-302))))) ? 11 : -1));
+    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form3[0] < (-((r_form3[1] * 1.000000000000001) + 7.645297421160059e-298))) & (r_form3_1[0] < (-((r_form3_1[1] * 1.000000000000001) + 7.645297421160059e-298))))) ? 11 : -1));
     return cert;
 }
 
@@ -945,7 +945,7 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f64(const doubl
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double aw00 = (ax00 * ag1);
@@ -970,7 +970,7 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f64(const doubl
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bw00 = (bx00 * bg1);
@@ -1004,7 +1004,7 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f64(const doubl
     const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
     double r_pencil_at3[2];
     pencil_at3(c_1, cr, (tin ? T : 1.0), r_pencil_at3);
-    const int64_t sep = ((ok & tin) & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 4.9386053663595506e-303)));
+    const int64_t sep = ((ok & tin) & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
     const double kT = (cak * T);
     const double s_1 = (pos ? (kT / (kT + cbk)) : 0.0);
     const double x0 = (cac0 + (s_1 * u0));
@@ -1045,7 +1045,7 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f64(const doubl
     frb[8] = 0.0;
     double r_form3_1[2];
     form3(fwb, frb, pt, 5.551115123125787e-16, r_form3_1);
-    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form3[0] < (-((r_form3[1] * 1.000000000000001) + 1.18480733363781e-302))) & (r_form3_1[0] < (-((r_form3_1[1] * 1.000000000000001) + 1.18480733363781e-302))))) ? 11 : -1));
+    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form3[0] < (-((r_form3[1] * 1.000000000000001) + 7.645297421160059e-298))) & (r_form3_1[0] < (-((r_form3_1[1] * 1.000000000000001) + 7.645297421160059e-298))))) ? 11 : -1));
     return cert;
 }
 
@@ -1064,7 +1064,7 @@ static inline __attribute__((always_inline)) int64_t first3_f32(const float *res
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double aw00 = (ax00 * ag1);
@@ -1089,7 +1089,7 @@ static inline __attribute__((always_inline)) int64_t first3_f32(const float *res
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bw00 = (bx00 * bg1);
@@ -1118,7 +1118,7 @@ static inline __attribute__((always_inline)) int64_t first3_f32(const float *res
     wb[8] = bw22;
     double r_pencil3[12];
     pencil3(wa, wb, r_pencil3);
-    const double F = (rounded ? 1.31150496e-316 : 1.31150496e-316);
+    const double F = (rounded ? 5.6322182142932096e-307 : 5.6322182142932096e-307);
     const double c0 = r_pencil3[0];
     const double c0r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[1]) + F);
     const double c1 = r_pencil3[2];
@@ -1147,7 +1147,7 @@ static inline __attribute__((always_inline)) int64_t first3_f32(const float *res
     return ((((aok | aopen) & (bok | bopen)) & (aopen | bopen)) ? -9 : first);
 }
 
-/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; NEEDS_SCALE for the other pairs. */
+/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^24], without the scaling; NEEDS_SCALE for the other pairs. */
 static inline __attribute__((always_inline)) int64_t first3_noscale_f32(const float *restrict a, const float *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
     const double ax00 = (double)a[0 * s];
     const double ax01 = (double)a[1 * s];
@@ -1162,7 +1162,7 @@ static inline __attribute__((always_inline)) int64_t first3_noscale_f32(const fl
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 256.0))) & asym);
+    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 16777216.0))) & asym);
     const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
     const int64_t aopen = (!aok);
     const double bx00 = (double)b[0 * s];
@@ -1178,7 +1178,7 @@ static inline __attribute__((always_inline)) int64_t first3_noscale_f32(const fl
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 256.0))) & bsym);
+    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 16777216.0))) & bsym);
     const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
     const int64_t bopen = (!bok);
     const int64_t rounded = ((aok & (!aok)) | (bok & (!bok)));
@@ -1198,7 +1198,7 @@ static inline __attribute__((always_inline)) int64_t first3_noscale_f32(const fl
     wb[8] = bx22;
     double r_pencil3[12];
     pencil3(wa, wb, r_pencil3);
-    const double F = (rounded ? 1.31150496e-316 : 1.31150496e-316);
+    const double F = (rounded ? 5.6322182142932096e-307 : 5.6322182142932096e-307);
     const double c0 = r_pencil3[0];
     const double c0r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[1]) + F);
     const double c1 = r_pencil3[2];
@@ -1246,7 +1246,7 @@ static inline __attribute__((always_inline)) int64_t full3_f32(const float *rest
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double ag2 = pow2((ak - ak1));
@@ -1286,7 +1286,7 @@ static inline __attribute__((always_inline)) int64_t full3_f32(const float *rest
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bg2 = pow2((bk - bk1));
@@ -1330,7 +1330,7 @@ static inline __attribute__((always_inline)) int64_t full3_f32(const float *rest
     wb[8] = bX22;
     double r_pencil3[12];
     pencil3(wa, wb, r_pencil3);
-    const double F = (rounded ? 1.31150496e-316 : 1.31150496e-316);
+    const double F = (rounded ? 5.6322182142932096e-307 : 5.6322182142932096e-307);
     const double c0 = r_pencil3[0];
     const double c0r = (((rounded ? 8.881784197001274e-16 : 5.551115123125793e-16) * r_pencil3[1]) + F);
     const double c1 = r_pencil3[2];
@@ -1374,7 +1374,7 @@ static inline __attribute__((always_inline)) int64_t third3_f32(const float *res
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double ag2 = pow2((ak - ak1));
@@ -1414,7 +1414,7 @@ static inline __attribute__((always_inline)) int64_t third3_f32(const float *res
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bg2 = pow2((bk - bk1));
@@ -1475,7 +1475,7 @@ static inline __attribute__((always_inline)) int64_t third3_f32(const float *res
     const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
     double r_pencil_at3[2];
     pencil_at3(c_1, cr, (tin ? T : 1.0), r_pencil_at3);
-    const int64_t sep = ((ok & tin) & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 4.9386053663595506e-303)));
+    const int64_t sep = ((ok & tin) & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
     const double kT = (cak * T);
     const double s_1 = (pos ? (kT / (kT + cbk)) : 0.0);
     const double x0 = (cac0 + (s_1 * u0));
@@ -1516,7 +1516,7 @@ static inline __attribute__((always_inline)) int64_t third3_f32(const float *res
     frb[8] = bq22;
     double r_form3_1[2];
     form3(fwb, frb, pt, 5.551115123125787e-16, r_form3_1);
-    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form3[0] < (-((r_form3[1] * 1.000000000000001) + 1.18480733363781e-302))) & (r_form3_1[0] < (-((r_form3_1[1] * 1.000000000000001) + 1.18480733363781e-302))))) ? 11 : -1));
+    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form3[0] < (-((r_form3[1] * 1.000000000000001) + 7.645297421160059e-298))) & (r_form3_1[0] < (-((r_form3_1[1] * 1.000000000000001) + 7.645297421160059e-298))))) ? 11 : -1));
     return cert;
 }
 
@@ -1535,7 +1535,7 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f32(const float
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = (((ax01 == ay01) & (ax02 == ay02)) & (ax12 == ay12));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double aw00 = (ax00 * ag1);
@@ -1560,7 +1560,7 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f32(const float
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = (((bx01 == by01) & (bx02 == by02)) & (bx12 == by12));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bw00 = (bx00 * bg1);
@@ -1594,7 +1594,7 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f32(const float
     const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
     double r_pencil_at3[2];
     pencil_at3(c_1, cr, (tin ? T : 1.0), r_pencil_at3);
-    const int64_t sep = ((ok & tin) & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 4.9386053663595506e-303)));
+    const int64_t sep = ((ok & tin) & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
     const double kT = (cak * T);
     const double s_1 = (pos ? (kT / (kT + cbk)) : 0.0);
     const double x0 = (cac0 + (s_1 * u0));
@@ -1635,7 +1635,7 @@ static inline __attribute__((always_inline)) int64_t third3_fast_f32(const float
     frb[8] = 0.0;
     double r_form3_1[2];
     form3(fwb, frb, pt, 5.551115123125787e-16, r_form3_1);
-    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form3[0] < (-((r_form3[1] * 1.000000000000001) + 1.18480733363781e-302))) & (r_form3_1[0] < (-((r_form3_1[1] * 1.000000000000001) + 1.18480733363781e-302))))) ? 11 : -1));
+    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form3[0] < (-((r_form3[1] * 1.000000000000001) + 7.645297421160059e-298))) & (r_form3_1[0] < (-((r_form3_1[1] * 1.000000000000001) + 7.645297421160059e-298))))) ? 11 : -1));
     return cert;
 }
 
@@ -1644,7 +1644,7 @@ static inline __attribute__((always_inline)) int64_t second3(const double *restr
     const double c_1[4] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s]};
     double r_hat_s0_rel_3[2];
     hat_s0_rel_3(c_1, r_hat_s0_rel_3);
-    const double s0b = ((((((c[4 * s] * 1048576.0) <= fabs(c[0 * s])) & ((c[5 * s] * 1048576.0) <= fabs(c[1 * s]))) & ((c[6 * s] * 1048576.0) <= fabs(c[2 * s]))) & ((c[7 * s] * 1048576.0) <= fabs(c[3 * s]))) ? ((r_hat_s0_rel_3[1] * 3.814702723484864e-06) + 5.4427934300196275e-297) : 1.7976931348623157e+308);
+    const double s0b = ((((((c[4 * s] * 1048576.0) <= fabs(c[0 * s])) & ((c[5 * s] * 1048576.0) <= fabs(c[1 * s]))) & ((c[6 * s] * 1048576.0) <= fabs(c[2 * s]))) & ((c[7 * s] * 1048576.0) <= fabs(c[3 * s]))) ? ((r_hat_s0_rel_3[1] * 3.814702723484864e-06) + 1.2137834929703163e-253) : 1.7976931348623157e+308);
     const int64_t s0d = sign_digit(r_hat_s0_rel_3[0], s0b);
     const int64_t code_s0 = TAB3[((idx * 5) + s0d)];
     return ((code_s0 >= 0) ? code_s0 : -10);
@@ -1656,7 +1656,7 @@ static inline __attribute__((always_inline)) int64_t fourth3(const double *restr
     const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
     double r_hat_s0_3[2];
     hat_s0_3(c_1, cr, r_hat_s0_3);
-    const double s0r = ((r_hat_s0_3[1] * 1.0000000000009095) + 1.6328380290058883e-296);
+    const double s0r = ((r_hat_s0_3[1] * 1.0000000000009095) + 3.641350478910949e-253);
     const int64_t code_s0 = TAB3[((idx * 5) + sign_digit(r_hat_s0_3[0], s0r))];
     return ((code_s0 >= 0) ? code_s0 : -8);
 }
@@ -2470,7 +2470,7 @@ static inline __attribute__((always_inline)) int64_t first4_f64(const double *re
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double aw00 = (ax00 * ag1);
@@ -2506,7 +2506,7 @@ static inline __attribute__((always_inline)) int64_t first4_f64(const double *re
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bw00 = (bx00 * bg1);
@@ -2547,7 +2547,7 @@ static inline __attribute__((always_inline)) int64_t first4_f64(const double *re
     wb[15] = bw33;
     double r_pencil4[18];
     pencil4(wa, wb, r_pencil4);
-    const double F = (rounded ? 8.9127970781e-313 : 8.9127970781e-313);
+    const double F = (rounded ? 2.508612608316712e-298 : 2.508612608316712e-298);
     const double c0 = r_pencil4[0];
     const double c0r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[1]) + F);
     const double c1 = r_pencil4[2];
@@ -2584,7 +2584,7 @@ static inline __attribute__((always_inline)) int64_t first4_f64(const double *re
     return ((((aok | aopen) & (bok | bopen)) & (aopen | bopen)) ? -9 : first);
 }
 
-/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; NEEDS_SCALE for the other pairs. */
+/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^24], without the scaling; NEEDS_SCALE for the other pairs. */
 static inline __attribute__((always_inline)) int64_t first4_noscale_f64(const double *restrict a, const double *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
     const double ax00 = (double)a[0 * s];
     const double ax01 = (double)a[1 * s];
@@ -2606,7 +2606,7 @@ static inline __attribute__((always_inline)) int64_t first4_noscale_f64(const do
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 256.0))) & asym);
+    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 16777216.0))) & asym);
     const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
     const int64_t aopen = (!aok);
     const double bx00 = (double)b[0 * s];
@@ -2629,7 +2629,7 @@ static inline __attribute__((always_inline)) int64_t first4_noscale_f64(const do
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 256.0))) & bsym);
+    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 16777216.0))) & bsym);
     const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
     const int64_t bopen = (!bok);
     const int64_t rounded = ((aok & (!aok)) | (bok & (!bok)));
@@ -2657,7 +2657,7 @@ static inline __attribute__((always_inline)) int64_t first4_noscale_f64(const do
     wb[15] = bx33;
     double r_pencil4[18];
     pencil4(wa, wb, r_pencil4);
-    const double F = (rounded ? 8.9127970781e-313 : 8.9127970781e-313);
+    const double F = (rounded ? 2.508612608316712e-298 : 2.508612608316712e-298);
     const double c0 = r_pencil4[0];
     const double c0r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[1]) + F);
     const double c1 = r_pencil4[2];
@@ -2721,7 +2721,7 @@ static inline __attribute__((always_inline)) int64_t full4_f64(const double *res
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double ag2 = pow2((ak - ak1));
@@ -2785,7 +2785,7 @@ static inline __attribute__((always_inline)) int64_t full4_f64(const double *res
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bg2 = pow2((bk - bk1));
@@ -2854,7 +2854,7 @@ static inline __attribute__((always_inline)) int64_t full4_f64(const double *res
     wb[15] = bX33;
     double r_pencil4[18];
     pencil4(wa, wb, r_pencil4);
-    const double F = (rounded ? 8.9127970781e-313 : 8.9127970781e-313);
+    const double F = (rounded ? 2.508612608316712e-298 : 2.508612608316712e-298);
     const double c0 = r_pencil4[0];
     const double c0r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[1]) + F);
     const double c1 = r_pencil4[2];
@@ -2913,7 +2913,7 @@ static inline __attribute__((always_inline)) int64_t third4_f64(const double *re
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double ag2 = pow2((ak - ak1));
@@ -2977,7 +2977,7 @@ static inline __attribute__((always_inline)) int64_t third4_f64(const double *re
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bg2 = pow2((bk - bk1));
@@ -3078,7 +3078,7 @@ static inline __attribute__((always_inline)) int64_t third4_f64(const double *re
     const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
     double r_pencil_at4[2];
     pencil_at4(c_1, cr, (tin ? T : 1.0), r_pencil_at4);
-    const int64_t sep = ((ok & tin) & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 7.045942467882672e-294)));
+    const int64_t sep = ((ok & tin) & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
     const double kT = (cak * T);
     const double s_1 = (pos ? (kT / (kT + cbk)) : 0.0);
     const double x0 = (cac0 + (s_1 * u0));
@@ -3137,7 +3137,7 @@ static inline __attribute__((always_inline)) int64_t third4_f64(const double *re
     frb[15] = bq33;
     double r_form4_1[2];
     form4(fwb, frb, pt, 6.661338147750944e-16, r_form4_1);
-    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form4[0] < (-((r_form4[1] * 1.0000000000000013) + 2.6658164998559026e-302))) & (r_form4_1[0] < (-((r_form4_1[1] * 1.0000000000000013) + 2.6658164998559026e-302))))) ? 11 : -1));
+    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form4[0] < (-((r_form4[1] * 1.0000000000000013) + 1.7201919192269955e-297))) & (r_form4_1[0] < (-((r_form4_1[1] * 1.0000000000000013) + 1.7201919192269955e-297))))) ? 11 : -1));
     return cert;
 }
 
@@ -3163,7 +3163,7 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f64(const doubl
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double aw00 = (ax00 * ag1);
@@ -3199,7 +3199,7 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f64(const doubl
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bw00 = (bx00 * bg1);
@@ -3252,7 +3252,7 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f64(const doubl
     const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
     double r_pencil_at4[2];
     pencil_at4(c_1, cr, (tin ? T : 1.0), r_pencil_at4);
-    const int64_t sep = ((ok & tin) & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 7.045942467882672e-294)));
+    const int64_t sep = ((ok & tin) & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
     const double kT = (cak * T);
     const double s_1 = (pos ? (kT / (kT + cbk)) : 0.0);
     const double x0 = (cac0 + (s_1 * u0));
@@ -3311,7 +3311,7 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f64(const doubl
     frb[15] = 0.0;
     double r_form4_1[2];
     form4(fwb, frb, pt, 6.661338147750944e-16, r_form4_1);
-    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form4[0] < (-((r_form4[1] * 1.0000000000000013) + 2.6658164998559026e-302))) & (r_form4_1[0] < (-((r_form4_1[1] * 1.0000000000000013) + 2.6658164998559026e-302))))) ? 11 : -1));
+    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form4[0] < (-((r_form4[1] * 1.0000000000000013) + 1.7201919192269955e-297))) & (r_form4_1[0] < (-((r_form4_1[1] * 1.0000000000000013) + 1.7201919192269955e-297))))) ? 11 : -1));
     return cert;
 }
 
@@ -3337,7 +3337,7 @@ static inline __attribute__((always_inline)) int64_t first4_f32(const float *res
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double aw00 = (ax00 * ag1);
@@ -3373,7 +3373,7 @@ static inline __attribute__((always_inline)) int64_t first4_f32(const float *res
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bw00 = (bx00 * bg1);
@@ -3414,7 +3414,7 @@ static inline __attribute__((always_inline)) int64_t first4_f32(const float *res
     wb[15] = bw33;
     double r_pencil4[18];
     pencil4(wa, wb, r_pencil4);
-    const double F = (rounded ? 8.9127970781e-313 : 8.9127970781e-313);
+    const double F = (rounded ? 2.508612608316712e-298 : 2.508612608316712e-298);
     const double c0 = r_pencil4[0];
     const double c0r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[1]) + F);
     const double c1 = r_pencil4[2];
@@ -3451,7 +3451,7 @@ static inline __attribute__((always_inline)) int64_t first4_f32(const float *res
     return ((((aok | aopen) & (bok | bopen)) & (aopen | bopen)) ? -9 : first);
 }
 
-/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; NEEDS_SCALE for the other pairs. */
+/* Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair of exactly symmetric matrices whose largest entries are in [2^-8, 2^24], without the scaling; NEEDS_SCALE for the other pairs. */
 static inline __attribute__((always_inline)) int64_t first4_noscale_f32(const float *restrict a, const float *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
     const double ax00 = (double)a[0 * s];
     const double ax01 = (double)a[1 * s];
@@ -3473,7 +3473,7 @@ static inline __attribute__((always_inline)) int64_t first4_noscale_f32(const fl
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 256.0))) & asym);
+    const int64_t aok = ((afinite & ((amx >= 0.00390625) & (amx <= 16777216.0))) & asym);
     const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
     const int64_t aopen = (!aok);
     const double bx00 = (double)b[0 * s];
@@ -3496,7 +3496,7 @@ static inline __attribute__((always_inline)) int64_t first4_noscale_f32(const fl
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 256.0))) & bsym);
+    const int64_t bok = ((bfinite & ((bmx >= 0.00390625) & (bmx <= 16777216.0))) & bsym);
     const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
     const int64_t bopen = (!bok);
     const int64_t rounded = ((aok & (!aok)) | (bok & (!bok)));
@@ -3524,7 +3524,7 @@ static inline __attribute__((always_inline)) int64_t first4_noscale_f32(const fl
     wb[15] = bx33;
     double r_pencil4[18];
     pencil4(wa, wb, r_pencil4);
-    const double F = (rounded ? 8.9127970781e-313 : 8.9127970781e-313);
+    const double F = (rounded ? 2.508612608316712e-298 : 2.508612608316712e-298);
     const double c0 = r_pencil4[0];
     const double c0r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[1]) + F);
     const double c1 = r_pencil4[2];
@@ -3588,7 +3588,7 @@ static inline __attribute__((always_inline)) int64_t full4_f32(const float *rest
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double ag2 = pow2((ak - ak1));
@@ -3652,7 +3652,7 @@ static inline __attribute__((always_inline)) int64_t full4_f32(const float *rest
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bg2 = pow2((bk - bk1));
@@ -3721,7 +3721,7 @@ static inline __attribute__((always_inline)) int64_t full4_f32(const float *rest
     wb[15] = bX33;
     double r_pencil4[18];
     pencil4(wa, wb, r_pencil4);
-    const double F = (rounded ? 8.9127970781e-313 : 8.9127970781e-313);
+    const double F = (rounded ? 2.508612608316712e-298 : 2.508612608316712e-298);
     const double c0 = r_pencil4[0];
     const double c0r = (((rounded ? 1.5543122344752253e-15 : 1.1102230246251599e-15) * r_pencil4[1]) + F);
     const double c1 = r_pencil4[2];
@@ -3780,7 +3780,7 @@ static inline __attribute__((always_inline)) int64_t third4_f32(const float *res
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double ag2 = pow2((ak - ak1));
@@ -3844,7 +3844,7 @@ static inline __attribute__((always_inline)) int64_t third4_f32(const float *res
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bg2 = pow2((bk - bk1));
@@ -3945,7 +3945,7 @@ static inline __attribute__((always_inline)) int64_t third4_f32(const float *res
     const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
     double r_pencil_at4[2];
     pencil_at4(c_1, cr, (tin ? T : 1.0), r_pencil_at4);
-    const int64_t sep = ((ok & tin) & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 7.045942467882672e-294)));
+    const int64_t sep = ((ok & tin) & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
     const double kT = (cak * T);
     const double s_1 = (pos ? (kT / (kT + cbk)) : 0.0);
     const double x0 = (cac0 + (s_1 * u0));
@@ -4004,7 +4004,7 @@ static inline __attribute__((always_inline)) int64_t third4_f32(const float *res
     frb[15] = bq33;
     double r_form4_1[2];
     form4(fwb, frb, pt, 6.661338147750944e-16, r_form4_1);
-    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form4[0] < (-((r_form4[1] * 1.0000000000000013) + 2.6658164998559026e-302))) & (r_form4_1[0] < (-((r_form4_1[1] * 1.0000000000000013) + 2.6658164998559026e-302))))) ? 11 : -1));
+    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form4[0] < (-((r_form4[1] * 1.0000000000000013) + 1.7201919192269955e-297))) & (r_form4_1[0] < (-((r_form4_1[1] * 1.0000000000000013) + 1.7201919192269955e-297))))) ? 11 : -1));
     return cert;
 }
 
@@ -4030,7 +4030,7 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f32(const float
     const double amx = from_bits(amxbits);
     const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
     const int64_t asym = ((((((ax01 == ay01) & (ax02 == ay02)) & (ax03 == ay03)) & (ax12 == ay12)) & (ax13 == ay13)) & (ax23 == ay23));
-    const int64_t ak = (((amx >= 0.00390625) & (amx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
     const int64_t ak1 = imin2(ak, 1000);
     const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
     const double aw00 = (ax00 * ag1);
@@ -4066,7 +4066,7 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f32(const float
     const double bmx = from_bits(bmxbits);
     const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
     const int64_t bsym = ((((((bx01 == by01) & (bx02 == by02)) & (bx03 == by03)) & (bx12 == by12)) & (bx13 == by13)) & (bx23 == by23));
-    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 256.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
     const int64_t bk1 = imin2(bk, 1000);
     const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
     const double bw00 = (bx00 * bg1);
@@ -4119,7 +4119,7 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f32(const float
     const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
     double r_pencil_at4[2];
     pencil_at4(c_1, cr, (tin ? T : 1.0), r_pencil_at4);
-    const int64_t sep = ((ok & tin) & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 7.045942467882672e-294)));
+    const int64_t sep = ((ok & tin) & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
     const double kT = (cak * T);
     const double s_1 = (pos ? (kT / (kT + cbk)) : 0.0);
     const double x0 = (cac0 + (s_1 * u0));
@@ -4178,7 +4178,7 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f32(const float
     frb[15] = 0.0;
     double r_form4_1[2];
     form4(fwb, frb, pt, 6.661338147750944e-16, r_form4_1);
-    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form4[0] < (-((r_form4[1] * 1.0000000000000013) + 2.6658164998559026e-302))) & (r_form4_1[0] < (-((r_form4_1[1] * 1.0000000000000013) + 2.6658164998559026e-302))))) ? 11 : -1));
+    const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form4[0] < (-((r_form4[1] * 1.0000000000000013) + 1.7201919192269955e-297))) & (r_form4_1[0] < (-((r_form4_1[1] * 1.0000000000000013) + 1.7201919192269955e-297))))) ? 11 : -1));
     return cert;
 }
 
@@ -4187,7 +4187,7 @@ static inline __attribute__((always_inline)) int64_t second4(const double *restr
     const double c_1[5] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s], c[4 * s]};
     double r_hat_s0_rel_4[2];
     hat_s0_rel_4(c_1, r_hat_s0_rel_4);
-    const double s0b = (((((((c[5 * s] * 1048576.0) <= fabs(c[0 * s])) & ((c[6 * s] * 1048576.0) <= fabs(c[1 * s]))) & ((c[7 * s] * 1048576.0) <= fabs(c[2 * s]))) & ((c[8 * s] * 1048576.0) <= fabs(c[3 * s]))) & ((c[9 * s] * 1048576.0) <= fabs(c[4 * s]))) ? ((r_hat_s0_rel_4[1] * 5.7220595432068574e-06) + 6.815820661743086e-259) : 1.7976931348623157e+308);
+    const double s0b = (((((((c[5 * s] * 1048576.0) <= fabs(c[0 * s])) & ((c[6 * s] * 1048576.0) <= fabs(c[1 * s]))) & ((c[7 * s] * 1048576.0) <= fabs(c[2 * s]))) & ((c[8 * s] * 1048576.0) <= fabs(c[3 * s]))) & ((c[9 * s] * 1048576.0) <= fabs(c[4 * s]))) ? ((r_hat_s0_rel_4[1] * 5.7220595432068574e-06) + 1.4558504572643725e-162) : 1.7976931348623157e+308);
     const int64_t s0d = sign_digit(r_hat_s0_rel_4[0], s0b);
     const int64_t code_s0 = TAB4[((idx * 5) + s0d)];
     return ((code_s0 >= 0) ? code_s0 : -10);
@@ -4199,7 +4199,7 @@ static inline __attribute__((always_inline)) int64_t fourth4(const double *restr
     const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
     double r_hat_s0_4[2];
     hat_s0_4(c_1, cr, r_hat_s0_4);
-    const double s0r = ((r_hat_s0_4[1] * 1.0000000000009095) + 2.0447461985229254e-258);
+    const double s0r = ((r_hat_s0_4[1] * 1.0000000000009095) + 4.367551371793117e-162);
     const int64_t code_s0 = TAB4[((idx * 5) + sign_digit(r_hat_s0_4[0], s0r))];
     return ((code_s0 >= 0) ? code_s0 : -8);
 }

@@ -86,7 +86,7 @@ NEEDS_S0_RADIUS = -10
 certificates, then :func:`decide_s0_radius`."""
 
 NEEDS_SCALE = -11
-"""Outcome of the C's unscaled first pass: a matrix's largest entry is outside [2^-8, 2^8] (or
+"""Outcome of the C's unscaled first pass: a matrix's largest entry is outside [2^-8, 2^24] (or
 the matrix is not exactly symmetric, or not finite): the scaled fast pass decides."""
 
 LEAF_ROUNDING = 2.0**-52
@@ -103,7 +103,7 @@ class Prepared:
 
     W: dict[tuple[int, int], Any]
     """Upper triangle of 2^k * sign * (symmetric part of M): a negative interior, largest entry
-    in [2^-8, 2^8] (or at most 2), exact for an exactly symmetric M, else rounded half sums."""
+    in [2^-8, 2^24] (or at most 2), exact for an exactly symmetric M, else rounded half sums."""
     k: Any
     """The exponent k (int per lane): W = 2^k * sign * S."""
     ok: Any
@@ -126,7 +126,7 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False, u
     ``open`` for the full prepare. On an exactly symmetric matrix both give the same W.
 
     ``unscaled`` (with ``exact_only``; the C's first try): only exactly symmetric matrices whose
-    largest entry is already in [2^-8, 2^8] (k = 0, most inputs) are prepared, the others are
+    largest entry is already in [2^-8, 2^24] (k = 0, most inputs) are prepared, the others are
     ``open`` for the scaled pass. W is M itself, not sign * M: the sign is applied to the
     pencil's results instead (:func:`pencil_bounds`), which is the same rounding, so the values
     are bit for bit those of the scaled pass; the pass skips the exponent, the scale and the
@@ -134,7 +134,7 @@ def prepare(x: Any, n: int, entry: Any, tag: str, *, exact_only: bool = False, u
 
     ``entry(i, j)`` reads M[i, j] of each lane as float64 (a float32 input is widened exactly).
     The scale 2^k (k = 1 - e, M's largest |entry| in [2^(e-1), 2^e)) is applied unless that
-    entry is already in [2^-8, 2^8]; k is clamped to [-1022, 2044] and applied in two exact
+    entry is already in [2^-8, 2^24]; k is clamped to [-1022, 2044] and applied in two exact
     factors, so the only rounding is a result in the subnormal range (the kernels' underflow
     floor covers it). The tolerance test is conservative: (d^2 (1 + 2^-48) <= tol^2 m_i m_j
     (1 - 2^-48), with tol^2 m_i m_j >= 2^-1000) on the scaled values implies the exact rule of

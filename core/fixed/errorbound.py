@@ -24,13 +24,15 @@ cancellation already present in the a_i is not compounded (a permanent of a perm
 The computed radius is itself rounded: ``radius_factor`` = 1 + 2^-40 >= (1 - u)^-(#radius ops).
 
 Underflow and overflow (both styles): the filter scales each matrix by a power of two (exact, and
-the relation does not change) unless its largest entry already lies in [2^-8, 2^8], so that every
-entry is at most LEAF_MAX = 2^8. Then no value can overflow (the largest magnitude every node can
-reach is computed here exactly from the leaf bounds), and with gradual underflow each rounding is
+the relation does not change) unless its largest entry already lies in [2^-8, 2^24], so that every
+entry is at most LEAF_MAX = 2^24. Then no value can overflow (the largest magnitude every node can
+reach is computed here exactly from the leaf bounds, and :func:`build_kernel` refuses a kernel
+whose nodes could reach 2^1000), and with gradual underflow each rounding is
 fl(x op y) = (x op y)(1 + d) + e with |e| <= 2^-1075 (e = 0 for + and -; Higham, Sec. 2.2).
 ``underflow_floor`` adds the effect of all the e's on the output: each e is multiplied on its way
 to the output by at most the largest magnitudes of the factors it meets (a backward pass over the
-trace); it is below 2^-850 for our kernels, far under any sign we certify.
+trace); it is below 2^-530 for our kernels (2^-850 when LEAF_MAX was 2^8), far under any sign we
+certify: the smallest matrices left unscaled (largest entry 2^-8) give s0 around 2^-192.
 """
 
 from __future__ import annotations
@@ -62,14 +64,18 @@ __all__ = [
 UNIT_ROUNDOFF = Fraction(1, 2**53)
 """u for float64 round-to-nearest."""
 
-LEAF_MAX = 256
-"""(Scaled) matrix entries must be <= 2^8: nothing can overflow (degree <= 24, constants <= 27)."""
+LEAF_MAX = 2**24
+"""(Scaled) matrix entries must be <= 2^24: nothing can overflow (degree <= 24, largest node < 2^640).
+
+2^24, not 2^8 as first: bodies a few thousand units from the origin (simulation boxes) have
+entries c^T A c up to ~2^22 and skip the per-pair scaling (a scaling by a power of two changes no
+relative error, only the overflow and underflow margins, which the generator checks)."""
 
 TRANSLATE_MAX = 2**30
 """The translated second stage of the filter moves the origin by at most 2^30 per coordinate."""
 
 NO_SCALE_MIN = Fraction(1, 256)
-"""Matrices whose largest |entry| is already in [2^-8, 2^8] are not rescaled (saves time)."""
+"""Matrices whose largest |entry| is already in [2^-8, 2^24] are not rescaled (saves time)."""
 
 CERT_T_MIN, CERT_T_MAX = Fraction(1, 2**20), Fraction(2**20)
 """The separation certificate evaluates P(T*) only for T* in this range (overflow-free bounds)."""
@@ -404,6 +410,8 @@ def build_kernel(
     body.append(f"    return ({', '.join(ret)},)")
     source = "\n".join(body) + "\n"
     mag = _magnitudes(nodes, leaf_max)
+    if max(mag) >= 2**1000:
+        raise ValueError(f"{name}: a node can reach 2^{math.log2(max(mag)):.0f}: leaf bounds too large for float64")
     floor = _underflow_floor(nodes, out_idx, mag, chains=3 if radius else 1)
     # an output "x" is bounded by its companion output "x_M" (an upper bound of its permanent)
     K_of = {k: nodes[out[k].i].K for k in outputs}

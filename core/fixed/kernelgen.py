@@ -421,7 +421,7 @@ _C_HEADER = """/* The certified float filter's lane functions, in C. GENERATED b
 #define NEEDS_CERT @NEEDS_CERT@ /* valid, the tree cannot decide: try the certificates */
 #define NEEDS_FULL @NEEDS_FULL@ /* fast pass: a matrix is not exactly symmetric: the full prepare */
 #define NEEDS_S0_RADIUS @NEEDS_S0_RADIUS@ /* stage 2 could not tell the sign of s0: the certificates, then stage 4 */
-#define NEEDS_SCALE @NEEDS_SCALE@ /* unscaled first try: a matrix outside [2^-8, 2^8] (or not exactly symmetric): the fast pass */
+#define NEEDS_SCALE @NEEDS_SCALE@ /* unscaled first try: a matrix outside [2^-8, 2^24] (or not exactly symmetric): the fast pass */
 
 /* Table digit of a certified sign: 0 for -1, 2 for +1, 3 for uncertain (core.formulae.decision.SIGN_CODES). */
 static inline int64_t sign_digit(double v, double b) { return v > b ? 2 : (v < -b ? 0 : 3); }
@@ -497,7 +497,7 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             c, cr, minors = pencil_bounds(x, n, Pa, Pb)
             code: CExpr
             code, _, idx = decide(x, n, c, cr, minors, Pa.ok & Pb.ok)
-            if unscaled:  # a matrix outside [2^-8, 2^8], not exactly symmetric or not finite
+            if unscaled:  # a matrix outside [2^-8, 2^24], not exactly symmetric or not finite
                 code = x.where(Pa.open | Pb.open, NEEDS_SCALE, code)
             elif fast:  # a matrix symmetric only up to rounding: the full prepare decides
                 code = x.where(((Pa.ok | Pa.open) & (Pb.ok | Pb.open)) & (Pa.open | Pb.open), NEEDS_FULL, code)
@@ -530,7 +530,7 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
         out.append(_lane_c(
             f"first{n}_noscale_{suffix}", params, lambda x, first=first: first(x, unscaled=True), infos,
             "Stage 1, first try (driver.prepare unscaled): the outputs of the fast pass, bit for bit, for a pair "
-            "of exactly symmetric matrices whose largest entries are in [2^-8, 2^8], without the scaling; "
+            "of exactly symmetric matrices whose largest entries are in [2^-8, 2^24], without the scaling; "
             "NEEDS_SCALE for the other pairs.",
         ))
         out.append(_lane_c(
