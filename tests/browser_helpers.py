@@ -52,6 +52,26 @@ def tick(page: Any, label: str, is_on: Callable[[], object], timeout: float = 12
         time.sleep(0.02)
 
 
+def open_folder(page: Any, folder: str, label: str, timeout: float = 120.0, patience: float = 15.0) -> None:
+    """Open the panel folder titled ``folder`` until the control labelled ``label`` in it is visible.
+
+    A click on a folder's title can be lost when the panel re-renders under it (the server's answer
+    to the previous action); it is repeated only when the control has not shown ``patience`` s after
+    the last click (a second click on a folder that did open would close it).
+    """
+    control = page.get_by_label(label, exact=True)
+    deadline = time.monotonic() + timeout
+    last_click = -float("inf")
+    while not control.is_visible():
+        now = time.monotonic()
+        if now > deadline:
+            raise AssertionError(f"timed out opening the folder {folder!r} (no {label!r} shown)")
+        if now - last_click > patience:
+            page.get_by_text(folder, exact=True).click()
+            last_click = time.monotonic()
+        time.sleep(0.02)
+
+
 def bodies_page(model: Any) -> Iterator[tuple[Any, Any]]:
     """A scene server on ``model`` (many bodies) and one headless tab on it, for a module fixture."""
     if not os.path.exists("/usr/bin/chromium"):

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 
 import pytest
+from browser_helpers import open_folder, tick
 from test_browser_scene import set_field, until
 
 from app.scene.links import link_path
@@ -38,8 +39,10 @@ def test_roots_of_p_follow_t_and_mark_the_tangency(headless_scene):
     hs = headless_scene
     s = hs.goto(link_path({"preset": "example-29", "event": 1, "show_plots": False}))
     page = hs.page
-    page.get_by_text("Roots of P(T) (the paper's picture)", exact=True).click()
-    page.get_by_text("Show the roots of P(T)", exact=True).click()
+    # states, not clicks in a row: a click can be lost while the panel re-renders (a clean-clone run
+    # timed out on "roots plots" after both clicks)
+    open_folder(page, "Roots of P(T) (the paper's picture)", "Show the roots of P(T)")
+    tick(page, "Show the roots of P(T)", lambda: s.ui.roots.show_roots.value)
     until(lambda: s.ui.roots.plane is not None and s.ui.roots.locus_plot is not None, what="roots plots")
     page.wait_for_function(f"() => ({SERIES_JS})('Roots of P(T)') !== null && ({SERIES_JS})('Root locus') !== null")
     plane = series(page, "Roots of P(T)")
