@@ -4,7 +4,8 @@ The block driver (``core/fixed/_blocks.h``) is compiled once more into a small p
 time-stamp read (``rdtsc``) between its stages (:data:`MARKS`):
 transpose, the unscaled first pass, the scaled and full first passes again (with the subsets'
 bookkeeping), the semi-static s0 test, the certificates, the running-error s0 test and the
-output. The program runs the chosen SIMD variant on one core over ``--pairs`` pairs (each data
+output. The program runs the chosen SIMD variant (by default the one the extension runs on this
+CPU; compiled from the extension's own ``_filter_<variant>.c``) on one core over ``--pairs`` pairs (each data
 set tiled) and keeps the fastest of ``--rounds`` runs: on a shared machine, the run least
 disturbed. The same driver built without the time stamps gives the last columns.
 
@@ -16,7 +17,7 @@ extension ran random pairs 28 % slower). Judge a change by the kernel as built, 
 with the old one (``bench.throughput``, or the two .so files called through ctypes). x86-64 with
 gcc only.
 
-    python -m bench.stage_cycles [--dim 3] [--pairs 1000000] [--rounds 7] [--define CHUNK4=16]
+    python -m bench.stage_cycles [--dim 3] [--pairs 1000000] [--rounds 7] [--variant avx2] [--define CHUNK4=16]
 """
 
 from __future__ import annotations
@@ -96,12 +97,16 @@ int main(int argc, char **argv) {
 }
 """
 
-_VARIANTS = {
-    "avx2": '#pragma GCC target("avx2")\n#define F64_BEGIN _Pragma("GCC push_options") _Pragma("GCC optimize(\\"schedule-insns\\", '
-            '\\"sched-pressure\\")")\n#define F64_END _Pragma("GCC pop_options")\n#include <immintrin.h>\n#define VARIANT avx2\n'
-            '#define TP_F64 4\n#define TP_F32 8\n#include "variant.h"\n',
-    "baseline": '#define VARIANT baseline\n#include "variant.h"\n',
-}
+VARIANT_FILES = {"baseline": "_filter_base.c", "avx2": "_filter_avx2.c", "avx512": "_filter_avx512.c"}
+"""The extension's own source of each SIMD variant (its target pragmas and settings), read as it is."""
+
+
+def default_variant() -> str:
+    """The variant the extension runs on this CPU (baseline when the extension is not built)."""
+    from core.fixed import compiled
+
+    v = compiled.variant()
+    return v if v in VARIANT_FILES else "baseline"
 
 
 def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = ()) -> tuple[Path, Path]:
@@ -117,7 +122,8 @@ def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = ()) -> 
     text = text.replace('"_blocks.h"', '"blocks.h"').replace('"_kernels.h"', f'"{FIXED / "_kernels.h"}"')
     (work / "variant.h").write_text(text)
     n = dim + 1
-    (work / "driver.c").write_text(_DRIVER.replace("@VARIANT@", _VARIANTS[variant]))
+    source = (FIXED / VARIANT_FILES[variant]).read_text().replace('"_variant.h"', '"variant.h"')
+    (work / "driver.c").write_text(_DRIVER.replace("@VARIANT@", source))
     (work / "main.c").write_text(_MAIN.replace("@E@", str(n * n)).replace("@CLASSIFY@", f"classify{n}_f64_{variant}"))
     exes = []
     for stamps in (True, False):
@@ -129,12 +135,12 @@ def build(variant: str, dim: int, work: Path, defines: tuple[str, ...] = ()) -> 
     return exes[0], exes[1]
 
 
-def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str = "avx2", labelled: int = 400,
+def run(dim: int = 3, pairs: int = 1_000_000, rounds: int = 7, variant: str | None = None, labelled: int = 400,
         defines: tuple[str, ...] = ()) -> list[dict[str, object]]:
     """Cycles per pair by stage, one row per data set (random, then the structured kinds)."""
     work = Path(tempfile.mkdtemp(prefix="stages-"))
     try:
-        exe, plain = build(variant, dim, work, defines)
+        exe, plain = build(variant or default_variant(), dim, work, defines)
         cpu = ["taskset", "-c", str(min(os.sched_getaffinity(0)))] if shutil.which("taskset") else []
         fa, fb = work / "a.bin", work / "b.bin"
 
@@ -173,13 +179,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--dim", type=int, default=3, choices=(2, 3))
     p.add_argument("--pairs", type=int, default=1_000_000)
     p.add_argument("--rounds", type=int, default=7)
-    p.add_argument("--variant", default="avx2", choices=tuple(_VARIANTS))
+    p.add_argument("--variant", default=None, choices=tuple(VARIANT_FILES), help="default: the variant the extension runs on this CPU")
     p.add_argument("--define", action="append", default=[], metavar="NAME=VALUE",
                    help="a macro of core/fixed/_variant.h for an experiment (CHUNK4=16, PF_DIST=4, ...)")
     a = p.parse_args(argv)
     if platform.machine() not in ("x86_64", "AMD64") or shutil.which("gcc") is None:
         print("needs x86-64 and gcc")
         return 1
+    a.variant = a.variant or default_variant()
     extra = f", {' '.join(a.define)}" if a.define else ""
     print(f"cycles per pair (rdtsc), {a.variant}, {a.dim}D, {a.pairs:,} pairs, fastest of {a.rounds} runs, one core{extra}")
     print(format_rows(run(a.dim, a.pairs, a.rounds, a.variant, defines=tuple(a.define))))
