@@ -93,3 +93,26 @@ def field_input(page: Any, label: str, selector: str = "input") -> Any:
         }""", [label, selector])
     assert idx >= 0, f"no field labelled {label!r}"
     return page.locator("input").nth(idx)
+
+
+def set_field(page: Any, label: str, text: str, handle: Any = None, patience: float = 15.0) -> None:
+    """Type ``text`` into the text field labelled ``label`` and press Enter.
+
+    With the server's ``handle`` of the field: until the server has the text, typing again when it
+    has not arrived ``patience`` s after the last try (a panel re-rendered by the previous action's
+    answer can drop the keys; the same text twice changes nothing).
+    """
+    deadline = time.monotonic() + 120
+    while True:
+        box = field_input(page, label, "input, textarea")
+        box.fill(text)
+        box.press("Enter")
+        if handle is None:
+            return
+        tried = time.monotonic()
+        while handle.value != text and time.monotonic() - tried < patience:
+            time.sleep(0.02)
+        if handle.value == text:
+            return
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out setting {label} to {text!r} (the server has {handle.value!r})")

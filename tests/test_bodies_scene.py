@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 import os
-import time
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +22,7 @@ import pytest
 viser = pytest.importorskip("viser")
 
 import browser_helpers  # noqa: E402
-from browser_helpers import field_input, text_shown, until  # noqa: E402
+from browser_helpers import set_field, text_shown, until  # noqa: E402
 from test_browser_scene import choose  # noqa: E402
 
 from app.bodyfiles import BodySet, read_bodies, write_bodies_csv  # noqa: E402
@@ -401,29 +400,6 @@ def bodies_page(demo_file):
 def fresh_tab(hs):
     """A new tab on the bodies (the view as a user first sees it), once it is drawn."""
     return hs.goto("/")
-
-
-def set_field(page, label: str, text: str, handle=None, patience: float = 15.0) -> None:
-    """Type ``text`` into the text field labelled ``label`` and press Enter.
-
-    With the server's ``handle`` of the field: until the server has the text, typing again when it
-    has not arrived ``patience`` s after the last try (a panel re-rendered by the previous action's
-    answer can drop the keys; the same text twice changes nothing).
-    """
-    deadline = time.monotonic() + 120
-    while True:
-        box = field_input(page, label)
-        box.fill(text)
-        box.press("Enter")
-        if handle is None:
-            return
-        tried = time.monotonic()
-        while handle.value != text and time.monotonic() - tried < patience:
-            time.sleep(0.02)
-        if handle.value == text:
-            return
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out setting {label} to {text!r} (the server has {handle.value!r})")
 
 
 def caption(page_of_pairs, what: str) -> str:

@@ -10,8 +10,7 @@ from __future__ import annotations
 import os
 
 import pytest
-from browser_helpers import open_folder, tick
-from test_browser_scene import set_field, until
+from browser_helpers import open_folder, set_field, tick, until
 
 from app.scene.links import link_path
 

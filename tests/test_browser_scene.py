@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 import pytest
-from browser_helpers import text_shown, tick, until
+from browser_helpers import set_field, text_shown, tick, until
 
 from app.scene.links import link_path
 
@@ -100,21 +100,6 @@ def type_into(page, current: str, new: str) -> None:
     box.press("Enter")
     box.blur()  # the next field's search must not find this one mid-update: wait until it shows the new text
     page.wait_for_function("([i, v]) => document.querySelectorAll('input')[i]?.value === v", arg=[idx, new], timeout=30000)
-
-
-def set_field(page, label: str, text: str) -> None:
-    """Type ``text`` into the field labelled ``label`` (unique labels only) and press Enter."""
-    idx = page.evaluate(
-        """(l) => {
-          const label = Array.from(document.querySelectorAll('label')).find(e => e.textContent === l && e.offsetParent !== null);
-          const row = label?.closest('.mantine-Flex-root');
-          const input = row?.querySelector('input, textarea');
-          return Array.from(document.querySelectorAll('input')).indexOf(input);
-        }""", label)
-    assert idx >= 0, f"no field labelled {label!r}"
-    box = page.locator("input").nth(idx)
-    box.fill(text)
-    box.press("Enter")
 
 
 def open_folder(page, title: str) -> None:
