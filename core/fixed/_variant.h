@@ -23,11 +23,18 @@
 #define LANES 8   /* pairs between two rounds of prefetching the next block */
 #endif
 #ifndef PF_DIST
-/* blocks ahead: 2. Measured 2026-12-02 on a 2-core Xeon VM (48 KB L1d, 2 MB L2 per core), 1 M random
+/* blocks ahead: 3 (was 2). Measured 2026-12-02 on a 2-core Xeon VM (48 KB L1d, 2 MB L2 per core), 1 M random
  * 3D pairs streamed from memory, one core, interleaved runs of the two builds: 1 block ahead
  * 28.1-28.2 ms, 2 blocks 25.6-26.6 ms, 4 blocks 24.8-26.6 ms (the same runs: the one-core ratio to the
- * C tree 1.54-1.64x against 1.71-1.76x); 8 and 16 blocks no better than 2, nor L2/L3 hints. */
-#define PF_DIST 2
+ * C tree 1.54-1.64x against 1.71-1.76x); 8 and 16 blocks no better than 2, nor L2/L3 hints.
+ * 2026-12-04, the same kind of Xeon, AVX-512 variant after the kernel became faster (a block of 8
+ * pairs in ~460 cycles): bench.stage_cycles' driver on random 3D pairs on huge pages (as numpy
+ * allocates large arrays) 57.4-57.9 cycles per pair with 2 blocks ahead, 56.5-56.7 with 3, 56.7-57.1
+ * with 4, 57.9-58.5 with 6 (on 4 KB pages 61.5-62.4 against 62.0-64.4); the extension as built, old
+ * and new alternating, one pinned core, CPU time: random 3D 43.6-45.1 -> 44.9-45.6 M pairs/s, float32
+ * 33.7-34.8 -> 35.3-35.4, 2D and the AVX2 variant unchanged. (In the L2 cache the same driver takes
+ * 52.1 cycles per pair: the stream from memory still costs ~10 %.) */
+#define PF_DIST 3
 #endif
 #ifndef PF_HINT
 #define PF_HINT 3 /* __builtin_prefetch locality: into L1 */
