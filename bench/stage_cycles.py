@@ -74,7 +74,7 @@ int64_t @CLASSIFY@(const double *A, const double *B, signed char *out, int64_t c
 static double *big(size_t bytes) {
     const size_t huge = (size_t)2 << 20;
     void *p = NULL;
-    if (posix_memalign(&p, huge, (bytes + huge - 1) / huge * huge) != 0) return NULL;
+    if (posix_memalign(&p, huge, (bytes + huge - 1) / huge * huge) != 0) return malloc(bytes);
     madvise(p, (bytes + huge - 1) / huge * huge, MADV_HUGEPAGE);
     return p;
 }
