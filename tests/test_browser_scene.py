@@ -102,7 +102,8 @@ def type_into(page, current: str, new: str) -> None:
     page.wait_for_function("([i, v]) => document.querySelectorAll('input')[i]?.value === v", arg=[idx, new], timeout=30000)
 
 
-def open_folder(page, title: str) -> None:
+def click_folder(page, title: str) -> None:
+    """One click on a panel folder's title (toggles it; ``browser_helpers.open_folder`` waits for a control)."""
     page.get_by_text(title, exact=True).click()
 
 
@@ -143,9 +144,9 @@ def test_dimension_switch_then_tangent_circles_are_drawn_where_certified(hs):
     # the 2D defaults, drawn where they are: A (2, 1) at the origin, B at (3, 3/2)
     assert_pose(hs, "/shapes/A", (0, 0, 0), scale=(2, 1, 1))
     assert_pose(hs, "/shapes/B", (3, 1.5, 0.01), scale=(1.5, 0.5, 1))
-    open_folder(page, "Shape A")
+    click_folder(page, "Shape A")
     type_into(page, "2, 1", "1, 1")  # A: unit circle at the origin
-    open_folder(page, "Shape B")
+    click_folder(page, "Shape B")
     type_into(page, "3, 1.5", "2, 0")  # exact values as exact decimals
     type_into(page, "1.5, 0.5", "1, 1")
     until(lambda: s.state.relation == "tangent", what="tangent")
@@ -265,7 +266,7 @@ def test_centre_beyond_the_drawing_range_is_refused_next_to_the_field(hs):
     """Defect 5: a centre of 1e300 gets a message next to the field; nothing else changes."""
     s = open_on(hs, {"preset": None, "A": {"center": [0, 0, 0], "semi_axes": [1, 1, 1]},
                      "B": {"center": [3, 0, 0], "semi_axes": [1, 1, 1]}})
-    open_folder(hs.page, "Shape B")
+    click_folder(hs.page, "Shape B")
     type_into(hs.page, "3, 0, 0", "1e300, 0, 0")
     text_shown(hs.page, "centre too far for the scene")
     assert s.state.relation == "separate" and str(s.state.shapes["B"].center[0]) == "3"
@@ -342,7 +343,7 @@ def test_reload_keeps_the_tab_and_a_link_opens_the_same_view(hs):
                      "B": {"center": [3, 0, 0], "semi_axes": [1, 1, 1]}})
     page = hs.page
     assert "/s/" in page.url
-    open_folder(page, "Shape B")
+    click_folder(page, "Shape B")
     type_into(page, "3, 0, 0", "2, 0, 0")
     until(lambda: s.state.relation == "tangent", what="tangent")
     before = max(hs.scene.sessions)
@@ -352,7 +353,7 @@ def test_reload_keeps_the_tab_and_a_link_opens_the_same_view(hs):
     hs.wait_settled()
     assert s2 is not s and s2.state.relation == "tangent" and str(s2.state.shapes["B"].center[0]) == "2"
     assert_pose(hs, "/shapes/B", (2, 0, 0))
-    open_folder(page, "Share and keep")
+    click_folder(page, "Share and keep")
     page.get_by_role("button", name="Link to this view").click()
     link = page.locator("a", has_text="Open this view in a new tab")
     link.wait_for()
@@ -369,7 +370,7 @@ def test_configuration_and_analysis_files(hs, tmp_path):
     s = open_on(hs, {"preset": "example-29", "t": "2/3"})
     page = hs.page
     assert s.state.t_text == "2/3"
-    open_folder(page, "Share and keep")
+    click_folder(page, "Share and keep")
     with page.expect_download() as d:
         page.get_by_role("button", name="Download configuration (JSON)").click()
     data = json.loads(open(d.value.path()).read())
@@ -524,7 +525,7 @@ def test_example_29_page_readout_plots_lights_copy_fields_and_dimension_switch(h
     text_shown(page, "y / max |y| on I")
     # the Shape fields follow the motion: a pose drawn at t is computed, so marked as rounded
     # (issue 22.1), never a number that looks exact
-    open_folder(page, "Shape A")
+    click_folder(page, "Shape A")
     page.wait_for_function("() => Array.from(document.querySelectorAll('input')).some(e => e.value === '≈ 7.4, 0, 0')", timeout=20000)
     set_field(page, "t (exact)", "0.7")  # A is at (11 - 12t, 0, 0) = (2.6, 0, 0)
     until(lambda: s.state.t == 0.7, what="t = 0.7")
