@@ -325,13 +325,34 @@ class HeadlessScene:
         while s.pending() and time.monotonic() < deadline:  # the coalesced panel refresh
             time.sleep(0.01)
         self.page.wait_for_function("() => (window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0) > 2")
-        self.page.wait_for_function(
-            _DRAWN_JS, arg=list(self.expected(s)), timeout=max(1.0, deadline - time.monotonic()) * 1000
-        )
+        self._wait_drawn(s, deadline)
         # two animation frames: the browser has rendered and painted the state just applied
         # (viser renders on demand: a frame counter may not move when nothing changes)
         for _ in range(frames):
             self.page.evaluate(_TWO_FRAMES_JS)
+
+    def _wait_drawn(self, s: Any, deadline: float, patience: float = 10.0) -> None:
+        """Wait until the browser draws what the session ``s`` holds (:meth:`expected`).
+
+        The expectation is read again every ``patience`` s: a session that changed once more after
+        it was read (a late update of the same load) is then waited for as it is now, never as it was.
+        """
+        from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+        while True:
+            poses, colours, word = self.expected(s)
+            left = deadline - time.monotonic()
+            try:
+                self.page.wait_for_function(_DRAWN_JS, arg=[poses, colours, word], timeout=max(1.0, min(left, patience)) * 1000)
+                return
+            except PlaywrightTimeout:
+                if time.monotonic() >= deadline:
+                    drawn = {name: self.page.evaluate(_POSE_JS, name) for name in poses}
+                    shown = {name: self.page.evaluate(_MESH_COLOR_JS, name) for name in colours}
+                    raise TimeoutError(
+                        f"the tab did not draw the session's state within {self.timeout} s: wanted {poses}, {colours}, {word}, "
+                        f"drawn poses {drawn}, colours {shown}"
+                    ) from None
 
     def _wait_bodies(self, frames: int) -> None:
         """Many bodies: the view built and drawn as it is for the tab's camera.
