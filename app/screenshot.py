@@ -131,6 +131,10 @@ class HeadlessScene:
         dpr: device pixel ratio the canvas renders at (viser's ``fixedDpr``): 1 for pictures;
             the browser tests take 0.5 (a quarter of the pixels: software WebGL draws a frame in
             about half the CPU time, and they read colours and three.js state, not detail).
+        cdp: DevTools address (``http://127.0.0.1:PORT``) of a Chromium that is already running:
+            the tab opens in its default profile (its cache is kept) and is closed on exit, with
+            every other tab opened since, while the browser keeps running. None: launch one (a
+            browser start costs ~1.5 CPU-s more than a connection; the test suite shares one).
     """
 
     def __init__(
@@ -144,6 +148,7 @@ class HeadlessScene:
         bodies: Any = None,
         prefetch: bool = False,
         dpr: float = 1.0,
+        cdp: str | None = None,
     ) -> None:
         if not 0.1 <= dpr <= 4:
             raise ValueError(f"dpr must be in [0.1, 4], not {dpr}")
@@ -156,11 +161,13 @@ class HeadlessScene:
         self.height = height
         self.timeout = timeout
         self.shared = shared
+        self.cdp = cdp
         self.scene: Any = None
         self.session: Any = None
         self.page: Any = None
         self._pw: Any = None
         self._browser: Any = None
+        self._tabs_before: list[Any] = []
         self._tmp: tempfile.TemporaryDirectory[str] | None = None
 
     def __enter__(self) -> HeadlessScene:
@@ -178,16 +185,22 @@ class HeadlessScene:
         )
         try:
             self._pw = sync_playwright().start()
-            self._tmp = tempfile.TemporaryDirectory(prefix="app-chromium-")
-            self._browser = self._pw.chromium.launch_persistent_context(
-                self._tmp.name,
-                executable_path=CHROMIUM,
-                headless=True,
-                args=CHROMIUM_FLAGS,
-                viewport={"width": self.width, "height": self.height},
-                device_scale_factor=1,
-            )
-            self.page = self._browser.pages[0] if self._browser.pages else self._browser.new_page()
+            if self.cdp is not None:
+                self._browser = self._pw.chromium.connect_over_cdp(self.cdp).contexts[0]
+                self._tabs_before = list(self._browser.pages)
+                self.page = self._browser.new_page()
+                self.page.set_viewport_size({"width": self.width, "height": self.height})
+            else:
+                self._tmp = tempfile.TemporaryDirectory(prefix="app-chromium-")
+                self._browser = self._pw.chromium.launch_persistent_context(
+                    self._tmp.name,
+                    executable_path=CHROMIUM,
+                    headless=True,
+                    args=CHROMIUM_FLAGS,
+                    viewport={"width": self.width, "height": self.height},
+                    device_scale_factor=1,
+                )
+                self.page = self._browser.pages[0] if self._browser.pages else self._browser.new_page()
             self.page.set_default_timeout(self.timeout * 1000)
             self.session = self.goto("/")
         except BaseException:
@@ -197,7 +210,7 @@ class HeadlessScene:
 
     def __exit__(self, *exc: Any) -> None:
         for closer in (
-            lambda: self._browser and self._browser.close(),
+            self._close_browser,
             lambda: self._pw and self._pw.stop(),
             lambda: self.scene and self.scene.stop(),
             lambda: None if self._tmp is None else self._tmp.cleanup(),
@@ -206,6 +219,17 @@ class HeadlessScene:
                 closer()
             except Exception:  # noqa: BLE001 - best-effort teardown
                 pass
+
+    def _close_browser(self) -> None:
+        """Close the browser this scene launched, or only the tabs it opened in a running one (``cdp``)."""
+        if self._browser is None:
+            return
+        if self.cdp is None:
+            self._browser.close()
+            return
+        for page in self._browser.pages:
+            if page not in self._tabs_before:
+                page.close()
 
     @property
     def url(self) -> str:

@@ -1,4 +1,4 @@
-"""Waiting on a page's state and opening a headless browser on many bodies: shared by the browser tests.
+"""Waiting on a page's state and the test process's one Chromium: shared by the browser tests.
 
 Every wait is on a state (a condition, a text on the page), never a fixed sleep; the timeouts are
 upper bounds for a loaded machine, so a passing test never waits for them.
@@ -6,14 +6,121 @@ upper bounds for a loaded machine, so a passing test never waits for them.
 
 from __future__ import annotations
 
+import atexit
+import contextlib
 import os
+import subprocess
+import tempfile
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
 
 from conftest import TEST_DPR
+
+PLAYWRIGHT_SWITCHES = [
+    "--disable-field-trial-config", "--disable-background-networking", "--disable-background-timer-throttling",
+    "--disable-backgrounding-occluded-windows", "--disable-back-forward-cache", "--disable-breakpad",
+    "--disable-component-extensions-with-background-pages", "--disable-component-update", "--no-default-browser-check",
+    "--disable-default-apps", "--disable-dev-shm-usage", "--disable-extensions",
+    "--disable-features=AvoidUnnecessaryBeforeUnloadCheckSync,DestroyProfileOnBrowserClose,HttpsUpgrades,"
+    "HttpsFirstBalancedModeAutoEnable,LensOverlay,MediaRouter,PaintHolding,ThirdPartyStoragePartitioning,"
+    "AvoidCorsURLLoaderRestartOnRedirect,OptimizationHints,NetworkTimeServiceQuerying,AimEnabled,PreconnectToSearch",
+    "--enable-features=CDPScreenshotNewSurface", "--allow-pre-commit-input", "--disable-hang-monitor",
+    "--disable-ipc-flooding-protection", "--disable-popup-blocking", "--disable-prompt-on-repost",
+    "--disable-renderer-backgrounding", "--force-color-profile=srgb", "--metrics-recording-only", "--no-first-run",
+    "--password-store=basic", "--use-mock-keychain", "--no-service-autorun", "--disable-search-engine-choice-screen",
+    "--hide-scrollbars", "--mute-audio",
+    "--blink-settings=primaryHoverType=2,availableHoverTypes=2,primaryPointerType=4,availablePointerTypes=4",
+]
+"""The switches Playwright 1.5x gives a headless Chromium it launches (playwright-core's
+chromiumSwitches and headless arguments), for the one the tests start themselves: background tabs
+not throttled, sRGB colours, no scrollbars, a mouse as the pointer."""
+
+
+class SharedChromium:
+    """The test process's one headless Chromium, started on first use and reached over DevTools.
+
+    Every browser test of a pytest process (worker) opens its tabs in it (``HeadlessScene(cdp=...)``,
+    :func:`connected`), instead of launching a browser of its own: a launch costs ~1.5 CPU-s
+    more than a connection (the suite launched 14). Unlike a browser Playwright launched, it
+    outlives each test's Playwright, which must stop before a test that runs asyncio (the sync
+    API holds the thread's event loop). Stopped at the end of the session (tests/conftest.py).
+    """
+
+    def __init__(self) -> None:
+        self._proc: subprocess.Popen[bytes] | None = None
+        self._tmp: tempfile.TemporaryDirectory[str] | None = None
+        self.url = ""
+
+    def get(self, timeout: float = 120.0) -> str:
+        """The DevTools address (``http://127.0.0.1:PORT``) of the running Chromium, started if need be."""
+        if self._proc is not None and self._proc.poll() is None:
+            return self.url
+        self.stop()
+        from app.screenshot import CHROMIUM, CHROMIUM_FLAGS
+
+        self._tmp = tempfile.TemporaryDirectory(prefix="test-chromium-")
+        root = Path(self._tmp.name)
+        log = root / "stderr.log"
+        with open(log, "wb") as err:
+            self._proc = subprocess.Popen(
+                [CHROMIUM, *CHROMIUM_FLAGS, *PLAYWRIGHT_SWITCHES, "--remote-debugging-port=0",
+                 f"--user-data-dir={root / 'profile'}", "about:blank"],
+                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err,
+            )
+        port_file = root / "profile" / "DevToolsActivePort"  # Chromium writes "PORT\n/devtools/browser/<id>"
+        deadline = time.monotonic() + timeout
+        while True:
+            lines = port_file.read_text().splitlines() if port_file.exists() else []
+            if len(lines) >= 2 and lines[0].isdigit():
+                self.url = f"http://127.0.0.1:{lines[0]}"
+                return self.url
+            code = self._proc.poll()
+            if code is not None or time.monotonic() > deadline:
+                tail = log.read_text(errors="replace")[-2000:]
+                self.stop()
+                raise RuntimeError(f"Chromium gave no DevTools port in {timeout:g} s (exit code {code}): {tail}")
+            time.sleep(0.05)
+
+    def stop(self) -> None:
+        """End the browser (if it runs) and remove its profile."""
+        proc, self._proc = self._proc, None
+        if proc is not None and proc.poll() is None:
+            proc.terminate()
+            try:
+                proc.wait(10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+        if self._tmp is not None:
+            self._tmp.cleanup()
+            self._tmp = None
+
+
+CHROMIUM_OF_THIS_PROCESS = SharedChromium()
+atexit.register(CHROMIUM_OF_THIS_PROCESS.stop)
+
+
+@contextlib.contextmanager
+def connected() -> Iterator[Any]:
+    """Playwright connected to this process's Chromium: yields its default context (``new_page()``);
+    the tabs opened in it are closed on exit, the browser keeps running."""
+    if not os.path.exists("/usr/bin/chromium"):
+        pytest.skip("needs Debian chromium at /usr/bin/chromium")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as pw:
+        context = pw.chromium.connect_over_cdp(CHROMIUM_OF_THIS_PROCESS.get()).contexts[0]
+        before = list(context.pages)
+        try:
+            yield context
+        finally:
+            for page in context.pages:
+                if page not in before:
+                    page.close()
 
 
 def until(cond: Callable[[], object], timeout: float = 120.0, what: str = "") -> None:
@@ -79,7 +186,8 @@ def bodies_page(model: Any) -> Iterator[tuple[Any, Any]]:
     from app.scene.state import SceneConfig
     from app.screenshot import HeadlessScene
 
-    with HeadlessScene(SceneConfig(), bodies=model, width=1000, height=720, timeout=120, dpr=TEST_DPR) as hs:
+    with HeadlessScene(SceneConfig(), bodies=model, width=1000, height=720, timeout=120, dpr=TEST_DPR,
+                       cdp=CHROMIUM_OF_THIS_PROCESS.get()) as hs:
         yield hs, model
 
 

@@ -34,10 +34,10 @@ class _SharedScene:
     """One scene server and one headless Chromium tab, shared by the tests that ask for them.
 
     Opened by the first test that uses the ``headless_scene`` fixture and kept for the next ones
-    (starting a browser costs seconds on the shared 2-core machines); closed before a test that
-    does not use it, because Playwright's sync API (and ``asyncio.run``) cannot run while another
-    sync Playwright holds this thread's event loop. The users sit in a few modules, so a session
-    starts it once or twice.
+    (a server, a Playwright and a page load cost seconds on the shared 2-core machines); closed
+    before a test that does not use it, because Playwright's sync API (and ``asyncio.run``)
+    cannot run while another sync Playwright holds this thread's event loop. The tab is in the
+    process's one Chromium (``browser_helpers.SharedChromium``), which keeps running.
     """
 
     def __init__(self) -> None:
@@ -45,10 +45,13 @@ class _SharedScene:
 
     def get(self):
         if self.scene is None:
+            from browser_helpers import CHROMIUM_OF_THIS_PROCESS
+
             from app.scene.state import SceneConfig
             from app.screenshot import HeadlessScene
 
-            scene = HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1000, height=720, timeout=90, dpr=TEST_DPR)
+            scene = HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1000, height=720,
+                                  timeout=90, dpr=TEST_DPR, cdp=CHROMIUM_OF_THIS_PROCESS.get())
             self.scene = scene.__enter__()
         return self.scene
 
@@ -80,6 +83,8 @@ def pytest_runtest_setup(item):
 
 def pytest_sessionfinish(session, exitstatus):
     _SHARED.close()
+    if "browser_helpers" in sys.modules:  # the process's one Chromium, if a test started it
+        sys.modules["browser_helpers"].CHROMIUM_OF_THIS_PROCESS.stop()
 
 
 @pytest.fixture

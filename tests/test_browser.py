@@ -204,12 +204,9 @@ def test_shared_presenter_scene_is_seen_by_every_tab(tmp_path):
 
     scene = start_scene("127.0.0.1", 0, static_config("4"), shared=True, processes=False)
     try:
-        from playwright.sync_api import sync_playwright
+        from browser_helpers import connected
 
-        from app.screenshot import CHROMIUM, CHROMIUM_FLAGS
-
-        with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_FLAGS)
+        with connected() as browser:
             pages = [browser.new_page() for _ in range(2)]
             for p in pages:
                 p.goto(f"http://127.0.0.1:{scene.port}/?fixedDpr=1&hideViserLogo")
@@ -223,19 +220,19 @@ def test_shared_presenter_scene_is_seen_by_every_tab(tmp_path):
             scene.shared.set_shape("B", center="1, 0, 0")  # the presenter moves B
             for p in pages:
                 p.wait_for_function(colour_js, arg=HEX["overlap"], timeout=60000)
-            browser.close()
     finally:
         scene.stop()
 
 
 def test_presenter_mode_dimension_switch_and_every_camera_browser():
     """Defects 1 and 5 in presenter mode (see test_browser_scene.py for the helpers)."""
+    from browser_helpers import CHROMIUM_OF_THIS_PROCESS
     from test_browser_scene import assert_pose, choose, until
 
     from app.screenshot import HeadlessScene
 
     cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.3})
-    with HeadlessScene(cfg, width=1100, height=800, timeout=90, shared=True) as h:
+    with HeadlessScene(cfg, width=1100, height=800, timeout=90, shared=True, cdp=CHROMIUM_OF_THIS_PROCESS.get()) as h:
         second = h.page.context.new_page()
         h.goto("/", page=second)
         s = h.scene.shared

@@ -43,13 +43,10 @@ def api_url():
     ("/redoc", "document.querySelectorAll('[data-section-id^=\"operation\"], [id^=\"operation/\"]').length"),
 ])
 def test_docs_render_without_internet(api_url, path, ready):
-    from playwright.sync_api import sync_playwright
-
-    from app.screenshot import CHROMIUM, CHROMIUM_FLAGS
+    from browser_helpers import connected
 
     refused: list[str] = []
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_FLAGS)
+    with connected() as browser:
         page = browser.new_page()
 
         def offline(route):  # the machine's own server only
@@ -63,6 +60,5 @@ def test_docs_render_without_internet(api_url, path, ready):
         page.goto(api_url + path)
         page.wait_for_function(f"() => ({ready}) >= 8", timeout=60000)
         text = page.evaluate("() => document.body.innerText")
-        browser.close()
     assert "/api/classify" in text and "/api/analyse" in text
     assert refused == [], refused  # no script, style or font was asked of the internet

@@ -63,20 +63,19 @@ def test_replay_records_every_relation_and_each_event_exactly():
 @browser
 def test_replay_plays_in_a_browser_without_a_server(tmp_path):
     """Opened from disk: the shapes take every relation's colour in turn (tangent at the events)."""
-    from playwright.sync_api import sync_playwright
+    from browser_helpers import connected
 
     from app.scene.replay import replay_html
     from app.scene.state import SceneConfig
-    from app.screenshot import CHROMIUM, CHROMIUM_FLAGS
 
     path = tmp_path / "ex29.html"
     path.write_text(replay_html(SceneConfig(preset="example-29"), seconds=4, frames=80, event_pause=1.0))
     colour = """() => { const r = window.__viserMutable?.nodeRefFromName?.['/shapes/A/mesh']; let h = null;
       r?.traverse(o => { if (h === null && o.material && o.material.color) h = '#' + o.material.color.getHexString(); }); return h; }"""
     seen: set[str] = set()
-    with sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_FLAGS)
-        page = b.new_page(viewport={"width": 900, "height": 600})
+    with connected() as b:
+        page = b.new_page()
+        page.set_viewport_size({"width": 900, "height": 600})
         page.goto(path.as_uri())
         page.wait_for_function("() => window.__viserMutable?.nodeRefFromName?.['/shapes/A/mesh'] != null", timeout=60000)
         for _ in range(160):  # the whole recording (6 s), sampled
@@ -84,30 +83,26 @@ def test_replay_plays_in_a_browser_without_a_server(tmp_path):
             if len(seen & {"#2ca02c", "#ffbf00", "#d62728"}) == 3:
                 break
             page.wait_for_timeout(50)
-        b.close()
     assert {"#2ca02c", "#ffbf00", "#d62728"} <= seen, seen
 
 
 @pytest.mark.browser
 @browser
 def test_notebook_show_serves_the_scene_in_an_iframe():
-    from playwright.sync_api import sync_playwright
+    from browser_helpers import connected
 
     from app.notebook import show
-    from app.screenshot import CHROMIUM, CHROMIUM_FLAGS
 
     nb = show("circles-crossing", height=500)
     try:
         html = nb._repr_html_()
         assert html.startswith('<iframe src="http://127.0.0.1:') and 'height="500"' in html
-        with sync_playwright() as pw:
-            b = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_FLAGS)
+        with connected() as b:
             page = b.new_page()
             page.set_content(html)  # what a notebook cell holds
             frame = page.frame_locator("iframe")
             frame.get_by_text("Jump to α1", exact=False).wait_for(timeout=60000)
             assert nb.session is not None and nb.session.state.motion.preset == "circles-crossing"
-            b.close()
     finally:
         nb.stop()
 
