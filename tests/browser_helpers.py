@@ -40,6 +40,14 @@ chromiumSwitches and headless arguments), for the one the tests start themselves
 not throttled, sRGB colours, no scrollbars, a mouse as the pointer."""
 
 
+def _die_with_parent() -> None:
+    """In the child before exec: SIGTERM when the test process dies (a killed worker leaves no browser)."""
+    import ctypes
+    import signal
+
+    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
 class SharedChromium:
     """The test process's one headless Chromium, started on first use and reached over DevTools.
 
@@ -69,7 +77,7 @@ class SharedChromium:
             self._proc = subprocess.Popen(
                 [CHROMIUM, *CHROMIUM_FLAGS, *PLAYWRIGHT_SWITCHES, "--remote-debugging-port=0",
                  f"--user-data-dir={root / 'profile'}", "about:blank"],
-                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err,
+                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, preexec_fn=_die_with_parent,
             )
         port_file = root / "profile" / "DevToolsActivePort"  # Chromium writes "PORT\n/devtools/browser/<id>"
         deadline = time.monotonic() + timeout

@@ -266,3 +266,28 @@ def test_screenshot_command_contract(tmp_path):
     data = out.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     assert int.from_bytes(data[16:20], "big") == 800 and int.from_bytes(data[20:24], "big") == 600
+
+
+def test_a_scene_in_a_running_chromium_closes_only_its_own_tabs():
+    """``HeadlessScene(cdp=...)`` opens its tab in a running Chromium and, on exit, closes that tab
+    and every tab opened since (here a second one), while the browser keeps running for the next."""
+    import json
+    import urllib.request
+
+    from browser_helpers import CHROMIUM_OF_THIS_PROCESS
+
+    from app.screenshot import HeadlessScene
+
+    url = CHROMIUM_OF_THIS_PROCESS.get()
+
+    def tabs() -> list[str]:
+        with urllib.request.urlopen(f"{url}/json/list", timeout=30) as r:
+            return sorted(t["id"] for t in json.load(r) if t["type"] == "page")
+
+    before = tabs()
+    with HeadlessScene(static_config("4"), width=800, height=600, timeout=90, cdp=url) as h:
+        h.page.context.new_page()
+        assert h.session.state.relation == "separate" and h.mesh_color("B") == HEX["separate"]
+        assert len(tabs()) == len(before) + 2
+    assert tabs() == before
+    assert CHROMIUM_OF_THIS_PROCESS.get() == url  # the same browser, still running
