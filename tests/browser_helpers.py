@@ -40,12 +40,9 @@ chromiumSwitches and headless arguments), for the one the tests start themselves
 not throttled, sRGB colours, no scrollbars, a mouse as the pointer."""
 
 
-def _die_with_parent() -> None:
-    """In the child before exec: SIGTERM when the test process dies (a killed worker leaves no browser)."""
-    import ctypes
-    import signal
-
-    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+DIE_WITH_PARENT = ["/usr/bin/setpriv", "--pdeathsig", "TERM"] if os.path.exists("/usr/bin/setpriv") else []
+"""Run before Chromium so that it gets SIGTERM when the test process dies (a killed worker leaves no
+browser): util-linux's setpriv (Debian: essential) sets the parent-death signal and execs."""
 
 
 class SharedChromium:
@@ -75,9 +72,9 @@ class SharedChromium:
         log = root / "stderr.log"
         with open(log, "wb") as err:
             self._proc = subprocess.Popen(
-                [CHROMIUM, *CHROMIUM_FLAGS, *PLAYWRIGHT_SWITCHES, "--remote-debugging-port=0",
+                [*DIE_WITH_PARENT, CHROMIUM, *CHROMIUM_FLAGS, *PLAYWRIGHT_SWITCHES, "--remote-debugging-port=0",
                  f"--user-data-dir={root / 'profile'}", "about:blank"],
-                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, preexec_fn=_die_with_parent,
+                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err,
             )
         port_file = root / "profile" / "DevToolsActivePort"  # Chromium writes "PORT\n/devtools/browser/<id>"
         deadline = time.monotonic() + timeout
