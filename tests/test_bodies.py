@@ -104,6 +104,58 @@ def test_builder_beyond_the_range_of_1_over_r2_keeps_the_shape(dim):
     assert classify(huge[0], huge[1]) == Relation.TANGENT
 
 
+def _exact_in_y(M, scale, dim):
+    """The rational matrix of M in the coordinates y = x / scale (entries of order 1 for a shape of that scale)."""
+    D = [fmpq(*float(scale).as_integer_ratio())] * dim + [fmpq(1)]
+    get = (lambda i, j: M[i][j]) if isinstance(M, list) else (lambda i, j: fmpq(*float(M[i, j]).as_integer_ratio()))
+    return [[get(i, j) * D[i] * D[j] for j in range(dim + 1)] for i in range(dim + 1)]
+
+
+@pytest.mark.parametrize("scale", [2.0**-1000, 2.0**-990, 2.0**990, 2.0**1000])
+def test_builder_small_body_far_from_the_origin_at_the_ends_of_the_range(scale):
+    """Was: a body 10^4 times smaller than its distance from the origin, at coordinates near 2^±1000,
+    came out of bodies_from_axes as a matrix of inf (even at its own scale 1/r^2 leaves the range),
+    with no error until classify named an entry the user never typed. Its entries span ~2^1990, which
+    a float64 matrix holds once multiplied by the right power of two: built so, it is a positive
+    multiple of the exact matrix of the same floats (checked in rationals), and the pairs get the
+    label of the exact shapes (exact arithmetic on quadric_from_axes(exact=True))."""
+    rng = np.random.default_rng(11)
+    n = 12
+    big = rng.uniform(50, 100, (n, 3)) * scale
+    small = rng.uniform(1e-3, 1e-2, (n, 3)) * scale
+    cs = np.zeros((n, 3))
+    cs[:, 0] = big[:, 0] + small[:, 0] * np.where(np.arange(n) % 2, 0.99, 1.01)  # in and out of the big body's end
+    A = bodies_from_axes(np.zeros((n, 3)), big)
+    B = bodies_from_axes(cs, small)
+    assert np.isfinite(B).all()
+    for k in range(n):
+        E = quadric_from_axes(cs[k], small[k], exact=True)
+        G, Fq = _exact_in_y(E, scale, 3), _exact_in_y(B[k], scale, 3)
+        lam = Fq[0][0] / G[0][0]
+        top = max(abs(v) for row in G for v in row)
+        assert lam > 0 and all(abs(Fq[i][j] / lam - G[i][j]) <= top / 2**44 for i in range(4) for j in range(4)), k
+        want = classify(quadric_from_axes(np.zeros(3), big[k], exact=True), E, method="exact")
+        assert classify(A[k], B[k]) == want == (Relation.SEPARATE if k % 2 == 0 else Relation.OVERLAP), k
+
+
+def test_builder_says_when_no_float_matrix_holds_the_shape():
+    """A shape no float64 matrix holds (semi-axes 2^1000 at 2^1021 from the origin: its entries span
+    2^2042 whatever power of two multiplies them) is refused with a message saying why and what to
+    do, never returned as inf; a marked row is NaN; the exact builder still takes it. The one-shape
+    builder refuses what the many-shape one refuses (here a centre past FAR_FROM_ORIGIN)."""
+    c, r = [2.0**-10, 0.0, 0.0], [2.0**-1040] * 3  # 2^1030 radii from the origin, past 2^26: refused earlier
+    with pytest.raises(ValueError, match="more than 2\\^26"):
+        quadric_from_axes(c, r)
+    c, r = [2.0**1021, 0.0, 0.0], [2.0**1000] * 3  # 2^21 radii away at the top of the range: entries span 2^2042
+    with pytest.raises(ValueError, match="no float64 matrix holds this shape"):
+        quadric_from_axes(c, r)
+    with pytest.raises(ValueError, match="^row 1: .*no float64 matrix holds this shape"):
+        bodies_from_axes([[0.0, 0, 0], c], [[1.0, 1, 1], r])
+    Q = bodies_from_axes([[0.0, 0, 0], c], [[1.0, 1, 1], r], on_invalid="mark")
+    assert np.isnan(Q[1]).all() and np.isfinite(Q[0]).all()
+    assert quadric_from_axes(c, r, exact=True)[3][3] == fmpq(2**42 - 1)  # (2^21)^2 - 1
+
+
 def _plain_build(b):
     from core.shapes.quadrics import _assemble_plain, rotations_from_orientations
 

@@ -492,6 +492,14 @@ def test_explain_float_values_within_bounds(n):
             assert q.sign == (c > 0) - (c < 0)
 
 
+def _plain_matrix(c, r, o):
+    """The float builder's formula without its checks: past 2^26 radii from the origin the builders
+    refuse the shape (FAR_FROM_ORIGIN), but the filter must be sound on whatever matrix it is given."""
+    from core.shapes.quadrics import _assemble_plain, rotations_from_orientations
+
+    return _assemble_plain(np.array([c]), np.array([r]), rotations_from_orientations(np.array([o]), 1, len(c)))[0]
+
+
 def _far_pairs(rng, n, count, centre, axes=(0.3, 3.0), gap=None):
     d = n - 1
     from core import validate_quadric
@@ -499,8 +507,8 @@ def _far_pairs(rng, n, count, centre, axes=(0.3, 3.0), gap=None):
     A, B = [], []
     while len(A) < count:
         o = (lambda: rng.uniform(0, 3)) if d == 2 else (lambda: rng.normal(size=4))
-        a = quadric_from_axes(centre + rng.uniform(-3, 3, d), rng.uniform(*axes, d), o())
-        b = quadric_from_axes(centre + rng.uniform(-3, 3, d), rng.uniform(*axes, d), o())
+        a = _plain_matrix(centre + rng.uniform(-3, 3, d), rng.uniform(*axes, d), o())
+        b = _plain_matrix(centre + rng.uniform(-3, 3, d), rng.uniform(*axes, d), o())
         try:  # far from the origin, rounding to floats can leave a matrix that is no ellipsoid
             validate_quadric(a), validate_quadric(b)
         except ValueError:

@@ -35,7 +35,8 @@ def bodies_from_axes(
             (or (N, 4) quaternions (w, 0, 0, z)); None: axis-aligned.
         on_invalid: "raise" a ValueError naming the first bad row, or "mark": such rows become
             NaN matrices, which :func:`core.bodies.contacts` reports as invalid bodies (the
-            reasons: :func:`core.shapes.quadrics.axes_row_errors`).
+            reasons: :func:`core.shapes.quadrics.axes_row_errors`, and
+            :func:`core.shapes.quadrics.unrepresentable` for a shape no float64 matrix holds).
 
     Returns:
         float64 array (N, d+1, d+1); row k equals ``quadric_from_axes(centers[k], semi_axes[k],
@@ -43,7 +44,7 @@ def bodies_from_axes(
 
     Raises:
         ValueError: wrong array shapes, an unknown ``on_invalid``, or (with "raise") a row with a
-            non-finite number, a semi-axis <= 0 or a zero quaternion.
+            non-finite number, a semi-axis <= 0 or a zero quaternion, or one no float64 matrix holds.
 
     Examples:
         >>> Q = bodies_from_axes([[0, 0], [2, 0]], [[1, 1], [1, 1]], [0.0, 0.0])
@@ -61,7 +62,7 @@ def bodies_from_axes(
         return quadrics_from_axes(centers, semi_axes, orientations)
     errors = axes_row_errors(centers, semi_axes, orientations)
     if not errors:
-        return quadrics_from_axes(centers, semi_axes, orientations)
+        return quadrics_from_axes(centers, semi_axes, orientations, unrepresentable_rows="nan")
     # bad rows get harmless stand-in parameters, then NaN: one builder for every row
     bad = np.array(sorted(errors))
     c = np.array(centers, dtype=float)
@@ -71,6 +72,6 @@ def bodies_from_axes(
     if orientations is not None:
         o = np.array(orientations, dtype=float)
         o[bad] = 0.0 if o.ndim == 1 or o.shape[-1] == 1 else (1.0, 0.0, 0.0, 0.0)
-    out = quadrics_from_axes(c, r, o)
+    out = quadrics_from_axes(c, r, o, unrepresentable_rows="nan")
     out[bad] = np.nan
     return out

@@ -149,9 +149,14 @@ def quadric_from_axes(
             raise ValueError("centre and semi-axes must be finite numbers")
     if any(v <= 0 for v in r):
         raise ValueError(f"semi-axes must be positive, got {[str(v) for v in r]}")
+    if not exact:  # the many-shape builder's checks, e.g. a centre too far for its float matrix (FAR_FROM_ORIGIN)
+        for reason in axes_row_errors(np.array([c]), np.array([r]), first=True).values():
+            raise ValueError(reason)
     R = _orientation_matrix(d, orientation, exact)
     if not exact:  # the float matrix is built by the one vectorised routine (bit for bit)
         out: np.ndarray = _assemble_float(np.array([c]), np.array([r]), np.asarray(R, dtype=float)[None])[0]
+        if np.isnan(out).any():
+            raise ValueError(unrepresentable(c, r))
         return out
     inv_r2 = [1 / (v * v) for v in r]
     Q = [[sum(R[min(i, j)][k] * inv_r2[k] * R[max(i, j)][k] for k in range(d)) for j in range(d)] for i in range(d)]
@@ -162,7 +167,16 @@ def quadric_from_axes(
     return M
 
 
-def quadrics_from_axes(centers: Any, semi_axes: Any, orientations: Any = None) -> np.ndarray:
+def unrepresentable(c: Any, r: Any) -> str:
+    """Why a shape has no float64 matrix (the message of :func:`quadric_from_axes` and the builders)."""
+    return (f"centre {list(map(float, c))} and semi-axes {list(map(float, r))}: no float64 matrix holds this shape "
+            "(at any scale its entries would span more than 2^2040, the shape being tiny or huge beside its distance "
+            "from the origin); place the origin nearer the bodies, or give exact parameters (exact=True)")
+
+
+def quadrics_from_axes(
+    centers: Any, semi_axes: Any, orientations: Any = None, *, unrepresentable_rows: Literal["raise", "nan"] = "raise"
+) -> np.ndarray:
     """Float matrices of N shapes: :func:`quadric_from_axes` vectorised, bit for bit.
 
     Row k of the result is exactly (every bit) ``quadric_from_axes(centers[k], semi_axes[k],
@@ -175,13 +189,17 @@ def quadrics_from_axes(centers: Any, semi_axes: Any, orientations: Any = None) -
         semi_axes: (N, d) positive floats.
         orientations: 3D: (N, 4) quaternions wxyz (need not be unit); 2D: (N,) or (N, 1) angles
             in radians, or (N, 4) quaternions (w, 0, 0, z); None = axis-aligned.
+        unrepresentable_rows: "raise" a ValueError for a row no float64 matrix holds, or "nan":
+            such a row is NaN (:func:`core.bodies.bodies_from_axes` marks it invalid).
 
     Returns:
         float64 array (N, d + 1, d + 1).
 
     Raises:
         ValueError: wrong shapes, or a row with a non-finite number, a semi-axis <= 0 or a zero
-            quaternion (the message names the first such row: :func:`axes_row_errors`).
+            quaternion (the message names the first such row: :func:`axes_row_errors`), or a row
+            no float64 matrix holds (:func:`unrepresentable`; with ``unrepresentable_rows="nan"``
+            such a row is NaN instead).
 
     Examples:
         >>> M = quadrics_from_axes([[0, 0, 0], [3, 0, 0]], [[1, 1, 1], [2, 1, 1]], [[1, 0, 0, 0], [1, 0, 0, 1]])
@@ -197,7 +215,13 @@ def quadrics_from_axes(centers: Any, semi_axes: Any, orientations: Any = None) -
     if errors:
         k, reason = next(iter(errors.items()))
         raise ValueError(f"row {k}: {reason}")
-    return _assemble_float(c, r, rotations_from_orientations(o, *c.shape))
+    M = _assemble_float(c, r, rotations_from_orientations(o, *c.shape))
+    if unrepresentable_rows == "raise":
+        nan_rows = np.flatnonzero(np.isnan(M).any(axis=(1, 2)))
+        if nan_rows.size:
+            k = int(nan_rows[0])
+            raise ValueError(f"row {k}: {unrepresentable(c[k], r[k])}")
+    return M
 
 
 def _axes_arrays(centers: Any, semi_axes: Any, orientations: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -351,23 +375,71 @@ def _assemble_float(c: np.ndarray, r: np.ndarray, R: np.ndarray) -> np.ndarray:
     beyond about 2^±511, e.g. 1e-160 or 1e160) is built at the scale s = 2^e of its largest
     number instead and put back exactly: with Q', m', k' its matrix for c / s, r / s, the matrix
     s D M' D (D = diag(1/s, .., 1/s, 1)) = [[Q' / s, m'], [m'^T, s k']] describes the same shape
-    (a positive multiple), every entry a normal float. Shapes the plain form holds are unchanged.
+    (a positive multiple), every entry a normal float. Where even that leaves the range (a body
+    far smaller than its distance from the origin at the ends of the range, e.g. semi-axes 1e-304
+    at 1e-299), the multiple 2^q [[Q' / s^2, m' / s], [m'^T / s, k']] with q centring the entries'
+    exponents is taken (:func:`_balanced`). Shapes the plain form holds are unchanged; a shape no
+    multiple holds (its entries would span more than 2^2040) is a row of NaN.
     """
     with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):  # found and mended below
         M = _assemble_plain(c, r, R)
     d = c.shape[1]
-    Q_diag = np.abs(M[:, np.arange(d), np.arange(d)])
-    out_of_range = ~np.isfinite(M).all(axis=(1, 2)) | (Q_diag < np.finfo(np.float64).tiny).any(axis=1)
+    out_of_range = ~_in_range(M, d)
     fixable = out_of_range & np.isfinite(c).all(axis=1) & np.isfinite(r).all(axis=1) & (r > 0).all(axis=1)
     if fixable.any():
         k = np.flatnonzero(fixable)
         big = np.maximum(np.abs(c[k]).max(axis=1), r[k].max(axis=1))
-        s = np.ldexp(1.0, np.frexp(big)[1])[:, None]  # a power of 2: the divisions below are exact
-        Ms = _assemble_plain(c[k] / s, r[k] / s, R[k])
-        Ms[:, :d, :d] /= s[:, :, None]
-        Ms[:, d, d] *= s[:, 0]
+        e = np.frexp(big)[1]
+        s = np.ldexp(1.0, e)[:, None]  # a power of 2: the divisions below are exact
+        with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
+            Mp = _assemble_plain(c[k] / s, r[k] / s, R[k])
+            Ms = Mp.copy()
+            Ms[:, :d, :d] /= s[:, :, None]
+            Ms[:, d, d] *= s[:, 0]
+        still = ~_in_range(Ms, d)
+        if still.any():
+            Ms[still] = _balanced(Mp[still], e[still], d)
         M[k] = Ms
+        M[k[~_in_range(Ms, d)]] = np.nan
     return M
+
+
+def _in_range(M: np.ndarray, d: int) -> np.ndarray:
+    """Rows whose every entry is finite and whose Q has normal (not underflowed) diagonal entries."""
+    Q_diag = np.abs(M[:, np.arange(d), np.arange(d)])
+    ok: np.ndarray = np.isfinite(M).all(axis=(1, 2)) & (Q_diag >= np.finfo(np.float64).tiny).all(axis=1)
+    return ok
+
+
+def _balanced(Mp: np.ndarray, e: np.ndarray, d: int) -> np.ndarray:
+    """The shape's matrix times the power of two that centres its entries' exponents.
+
+    That is 2^q [[Q' / s^2, m' / s], [m'^T / s, k']] (s = 2^e) from M' = [[Q', m'], [m'^T, k']],
+    the matrix for c / s, r / s; NaN rows where the exponents span more than 2040 (or M' itself
+    is out of range).
+    """
+
+    def expo(x: np.ndarray) -> np.ndarray:  # |x| in [2^(E-1), 2^E)
+        e: np.ndarray = np.frexp(x)[1].astype(np.int64)
+        return e
+
+    Q, m, k = Mp[:, :d, :d], Mp[:, :d, d], Mp[:, d, d]
+    with np.errstate(invalid="ignore"):
+        q_max = expo(np.abs(Q).max(axis=(1, 2))) - 2 * e
+        q_min = expo(np.abs(Q[:, np.arange(d), np.arange(d)]).min(axis=1)) - 2 * e
+        m_abs = np.abs(m).max(axis=1)
+        m_e = np.where(m_abs > 0, expo(m_abs) - e, q_max)
+        k_e = np.where(k != 0, expo(np.abs(k)), q_max)
+    hi = np.maximum(np.maximum(q_max, m_e), k_e)
+    lo = np.minimum(q_min, k_e)
+    q = -((hi + lo) // 2)
+    out = np.empty_like(Mp)
+    out[:, :d, :d] = np.ldexp(Q, (q - 2 * e)[:, None, None])
+    out[:, :d, d] = out[:, d, :d] = np.ldexp(m, (q - e)[:, None])
+    out[:, d, d] = np.ldexp(k, q)
+    fits = np.isfinite(Mp).all(axis=(1, 2)) & (hi + q <= 1020) & (lo + q >= -1020)
+    out[~fits] = np.nan
+    return out
 
 
 def _assemble_plain(c: np.ndarray, r: np.ndarray, R: np.ndarray) -> np.ndarray:
