@@ -243,6 +243,11 @@ def test_explain_rejects_batch_and_bad_matrix(client):
         ({"center": [0, 0], "semi_axes": [1, 1], "orientation": [1, 1, 0, 0]}, "b: a 2D quaternion must rotate about z: (w, 0, 0, z)"),
         ({"center": [0, 0], "semi_axes": [1, 1], "orientation": [0, 0, 0, 0]}, "b: orientation quaternion is zero"),
         ({"center": [0.5, 0], "semi_axes": ["1e400", 1]}, "b: '1e400' is too large for a float (this shape is built in floats)"),
+        # was "b is a degenerate ellipse (det = 0: a single point)": the float matrix of a unit circle
+        # 1e8 from the origin rounds to a point; the builder says so and what to do
+        ({"center": [1e8, 0], "semi_axes": [1, 1]}, "b: centre [100000000.0, 0.0] is more than 2^26 times the smallest "
+         "semi-axis (1.0) from the origin: the float64 matrix would not be this shape (its constant term rounds by as "
+         "much as the shape's own size); place the origin nearer the bodies"),
     ],
 )
 def test_core_rejections_are_422_with_message(client, b, detail):
