@@ -434,9 +434,10 @@ def _balanced(Mp: np.ndarray, e: np.ndarray, d: int) -> np.ndarray:
     lo = np.minimum(q_min, k_e)
     q = -((hi + lo) // 2)
     out = np.empty_like(Mp)
-    out[:, :d, :d] = np.ldexp(Q, (q - 2 * e)[:, None, None])
-    out[:, :d, d] = out[:, d, :d] = np.ldexp(m, (q - e)[:, None])
-    out[:, d, d] = np.ldexp(k, q)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):  # rows that do not fit become NaN below
+        out[:, :d, :d] = np.ldexp(Q, (q - 2 * e)[:, None, None])
+        out[:, :d, d] = out[:, d, :d] = np.ldexp(m, (q - e)[:, None])
+        out[:, d, d] = np.ldexp(k, q)
     fits = np.isfinite(Mp).all(axis=(1, 2)) & (hi + q <= 1020) & (lo + q >= -1020)
     out[~fits] = np.nan
     return out
