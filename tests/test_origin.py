@@ -6,6 +6,8 @@ case by case, and the guard that refuses to start a scene without the check.
 
 from __future__ import annotations
 
+import time
+
 import pytest
 
 from app.scene.origin import OriginPolicy, normalise_origin, start_viser
@@ -93,3 +95,29 @@ def test_scene_never_starts_without_the_check(monkeypatch):
     with pytest.raises(RuntimeError, match="Origin check of the scene could not be installed"):
         start_viser(OriginPolicy("127.0.0.1"), host="127.0.0.1", port=0)
     assert stopped == [True]
+
+
+def test_stop_does_not_wait_for_a_connection_that_never_sent_a_request():
+    """A browser's spare socket (a TCP connection that sends no request) is dropped when the scene
+    stops. Was: ``websockets`` waited up to 10 s for its handshake; viser's stop() gave up after
+    6 s with the connection still open, so a scene that two tabs had opened took 6 s to stop."""
+    import socket
+
+    from app.scene import origin
+    from app.scene.server import start_scene
+
+    scene = start_scene("127.0.0.1", 0, processes=False)
+    with socket.create_connection(("127.0.0.1", scene.port), timeout=30) as idle:
+        deadline = time.monotonic() + 30
+        while not origin._WEBSOCKETS[scene.server].handlers:  # accepted by the server, no request sent
+            assert time.monotonic() < deadline, "the scene never accepted the connection"
+            time.sleep(0.01)
+        scene.stop()
+        idle.setblocking(False)
+        try:
+            dropped = idle.recv(1) == b""  # end of stream: the server closed it
+        except ConnectionResetError:
+            dropped = True  # aborted
+        except BlockingIOError:
+            dropped = False  # still open, waiting for a request
+        assert dropped, "the idle connection is still open after stop()"

@@ -17,6 +17,12 @@ scene on their machine (and send it expensive input). Accepted:
 viser 1.1.1 runs its own ``websockets`` server and takes no hook for this; :func:`start_viser`
 installs the check as that server's ``process_request`` (the handshake hook of ``websockets``),
 by wrapping ``websockets.asyncio.server.serve`` only while viser starts its server thread.
+
+:func:`stop_viser` stops such a server without waiting for a browser's spare connections: a
+browser opens TCP connections it may never send a request on (more than one tab on a host), and
+``websockets`` waits for each one's handshake for up to its ``open_timeout`` (10 s) when it
+closes. viser's ``stop()`` gives up after 6 s and leaves its thread running, so every scene a
+browser had two tabs on took 6 s to stop.
 """
 
 from __future__ import annotations
@@ -25,14 +31,17 @@ import http
 import ipaddress
 import socket
 import threading
+import weakref
 from collections.abc import Callable, Iterable
 from typing import Any
 from urllib.parse import urlsplit
 
-__all__ = ["OriginPolicy", "normalise_origin", "start_viser"]
+__all__ = ["OriginPolicy", "normalise_origin", "start_viser", "stop_viser"]
 
 _DEFAULT_PORTS = {"http": 80, "https": 443}
 _PATCH_LOCK = threading.Lock()
+_WEBSOCKETS: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
+"""The ``websockets`` server under each viser server :func:`start_viser` started (for :func:`stop_viser`)."""
 
 
 def normalise_origin(url: str) -> str:
@@ -206,11 +215,14 @@ def start_viser(policy: OriginPolicy, router: Any = None, **kwargs: Any) -> Any:
     if policy.port is None and kwargs.get("port"):
         policy.port = int(kwargs["port"])
 
+    started: list[Any] = []
+
     def serve(*args: Any, process_request: Callable[..., Any] | None = None, **kw: Any) -> Any:
         installed.append(True)
         if router is not None:
             process_request = router.process_request(process_request)
-        return original(*args, process_request=policy.process_request(process_request), **kw)
+        started.append(original(*args, process_request=policy.process_request(process_request), **kw))
+        return started[-1]
 
     with _PATCH_LOCK:  # viser calls serve() from its thread before ViserServer() returns
         ws_server.serve = serve  # type: ignore[assignment,misc]  # patched on purpose: serve is a class in websockets
@@ -223,4 +235,33 @@ def start_viser(policy: OriginPolicy, router: Any = None, **kwargs: Any) -> Any:
         raise RuntimeError("viser did not start its websocket server through websockets.asyncio.server.serve: "
                            "the Origin check of the scene could not be installed")
     policy.port = int(server.get_port())
+    websockets_server = getattr(started[-1], "server", None)  # websockets' Server (handlers, loop)
+    if websockets_server is not None:
+        _WEBSOCKETS[server] = websockets_server
     return server
+
+
+def stop_viser(server: Any) -> None:
+    """``server.stop()``, first dropping the connections that have not sent a request yet.
+
+    Such a connection is a browser's spare socket (or a client that never spoke): closing the
+    server would wait for its handshake (module docstring). Dropped on the server's event loop,
+    now and again just after the stop has closed the listening socket.
+    """
+    ws = _WEBSOCKETS.get(server)
+    loop = getattr(ws, "loop", None)
+    if loop is not None:
+        def drop_unopened() -> None:
+            from websockets.protocol import State
+
+            for connection in list(getattr(ws, "handlers", {})):
+                if connection.protocol.state is State.CONNECTING:
+                    connection.transport.abort()
+
+        try:
+            loop.call_soon_threadsafe(drop_unopened)
+            for delay in (0.05, 0.5):  # accepted between this call and the listener's close
+                loop.call_soon_threadsafe(loop.call_later, delay, drop_unopened)
+        except RuntimeError:  # the loop is already closed: nothing waits on it
+            pass
+    server.stop()

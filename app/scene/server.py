@@ -150,9 +150,11 @@ class SceneServer:
 
     def stop(self) -> None:
         """Stop the server and the analysis workers."""
+        from .origin import stop_viser
+
         for s in list(self.sessions.values()):
             s.close()
-        self.server.stop()
+        stop_viser(self.server)
         self.cache.shutdown()
         self.executor.shutdown(wait=False, cancel_futures=True)
 
@@ -203,7 +205,7 @@ def start_scene(
     """
     from core import warm_up
 
-    from .origin import OriginPolicy, start_viser
+    from .origin import OriginPolicy, start_viser, stop_viser
 
     if port and not _port_free(host, port):
         raise PortBusy(f"the scene's port {port} on {host} is already in use: stop the program using it or choose another with --port")
@@ -215,7 +217,7 @@ def start_scene(
     policy = OriginPolicy(host, allow_origins)
     server = start_viser(policy, router, host=host, port=port, verbose=verbose)
     if port and server.get_port() != port:  # taken between the check and the start
-        server.stop()
+        stop_viser(server)
         raise PortBusy(f"the scene's port {port} on {host} is already in use: choose another with --port")
     server.gui.configure_theme(control_width="large", show_share_button=False)
     return SceneServer(
