@@ -67,9 +67,11 @@ _SHARED = _SharedScene()
 def pytest_collection_modifyitems(session, config, items):
     """Files with browser tests first (each takes 20-90 s; the rest mostly under 10 s).
 
-    pytest-xdist (``--dist loadfile``) hands out whole files in collection order: starting the
-    long files first leaves short ones to fill the end, so no worker waits alone for a long file
-    at the end of the run. The order inside a file is kept; the sort is the same in every worker.
+    pytest-xdist (``--dist loadfile --no-loadscope-reorder``, pyproject.toml) hands out whole files
+    in collection order: starting the long files first leaves short ones to fill the end, so no
+    worker waits alone for a long file at the end of the run. Without the option xdist 3.8 sends
+    the files with the most tests first, and this sort did nothing. The order inside a file is
+    kept; the sort is the same in every worker.
     """
     browser_files = {item.nodeid.split("::")[0] for item in items if item.get_closest_marker("browser")}
     items.sort(key=lambda item: item.nodeid.split("::")[0] not in browser_files)
