@@ -73,6 +73,10 @@ class SceneServer:
         self.cache = AnalysisCache(self.executor, processes=processes)
         self.sessions: dict[int, Session] = {}
         self._tabs: dict[int, str] = {}
+        self._building: set[int] = set()
+        """Clients whose session is being built."""
+        self._left: set[int] = set()
+        """Of those, the ones that disconnected meanwhile (see :meth:`_register`)."""
         self._lock = threading.Lock()
         self.new_session = threading.Condition(self._lock)
         self.shared: Session | None = None
@@ -89,14 +93,23 @@ class SceneServer:
         server.on_client_disconnect(self._disconnect)
 
     def _connect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            self._building.add(client.client_id)
+        try:
+            self._open(client)
+        finally:
+            with self._lock:
+                self._building.discard(client.client_id)
+                self._left.discard(client.client_id)
+
+    def _open(self, client: viser.ClientHandle) -> None:
         if self.bodies is not None and self.shared is None:  # many bodies (issue 14): one view per tab
             from .bodies_view import BodiesView
 
             view = BodiesView(client, self.bodies, cache=self.cache, executor=self.executor)
-            with self._lock:
-                self.sessions[client.client_id] = view  # type: ignore[assignment]
-                self.new_session.notify_all()
+            self._register(client.client_id, view, None)
             return
+        tab = None
         if self.shared is not None:
             session = self.shared  # the scene is shared; every tab's camera is framed
         else:
@@ -106,18 +119,33 @@ class SceneServer:
                               cache=self.cache, executor=self.executor, defer_load=isinstance(saved, dict))
             if isinstance(saved, dict):  # a link: user input, read like an uploaded file
                 session.load_untrusted(saved)
-            if tab is not None:
-                with self._lock:
-                    self._tabs[client.client_id] = tab
         session.frame_camera()
+        self._register(client.client_id, session, tab)
+
+    def _register(self, client_id: int, session: Any, tab: str | None) -> None:
+        """Make ``session`` the tab's, unless the tab left while it was being built: then close it.
+
+        viser runs the connect and disconnect callbacks of a client on a thread pool, so a tab
+        closed (or reloaded) while its session is built is seen leaving before it has a session.
+        Was: the session was registered afterwards and never closed (its analyses and timers ran on
+        for a tab that was gone, and a scene's newest session could be a dead one).
+        """
         with self._lock:
-            self.sessions[client.client_id] = session
-            self.new_session.notify_all()
+            left = client_id in self._left
+            if not left:
+                self.sessions[client_id] = session
+                if tab is not None:
+                    self._tabs[client_id] = tab
+                self.new_session.notify_all()
+        if left and session is not self.shared:
+            session.close()  # the tab's stored configuration stays what it opened (a reload reopens it)
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
             s = self.sessions.pop(client.client_id, None)
             tab = self._tabs.pop(client.client_id, None)
+            if s is None and client.client_id in self._building:  # _register closes it when built
+                self._left.add(client.client_id)
         if s is not None and s is not self.shared:
             if tab is not None:
                 self.store.put(tab, s.snapshot())  # a reload of this tab reopens it as it is

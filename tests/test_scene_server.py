@@ -1,0 +1,58 @@
+"""The scene server's tabs (app.scene.server): each connected tab has one session, closed when it leaves."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import msgspec
+import viser
+from viser import _messages
+from websockets.sync.client import connect
+
+from app.scene.server import SceneServer, start_scene
+from app.scene.session import Session
+
+
+def until(cond, what: str, timeout: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not cond():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.01)
+
+
+CAMERA = msgspec.msgpack.encode(_messages.ViewerCameraMessage(
+    wxyz=(1.0, 0.0, 0.0, 0.0), position=(0.0, 0.0, 5.0), fov=1.0, near=0.01, far=100.0, image_height=600, image_width=800,
+    look_at=(0.0, 0.0, 0.0), up_direction=(0.0, 0.0, 1.0)).as_serializable_dict())
+"""A tab's first message: viser counts a client as connected once it has reported its camera."""
+
+
+def test_a_tab_that_leaves_while_its_session_is_built_leaves_no_session(monkeypatch):
+    """viser runs a client's connect and disconnect callbacks on a thread pool, so a tab closed
+    (or reloaded) while its session is being built is seen leaving first. Was: the session was
+    registered afterwards and never closed; its analyses and timers ran on for a tab that was gone.
+    Here the last step of the build waits until the server has seen the tab leave."""
+    built: list[Session] = []
+    left = threading.Event()
+    real_frame, real_disconnect = Session.frame_camera, SceneServer._disconnect
+
+    def disconnect(self: SceneServer, client: viser.ClientHandle) -> None:
+        real_disconnect(self, client)
+        left.set()
+
+    def frame_after_the_tab_left(self: Session) -> None:  # the build's last step
+        built.append(self)
+        until(left.is_set, "the server to see the tab leave")
+        real_frame(self)
+
+    monkeypatch.setattr(SceneServer, "_disconnect", disconnect)
+    monkeypatch.setattr(Session, "frame_camera", frame_after_the_tab_left)
+    scene = start_scene("127.0.0.1", 0, processes=False, prefetch=False)
+    try:
+        with connect(f"ws://127.0.0.1:{scene.port}/", subprotocols=[f"viser-v{viser.__version__}"], open_timeout=30) as tab:
+            tab.send(CAMERA)
+            until(lambda: built, "the tab's session to be built")
+        until(lambda: built[0].closed, "the session of the tab that left to be closed")
+        assert scene.sessions == {}
+    finally:
+        scene.stop()
