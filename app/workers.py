@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any, cast
 if TYPE_CHECKING:
     from multiprocessing.context import ForkContext, ForkServerContext, SpawnContext
 
-__all__ = ["JOB_MODULES", "WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerStopped", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
+__all__ = ["JOB_MODULES", "job_clock", "WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerStopped", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
 
 JOB_MODULES: tuple[str, ...] = (
     "core",
@@ -152,7 +152,25 @@ def _batch_policy() -> None:
         pass
 
 
-def _child(conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_mb: int | None) -> None:
+_JOB_CLOCK: list[float] = []
+"""In a worker process: when the pool started its job's clock (``time.monotonic()``); empty elsewhere."""
+
+
+def job_clock() -> float | None:
+    """When the pool started the clock of this process's job (``time.monotonic()``), or None outside a worker.
+
+    Read before the child starts: the pool's own deadline counts from just after it, so a budget
+    of the same length counted from here (:class:`app.api.budget.Budget`) always ends first.
+    ``time.monotonic()`` is Linux's ``CLOCK_MONOTONIC``, one clock for every process of the machine.
+    """
+    return _JOB_CLOCK[0] if _JOB_CLOCK else None
+
+
+def _child(
+    conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_mb: int | None, clock: float | None = None
+) -> None:
+    if clock is not None:
+        _JOB_CLOCK[:] = [clock]
     _die_with_parent()
     _batch_policy()
     if memory_mb is not None:
@@ -322,7 +340,8 @@ class WorkerPool:
         self, fn: Callable[..., Any], args: tuple, kwargs: dict, timeout: float, grace: float, cancel: threading.Event | None
     ) -> Any:
         recv, send = self._ctx.Pipe(duplex=False)
-        proc = self._ctx.Process(target=_child, args=(send, fn, args, kwargs, self._memory_mb), daemon=True)
+        clock = time.monotonic()  # the job's own budget counts from here (job_clock), the kill from after start
+        proc = self._ctx.Process(target=_child, args=(send, fn, args, kwargs, self._memory_mb, clock), daemon=True)
         try:
             proc.start()
         except Exception as e:

@@ -21,3 +21,21 @@ def log(path: str, name: str) -> str:
     with open(path, "a") as f:
         f.write(name + "\n")
     return name
+
+
+def budget_checks_after_a_slow_start(start_s: float, budget_s: float) -> None:
+    """A job whose start takes ``start_s`` (as on a loaded machine), then checks a budget of
+    ``budget_s`` every 10 ms until it is spent: it stops with the budget's message, saying where."""
+    from app.api.budget import Budget, BudgetExceeded
+    from app.workers import WorkerTimeout
+
+    time.sleep(start_s)
+    budget = Budget(budget_s)
+    steps = 0
+    try:
+        while True:
+            budget.check(f"after {steps} steps")
+            steps += 1
+            time.sleep(0.01)
+    except BudgetExceeded as e:
+        raise WorkerTimeout(str(e)) from None

@@ -16,12 +16,15 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pool_jobs
+import pytest
+
 import app.jobs as jobs
 from app.api.contacts_schemas import ContactsIn
 from app.api.schemas import PairItem
 from app.api.sweep_schemas import SweepIn
 from app.api.witness_schemas import ContactScaleIn, WitnessIn
-from app.workers import JOB_MODULES, WorkerPool
+from app.workers import JOB_MODULES, WorkerPool, WorkerTimeout
 
 ROOT = Path(__file__).resolve().parents[1]
 PAIR = {"a": {"center": ["3", "0"], "semi_axes": ["1", "2"]}, "b": {"center": [0, 0], "semi_axes": [1, 2]}}
@@ -81,3 +84,19 @@ def test_jobs_run_under_the_batch_policy():
     finally:
         pool.shutdown()
     assert (policy, nice) == (os.SCHED_BATCH, os.nice(0))
+
+
+def test_a_job_slow_to_start_still_says_where_its_budget_stopped_it():
+    """A job's own budget counts from when the pool started its clock, as the pool's kill does.
+
+    Was: it counted from when the job began, so a job slow to start (a loaded machine: the fork,
+    reading its arguments) was killed at the pool's deadline (plus the grace) before its own
+    budget ran out, and the answer said only "exceeded its time budget". Here the start takes
+    2 s, the budget 2 s, the grace 1 s: the job's check at 2 s is over its budget (it was 4 s)."""
+    pool = WorkerPool(1)
+    try:
+        with pytest.raises(WorkerTimeout) as stop:
+            pool.run(pool_jobs.budget_checks_after_a_slow_start, 2.0, 2.0, timeout=2.0, grace=1.0)
+    finally:
+        pool.shutdown()
+    assert str(stop.value) == "stopped after 0 steps: over the time budget of 2 s per request"

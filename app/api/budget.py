@@ -31,6 +31,7 @@ from ..workers import (
     WorkerPool,
     WorkerStopped,
     WorkerTimeout,
+    job_clock,
 )
 
 __all__ = [
@@ -70,11 +71,20 @@ class Cancelled(RuntimeError):
 
 
 class Budget:
-    """Deadline plus cancel event of one request; call :meth:`check` between steps."""
+    """Deadline plus cancel event of one request; call :meth:`check` between steps.
+
+    In a worker process the deadline counts from when the pool started the job's clock
+    (:func:`app.workers.job_clock`), not from when the job got here: the pool kills the job
+    :data:`JOB_GRACE_S` after its own deadline, which counts from then, so the job's last check
+    comes first and says where it stopped. Was: on a loaded machine the child's start (fork,
+    reading its arguments) took long enough that the kill came first, with a message that says less.
+    """
 
     def __init__(self, seconds: float, cancel: threading.Event | None = None) -> None:
         self.seconds = seconds
-        self.deadline = time.monotonic() + seconds
+        now = time.monotonic()
+        clock = job_clock()
+        self.deadline = (clock if clock is not None and clock <= now else now) + seconds
         self.cancel = cancel or threading.Event()
 
     def check(self, progress: str = "") -> None:
