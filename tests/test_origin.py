@@ -6,8 +6,6 @@ case by case, and the guard that refuses to start a scene without the check.
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from app.scene.origin import OriginPolicy, normalise_origin, start_viser
@@ -103,15 +101,14 @@ def test_stop_does_not_wait_for_a_connection_that_never_sent_a_request():
     6 s with the connection still open, so a scene that two tabs had opened took 6 s to stop."""
     import socket
 
+    from browser_helpers import until
+
     from app.scene import origin
     from app.scene.server import start_scene
 
     scene = start_scene("127.0.0.1", 0, processes=False)
     with socket.create_connection(("127.0.0.1", scene.port), timeout=30) as idle:
-        deadline = time.monotonic() + 30
-        while not origin._WEBSOCKETS[scene.server].handlers:  # accepted by the server, no request sent
-            assert time.monotonic() < deadline, "the scene never accepted the connection"
-            time.sleep(0.01)
+        until(lambda: origin._WEBSOCKETS[scene.server].handlers, 30, "the scene to accept the connection (no request sent)")
         scene.stop()
         idle.setblocking(False)
         try:

@@ -3,24 +3,16 @@
 from __future__ import annotations
 
 import threading
-import time
 
 import msgspec
 import pytest
 import viser
+from browser_helpers import until
 from viser import _messages
 from websockets.sync.client import connect
 
 from app.scene.server import SceneServer, start_scene
 from app.scene.session import Session
-
-
-def until(cond, what: str, timeout: float = 60.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not cond():
-        assert time.monotonic() < deadline, f"timed out waiting for {what}"
-        time.sleep(0.01)
-
 
 CAMERA = msgspec.msgpack.encode(_messages.ViewerCameraMessage(
     wxyz=(1.0, 0.0, 0.0, 0.0), position=(0.0, 0.0, 5.0), fov=1.0, near=0.01, far=100.0, image_height=600, image_width=800,
@@ -45,7 +37,7 @@ def test_a_tab_that_leaves_while_its_session_is_built_leaves_no_session(monkeypa
 
     def frame_after_the_tab_left(self: Session) -> None:  # the build's last step
         built.append(self)
-        until(left.is_set, "the server to see the tab leave")
+        until(left.is_set, 60, "the server to see the tab leave")
         real_frame(self)
 
     monkeypatch.setattr(SceneServer, "_disconnect", disconnect)
@@ -54,8 +46,8 @@ def test_a_tab_that_leaves_while_its_session_is_built_leaves_no_session(monkeypa
     try:
         with connect(f"ws://127.0.0.1:{scene.port}/", subprotocols=[f"viser-v{viser.__version__}"], open_timeout=30) as tab:
             tab.send(CAMERA)
-            until(lambda: built, "the tab's session to be built")
-        until(lambda: built[0].closed, "the session of the tab that left to be closed")
+            until(lambda: built, 60, "the tab's session to be built")
+        until(lambda: built[0].closed, 60, "the session of the tab that left to be closed")
         assert scene.sessions == {}
     finally:
         scene.stop()
