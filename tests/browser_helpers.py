@@ -9,6 +9,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import os
+import signal
 import subprocess
 import tempfile
 import time
@@ -98,18 +99,53 @@ class SharedChromium:
             time.sleep(0.05)
 
     def stop(self) -> None:
-        """End the browser (if it runs) and remove its profile."""
+        """End the browser and every process it started (if it runs), then remove its profile.
+
+        The helper processes (GPU, network, storage) can outlive the browser's main process by a
+        moment and still write into the profile: removing it before they are gone failed with
+        "Directory not empty" (2 stops of 30). They are in the browser's session (its process group).
+        """
         proc, self._proc = self._proc, None
-        if proc is not None and proc.poll() is None:
-            proc.terminate()
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        if proc is not None:
+            if proc.poll() is None:
+                proc.terminate()
+                try:
+                    proc.wait(10)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait()
+            _end_group(proc.pid)
         if self._tmp is not None:
             self._tmp.cleanup()
             self._tmp = None
+
+
+def _end_group(pgid: int, timeout: float = 10.0) -> None:
+    """Kill what is left of the process group ``pgid`` and wait (at most ``timeout`` s) until none runs.
+
+    Called once the browser's main process has ended: its helpers have nothing left to keep (the
+    profile is removed next). A killed helper is done with its files once it is a zombie; who reaps
+    it (the init process, ~1 s here) is not waited for.
+    """
+    try:
+        os.killpg(pgid, signal.SIGKILL)
+    except ProcessLookupError:
+        return
+    deadline = time.monotonic() + timeout
+    while _running_in_group(pgid) and time.monotonic() < deadline:
+        time.sleep(0.01)
+
+
+def _running_in_group(pgid: int) -> bool:
+    """Whether a process of the group ``pgid`` is alive and not yet a zombie (Linux /proc)."""
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:  # ended meanwhile
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":  # fields after the name: state, ppid, pgrp
+            return True
+    return False
 
 
 CHROMIUM_OF_THIS_PROCESS = SharedChromium()
@@ -122,10 +158,17 @@ def connected() -> Iterator[Any]:
     the tabs opened in it are closed on exit, the browser keeps running."""
     if not os.path.exists("/usr/bin/chromium"):
         pytest.skip("needs Debian chromium at /usr/bin/chromium")
+    with connected_to(CHROMIUM_OF_THIS_PROCESS.get()) as context:
+        yield context
+
+
+@contextlib.contextmanager
+def connected_to(cdp: str) -> Iterator[Any]:
+    """Playwright connected to the Chromium at the DevTools address ``cdp``: see :func:`connected`."""
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as pw:
-        context = pw.chromium.connect_over_cdp(CHROMIUM_OF_THIS_PROCESS.get()).contexts[0]
+        context = pw.chromium.connect_over_cdp(cdp).contexts[0]
         before = list(context.pages)
         try:
             yield context
