@@ -19,7 +19,7 @@ from typing import Any
 
 import pytest
 
-from conftest import TEST_DPR
+from conftest import TEST_DPR, TEST_SETTLE_MS
 
 PLAYWRIGHT_SWITCHES = [
     "--disable-field-trial-config", "--disable-background-networking", "--disable-background-timer-throttling",
@@ -241,7 +241,7 @@ def bodies_page(model: Any) -> Iterator[tuple[Any, Any]]:
     from app.scene.state import SceneConfig
     from app.screenshot import HeadlessScene
 
-    with HeadlessScene(SceneConfig(), bodies=model, width=1000, height=720, timeout=120, dpr=TEST_DPR,
+    with HeadlessScene(SceneConfig(), bodies=model, width=1000, height=720, timeout=120, dpr=TEST_DPR, settle_ms=TEST_SETTLE_MS,
                        cdp=CHROMIUM_OF_THIS_PROCESS.get()) as hs:
         yield hs, model
 

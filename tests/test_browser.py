@@ -16,7 +16,7 @@ import pytest
 
 from app.scene.links import link_path
 from app.scene.state import SceneConfig
-from conftest import TEST_DPR
+from conftest import TEST_DPR, TEST_SETTLE_MS
 
 pytestmark = [
     pytest.mark.browser,
@@ -210,7 +210,7 @@ def test_shared_presenter_scene_is_seen_by_every_tab(tmp_path):
         with connected() as browser:
             pages = [browser.new_page() for _ in range(2)]
             for p in pages:
-                p.goto(f"http://127.0.0.1:{scene.port}/?fixedDpr={TEST_DPR:g}&hideViserLogo")
+                p.goto(f"http://127.0.0.1:{scene.port}/?fixedDpr={TEST_DPR:g}&hideViserLogo&renderSettleMs={TEST_SETTLE_MS}")
             colour_js = (
                 "(want) => { const r = window.__viserMutable?.nodeRefFromName?.['/shapes/B/mesh']; if (!r) return false;"
                 " let h = null; r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); });"
@@ -233,7 +233,7 @@ def test_presenter_mode_dimension_switch_and_every_camera_browser():
     from app.screenshot import HeadlessScene
 
     cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.3})
-    with HeadlessScene(cfg, width=1100, height=800, timeout=90, shared=True, dpr=TEST_DPR,
+    with HeadlessScene(cfg, width=1100, height=800, timeout=90, shared=True, dpr=TEST_DPR, settle_ms=TEST_SETTLE_MS,
                        cdp=CHROMIUM_OF_THIS_PROCESS.get()) as h:
         second = h.page.context.new_page()
         h.goto("/", page=second)
@@ -287,7 +287,7 @@ def test_a_scene_in_a_running_chromium_closes_only_its_own_tabs():
             return sorted(t["id"] for t in json.load(r) if t["type"] == "page")
 
     before = tabs()
-    with HeadlessScene(static_config("4"), width=800, height=600, timeout=90, dpr=TEST_DPR, cdp=url) as h:
+    with HeadlessScene(static_config("4"), width=800, height=600, timeout=90, dpr=TEST_DPR, settle_ms=TEST_SETTLE_MS, cdp=url) as h:
         h.page.context.new_page()
         assert h.session.state.relation == "separate" and h.mesh_color("B") == HEX["separate"]
         assert len(tabs()) == len(before) + 2

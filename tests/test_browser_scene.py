@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import time
 
 import numpy as np
@@ -130,6 +131,27 @@ def test_a_new_tab_runs_the_client_from_the_browser_cache(hs, monkeypatch):
     assert s.state.relation is not None and hs.page.evaluate("() => window.__viserMutable != null")
     srcs = hs.page.evaluate("() => Array.from(document.scripts).map(e => e.src).filter(u => u.includes('/_client/'))")
     assert len(srcs) == 1 and srcs[0].endswith(".js")
+
+
+def test_the_settle_window_is_what_the_page_address_says(hs):
+    """``renderSettleMs`` (app/scene/page.py): the test tabs draw one frame per change (0 ms), and
+    the client reads the flag as documented: a number in 0..10000, else viser's own 250 ms."""
+    from app.scene.page import SETTLE_FLAG, settle_flag_supported
+    from conftest import TEST_SETTLE_MS
+
+    assert settle_flag_supported()
+    open_on(hs, {"preset": "example-29", "t": 0.3})
+    assert SETTLE_FLAG + "=" in hs.page.url
+    assert hs.page.evaluate("() => window.__renderSettleMs") == TEST_SETTLE_MS
+    # the flag's reader as the client runs it, on other addresses (no page load each)
+    js = hs.page.evaluate("() => Array.from(document.scripts).map(e => e.src).find(u => u.includes('/_client/'))")
+    reader = re.search(r"\(\(\)=>\{const v=new URLSearchParams\(location\.search\).*?\}\)\(\)", hs.page.evaluate(
+        "async (u) => (await fetch(u)).text()", js)).group(0)
+    for query, want in [("", 250), (f"?{SETTLE_FLAG}=0", 0), (f"?a=1&{SETTLE_FLAG}=40", 40), (f"?{SETTLE_FLAG}=10000", 10000),
+                        (f"?{SETTLE_FLAG}=", 250), (f"?{SETTLE_FLAG}=abc", 250), (f"?{SETTLE_FLAG}=-1", 250),
+                        (f"?{SETTLE_FLAG}=1e9", 250), (f"?{SETTLE_FLAG}=NaN", 250)]:
+        got = hs.page.evaluate("([r, q]) => new Function('location', 'globalThis', 'return ' + r)({search: q}, {})", [reader, query])
+        assert got == want, (query, got)
 
 
 def test_dimension_switch_then_tangent_circles_are_drawn_where_certified(hs):

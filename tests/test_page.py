@@ -16,6 +16,7 @@ from pathlib import Path
 import httpx
 import pytest
 import viser
+import zstandard
 
 from app.scene import page
 from app.scene.server import start_scene
@@ -54,10 +55,16 @@ def test_base88_decodes_what_the_loader_encoding_makes(data):
 def test_the_files_are_viser_client_named_by_their_hash():
     client = page._client()
     assert client is not None, "viser's page is no longer laid out as 1.1.1 lays it out"
-    m = re.search(r'data-ss="(\d+)" data-cs="(\d+)"', VISER_PAGE)
-    assert (len(client.css), len(client.js)) == (int(m.group(1)), int(m.group(2)))
-    assert client.name == hashlib.sha256(client.css + client.js).hexdigest()[:20]
+    m = re.search(r'data-p="([^"]*)" data-ss="(\d+)" data-cs="(\d+)"', VISER_PAGE)
+    ss, cs = int(m.group(2)), int(m.group(3))
+    raw = zstandard.ZstdDecompressor().decompress(page._base88(m.group(1)), max_output_size=ss + cs)
+    assert client.css == raw[:ss]
+    # the code is viser's with one change: the settle window read from the page's address
     js = client.js.decode("utf-8")
+    reader = re.compile(r"\(\(\)=>\{const v=new URLSearchParams\(location\.search\)\.get\(\"renderSettleMs\"\).*?:250\}\)\(\)")
+    assert len(reader.findall(js)) == 1 and client.settle_flag
+    assert reader.sub("250", js).encode("utf-8") == raw[ss:]
+    assert client.name == hashlib.sha256(client.css + client.js).hexdigest()[:20]
     assert "__viserZstdWasm" in js and "__viserMutable" in js  # the client's code, not garbage
     assert client.css.decode("utf-8").lstrip().startswith(":root")
     # the loader keeps the WebAssembly module the client needs and no longer carries the payload
@@ -127,6 +134,19 @@ def test_unknown_client_files_are_404_never_the_page(scenes):
 def _clear_caches() -> None:
     for cached in (page._client, page.page_html, page._gzipped, page._assets):
         cached.cache_clear()
+
+
+def test_a_client_without_the_known_scheduler_is_served_unchanged(monkeypatch):
+    """Another viser whose render scheduler is not found: its code as it ships, the flag ignored."""
+    _clear_caches()
+    try:
+        monkeypatch.setattr(page, "_SETTLE", re.compile("no such scheduler"))
+        client = page._client()
+        assert client is not None and not client.settle_flag and not page.settle_flag_supported()
+        assert b"renderSettleMs" not in client.js and len(client.js) == int(re.search(r'data-cs="(\d+)"', VISER_PAGE).group(1))
+    finally:
+        monkeypatch.undo()
+        _clear_caches()
 
 
 def test_a_page_of_another_layout_is_served_whole(monkeypatch):

@@ -14,6 +14,12 @@ inflater and runs as an inline module on every load: nothing of it can be cached
 and the style are files named by their content hash (``_client/<hash>.js`` / ``.css``, served
 with ``Cache-Control: immutable``), so a browser fetches them once and reuses its compiled
 code. Pages of an unknown layout are served as viser ships them.
+
+The client keeps drawing for 250 ms after each change it is asked to show (viser's settle window,
+for changes with asynchronous tails); a page address with ``renderSettleMs=N`` (0..10000) sets
+that window, e.g. 0 for one frame per change: in software WebGL a frame takes ~80 ms, so the
+window is 3 frames of CPU per change that headless tests reading state need not pay (the
+client's one frame a second when idle still draws a late tail). See :data:`SETTLE_FLAG`.
 """
 
 from __future__ import annotations
@@ -28,8 +34,8 @@ from pathlib import Path
 from typing import Any
 
 __all__ = [
-    "CLIENT_PREFIX", "LABELS_JS", "SHARED_CLIENT_DIR", "TAB_CLIENT_DIR", "client_asset_response", "page_html",
-    "page_response", "warm",
+    "CLIENT_PREFIX", "LABELS_JS", "SETTLE_FLAG", "SHARED_CLIENT_DIR", "TAB_CLIENT_DIR", "client_asset_response",
+    "page_html", "page_response", "settle_flag_supported", "warm",
 ]
 
 LABELS_JS = """
@@ -68,6 +74,38 @@ _BASE88 = (
 )
 
 
+SETTLE_FLAG = "renderSettleMs"
+"""The page address's flag setting the client's settle window in ms (see the module's docstring)."""
+
+_SETTLE = re.compile(
+    r"var (\w+)=(\d+),(\w+)=1e3;(function \w+\(\)\{.{0,600}?requestRender=\(\)=>\{\w+\.current=performance\.now\(\)\+\1,)",
+    re.S,
+)
+"""viser 1.1.1's render scheduler (minified): ``var <settle>=250,<heartbeat>=1e3;function ...
+requestRender=()=>{<ref>.current=performance.now()+<settle>, ...``."""
+
+
+def _with_settle_flag(js: str) -> str | None:
+    """The client's code with its settle window read from the page's :data:`SETTLE_FLAG`.
+
+    Its own value when the flag is absent or not a number in 0..10000; None when the scheduler is
+    not found (another viser: the code is served unchanged, the flag ignored). The window in effect
+    is ``window.__renderSettleMs``.
+    """
+    if len(_SETTLE.findall(js)) != 1:
+        return None
+
+    def settle(m: re.Match[str]) -> str:
+        own = m.group(2)
+        read = (
+            f'(()=>{{const v=new URLSearchParams(location.search).get("{SETTLE_FLAG}"),n=v===null||v===""?NaN:Number(v);'
+            f"return globalThis.__renderSettleMs=n>=0&&n<=1e4?n:{own}}})()"
+        )
+        return f"var {m.group(1)}={read},{m.group(3)}=1e3;{m.group(4)}"
+
+    return _SETTLE.sub(settle, js, count=1)
+
+
 @dataclass(frozen=True)
 class _Client:
     """viser's page split into a small loader page and the two files it loads."""
@@ -78,6 +116,8 @@ class _Client:
     css: bytes
     name: str
     """The files' name: a prefix of the SHA-256 of both."""
+    settle_flag: bool = False
+    """The code reads the page's :data:`SETTLE_FLAG`."""
 
 
 def _base88(text: str) -> bytes:
@@ -126,7 +166,11 @@ def _client() -> _Client | None:
         return None
     if len(raw) != ss + cs:
         return None
-    name = hashlib.sha256(raw).hexdigest()[:20]
+    css, js = raw[:ss], raw[ss:]
+    flagged = _with_settle_flag(js.decode("utf-8"))
+    if flagged is not None:
+        js = flagged.encode("utf-8")
+    name = hashlib.sha256(css + js).hexdigest()[:20]
     # the loader still builds the zstd module the client uses (globalThis.__viserZstdWasm), then
     # runs the client from its file instead of decoding it; the style is linked in the head
     run = (
@@ -137,7 +181,13 @@ def _client() -> _Client | None:
     loader = _DECODE_AND_RUN.sub(lambda _: run, loader, count=1)
     links = f'<link rel="stylesheet" href="{_DIR}{name}.css"><link rel="modulepreload" href="{_DIR}{name}.js">'
     loader = loader.replace("<title>", links + "<title>", 1)
-    return _Client(loader=loader, js=raw[ss:], css=raw[:ss], name=name)
+    return _Client(loader=loader, js=js, css=css, name=name, settle_flag=flagged is not None)
+
+
+def settle_flag_supported() -> bool:
+    """Whether the client served reads :data:`SETTLE_FLAG` (viser's code as 1.1.1 lays it out)."""
+    client = _client()
+    return client is not None and client.settle_flag
 
 
 @lru_cache(maxsize=4)
