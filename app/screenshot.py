@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from .output import Output
-from .scene.page import SETTLE_FLAG
+from .scene.page import SETTLE_FLAG, SETTLE_MAX_MS
 from .scene.shapes import PALETTES, RELATION_HEX
 from .scene.state import SceneConfig
 
@@ -160,8 +160,8 @@ class HeadlessScene:
     ) -> None:
         if not 0.1 <= dpr <= 4:
             raise ValueError(f"dpr must be in [0.1, 4], not {dpr}")
-        if settle_ms is not None and not 0 <= settle_ms <= 10_000:
-            raise ValueError(f"settle_ms must be in [0, 10000], not {settle_ms}")
+        if settle_ms is not None and not 0 <= settle_ms <= SETTLE_MAX_MS:
+            raise ValueError(f"settle_ms must be in [0, {SETTLE_MAX_MS}], not {settle_ms}")
         self.settle_ms = settle_ms
         self.config = config
         self.dpr = dpr

@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 __all__ = [
-    "CLIENT_PREFIX", "LABELS_JS", "SETTLE_FLAG", "SHARED_CLIENT_DIR", "TAB_CLIENT_DIR", "client_asset_response",
+    "CLIENT_PREFIX", "LABELS_JS", "SETTLE_FLAG", "SETTLE_MAX_MS", "SHARED_CLIENT_DIR", "TAB_CLIENT_DIR", "client_asset_response",
     "page_html", "page_response", "settle_flag_supported", "warm",
 ]
 
@@ -76,6 +76,8 @@ _BASE88 = (
 
 SETTLE_FLAG = "renderSettleMs"
 """The page address's flag setting the client's settle window in ms (see the module's docstring)."""
+SETTLE_MAX_MS = 10_000
+"""The largest settle window the flag sets; a larger value means viser's own."""
 
 _SETTLE = re.compile(
     r"var (\w+)=(\d+),(\w+)=1e3;(function \w+\(\)\{.{0,600}?requestRender=\(\)=>\{\w+\.current=performance\.now\(\)\+\1,)",
@@ -88,7 +90,7 @@ requestRender=()=>{<ref>.current=performance.now()+<settle>, ...``."""
 def _with_settle_flag(js: str) -> str | None:
     """The client's code with its settle window read from the page's :data:`SETTLE_FLAG`.
 
-    Its own value when the flag is absent or not a number in 0..10000; None when the scheduler is
+    Its own value when the flag is absent or not a number in 0..:data:`SETTLE_MAX_MS`; None when the scheduler is
     not found (another viser: the code is served unchanged, the flag ignored). The window in effect
     is ``window.__renderSettleMs``.
     """
@@ -99,7 +101,7 @@ def _with_settle_flag(js: str) -> str | None:
         own = m.group(2)
         read = (
             f'(()=>{{const v=new URLSearchParams(location.search).get("{SETTLE_FLAG}"),n=v===null||v===""?NaN:Number(v);'
-            f"return globalThis.__renderSettleMs=n>=0&&n<=1e4?n:{own}}})()"
+            f"return globalThis.__renderSettleMs=n>=0&&n<={SETTLE_MAX_MS}?n:{own}}})()"
         )
         return f"var {m.group(1)}={read},{m.group(3)}=1e3;{m.group(4)}"
 
