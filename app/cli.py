@@ -86,6 +86,17 @@ def _origin(text: str) -> str:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
+def _seconds(text: str) -> float:
+    """A time budget for ``serve``: a finite number of seconds > 0 (at most a day)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not 0 < v <= 86_400:  # also refuses nan and inf
+        raise argparse.ArgumentTypeError(f"seconds out of range (0, 86400]: {text!r}")
+    return v
+
+
 def _cors_origin(text: str) -> str:
     """An origin for ``--cors-origin`` (as browsers send it), or "*" for any."""
     return "*" if text.strip() == "*" else _origin(text)
@@ -143,6 +154,15 @@ def build_parser() -> argparse.ArgumentParser:
         "--cors-origin", action="append", default=[], type=_cors_origin, metavar="URL",
         help="let web pages at this origin call the API from a browser (CORS), e.g. https://example.org, "
         "or '*' for any (repeatable; default: no CORS headers)",
+    )
+    s.add_argument(
+        "--request-budget", type=_seconds, default=None, metavar="SECONDS",
+        help="time budget of one API request (classify, explain, witnesses, contacts, sweep): "
+        "the work is stopped and answered with 503 (default 5)",
+    )
+    s.add_argument(
+        "--analysis-budget", type=_seconds, default=None, metavar="SECONDS",
+        help="time budget of one motion analysis of the API (/api/analyse); its worker is killed (default 20)",
     )
 
     sh = sub.add_parser(
@@ -264,7 +284,8 @@ def _serve(args: argparse.Namespace) -> int:
         if scene is not None:
             scene.stop()
         return 0
-    api = create_api(ApiSettings(scene_url=scene_url, cors_origins=tuple(args.cors_origin)))
+    budgets = {name: v for name, v in (("request_budget_s", args.request_budget), ("time_budget_s", args.analysis_budget)) if v is not None}
+    api = create_api(ApiSettings(scene_url=scene_url, cors_origins=tuple(args.cors_origin), **budgets))
 
     def stop_work() -> None:
         """On SIGTERM/SIGINT: fail every request budget, kill the analysis workers (API, scene)."""

@@ -44,6 +44,10 @@ def test_t_accepts_fractions():
         (["screenshot", "--width", "10", "--out", "x.png"], "size out of range"),
         (["serve", "--port", "70000"], "port out of range"),
         (["screenshot", "--dim", "4", "--out", "x.png"], "invalid choice"),
+        (["serve", "--request-budget", "0"], "seconds out of range (0, 86400]: '0'"),
+        (["serve", "--analysis-budget", "nan"], "seconds out of range (0, 86400]: 'nan'"),
+        (["serve", "--request-budget", "inf"], "seconds out of range"),
+        (["serve", "--analysis-budget", "5s"], "not a number of seconds: '5s'"),
     ],
 )
 def test_bad_arguments_exit_2(argv, message, capsys):
@@ -51,6 +55,22 @@ def test_bad_arguments_exit_2(argv, message, capsys):
         main(argv)
     assert e.value.code == 2
     assert message in capsys.readouterr().err
+
+
+def test_serve_budgets_default_to_the_api_settings_and_say_so():
+    """``serve --request-budget/--analysis-budget``: absent, the API keeps ApiSettings' budgets, and
+    the help states those defaults (one value, read from the settings)."""
+    from app.api.settings import ApiSettings
+
+    defaults = ApiSettings()
+    args = build_parser().parse_args(["serve"])
+    assert (args.request_budget, args.analysis_budget) == (None, None)
+    args = build_parser().parse_args(["serve", "--request-budget", "2.5", "--analysis-budget", "60"])
+    assert (args.request_budget, args.analysis_budget) == (2.5, 60.0)
+    serve = next(a for a in build_parser()._actions if a.dest == "command").choices["serve"]
+    helps = {a.dest: a.help for a in serve._actions}
+    assert helps["request_budget"].endswith(f"(default {defaults.request_budget_s:g})")
+    assert helps["analysis_budget"].endswith(f"(default {defaults.time_budget_s:g})")
 
 
 def test_bad_config_file_is_a_clear_error(tmp_path, capsys):

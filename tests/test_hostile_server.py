@@ -51,6 +51,10 @@ MEMORY_MB = 3 * 1024
 """The server and all its processes together stay below this resident size (the issue's bound)."""
 GUARD_S = 60.0
 """Failure guard for an answer (the budgets are 5-20 s; refusals are immediate)."""
+SHORT_BUDGET_S = 1.5
+"""The request and analysis budgets of the ``short_budget`` server (``serve --request-budget``,
+``--analysis-budget``): the tests of work stopped by the budget wait for it, and the default's 5 s
+spent ~10 s of the suite."""
 EXIT_S = 5.0
 """SIGTERM to exit, with any work in flight (the issue's bound)."""
 
@@ -129,6 +133,17 @@ def server():
     wait_gone(below, 10)
 
 
+@pytest.fixture(scope="module")
+def short_budget():
+    """The API alone with a request budget of SHORT_BUDGET_S (the work the budget stops is the same,
+    only sooner); the server above keeps the default 5 s, longer than a client that leaves after 1 s."""
+    s = Server("--api-only", "--request-budget", f"{SHORT_BUDGET_S:g}", "--analysis-budget", f"{SHORT_BUDGET_S:g}")
+    yield s
+    below = descendants(s.proc.pid)
+    s.kill()
+    wait_gone(below, 10)
+
+
 def health(s: Server) -> dict:
     return httpx.get(f"{s.api}/healthz", timeout=30).json()
 
@@ -186,8 +201,9 @@ def test_contacts_answer_over_the_cap_is_refused_before_it_is_built(server):
     )
 
 
-def test_contacts_heavy_exact_work_is_answered_or_stopped_by_the_budget(server):
+def test_contacts_heavy_exact_work_is_answered_or_stopped_by_the_budget(short_budget):
     """9,702 touching spheres: every one of 27,741 pairs needs exact arithmetic (seconds of work)."""
+    server = short_budget
     c = np.array(np.meshgrid(np.arange(21.0), np.arange(21.0), np.arange(22.0), indexing="ij")).reshape(3, -1).T
     rows = [[*p, 0.5, 0.5, 0.5, 1.0, 0.0, 0.0, 0.0] for p in c.tolist()]
     r = attack(server, "/api/contacts", {"bodies": rows})
@@ -197,7 +213,7 @@ def test_contacts_heavy_exact_work_is_answered_or_stopped_by_the_budget(server):
         assert r.status_code == 503 and r.headers["retry-after"] == "2", r.text[:300]
         detail = r.json()["detail"]
         assert detail.startswith("stopped after ") and detail.endswith(
-            "pairs to examine: over the time budget of 5 s per request; send fewer bodies per request"
+            f"pairs to examine: over the time budget of {SHORT_BUDGET_S:g} s per request; send fewer bodies per request"
         ), detail
 
 
@@ -254,9 +270,10 @@ def test_work_of_a_sweep_client_that_went_away_is_stopped(server):
     assert wait_gone(job_processes(server.proc.pid), 5) == set()
 
 
-def test_sweep_heavy_exact_work_is_answered_or_stopped_by_the_budget(server):
+def test_sweep_heavy_exact_work_is_answered_or_stopped_by_the_budget(short_budget):
     """The same 5,000 exact grazing pairs, waited for: today 503 saying where the budget stopped the
     sweep (a sweep fast enough to answer them within the budget is as good)."""
+    server = short_budget
     r = attack(server, "/api/sweep", grazing_sweep(5000))
     if r.status_code == 200:
         assert r.json()["counts"]["tangent"] == 5000
@@ -264,24 +281,33 @@ def test_sweep_heavy_exact_work_is_answered_or_stopped_by_the_budget(server):
     assert (r.status_code, r.headers.get("retry-after")) == (503, "2"), r.text[:300]
     detail = r.json()["detail"]
     assert detail.startswith("stopped after ") and detail.endswith(
-        "pairs to examine: over the time budget of 5 s per request; send fewer bodies per request"
+        f"pairs to examine: over the time budget of {SHORT_BUDGET_S:g} s per request; send fewer bodies per request"
     ), detail
 
 
 # --- witnesses: work that grows with the numbers ---------------------------------------------------
 
-def test_exact_contact_scale_on_huge_numbers_is_answered_or_stopped_by_the_budget(server):
+def test_exact_contact_scale_on_huge_numbers_is_answered_or_stopped_by_the_budget(short_budget):
     """Was: a server thread still running 6 minutes after the client left; SIGTERM could not stop it.
 
     Today this pair takes far longer than the budget (the precision grows with the size of the
     numbers); a faster witness answers it, which is as good.
     """
+    server = short_budget
     r = attack(server, "/api/contact-scale", HUGE_WORK)
     if r.status_code == 200:
         assert r.json()["relation"] == "separate"
     else:
         assert (r.status_code, r.headers.get("retry-after")) == (503, "2"), r.text[:300]
-        assert r.json() == {"detail": "stopped: the job exceeded its time budget of 5 s and was stopped"}
+        assert r.json() == {"detail": f"stopped: the job exceeded its time budget of {SHORT_BUDGET_S:g} s and was stopped"}
+
+
+def test_an_analysis_over_the_budget_the_server_was_given_is_stopped(short_budget):
+    """``serve --analysis-budget``: a legitimate analysis of several seconds is stopped at the budget
+    given (the default is 20 s), its worker killed."""
+    r = attack(short_budget, "/api/analyse", slow_motion())
+    assert (r.status_code, r.headers.get("retry-after")) == (503, "2"), r.text[:300]
+    assert r.json()["detail"].startswith(f"analysis stopped: the job exceeded its time budget of {SHORT_BUDGET_S:g} s"), r.text
 
 
 def test_work_of_a_witness_client_that_went_away_is_stopped(server):
