@@ -41,6 +41,10 @@ chromiumSwitches and headless arguments), for the one the tests start themselves
 not throttled, sRGB colours, no scrollbars, a mouse as the pointer."""
 
 
+NOTEBOOK_HOST = "notebook.test"
+"""A host name the test Chromium resolves to 127.0.0.1 (``--host-resolver-rules``): a page served
+on loopback under a name, as a remote notebook server's page is (tests/test_replay_notebook.py)."""
+
 DIE_WITH_PARENT = ["/usr/bin/setpriv", "--pdeathsig", "TERM"] if os.path.exists("/usr/bin/setpriv") else []
 """Run before Chromium so that it gets SIGTERM when the test process dies (a killed worker leaves no
 browser): util-linux's setpriv (Debian: essential) sets the parent-death signal and execs."""
@@ -80,6 +84,7 @@ class SharedChromium:
         with open(log, "wb") as err:
             self._proc = subprocess.Popen(
                 [*DIE_WITH_PARENT, CHROMIUM, *CHROMIUM_FLAGS, *PLAYWRIGHT_SWITCHES, "--remote-debugging-port=0",
+                 f"--host-resolver-rules=MAP {NOTEBOOK_HOST} 127.0.0.1",
                  f"--user-data-dir={root / 'profile'}", "about:blank"],
                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err,
                 start_new_session=True,  # its own session, as Playwright launches it (see below)

@@ -202,32 +202,28 @@ def test_notebook_scene_through_a_remote_notebooks_proxy():
     Jupyter's base URL (read from the page) to <base>proxy/PORT/s/<tab>/, the scene's redirects
     stay below that path, and the handshake is accepted for the cell's secret tab only: a tab of
     the same scene opened at the proxy's root is refused (the Origin is not the scene's)."""
-    from playwright.sync_api import sync_playwright
+    from browser_helpers import NOTEBOOK_HOST, connected
 
     from app.notebook import show
-    from app.screenshot import CHROMIUM, CHROMIUM_FLAGS
 
     nb = show("circles-crossing", height=500, proxy=True)
     proxy = NotebookProxy(nb._repr_html_(), base_url="/")
     try:
         assert nb.url == f"/proxy/{nb.scene.port}/s/{nb.tab}/"
-        with sync_playwright() as pw:
-            b = pw.chromium.launch(executable_path=CHROMIUM, headless=True,
-                                   args=[*CHROMIUM_FLAGS, "--host-resolver-rules=MAP notebook.test 127.0.0.1"])
+        with connected() as b:  # the test Chromium resolves NOTEBOOK_HOST to 127.0.0.1
             page = b.new_page()
-            page.goto(f"http://notebook.test:{proxy.port}/lab/tree/nb.ipynb")
+            page.goto(f"http://{NOTEBOOK_HOST}:{proxy.port}/lab/tree/nb.ipynb")
             frame = page.frame_locator("iframe")
             frame.get_by_text("Jump to α1", exact=False).wait_for(timeout=60000)
             assert nb.session is not None and nb.session.state.motion.preset == "circles-crossing"
             assert page.evaluate("() => document.querySelector('iframe').src") == \
-                f"http://notebook.test:{proxy.port}/proxy/{nb.scene.port}/s/{nb.tab}/"
+                f"http://{NOTEBOOK_HOST}:{proxy.port}/proxy/{nb.scene.port}/s/{nb.tab}/"
             # the relative redirect of the scene's root stays below the proxy's path
             other = b.new_page()
-            other.goto(f"http://notebook.test:{proxy.port}/proxy/{nb.scene.port}/")
-            assert other.url.startswith(f"http://notebook.test:{proxy.port}/proxy/{nb.scene.port}/s/"), other.url
-            b.close()
+            other.goto(f"http://{NOTEBOOK_HOST}:{proxy.port}/proxy/{nb.scene.port}/")
+            assert other.url.startswith(f"http://{NOTEBOOK_HOST}:{proxy.port}/proxy/{nb.scene.port}/s/"), other.url
         # the notebook's Origin opens the cell's tab only: any other tab of the scene is refused
-        origin = f"http://notebook.test:{proxy.port}"
+        origin = f"http://{NOTEBOOK_HOST}:{proxy.port}"
         assert handshake(nb.scene.port, f"/s/{nb.tab}/", origin) == 101
         assert handshake(nb.scene.port, "/s/AAAAAAAAAAAAAAAA/", origin) == 403
         assert handshake(nb.scene.port, "/", origin) == 403
