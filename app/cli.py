@@ -41,6 +41,8 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from .scene.mesh_detail import SPHERE_SUBDIVISIONS, SPHERE_SUBDIVISIONS_RANGE
+
 if TYPE_CHECKING:  # imported where used: the command line starts without viser
     from .scene.state import SceneConfig
 
@@ -156,6 +158,12 @@ def build_parser() -> argparse.ArgumentParser:
         "or '*' for any (repeatable; default: no CORS headers)",
     )
     s.add_argument(
+        "--sphere-subdivisions", type=int, choices=SPHERE_SUBDIVISIONS_RANGE, default=SPHERE_SUBDIVISIONS, metavar="K",
+        help=f"icosphere subdivisions of the drawn ellipsoids, {SPHERE_SUBDIVISIONS_RANGE[0]}..{SPHERE_SUBDIVISIONS_RANGE[-1]} "
+        f"(20 * 4^K faces; default {SPHERE_SUBDIVISIONS}: tangent shapes drawn within a pixel up to 3,000 pixels across); "
+        "fewer draw faster where the browser has no GPU",
+    )
+    s.add_argument(
         "--request-budget", type=_seconds, default=None, metavar="SECONDS",
         help="time budget of one API request (classify, explain, witnesses, contacts, sweep): "
         "the work is stopped and answered with 503 (default 5)",
@@ -268,7 +276,7 @@ def _serve(args: argparse.Namespace) -> int:
 
         scene = start_scene(
             args.host, args.port, config_from_args(args), shared=args.shared, allow_origins=args.allow_origin,
-            bodies=_bodies_model(args),
+            bodies=_bodies_model(args), sphere_subdivisions=args.sphere_subdivisions,
         )
         scene_url = scene.url
         print(f"Scene (open in a browser): {scene_url}", flush=True)

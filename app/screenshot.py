@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from .output import Output
+from .scene.mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
 from .scene.page import SETTLE_FLAG, SETTLE_MAX_MS
 from .scene.shapes import PALETTES, RELATION_HEX
 from .scene.state import SceneConfig
@@ -142,6 +143,10 @@ class HeadlessScene:
             before the picture is taken). The browser tests, which read three.js state and the
             panel, take 0: one frame per change (in software WebGL the window is 3 frames), 14 %
             less CPU in tests/test_browser_scene.py.
+        sphere_subdivisions: of the icosphere the solids are drawn with
+            (:data:`app.scene.shapes.SPHERE_SUBDIVISIONS_RANGE`): the default for pictures; the
+            browser tests, which read colours, poses and the panel, take 3 (a frame in software
+            WebGL ~23 instead of ~60 ms of CPU).
     """
 
     def __init__(
@@ -157,7 +162,9 @@ class HeadlessScene:
         dpr: float = 1.0,
         cdp: str | None = None,
         settle_ms: float | None = None,
+        sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
     ) -> None:
+        self.sphere_subdivisions = check_sphere_subdivisions(sphere_subdivisions)
         if not 0.1 <= dpr <= 4:
             raise ValueError(f"dpr must be in [0.1, 4], not {dpr}")
         if settle_ms is not None and not 0 <= settle_ms <= SETTLE_MAX_MS:
@@ -192,7 +199,8 @@ class HeadlessScene:
         from .scene.server import start_scene
 
         self.scene = start_scene(
-            "127.0.0.1", 0, self.config, shared=self.shared, bodies=self.bodies, prefetch=self.prefetch
+            "127.0.0.1", 0, self.config, shared=self.shared, bodies=self.bodies, prefetch=self.prefetch,
+            sphere_subdivisions=self.sphere_subdivisions,
         )
         try:
             self._pw = sync_playwright().start()

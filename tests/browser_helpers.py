@@ -19,7 +19,7 @@ from typing import Any
 
 import pytest
 
-from conftest import TEST_DPR, TEST_SETTLE_MS
+from conftest import TEST_DPR, TEST_SETTLE_MS, TEST_SPHERE_SUBDIVISIONS
 
 PLAYWRIGHT_SWITCHES = [
     "--disable-field-trial-config", "--disable-background-networking", "--disable-background-timer-throttling",
@@ -247,6 +247,7 @@ def bodies_page(model: Any) -> Iterator[tuple[Any, Any]]:
     from app.screenshot import HeadlessScene
 
     with HeadlessScene(SceneConfig(), bodies=model, width=1000, height=720, timeout=120, dpr=TEST_DPR, settle_ms=TEST_SETTLE_MS,
+                       sphere_subdivisions=TEST_SPHERE_SUBDIVISIONS,
                        cdp=CHROMIUM_OF_THIS_PROCESS.get()) as hs:
         yield hs, model
 

@@ -33,6 +33,14 @@ idle still draws a change's late tail. tests/test_browser_scene.py: 60 -> 51 CPU
 viser's window."""
 
 
+TEST_SPHERE_SUBDIVISIONS = 3
+"""Icosphere subdivisions of the solids in the test tabs' scenes (``HeadlessScene`` and
+``start_scene(sphere_subdivisions=...)``): 1,280 faces instead of 20,480, so that software WebGL
+draws a frame of two ellipsoids in ~23 instead of ~60 ms of CPU (the browser test files: 146 ->
+132 CPU-s). The tests read colours, poses, three.js state and the panel; the default mesh and its
+gap bound are tested without a browser (tests/test_scene.py), and pictures keep it."""
+
+
 def _chromium() -> bool:
     return os.path.exists("/usr/bin/chromium")
 
@@ -59,6 +67,7 @@ class _SharedScene:
 
             scene = HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1000, height=720,
                                   timeout=90, dpr=TEST_DPR, settle_ms=TEST_SETTLE_MS,
+                                  sphere_subdivisions=TEST_SPHERE_SUBDIVISIONS,
                                   cdp=CHROMIUM_OF_THIS_PROCESS.get())
             self.scene = scene.__enter__()
         return self.scene

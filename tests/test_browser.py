@@ -16,7 +16,7 @@ import pytest
 
 from app.scene.links import link_path
 from app.scene.state import SceneConfig
-from conftest import TEST_DPR, TEST_SETTLE_MS
+from conftest import TEST_DPR, TEST_SETTLE_MS, TEST_SPHERE_SUBDIVISIONS
 
 pytestmark = [
     pytest.mark.browser,
@@ -84,6 +84,10 @@ def test_scene_loads_and_typing_a_centre_changes_colour(headless, tmp_path):
     hs = headless(static_config("4"))
     assert hs.session.state.relation == "separate"
     assert hs.mesh_color("A") == hs.mesh_color("B") == HEX["separate"]
+    faces = ("(n) => { let f = null; window.__viserMutable.nodeRefFromName[n].traverse(o => {"
+             " if (f === null && o.geometry?.index) f = o.geometry.index.count / 3; }); return f; }")
+    drawn = [hs.page.evaluate(faces, f"/shapes/{n}/mesh") for n in "AB"]
+    assert drawn == [20 * 4**TEST_SPHERE_SUBDIVISIONS] * 2, drawn  # the scene's detail reaches the tab
     assert dominant_hue_share(hs.canvas_pixels(), HUE["separate"]) > 0.8
     page = hs.page
     page.get_by_text("Shape B", exact=True).click()
@@ -203,7 +207,8 @@ def test_choosing_a_preset_in_the_dropdown_shows_its_intervals(headless):
 def test_shared_presenter_scene_is_seen_by_every_tab(tmp_path):
     from app.scene.server import start_scene
 
-    scene = start_scene("127.0.0.1", 0, static_config("4"), shared=True, processes=False)
+    scene = start_scene("127.0.0.1", 0, static_config("4"), shared=True, processes=False,
+                        sphere_subdivisions=TEST_SPHERE_SUBDIVISIONS)
     try:
         from browser_helpers import connected
 
@@ -234,6 +239,7 @@ def test_presenter_mode_dimension_switch_and_every_camera_browser():
 
     cfg = SceneConfig.from_dict({"preset": "example-29", "t": 0.3})
     with HeadlessScene(cfg, width=1100, height=800, timeout=90, shared=True, dpr=TEST_DPR, settle_ms=TEST_SETTLE_MS,
+                       sphere_subdivisions=TEST_SPHERE_SUBDIVISIONS,
                        cdp=CHROMIUM_OF_THIS_PROCESS.get()) as h:
         second = h.page.context.new_page()
         h.goto("/", page=second)
@@ -287,7 +293,8 @@ def test_a_scene_in_a_running_chromium_closes_only_its_own_tabs():
             return sorted(t["id"] for t in json.load(r) if t["type"] == "page")
 
     before = tabs()
-    with HeadlessScene(static_config("4"), width=800, height=600, timeout=90, dpr=TEST_DPR, settle_ms=TEST_SETTLE_MS, cdp=url) as h:
+    with HeadlessScene(static_config("4"), width=800, height=600, timeout=90, dpr=TEST_DPR, settle_ms=TEST_SETTLE_MS, cdp=url,
+                       sphere_subdivisions=TEST_SPHERE_SUBDIVISIONS) as h:
         h.page.context.new_page()
         assert h.session.state.relation == "separate" and h.mesh_color("B") == HEX["separate"]
         assert len(tabs()) == len(before) + 2

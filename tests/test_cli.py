@@ -136,6 +136,33 @@ def test_serve_starts_scene_and_api():
     assert f"http://127.0.0.1:{api_port}/" in out
 
 
+def test_serve_hands_its_scene_and_api_options_on(monkeypatch, capsys):
+    """``serve --sphere-subdivisions/--request-budget/--analysis-budget`` reach the scene server and
+    the API's settings (both stubbed here: nothing listens)."""
+    import app.lifecycle
+    import app.scene.server
+
+    seen: dict[str, object] = {}
+
+    class Scene:
+        url = "http://127.0.0.1:1/"
+
+        def stop(self) -> None:
+            seen["stopped"] = True
+
+    def start_scene(host, port, config, **kw):
+        seen["scene"] = kw
+        return Scene()
+
+    monkeypatch.setattr(app.scene.server, "start_scene", start_scene)
+    monkeypatch.setattr(app.lifecycle, "serve", lambda api, host, port, stop: seen.setdefault("settings", api.state.settings))
+    assert main(["serve", "--preset", "none", "--sphere-subdivisions", "2", "--request-budget", "3", "--analysis-budget", "45"]) == 0
+    assert seen["scene"]["sphere_subdivisions"] == 2 and seen["stopped"]
+    settings = seen["settings"]
+    assert (settings.request_budget_s, settings.time_budget_s) == (3.0, 45.0)
+    capsys.readouterr()
+
+
 def test_no_subcommand_means_serve():
     from app.cli import build_parser
 

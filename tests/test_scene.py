@@ -532,6 +532,29 @@ def test_dimension_switch_keeps_the_gizmo_and_swaps_the_mesh(server):
     s.close()
 
 
+def test_a_sessions_sphere_subdivisions_draw_its_solids_and_survive_a_dimension_switch(server):
+    """``Session(sphere_subdivisions=k)`` (``serve --sphere-subdivisions``): the solids are the
+    icosphere of k subdivisions (20 * 4^k faces), before and after a switch to 2D and back; a
+    value outside 1..6 is refused, naming the range."""
+    from app.scene.mesh_detail import SPHERE_SUBDIVISIONS
+
+    for k in (1, 3):
+        s = Session(server, unit_spheres(3, "3"), sphere_subdivisions=k)
+        for v in s.views.values():
+            assert len(v.mesh.faces) == 20 * 4**k and len(v.mesh.vertices) == len(unit_sphere(k)[0])
+        s.ui.view.dimension.value = "2D ellipses"
+        assert all(len(v.mesh.vertices) == len(unit_disc(DISC_SEGMENTS)[0]) for v in s.views.values())
+        s.ui.view.dimension.value = "3D ellipsoids"
+        assert all(len(v.mesh.faces) == 20 * 4**k for v in s.views.values())
+        s.close()
+    s = Session(server, unit_spheres(3, "3"))
+    assert all(len(v.mesh.faces) == 20 * 4**SPHERE_SUBDIVISIONS for v in s.views.values())  # the default
+    s.close()
+    for bad in (0, 7, 2.5, True):
+        with pytest.raises(ValueError, match=r"sphere subdivisions must be an integer in 1\.\.6"):
+            Session(server, unit_spheres(3, "3"), sphere_subdivisions=bad)
+
+
 def test_dimension_switch_rebuilds_shapes(server):
     """View -> Dimension shows the other dimension's default shapes, drawn where they are: 2D
     A = ellipse (2, 1) at the origin, B = ellipse (3/2, 1/2) at (3, 3/2) turned by 0.6 rad."""

@@ -37,6 +37,7 @@ from .bodies_layers import SEPARATE_MODES, BodyLayers, relation_colour_rows
 from .bodies_lod import ViewPose
 from .camera import Framing
 from .lighting import light_scene
+from .mesh_detail import SPHERE_SUBDIVISIONS
 from .shapes import RELATION_HEX
 
 __all__ = ["BodiesView", "load_model", "NO_PAIRS"]
@@ -69,9 +70,14 @@ class BodiesView:
         model: the bodies to show (None: an empty view with the upload button).
         cache: analysis cache handed to the two-body view.
         executor: where the two-body view runs analyses.
+        sphere_subdivisions: of the two-body view's solids (:class:`app.scene.session.Session`).
     """
 
-    def __init__(self, target: Any, model: BodiesModel | None, *, cache: Any = None, executor: Executor | None = None) -> None:
+    def __init__(
+        self, target: Any, model: BodiesModel | None, *, cache: Any = None, executor: Executor | None = None,
+        sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
+    ) -> None:
+        self.sphere_subdivisions = sphere_subdivisions
         self.target = target
         self.scene = target.scene
         self.gui = target.gui
@@ -542,7 +548,8 @@ class BodiesView:
             if self.session is None:
                 self.pair_folder = self.gui.add_folder("Two-body view", order=-998.0)
                 with self.pair_folder:
-                    self.session = Session(self.target, cfg, cache=self.analysis_cache(), executor=self.executor)
+                    self.session = Session(self.target, cfg, cache=self.analysis_cache(), executor=self.executor,
+                                           sphere_subdivisions=self.sphere_subdivisions)
             else:
                 self.pair_folder.visible = True
                 self._show_session_nodes(True)

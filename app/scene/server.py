@@ -24,6 +24,7 @@ import viser
 from . import page, wire
 from .analysis import AnalysisCache
 from .links import Router, TabStore, tab_id_of
+from .mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
 from .session import Session
 from .state import SceneConfig
 
@@ -47,6 +48,8 @@ class SceneServer:
             tab opens on them (:mod:`app.scene.bodies_view`) instead of ``config``.
         prefetch: analyse every preset at start, so a pick in the dropdown shows at once (an
             interactive server); off for one-shot uses (screenshots) that show one motion.
+        sphere_subdivisions: of the icosphere every tab draws the solids with
+            (:data:`app.scene.shapes.SPHERE_SUBDIVISIONS_RANGE`).
     """
 
     def __init__(
@@ -60,8 +63,11 @@ class SceneServer:
         bodies: Any = None,
         prefetch: bool = True,
         policy: Any = None,
+        sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
     ) -> None:
         self.server = server
+        self.sphere_subdivisions = check_sphere_subdivisions(sphere_subdivisions)
+        """Icosphere subdivisions of the solids of every session."""
         self.policy = policy
         """The :class:`~app.scene.origin.OriginPolicy` of the handshakes (None: not checked here)."""
         self.config = config
@@ -86,7 +92,7 @@ class SceneServer:
         """The thread analysing the presets at start (joined: every preset is in the cache), or None."""
         if shared:
             self.shared = Session(
-                server, config, cache=self.cache, executor=self.executor,
+                server, config, cache=self.cache, executor=self.executor, sphere_subdivisions=self.sphere_subdivisions,
                 cameras=lambda: [c.camera for c in server.get_clients().values()],
             )
         server.on_client_connect(self._connect)
@@ -106,7 +112,8 @@ class SceneServer:
         if self.bodies is not None and self.shared is None:  # many bodies (issue 14): one view per tab
             from .bodies_view import BodiesView
 
-            view = BodiesView(client, self.bodies, cache=self.cache, executor=self.executor)
+            view = BodiesView(client, self.bodies, cache=self.cache, executor=self.executor,
+                              sphere_subdivisions=self.sphere_subdivisions)
             self._register(client.client_id, view, None)
             return
         tab = None
@@ -116,7 +123,8 @@ class SceneServer:
             tab = tab_id_of(wire.handshake_path(self.server, client))
             saved = self.store.get(tab) if tab is not None else None
             session = Session(client, self.config if isinstance(saved, dict) or saved is None else saved,
-                              cache=self.cache, executor=self.executor, defer_load=isinstance(saved, dict))
+                              cache=self.cache, executor=self.executor, defer_load=isinstance(saved, dict),
+                              sphere_subdivisions=self.sphere_subdivisions)
             if isinstance(saved, dict):  # a link: user input, read like an uploaded file
                 session.load_untrusted(saved)
         session.frame_camera()
@@ -210,6 +218,7 @@ def start_scene(
     allow_origins: Iterable[str] = (),
     bodies: Any = None,
     prefetch: bool = True,
+    sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
 ) -> SceneServer:
     """Start the scene server (returns at once; viser serves from its own thread).
 
@@ -227,6 +236,8 @@ def start_scene(
         bodies: many bodies (:class:`app.scene.bodies.BodiesModel`, ``--bodies FILE``): each tab
             opens on them (:mod:`app.scene.bodies_view`) instead of ``config``.
         prefetch: analyse every preset at start (see :class:`SceneServer`).
+        sphere_subdivisions: of the icosphere the solids are drawn with (see :class:`SceneServer`;
+            ``--sphere-subdivisions`` on the command line).
 
     Raises:
         PortBusy: ``port`` is taken (viser would silently take the next port, perhaps the API's).
@@ -235,6 +246,7 @@ def start_scene(
 
     from .origin import OriginPolicy, start_viser, stop_viser
 
+    check_sphere_subdivisions(sphere_subdivisions)  # before a port is taken
     if port and not _port_free(host, port):
         raise PortBusy(f"the scene's port {port} on {host} is already in use: stop the program using it or choose another with --port")
     warm_up(wait=False)  # compile the float filter in the background; drags use exact meanwhile
@@ -250,7 +262,7 @@ def start_scene(
     server.gui.configure_theme(control_width="large", show_share_button=False)
     return SceneServer(
         server, config or SceneConfig(), processes=processes, shared=shared, store=store, bodies=bodies, prefetch=prefetch,
-        policy=policy,
+        policy=policy, sphere_subdivisions=sphere_subdivisions,
     )
 
 

@@ -36,6 +36,7 @@ from .control_timeline import TimelineControl
 from .gui import build_gui
 from .lighting import light_scene
 from .markers import WitnessMarkers
+from .mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
 from .motion import MotionError, MotionModel, list_presets, load_motion
 from .panel_view import PanelView, Syncing
 from .picture import Picture, motion_picture, static_picture
@@ -57,6 +58,8 @@ class Session:
         cameras: the cameras to frame (presenter mode: every connected tab's); default the
             target's own camera, if it has one.
         defer_load: build the scene but load nothing yet (the caller loads, e.g. a link).
+        sphere_subdivisions: of the icosphere the solids are drawn with
+            (:data:`app.scene.shapes.SPHERE_SUBDIVISIONS_RANGE`; fewer draw faster in software WebGL).
     """
 
     PANEL_PERIOD = 0.05
@@ -81,7 +84,9 @@ class Session:
         count_messages: bool = False,
         cameras: Callable[[], Iterable[viser.CameraHandle]] | None = None,
         defer_load: bool = False,
+        sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
     ) -> None:
+        self.sphere_subdivisions = check_sphere_subdivisions(sphere_subdivisions)
         self.target = target
         self.scene: viser.SceneApi = target.scene
         self.gui_api: viser.GuiApi = target.gui
@@ -133,7 +138,10 @@ class Session:
         for v in self.views.values():
             v.remove()
         gizmo = self.state.gizmos and self.state.motion is None
-        self.views = {name: EllipsoidView(self.scene, name, self.state.dim, gizmo=gizmo) for name in ("A", "B")}
+        self.views = {
+            name: EllipsoidView(self.scene, name, self.state.dim, gizmo=gizmo, subdivisions=self.sphere_subdivisions)
+            for name in ("A", "B")
+        }
         self.shapes_ctl.attach_gizmos()
 
     def set_dimension(self, dim: int) -> None:

@@ -19,6 +19,7 @@ import viser
 
 from . import wire
 from .markers import vec3
+from .mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
 
 __all__ = [
     "RELATION_COLORS",
@@ -69,10 +70,6 @@ NEUTRAL = (150, 150, 150)
 Pose = tuple[tuple[float, float, float], tuple[float, float, float, float], tuple[float, float, float]]
 """(position, wxyz, scale) of a shape, in 3D (2D shapes live in z = 0)."""
 
-
-SPHERE_SUBDIVISIONS = 5
-"""Icosphere subdivisions of a shape's mesh: 20,480 faces, whose planes lie within
-:data:`MESH_GAP` of the unit sphere (``tests/test_scene.py`` proves the bound)."""
 
 DISC_SEGMENTS = 256
 """Sides of the polygon drawn for an ellipse (its sides lie within 1 - cos(π/256) = 7.5e-5)."""
@@ -136,9 +133,9 @@ _SIDE: dict[int, Literal["front", "double"]] = {2: "double", 3: "front"}
 """Faces drawn by dimension: a disc from both sides, a closed solid from outside."""
 
 
-def _geometry(dim: int) -> tuple[np.ndarray, np.ndarray]:
+def _geometry(dim: int, subdivisions: int = SPHERE_SUBDIVISIONS) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and faces of a shape's unit mesh: a disc (2D) or an icosphere (3D)."""
-    return unit_disc(DISC_SEGMENTS) if dim == 2 else unit_sphere()
+    return unit_disc(DISC_SEGMENTS) if dim == 2 else unit_sphere(subdivisions)
 
 
 _POINT = (np.zeros((3, 3), np.float32), np.array([[0, 1, 2]], np.uint32))
@@ -169,6 +166,7 @@ class EllipsoidView:
         dim: 2 (flat disc in z = 0, gizmo limited to the plane) or 3.
         opacity: mesh opacity (semi-transparent so the other shape shows through).
         gizmo: show the transform gizmo.
+        subdivisions: of the icosphere a solid is drawn with (:data:`SPHERE_SUBDIVISIONS_RANGE`).
     """
 
     OPACITY = 0.6
@@ -178,14 +176,19 @@ class EllipsoidView:
     see-through shapes that touch look interpenetrating) and the relation shows by more than
     its colour."""
 
-    def __init__(self, scene: viser.SceneApi, name: str, dim: int, *, gizmo: bool = True) -> None:
+    def __init__(
+        self, scene: viser.SceneApi, name: str, dim: int, *, gizmo: bool = True, subdivisions: int = SPHERE_SUBDIVISIONS
+    ) -> None:
         self.name = name
         self.dim = dim
+        self.subdivisions = check_sphere_subdivisions(subdivisions)
         root = f"/shapes/{name}"
         self.control: viser.TransformControlsHandle = scene.add_transform_controls(
             root, scale=1.2, depth_test=False, **_GIZMO_LIMITS[dim]
         )
-        self.mesh: viser.MeshHandle = _shape_mesh(scene, f"{root}/mesh", *_geometry(dim), NEUTRAL, self.OPACITY, _SIDE[dim])
+        self.mesh: viser.MeshHandle = _shape_mesh(
+            scene, f"{root}/mesh", *_geometry(dim, subdivisions), NEUTRAL, self.OPACITY, _SIDE[dim]
+        )
         # a point-sized double-sided twin: keeps both shader variants (disc: back and front
         # pass; solid: front) compiled in the browser, so a 2D <-> 3D switch compiles nothing
         # (SwiftShader took ~100 ms per switch to compile them again)
@@ -225,7 +228,7 @@ class EllipsoidView:
         c.active_axes = limits["active_axes"]
         c.translation_limits = limits["translation_limits"]
         c.rotation_limits = limits["rotation_limits"]
-        self.mesh.vertices, self.mesh.faces = _geometry(dim)
+        self.mesh.vertices, self.mesh.faces = _geometry(dim, self.subdivisions)
         self.mesh.side = _SIDE[dim]
         self._fresh = True
         self._scale = None
