@@ -195,6 +195,10 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--seconds", type=float, default=12.0, help="playing time of the sweep over I (default 12)")
     ex.add_argument("--frames", type=int, default=240, help="time steps recorded (default 240)")
     ex.add_argument("--out", required=True, help="output HTML path")
+    ex.add_argument(
+        "--sphere-subdivisions", type=int, choices=SPHERE_SUBDIVISIONS_RANGE, default=SPHERE_SUBDIVISIONS, metavar="K",
+        help=f"icosphere subdivisions of the drawn ellipsoids (as serve's; default {SPHERE_SUBDIVISIONS}): fewer make a smaller file",
+    )
     from .bodies_cli import add_body_file_options, add_parsers, box_argument, frame_argument
 
     for parser in (s, sh):  # many bodies (issue 14): the scene opens on the bodies of a file
@@ -394,7 +398,8 @@ def _export(args: argparse.Namespace) -> int:
         out.parent.mkdir(parents=True, exist_ok=True)  # documented: the folders are created
     target = Output(out)  # checked before the replay is built
     with target as f:
-        html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames)
+        html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames,
+                           sphere_subdivisions=args.sphere_subdivisions)
         f.write(html)
     print(f"wrote {out} ({len(html) // 1024} kB; open it in a browser, no server needed)", file=sys.stderr)
     return 0

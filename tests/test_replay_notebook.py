@@ -67,9 +67,11 @@ def test_replay_plays_in_a_browser_without_a_server(tmp_path):
 
     from app.scene.replay import replay_html
     from app.scene.state import SceneConfig
+    from conftest import TEST_SPHERE_SUBDIVISIONS
 
     path = tmp_path / "ex29.html"
-    path.write_text(replay_html(SceneConfig(preset="example-29"), seconds=4, frames=80, event_pause=1.0))
+    path.write_text(replay_html(SceneConfig(preset="example-29"), seconds=4, frames=80, event_pause=1.0,
+                                sphere_subdivisions=TEST_SPHERE_SUBDIVISIONS))
     colour = """() => { const r = window.__viserMutable?.nodeRefFromName?.['/shapes/A/mesh']; let h = null;
       r?.traverse(o => { if (h === null && o.material && o.material.color) h = '#' + o.material.color.getHexString(); }); return h; }"""
     seen: set[str] = set()
@@ -78,6 +80,9 @@ def test_replay_plays_in_a_browser_without_a_server(tmp_path):
         page.set_viewport_size({"width": 900, "height": 600})
         page.goto(path.as_uri())
         page.wait_for_function("() => window.__viserMutable?.nodeRefFromName?.['/shapes/A/mesh'] != null", timeout=60000)
+        faces = ("() => { let f = null; window.__viserMutable.nodeRefFromName['/shapes/A/mesh'].traverse(o => {"
+                 " if (f === null && o.geometry?.index) f = o.geometry.index.count / 3; }); return f; }")
+        assert page.evaluate(faces) == 20 * 4**TEST_SPHERE_SUBDIVISIONS  # the replay's detail
         for _ in range(160):  # the whole recording (6 s), sampled
             seen.add(page.evaluate(colour))
             if len(seen & {"#2ca02c", "#ffbf00", "#d62728"}) == 3:

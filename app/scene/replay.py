@@ -18,6 +18,7 @@ import numpy as np
 from .analysis import AnalysisCache
 from .camera import Framing, extent_of
 from .markers import vec3
+from .mesh_detail import SPHERE_SUBDIVISIONS
 from .session import Session
 from .state import SceneConfig
 
@@ -48,7 +49,10 @@ class _InitialCamera:
             object.__setattr__(self, name, value)
 
 
-def replay_html(config: SceneConfig, *, seconds: float = 12.0, frames: int = 240, event_pause: float = 1.2, timeout: float = 120.0) -> str:
+def replay_html(
+    config: SceneConfig, *, seconds: float = 12.0, frames: int = 240, event_pause: float = 1.2, timeout: float = 120.0,
+    sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
+) -> str:
     """The standalone HTML replay of ``config`` (a motion swept over its window, or a still scene).
 
     Args:
@@ -57,6 +61,9 @@ def replay_html(config: SceneConfig, *, seconds: float = 12.0, frames: int = 240
         frames: time steps recorded over the window.
         event_pause: seconds each event is held.
         timeout: seconds to wait for the analysis.
+        sphere_subdivisions: of the icosphere the solids are drawn with
+            (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`): fewer make a smaller file
+            that plays faster without a GPU.
 
     Raises:
         ValueError: the configuration's motion cannot be read or analysed.
@@ -68,7 +75,7 @@ def replay_html(config: SceneConfig, *, seconds: float = 12.0, frames: int = 240
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     cache = AnalysisCache()
     try:
-        s = Session(server, config, cache=cache)
+        s = Session(server, config, cache=cache, sphere_subdivisions=sphere_subdivisions)
         if not s.ready.wait(timeout):
             raise TimeoutError("the analysis of the motion did not finish")
         st = s.state
