@@ -272,6 +272,23 @@ def test_typed_motion_errors_are_shown_next_to_the_field(server):
     s.close()
 
 
+def test_a_motion_not_analysed_is_said_in_words_in_the_readout_and_in_red_in_the_panel(server):
+    """Was: with no analysis to show, the readout printed the panel's red status as text
+    ("⚠ <span style=...>⚠ the motion was not analysed ...</span>"). The status is plain words; each
+    view renders the failure its own way."""
+    from app.scene.motion import MotionError
+
+    s = motion_session(server)
+    s.state.analysis = None  # the motion's analysis failed (a worker died, a budget ran out)
+    s.motion_ctl.show_error(MotionError("the analysis took over 300 s and was stopped", "A"))
+    readout = s.ui.readout.content
+    assert "⚠ the motion was not analysed: see the message next to its field" in readout, readout
+    assert "<span" not in readout.split("**Relation**", 1)[1].split("</span>", 1)[1] and "&lt;" not in readout, readout
+    assert s.ui.motion.status.content == '<span style="color:#d62728">⚠ the motion was not analysed: see the message next to its field</span>'
+    assert "300 s" in s.ui.motion.errors["A"].content
+    s.close()
+
+
 def test_typed_motion_is_analysed(server):
     s = motion_session(server)
     # unit circles at (t, 0) and (-t, 0): tangent at t = -1 and t = 1 (centre distance 2|t| = 2)

@@ -18,9 +18,8 @@ from .analysis import AnalysisView
 from .gui import STATIC
 from .motion import MotionError, MotionModel
 from .motion_form import form_text
-from .panel_view import error_html
 from .panels import analysed_text
-from .state import SceneConfig
+from .state import SceneConfig, StatusError
 from .texts import SHOWN_DIGITS, read_time, time_float
 from .touch import touch_event, touch_motion
 
@@ -329,5 +328,5 @@ class MotionControl:
                 st.errors.pop(key, None)
             st.errors[field] = str(e)
             st.analysing = False
-            st.status = error_html("the motion was not analysed: see the message next to its field")
+            st.status = StatusError("the motion was not analysed: see the message next to its field")
             s.refresh()

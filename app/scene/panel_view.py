@@ -31,7 +31,7 @@ from .panels import (
 )
 from .plots import SCALES, PlotsView
 from .shapes import PALETTES
-from .state import AppState, ShapeState
+from .state import AppState, ShapeState, StatusError
 from .texts import APPROX
 from .words import plain_words
 
@@ -270,7 +270,7 @@ class PanelView:
         self.set_visible(mg.progress, state.analysing)
         if state.analysing and mg.progress.value != 10.0:
             mg.progress.value = 10.0  # type: ignore[misc]  # writable: viser defines the setter apart from the getter, mypy sees read-only
-        self.set_text(mg.status, state.status)
+        self.set_text(mg.status, error_html(state.status) if isinstance(state.status, StatusError) else state.status)
 
     def _show_timeline(self, state: AppState) -> None:
         tg = self.gui.timeline

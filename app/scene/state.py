@@ -20,7 +20,7 @@ from core.shapes.numbers import to_float
 
 from .texts import APPROX, Number, exact_text, parse_matrix, parse_vector, read_time, round_decimal
 
-__all__ = ["ShapeState", "SceneConfig", "AppState", "DEFAULT_PRESET"]
+__all__ = ["ShapeState", "SceneConfig", "AppState", "StatusError", "DEFAULT_PRESET"]
 
 if TYPE_CHECKING:
     from .analysis import AnalysisView
@@ -403,6 +403,14 @@ class SceneConfig:
         }
 
 
+class StatusError(str):
+    """A status line that reports a failure, as plain text.
+
+    Each view renders it as it shows errors (the motion panel in red, the readout after a warning
+    sign); the text never carries HTML.
+    """
+
+
 @dataclass
 class AppState:
     """Everything one tab shows: controllers change it, ``Session.refresh`` draws it."""
@@ -434,7 +442,7 @@ class AppState:
     witness: WitnessView | None = None
     """Last witness of the static shapes (margin, sentence, plane or point)."""
     status: str = ""
-    """Status line of the motion panel (Markdown)."""
+    """Status line of the motion panel (plain text; a :class:`StatusError` for a failure)."""
     analysing: bool = False
     """An analysis of ``motion`` is running."""
     errors: dict[str, str] = field(default_factory=dict)
