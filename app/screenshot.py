@@ -144,7 +144,7 @@ class HeadlessScene:
             panel, take 0: one frame per change (in software WebGL the window is 3 frames), 14 %
             less CPU in tests/test_browser_scene.py.
         sphere_subdivisions: of the icosphere the solids are drawn with
-            (:data:`app.scene.shapes.SPHERE_SUBDIVISIONS_RANGE`): the default for pictures; the
+            (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`): the default for pictures; the
             browser tests, which read colours, poses and the panel, take 3 (a frame in software
             WebGL ~23 instead of ~60 ms of CPU).
     """

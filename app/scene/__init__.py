@@ -13,7 +13,7 @@ Controllers (callbacks change the state and call ``Session.refresh``):
 :mod:`~app.scene.control_shapes`, :mod:`~app.scene.control_motion`,
 :mod:`~app.scene.control_timeline`, :mod:`~app.scene.control_keys`, :mod:`~app.scene.control_share`.
 
-Views (viser handles, typed): :mod:`~app.scene.shapes`, :mod:`~app.scene.markers`,
+Views (viser handles, typed): :mod:`~app.scene.shapes` (how finely: :mod:`~app.scene.mesh_detail`), :mod:`~app.scene.markers`,
 :mod:`~app.scene.camera`, :mod:`~app.scene.gui` (the panel's handles),
 :mod:`~app.scene.panel_view` (fills the panel), :mod:`~app.scene.plots`, text in
 :mod:`~app.scene.panels` and :mod:`~app.scene.words`; :mod:`~app.scene.wire` is the only module

@@ -49,7 +49,7 @@ class SceneServer:
         prefetch: analyse every preset at start, so a pick in the dropdown shows at once (an
             interactive server); off for one-shot uses (screenshots) that show one motion.
         sphere_subdivisions: of the icosphere every tab draws the solids with
-            (:data:`app.scene.shapes.SPHERE_SUBDIVISIONS_RANGE`).
+            (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`).
     """
 
     def __init__(

@@ -59,7 +59,7 @@ class Session:
             target's own camera, if it has one.
         defer_load: build the scene but load nothing yet (the caller loads, e.g. a link).
         sphere_subdivisions: of the icosphere the solids are drawn with
-            (:data:`app.scene.shapes.SPHERE_SUBDIVISIONS_RANGE`; fewer draw faster in software WebGL).
+            (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`; fewer draw faster in software WebGL).
     """
 
     PANEL_PERIOD = 0.05

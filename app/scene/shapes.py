@@ -166,7 +166,7 @@ class EllipsoidView:
         dim: 2 (flat disc in z = 0, gizmo limited to the plane) or 3.
         opacity: mesh opacity (semi-transparent so the other shape shows through).
         gizmo: show the transform gizmo.
-        subdivisions: of the icosphere a solid is drawn with (:data:`SPHERE_SUBDIVISIONS_RANGE`).
+        subdivisions: of the icosphere a solid is drawn with (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`).
     """
 
     OPACITY = 0.6
