@@ -130,6 +130,15 @@ def _time(text: str) -> float:
     return t
 
 
+def _add_sphere_subdivisions(parser: argparse.ArgumentParser, why: str) -> None:
+    """``--sphere-subdivisions K`` (app.scene.mesh_detail): how finely the ellipsoids are drawn."""
+    lo, hi = SPHERE_SUBDIVISIONS_RANGE[0], SPHERE_SUBDIVISIONS_RANGE[-1]
+    parser.add_argument(
+        "--sphere-subdivisions", type=int, choices=SPHERE_SUBDIVISIONS_RANGE, default=SPHERE_SUBDIVISIONS, metavar="K",
+        help=f"icosphere subdivisions of the drawn ellipsoids, {lo}..{hi} (20 * 4^K faces; {why})",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (sub-commands ``serve``, ``screenshot`` and ``export``)."""
     p = _Parser(
@@ -157,10 +166,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="let web pages at this origin call the API from a browser (CORS), e.g. https://example.org, "
         "or '*' for any (repeatable; default: no CORS headers)",
     )
-    s.add_argument(
-        "--sphere-subdivisions", type=int, choices=SPHERE_SUBDIVISIONS_RANGE, default=SPHERE_SUBDIVISIONS, metavar="K",
-        help=f"icosphere subdivisions of the drawn ellipsoids, {SPHERE_SUBDIVISIONS_RANGE[0]}..{SPHERE_SUBDIVISIONS_RANGE[-1]} "
-        f"(20 * 4^K faces; default {SPHERE_SUBDIVISIONS}: tangent shapes drawn within a pixel up to 3,000 pixels across); "
+    _add_sphere_subdivisions(
+        s, f"default {SPHERE_SUBDIVISIONS}: tangent shapes drawn within a pixel up to 3,000 pixels across; "
         "fewer draw faster where the browser has no GPU",
     )
     s.add_argument(
@@ -195,10 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--seconds", type=float, default=12.0, help="playing time of the sweep over I (default 12)")
     ex.add_argument("--frames", type=int, default=240, help="time steps recorded (default 240)")
     ex.add_argument("--out", required=True, help="output HTML path")
-    ex.add_argument(
-        "--sphere-subdivisions", type=int, choices=SPHERE_SUBDIVISIONS_RANGE, default=SPHERE_SUBDIVISIONS, metavar="K",
-        help=f"icosphere subdivisions of the drawn ellipsoids (as serve's; default {SPHERE_SUBDIVISIONS}): fewer make a smaller file",
-    )
+    _add_sphere_subdivisions(ex, f"default {SPHERE_SUBDIVISIONS}; fewer make a smaller file")
     from .bodies_cli import add_body_file_options, add_parsers, box_argument, frame_argument
 
     for parser in (s, sh):  # many bodies (issue 14): the scene opens on the bodies of a file

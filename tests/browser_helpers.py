@@ -192,6 +192,15 @@ def until(cond: Callable[[], object], timeout: float = 120.0, what: str = "") ->
         time.sleep(0.02)
 
 
+def drawn_faces(page: Any, node: str) -> int | None:
+    """Triangles of the first indexed mesh under the scene node ``node`` as three.js draws it (None: none)."""
+    return page.evaluate(
+        "(n) => { let f = null; window.__viserMutable?.nodeRefFromName?.[n]?.traverse(o => {"
+        " if (f === null && o.geometry?.index) f = o.geometry.index.count / 3; }); return f; }",
+        node,
+    )
+
+
 def text_shown(page: Any, fragment: str, timeout: float = 120.0) -> None:
     """Wait until the page's text contains ``fragment``."""
     page.wait_for_function("(f) => document.body.innerText.includes(f)", arg=fragment, timeout=timeout * 1000)

@@ -13,6 +13,7 @@ import os
 
 import numpy as np
 import pytest
+from browser_helpers import drawn_faces
 
 from app.scene.links import link_path
 from app.scene.state import SceneConfig
@@ -84,9 +85,7 @@ def test_scene_loads_and_typing_a_centre_changes_colour(headless, tmp_path):
     hs = headless(static_config("4"))
     assert hs.session.state.relation == "separate"
     assert hs.mesh_color("A") == hs.mesh_color("B") == HEX["separate"]
-    faces = ("(n) => { let f = null; window.__viserMutable.nodeRefFromName[n].traverse(o => {"
-             " if (f === null && o.geometry?.index) f = o.geometry.index.count / 3; }); return f; }")
-    drawn = [hs.page.evaluate(faces, f"/shapes/{n}/mesh") for n in "AB"]
+    drawn = [drawn_faces(hs.page, f"/shapes/{n}/mesh") for n in "AB"]
     assert drawn == [20 * 4**TEST_SPHERE_SUBDIVISIONS] * 2, drawn  # the scene's detail reaches the tab
     assert dominant_hue_share(hs.canvas_pixels(), HUE["separate"]) > 0.8
     page = hs.page

@@ -63,7 +63,7 @@ def test_replay_records_every_relation_and_each_event_exactly():
 @browser
 def test_replay_plays_in_a_browser_without_a_server(tmp_path):
     """Opened from disk: the shapes take every relation's colour in turn (tangent at the events)."""
-    from browser_helpers import connected
+    from browser_helpers import connected, drawn_faces
 
     from app.scene.replay import replay_html
     from app.scene.state import SceneConfig
@@ -80,9 +80,7 @@ def test_replay_plays_in_a_browser_without_a_server(tmp_path):
         page.set_viewport_size({"width": 900, "height": 600})
         page.goto(path.as_uri())
         page.wait_for_function("() => window.__viserMutable?.nodeRefFromName?.['/shapes/A/mesh'] != null", timeout=60000)
-        faces = ("() => { let f = null; window.__viserMutable.nodeRefFromName['/shapes/A/mesh'].traverse(o => {"
-                 " if (f === null && o.geometry?.index) f = o.geometry.index.count / 3; }); return f; }")
-        assert page.evaluate(faces) == 20 * 4**TEST_SPHERE_SUBDIVISIONS  # the replay's detail
+        assert drawn_faces(page, "/shapes/A/mesh") == 20 * 4**TEST_SPHERE_SUBDIVISIONS  # the replay's detail
         for _ in range(160):  # the whole recording (6 s), sampled
             seen.add(page.evaluate(colour))
             if len(seen & {"#2ca02c", "#ffbf00", "#d62728"}) == 3:
