@@ -9,7 +9,6 @@ from __future__ import annotations
 import atexit
 import contextlib
 import os
-import signal
 import subprocess
 import tempfile
 import time
@@ -18,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from process_groups import end_group
 
 from conftest import TEST_DPR, TEST_SETTLE_MS, TEST_SPHERE_SUBDIVISIONS
 
@@ -119,38 +119,10 @@ class SharedChromium:
                 except subprocess.TimeoutExpired:
                     proc.kill()
                     proc.wait()
-            _end_group(proc.pid)
+            end_group(proc.pid)
         if self._tmp is not None:
             self._tmp.cleanup()
             self._tmp = None
-
-
-def _end_group(pgid: int, timeout: float = 10.0) -> None:
-    """Kill what is left of the process group ``pgid`` and wait (at most ``timeout`` s) until none runs.
-
-    Called once the browser's main process has ended: its helpers have nothing left to keep (the
-    profile is removed next). A killed helper is done with its files once it is a zombie; who reaps
-    it (the init process, ~1 s here) is not waited for.
-    """
-    try:
-        os.killpg(pgid, signal.SIGKILL)
-    except ProcessLookupError:
-        return
-    deadline = time.monotonic() + timeout
-    while _running_in_group(pgid) and time.monotonic() < deadline:
-        time.sleep(0.01)
-
-
-def _running_in_group(pgid: int) -> bool:
-    """Whether a process of the group ``pgid`` is alive and not yet a zombie (Linux /proc)."""
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:  # ended meanwhile
-            continue
-        if int(fields[2]) == pgid and fields[0] != "Z":  # fields after the name: state, ppid, pgrp
-            return True
-    return False
 
 
 CHROMIUM_OF_THIS_PROCESS = SharedChromium()

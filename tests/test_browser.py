@@ -309,7 +309,8 @@ def test_the_test_chromium_stops_with_every_process_it_started_and_leaves_no_pro
     and this test saw a helper still running after one stop in six (a race: it cannot fail every time)."""
     from pathlib import Path
 
-    from browser_helpers import SharedChromium, _running_in_group, connected_to
+    from browser_helpers import SharedChromium, connected_to
+    from process_groups import running_in_group
 
     chromium = SharedChromium()
     try:
@@ -318,7 +319,7 @@ def test_the_test_chromium_stops_with_every_process_it_started_and_leaves_no_pro
             page.set_content("<canvas></canvas>")
             assert page.evaluate("() => !!document.querySelector('canvas').getContext('webgl2')")
         pid, profile = chromium._proc.pid, Path(chromium._tmp.name)
-        assert _running_in_group(pid)
+        assert running_in_group(pid)
     finally:
         chromium.stop()
-    assert not _running_in_group(pid) and not profile.exists()
+    assert not running_in_group(pid) and not profile.exists()
