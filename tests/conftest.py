@@ -12,8 +12,6 @@ for p in (ROOT, ROOT / "tests"):
     if str(p) not in sys.path:
         sys.path.insert(0, str(p))
 
-import background_mypy  # noqa: E402  (tests/ is on the path from here)
-
 settings.register_profile(
     "ci", max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True
 )
@@ -94,27 +92,6 @@ def pytest_collection_modifyitems(session, config, items):
     """
     browser_files = {item.nodeid.split("::")[0] for item in items if item.get_closest_marker("browser")}
     items.sort(key=lambda item: item.nodeid.split("::")[0] not in browser_files)
-
-
-def pytest_configure(config):
-    if not hasattr(config, "workerinput"):  # the process that schedules the tests (or runs them, -n 0)
-        background_mypy.announce()
-
-
-@pytest.hookimpl(optionalhook=True)
-def pytest_xdist_node_collection_finished(node, ids):
-    """The xdist controller: a worker's collection is known before any test runs."""
-    background_mypy.start(ids)
-
-
-def pytest_collection_finish(session):
-    if not hasattr(session.config, "workerinput"):  # -n 0
-        background_mypy.start([item.nodeid for item in session.items])
-
-
-def pytest_unconfigure(config):
-    if not hasattr(config, "workerinput"):
-        background_mypy.stop()
 
 
 def pytest_runtest_setup(item):

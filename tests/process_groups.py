@@ -1,7 +1,7 @@
 """Ending a process group and waiting until none of its processes runs (Linux /proc).
 
 Used for what the tests start in a session of its own: the shared Chromium and its helpers
-(tests/browser_helpers.py), the suite's background mypy run (tests/background_mypy.py).
+(tests/browser_helpers.py); tests/test_browser.py checks with it that none is left.
 """
 
 from __future__ import annotations
