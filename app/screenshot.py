@@ -90,6 +90,12 @@ _BODIES_DRAWN_JS = """(want) => {
 
 _FRAME_JS = "() => window.__viserTestpoints?.rendererInfo?.render?.frame ?? 0"
 
+_MARK_PANEL_JS = "() => { window.__fieldsBeforeRenewal = Array.from(document.querySelectorAll('input')); }"
+_RENEWED_JS = "() => (window.__fieldsBeforeRenewal ?? []).some((e) => !e.isConnected)"
+"""Mark the page's fields, then: some have left it. viser keys panel elements by id, so a renewed
+tab's old panel leaves whole (only the client's own settings fields stay); the server clears the
+scene before the panel, and the page applies messages in order: the old scene is gone too."""
+
 _DRAWN_JS = """([poses, colours, word]) => {
   const m = window.__viserMutable?.nodeRefFromName;
   if (!m) return false;
@@ -276,6 +282,25 @@ class HeadlessScene:
             self.session = session
             self.wait_settled()
         return session
+
+    def open(self, config: SceneConfig | dict[str, Any]) -> Any:
+        """Start the tab again on ``config``, as a new tab on its link starts, without a page load.
+
+        Unlike :meth:`show`, which loads ``config`` into the tab's session (the panel as the
+        previous configuration left it), the tab gets a new session and a new panel
+        (:meth:`SceneServer.renew <app.scene.server.SceneServer.renew>`); ``config`` is read as
+        a link's (user input). Returns the new session once the browser shows its state: the
+        old panel's elements have left the page, then :meth:`wait_settled`.
+        """
+        data = config.to_dict() if isinstance(config, SceneConfig) else config
+        client_id = next((k for k, v in list(self.scene.sessions.items()) if v is self.session), None)
+        if client_id is None:
+            raise RuntimeError("the tab has no session on the server (closed or reloading): open a page with goto()")
+        self.page.evaluate(_MARK_PANEL_JS)
+        self.session = self.scene.renew(client_id, data)
+        self.page.wait_for_function(_RENEWED_JS)
+        self.wait_settled()
+        return self.session
 
     def server_clients(self) -> list[Any]:
         """The connected tabs' ``viser.ClientHandle`` objects."""

@@ -110,7 +110,8 @@ def pytest_sessionfinish(session, exitstatus):
 def headless_scene():
     """The shared scene server and headless Chromium tab (see :class:`_SharedScene`).
 
-    Tests open their own tab on their own configuration with a link (``hs.goto(link_path(cfg))``).
+    Tests start the tab on their own configuration as its link would (``hs.open(cfg)``: a new session
+    and panel without a page load); tests of page loads and links load the link (``hs.goto(link_path(cfg))``).
     """
     if not _chromium():
         pytest.skip("needs Debian chromium at /usr/bin/chromium")

@@ -75,7 +75,7 @@ def headless(headless_scene):
     """Open a configuration in the session's shared scene and tab (tests/conftest.py); return it."""
 
     def open_on(config: SceneConfig):
-        headless_scene.goto(link_path(config))
+        headless_scene.open(config)  # as its link starts a tab, without a page load
         return headless_scene
 
     return open_on

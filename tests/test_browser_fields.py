@@ -28,7 +28,6 @@ import pytest
 from oracle import oracle_relation
 from test_browser_scene import choose, until
 
-from app.scene.links import link_path
 from core import quadric_from_axes
 from core.moving.motions import matrix_at_exact, motion_from_dict
 
@@ -304,7 +303,7 @@ def test_fields_always_show_what_is_certified(headless_scene):
     rng = random.Random(SEED)
     cfg = {"preset": None, "A": {"center": ["0", "0", "0"], "semi_axes": ["2", "1", "1"]},
            "B": {"center": ["3", "0", "0"], "semi_axes": ["1", "1", "1"]}}
-    hs.goto(link_path(cfg))
+    hs.open(cfg)
     d = Driver(hs, rng)
     d.open_shape_folders()
     d.check()
@@ -342,7 +341,7 @@ def test_dragging_a_gizmo_certifies_the_shape_the_fields_show(headless_scene):
     # B left of A: its +x arrow points at A, in the middle of the canvas (not under the GUI panel)
     cfg = {"preset": None, "A": {"center": ["3", "0", "0"], "semi_axes": ["1", "1", "1"]},
            "B": {"center": ["0", "0", "0"], "semi_axes": ["1", "1", "1"]}}
-    s = hs.goto(link_path(cfg))
+    s = hs.open(cfg)
     page = hs.page
     d = Driver(hs, random.Random(0))
     d.open_shape_folders()
@@ -371,7 +370,7 @@ def test_field_labels_are_tied_to_their_inputs(headless_scene):
     """Issue 22.4 (accessibility): every text field's label names its input, so a screen reader reads
     "Centre" for it and get_by_label finds it (viser's labels pointed at ids no input had)."""
     hs = headless_scene
-    s = hs.goto(link_path({"preset": "example-29", "t": 0.3}))
+    s = hs.open({"preset": "example-29", "t": 0.3})
     page = hs.page
     Driver(hs, random.Random(0)).open_shape_folders()
     page.wait_for_function("() => document.querySelectorAll('[aria-labelledby]').length > 10")

@@ -12,8 +12,6 @@ import os
 import pytest
 from browser_helpers import open_folder, set_field, tick, until
 
-from app.scene.links import link_path
-
 pytestmark = [
     pytest.mark.browser,
     pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian chromium at /usr/bin/chromium"),
@@ -36,7 +34,7 @@ def series(page, title: str) -> dict | None:
 
 def test_roots_of_p_follow_t_and_mark_the_tangency(headless_scene):
     hs = headless_scene
-    s = hs.goto(link_path({"preset": "example-29", "event": 1, "show_plots": False}))
+    s = hs.open({"preset": "example-29", "event": 1, "show_plots": False})
     page = hs.page
     # states, not clicks in a row: a click can be lost while the panel re-renders (a clean-clone run
     # timed out on "roots plots" after both clicks)

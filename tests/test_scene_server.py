@@ -51,3 +51,74 @@ def test_a_tab_that_leaves_while_its_session_is_built_leaves_no_session(monkeypa
         assert scene.sessions == {}
     finally:
         scene.stop()
+
+
+def _connected_tab(scene: SceneServer):
+    """A websocket client of ``scene`` that counts as a tab (it reported its camera), and its session.
+
+    It reads no message: with no bound on its queue it still sees the server's answer when it closes
+    (with websockets' default of 16 messages, a close waited its 10 s timeout behind a full queue).
+    """
+    tab = connect(f"ws://127.0.0.1:{scene.port}/", subprotocols=[f"viser-v{viser.__version__}"], open_timeout=30,
+                  max_queue=None)
+    tab.send(CAMERA)
+    until(lambda: scene.sessions, 60, "the tab's session to be built")
+    return tab, next(iter(scene.sessions.items()))
+
+
+@pytest.mark.filterwarnings("ignore:Queued a .* on a closed connection:UserWarning")
+def test_renew_gives_the_tab_a_new_session_on_the_link_and_closes_the_old():
+    """``SceneServer.renew`` (HeadlessScene.open): the tab's one session is a new one on the link's
+    configuration, read as user input (a bad link is the default with its message, as a new tab's)."""
+    scene = start_scene("127.0.0.1", 0, processes=False, prefetch=False)
+    try:
+        tab, (cid, old) = _connected_tab(scene)
+        with tab:
+            new = scene.renew(cid, {"preset": None, "A": {"center": [0, 0, 0], "semi_axes": [1, 1, 1]},
+                                    "B": {"center": [2, 0, 0], "semi_axes": [1, 1, 1]}})
+            assert old.closed and not new.closed and scene.sessions == {cid: new}
+            assert new.ready.wait(60) and new.state.relation == "tangent"
+            bad = scene.renew(cid, {"preset": "no-such-preset"})
+            assert new.closed and scene.sessions == {cid: bad}
+            assert bad.ready.wait(60) and any("no-such-preset" in m for m in bad.state.errors.values())
+            with pytest.raises(KeyError, match="no tab 12345"):
+                scene.renew(12345, {"preset": None})
+    finally:
+        scene.stop()
+    shared = start_scene("127.0.0.1", 0, processes=False, prefetch=False, shared=True)
+    try:
+        with pytest.raises(ValueError, match="presenter"):
+            shared.renew(0, {"preset": None})
+    finally:
+        shared.stop()
+
+
+@pytest.mark.filterwarnings("ignore:Queued a .* on a closed connection:UserWarning")
+def test_a_tab_that_leaves_while_it_is_renewed_leaves_no_session(monkeypatch):
+    """A tab that closes while ``renew`` builds its new session: that session is closed, none stays
+    (as for a tab that leaves while its first session is built, above)."""
+    left, armed = threading.Event(), threading.Event()
+    built: list[Session] = []
+    real_frame, real_disconnect = Session.frame_camera, SceneServer._disconnect
+
+    def disconnect(self: SceneServer, client: viser.ClientHandle) -> None:
+        real_disconnect(self, client)
+        left.set()
+
+    def frame_after_the_tab_left(self: Session) -> None:  # the renewal's last step closes the tab first
+        if armed.is_set():
+            built.append(self)
+            tab.close()
+            until(left.is_set, 60, "the server to see the tab leave")
+        real_frame(self)
+
+    monkeypatch.setattr(SceneServer, "_disconnect", disconnect)  # before the server registers its callbacks
+    monkeypatch.setattr(Session, "frame_camera", frame_after_the_tab_left)
+    scene = start_scene("127.0.0.1", 0, processes=False, prefetch=False)
+    try:
+        tab, (cid, old) = _connected_tab(scene)
+        armed.set()
+        new = scene.renew(cid, {"preset": None})
+        assert built == [new] and old.closed and new.closed and scene.sessions == {}
+    finally:
+        scene.stop()
