@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import re
 
+import pytest
 import schemathesis
 from hypothesis import HealthCheck, settings
 from schemathesis.checks import not_a_server_error
@@ -22,9 +23,18 @@ from schemathesis.specs.openapi.checks import response_schema_conformance, statu
 from app.api import ApiSettings, create_api
 from app.api.budget import RETRY_AFTER_S
 
-app = create_api(ApiSettings(time_budget_s=2.0, max_batch=50))
 EXAMPLES = max(10, settings.default.max_examples // 2)  # the profile in force (tests/conftest.py)
-schema = schemathesis.openapi.from_asgi("/openapi.json", app)
+
+
+@pytest.fixture(scope="module")
+def api_schema():
+    """The API's own schema, read when the test runs: building its tests costs ~2 s, which every
+    pytest-xdist worker would pay again at collection (each collects every file)."""
+    return schemathesis.openapi.from_asgi("/openapi.json", create_api(ApiSettings(time_budget_s=2.0, max_batch=50)))
+
+
+schema = schemathesis.pytest.from_fixture("api_schema")
+"""One test; each operation of the schema is a subtest of its own, reported by name."""
 
 UNAVAILABLE = re.compile(
     r"^(analysis )?stopped[ :]"  # a budget stop: where, and why (app.api.budget, app.workers)
