@@ -11,7 +11,7 @@
 * ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png [--config file.json]
   [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly;
   several ``--t``/``--event``/``--config`` render one image each in one browser session
-  (``--out`` a folder).
+  (``--out`` a folder); ``--browser URL`` draws in a tab of a Chromium that already runs.
 * ``python -m app export --preset example-29 --out ex29.html [--config file.json]``: a
   self-contained HTML replay of the motion (viser's scene recording and player; no server).
 * ``python -m app contacts BODIES --out PAIRS.csv [--box Lx,Ly,Lz]`` and ``python -m app
@@ -114,6 +114,21 @@ def _size(text: str) -> int:
     return v
 
 
+def _devtools_address(text: str) -> str:
+    """``--browser``: the DevTools address of a running Chromium, ``http://HOST:PORT`` (or ws://, https://)."""
+    from urllib.parse import urlsplit
+
+    try:
+        parts = urlsplit(text)
+        port = parts.port
+    except ValueError:
+        port = None
+        parts = None
+    if parts is None or parts.scheme not in ("http", "https", "ws", "wss") or not parts.hostname or port is None:
+        raise argparse.ArgumentTypeError(f"not a DevTools address (http://HOST:PORT): {text!r}")
+    return text
+
+
 def _time(text: str) -> float:
     from core.shapes.numbers import to_fmpq
 
@@ -194,6 +209,12 @@ def build_parser() -> argparse.ArgumentParser:
     sh.add_argument("--no-plots", action="store_true", help="hide the live plots")
     sh.add_argument("--out", required=True, help="output PNG path, or a folder for several images")
     sh.add_argument("--timeout", type=float, default=120.0, help="seconds to wait for rendering")
+    sh.add_argument(
+        "--browser", type=_devtools_address, default=None, metavar="URL",
+        help="DevTools address of a Chromium that already runs (chromium --headless --remote-debugging-port=PORT: "
+        "http://127.0.0.1:PORT): the images are drawn in a tab of it, closed afterwards, instead of in a browser "
+        "launched for the command",
+    )
 
     ex = sub.add_parser("export", help="write a self-contained HTML replay of a scene (a motion played through)")
     ex.add_argument("--preset", default=None, help="motion preset, e.g. example-29 ('none' for static shapes)")
@@ -382,7 +403,8 @@ def _screenshot(args: argparse.Namespace) -> int:
     import contextlib
 
     with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # the scene server's banner: not for a screenshot
-        written = screenshots(shots, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args))
+        written = screenshots(shots, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args),
+                              cdp=args.browser)
     for path in written:
         print(f"wrote {path}", file=sys.stderr)
     return 0

@@ -195,7 +195,7 @@ class HeadlessScene:
         self._tmp: tempfile.TemporaryDirectory[str] | None = None
 
     def __enter__(self) -> HeadlessScene:
-        if not os.path.exists(CHROMIUM):
+        if self.cdp is None and not os.path.exists(CHROMIUM):
             raise RuntimeError(f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium)")
         try:
             from playwright.sync_api import sync_playwright
@@ -211,7 +211,11 @@ class HeadlessScene:
         try:
             self._pw = sync_playwright().start()
             if self.cdp is not None:
-                self._browser = self._pw.chromium.connect_over_cdp(self.cdp).contexts[0]
+                try:
+                    self._browser = self._pw.chromium.connect_over_cdp(self.cdp, timeout=self.timeout * 1000).contexts[0]
+                except Exception as e:  # Playwright's Error: a one-line reason, not its call log
+                    reason = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+                    raise RuntimeError(f"no Chromium answers at {self.cdp}: {reason}") from None
                 self._tabs_before = list(self._browser.pages)
                 self.page = self._browser.new_page()
                 self.page.set_viewport_size({"width": self.width, "height": self.height})
@@ -540,7 +544,8 @@ def _check_events(shots: Sequence[Shot]) -> None:
 
 
 def screenshot(
-    config: SceneConfig, out: str | Path, *, width: int = 1400, height: int = 900, timeout: float = 120.0, bodies: Any = None
+    config: SceneConfig, out: str | Path, *, width: int = 1400, height: int = 900, timeout: float = 120.0, bodies: Any = None,
+    cdp: str | None = None,
 ) -> Path:
     """Render ``config`` to a PNG as a user sees it (shapes in their relation colours).
 
@@ -551,6 +556,7 @@ def screenshot(
         height: viewport height in pixels.
         timeout: seconds to wait for rendering (the analysis of a preset included).
         bodies: many bodies to show instead (``--bodies FILE``: :mod:`app.scene.bodies_view`).
+        cdp: DevTools address of a running Chromium to draw in (a tab of it), or None: launch one.
 
     Returns:
         The path written.
@@ -558,7 +564,7 @@ def screenshot(
     Raises:
         RuntimeError: chromium missing. TimeoutError: the scene never finished rendering.
     """
-    return screenshots([Shot(config, Path(out))], width=width, height=height, timeout=timeout, bodies=bodies)[0]
+    return screenshots([Shot(config, Path(out))], width=width, height=height, timeout=timeout, bodies=bodies, cdp=cdp)[0]
 
 
 def screenshots(
@@ -569,6 +575,7 @@ def screenshots(
     timeout: float = 120.0,
     timings: list[float] | None = None,
     bodies: Any = None,
+    cdp: str | None = None,
 ) -> list[Path]:
     """Render many shots with one browser and one server (one tab, reloaded for nothing).
 
@@ -579,6 +586,8 @@ def screenshots(
         timeout: seconds to wait for each image.
         timings: if given, receives the seconds each image took (the first includes the start).
         bodies: many bodies to show instead of the shots' configurations (``--bodies FILE``).
+        cdp: DevTools address of a running Chromium (``python -m app screenshot --browser URL``): the shots
+            are drawn in a tab of it, closed afterwards; None: a browser is launched and closed.
 
     Returns:
         The paths written, in order.
@@ -591,7 +600,7 @@ def screenshots(
         _check_events(shots)  # and every event (seconds of browser start saved on a typo)
     out: list[Path] = []
     t0 = time.perf_counter()
-    with HeadlessScene(shots[0].config, width=width, height=height, timeout=timeout, bodies=bodies) as hs:
+    with HeadlessScene(shots[0].config, width=width, height=height, timeout=timeout, bodies=bodies, cdp=cdp) as hs:
         shown: SceneConfig | None = shots[0].config
         for shot, target in zip(shots, targets, strict=True):
             if shot.config is not shown:

@@ -373,12 +373,14 @@ needs_chromium = pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), rea
 @pytest.mark.browser
 @needs_chromium
 def test_screenshot_command_with_bodies(demo_file, tmp_path):
-    """The command launches its own browser: it runs before the module's browser is started
-    (Playwright's sync API cannot nest)."""
+    """The command draws in a tab of the test process's Chromium (``--browser``; the command that
+    launches its own: tests/test_browser.py). It runs before the module's tab is opened (Playwright's
+    sync API cannot nest)."""
     from app.cli import main
 
     out = tmp_path / "shot.png"
-    assert main(["screenshot", "--bodies", str(demo_file), "--out", str(out), "--width", "900", "--height", "600"]) == 0
+    assert main(["screenshot", "--bodies", str(demo_file), "--out", str(out), "--width", "900", "--height", "600",
+                 "--browser", browser_helpers.CHROMIUM_OF_THIS_PROCESS.get()]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 20_000
 
 

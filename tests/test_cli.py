@@ -48,6 +48,10 @@ def test_t_accepts_fractions():
         (["serve", "--analysis-budget", "nan"], "seconds out of range (0, 86400]: 'nan'"),
         (["serve", "--request-budget", "inf"], "seconds out of range"),
         (["serve", "--analysis-budget", "5s"], "not a number of seconds: '5s'"),
+        (["screenshot", "--browser", "localhost", "--out", "x.png"], "not a DevTools address (http://HOST:PORT): 'localhost'"),
+        (["screenshot", "--browser", "http://127.0.0.1", "--out", "x.png"], "not a DevTools address"),
+        (["screenshot", "--browser", "http://127.0.0.1:99999", "--out", "x.png"], "not a DevTools address"),
+        (["screenshot", "--browser", "file:///tmp:9222", "--out", "x.png"], "not a DevTools address"),
     ],
 )
 def test_bad_arguments_exit_2(argv, message, capsys):
@@ -83,6 +87,18 @@ def test_bad_config_file_is_a_clear_error(tmp_path, capsys):
     assert main(["screenshot", "--config", str(wrong), "--out", str(tmp_path / "x.png")]) == 2
     assert "A.semi_axes: must be positive" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
+
+
+def test_screenshot_with_no_browser_at_the_address_is_one_line_naming_it(tmp_path, capsys):
+    """``--browser URL`` where no Chromium listens: exit 1, one line that names the address, no file
+    (the scene started for it is stopped)."""
+    pytest.importorskip("playwright")
+    url = f"http://127.0.0.1:{free_port()}"
+    out = tmp_path / "x.png"
+    assert main(["screenshot", "--preset", "none", "--out", str(out), "--browser", url, "--timeout", "20"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"error: no Chromium answers at {url}: "), err
+    assert not out.exists()
 
 
 def test_config_file_and_dim_override(tmp_path):

@@ -389,12 +389,13 @@ needs_chromium = pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), rea
 @pytest.mark.browser
 @needs_chromium
 def test_screenshot_command_with_moving_bodies(scene_files, tmp_path):
-    """The command launches its own browser: it runs before the module's browser is started."""
+    """The command draws in a tab of the test process's Chromium (``--browser``); it runs before the
+    module's tab is opened (Playwright's sync API cannot nest)."""
     from app.cli import main
 
     out = tmp_path / "shots"
     argv = ["screenshot", "--bodies", str(scene_files[0]), "--to", str(scene_files[1]), "--t", "0.5", "--event", "3",
-            "--out", str(out), "--width", "900", "--height", "600"]
+            "--out", str(out), "--width", "900", "--height", "600", "--browser", browser_helpers.CHROMIUM_OF_THIS_PROCESS.get()]
     assert main(argv) == 0
     for name in ("t-0.5.png", "event-3.png"):
         data = (out / name).read_bytes()
