@@ -120,11 +120,10 @@ def _devtools_address(text: str) -> str:
 
     try:
         parts = urlsplit(text)
-        port = parts.port
-    except ValueError:
-        port = None
-        parts = None
-    if parts is None or parts.scheme not in ("http", "https", "ws", "wss") or not parts.hostname or port is None:
+        ok = parts.scheme in ("http", "https", "ws", "wss") and bool(parts.hostname) and parts.port is not None
+    except ValueError:  # a port out of range or not a number
+        ok = False
+    if not ok:
         raise argparse.ArgumentTypeError(f"not a DevTools address (http://HOST:PORT): {text!r}")
     return text
 
