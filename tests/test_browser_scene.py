@@ -145,17 +145,37 @@ PANEL_JS = """() => ({text: document.body.innerText,
 """What the page shows: its text, and the values of its visible fields (open folders show theirs)."""
 
 
-def test_open_starts_the_tab_as_its_link_does_without_a_page_load(hs):
+SETTINGS_SHOWN_JS = """() => { window.__settingsShown = 0; new MutationObserver(() => {
+  if (document.body.innerText.includes('Dev Settings')) window.__settingsShown++; }).observe(
+  document.body, {subtree: true, childList: true, attributes: true}); }"""
+"""Count the page's changes that show viser's own settings (it unfolds them in a panel with no element)."""
+
+
+def test_open_starts_the_tab_as_its_link_does_without_a_page_load(hs, monkeypatch):
     """``HeadlessScene.open`` (what these tests start with): the tab shows what a page loaded from
-    the link shows, with a new panel (a folder opened before is closed again), in the same page."""
+    the link shows, with a new panel (a folder opened before is closed again), in the same page, and
+    is never shown empty meanwhile, even when its new session is slow to build (cold caches: a clean
+    clone's run caught viser's settings still folding away after an empty moment)."""
+    import app.scene.server as server
+
+    build = server.SceneServer._session
+
+    def slow_build(self, client, saved):
+        time.sleep(0.3)
+        return build(self, client, saved)
+
     link = {"preset": "example-30", "t": 0.5}
     old = load_link(hs, {"preset": "example-29", "t": 0.3})
     shown = len(hs.page.evaluate(PANEL_JS)["fields"])
     click_folder(hs.page, "Shape B")
     hs.page.wait_for_function(f"() => ({PANEL_JS})().fields.length > {shown}")  # the folder's fields show
     hs.page.evaluate("() => { window.__samePage = true; }")
+    hs.page.evaluate(SETTINGS_SHOWN_JS)
+    monkeypatch.setattr(server.SceneServer, "_session", slow_build)
     s = open_on(hs, link)
+    monkeypatch.undo()
     assert hs.page.evaluate("() => window.__samePage === true")  # no page load
+    assert hs.page.evaluate("() => window.__settingsShown") == 0
     assert s is not old and old.closed and hs.scene.sessions[max(hs.scene.sessions)] is s
     opened = hs.page.evaluate(PANEL_JS)
     load_link(hs, link)

@@ -160,10 +160,13 @@ class SceneServer:
             tab = self._tabs.get(client_id)
         try:
             old.close()
-            client.scene.reset()  # before the panel: a page that shows the old panel gone has no old scene
-            client.gui.reset()
-            session = self._session(client, link)
-            session.frame_camera()
+            # one batch from the reset to the new panel: the page never shows the tab empty (viser then
+            # unfolds its own settings in the panel, and a page read in the fold's 200 ms showed them)
+            with client.atomic():
+                client.scene.reset()  # before the panel: a page that shows the old panel gone has no old scene
+                client.gui.reset()
+                session = self._session(client, link)
+                session.frame_camera()
             self._register(client_id, session, tab)
         finally:
             with self._lock:
