@@ -5,7 +5,7 @@
 #   deps    the runtime dependencies of pyproject.toml in a virtualenv, in a layer of their own
 #           (it depends on pyproject.toml alone: a code change does not reinstall them);
 #           Playwright is left out (screenshots are a command-line tool, not served by the image)
-#   build   the C compiler, and the package built into a wheel: the compiled float filter
+#   build   the C compiler, and the package built into a wheel (with the landing page, app/static): the compiled float filter
 #           (setup.py: core.fixed._filter, baseline / AVX2 / AVX-512 variants chosen when it is
 #           imported, so the image runs on any x86-64 CPU; a portable build elsewhere) and the
 #           sweep filter of moving bodies (core.moving._sweep_filter)
@@ -33,9 +33,11 @@ RUN apt-get update && apt-get install -y --no-install-recommends gcc libc6-dev \
     && rm -rf /var/lib/apt/lists/*
 
 WORKDIR /src
-COPY pyproject.toml setup.py MANIFEST.in README.md ./
+COPY pyproject.toml setup.py MANIFEST.in README.md LICENSE ./
 COPY core ./core
 COPY app ./app
+# the landing page: setup.py copies it into the wheel (app/static)
+COPY static ./static
 # a wheel with the compiled extension (setuptools from the build-system requirements)
 RUN pip wheel --no-deps --wheel-dir /wheels . \
     && python -m zipfile -l /wheels/*.whl | grep -q "core/fixed/_filter.*\.so" \
@@ -60,9 +62,6 @@ RUN pip install --no-deps /wheels/*.whl \
     && python -c "from core.fixed import compiled; assert compiled.available(), compiled.status(); print(compiled.status())" \
     && python -c "from core.moving import sweep_filter as s; assert s._library() is not None, s.filter_status(); print(s.filter_status())" \
     && useradd --create-home --uid 10001 --shell /usr/sbin/nologin app
-
-# The landing page (served at / by the API; found as ./static from this work directory).
-COPY static ./static
 
 USER app
 

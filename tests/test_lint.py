@@ -69,7 +69,7 @@ def test_core_is_a_typed_package():
     """core/py.typed exists and ships (package data and the source distribution)."""
     assert (ROOT / "core" / "py.typed").is_file()
     assert '"core" = ["py.typed"]' in (ROOT / "pyproject.toml").read_text()
-    assert "include core/py.typed" in (ROOT / "MANIFEST.in").read_text().splitlines()
+    assert "core/py.typed" in (ROOT / "MANIFEST.in").read_text().split()
 
 
 def _public_callables() -> list[tuple[str, object]]:

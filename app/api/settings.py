@@ -16,16 +16,17 @@ __all__ = ["ApiSettings", "default_static_dir", "default_bench_dir"]
 
 
 def default_static_dir() -> Path | None:
-    """The ``static/`` folder of the repository, or ``./static`` (Docker's work directory).
+    """The landing page's folder, or None.
 
-    ``pip install .`` installs the packages but not ``static/``, so the working directory is
-    searched second.
+    Looked for in ``app/static`` (an installed wheel), ``static/`` of the checkout (an editable
+    install), then ``./static`` (a working directory that holds one).
 
     Examples:
         >>> default_static_dir() is None or (default_static_dir() / "index.html").is_file()
         True
     """
-    for candidate in (Path(__file__).resolve().parents[2] / "static", Path.cwd() / "static"):
+    here = Path(__file__).resolve()
+    for candidate in (here.parents[1] / "static", here.parents[2] / "static", Path.cwd() / "static"):
         if (candidate / "index.html").is_file():
             return candidate
     return None

@@ -35,7 +35,8 @@ typedef int64_t (*kernel32)(const float *, const float *, signed char *, int64_t
     int64_t classify4_f64_##v(const double *, const double *, signed char *, int64_t, const signed char *); \
     int64_t classify4_f32_##v(const float *, const float *, signed char *, int64_t, const signed char *);
 DECLARE(baseline)
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+/* BASELINE_ONLY: a developer build of the baseline alone (setup.py, ELLIPSOID_BUILD_VARIANTS=baseline) */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(BASELINE_ONLY)
 #define HAVE_X86_VARIANTS 1
 DECLARE(avx2)
 DECLARE(avx512)
@@ -300,7 +301,7 @@ static PyMethodDef METHODS[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static struct PyModuleDef MODULE = {PyModuleDef_HEAD_INIT, "_filter", "The compiled certified float filter.", -1, METHODS};
+static struct PyModuleDef MODULE = {PyModuleDef_HEAD_INIT, "_filter", "The compiled certified float filter.", -1, METHODS, NULL, NULL, NULL, NULL};
 
 PyMODINIT_FUNC PyInit__filter(void) {
     PyObject *m = PyModule_Create(&MODULE);

@@ -320,6 +320,27 @@ def hat_s0_relative_info(n: int) -> tuple[float, float]:
 # C: the same traced kernels and the driver's lane functions (core/fixed/_kernels.h)
 
 
+_C_LOCAL = re.compile(r"^\s*const (?:double|float|int64_t) (\w+) = .*;$")
+
+
+def _drop_unused(lines: list[str]) -> list[str]:
+    """The C lines without the locals nothing reads (repeated until none is left).
+
+    The traced kernels and the driver compute some values that a given C function does not use
+    (an output of a shared stage, a flag of the other path); their definitions are pure, so they
+    go, and the compiler has no unused variable to warn about. Values and their order stay.
+    """
+    while True:
+        text = "\n".join(lines)
+        counts: dict[str, int] = {}
+        for word in re.findall(r"\b\w+\b", text):
+            counts[word] = counts.get(word, 0) + 1
+        kept = [ln for ln in lines if not ((m := _C_LOCAL.match(ln)) and counts.get(m.group(1), 0) == 1)]
+        if len(kept) == len(lines):
+            return kept
+        lines = kept
+
+
 def c_function(k: Kernel, n: int, scalars: Sequence[str] = ()) -> str:
     """The kernel's straight-line Python source rewritten as a C function.
 
@@ -341,6 +362,7 @@ def c_function(k: Kernel, n: int, scalars: Sequence[str] = ()) -> str:
         rhs = re.sub(r"(\w+)\[(\d+), (\d+)\]", lambda m: f"{m.group(1)}[{int(m.group(2)) * n + int(m.group(3))}]", rhs)
         rhs = rhs.replace("abs(", "fabs(")
         body.append(f"    const double {name} = {rhs};")
+    body = _drop_unused(body)
     body.append("}")
     return "\n".join(body) + "\n"
 
@@ -467,9 +489,8 @@ def _lane_c(name: str, params: str, build: Any, infos: dict[str, KernelInfo], do
     """A C lane function: ``build(x)`` runs the driver on :class:`CLanes` and returns the result."""
     x = CLanes(infos, re.findall(r"(\w+)(?:,|$)", params))
     ret = build(x)
-    lines = [f"/* {doc} */", f"static inline __attribute__((always_inline)) int64_t {name}({params}) {{", *x.lines]
-    lines.append(f"    return {ret.text};")
-    lines.append("}")
+    body = _drop_unused([*x.lines, f"    return {ret.text};"])
+    lines = [f"/* {doc} */", f"static inline __attribute__((always_inline)) int64_t {name}({params}) {{", *body, "}"]
     return "\n".join(lines) + "\n"
 
 

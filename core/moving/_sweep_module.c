@@ -7,7 +7,7 @@
 
 static struct PyModuleDef sweep_module = {
     PyModuleDef_HEAD_INIT, "_sweep_filter",
-    "Certified float filter for first contacts in linear motion (C; called through ctypes).", -1, NULL,
+    "Certified float filter for first contacts in linear motion (C; called through ctypes).", -1, NULL, NULL, NULL, NULL, NULL,
 };
 
 PyMODINIT_FUNC PyInit__sweep_filter(void) { return PyModule_Create(&sweep_module); }
