@@ -10,6 +10,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import read_motion, read_interval           # user text, under limits (one grammar)
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
     from core import warm_up, set_threads                 # compiled filter available?; threads
+    from core import filter_stats, Stats                  # how often each float stage fails (core.filtered)
     from core import contact_scale, separating_plane, contact_point, distance   # witnesses (core.witness)
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
     from core import BodyIndex                            # an index asked about new bodies
@@ -28,9 +29,11 @@ from .bodies.index import BodyIndex as BodyIndex
 from .bodies.result import Contacts as Contacts
 from .bodies.sweep import sweep_contacts as sweep_contacts
 from .bodies.sweep_result import SweepContacts as SweepContacts
-from .fixed.classify import Certifier as Certifier
+from .filtered import Certifier as Certifier
+from .filtered import FilterCounts as FilterCounts
+from .filtered import Stats as Stats
+from .filtered import filter_stats as filter_stats
 from .fixed.classify import Classification as Classification
-from .fixed.classify import Stats as Stats
 from .fixed.classify import classify as classify
 from .fixed.classify import classify_detailed as classify_detailed
 from .fixed.compiled import set_threads as set_threads
@@ -79,6 +82,7 @@ __all__ = [
     "Contacts",
     "classify_detailed",
     "Explanation",
+    "FilterCounts",
     "Method",
     "Motion",
     "MotionAnalysis",
@@ -100,6 +104,7 @@ __all__ = [
     "contacts",
     "distance",
     "explain",
+    "filter_stats",
     "first_contact",
     "motion_from_dict",
     "motion_to_dict",
