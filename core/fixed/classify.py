@@ -241,9 +241,9 @@ def _classify(
 ) -> Classification:
     """:func:`classify_detailed`, or for :func:`classify` (``certifiers=False``) a leaner result.
 
-    :func:`classify` reads only the relations and the escalation count: when the float filter
-    decides every pair, ``certified_by`` is then a read-only broadcast of FLOAT (no pass over the
-    batch, no second array written).
+    :func:`classify` reads only the relations (its ``stats`` are fed by :mod:`core.filtered`):
+    when the float filter decides every pair, ``certified_by`` is then a read-only broadcast of
+    FLOAT (no pass over the batch, no second array written).
     """
     a = _as_array(A, "A")
     b = _as_array(B, "B")
@@ -294,30 +294,32 @@ def _rule_code(A: np.ndarray, B: np.ndarray) -> int | None:
 
 
 def _exact_code(a: Any, b: Any, i: int, scalar: bool, on_invalid: str, errors: dict[int, str]) -> int:
-    """Exact relation code of pair i; an invalid pair raises (naming it) or is marked INVALID in ``errors``."""
+    """Exact relation code of pair i; an invalid pair raises or is marked (:func:`_invalid`)."""
     try:
         return int(classify_exact(a, b).relation)
     except ValueError as e:
-        if on_invalid == "raise":
-            raise ValueError(_where(i, scalar) + str(e)) from None
-        errors[i] = str(e)
-        return int(Relation.INVALID)
+        return _invalid(e, i, scalar, on_invalid, errors)
 
 
 def _checked_code(a: Any, b: Any, i: int, scalar: bool, on_invalid: str, errors: dict[int, str], proven: bool) -> int:
-    """UNDECIDED for pair i under "float" once it is known valid, else raise or mark it INVALID.
+    """UNDECIDED for pair i under "float" once it is known valid; else raise or mark it (:func:`_invalid`).
 
-    Valid: ``proven`` by the filter, else checked exactly; marked as in :func:`_exact_code`.
+    Valid: ``proven`` by the filter's own validity proof, else checked exactly.
     """
     try:
         if not proven:
             _validate_pair(a, b)
         return int(Relation.UNDECIDED)
     except ValueError as e:
-        if on_invalid == "raise":
-            raise ValueError(_where(i, scalar) + str(e)) from None
-        errors[i] = str(e)
-        return int(Relation.INVALID)
+        return _invalid(e, i, scalar, on_invalid, errors)
+
+
+def _invalid(e: ValueError, i: int, scalar: bool, on_invalid: str, errors: dict[int, str]) -> int:
+    """``on_invalid`` for invalid pair i: raise its error naming the pair, or keep it and return INVALID."""
+    if on_invalid == "raise":
+        raise ValueError(_where(i, scalar) + str(e)) from None
+    errors[i] = str(e)
+    return int(Relation.INVALID)
 
 
 def _classify_flat(
