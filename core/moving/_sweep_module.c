@@ -55,14 +55,14 @@ static int get_array(PyObject *obj, Py_buffer *view, const char *name, const cha
                      int ndim, Py_ssize_t *shape, int writable) {
     if (PyObject_GetBuffer(obj, view, PyBUF_RECORDS_RO) < 0) {
         PyErr_Clear();
-        PyErr_Format(PyExc_TypeError, "sweep_pairs: %s must be a %s array, got %.100s", name, dtype, Py_TYPE(obj)->tp_name);
+        PyErr_Format(PyExc_TypeError, "sweep_pairs: %s must be an array of %s, got %.100s", name, dtype, Py_TYPE(obj)->tp_name);
         return 0;
     }
     char got[64];
     const char *problem = NULL;
     if (!has_type(view, kind, itemsize)) {
         describe(view, got, sizeof(got));
-        PyErr_Format(PyExc_TypeError, "sweep_pairs: %s must be a %s array, got %s", name, dtype, got);
+        PyErr_Format(PyExc_TypeError, "sweep_pairs: %s must be an array of %s, got %s", name, dtype, got);
         PyBuffer_Release(view);
         return 0;
     }
@@ -84,8 +84,8 @@ static int get_array(PyObject *obj, Py_buffer *view, const char *name, const cha
             PyBuffer_Release(view);
             return 0;
         }
-        shape[i] = view->shape[i];
     }
+    for (int i = 0; i < ndim; i++) shape[i] = view->shape[i];
     if (!PyBuffer_IsContiguous(view, 'C')) problem = "must be C-contiguous (numpy.ascontiguousarray)";
     else if (writable && view->readonly) problem = "must be writable";
     if (problem) {

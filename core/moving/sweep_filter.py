@@ -78,7 +78,8 @@ def _library() -> ModuleType | None:
             try:
                 lib = importlib.import_module("core.moving._sweep_filter")
                 if not callable(getattr(lib, "sweep_pairs", None)):  # built from an older source
-                    raise ImportError(f"{lib.__file__} has no sweep_pairs: it was built from an older core/moving/_sweep_module.c")
+                    where = getattr(lib, "__file__", lib.__name__)
+                    raise ImportError(f"{where} has no sweep_pairs: it was built from an older core/moving/_sweep_module.c")
                 status = f"compiled sweep kernel loaded from {lib.__file__}"
             except ImportError as e:
                 lib = None
