@@ -161,7 +161,7 @@ static PyObject *sweep_pairs(PyObject *self, PyObject *args) {
                                  (const int64_t *)view[2].buf, has_shift ? (const double *)view[3].buf : NULL, (int64_t)m,
                                  (int8_t *)view[4].buf, (double *)view[5].buf, (double *)view[6].buf, (int32_t *)view[7].buf);
             Py_END_ALLOW_THREADS
-            if (failed) PyErr_SetString(PyExc_MemoryError, "sweep_pairs: no memory for the filter's workspace (about 400 kB)");
+            if (failed) PyErr_SetString(PyExc_MemoryError, "sweep_pairs: no memory for the filter's workspace (about 0.5 MB)");
             else result = Py_NewRef(Py_None);
         }
     }

@@ -52,8 +52,6 @@ __all__ = ["SOURCE", "Row", "read_defines", "rows", "problems", "main"]
 SOURCE = Path(__file__).with_name("_sweep_filter.c")
 """The C kernel whose allowances are checked."""
 
-COMMAND = "python -m core.moving.sweepbounds"
-
 WIDTH = Fraction(1, 10**9)
 """The documented bracket width: t_hi - t_lo <= 1e-9 (:class:`core.moving.sweep_filter.FilterResult`)."""
 
