@@ -28,6 +28,8 @@ from ..moving.first_contact import FirstContacts, first_contacts
 from ..moving.linear import LinearMotions, read_linear_motions
 from ..options import check_options
 from ..relation import Relation
+from .bodies import Bodies
+from .box import Box
 from .broadphase import Candidates
 from .periodic import check_box, lattice_shifts, read_box
 from .sweep_result import SweepContacts
@@ -44,7 +46,7 @@ _BATCH = 1 << 18
 def sweep_contacts(
     centers0: Any,
     centers1: Any,
-    semi_axes: Any,
+    semi_axes: Any = None,
     orientations0: Any = None,
     orientations1: Any = None,
     *,
@@ -56,8 +58,13 @@ def sweep_contacts(
 ) -> SweepContacts:
     """Every pair of moving bodies that touches or overlaps during t in [0, 1], with its first contact.
 
+    Also ``sweep_contacts(start, end)`` with two :class:`core.Bodies` (two frames): their centres,
+    semi-axes (equal in both: the bodies are rigid), orientations, box (``start``'s unless ``box``
+    is given) and ids (``end`` is reordered to ``start``'s ids when both have ids; the result
+    carries them).
+
     Args:
-        centers0: (N, 3) centres at t = 0 (2D: (N, 2)); floats, read exactly.
+        centers0: (N, 3) centres at t = 0 (2D: (N, 2)); floats, read exactly. Or the :class:`core.Bodies` at t = 0.
         centers1: (N, d) centres at t = 1: body k's centre is c0 + t (c1 - c0). In a periodic
             box give the unwrapped end (c0 plus the displacement), not a wrapped one.
         semi_axes: (N, d) semi-axes, fixed during the step.
@@ -118,6 +125,11 @@ def sweep_contacts(
     """
     check_options(method, on_invalid, ("adaptive", "exact"))
     t0 = time.perf_counter()
+    ids = None
+    if isinstance(centers0, Bodies) or isinstance(centers1, Bodies):
+        centers0, centers1, semi_axes, orientations0, orientations1, box, ids = _frames(
+            centers0, centers1, semi_axes, orientations0, orientations1, box
+        )
     bodies, bad = read_linear_motions(centers0, centers1, semi_axes, orientations0, orientations1)
     if bad and on_invalid == "raise":
         raise ValueError(next(iter(bad.values())))
@@ -188,11 +200,12 @@ def sweep_contacts(
         certified_by=fc.certified_by[order].astype(np.int8),
         n_bodies=N,
         bodies=bodies,
-        box=L,
+        box=Box.from_any(L, d),
         image=None if cand.image is None else cand.image[order],
         invalid=dict(sorted(bad.items())),
         counts=counts,
         _times={int(where[k]): t for k, t in fc.times.items()},
+        ids=ids,
     )
     out.seconds = {"read": t1 - t0, "broad": t3 - t1 - found.narrow_s, "narrow": found.narrow_s, "total": time.perf_counter() - t0}
     return out
@@ -249,3 +262,26 @@ class _Found:
         fc = FirstContacts(joined("relation", np.int8), joined("t_lo", np.float64), joined("t_hi", np.float64),
                            joined("certified_by", np.int8), times)
         return cand, fc
+
+
+def _frames(start: Any, end: Any, semi_axes: Any, o0: Any, o1: Any, box: Any) -> tuple[Any, ...]:
+    """The arrays of ``sweep_contacts(start, end)`` with two :class:`core.Bodies`, and their ids."""
+    if not (isinstance(start, Bodies) and isinstance(end, Bodies)):
+        raise ValueError("sweep_contacts: give two Bodies (start, end), or the arrays centers0, centers1, semi_axes, ...")
+    if semi_axes is not None or o0 is not None or o1 is not None:
+        raise ValueError("sweep_contacts(start, end): the Bodies carry the semi-axes and orientations; give no arrays")
+    if not (start.has_parameters and end.has_parameters):
+        raise ValueError("sweep_contacts: the Bodies need centres and semi-axes (not matrices alone)")
+    end = end.ordered_like(start)
+    if start.dimensions != end.dimensions:
+        raise ValueError(f"sweep_contacts: {start.dimensions}D bodies at the start and {end.dimensions}D at the end")
+    differ = np.flatnonzero((start.semi_axes != end.semi_axes).any(axis=1))
+    if differ.size:
+        k = int(differ[0])
+        raise ValueError(
+            f"sweep_contacts: {start.name(k)} has semi-axes {start.semi_axes[k].tolist()} at the start and "
+            f"{end.semi_axes[k].tolist()} at the end: the bodies must keep their shape during the step"
+        )
+    if box is None:
+        box = start.box if start.box is not None else end.box
+    return start.centers, end.centers, start.semi_axes, start.orientations, end.orientations, box, start.ids
