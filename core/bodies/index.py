@@ -41,8 +41,8 @@ from ..fixed.classify import Certifier, classify_detailed
 from ..fixed.compiled import warm_up
 from ..options import check_options
 from ..relation import Relation
-from .bounds import bounding_spheres
 from .bodies import unpack
+from .bounds import bounding_spheres
 from .box import Box
 from .periodic import (
     box_vectors_exact,
