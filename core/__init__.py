@@ -13,6 +13,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import filter_stats, Stats                  # how often each float stage fails (core.filtered)
     from core import contact_scale, separating_plane, contact_point, distance   # witnesses (core.witness)
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
+    from core import Box, Bodies, PairTable               # a periodic box; bodies with ids and box
     from core import BodyIndex                            # an index asked about new bodies
     from core import sweep_contacts, SweepContacts, first_contact   # N moving bodies: first contacts
 
@@ -22,10 +23,14 @@ path (:mod:`core.fixed.lazy`, :mod:`core.bodies.distributed`) imports dask only 
 """
 
 from . import pickling as _pickling  # noqa: F401  (flint polynomials pickle: results travel between processes
+from .bodies.bodies import Bodies as Bodies
+from .bodies.box import Box as Box
 from .bodies.broadphase import TooManyPairs as TooManyPairs
 from .bodies.build import bodies_from_axes as bodies_from_axes
 from .bodies.contacts import contacts as contacts
 from .bodies.index import BodyIndex as BodyIndex
+from .bodies.index import IndexPairs as IndexPairs
+from .bodies.pairs import PairTable as PairTable
 from .bodies.result import Contacts as Contacts
 from .bodies.sweep import sweep_contacts as sweep_contacts
 from .bodies.sweep_result import SweepContacts as SweepContacts
@@ -72,7 +77,11 @@ from .witness import distance as distance
 from .witness import separating_plane as separating_plane
 
 __all__ = [
+    "Bodies",
     "BodyIndex",
+    "Box",
+    "IndexPairs",
+    "PairTable",
     "METHODS",
     "ON_INVALID",
     "Certifier",

@@ -226,6 +226,8 @@ def test_a_rotating_body_against_the_exact_motion_analysis(client):
         ({"start": [sphere(0)], "end": [[0, 0, 0, 1, 1, 1, -2, 0, 0, 0]]},
          "row 0: the orientation passes through zero: end's = -lambda start's (lambda > 0); flip the sign of end's quaternion"),
         ({"start": [sphere(0), sphere(3)], "end": [sphere(9), sphere(3)], "box": [10, 10, 10]},
+         "row 0 moves 9 in one step, more than half the smallest height of the periodic cell"),
+        ({"start": [[0, 0, 0, 2, 2, 2, 1, 0, 0, 0], sphere(3)], "end": [[4, 0, 0, 2, 2, 2, 1, 0, 0, 0], sphere(3)], "box": [10, 10, 10]},
          "body 0 is too large for the periodic box"),
         ({"start": [sphere(0)], "end": [sphere(0)], "digits": 201}, "digits = 201 is over the limit of 200"),
     ],
