@@ -34,6 +34,7 @@ from .bodies.pairs import PairTable as PairTable
 from .bodies.result import Contacts as Contacts
 from .bodies.sweep import sweep_contacts as sweep_contacts
 from .bodies.sweep_result import SweepContacts as SweepContacts
+from .errors import InvalidInput as InvalidInput
 from .filtered import Certifier as Certifier
 from .filtered import FilterCounts as FilterCounts
 from .filtered import Stats as Stats
@@ -85,6 +86,7 @@ __all__ = [
     "BodyIndex",
     "Box",
     "IndexPairs",
+    "InvalidInput",
     "PairTable",
     "METHODS",
     "ON_INVALID",

@@ -166,3 +166,21 @@ def test_body_index_takes_the_box_as_a_keyword():
     assert hits.j.tolist() == old.j.tolist() == [0, 1] and hits.box == Box(5, 5)
     assert hits.shifts().tolist() == [[5.0, 0.0], [0.0, 0.0]]  # body 0's image at x = 5
     assert BodyIndex(Bodies([[0, 0], [2.5, 0]], [[1, 1]] * 2, box=(5, 5))).box == Box(5, 5)
+
+
+def test_invalid_input_says_which_pair_and_matrix():
+    from core import InvalidInput, classify
+
+    circle = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]
+    hyperbola = [[1, 0, 0], [0, -1, 0], [0, 0, -1]]
+    with pytest.raises(InvalidInput) as one:
+        classify(circle, hyperbola)
+    assert (one.value.pair, one.value.matrix) == (None, "B") and str(one.value).startswith("B is not an ellipse")
+    with pytest.raises(InvalidInput) as batch:
+        classify([circle, circle, hyperbola], circle)
+    assert (batch.value.pair, batch.value.matrix) == (2, "A") and str(batch.value).startswith("pair 2: A is not an ellipse")
+    assert batch.value.reason.startswith("A is not an ellipse")
+    with pytest.raises(InvalidInput) as entry:
+        classify([[1, 0, 0], [0, 1, 0], [0, 0, float("nan")]], circle)
+    assert entry.value.matrix == "A" and "entry (2,2)" in str(entry.value)
+    assert isinstance(entry.value, ValueError)

@@ -33,6 +33,7 @@ from typing import Any, Literal, TypeAlias, overload
 import numpy as np
 from flint import fmpq, fmpz
 
+from ..errors import InvalidInput
 from ..formulae.pencil import determinant
 from .numbers import sign, to_fmpq
 from .rotation import rotation_numerator
@@ -629,25 +630,28 @@ def normalised_quadratic_part(M: Any, *, name: str = "matrix") -> ExactMatrix:
     :func:`validate_quadric`, is left to the caller (the exact classifier reads it off the
     pencil: det A = a_n, det B = a_0).
     """
-    rows = _rows(M, name)
-    n = len(rows)
-    E = symmetric_part([[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)], name)
+    try:
+        rows = _rows(M, name)
+        n = len(rows)
+        E = symmetric_part([[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)], name)
+    except ValueError as e:
+        raise InvalidInput.of(e, matrix=name) from None
     minors = [determinant([row[:k] for row in E[:k]]) for k in range(1, n)]
     flip = interior_sign([sign(m) for m in minors])
     if flip == 1:
         return E
     if flip == -1:
         return [[-v for v in row] for row in E]
-    raise ValueError(not_a_quadric_message(name, n))
+    raise InvalidInput(not_a_quadric_message(name, n), matrix=name)
 
 
 def check_determinant_sign(det_sign: int, n: int, name: str) -> None:
     """Raise unless det < 0 (given the sign of det of the normalised matrix)."""
     kind = "ellipse" if n == 3 else "ellipsoid"
     if det_sign == 0:
-        raise ValueError(f"{name} is a degenerate {kind} (det = 0: a single point)")
+        raise InvalidInput(f"{name} is a degenerate {kind} (det = 0: a single point)", matrix=name)
     if det_sign > 0:
-        raise ValueError(f"{name} has an empty interior: no real points (det > 0), not an {kind}")
+        raise InvalidInput(f"{name} has an empty interior: no real points (det > 0), not an {kind}", matrix=name)
 
 
 def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
@@ -661,8 +665,9 @@ def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
         Nested lists of ``fmpq`` with interior X^T M X < 0 (signs flipped if needed).
 
     Raises:
-        ValueError: wrong shape, not symmetric, NaN/inf or unreadable entry, quadratic part
-            not definite, degenerate (det = 0) or empty (no real points).
+        InvalidInput: (a ValueError naming ``name``) wrong shape, not symmetric, NaN/inf or
+            unreadable entry, quadratic part not definite, degenerate (det = 0) or empty (no
+            real points).
 
     Examples:
         >>> validate_quadric([[-1, 0, 0], [0, -1, 0], [0, 0, 1]])   # flipped unit circle
@@ -670,7 +675,7 @@ def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
         >>> validate_quadric([[1, 0, 0], [0, -1, 0], [0, 0, -1]])
         Traceback (most recent call last):
         ...
-        ValueError: matrix is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)
+        core.errors.InvalidInput: matrix is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)
     """
     E = normalised_quadratic_part(M, name=name)
     d = determinant(E)
