@@ -1,0 +1,162 @@
+"""Trajectories of hard bodies for the audit benchmark: a dense packing that moves, and a tangent lattice.
+
+:func:`fcc_trajectory`: ellipsoids at the sites of a face-centred cubic lattice in a periodic box,
+each frame jittered around its site (at most ``jitter`` from it) and turned at random, the whole
+packing drifting so that bodies cross the box's faces between frames; frames are wrapped, as a
+simulation stores them. The lattice spacing keeps the bodies' bounding spheres apart whatever the
+jitter and the turns, so no pair ever overlaps (packing fraction ~0.5 with the default shape), and
+a linear step between two frames keeps them apart too (each centre stays in its ball).
+
+:func:`tangent_lattice`: spheres of diameter 1 on a simple cubic lattice of spacing 1: every
+neighbour pair touches exactly, the hardest input a float overlap check can get; a few bodies are
+then moved by +-2^-40 along x, which makes exact overlaps and gaps of ~1e-12. Their true relations
+are known by construction (:attr:`TangentLattice.truth`).
+
+Examples:
+    >>> t = fcc_trajectory((2, 2, 2), frames=2, seed=1)
+    >>> len(t.centers), t.centers[0].shape, t.semi_axes.shape, t.box
+    (2, (32, 3), (32, 3), (5.713203435596426, 5.713203435596426, 5.713203435596426))
+    >>> lat = tangent_lattice(3, planted=2, seed=0)
+    >>> lat.centers.shape, sorted(set(lat.truth.values()))
+    ((27, 3), ['overlap', 'tangent'])
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["FCC_AXES", "Trajectory", "fcc_trajectory", "write_gsd", "TangentLattice", "tangent_lattice"]
+
+FCC_AXES = (1.0, 0.88, 0.8)
+"""Semi-axes of every ellipsoid of :func:`fcc_trajectory` (the largest is 1)."""
+
+
+@dataclass
+class Trajectory:
+    """Frames of N rigid bodies in one periodic box (wrapped positions)."""
+
+    centers: list[np.ndarray]
+    """Per frame, (N, 3) float64 centres wrapped into [-L/2, L/2)."""
+    orientations: list[np.ndarray]
+    """Per frame, (N, 4) unit quaternions wxyz."""
+    semi_axes: np.ndarray
+    """(N, 3), the same in every frame."""
+    box: tuple[float, float, float]
+    """Sides of the orthogonal periodic box."""
+
+    @property
+    def fraction(self) -> float:
+        """Packing fraction: the bodies' volume over the box's."""
+        return float((4 / 3 * math.pi * self.semi_axes.prod(axis=1)).sum() / np.prod(self.box))
+
+
+def fcc_trajectory(cells: tuple[int, int, int], frames: int, *, jitter: float = 0.01, drift: float = 0.37,
+                   seed: int = 0) -> Trajectory:
+    """A jittered FCC packing of ellipsoids over ``frames`` frames (module docstring).
+
+    Args:
+        cells: unit cells along x, y, z (4 bodies each: 100,000 bodies = (25, 40, 25)).
+        frames: how many frames.
+        jitter: each centre lies within this distance of its (drifting) site.
+        drift: how far the whole packing moves along (1, 0.5, 0.25) per frame (wrapped).
+        seed: random seed.
+    """
+    rng = np.random.default_rng(seed)
+    a = math.sqrt(2.0) * (2.0 + 2.0 * jitter)  # nearest sites 2 + 2 jitter apart: bounding spheres (radius 1) never meet
+    basis = np.array([[0, 0, 0], [0, 0.5, 0.5], [0.5, 0, 0.5], [0.5, 0.5, 0]])
+    grid = np.stack(np.meshgrid(*(np.arange(c) for c in cells), indexing="ij"), axis=-1).reshape(-1, 1, 3)
+    sites = ((grid + basis[None]) * a).reshape(-1, 3)
+    box = tuple(float(c * a) for c in cells)
+    L = np.array(box)
+    n = len(sites)
+    axes = np.tile(FCC_AXES, (n, 1))
+    centers, orientations = [], []
+    direction = np.array([1.0, 0.5, 0.25])
+    for k in range(frames):
+        u = rng.normal(size=(n, 3))
+        u *= (jitter * rng.uniform(0, 1, n) ** (1 / 3) / np.linalg.norm(u, axis=1))[:, None]
+        c = sites + k * drift * direction + u
+        c = c - L * np.floor(c / L + 0.5)  # wrapped into [-L/2, L/2)
+        q = rng.normal(size=(n, 4))
+        centers.append(c)
+        orientations.append(q / np.linalg.norm(q, axis=1)[:, None])
+    return Trajectory(centers, orientations, axes, box)  # type: ignore[arg-type]
+
+
+def write_gsd(path: str, traj: Trajectory) -> None:
+    """Write the trajectory as a HOOMD GSD file (one Ellipsoid type; float32, as HOOMD stores it).
+
+    The float32 positions keep the bodies apart: they move each centre by at most 2^-20 of the box,
+    far less than the gaps the lattice leaves.
+    """
+    import gsd.hoomd
+
+    a, b, c = FCC_AXES
+    with gsd.hoomd.open(path, "w") as f:
+        for k in range(len(traj.centers)):
+            frame = gsd.hoomd.Frame()
+            frame.configuration.step = k
+            frame.configuration.box = [*traj.box, 0.0, 0.0, 0.0]
+            frame.particles.N = len(traj.semi_axes)
+            frame.particles.types = ["E"]
+            frame.particles.typeid = np.zeros(frame.particles.N, dtype=np.uint32)
+            frame.particles.type_shapes = [{"type": "Ellipsoid", "a": a, "b": b, "c": c}]
+            frame.particles.position = traj.centers[k].astype(np.float32)
+            frame.particles.orientation = traj.orientations[k].astype(np.float32)
+            f.append(frame)
+
+
+@dataclass
+class TangentLattice:
+    """Spheres of radius 1/2 on the integer lattice, and the true relation of every touching pair."""
+
+    centers: np.ndarray
+    """(N, 3) float64 centres (integers, a few moved by +-2^-40 along x)."""
+    radii: np.ndarray
+    """(N,) radii (1/2)."""
+    box: tuple[float, float, float]
+    """The periodic box (n, n, n): the lattice tiles it."""
+    truth: dict[tuple[int, int], str] = field(default_factory=dict)
+    """(i, j) with i < j -> "tangent" or "overlap" for every pair that is not separate (exact, by construction)."""
+
+
+def tangent_lattice(n: int, *, planted: int = 20, seed: int = 0) -> TangentLattice:
+    """n^3 unit-diameter spheres on a simple cubic lattice in an (n, n, n) box (module docstring).
+
+    ``planted`` bodies (not neighbours of each other along x) are moved by +2^-40 or -2^-40 along x:
+    the pair in the direction of the move overlaps by 2^-40, the pair behind it opens a gap of
+    2^-40 (separate); every other neighbour pair stays exactly tangent.
+    """
+    rng = np.random.default_rng(seed)
+    g = np.stack(np.meshgrid(*(np.arange(n),) * 3, indexing="ij"), axis=-1).reshape(-1, 3).astype(np.float64)
+    index = {tuple(int(v) for v in p): k for k, p in enumerate(g)}
+    move = np.zeros(len(g))
+    chosen: list[int] = []
+    for k in rng.permutation(len(g)).tolist():
+        x, y, z = (int(v) for v in g[k])
+        if all(index[((x + dx) % n, y, z)] not in chosen for dx in (-1, 1)):
+            chosen.append(k)
+            move[k] = 2.0**-40 if rng.uniform() < 0.5 else -(2.0**-40)
+        if len(chosen) == planted:
+            break
+    centers = g.copy()
+    centers[:, 0] += move
+    truth: dict[tuple[int, int], str] = {}
+    for k, p in enumerate(g):
+        x, y, z = (int(v) for v in p)
+        for axis in range(3):
+            q = [x, y, z]
+            q[axis] = (q[axis] + 1) % n
+            j = index[tuple(q)]
+            i0, j0 = min(k, j), max(k, j)
+            if axis == 0:
+                gap = move[j] - move[k]  # j is one step along +x from k (through the face if wrapped)
+                rel = "tangent" if gap == 0 else ("overlap" if gap < 0 else None)
+            else:  # a sideways shift of one of them opens a gap of ~2^-81: separate
+                rel = "tangent" if move[k] == move[j] else None
+            if rel is not None:
+                truth[(i0, j0)] = rel
+    return TangentLattice(centers, np.full(len(g), 0.5), (float(n),) * 3, truth)
