@@ -1,4 +1,4 @@
-"""Dependencies of the routes: the settings, the worker pool and the pair batcher of this app.
+"""Dependencies of the routes: the settings, the worker pool, the pair batcher and the line of this app.
 
 Both live on ``app.state`` (set by :func:`app.api.create_api`), are reached through ``Depends``
 and can be swapped in tests with ``app.dependency_overrides[get_settings] = ...``.
@@ -12,9 +12,10 @@ from fastapi import Depends, Request
 
 from ..workers import WorkerPool
 from .batching import PairBatcher
+from .line import Line
 from .settings import ApiSettings
 
-__all__ = ["get_settings", "get_workers", "get_batcher", "SettingsDep", "WorkersDep", "BatcherDep"]
+__all__ = ["get_settings", "get_workers", "get_batcher", "get_line", "SettingsDep", "WorkersDep", "BatcherDep", "LineDep"]
 
 
 def get_settings(request: Request) -> ApiSettings:
@@ -32,6 +33,12 @@ def get_batcher(request: Request) -> PairBatcher:
     return request.app.state.batcher
 
 
+def get_line(request: Request) -> Line:
+    """The places of large request bodies and their reader (:mod:`app.api.line`)."""
+    return request.app.state.line
+
+
 SettingsDep = Annotated[ApiSettings, Depends(get_settings)]
 WorkersDep = Annotated[WorkerPool, Depends(get_workers)]
 BatcherDep = Annotated[PairBatcher, Depends(get_batcher)]
+LineDep = Annotated[Line, Depends(get_line)]

@@ -282,3 +282,6 @@ class HealthOut(BaseModel):
     analyses_waiting: int = 0
     """Requests waiting in the queue for a worker."""
     max_queued_analyses: int = 0
+    large_bodies: int = 0
+    """Requests with a body over 64 kB in the server (received, read, waiting for a worker or running)."""
+    max_large_bodies: int = 0
