@@ -246,6 +246,7 @@ class ErrorOut(BaseModel):
 
 ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     400: {"model": ErrorOut, "description": "Unreadable body (e.g. JSON nested too deeply)"},
+    408: {"model": ErrorOut, "description": "Body stalled or too slow to arrive (ApiSettings.body_stall_s, body_read_s); the connection is closed"},
     413: {"model": ErrorOut, "description": "Body over the size limit"},
     415: {"model": ErrorOut, "description": "Body not sent as JSON (content-type: application/json)"},
     422: {"model": ErrorOut, "description": "Invalid input: the message says what is wrong"},
