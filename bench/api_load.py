@@ -53,18 +53,23 @@ def _free_port() -> int:
 
 
 class serve_api:
-    """Context manager: the API alone in a subprocess on a free port (``.port``, ``.proc``)."""
+    """Context manager: the API alone in a subprocess on a free port (``.port``, ``.proc``).
 
-    def __init__(self, *extra: str) -> None:
+    ``root``: the checkout whose ``app`` is served (default: this one; another, e.g. an earlier
+    commit with its compiled filters, to compare).
+    """
+
+    def __init__(self, *extra: str, root: Path = ROOT) -> None:
         self.port = _free_port()
         self.extra = extra
+        self.root = root
         self.proc: subprocess.Popen[bytes] | None = None
 
     def __enter__(self) -> serve_api:
-        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        env = {**os.environ, "PYTHONPATH": str(self.root)}
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "app", "serve", "--api-only", "--api-port", str(self.port), *self.extra],
-            cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            cwd=self.root, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
         )
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
@@ -412,12 +417,13 @@ def _mixed(port: int, clients: int, large: bytes, small: list[bytes], per_large:
     return asyncio.run(go())
 
 
-def run_line_load(*, quick: bool = False, log: Any = print) -> dict[str, Any]:
+def run_line_load(*, quick: bool = False, log: Any = print, root: Path = ROOT, server: str = "this commit") -> dict[str, Any]:
     """The line under load: the issue's two bursts, then 32 and 64 mixed clients; one server each.
 
-    Returns ``{"rows": [...], "load": (1, 5, 15 min)}``; each row has ``name``, ``bytes`` (the
-    large body), ``answers`` (:func:`_summary`), ``idle_mb``/``peak_mb`` (server tree resident
-    memory), ``health_worst_ms``, ``places_max`` (-1: a server without the line) and ``seconds``.
+    Returns ``{"rows": [...], "load": (1, 5, 15 min)}``; each row has ``server`` (its label),
+    ``name``, ``bytes`` (the large body), ``answers`` (:func:`_summary`), ``idle_mb``/``peak_mb``
+    (server tree resident memory), ``health_worst_ms``, ``places_max`` (-1: a server without the
+    line) and ``seconds``. ``root``: the checkout served (:class:`serve_api`).
     """
     small = [json.dumps(p).encode() for p in _random_pairs(200, 3, 7)]
     contacts = large_body("/api/contacts", 500 if quick else 2000)
@@ -434,14 +440,14 @@ def run_line_load(*, quick: bool = False, log: Any = print) -> dict[str, Any]:
                                                                10 if quick else 40)))
     rows = []
     for name, body, run in scenarios:
-        with serve_api() as srv:
+        with serve_api(root=root) as srv:
             assert srv.proc is not None
             asyncio.run(_one_request(srv.port, "POST", "/api/contacts", contacts))  # warm: a worker, the reader
             idle = tree_rss_mb(srv.proc.pid)
             t0 = time.perf_counter()
             with _Watch(srv.port, srv.proc.pid) as watch:
                 answers = run(srv.port)
-            row = {"name": name, "bytes": len(body), "answers": _summary(answers), "idle_mb": idle,
+            row = {"server": server, "name": name, "bytes": len(body), "answers": _summary(answers), "idle_mb": idle,
                    "peak_mb": max(watch.memory), "health_worst_ms": 1e3 * max(watch.health),
                    "places_max": max(watch.places), "seconds": time.perf_counter() - t0}
         log(f"api line: {row}")
@@ -451,13 +457,13 @@ def run_line_load(*, quick: bool = False, log: Any = print) -> dict[str, Any]:
 
 def format_line(d: dict[str, Any]) -> str:
     """Markdown table of :func:`run_line_load`."""
-    out = ["| load | body | answers: count, p50 / p99 / max latency | server memory: idle -> peak | "
-           "/healthz worst | large bodies held (most) |", "|---|---:|---|---:|---:|---:|"]
-    for r in d["rows"]:
+    out = ["| load | server | body | answers: count, p50 / p99 / max latency | server memory: idle -> peak | "
+           "/healthz worst | large bodies held (most) |", "|---|---|---:|---|---:|---:|---:|"]
+    for r in sorted(d["rows"], key=lambda r: [x["name"] for x in d["rows"]].index(r["name"])):
         answers = "<br>".join(f"{k}: {v['n']}, {v['p50_ms'] / 1e3:.2f} / {v['p99_ms'] / 1e3:.2f} / {v['max_ms'] / 1e3:.2f} s"
                               for k, v in r["answers"].items())
         places = "n/a" if r["places_max"] < 0 else str(r["places_max"])
-        out.append(f"| {r['name']} | {r['bytes'] / 1e6:.1f} MB | {answers} | {r['idle_mb']:.0f} -> {r['peak_mb']:.0f} MB | "
+        out.append(f"| {r['name']} | {r['server']} | {r['bytes'] / 1e6:.1f} MB | {answers} | {r['idle_mb']:.0f} -> {r['peak_mb']:.0f} MB | "
                    f"{r['health_worst_ms']:.0f} ms | {places} |")
     return "\n".join(out)
 
@@ -485,16 +491,23 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--line", action="store_true", help="large bodies: bursts and 32 / 64 mixed clients (issue 52)")
     ap.add_argument("--write", action="store_true", help="with --line: write its section of bench/REPORT.md")
+    ap.add_argument("--against", type=Path, help="with --line: also serve this checkout (e.g. an earlier commit, "
+                                                   "with its compiled filters) and give its rows")
+    ap.add_argument("--against-label", help="the name of --against's rows (default: its folder's name)")
     a = ap.parse_args(argv)
     log = lambda s: print(s, file=sys.stderr)  # noqa: E731
     if a.line:
         load0 = os.getloadavg()
         t0 = time.perf_counter()
         d = run_line_load(quick=a.quick, log=log)
+        if a.against:
+            before = run_line_load(quick=a.quick, log=log, root=a.against.resolve(), server=a.against_label or a.against.name)
+            d = {"rows": d["rows"] + before["rows"], "load": before["load"]}
         table = format_line(d)
         print(table)
         if a.write:
-            command = "python -m bench.api_load --line" + (" --quick" if a.quick else "") + " --write"
+            command = ("python -m bench.api_load --line" + (" --quick" if a.quick else "") +
+                       (f" --against CHECKOUT --against-label {a.against_label}" if a.against else "") + " --write")
             write_section(
                 "### Large bodies under load: the one bounded line\n\n"
                 f"Generated by `{command}` in {time.perf_counter() - t0:.0f} s on "
