@@ -1,9 +1,10 @@
 """One bounded line for all work (issue 52): places for large bodies, read timeouts, one wait, shutdown.
 
 Most tests run a real uvicorn server in a thread of this process (small limits: 2 places, a pause
-of 1 s, a whole body within 3 s, a wait of 1 s) and speak to it over raw sockets, so that a client
-can send headers and half a body and then nothing. The last ones run ``python -m app serve`` in a
-subprocess: 60 concurrent large ``/api/contacts`` and SIGTERM while a body arrives.
+of 5 s, a wait of 1 s) and speak to it over raw sockets, so that a client can send headers and
+part of a body and then nothing. A client that must hold its place while the test looks trickles
+a byte every 0.25 s (:class:`Holder`) and stalls when told. The last ones run ``python -m app
+serve`` in a subprocess: SIGTERM while a body arrives, and 60 concurrent large ``/api/contacts``.
 
 Waits are on states (``/healthz`` counts, a response arriving); the only times asserted are lower
 bounds that cannot depend on the machine's speed (a 408 never comes before its pause).
@@ -13,11 +14,14 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
 import signal
 import socket
 import threading
 import time
 
+import anyio
+import anyio.to_thread
 import httpx
 import numpy as np
 import pytest
@@ -31,7 +35,10 @@ from app.api.budget import STOPPING
 from app.api.line import INLINE_BYTES, SHUTTING_DOWN, Line, RequestLine
 from app.workers import WorkerBusy, WorkerPool
 
-SETTINGS = ApiSettings(scene_url=None, max_large_bodies=2, body_stall_s=1.0, body_read_s=3.0, queue_wait_s=1.0)
+SETTINGS = ApiSettings(scene_url=None, max_large_bodies=2, body_stall_s=5.0, body_read_s=120.0, queue_wait_s=1.0,
+                       request_budget_s=60.0)  # the budget is not what is tested: a loaded machine never meets it
+TRICKLE_S = 0.25
+"""A :class:`Holder` sends one byte this often (far below the pause of 5 s)."""
 FULL = ("2 requests with large bodies (over 64 kB) are being received, read or worked on, the most this server "
         "holds; retry in a moment")
 
@@ -123,25 +130,57 @@ def chunk(data: bytes) -> bytes:
     return f"{len(data):x}\r\n".encode() + data + b"\r\n"
 
 
+class Holder:
+    """A client that has sent headers and ``first`` bytes of ``BIG`` and sends one more byte every
+    :data:`TRICKLE_S` (never the whole body) until :meth:`stall`; ``last`` is when it sent its last byte."""
+
+    def __init__(self, port: int, path: str = "/api/contacts", first: int = 1000) -> None:
+        self.sock = connect(port, path, len(BIG), BIG[:first])
+        self.sent = first
+        self.last = time.monotonic()
+        self._stall = threading.Event()
+        self._thread = threading.Thread(target=self._trickle, daemon=True)
+        self._thread.start()
+
+    def _trickle(self) -> None:
+        while not self._stall.wait(TRICKLE_S) and self.sent < len(BIG) - 1:
+            try:
+                self.sock.sendall(BIG[self.sent:self.sent + 1])
+            except OSError:  # answered and closed
+                return
+            self.sent += 1
+            self.last = time.monotonic()
+
+    def stall(self) -> float:
+        """Send nothing more; returns when the last byte was sent."""
+        self._stall.set()
+        self._thread.join(GUARD_S)
+        return self.last
+
+    def close(self) -> None:
+        self.stall()
+        self.sock.close()
+
+
 # --- read timeouts ------------------------------------------------------------------------------------
 
 def test_a_large_body_that_stalls_is_408_after_the_pause_and_holds_no_reader_or_worker(api):
-    """Headers and half a body, then nothing: 408 and the connection closed after ``body_stall_s``;
-    meanwhile it holds its place only, and another large body is read and answered."""
-    t0 = time.monotonic()
-    stalled = connect(api.port, "/api/contacts", len(BIG), BIG[: len(BIG) // 2])
+    """Headers and part of a body, then nothing: 408 and the connection closed ``body_stall_s`` after
+    its last byte; meanwhile it holds its place only, and another large body is read and answered."""
+    holder = Holder(api.port)
     try:
-        wait_until(lambda: api.health()["large_bodies"] == 1, "the stalled body to hold its place")
+        wait_until(lambda: api.health()["large_bodies"] == 1, "the arriving body to hold its place")
         h = api.health()
         assert (h["analyses_running"], h["analyses_waiting"]) == (0, 0)
         r = httpx.post(f"{api.url}/api/contacts", content=BIG, headers={"content-type": "application/json"}, timeout=GUARD_S)
         assert r.status_code == 200, r.text[:300]  # the reader and the workers were free
-        status, headers, body = response(stalled)
-        assert time.monotonic() - t0 >= SETTINGS.body_stall_s
-        assert (status, body) == (408, {"detail": "request body timed out: nothing arrived for 1 s"})
-        assert headers["connection"] == "close" and closed(stalled)
+        last = holder.stall()
+        status, headers, body = response(holder.sock)
+        assert time.monotonic() - last >= SETTINGS.body_stall_s
+        assert (status, body) == (408, {"detail": "request body timed out: nothing arrived for 5 s"})
+        assert headers["connection"] == "close" and closed(holder.sock)
     finally:
-        stalled.close()
+        holder.close()
     wait_until(lambda: api.health()["large_bodies"] == 0, "its place to be freed")
 
 
@@ -149,43 +188,37 @@ def test_a_small_body_that_stalls_is_408_and_takes_no_place(api):
     stalled = connect(api.port, "/api/classify", 1000, b'{"a": [[1, 0, 0], [0, 1, 0], [0, 0, -1]], ')
     try:
         status, _, body = response(stalled)
-        assert (status, body) == (408, {"detail": "request body timed out: nothing arrived for 1 s"})
+        assert (status, body) == (408, {"detail": "request body timed out: nothing arrived for 5 s"})
         assert closed(stalled)
         assert api.health()["large_bodies"] == 0
     finally:
         stalled.close()
 
 
-def test_a_body_that_trickles_is_408_when_not_whole_within_the_read_limit(api):
-    """A byte every 0.2 s never pauses for 1 s, but the body is not whole within ``body_read_s``."""
-    t0 = time.monotonic()
-    sock = connect(api.port, "/api/contacts", len(BIG), BIG[:INLINE_BYTES + 1])
-    got: list[tuple[int, dict[str, str], dict]] = []
+def test_a_body_that_trickles_is_408_when_not_whole_within_the_read_limit():
+    """A byte every 0.25 s never pauses for 5 s, but the body is not whole within ``body_read_s``."""
+    server = LiveApi(ApiSettings(scene_url=None, body_stall_s=5.0, body_read_s=3.0))
     try:
-        reader = threading.Thread(target=lambda: got.append(response(sock)), daemon=True)
-        reader.start()
-        sent = INLINE_BYTES + 1
-        while reader.is_alive() and time.monotonic() - t0 < GUARD_S:
-            try:
-                sock.sendall(BIG[sent:sent + 1])
-            except OSError:  # closed after its answer
-                break
-            sent += 1
-            time.sleep(0.2)
-        reader.join(GUARD_S)
-        assert time.monotonic() - t0 >= SETTINGS.body_read_s
-        assert [(s, b) for s, _, b in got] == [(408, {"detail": "request body timed out: not received whole within 3 s"})]
+        t0 = time.monotonic()
+        holder = Holder(server.port, first=INLINE_BYTES + 1)
+        try:
+            status, headers, body = response(holder.sock)
+            assert time.monotonic() - t0 >= 3.0
+            assert (status, body) == (408, {"detail": "request body timed out: not received whole within 3 s"})
+            assert headers["connection"] == "close"
+        finally:
+            holder.close()
+        wait_until(lambda: server.health()["large_bodies"] == 0, "its place to be freed")
     finally:
-        sock.close()
-    wait_until(lambda: api.health()["large_bodies"] == 0, "its place to be freed")
+        server.stop()
 
 
 # --- places --------------------------------------------------------------------------------------------
 
 def test_beyond_the_places_is_503_at_once_before_the_body_is_read(api):
-    """Two stalled large bodies hold both places: a third (declared) gets 503 with its body unsent;
+    """Two arriving large bodies hold both places: a third (declared) gets 503 with its body unsent;
     a chunked one gets 503 once it has sent more than 64 kB; a small one is served."""
-    holders = [connect(api.port, "/api/contacts", len(BIG), BIG[:1000]) for _ in range(2)]
+    holders = [Holder(api.port) for _ in range(2)]
     try:
         wait_until(lambda: api.health()["large_bodies"] == 2, "both places taken")
         declared = connect(api.port, "/api/contacts", len(BIG))  # headers only
@@ -203,8 +236,8 @@ def test_beyond_the_places_is_503_at_once_before_the_body_is_read(api):
         assert r.status_code == 200 and len(r.json()["pairs"]) == 1
         assert api.health()["large_bodies"] == 2
     finally:
-        for s in holders:
-            s.close()  # the client leaves: its place is freed at once
+        for h in holders:
+            h.close()  # the client leaves: its place is freed at once
     wait_until(lambda: api.health()["large_bodies"] == 0, "the places to be freed")
 
 
@@ -293,20 +326,47 @@ def test_the_pool_stops_a_wait_at_the_requests_deadline(tmp_path):
         holder.join(GUARD_S)
 
 
+# --- /healthz needs no thread ----------------------------------------------------------------------------
+
+def test_healthz_answers_while_every_thread_of_the_pool_is_taken(api):
+    """Work waiting for a worker process holds a thread of anyio's pool; /healthz needs none (its
+    dependencies run on the event loop). Was: three thread hops, and a wait for a free thread."""
+    loop = api.server.servers[0].get_loop()
+    release = threading.Event()
+    held: list[asyncio.Future] = []
+
+    async def take_every_thread() -> tuple[int, int]:
+        limiter = anyio.to_thread.current_default_thread_limiter()
+        free = int(limiter.available_tokens)
+        held.extend(asyncio.ensure_future(anyio.to_thread.run_sync(release.wait)) for _ in range(free))
+        while limiter.available_tokens:  # the threads have started
+            await asyncio.sleep(0.01)
+        return free, int(limiter.total_tokens)
+
+    free, total = asyncio.run_coroutine_threadsafe(take_every_thread(), loop).result(GUARD_S)
+    try:
+        assert free > 0 and total >= free
+        r = httpx.get(f"{api.url}/healthz", timeout=GUARD_S / 2)
+        assert r.status_code == 200 and r.json()["status"] == "ok"
+    finally:
+        release.set()
+        asyncio.run_coroutine_threadsafe(asyncio.wait(held), loop).result(GUARD_S)
+
+
 # --- shutdown -----------------------------------------------------------------------------------------
 
 def test_a_body_arriving_when_the_server_stops_is_503_at_once(api):
-    stalled = connect(api.port, "/api/contacts", len(BIG), BIG[:1000])
+    holder = Holder(api.port)
     try:
         wait_until(lambda: api.health()["large_bodies"] == 1, "the body to be arriving")
         STOPPING.set()
-        status, headers, body = response(stalled)
+        status, headers, body = response(holder.sock)
         assert (status, headers.get("retry-after"), body) == (503, "2", {"detail": SHUTTING_DOWN})
         r = httpx.get(f"{api.url}/healthz", timeout=GUARD_S)  # every request now
         assert (r.status_code, r.json()) == (503, {"detail": SHUTTING_DOWN})
     finally:
         STOPPING.clear()
-        stalled.close()
+        holder.close()
     wait_until(lambda: api.health()["large_bodies"] == 0, "its place to be freed")
 
 
@@ -352,12 +412,12 @@ def test_sigterm_while_a_body_arrives_answers_503_and_exits():
     which cancelled it and answered 500."""
     s = Server("--api-only")
     try:
-        stalled = connect(s.api_port, "/api/contacts", len(BIG), BIG[:1000])
+        holder = Holder(s.api_port)
         wait_until(lambda: httpx.get(f"{s.api}/healthz", timeout=30).json()["large_bodies"] == 1, "the body to be arriving")
         t0 = time.monotonic()
         s.proc.send_signal(signal.SIGTERM)
-        status, headers, body = response(stalled)
-        stalled.close()
+        status, headers, body = response(holder.sock)
+        holder.close()
         assert (status, headers.get("retry-after"), body) == (503, "2", {"detail": SHUTTING_DOWN})
         s.proc.wait(30)
         assert time.monotonic() - t0 < 5.0 and s.proc.returncode == 0
@@ -366,6 +426,15 @@ def test_sigterm_while_a_body_arrives_answers_503_and_exits():
 
 
 # --- a burst of large bodies against the real server -----------------------------------------------------
+
+BUSY = re.compile(
+    "^(16 requests with large bodies \\(over 64 kB\\) are being received, read or worked on, the most this server holds"
+    "|waited 10 s in line for its body to be read|waited 10 s in the queue for one of the 2 workers)"
+    "; retry in a moment$"
+    "|^stopped after [0-9,]+ of [0-9,]+ pairs to examine: over the time budget of 5 s per request; send fewer bodies per request$"
+)
+"""What a 503 of the burst may say: a place, the wait or (on a loaded machine) the job's budget ran out."""
+
 
 def test_sixty_concurrent_large_contacts_get_200_or_503_and_memory_stays_bounded():
     """Was: all 60 answered 200 after up to 36.8 s, the worker queue empty, nobody told to retry.
@@ -400,12 +469,7 @@ def test_sixty_concurrent_large_contacts_get_200_or_503_and_memory_stays_bounded
         for r in answers:
             if r.status_code == 503:
                 assert r.headers.get("retry-after") == "2"
-                assert r.json()["detail"] in {
-                    "16 requests with large bodies (over 64 kB) are being received, read or worked on, the most this "
-                    "server holds; retry in a moment",
-                    "waited 10 s in line for its body to be read; retry in a moment",
-                    "waited 10 s in the queue for one of the 2 workers; retry in a moment",
-                }, r.text
+                assert BUSY.match(r.json()["detail"]), r.text
             else:
                 assert r.json()["bodies"] == 2000
         assert max(peak) <= 16
