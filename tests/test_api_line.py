@@ -92,11 +92,13 @@ def wait_until(predicate, what: str, seconds: float = GUARD_S) -> None:
         time.sleep(0.02)
 
 
-def connect(port: int, path: str, length: int | None, first: bytes = b"") -> socket.socket:
-    """A raw connection that has sent a POST's headers (``length`` None: chunked) and ``first``."""
+def connect(port: int, path: str, length: int | None, first: bytes = b"", extra: str = "") -> socket.socket:
+    """A raw connection that has sent a POST's headers (``length`` None: chunked; ``extra``: more
+    header lines) and ``first``."""
     sock = socket.create_connection(("127.0.0.1", port), timeout=GUARD_S)
     size = "transfer-encoding: chunked" if length is None else f"content-length: {length}"
-    sock.sendall(f"POST {path} HTTP/1.1\r\nhost: x\r\ncontent-type: application/json\r\n{size}\r\n\r\n".encode() + first)
+    head = f"POST {path} HTTP/1.1\r\nhost: x\r\ncontent-type: application/json\r\n{size}\r\n{extra}\r\n"
+    sock.sendall(head.encode() + first)
     return sock
 
 
@@ -216,12 +218,14 @@ def test_a_body_that_trickles_is_408_when_not_whole_within_the_read_limit():
 # --- places --------------------------------------------------------------------------------------------
 
 def test_beyond_the_places_is_503_at_once_before_the_body_is_read(api):
-    """Two arriving large bodies hold both places: a third (declared) gets 503 with its body unsent;
+    """Two arriving large bodies hold both places: a third (declared, ``Expect: 100-continue``) gets
+    503 with its body unsent;
     a chunked one gets 503 once it has sent more than 64 kB; a small one is served."""
     holders = [Holder(api.port) for _ in range(2)]
     try:
         wait_until(lambda: api.health()["large_bodies"] == 2, "both places taken")
-        declared = connect(api.port, "/api/contacts", len(BIG))  # headers only
+        # headers only, asking whether to send the body: the first answer is the 503, not "100 Continue"
+        declared = connect(api.port, "/api/contacts", len(BIG), extra="expect: 100-continue\r\n")
         status, headers, body = response(declared)
         declared.close()
         assert (status, headers.get("retry-after"), body) == (503, "2", {"detail": FULL})
