@@ -69,11 +69,6 @@ class _Turns:
         self._held = False
         self._queue: deque[asyncio.Future[None]] = deque()
 
-    @property
-    def waiting(self) -> int:
-        """Waiters in the queue."""
-        return len(self._queue)
-
     async def acquire(self, deadline: float | None, check: Callable[[], Awaitable[None]]) -> None:
         """Take the turn, waiting until ``deadline`` (monotonic; None: no limit).
 
