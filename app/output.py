@@ -144,12 +144,15 @@ class Output:
         path: the file to write, or ``-``.
         binary: bytes (True) or text (False, UTF-8, Unix line ends).
         option: the option's name for messages.
+        make_folders: create the file's missing folders first (``export``, ``screenshot``).
 
     Raises:
         ValueError: on construction, when the path cannot be written (one line saying why).
     """
 
-    def __init__(self, path: str | os.PathLike[str], *, binary: bool = False, option: str = "--out") -> None:
+    def __init__(
+        self, path: str | os.PathLike[str], *, binary: bool = False, option: str = "--out", make_folders: bool = False
+    ) -> None:
         self.binary = binary
         self.name = str(path)
         self.stdout = self.name == STDIO
@@ -166,6 +169,12 @@ class Output:
             self.direct = True
             self._file = self._wrap(_open_special(self.name, kind, option))
             return
+        if make_folders and not self.path.is_dir():
+            folder = _target(self.path, option).parent
+            try:
+                folder.mkdir(parents=True, exist_ok=True)
+            except OSError as e:
+                raise ValueError(f"{option} {path}: cannot create the folder {folder}: {e.strerror}") from None
         check_output_path(path, option=option)
         self.target = _target(self.path, option)
         """The file renamed over: the path, or the target of a symbolic link."""
