@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import math
 import sys
 import time
 from typing import Any, TextIO
@@ -32,14 +33,37 @@ COMMANDS = ("contacts", "classify")
 
 
 def box_argument(text: str) -> tuple[float, ...]:
-    """``--box Lx,Ly[,Lz]`` (or ``Lx,Ly,Lz,xy,xz,yz``, a tilted box) as a tuple of floats (argparse type)."""
+    """``--box Lx,Ly[,Lz]`` (or ``Lx,Ly,Lz,xy,xz,yz``, a tilted box) as a tuple of floats (argparse type).
+
+    Checked before any work: finite numbers, the sides Lx, Ly (and Lz of six) positive; whether
+    a third number is Lz or a 2D tilt, and the rest, the library checks against the bodies.
+    """
     try:
         sides = tuple(float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"--box takes Lx,Ly[,Lz] (numbers), got {text!r}") from None
     if len(sides) not in (2, 3, 6):
         raise argparse.ArgumentTypeError(f"--box takes 2 or 3 sides (or Lx,Ly,Lz,xy,xz,yz), got {text!r}")
+    if not all(map(math.isfinite, sides)):
+        raise argparse.ArgumentTypeError(f"--box takes finite numbers, got {text!r}")
+    if not all(v > 0 for v in sides[: 3 if len(sides) == 6 else 2]):
+        raise argparse.ArgumentTypeError(f"--box: the sides must be positive, got {text!r}")
     return sides
+
+
+def scheduler_argument(text: str) -> str:
+    """``--scheduler ADDRESS``: a Dask scheduler's address (argparse type; checked as Dask reads it, when installed)."""
+    try:
+        from distributed.comm.addressing import parse_address, parse_host_port
+    except ImportError:  # run_contacts says what to install
+        return text
+    try:
+        scheme, location = parse_address(text)
+        if scheme in ("tcp", "tls"):
+            parse_host_port(location)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(f"not a scheduler address ({e}), e.g. tcp://HOST:8786: {text!r}") from None
+    return text
 
 
 def frame_argument(text: str) -> int:
@@ -74,7 +98,7 @@ def add_parsers(sub: Any) -> None:
         "--with", dest="extras", action="append", choices=("scale",), default=[],
         help="scale: add a certified contact-scale bracket scale_lo,scale_hi and a containment flag per pair",
     )
-    c.add_argument("--scheduler", default=None, help="run on Dask: scheduler address tcp://host:8786 (pip install 'ellipsoid-interference[dask]')")
+    c.add_argument("--scheduler", type=scheduler_argument, default=None, help="run on Dask: scheduler address tcp://host:8786 (pip install 'ellipsoid-interference[dask]')")
     c.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
 
     k = sub.add_parser("classify", help="certified relations of a file of pairs (NPZ with stacks A, B)")
@@ -142,7 +166,7 @@ def warn_invalid(invalid: dict[int, str], where: Any) -> None:
 
 
 def _connect(address: str) -> Any:
-    """A ``distributed.Client`` on ``address``, or a one-line error (RuntimeError) within seconds."""
+    """A ``distributed.Client`` on ``address`` (checked by :func:`scheduler_argument`), or a one-line RuntimeError within seconds."""
     try:
         import distributed  # noqa: F401
     except ImportError:

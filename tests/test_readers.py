@@ -239,3 +239,40 @@ def test_format_is_told_from_the_name_or_the_bytes():
         "gsd", "lammps", "lammps", "xyz", "parquet", "npz", "csv"]
     assert format_of("-", b"ITEM: TIMESTEP\n0\n") == "lammps"
     assert format_of("-", b"2\nLattice=\"1 0 0 0 1 0 0 0 1\" Properties=pos:R:3\n") == "xyz"
+
+
+def test_extended_xyz_frames_are_read_alone_blank_ends_empty_frames_and_crlf(tmp_path):
+    """The checked scan hands the parser one frame: any frame of many, after a frame of 0 atoms
+    (which crashes the C parser), with blank lines at the end or CRLF line ends."""
+    props = 'Properties=species:S:1:pos:R:3:aspherical_shape:R:3 pbc="F F F"'
+    frames = [(2, "A 0 0 0 1 1 1\nB 2 0 0 1 1 1\n"), (0, ""), (2, "A 0 0 0 1 1 1\nB 2.5 0 0 1 1 1\n"), (1, "A 0 0 0 1 1 1\n")]
+    path = tmp_path / "frames.xyz"
+    path.write_text("".join(f"{n}\n{props}\n{rows}" for n, rows in frames) + "\n\n  \n")
+    got = [read_bodies(path, frame=k) for k in range(4)]
+    assert [len(s) for s in got] == [2, 0, 2, 1] and [s.frame for s in got] == [0, 1, 2, 3]
+    assert read_bodies(path).frame == 3 and read_bodies(path, frame=-2).centers.tolist() == [[0, 0, 0], [2.5, 0, 0]]
+    assert contacts(got[0].Q).relation.tolist() == [Relation.TANGENT] and len(contacts(got[2].Q)) == 0
+    with pytest.raises(ValueError, match=r"frames.xyz: no frame 4: the file has 4 frames"):
+        read_bodies(path, frame=4)
+    crlf = tmp_path / "crlf.xyz"
+    crlf.write_bytes(f"2\r\n{props}\r\nA 0 0 0 1 1 1\r\nB 2 0 0 1 1 1\r\n".encode())
+    assert np.array_equal(read_bodies(crlf).Q, got[0].Q)
+    mid = tmp_path / "mid.xyz"
+    mid.write_text(f"2\n{props}\nA 0 0 0 1 1 1\nB 2 0 0 1 1 1\n\n2\n{props}\nA 0 0 0 1 1 1\nB 2 0 0 1 1 1\n")
+    with pytest.raises(ValueError, match=r"mid.xyz: line 5: a blank line where frame 1 should start with its atom count"):
+        read_bodies(mid)
+
+
+def test_text_tables_with_a_bom_crlf_and_long_extra_values_read_as_before(tmp_path):
+    b = random_bodies(50, dim=3, seed=5)
+    values = np.concatenate([b.centers, b.semi_axes, b.orientations], axis=1)
+    Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
+    rows = "".join(",".join(repr(v) for v in row) + f',"{"n" * 200_000}"\r\n' for row in values.tolist())
+    path = tmp_path / "bom.csv"
+    path.write_bytes(("\ufeffx,y,z,a,b,c,qw,qx,qy,qz,note\r\n" + rows).encode())
+    assert np.array_equal(read_bodies(path).Q, Q)  # a value of 200,000 characters in a column not read
+    dump = tmp_path / "crlf.dump"
+    dump.write_bytes(b"ITEM: TIMESTEP\r\n0\r\nITEM: NUMBER OF ATOMS\r\n2\r\nITEM: BOX BOUNDS pp pp pp\r\n0 10\r\n0 10\r\n0 10\r\n"
+                     b"ITEM: ATOMS id type x y z shapex shapey shapez\r\n1 1 1 1 1 2 2 2\r\n2 1 3 1 1 2 2 2\r\n")
+    s = read_bodies(dump)
+    assert s.centers.tolist() == [[1, 1, 1], [3, 1, 1]] and contacts(s.Q).relation.tolist() == [Relation.TANGENT]

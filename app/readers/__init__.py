@@ -19,6 +19,12 @@ xyz        ``*.xyz``, ``*.extxyz``                extxyz, libAtoms' (:mod:`.extx
 
 The format comes from ``format=`` (``--format``), else the file name, else the first bytes.
 ``-`` reads standard input (CSV is streamed; other formats are read whole first).
+
+Hostile files (issue 52): every reader checks a file's claims (counts in a header, shapes,
+sizes in an archive's directory) against the file's size before it makes an array, and a
+text format's file that is no text (gzip, UTF-16, NUL bytes) is refused before it is parsed
+(:mod:`.guard`); a malformed file of any format is one ValueError line naming the file, and the
+frame or line, never another exception (``tests/test_hostile_files.py``).
 """
 
 from __future__ import annotations
@@ -42,6 +48,8 @@ _SUFFIXES = {
     ".dump": "lammps", ".lammpstrj": "lammps", ".lammps": "lammps", ".xyz": "xyz", ".extxyz": "xyz",
 }
 _TRAJECTORIES = ("gsd", "lammps", "xyz")
+_TEXT = {"csv": "text table", "lammps": "LAMMPS dump", "xyz": "extended XYZ file"}
+"""Formats read as text, and what to call them in messages."""
 
 
 def format_of(name: str, head: bytes = b"") -> str:
@@ -130,11 +138,16 @@ def _read_stream(stream: IO[bytes], name: str, frame: int | None, format: str | 
 
 
 def _checked_format(format: str | None, name: str, head: bytes, frame: int | None) -> str:
+    """The format to read (``format``, else from the name and the first bytes), its first bytes checked."""
     if format is not None and format not in FORMATS:
         raise ValueError(f"unknown format {format!r}; formats: {', '.join(FORMATS)}")
     fmt = format or format_of(name, head)
     if frame not in (None, 0, -1) and fmt not in _TRAJECTORIES:
         raise ValueError(f"{name}: --frame {frame}: a {fmt} file holds one frame (frames: GSD, LAMMPS dump, XYZ)")
+    if fmt in _TEXT:
+        from .guard import refuse_non_text
+
+        refuse_non_text(head, Path(name).name, _TEXT[fmt])
     return fmt
 
 

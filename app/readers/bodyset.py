@@ -20,6 +20,8 @@ import numpy as np
 from core import bodies_from_axes
 from core.shapes.quadrics import axes_row_errors
 
+from .guard import one_line
+
 __all__ = ["BodySet", "from_parameters", "file_box"]
 
 
@@ -76,7 +78,7 @@ def from_parameters(centers: Any, semi_axes: Any, orientations: Any, name: str, 
         errors = axes_row_errors(c, r, o)
         Q = bodies_from_axes(c, r, o, on_invalid="mark")
     except (ValueError, TypeError) as e:
-        raise ValueError(f"{name}: {e}") from None
+        raise ValueError(f"{name}: {one_line(e, 300)}") from None
     return BodySet(Q, c, r, o, errors, name, **extra)
 
 

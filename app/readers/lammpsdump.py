@@ -15,10 +15,15 @@ The box becomes HOOMD's convention (:mod:`app.readers.bodyset`): Lx = xhi - xlo,
 box's tilt *lengths* xy, xz, yz become the factors xy / Ly, xz / Lz, yz / Lz (one rounding
 each). Boundaries ``pp pp pp`` are a periodic box, fixed or shrink-wrapped ones (``ff``, ``ss``,
 ``fs``, ``fm``...) on every axis open space; a mix is refused.
+
+The frame's items are checked before lammpsio reads it (:func:`_check_items`): the step and the
+count are integers, the count is not negative and its rows are in the file (a small file
+claiming 10^8 atoms is refused, not allocated), the box bounds are three lines of numbers.
 """
 
 from __future__ import annotations
 
+import math
 import mmap
 import os
 import tempfile
@@ -27,6 +32,7 @@ import numpy as np
 
 from .bodyset import BodySet, file_box, from_parameters
 from .gsdfile import _frame_index
+from .guard import GZIP_MAGIC, clip, one_line
 
 __all__ = ["read_lammps_dump", "SHAPE_COLUMNS", "QUAT_COLUMNS"]
 
@@ -58,6 +64,7 @@ def read_lammps_dump(path: str, name: str, *, frame: int | None = None) -> BodyS
     bounds = next((i for i, ln in enumerate(lines) if ln.startswith(b"ITEM: BOX BOUNDS")), None)
     if atoms is None or bounds is None:
         raise ValueError(f"{name}: frame {k} has no ITEM: BOX BOUNDS / ITEM: ATOMS section")
+    _check_items(lines, bounds, atoms, k, name)
     columns = lines[atoms].decode("ascii", "replace").split()[2:]
     for need in (("x", "y", "z"), SHAPE_COLUMNS):
         missing = [c for c in need if c not in columns]
@@ -73,7 +80,7 @@ def read_lammps_dump(path: str, name: str, *, frame: int | None = None) -> BodyS
         try:
             snap = next(iter(lammpsio.DumpFile(tmp.name, sort_ids=True)))
         except Exception as e:  # noqa: BLE001 - lammpsio raises IOError/ValueError/IndexError kinds
-            raise ValueError(f"{name}: frame {k} cannot be read ({e})") from None
+            raise ValueError(f"{name}: frame {k} cannot be read ({one_line(e)})") from None
     N = int(snap.N)
     use = [columns.index(c) for c in (*SHAPE_COLUMNS, *(QUAT_COLUMNS if "quatw" in columns else ()))]
     rows = lines[atoms + 1 : atoms + 1 + N]
@@ -82,7 +89,7 @@ def read_lammps_dump(path: str, name: str, *, frame: int | None = None) -> BodyS
     try:
         table = np.loadtxt(rows, dtype=np.float64, ndmin=2, usecols=use) if N else np.zeros((0, len(use)))
     except ValueError as e:
-        raise ValueError(f"{name}: frame {k}: {e}") from None
+        raise ValueError(f"{name}: frame {k}: {one_line(e, 300)}") from None
     ids = np.asarray(snap.id, dtype=np.int64)
     if "id" in columns and N:
         file_ids = np.loadtxt(rows, dtype=np.int64, usecols=[columns.index("id")], ndmin=1)
@@ -102,11 +109,54 @@ def read_lammps_dump(path: str, name: str, *, frame: int | None = None) -> BodyS
     )
 
 
+def _check_items(lines: list[bytes], bounds: int, atoms: int, k: int, name: str) -> None:
+    """Check what frame k's items claim before lammpsio reads them (module docstring).
+
+    Raises:
+        ValueError: a step or count that is no integer, a negative count, fewer rows than the
+            count, box bounds that are not three lines of two or three numbers.
+    """
+    where = f"{name}: frame {k}"
+    step = lines[1].strip() if len(lines) > 1 else b""
+    if not _integer(step):
+        raise ValueError(f"{where}: ITEM: TIMESTEP is followed by {_shown(step)}, not a step number")
+    item = next((i for i, ln in enumerate(lines) if ln.startswith(b"ITEM: NUMBER OF ATOMS")), None)
+    if item is None:
+        raise ValueError(f"{where} has no ITEM: NUMBER OF ATOMS")
+    count = lines[item + 1].strip() if item + 1 < len(lines) else b""
+    if not _integer(count):
+        raise ValueError(f"{where}: NUMBER OF ATOMS is {_shown(count)}, not a count")
+    N = int(count)
+    if N < 0:
+        raise ValueError(f"{where}: NUMBER OF ATOMS is {N}")
+    follow = len(lines) - atoms - 1 - (lines[-1].strip() == b"")  # the frame's text ends with a newline
+    if N > follow:
+        raise ValueError(f"{where} is truncated: {N} atoms announced, {max(follow, 0)} lines follow ITEM: ATOMS")
+    for ln in lines[bounds + 1 : bounds + 4]:
+        values = ln.split()
+        try:
+            ok = len(values) in (2, 3) and all(math.isfinite(float(v)) for v in values)
+        except ValueError:
+            ok = False
+        if not ok:
+            raise ValueError(f"{where}: ITEM: BOX BOUNDS needs three lines 'lo hi' (or 'lo hi tilt'), got {_shown(ln)}")
+
+
+def _integer(text: bytes) -> bool:
+    """Whether ``text`` is a decimal integer (an optional sign, then digits)."""
+    return text.lstrip(b"+-").isdigit() and len(text) - len(text.lstrip(b"+-")) <= 1
+
+
+def _shown(text: bytes) -> str:
+    """A line of the file, quoted for a message (cut when long)."""
+    return repr(clip(text.decode("utf-8", "replace"), 60)) if text else "nothing"
+
+
 def _frame_text(path: str, name: str, frame: int | None) -> tuple[int, bytes]:
     """(frame number, the bytes of that frame) of a dump file."""
     try:
         with open(path, "rb") as f:
-            if f.read(2) == b"\x1f\x8b":
+            if f.read(2) == GZIP_MAGIC:
                 raise ValueError(f"{name}: a gzip-compressed dump: decompress it first (gunzip)")
             size = os.fstat(f.fileno()).st_size
             if size == 0:

@@ -7,7 +7,9 @@ ellipses. Body k is data row k (CSV: line k + 2 of the file).
 
 A CSV file is read in blocks of about :data:`BLOCK_CHARS` characters (numpy's C parser on each
 block), so memory grows with the numbers kept (the selected columns), never with the size of
-the text: a 2 GB file with extra columns is read without holding its text.
+the text: a 2 GB file with extra columns is read without holding its text. The header line is
+at most :data:`HEADER_CHARS` characters; NUL bytes and values beyond the csv module's field
+limit are one-line errors naming the line (:mod:`app.readers.guard`).
 """
 
 from __future__ import annotations
@@ -23,14 +25,18 @@ import numpy as np
 from core.shapes.numbers import binary64_array
 
 from .bodyset import BodySet, from_parameters
+from .guard import clip, one_line
 
-__all__ = ["COLUMNS", "read_csv", "read_parquet", "BLOCK_CHARS"]
+__all__ = ["COLUMNS", "read_csv", "read_parquet", "BLOCK_CHARS", "HEADER_CHARS"]
 
 COLUMNS = {3: ("x", "y", "z", "a", "b", "c", "qw", "qx", "qy", "qz"), 2: ("x", "y", "a", "b", "angle")}
 """Columns of a body, by dimension."""
 
 BLOCK_CHARS = 1 << 23
 """Characters of CSV text parsed at a time (8 MiB: numpy's parser stays fast, memory small)."""
+
+HEADER_CHARS = 1 << 20
+"""Longest header line read (1 Mi characters: some 50,000 column names); a longer one is refused."""
 
 
 def choose_columns(header: list[str], name: str) -> tuple[int, list[int]]:
@@ -67,10 +73,12 @@ def read_csv(stream: IO[bytes], name: str) -> BodySet:
             the line and column), a row with fewer or more values than the header.
     """
     text = io.TextIOWrapper(stream, encoding="utf-8-sig", errors="replace", newline="")
-    first = text.readline()
+    first = text.readline(HEADER_CHARS + 1)
+    if len(first) > HEADER_CHARS:
+        raise ValueError(f"{name}: the header (line 1) is longer than {HEADER_CHARS:,} characters: not a table of bodies")
     if not first.strip():
         raise ValueError(f"{name}: empty file: expected a header row naming the columns")
-    header = next(csv.reader([first]))
+    header = _fields(first, 1, name)
     dim, cols = choose_columns(header, name)
     width = len(header)
     blocks: list[np.ndarray] = []
@@ -83,7 +91,7 @@ def read_csv(stream: IO[bytes], name: str) -> BodySet:
         try:
             block = np.loadtxt(lines, delimiter=",", dtype=np.float64, ndmin=2, usecols=cols, quotechar='"')
         except ValueError as e:
-            raise ValueError(f"{name}: {_line_of(str(e), line, header, cols)}") from None
+            raise ValueError(f"{name}: {_line_of(str(e), line, header, cols, lines)}") from None
         blocks.append(block)
         line += len(lines)
     table = np.concatenate(blocks) if blocks else np.zeros((0, len(cols)))
@@ -97,19 +105,38 @@ def _check_widths(lines: list[str], width: int, start: int, name: str) -> None:
         row = lines[k].strip()
         if not row or row.startswith("#"):  # blank lines and comments are skipped by the parser
             continue
-        got = len(next(csv.reader([row])))  # quoted values may hold commas
+        got = len(_fields(row, start + k, name))  # quoted values may hold commas
         if got != width:
             raise ValueError(f"{name}: line {start + k}: {got} values but {width} columns in the header")
 
 
-def _line_of(message: str, start: int, header: list[str], cols: list[int]) -> str:
+def _fields(row: str, line: int, name: str) -> list[str]:
+    """The values of one CSV line (quoted values may hold commas); NUL bytes and huge values refused."""
+    if "\0" in row:
+        raise ValueError(f"{name}: {_nul(line)}")
+    try:
+        return next(csv.reader([row]))
+    except csv.Error as e:
+        limit = csv.field_size_limit()
+        problem = f"a value longer than {limit:,} characters" if "field larger" in str(e) else str(e)
+        raise ValueError(f"{name}: line {line}: {problem}") from None
+
+
+def _nul(line: int) -> str:
+    return f"line {line} holds NUL bytes: not a text table (a binary file?)"
+
+
+def _line_of(message: str, start: int, header: list[str], cols: list[int], lines: list[str]) -> str:
     """Numpy's "... at row 12, column 3" (row from 0 in the block) as the file's line and column."""
     m = re.search(r"at row (\d+), column (\d+)", message)
     if not m:
-        return message
+        return clip(message)
     row, col = int(m.group(1)), int(m.group(2))
+    if 0 <= row < len(lines) and "\0" in lines[row]:
+        return _nul(row + start)
     column = cols[col - 1] + 1 if 0 < col <= len(cols) else col
-    return f"line {row + start}, column {column}: {message.split(' at row')[0]} (column {header[column - 1].strip()})"
+    what = re.sub(r"string '(.*)' to", lambda v: f"string {clip(v.group(1))!r} to", message.split(" at row")[0], flags=re.S)
+    return f"line {row + start}, column {column}: {what} (column {clip(header[column - 1].strip(), 60)})"
 
 
 def _bodies(table: np.ndarray, dim: int, name: str, **extra: Any) -> BodySet:
@@ -131,7 +158,7 @@ def read_parquet(path: str, name: str) -> BodySet:
     try:
         f = pq.ParquetFile(path)
     except Exception as e:  # noqa: BLE001 - pyarrow raises its own ArrowInvalid / OSError kinds
-        raise ValueError(f"{name}: not a readable Parquet file ({e})") from None
+        raise ValueError(f"{name}: not a readable Parquet file ({one_line(e)})") from None
     header = list(f.schema_arrow.names)
     dim, cols = choose_columns(header, name)
     wanted = [header[k] for k in cols]
@@ -142,7 +169,7 @@ def read_parquet(path: str, name: str) -> BodySet:
     except ValueError:
         raise
     except Exception as e:  # noqa: BLE001
-        raise ValueError(f"{name}: cannot read the Parquet data ({e})") from None
+        raise ValueError(f"{name}: cannot read the Parquet data ({one_line(e)})") from None
     table = np.concatenate(blocks) if blocks else np.zeros((0, len(cols)))
     return _bodies(table, dim, name)
 
