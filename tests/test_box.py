@@ -109,7 +109,7 @@ def test_bodies_build_matrices_once_and_keep_ids_and_box():
     assert b.box == Box(4, 4, 4) and b.ids.tolist() == [7, 3] and b.name(1) == "body 1 (id 3)"
     with pytest.raises(ValueError, match="ids must be 2 integers"):
         Bodies(c, r, q, ids=[1])
-    with pytest.raises(ValueError, match="same shape"):
+    with pytest.raises(ValueError, match="of one shape"):
         Bodies(c, [[1, 1]] * 2)
     m = Bodies.from_matrices(b.matrices, ids=[1, 2])
     assert not m.has_parameters and len(m) == 2 and m.dimensions == 3

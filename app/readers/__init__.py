@@ -76,7 +76,8 @@ def format_of(name: str, head: bytes = b"") -> str:
     return "csv"
 
 
-def read_bodies(path: str | os.PathLike[str], *, frame: int | None = None, format: str | None = None) -> BodySet:
+def read_bodies(path: str | os.PathLike[str], *, frame: int | None = None, format: str | None = None,
+                dim: int | None = None) -> BodySet:
     """Read a file of bodies (``-``: standard input) in any format of :data:`FORMATS`.
 
     Args:
@@ -84,14 +85,18 @@ def read_bodies(path: str | os.PathLike[str], *, frame: int | None = None, forma
         frame: trajectories (GSD, LAMMPS, XYZ): the frame from 0 (negative: from the end);
             None: the last one. Other formats have one frame: only None, 0 or -1.
         format: one of :data:`FORMATS`, or None to tell from the name and the first bytes.
+        dim: 2 reads a file that stores a 2D system as 3D (z = 0, turned about z) as ellipses;
+            3 keeps 3D; None: the file says (GSD's dimensions, LAMMPS' 2D bounds, XYZ's pbc).
 
     Raises:
         ValueError: unreadable file, unknown format, a format's own errors (missing columns,
             bad numbers...: the message names the line or body).
     """
     name = str(path)
+    if dim not in (None, 2, 3):
+        raise ValueError(f"dim must be 2 or 3, got {dim!r}")
     if name == "-":
-        return _read_stream(sys.stdin.buffer, "<stdin>", frame, format)
+        return _in_dimension(_read_stream(sys.stdin.buffer, "<stdin>", frame, format, dim), dim)
     try:
         with open(path, "rb") as f:
             head = f.read(512)
@@ -100,22 +105,32 @@ def read_bodies(path: str | os.PathLike[str], *, frame: int | None = None, forma
                 f.seek(0)
                 from .table import read_csv
 
-                return read_csv(f, Path(name).name)
+                return _in_dimension(read_csv(f, Path(name).name), dim)
     except IsADirectoryError:
         raise ValueError(f"cannot read {name}: it is a folder") from None
     except OSError as e:
         raise ValueError(f"cannot read {name}: {e.strerror}") from None
-    return _read_file(name, Path(name).name, fmt, frame)
+    return _in_dimension(_read_file(name, Path(name).name, fmt, frame, dim), dim)
 
 
-def read_bodies_bytes(data: bytes, name: str, *, frame: int | None = None, format: str | None = None) -> BodySet:
+def read_bodies_bytes(data: bytes, name: str, *, frame: int | None = None, format: str | None = None,
+                      dim: int | None = None) -> BodySet:
     """:func:`read_bodies` from the bytes of a file called ``name`` (the scene's upload)."""
     import io
 
-    return _read_stream(io.BytesIO(data), name, frame, format)
+    return _in_dimension(_read_stream(io.BytesIO(data), name, frame, format, dim), dim)
 
 
-def _read_stream(stream: IO[bytes], name: str, frame: int | None, format: str | None) -> BodySet:
+def _in_dimension(bodies: BodySet, dim: int | None) -> BodySet:
+    """The bodies in the dimension asked for (``--dim``): a 3D file of a 2D system made 2D."""
+    if dim == 2 and bodies.dimensions == 3:
+        return bodies.in_plane()
+    if dim == 3 and bodies.dimensions == 2:
+        raise ValueError(f"{bodies.source}: --dim 3, but the file holds 2D bodies")
+    return bodies
+
+
+def _read_stream(stream: IO[bytes], name: str, frame: int | None, format: str | None, dim: int | None = None) -> BodySet:
     """A stream (stdin, an upload): CSV is parsed as it comes, other formats via a temporary file."""
     head = stream.peek(512)[:512] if hasattr(stream, "peek") else b""
     if not head and hasattr(stream, "getvalue"):
@@ -134,7 +149,7 @@ def _read_stream(stream: IO[bytes], name: str, frame: int | None, format: str | 
         tmp = os.path.join(d, "bodies" + {"gsd": ".gsd", "lammps": ".dump", "xyz": ".xyz", "parquet": ".parquet"}[fmt])
         with open(tmp, "wb") as f:
             f.write(data)
-        return _read_file(tmp, name, fmt, frame)
+        return _read_file(tmp, name, fmt, frame, dim)
 
 
 def _checked_format(format: str | None, name: str, head: bytes, frame: int | None) -> str:
@@ -151,7 +166,7 @@ def _checked_format(format: str | None, name: str, head: bytes, frame: int | Non
     return fmt
 
 
-def _read_file(path: str, name: str, fmt: str, frame: int | None) -> BodySet:
+def _read_file(path: str, name: str, fmt: str, frame: int | None, dim: int | None = None) -> BodySet:
     if fmt == "npz":
         from .npzfile import read_npz
 
@@ -167,7 +182,7 @@ def _read_file(path: str, name: str, fmt: str, frame: int | None) -> BodySet:
     if fmt == "lammps":
         from .lammpsdump import read_lammps_dump
 
-        return read_lammps_dump(path, name, frame=frame)
+        return read_lammps_dump(path, name, frame=frame, planar=None if dim is None else dim == 2)
     from .extxyzfile import read_extxyz
 
-    return read_extxyz(path, name, frame=frame)
+    return read_extxyz(path, name, frame=frame, planar=None if dim is None else dim == 2)

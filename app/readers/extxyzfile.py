@@ -10,11 +10,14 @@ A frame (default: the last) whose comment line names the columns, e.g.::
 Columns by the names OVITO's XYZ exporter gives its particle properties: ``pos`` (Position),
 ``aspherical_shape`` (Aspherical Shape: the three **semi-axes**), ``orientation``
 (Orientation, OVITO's order **x y z w**: reordered to wxyz here; identity when absent),
-``radius`` (spheres, when there is no ``aspherical_shape``). Other columns (``species``,
-``id``, ...) are ignored. The cell: ``Lattice`` (three box vectors) with ``pbc`` (OVITO writes
-none: periodic, as the format's default). A periodic cell must be in HOOMD's orientation
-(a1 along x, a2 in the xy plane) to become a box (:mod:`app.readers.bodyset`); an ``Origin`` is
-irrelevant (only differences of positions matter).
+``radius`` (spheres, when there is no ``aspherical_shape``), ``id`` (the particles' own ids:
+the outputs name them). Other columns (``species``, ...) are ignored. The cell: ``Lattice``
+(three box vectors) with ``pbc`` (OVITO writes none: periodic, as the format's default); no
+``Lattice``: open space. A periodic cell must be in HOOMD's orientation (a1 along x, a2 in the
+xy plane) to become a box (:mod:`app.readers.bodyset`); an ``Origin`` is irrelevant (only
+differences of positions matter). A cell periodic on some axes only has its open axes padded
+(:func:`app.readers.bodyset.cell_box`); ``pbc="T T F"`` with every body at z = 0 is a 2D
+system (ellipses in the periodic plane, :meth:`app.readers.bodyset.BodySet.in_plane`).
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from .bodyset import BodySet, file_box, from_parameters
+from .bodyset import BodySet, cell_box, from_parameters
 from .gsdfile import _frame_index
 from .guard import clip, one_line
 
@@ -43,6 +46,7 @@ _COUNT_CHARS = 4096
 _MOST_ATOMS = 2**31 - 1
 """Most atoms the C parser counts (a C int)."""
 
+_LATTICE = re.compile(rb"""(?:^|\s)["']?lattice["']?\s*=""", re.IGNORECASE)
 _PROPERTIES = re.compile(r"""["']?properties["']?\s*=\s*(?:"([^"]*)"|'([^']*)'|\{([^}]*)\}|(\S+))""", re.IGNORECASE)
 
 
@@ -54,9 +58,11 @@ class _Frame:
     end: int
     line: int
     natoms: int
+    lattice: bool = True
+    """Whether the comment line gives a ``Lattice`` (without one the frame is in open space)."""
 
 
-def read_extxyz(path: str, name: str, *, frame: int | None = None) -> BodySet:
+def read_extxyz(path: str, name: str, *, frame: int | None = None, planar: bool | None = None) -> BodySet:
     """Bodies of one frame of an extended XYZ file (module docstring).
 
     Every frame's atom count, comment line and lines are checked first (:func:`_frames`), so
@@ -91,7 +97,7 @@ def read_extxyz(path: str, name: str, *, frame: int | None = None) -> BodySet:
             raise ValueError(f"{name}: frame {k}: {_parser_said(e, fr)}") from None
     if f is None:
         raise ValueError(f"{name}: frame {k} (line {fr.line}) cannot be read")
-    return _bodies(f, name, k)
+    return _bodies(f, name, k, fr.lattice, planar)
 
 
 def _copy(src: Any, dst: Any, n: int) -> None:
@@ -175,7 +181,7 @@ def _scan(m: mmap.mmap, size: int, name: str) -> list[_Frame]:
                 f"{name}: line {line + 2 + at}: {longest:,} characters in frame {k} of {natoms:,} atoms whose lines are far shorter "
                 "(its strings would be held at that width for every atom)"
             )
-        frames.append(_Frame(start, pos, line, natoms))
+        frames.append(_Frame(start, pos, line, natoms, _LATTICE.search(comment) is not None))
         line += 2 + natoms
     return frames
 
@@ -241,7 +247,7 @@ def _skip_lines(m: mmap.mmap, pos: int, n: int, size: int) -> tuple[int, int, in
     return got, line_start, longest, at
 
 
-def _bodies(f: Any, name: str, k: int) -> BodySet:
+def _bodies(f: Any, name: str, k: int, lattice: bool = True, planar: bool | None = None) -> BodySet:
     a = {key.lower(): v for key, v in f.arrays.items()}
     N = int(f.natoms)
     if "pos" not in a:
@@ -260,7 +266,17 @@ def _bodies(f: Any, name: str, k: int) -> BodySet:
     if "orientation" in a:
         xyzw = _real(a["orientation"], "orientation", 4, N, name)
         quat = xyzw[:, [3, 0, 1, 2]]
-    return from_parameters(pos, semi, quat, name, box=_box(f, name, k), frame=k)
+    ids = None
+    if "id" in a:
+        ids = np.asarray(a["id"]).reshape(-1)
+        if ids.dtype.kind not in "iu" or ids.size != N:
+            raise ValueError(f"{name}: frame {k}: column id holds {ids.dtype} values, not one integer per atom")
+    pbc = np.asarray(f.pbc, dtype=bool).reshape(-1) if lattice else np.zeros(3, dtype=bool)
+    box = _box(f, name, k, pbc, pos, semi)
+    out = from_parameters(pos, semi, quat, name, box=box, ids=ids, frame=k)
+    if planar is None:  # a 2D system: periodic in x and y, open in z, every body at z = 0
+        planar = bool(lattice and pbc[0] and pbc[1] and not pbc[2] and not pos[:, 2].any())
+    return out.in_plane() if planar else out
 
 
 def _real(values: Any, column: str, width: int, N: int, name: str) -> np.ndarray:
@@ -272,12 +288,10 @@ def _real(values: Any, column: str, width: int, N: int, name: str) -> np.ndarray
     return v.astype(np.float64).reshape(N, width)
 
 
-def _box(f: Any, name: str, k: int) -> tuple[float, ...] | None:
-    pbc = np.asarray(f.pbc, dtype=bool).reshape(-1)
+def _box(f: Any, name: str, k: int, pbc: np.ndarray, pos: np.ndarray, semi: np.ndarray) -> tuple[float, ...] | None:
+    """The frame's box: None without a Lattice or with no periodic axis; open axes padded (:func:`cell_box`)."""
     if not pbc.any():
         return None
-    if not pbc.all():
-        raise ValueError(f"{name}: frame {k}: pbc {pbc.tolist()} mixes periodic and open axes: not supported")
     cell = np.asarray(f.cell, dtype=np.float64)  # columns are the box vectors a1, a2, a3
     a1, a2, a3 = cell[:, 0], cell[:, 1], cell[:, 2]
     if a1[1] != 0 or a1[2] != 0 or a2[2] != 0:
@@ -286,6 +300,8 @@ def _box(f: Any, name: str, k: int) -> tuple[float, ...] | None:
             f"Lattice vectors {a1.tolist()}, {a2.tolist()}, {a3.tolist()}"
         )
     Lx, Ly, Lz = a1[0], a2[1], a3[2]
-    if not (Lx > 0 and Ly > 0 and Lz > 0):
-        raise ValueError(f"{name}: frame {k}: the cell has no volume: Lattice diagonal {Lx}, {Ly}, {Lz}")
-    return file_box((Lx, Ly, Lz), (a2[0] / Ly, a3[0] / Lz, a3[1] / Lz), dim=3)
+    sides = [Lx, Ly, Lz]
+    if not all(sides[a] > 0 for a in range(3) if pbc[a]):
+        raise ValueError(f"{name}: frame {k}: the cell has no volume along a periodic axis: Lattice diagonal {Lx}, {Ly}, {Lz}")
+    sides = [v if v > 0 else 1.0 for v in sides]  # an open axis' side is replaced (cell_box)
+    return cell_box(sides, (a2[0] / sides[1], a3[0] / sides[2], a3[1] / sides[2]), pbc, pos, semi, name=f"{name}: frame {k}")

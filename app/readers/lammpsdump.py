@@ -14,7 +14,10 @@ z shapex shapey shapez quatw quati quatj quatk``:
 The box becomes HOOMD's convention (:mod:`app.readers.bodyset`): Lx = xhi - xlo, ...; a tilted
 box's tilt *lengths* xy, xz, yz become the factors xy / Ly, xz / Lz, yz / Lz (one rounding
 each). Boundaries ``pp pp pp`` are a periodic box, fixed or shrink-wrapped ones (``ff``, ``ss``,
-``fs``, ``fm``...) on every axis open space; a mix is refused.
+``fs``, ``fm``...) on every axis open space; a mix (a slab, ``pp pp ff``) has its open axes
+padded (:func:`app.readers.bodyset.cell_box`). A 2D run (``dimension 2``: z bounds -0.5 0.5,
+every atom at z = 0, quaternions about z) is read as ellipses (semi-axes shapex / 2, shapey / 2;
+``--dim 2`` says so for other 2D dumps).
 
 The frame's items are checked before lammpsio reads it (:func:`_check_items`): the step and the
 count are integers, the count is not negative and its rows are in the file (a small file
@@ -30,7 +33,7 @@ import tempfile
 
 import numpy as np
 
-from .bodyset import BodySet, file_box, from_parameters
+from .bodyset import BodySet, cell_box, from_parameters
 from .gsdfile import _frame_index
 from .guard import GZIP_MAGIC, clip, one_line
 
@@ -42,17 +45,19 @@ QUAT_COLUMNS = ("quatw", "quati", "quatj", "quatk")
 """Orientation quaternion, w first."""
 
 
-def read_lammps_dump(path: str, name: str, *, frame: int | None = None) -> BodySet:
+def read_lammps_dump(path: str, name: str, *, frame: int | None = None, planar: bool | None = None) -> BodySet:
     """Bodies of one frame of a LAMMPS text dump (module docstring).
 
     Args:
         path: the file (text; a compressed dump must be decompressed first).
         name: its name, for messages.
         frame: frame number from 0 (negative: from the end); None: the last frame.
+        planar: True: a 2D run (ellipses); False: 3D; None: 2D when the frame looks like
+            LAMMPS' ``dimension 2`` (module docstring).
 
     Raises:
         ValueError: lammpsio missing, not a dump, no such frame, missing columns, bad numbers,
-            mixed periodic and open boundaries.
+            a tilt along an open axis, a 2D run whose bodies leave the plane.
     """
     try:
         import lammpsio
@@ -74,6 +79,7 @@ def read_lammps_dump(path: str, name: str, *, frame: int | None = None) -> BodyS
                 "write it with e.g. dump custom ... id type x y z shapex shapey shapez quatw quati quatj quatk"
             )
     periodic = _periodic(lines[bounds].decode("ascii", "replace").split()[3:], name)
+    z_bounds = lines[bounds + 3].split()[:2]
     with tempfile.NamedTemporaryFile(suffix=".dump") as tmp:  # lammpsio reads a file by name
         tmp.write(data)
         tmp.flush()
@@ -97,16 +103,18 @@ def read_lammps_dump(path: str, name: str, *, frame: int | None = None) -> BodyS
     has_quat = "quatw" in columns
     if has_quat and any(c not in columns for c in QUAT_COLUMNS):
         raise ValueError(f"{name}: give all of {' '.join(QUAT_COLUMNS)} or none")
+    centers, semi = np.asarray(snap.position, np.float64), table[:, :3] / 2
     box = None
-    if periodic:
+    if any(periodic):
         lo, hi = np.asarray(snap.box.low, np.float64), np.asarray(snap.box.high, np.float64)
         L = hi - lo
         tilt = np.zeros(3) if snap.box.tilt is None else np.asarray(snap.box.tilt, np.float64)
-        box = file_box(L, (tilt[0] / L[1], tilt[1] / L[2], tilt[2] / L[2]), dim=3)
-    return from_parameters(
-        np.asarray(snap.position, np.float64), table[:, :3] / 2, table[:, 3:7] if has_quat else None, name,
-        box=box, ids=ids, frame=k,
-    )
+        box = cell_box(L, (tilt[0] / L[1], tilt[1] / L[2], tilt[2] / L[2]), periodic, centers, semi, name=f"{name}: frame {k}")
+    out = from_parameters(centers, semi, table[:, 3:7] if has_quat else None, name, box=box, ids=ids, frame=k)
+    if planar is None:  # LAMMPS' dimension 2: z bounds -0.5 0.5, every atom at z = 0, turned about z
+        flat = not centers[:, 2].any() and (not has_quat or not table[:, 4:6].any())
+        planar = flat and [float(b) for b in z_bounds] == [-0.5, 0.5]
+    return out.in_plane() if planar else out
 
 
 def _check_items(lines: list[bytes], bounds: int, atoms: int, k: int, name: str) -> None:
@@ -177,14 +185,11 @@ def _frame_text(path: str, name: str, frame: int | None) -> tuple[int, bytes]:
         raise ValueError(f"cannot read {name}: {e.strerror}") from None
 
 
-def _periodic(flags: list[str], name: str) -> bool:
-    """Whether the boundaries (``xy xz yz pp pp pp`` after ITEM: BOX BOUNDS) are periodic."""
+def _periodic(flags: list[str], name: str) -> tuple[bool, bool, bool]:
+    """Which axes are periodic (``pp`` after ITEM: BOX BOUNDS; fixed or shrink-wrapped ``f s m``: open)."""
     flags = [f for f in flags if f not in ("xy", "xz", "yz")]
     if not flags:
-        return True  # old dumps name no boundaries: LAMMPS's default is periodic
-    per = [f == "pp" for f in flags]
-    if all(per):
-        return True
-    if not any(per):
-        return False
-    raise ValueError(f"{name}: boundaries {' '.join(flags)} mix periodic and open axes: not supported")
+        return (True, True, True)  # old dumps name no boundaries: LAMMPS's default is periodic
+    if len(flags) != 3:
+        raise ValueError(f"{name}: ITEM: BOX BOUNDS names {len(flags)} boundaries, not 3: {' '.join(flags)}")
+    return (flags[0] == "pp", flags[1] == "pp", flags[2] == "pp")

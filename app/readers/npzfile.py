@@ -141,7 +141,7 @@ def read_npz(source: str | Path | bytes, name: str) -> BodySet:
             raise ValueError(f"{name}: Q must be (N, 3, 3) or (N, 4, 4), got shape {Q.shape}")
         if Q.dtype.kind not in "fiu":
             raise ValueError(f"{name}: Q must hold numbers, got dtype {Q.dtype}")
-        return BodySet(Q.astype(np.float64), source=name, box=None if box is None else box(Q.shape[1] - 1))
+        return BodySet.of_matrices(Q.astype(np.float64), source=name, box=None if box is None else box(Q.shape[1] - 1))
     missing = {"centers", "semi_axes"} - set(arrays)
     if missing:
         raise ValueError(f"{name}: expected arrays centers, semi_axes, orientations (or Q); missing {sorted(missing)}")

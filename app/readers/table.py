@@ -1,6 +1,6 @@
 """Tables of bodies, columns chosen by name: CSV (streamed) and Parquet (pyarrow).
 
-Columns (any order, any case; other columns such as ``id`` or ``type`` are ignored):
+Columns (any order, any case; an ``id`` column gives the bodies their ids, others such as ``type`` are ignored):
 3D ``x,y,z,a,b,c,qw,qx,qy,qz`` (centre, semi-axes, quaternion wxyz), 2D ``x,y,a,b,angle``
 (radians). A table with every 3D column is read as ellipsoids, else one with every 2D column as
 ellipses. Body k is data row k (CSV: line k + 2 of the file).
@@ -65,6 +65,30 @@ def choose_columns(header: list[str], name: str) -> tuple[int, list[int]]:
     )
 
 
+def id_column(header: list[str]) -> int | None:
+    """The index of an ``id`` column (the bodies' own ids: outputs name them), or None.
+
+    Examples:
+        >>> id_column(["x", "ID", "y"]), id_column(["x", "y"])
+        (1, None)
+    """
+    names = [h.strip().strip('"').strip().lower() for h in header]
+    return names.index("id") if names.count("id") == 1 else None
+
+
+def _ids(table: np.ndarray, with_id: bool, name: str, first_line: int | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """The table without its last column and that column as int64 ids, when the file has an id column."""
+    if not with_id:
+        return table, None
+    raw = table[:, -1]
+    bad = np.flatnonzero(~(np.isfinite(raw) & (raw == np.round(raw)) & (np.abs(raw) < 2.0**53)))
+    if bad.size:
+        k = int(bad[0])
+        where = f"line {k + first_line}" if first_line is not None else f"row {k}"
+        raise ValueError(f"{name}: {where}: id {float(raw[k])!r} is not an integer")
+    return table[:, :-1], raw.astype(np.int64)
+
+
 def read_csv(stream: IO[bytes], name: str) -> BodySet:
     """Read a CSV table of bodies from a binary stream, block by block (module docstring).
 
@@ -80,6 +104,9 @@ def read_csv(stream: IO[bytes], name: str) -> BodySet:
         raise ValueError(f"{name}: empty file: expected a header row naming the columns")
     header = _fields(first, 1, name)
     dim, cols = choose_columns(header, name)
+    idc = id_column(header)
+    if idc is not None:
+        cols = [*cols, idc]
     width = len(header)
     blocks: list[np.ndarray] = []
     line = 2  # the line of the file where the next block starts
@@ -95,7 +122,8 @@ def read_csv(stream: IO[bytes], name: str) -> BodySet:
         blocks.append(block)
         line += len(lines)
     table = np.concatenate(blocks) if blocks else np.zeros((0, len(cols)))
-    return _bodies(table, dim, name, first_line=2)
+    table, ids = _ids(table, idc is not None, name, 2)
+    return _bodies(table, dim, name, first_line=2, ids=ids)
 
 
 def _check_widths(lines: list[str], width: int, start: int, name: str) -> None:
@@ -161,6 +189,9 @@ def read_parquet(path: str, name: str) -> BodySet:
         raise ValueError(f"{name}: not a readable Parquet file ({one_line(e)})") from None
     header = list(f.schema_arrow.names)
     dim, cols = choose_columns(header, name)
+    idc = id_column(header)
+    if idc is not None:
+        cols = [*cols, idc]
     wanted = [header[k] for k in cols]
     blocks = []
     try:
@@ -171,7 +202,8 @@ def read_parquet(path: str, name: str) -> BodySet:
     except Exception as e:  # noqa: BLE001
         raise ValueError(f"{name}: cannot read the Parquet data ({one_line(e)})") from None
     table = np.concatenate(blocks) if blocks else np.zeros((0, len(cols)))
-    return _bodies(table, dim, name)
+    table, ids = _ids(table, idc is not None, name, None)
+    return _bodies(table, dim, name, ids=ids)
 
 
 def _numbers(column: Any, label: str, name: str) -> np.ndarray:

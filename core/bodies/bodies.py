@@ -62,7 +62,7 @@ class Bodies:
                 raise ValueError(f"bodies: centres, semi-axes and orientations must be arrays of numbers ({e})") from None
             c, r = self.centers, self.semi_axes
             if c.ndim != 2 or c.shape[1] not in (2, 3) or r.shape != c.shape:
-                raise ValueError(f"bodies: expected (N, 2) or (N, 3) centres and semi-axes of the same shape, got {c.shape} and {r.shape}")
+                raise ValueError(f"bodies: centers and semi_axes must be (N, 2) or (N, 3) arrays of one shape, got {c.shape} and {r.shape}")
             n = c.shape[0]
         else:
             assert self._matrices is not None
