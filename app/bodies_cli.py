@@ -74,12 +74,15 @@ def frame_argument(text: str) -> int:
         raise argparse.ArgumentTypeError(f"--frame takes a frame number (0 first, -1 last), got {text!r}") from None
 
 
-def add_body_file_options(parser: argparse.ArgumentParser) -> None:
-    """``--frame`` and ``--format``: which frame of a trajectory, and which reader (:mod:`app.readers`)."""
+def add_body_file_options(parser: argparse.ArgumentParser, *, dim: bool = False) -> None:
+    """``--frame`` and ``--format``: which frame of a trajectory, and which reader (:mod:`app.readers`); ``--dim`` too if asked."""
     from .readers import FORMATS
 
     parser.add_argument("--frame", type=frame_argument, default=None, help="frame of a trajectory (GSD, LAMMPS, XYZ): 0 first, -1 last (default)")
     parser.add_argument("--format", choices=FORMATS, default=None, help="file format (default: from the name, else the first bytes)")
+    if dim:
+        parser.add_argument("--dim", type=int, choices=(2, 3), default=None,
+                            help="2: read a 3D file of a 2D system (z = 0, turned about z) as ellipses; default: the file says")
 
 
 def add_parsers(sub: Any) -> None:
@@ -91,7 +94,7 @@ def add_parsers(sub: Any) -> None:
         help="output: CSV i,j,relation,certified_by,image_x,image_y,image_z (NPZ for a .npz name), or - for stdout",
     )
     c.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz], or a tilted box Lx,Ly,Lz,xy,xz,yz (2D: Lx,Ly,xy) (minimum image); default: the file's box")
-    add_body_file_options(c)
+    add_body_file_options(c, dim=True)
     c.add_argument("--method", choices=("adaptive", "float", "exact"), default="adaptive")
     c.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bad bodies and go on")
     c.add_argument(
@@ -179,37 +182,50 @@ def _connect(address: str) -> Any:
     return connect(address)
 
 
+def command_box(given: Any, bodies: Any) -> Any:
+    """The box of a command: ``--box`` (any form :meth:`core.Box.from_any` reads), else the file's.
+
+    Raises:
+        ValueError: a ``--box`` that is no box for the bodies' dimension, saying what was expected.
+    """
+    from core import Box
+
+    if given is None:
+        return bodies.box
+    try:
+        return Box.from_any(given, bodies.dimensions)
+    except ValueError as e:
+        raise ValueError(f"--box: {str(e).removeprefix('box: ')}") from None
+
+
 def run_contacts(args: argparse.Namespace) -> int:
     """``python -m app contacts``: read, search, write, summarise. Returns the exit status."""
     from core import contacts
 
     from .bodyfiles import write_pairs_csv, write_pairs_npz
     from .output import Output
-    from .readers import read_bodies, usable_box
+    from .readers import read_bodies
 
     as_npz = args.out.lower().endswith(".npz")
     out = Output(args.out, binary=as_npz)  # checked (and its temporary file made) before any work
     with out as f:
         t0 = time.perf_counter()
-        bodies = read_bodies(args.bodies, frame=args.frame, format=args.format)
+        bodies = read_bodies(args.bodies, frame=args.frame, format=args.format, dim=args.dim)
         source = "<stdin>" if args.bodies == "-" else args.bodies
         if bodies.errors and args.on_invalid == "raise":
             k, why = next(iter(bodies.errors.items()))
             raise ValueError(f"{source}: {bodies.where(k)}: {why}")
-        box = args.box if args.box is not None else bodies.box
-        if box is not None and len(box) != 6 and len(box) != bodies.dim and not (bodies.dim == 2 and len(box) == 3):
-            raise ValueError(f"--box has {len(box)} sides but the bodies are {bodies.dim}D")
-        box = usable_box(box, bodies.dim, source)
+        box = command_box(args.box, bodies)
         t1 = time.perf_counter()
         what = "ellipsoids" if bodies.dim == 3 else "ellipses"
         frame = f" (frame {bodies.frame})" if bodies.frame is not None else ""
-        say(args, f"read {len(bodies):,} {what} from {source}{frame} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
+        say(args, f"read {len(bodies):,} {what} from {source}{frame} in {t1 - t0:.1f} s" + (f"; periodic box {box.describe()}" if box is not None else ""))
         scheduler = _connect(args.scheduler) if args.scheduler else None
         try:
             progress = None if args.quiet else (True if scheduler is not None else ProgressBar(sys.stderr, "classifying"))
             chunk = 10_000 if args.method == "exact" else None  # exact: ~1 ms of work per 10 pairs, progress every second or so
             res = contacts(
-                bodies.Q, box=box, method=args.method, on_invalid=args.on_invalid, scheduler=scheduler, progress=progress,
+                bodies, box=box, method=args.method, on_invalid=args.on_invalid, scheduler=scheduler, progress=progress,
                 **({"chunk": chunk} if chunk else {}),
             )
         finally:
@@ -225,9 +241,9 @@ def run_contacts(args: argparse.Namespace) -> int:
             say(args, f"contact scales and containment of {len(res):,} pairs in {time.perf_counter() - ts:.1f} s")
         t2 = time.perf_counter()
         if as_npz:
-            write_pairs_npz(f, res.i, res.j, res.relation, res.certified_by, res.image, details)
+            write_pairs_npz(f, res, details)
         else:
-            write_pairs_csv(f, res.i, res.j, res.relation, res.certified_by, res.image, details)
+            write_pairs_csv(f, res, details)
     t3 = time.perf_counter()
     invalid = dict(res.invalid)
     invalid.update(bodies.errors)  # the reason from the file's parameters, not "NaN"

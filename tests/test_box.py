@@ -136,7 +136,7 @@ def test_contacts_of_bodies_carry_their_ids_box_and_write_one_csv():
     assert lines[1].split(",")[:3] == ["0", "1", "tangent"] and lines[1].split(",")[-2:] == ["100", "200"]
     assert lines[2].split(",")[:5] == ["0", "2", "overlap", res.columns()["certified_by"][1], "-1"]
     rows = list(res.rows())
-    assert rows[1]["image"] == [-1, 0, 0] and rows[1]["id_j"] == 300
+    assert rows[1]["image"] == [-1, 0] and rows[1]["image_z"] == 0 and rows[1]["id_j"] == 300
     assert "id_i" not in want.columns()  # no ids: no id columns
 
 

@@ -19,8 +19,6 @@ import numpy as np
 
 from core import Bodies
 
-from .guard import one_line
-
 __all__ = ["BodySet", "from_parameters", "file_box", "cell_box"]
 
 
@@ -108,7 +106,6 @@ def from_parameters(centers: Any, semi_axes: Any, orientations: Any, name: str, 
     """
     try:
         out = BodySet(centers, semi_axes, orientations, source=name, **extra)
-        out.matrices  # noqa: B018 - built now: a row that is no shape is found while the file is at hand
     except (ValueError, TypeError) as e:
         raise ValueError(f"{name}: {e}") from None
     return out

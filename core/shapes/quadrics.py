@@ -260,7 +260,8 @@ def _far_limit(r: np.ndarray) -> np.ndarray:
         return np.asarray(FAR_FROM_ORIGIN * r.min(axis=1, initial=np.inf), dtype=np.float64)
 
 
-def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, first: bool = False) -> dict[int, str]:
+def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, first: bool = False,
+                    matrices: bool = True) -> dict[int, str]:
     """Row -> why those parameters are no shape (the checks of :func:`quadrics_from_axes`).
 
     Args:
@@ -268,6 +269,9 @@ def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, f
         semi_axes: (N, d) floats.
         orientations: (N, 4) quaternions, (N,) angles (2D) or None.
         first: stop at the first bad row.
+        matrices: also refuse a centre so far from the origin (2^26 times the smallest
+            semi-axis) that no float64 matrix holds the shape; False for the computations that
+            read the parameters exactly and build no float matrix (the sweep).
 
     Returns:
         ``{row: reason}`` for rows with a non-finite number, a semi-axis <= 0, a zero quaternion
@@ -283,7 +287,7 @@ def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, f
         (~(np.isfinite(c).all(axis=1) & np.isfinite(r).all(axis=1)),
          lambda k: f"centre and semi-axes must be finite numbers, got {c[k].tolist()} and {r[k].tolist()}"),
         (~(r > 0).all(axis=1), lambda k: f"semi-axes must be positive, got {r[k].tolist()}"),
-        (np.abs(c).max(axis=1, initial=0.0) > _far_limit(r),
+        (np.abs(c).max(axis=1, initial=0.0) > _far_limit(r) if matrices else np.zeros(N, dtype=bool),
          lambda k: f"centre {c[k].tolist()} is more than 2^26 times the smallest semi-axis ({float(r[k].min())!r}) from "
                    "the origin: the float64 matrix would not be this shape (its constant term rounds by as much as "
                    "the shape's own size); place the origin nearer the bodies"),
