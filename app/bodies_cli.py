@@ -125,7 +125,8 @@ class ProgressBar:
         delay: any run draws once it has taken this many seconds.
     """
 
-    def __init__(self, stream: TextIO, label: str, *, min_total: int = 1_000_000, delay: float = 1.0) -> None:
+    def __init__(self, stream: TextIO, label: str, *, min_total: int = 1_000_000, delay: float = 1.0, unit: str = "pairs") -> None:
+        self.unit = unit
         self.stream = stream
         self.label = label
         self.min_total = min_total
@@ -144,7 +145,7 @@ class ProgressBar:
             return
         self.last = pct
         bar = "#" * (pct * 30 // 100)
-        line = f"{self.label} [{bar:<30}] {pct:3d}% {done:,}/{total:,} pairs, {elapsed:.1f} s"
+        line = f"{self.label} [{bar:<30}] {pct:3d}% {done:,}/{total:,} {self.unit}, {elapsed:.1f} s"
         self.stream.write(("\r" + line) if self.tty else line + "\n")
         if self.tty and done >= total:
             self.stream.write("\n")

@@ -21,6 +21,8 @@
   moving bodies over one step (the timeline, the contact events: :mod:`app.scene.sweep_view`).
 * ``python -m app sweep START.csv END.csv --out EVENTS.csv``: first contact times of moving
   bodies (:mod:`app.sweep_cli`).
+* ``python -m app audit TRAJECTORY --out REPORT.csv [--between]``: a certified check of a
+  hard-particle trajectory, frame by frame; exit status 3 when a pair overlaps (:mod:`app.audit_cli`).
 * ``python -m app --version``. The console script ``ellipsoids`` is the same command.
 
 Exit status: 0 done; 1 the work could not be done here (a missing optional package or
@@ -249,6 +251,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .sweep_cli import add_parser as add_sweep_parser
 
     add_sweep_parser(sub)
+    from .audit_cli import add_parser as add_audit_parser
+
+    add_audit_parser(sub)
     return p
 
 
@@ -449,7 +454,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     from .bodies_cli import COMMANDS, run_classify, run_contacts
 
-    if not argv or (argv[0] not in ("serve", "screenshot", "export", "sweep", *COMMANDS) and argv[0] not in ("-h", "--help", "--version")):
+    if not argv or (argv[0] not in ("serve", "screenshot", "export", "sweep", "audit", *COMMANDS) and argv[0] not in ("-h", "--help", "--version")):
         argv = ["serve", *argv]  # no sub-command: serve with the given options (or defaults)
     args = parser.parse_args(argv)
     if args.command != "serve" and args.command is not None:
@@ -467,6 +472,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from .sweep_cli import run_sweep
 
             return run_sweep(args)
+        if args.command == "audit":
+            from .audit_cli import run_audit
+
+            return run_audit(args)
         return _serve(args)
     except ValueError as e:
         return _fail(f"error: {e}", EXIT_USAGE)

@@ -1,11 +1,9 @@
 """Trajectories of hard bodies for the audit benchmark: a dense packing that moves, and a tangent lattice.
 
-:func:`fcc_trajectory`: ellipsoids at the sites of a face-centred cubic lattice in a periodic box,
-each frame jittered around its site (at most ``jitter`` from it) and turned at random, the whole
-packing drifting so that bodies cross the box's faces between frames; frames are wrapped, as a
-simulation stores them. The lattice spacing keeps the bodies' bounding spheres apart whatever the
-jitter and the turns, so no pair ever overlaps (packing fraction ~0.5 with the default shape), and
-a linear step between two frames keeps them apart too (each centre stays in its ball).
+:func:`fcc_trajectory`: nearly aligned ellipsoids at the sites of a stretched face-centred cubic
+lattice in a periodic box (packing fraction 0.5), each frame jittered around its site and turned
+a little, the whole packing drifting so that bodies cross the box's faces between frames; frames
+are wrapped, as a simulation stores them. No pair overlaps, yet many bounding spheres meet.
 
 :func:`tangent_lattice`: spheres of diameter 1 on a simple cubic lattice of spacing 1: every
 neighbour pair touches exactly, the hardest input a float overlap check can get; a few bodies are
@@ -14,8 +12,8 @@ are known by construction (:attr:`TangentLattice.truth`).
 
 Examples:
     >>> t = fcc_trajectory((2, 2, 2), frames=2, seed=1)
-    >>> len(t.centers), t.centers[0].shape, t.semi_axes.shape, t.box
-    (2, (32, 3), (32, 3), (5.713203435596426, 5.713203435596426, 5.713203435596426))
+    >>> len(t.centers), t.centers[0].shape, t.semi_axes.shape, round(t.fraction, 6)
+    (2, (32, 3), (32, 3), 0.5)
     >>> lat = tangent_lattice(3, planted=2, seed=0)
     >>> lat.centers.shape, sorted(set(lat.truth.values()))
     ((27, 3), ['overlap', 'tangent'])
@@ -53,37 +51,48 @@ class Trajectory:
         return float((4 / 3 * math.pi * self.semi_axes.prod(axis=1)).sum() / np.prod(self.box))
 
 
-def fcc_trajectory(cells: tuple[int, int, int], frames: int, *, jitter: float = 0.01, drift: float = 0.37,
-                   seed: int = 0) -> Trajectory:
-    """A jittered FCC packing of ellipsoids over ``frames`` frames (module docstring).
+def fcc_trajectory(cells: tuple[int, int, int], frames: int, *, fraction: float = 0.5, jitter: float = 0.04,
+                   turn: float = 0.03, drift: float = 0.37, seed: int = 0) -> Trajectory:
+    """Nearly aligned ellipsoids on a stretched FCC lattice over ``frames`` frames (module docstring).
+
+    The packing is the image of an FCC packing of spheres of radius 1 under the map
+    diag(:data:`FCC_AXES`): aligned ellipsoids that never overlap when the spheres do not, at the
+    spheres' packing fraction ``fraction`` (the map keeps volume ratios). Each frame every body is
+    jittered (at most ``jitter`` in the spheres' space) and turned by a random rotation of at most
+    ``turn`` radians about a random axis; the lattice leaves gaps of about 0.28 between the spheres
+    at fraction 0.5, far more than the jitter and the turns take, so no pair overlaps, while many
+    bounding spheres (radius 1) meet: a dense candidate set, as in a real hard-particle fluid.
 
     Args:
         cells: unit cells along x, y, z (4 bodies each: 100,000 bodies = (25, 40, 25)).
         frames: how many frames.
-        jitter: each centre lies within this distance of its (drifting) site.
+        fraction: packing fraction (at most FCC's 0.7405).
+        jitter: each centre lies within this distance (spheres' space) of its drifting site.
+        turn: largest rotation angle per frame, radians.
         drift: how far the whole packing moves along (1, 0.5, 0.25) per frame (wrapped).
         seed: random seed.
     """
     rng = np.random.default_rng(seed)
-    a = math.sqrt(2.0) * (2.0 + 2.0 * jitter)  # nearest sites 2 + 2 jitter apart: bounding spheres (radius 1) never meet
+    a = 2 * math.sqrt(2.0) * (0.7404804896930609 / fraction) ** (1 / 3)  # the spheres' lattice constant
     basis = np.array([[0, 0, 0], [0, 0.5, 0.5], [0.5, 0, 0.5], [0.5, 0.5, 0]])
     grid = np.stack(np.meshgrid(*(np.arange(c) for c in cells), indexing="ij"), axis=-1).reshape(-1, 1, 3)
+    axes3 = np.array(FCC_AXES)
     sites = ((grid + basis[None]) * a).reshape(-1, 3)
-    box = tuple(float(c * a) for c in cells)
+    box = tuple(float(c * a * s) for c, s in zip(cells, axes3, strict=True))
     L = np.array(box)
     n = len(sites)
-    axes = np.tile(FCC_AXES, (n, 1))
-    centers, orientations = [], []
     direction = np.array([1.0, 0.5, 0.25])
+    centers, orientations = [], []
     for k in range(frames):
         u = rng.normal(size=(n, 3))
         u *= (jitter * rng.uniform(0, 1, n) ** (1 / 3) / np.linalg.norm(u, axis=1))[:, None]
-        c = sites + k * drift * direction + u
-        c = c - L * np.floor(c / L + 0.5)  # wrapped into [-L/2, L/2)
-        q = rng.normal(size=(n, 4))
-        centers.append(c)
-        orientations.append(q / np.linalg.norm(q, axis=1)[:, None])
-    return Trajectory(centers, orientations, axes, box)  # type: ignore[arg-type]
+        c = (sites + u) * axes3 + k * drift * direction
+        centers.append(c - L * np.floor(c / L + 0.5))  # wrapped into [-L/2, L/2)
+        axis = rng.normal(size=(n, 3))
+        axis /= np.linalg.norm(axis, axis=1)[:, None]
+        half = rng.uniform(0, turn / 2, n)
+        orientations.append(np.concatenate([np.cos(half)[:, None], np.sin(half)[:, None] * axis], axis=1))
+    return Trajectory(centers, orientations, np.tile(axes3, (n, 1)), box)  # type: ignore[arg-type]
 
 
 def write_gsd(path: str, traj: Trajectory) -> None:

@@ -33,12 +33,13 @@ import os
 import sys
 import tempfile
 from pathlib import Path
-from typing import IO
+from collections.abc import Iterator
+from typing import IO, Any
 
 from .bodyset import BodySet, file_box, usable_box
 from .table import COLUMNS
 
-__all__ = ["BodySet", "COLUMNS", "FORMATS", "format_of", "read_bodies", "read_bodies_bytes", "file_box", "usable_box"]
+__all__ = ["BodySet", "COLUMNS", "FORMATS", "format_of", "read_bodies", "read_frames", "read_bodies_bytes", "file_box", "usable_box"]
 
 FORMATS = ("csv", "parquet", "npz", "gsd", "lammps", "xyz")
 """The formats read, by name (``--format``)."""
@@ -111,6 +112,78 @@ def read_bodies(path: str | os.PathLike[str], *, frame: int | None = None, forma
     except OSError as e:
         raise ValueError(f"cannot read {name}: {e.strerror}") from None
     return _in_dimension(_read_file(name, Path(name).name, fmt, frame, dim), dim)
+
+
+def read_frames(path: str | os.PathLike[str], *, frames: slice = slice(None), format: str | None = None,
+                dim: int | None = None) -> tuple[list[str], Iterator[BodySet]]:
+    """The frames of a trajectory, one at a time: (a name for each frame picked, an iterator of them).
+
+    ``path`` is a trajectory file (GSD, LAMMPS dump, extended XYZ: its frames, read in one pass),
+    another file of bodies (one frame), a folder of frame files or a glob pattern (``run/*.csv``:
+    one frame per file, the last one of a trajectory, files in natural order: ``f2`` before
+    ``f10``). ``frames`` picks frames as a Python slice does. Nothing but the frame at hand is held.
+
+    Raises:
+        ValueError: no such file or no file matches, an unknown format; a frame's own errors
+            surface when the iterator reaches it.
+    """
+    import glob as globbing
+
+    name = str(path)
+    if os.path.isdir(name) or any(ch in name for ch in "*?["):
+        files = sorted((f for f in (globbing.glob(os.path.join(name, "*")) if os.path.isdir(name) else globbing.glob(name))
+                        if os.path.isfile(f)), key=_natural)
+        if not files:
+            raise ValueError(f"{name}: no files of frames there")
+        numbers = list(range(len(files)))[frames]
+
+        def each_file() -> Iterator[BodySet]:
+            for k in numbers:
+                b = read_bodies(files[k], format=format, dim=dim)
+                b.frame = k  # the frame's number: its place among the files
+                yield b
+
+        return [files[k] for k in numbers], each_file()
+    try:
+        with open(name, "rb") as f:
+            head = f.read(512)
+    except IsADirectoryError:
+        raise ValueError(f"cannot read {name}: it is a folder") from None
+    except OSError as e:
+        raise ValueError(f"cannot read {name}: {e.strerror}") from None
+    fmt = _checked_format(format, name, head, None)
+    short = Path(name).name
+    planar = None if dim is None else dim == 2
+    if fmt == "gsd":
+        from .gsdfile import gsd_frames
+
+        wanted, it = gsd_frames(name, short, frames)
+    elif fmt == "lammps":
+        from .lammpsdump import lammps_frames
+
+        wanted, it = lammps_frames(name, short, frames, planar=planar)
+    elif fmt == "xyz":
+        from .extxyzfile import extxyz_frames
+
+        wanted, it = extxyz_frames(name, short, frames, planar=planar)
+    else:
+        wanted = range(*frames.indices(1))
+
+        def one() -> Iterator[BodySet]:
+            for k in wanted:
+                b = read_bodies(name, format=fmt, dim=dim)
+                b.frame = k
+                yield b
+
+        it = one()
+    return [f"{short} frame {k}" for k in wanted], (_in_dimension(b, dim) for b in it)
+
+
+def _natural(name: str) -> list[Any]:
+    """Sort key: digits as numbers (``frame2`` before ``frame10``)."""
+    import re
+
+    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", name)]
 
 
 def read_bodies_bytes(data: bytes, name: str, *, frame: int | None = None, format: str | None = None,

@@ -26,6 +26,7 @@ import mmap
 import os
 import re
 import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,7 +36,7 @@ from .bodyset import BodySet, cell_box, from_parameters
 from .gsdfile import _frame_index
 from .guard import clip, one_line
 
-__all__ = ["read_extxyz", "COMMENT_CHARS"]
+__all__ = ["read_extxyz", "extxyz_frames", "COMMENT_CHARS"]
 
 COMMENT_CHARS = 1 << 20
 """Longest comment line read (1 Mi characters); a longer one is refused."""
@@ -75,13 +76,28 @@ def read_extxyz(path: str, name: str, *, frame: int | None = None, planar: bool 
             line, and what is wrong), no such frame, missing columns, a cell that is periodic on
             some axes only or not in HOOMD's orientation.
     """
+    frames = _frames(path, name)
+    k = _frame_index(frame, len(frames), name)
+    return _read_frame(path, name, frames[k], k, planar)
+
+
+def extxyz_frames(path: str, name: str, select: slice = slice(None), *, planar: bool | None = None) -> tuple[range, Iterator[BodySet]]:
+    """(the frames ``select`` picks, an iterator over them as :class:`BodySet`): the file checked once.
+
+    Every frame is checked first (:func:`_frames`), then each wanted one is parsed alone, as
+    :func:`read_extxyz` parses one (``python -m app audit``: memory of one frame).
+    """
+    frames = _frames(path, name)
+    wanted = range(*select.indices(len(frames)))
+    return wanted, (_read_frame(path, name, frames[k], k, planar) for k in wanted)
+
+
+def _read_frame(path: str, name: str, fr: _Frame, k: int, planar: bool | None) -> BodySet:
+    """Frame k (checked: :func:`_frames`) parsed by the C parser, alone."""
     try:
         import extxyz
     except ImportError:
         raise ValueError(f"{name}: reading extended XYZ needs extxyz: pip install 'ellipsoid-interference[formats]'") from None
-    frames = _frames(path, name)
-    k = _frame_index(frame, len(frames), name)
-    fr = frames[k]
     if fr.natoms == 0:  # nothing to parse (and the C parser would crash on it)
         return from_parameters(np.zeros((0, 3)), np.zeros((0, 3)), None, name, frame=k)
     with tempfile.TemporaryDirectory(prefix="xyz-") as tmp:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -26,7 +27,7 @@ import numpy as np
 from .bodyset import BodySet, file_box, from_parameters
 from .guard import one_line
 
-__all__ = ["read_gsd"]
+__all__ = ["read_gsd", "gsd_frames"]
 
 
 def read_gsd(path: str, name: str, *, frame: int | None = None) -> BodySet:
@@ -41,28 +42,53 @@ def read_gsd(path: str, name: str, *, frame: int | None = None) -> BodySet:
         ValueError: gsd missing, not a GSD file, no such frame, a type whose shape is not an
             ellipsoid, no shapes in the file.
     """
+    traj = _open(path, name)
+    with traj:
+        return _frame(traj, _frame_index(frame, len(traj), name), path, name)
+
+
+def gsd_frames(path: str, name: str, select: slice = slice(None)) -> tuple[range, Iterator[BodySet]]:
+    """(the frames ``select`` picks, an iterator over them as :class:`BodySet`): the file opened once.
+
+    Each frame is checked and read as :func:`read_gsd` reads one (``python -m app audit``:
+    memory of one frame).
+    """
+    traj = _open(path, name)
+    wanted = range(*select.indices(len(traj)))
+
+    def frames() -> Iterator[BodySet]:
+        with traj:
+            for k in wanted:
+                yield _frame(traj, k, path, name)
+
+    return wanted, frames()
+
+
+def _open(path: str, name: str) -> Any:
+    """The file as a ``gsd.hoomd`` trajectory (a one-line ValueError if it is none)."""
     try:
         import gsd.hoomd
     except ImportError:
         raise ValueError(f"{name}: reading GSD files needs the gsd package: pip install 'ellipsoid-interference[formats]'") from None
     try:
-        traj = gsd.hoomd.open(path, "r")
+        return gsd.hoomd.open(path, "r")
     except Exception as e:  # noqa: BLE001 - gsd raises RuntimeError/OSError kinds for bad files
         raise ValueError(f"{name}: not a readable GSD file ({_said(e, path)})") from None
-    with traj:
-        n = len(traj)
-        k = _frame_index(frame, n, name)
-        try:
-            counts = _counts(traj.file, k)
-        except Exception as e:  # noqa: BLE001
-            raise ValueError(f"{name}: frame {k} cannot be read ({_said(e, path)})") from None
-        _check_counts(counts, os.path.getsize(path), name)
-        try:
-            f = traj[k]
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise ValueError(f"{name}: frame {k}: particles/type_shapes holds no valid JSON ({one_line(e)})") from None
-        except Exception as e:  # noqa: BLE001
-            raise ValueError(f"{name}: frame {k} cannot be read ({_said(e, path)})") from None
+
+
+def _frame(traj: Any, k: int, path: str, name: str) -> BodySet:
+    """Frame k of an open trajectory, its counts checked against the file's size before it is read."""
+    try:
+        counts = _counts(traj.file, k)
+    except Exception as e:  # noqa: BLE001
+        raise ValueError(f"{name}: frame {k} cannot be read ({_said(e, path)})") from None
+    _check_counts(counts, os.path.getsize(path), name)
+    try:
+        f = traj[k]
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise ValueError(f"{name}: frame {k}: particles/type_shapes holds no valid JSON ({one_line(e)})") from None
+    except Exception as e:  # noqa: BLE001
+        raise ValueError(f"{name}: frame {k} cannot be read ({_said(e, path)})") from None
     return _bodies(f, name, k)
 
 

@@ -30,6 +30,7 @@ import math
 import mmap
 import os
 import tempfile
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -37,7 +38,7 @@ from .bodyset import BodySet, cell_box, from_parameters
 from .gsdfile import _frame_index
 from .guard import GZIP_MAGIC, clip, one_line
 
-__all__ = ["read_lammps_dump", "SHAPE_COLUMNS", "QUAT_COLUMNS"]
+__all__ = ["read_lammps_dump", "lammps_frames", "SHAPE_COLUMNS", "QUAT_COLUMNS"]
 
 SHAPE_COLUMNS = ("shapex", "shapey", "shapez")
 """Diameters of the ellipsoid along its body axes."""
@@ -59,11 +60,35 @@ def read_lammps_dump(path: str, name: str, *, frame: int | None = None, planar: 
         ValueError: lammpsio missing, not a dump, no such frame, missing columns, bad numbers,
             a tilt along an open axis, a 2D run whose bodies leave the plane.
     """
+    k, data = _frame_text(path, name, frame)
+    return _parse_frame(data, k, name, planar)
+
+
+def lammps_frames(path: str, name: str, select: slice = slice(None), *, planar: bool | None = None) -> tuple[range, Iterator[BodySet]]:
+    """(the frames ``select`` picks, an iterator over them as :class:`BodySet`): one pass over the file.
+
+    The file is scanned once for its frames, then each wanted frame is parsed as
+    :func:`read_lammps_dump` parses one (``python -m app audit``: memory of one frame).
+    """
+    starts, size = _frame_starts(path, name)
+    wanted = range(*select.indices(len(starts)))
+
+    def frames() -> Iterator[BodySet]:
+        with open(path, "rb") as f:
+            for k in wanted:
+                end = starts[k + 1] if k + 1 < len(starts) else size
+                f.seek(starts[k])
+                yield _parse_frame(f.read(end - starts[k]), k, name, planar)
+
+    return wanted, frames()
+
+
+def _parse_frame(data: bytes, k: int, name: str, planar: bool | None) -> BodySet:
+    """The bodies of frame k, from its bytes (``ITEM: TIMESTEP`` to the next frame)."""
     try:
         import lammpsio
     except ImportError:
         raise ValueError(f"{name}: reading LAMMPS dumps needs lammpsio: pip install 'ellipsoid-interference[formats]'") from None
-    k, data = _frame_text(path, name, frame)
     lines = data.split(b"\n")
     atoms = next((i for i, ln in enumerate(lines) if ln.startswith(b"ITEM: ATOMS")), None)
     bounds = next((i for i, ln in enumerate(lines) if ln.startswith(b"ITEM: BOX BOUNDS")), None)
@@ -160,8 +185,8 @@ def _shown(text: bytes) -> str:
     return repr(clip(text.decode("utf-8", "replace"), 60)) if text else "nothing"
 
 
-def _frame_text(path: str, name: str, frame: int | None) -> tuple[int, bytes]:
-    """(frame number, the bytes of that frame) of a dump file."""
+def _frame_starts(path: str, name: str) -> tuple[list[int], int]:
+    """(the byte offset of every frame's ``ITEM: TIMESTEP`` line, the file's size)."""
     try:
         with open(path, "rb") as f:
             if f.read(2) == GZIP_MAGIC:
@@ -176,11 +201,22 @@ def _frame_text(path: str, name: str, frame: int | None) -> tuple[int, bytes]:
                     if at == 0 or m[at - 1 : at] == b"\n":
                         starts.append(at)
                     at = m.find(b"ITEM: TIMESTEP", at + 1)
-                if not starts:
-                    raise ValueError(f"{name}: not a LAMMPS dump file (no ITEM: TIMESTEP line)")
-                k = _frame_index(frame, len(starts), name)
-                end = starts[k + 1] if k + 1 < len(starts) else size
-                return k, bytes(m[starts[k] : end])
+    except OSError as e:
+        raise ValueError(f"cannot read {name}: {e.strerror}") from None
+    if not starts:
+        raise ValueError(f"{name}: not a LAMMPS dump file (no ITEM: TIMESTEP line)")
+    return starts, size
+
+
+def _frame_text(path: str, name: str, frame: int | None) -> tuple[int, bytes]:
+    """(frame number, the bytes of that frame) of a dump file."""
+    starts, size = _frame_starts(path, name)
+    k = _frame_index(frame, len(starts), name)
+    end = starts[k + 1] if k + 1 < len(starts) else size
+    try:
+        with open(path, "rb") as f:
+            f.seek(starts[k])
+            return k, f.read(end - starts[k])
     except OSError as e:
         raise ValueError(f"cannot read {name}: {e.strerror}") from None
 
