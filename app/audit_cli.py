@@ -6,8 +6,11 @@
 TRAJECTORY is a GSD, LAMMPS dump or extended XYZ file (every frame), or a folder or glob of frame
 files (``run/*.csv``: one frame per file, in natural order). For every frame picked by
 ``--frames`` (a Python slice: ``A:B`` from frame A to frame B - 1, ``A:``, ``:B``, ``K``), every
-pair that is not separate is listed, with its certified relation (:func:`core.contacts` on the
-frame's bodies, the float matrices :func:`core.bodies_from_axes` builds from the file's numbers).
+pair that is not separate is listed, with its certified relation for the bodies the file's
+numbers describe, read exactly: centre, semi-axes and the rotation of the quaternion (of any
+length), with no float matrix in between (:func:`core.sweep_contacts` at t = 0). So a gap of
+1e-12 between two bodies far from the origin is a gap, whatever a float matrix of them would
+round to (a file of matrices is classified as those matrices, :func:`core.contacts`).
 With ``--between``, every pair that meets during the straight-line step from each frame to the
 next is listed too (:func:`core.sweep_contacts`: centres on the minimum-image displacement,
 orientations along q(t) = (1 - t) q0 + t q1; the bodies' own parameters, read exactly), with
@@ -134,14 +137,17 @@ def header(dimensions: int, has_ids: bool) -> str:
     return ",".join(["frame", "i", "j", "relation", "certified_by", *images, "t_lo", "t_hi", *(["id_i", "id_j"] if has_ids else [])])
 
 
-def _rows(frame: int, table: Any, d: int, has_ids: bool) -> str:
-    """CSV rows of a pair table (:class:`core.PairTable`) under ``frame``, in the report's column order."""
+def _rows(frame: int, table: Any, d: int, has_ids: bool, *, bracket: bool = True) -> str:
+    """CSV rows of a pair table (:class:`core.PairTable`) under ``frame``, in the report's column order.
+
+    ``bracket=False``: the frame's own rows (empty ``t_lo, t_hi``) even from a sweep's table.
+    """
     cols = table.columns(image_dims=d)
     n = len(table)
     parts: list[list[str]] = [[str(frame)] * n, [str(v) for v in cols["i"]], [str(v) for v in cols["j"]],
                               cols["relation"], cols["certified_by"]]
     parts += [[str(v) for v in cols[f"image_{'xyz'[a]}"]] for a in range(d)]
-    parts += [[repr(v) for v in cols[name]] if name in cols else [""] * n for name in ("t_lo", "t_hi")]
+    parts += [[repr(v) for v in cols[name]] if bracket and name in cols else [""] * n for name in ("t_lo", "t_hi")]
     if has_ids:
         parts += [[str(v) for v in cols["id_i"]], [str(v) for v in cols["id_j"]]] if "id_i" in cols else [[""] * n] * 2
     return "".join(",".join(row) + "\n" for row in zip(*parts, strict=True))
@@ -170,18 +176,22 @@ def audit_frame(frame: int, bodies: Any, box: Any, following: Any = None, *, on_
         set_threads(threads)
     where = f"{bodies.source}: frame {frame}"
     use_box = box if box is not None else bodies.box
-    if bodies.errors and on_invalid == "raise":
-        k, why = next(iter(bodies.errors.items()))
+    errors = bodies.parameter_errors if bodies.has_parameters else bodies.errors
+    if errors and on_invalid == "raise":
+        k, why = next(iter(errors.items()))
         raise ValueError(f"{where}: {bodies.where(k)}: {why}")
     try:
-        found = contacts(bodies, box=use_box, on_invalid=on_invalid)
+        if bodies.has_parameters:  # the bodies the file's numbers describe, read exactly (as --between does)
+            found = sweep_contacts(bodies, bodies, box=use_box, on_invalid=on_invalid)
+        else:  # a file of matrices: the matrices
+            found = contacts(bodies, box=use_box, on_invalid=on_invalid)
     except ValueError as e:
         raise ValueError(f"{where}: {e}") from None
     d, has_ids = bodies.dimensions, bodies.ids is not None
-    text = _rows(frame, found, d, has_ids)
+    text = _rows(frame, found, d, has_ids, bracket=False)
     counts = {"tangent": int(np.count_nonzero(found.relation == Relation.TANGENT)),
               "overlap": int(np.count_nonzero(found.relation == Relation.OVERLAP)),
-              "invalid": len(set(found.invalid) | set(bodies.errors))}
+              "invalid": len(set(found.invalid) | set(errors))}
     overlaps = [f"frame {frame}: {_pair_name(bodies, int(a), int(b))}" for a, b in
                 zip(found.i[found.relation == Relation.OVERLAP][:5], found.j[found.relation == Relation.OVERLAP][:5], strict=True)]
     if following is not None:

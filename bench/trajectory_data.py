@@ -5,18 +5,17 @@ lattice in a periodic box (packing fraction 0.5), each frame jittered around its
 a little, the whole packing drifting so that bodies cross the box's faces between frames; frames
 are wrapped, as a simulation stores them. No pair overlaps, yet many bounding spheres meet.
 
-:func:`tangent_lattice`: spheres of diameter 1 on a simple cubic lattice of spacing 1: every
-neighbour pair touches exactly, the hardest input a float overlap check can get; a few bodies are
-then moved by +-2^-40 along x, which makes exact overlaps and gaps of ~1e-12. Their true relations
-are known by construction (:attr:`TangentLattice.truth`).
+:func:`touching_pairs`: pairs of axis-aligned ellipsoids of different shapes touching exactly, a
+fraction of them moved by +-2^-40 (overlaps and gaps of ~1e-12): the contacts a float overlap check
+cannot settle. Their true relations are known by construction (:attr:`TouchingPairs.truth`).
 
 Examples:
     >>> t = fcc_trajectory((2, 2, 2), frames=2, seed=1)
     >>> len(t.centers), t.centers[0].shape, t.semi_axes.shape, round(t.fraction, 6)
     (2, (32, 3), (32, 3), 0.5)
-    >>> lat = tangent_lattice(3, planted=2, seed=0)
-    >>> lat.centers.shape, sorted(set(lat.truth.values()))
-    ((27, 3), ['overlap', 'tangent'])
+    >>> pairs = touching_pairs(50, seed=0)
+    >>> pairs.centers.shape, sorted(set(pairs.truth.values()))
+    ((100, 3), ['overlap', 'tangent'])
 """
 
 from __future__ import annotations
@@ -26,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["FCC_AXES", "Trajectory", "fcc_trajectory", "write_gsd", "TangentLattice", "tangent_lattice"]
+__all__ = ["FCC_AXES", "Trajectory", "fcc_trajectory", "write_gsd", "TouchingPairs", "touching_pairs"]
 
 FCC_AXES = (1.0, 0.88, 0.8)
 """Semi-axes of every ellipsoid of :func:`fcc_trajectory` (the largest is 1)."""
@@ -119,53 +118,38 @@ def write_gsd(path: str, traj: Trajectory) -> None:
 
 
 @dataclass
-class TangentLattice:
-    """Spheres of radius 1/2 on the integer lattice, and the true relation of every touching pair."""
+class TouchingPairs:
+    """Pairs of bodies whose true relations are known by construction."""
 
     centers: np.ndarray
-    """(N, 3) float64 centres (integers, a few moved by +-2^-40 along x)."""
-    radii: np.ndarray
-    """(N,) radii (1/2)."""
-    box: tuple[float, float, float]
-    """The periodic box (n, n, n): the lattice tiles it."""
-    truth: dict[tuple[int, int], str] = field(default_factory=dict)
-    """(i, j) with i < j -> "tangent" or "overlap" for every pair that is not separate (exact, by construction)."""
+    """(2m, 3) centres: body 2k and body 2k + 1 form pair k."""
+    semi_axes: np.ndarray
+    """(2m, 3) semi-axes (powers of two: every float matrix is exact)."""
+    truth: dict[tuple[int, int], str]
+    """(2k, 2k + 1) -> "tangent" or "overlap" (the separate pairs are absent)."""
 
 
-def tangent_lattice(n: int, *, planted: int = 20, seed: int = 0) -> TangentLattice:
-    """n^3 unit-diameter spheres on a simple cubic lattice in an (n, n, n) box (module docstring).
+def touching_pairs(m: int, *, planted: float = 0.25, offset: float = 2.0**-40, seed: int = 0) -> TouchingPairs:
+    """m pairs of axis-aligned ellipsoids touching exactly along x, a fraction moved by +-``offset``.
 
-    ``planted`` bodies (not neighbours of each other along x) are moved by +2^-40 or -2^-40 along x:
-    the pair in the direction of the move overlaps by 2^-40, the pair behind it opens a gap of
-    2^-40 (separate); every other neighbour pair stays exactly tangent.
+    Semi-axes are powers of two between 1/8 and 4; body 2k + 1 stands at x = a_x + b_x from body 2k
+    (every coordinate a float exactly): the plane x = a_x separates them and both touch it at one
+    point (tangent). A fraction ``planted`` of the pairs is moved by -offset
+    (overlap by ``offset``) or +offset (a gap of ``offset``: separate). Pairs stand 40 apart.
     """
     rng = np.random.default_rng(seed)
-    g = np.stack(np.meshgrid(*(np.arange(n),) * 3, indexing="ij"), axis=-1).reshape(-1, 3).astype(np.float64)
-    index = {tuple(int(v) for v in p): k for k, p in enumerate(g)}
-    move = np.zeros(len(g))
-    chosen: list[int] = []
-    for k in rng.permutation(len(g)).tolist():
-        x, y, z = (int(v) for v in g[k])
-        if all(index[((x + dx) % n, y, z)] not in chosen for dx in (-1, 1)):
-            chosen.append(k)
-            move[k] = 2.0**-40 if rng.uniform() < 0.5 else -(2.0**-40)
-        if len(chosen) == planted:
-            break
-    centers = g.copy()
-    centers[:, 0] += move
-    truth: dict[tuple[int, int], str] = {}
-    for k, p in enumerate(g):
-        x, y, z = (int(v) for v in p)
-        for axis in range(3):
-            q = [x, y, z]
-            q[axis] = (q[axis] + 1) % n
-            j = index[tuple(q)]
-            i0, j0 = min(k, j), max(k, j)
-            if axis == 0:
-                gap = move[j] - move[k]  # j is one step along +x from k (through the face if wrapped)
-                rel = "tangent" if gap == 0 else ("overlap" if gap < 0 else None)
-            else:  # a sideways shift of one of them opens a gap of ~2^-81: separate
-                rel = "tangent" if move[k] == move[j] else None
-            if rel is not None:
-                truth[(i0, j0)] = rel
-    return TangentLattice(centers, np.full(len(g), 0.5), (float(n),) * 3, truth)
+    a = 2.0 ** rng.integers(-3, 3, (m, 3)).astype(np.float64)
+    b = 2.0 ** rng.integers(-3, 3, (m, 3)).astype(np.float64)
+    side = int(math.ceil(m ** (1 / 3)))
+    grid = np.stack(np.meshgrid(*(np.arange(side),) * 3, indexing="ij"), axis=-1).reshape(-1, 3)[:m] * 40.0
+    shift = np.zeros(m)
+    moved = rng.uniform(size=m) < planted
+    shift[moved] = np.where(rng.uniform(size=int(moved.sum())) < 0.5, -offset, offset)
+    second = grid.copy()
+    second[:, 0] += a[:, 0] + b[:, 0] + shift
+    centers = np.empty((2 * m, 3))
+    centers[0::2], centers[1::2] = grid, second
+    axes = np.empty((2 * m, 3))
+    axes[0::2], axes[1::2] = a, b
+    truth = {(2 * k, 2 * k + 1): ("tangent" if shift[k] == 0 else "overlap") for k in range(m) if shift[k] <= 0}
+    return TouchingPairs(centers, axes, truth)

@@ -140,3 +140,16 @@ def test_frames_spread_over_a_dask_cluster_give_the_same_report(tmp_path):
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         rc = main(["audit", str(tmp_path / "run.dump"), "--out", str(there), "--between", "--scheduler", cluster.scheduler_address, "--quiet"])
     assert rc == 3 and there.read_text() == here.read_text()
+
+
+def test_a_gap_of_1e_12_far_from_the_origin_is_a_gap(tmp_path):
+    """The file's numbers are the bodies: semi-axes (1/8, 4, 1/8) and (2, 4, 1/4) touch across the plane
+    x = 320.125 when 2.125 apart along x; moved 2^-40 apart they are separate, 2^-40 closer they overlap.
+    (Float matrices of these bodies, 320 from the origin, round their constant terms by more than 2^-40.)"""
+    d = 2.0**-40
+    for shift, rc, relations in ((d, 0, []), (0.0, 0, ["tangent"]), (-d, 3, ["overlap"])):
+        x = 322.125 + shift
+        (tmp_path / "f.csv").write_text("x,y,z,a,b,c,qw,qx,qy,qz\n"
+                                        f"320,440,480,0.125,4,0.125,1,0,0,0\n{x!r},440,480,2,4,0.25,1,0,0,0\n")
+        assert main(["audit", str(tmp_path / "f.csv"), "--out", str(tmp_path / "r.csv"), "--jobs", "1", "--quiet"]) == rc
+        assert [r["relation"] for r in report(tmp_path / "r.csv")] == relations, shift
