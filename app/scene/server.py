@@ -8,7 +8,10 @@ own address (``/s/<tab id>/``, :mod:`app.scene.links`): a reload reopens it as i
 link ``/c/<configuration>/`` opens a new tab on a shared configuration. ``shared=True``
 (``python -m app serve --shared``) is the presenter mode: one scene for all tabs, every tab's
 camera framed. Only the scene's own pages (and clients without an Origin header) may connect
-(:mod:`app.scene.origin`).
+(:mod:`app.scene.origin`). What a client sends is budgeted: one websocket message at most
+:data:`app.scene.wire.MAX_MESSAGE_BYTES`, uploads counted before they are kept
+(:class:`app.scene.wire.UploadGuard`: :data:`app.scene.bodies.UPLOAD_BYTES` per client under way,
+:data:`UPLOADS_TOTAL_BYTES` for all).
 """
 
 from __future__ import annotations
@@ -23,12 +26,17 @@ import viser
 
 from . import page, wire
 from .analysis import AnalysisCache
+from .bodies import UPLOAD_BYTES
 from .links import Router, TabStore, tab_id_of
 from .mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
 from .session import Session
 from .state import SceneConfig
 
-__all__ = ["SceneServer", "start_scene", "PortBusy"]
+__all__ = ["SceneServer", "start_scene", "PortBusy", "UPLOADS_TOTAL_BYTES"]
+
+UPLOADS_TOTAL_BYTES = 4 * UPLOAD_BYTES
+"""Most bytes of uploads under way in the scene for all tabs together (each tab: ``UPLOAD_BYTES``,
+the largest upload button's limit)."""
 
 
 class PortBusy(RuntimeError):
@@ -85,6 +93,8 @@ class SceneServer:
         """Of those, the ones that disconnected meanwhile (see :meth:`_register`)."""
         self._lock = threading.Lock()
         self.new_session = threading.Condition(self._lock)
+        self.uploads = wire.UploadGuard(server, per_client=UPLOAD_BYTES, total=UPLOADS_TOTAL_BYTES)
+        """Counts what tabs upload before viser keeps it (installed before any tab's panel exists)."""
         self.shared: Session | None = None
         """The one session every tab sees (presenter mode), or None (one session per tab)."""
         self.cache.warm()
@@ -93,7 +103,7 @@ class SceneServer:
         if shared:
             self.shared = Session(
                 server, config, cache=self.cache, executor=self.executor, sphere_subdivisions=self.sphere_subdivisions,
-                cameras=lambda: [c.camera for c in server.get_clients().values()],
+                cameras=lambda: [c.camera for c in server.get_clients().values()], uploads=self.uploads,
             )
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
@@ -113,7 +123,7 @@ class SceneServer:
             from .bodies_view import BodiesView
 
             view = BodiesView(client, self.bodies, cache=self.cache, executor=self.executor,
-                              sphere_subdivisions=self.sphere_subdivisions)
+                              sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads)
             self._register(client.client_id, view, None)
             return
         tab = None
@@ -129,7 +139,7 @@ class SceneServer:
         """A new session of ``client`` on a tab's stored configuration, a link's (a dict) or the default (None)."""
         session = Session(client, self.config if isinstance(saved, dict) or saved is None else saved,
                           cache=self.cache, executor=self.executor, defer_load=isinstance(saved, dict),
-                          sphere_subdivisions=self.sphere_subdivisions)
+                          sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads)
         if isinstance(saved, dict):  # a link: user input, read like an uploaded file
             session.load_untrusted(saved)
         return session
@@ -235,6 +245,7 @@ class SceneServer:
         for s in list(self.sessions.values()):
             s.close()
         stop_viser(self.server)
+        self.uploads.close()
         self.cache.shutdown()
         self.executor.shutdown(wait=False, cancel_futures=True)
 
@@ -299,7 +310,7 @@ def start_scene(
     store = TabStore()
     router = Router(store, enabled=not shared)
     policy = OriginPolicy(host, allow_origins)
-    server = start_viser(policy, router, host=host, port=port, verbose=verbose)
+    server = start_viser(policy, router, max_message=wire.MAX_MESSAGE_BYTES, host=host, port=port, verbose=verbose)
     if port and server.get_port() != port:  # taken between the check and the start
         stop_viser(server)
         raise PortBusy(f"the scene's port {port} on {host} is already in use: choose another with --port")

@@ -60,6 +60,8 @@ class Session:
         defer_load: build the scene but load nothing yet (the caller loads, e.g. a link).
         sphere_subdivisions: of the icosphere the solids are drawn with
             (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`; fewer draw faster in software WebGL).
+        uploads: the server's :class:`~app.scene.wire.UploadGuard` (the configuration upload's
+            limit is set on it, and a refused file is shown next to the button), or None.
     """
 
     PANEL_PERIOD = 0.05
@@ -85,8 +87,10 @@ class Session:
         cameras: Callable[[], Iterable[viser.CameraHandle]] | None = None,
         defer_load: bool = False,
         sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
+        uploads: wire.UploadGuard | None = None,
     ) -> None:
         self.sphere_subdivisions = check_sphere_subdivisions(sphere_subdivisions)
+        self.uploads = uploads
         self.target = target
         self.scene: viser.SceneApi = target.scene
         self.gui_api: viser.GuiApi = target.gui
