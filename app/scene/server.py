@@ -16,6 +16,8 @@ camera framed. Only the scene's own pages (and clients without an Origin header)
 
 from __future__ import annotations
 
+import ctypes
+import gc
 import socket
 import threading
 from collections.abc import Iterable
@@ -33,6 +35,9 @@ from .session import Session
 from .state import SceneConfig
 
 __all__ = ["SceneServer", "start_scene", "PortBusy", "UPLOADS_TOTAL_BYTES"]
+
+RECLAIM_SECONDS = 2.0
+"""A closed tab's memory is reclaimed this long after it closes, once for all the tabs closed meanwhile."""
 
 UPLOADS_TOTAL_BYTES = 4 * UPLOAD_BYTES
 """Most bytes of uploads under way in the scene for all tabs together (each tab: ``UPLOAD_BYTES``,
@@ -93,6 +98,8 @@ class SceneServer:
         """Of those, the ones that disconnected meanwhile (see :meth:`_register`)."""
         self._lock = threading.Lock()
         self.new_session = threading.Condition(self._lock)
+        self.reclaim = Reclaimer(RECLAIM_SECONDS)
+        """Gives a closed tab's memory back (see :class:`Reclaimer`)."""
         self.uploads = wire.UploadGuard(server, per_client=UPLOAD_BYTES, total=UPLOADS_TOTAL_BYTES)
         """Counts what tabs upload before viser keeps it (installed before any tab's panel exists)."""
         self.shared: Session | None = None
@@ -170,6 +177,7 @@ class SceneServer:
             tab = self._tabs.get(client_id)
         try:
             old.close()
+            self.reclaim.soon()
             # one batch from the reset to the new panel: the page never shows the tab empty (viser then
             # unfolds its own settings in the panel, and a page read in the fold's 200 ms showed them)
             with client.atomic():
@@ -201,6 +209,7 @@ class SceneServer:
                 self.new_session.notify_all()
         if left and session is not self.shared:
             session.close()  # the tab's stored configuration stays what it opened (a reload reopens it)
+            self.reclaim.soon()
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -212,6 +221,7 @@ class SceneServer:
             if tab is not None:
                 self.store.put(tab, s.snapshot())  # a reload of this tab reopens it as it is
             s.close()
+            self.reclaim.soon()
 
     @property
     def port(self) -> int:
@@ -246,8 +256,65 @@ class SceneServer:
             s.close()
         stop_viser(self.server)
         self.uploads.close()
+        self.reclaim.close()
         self.cache.shutdown()
         self.executor.shutdown(wait=False, cancel_futures=True)
+
+
+class Reclaimer:
+    """Gives the memory of closed tabs back to the system, ``delay`` seconds after a tab closes.
+
+    A session is a web of objects that refer to each other (controllers, views, viser's handles
+    and their callbacks): it is freed by Python's cycle collector, whose full passes are rare,
+    and the C library keeps freed heap pages for reuse. Measured with browser tabs opened and
+    closed one after another: the scene's resident memory grew ~0.4 MB per closed tab with no
+    session left alive (``bench/scene_memory.py``). One pass per ``delay`` (a full collection,
+    ~0.1 s with the scene's ~10^5 objects, then glibc's ``malloc_trim``) serves all the tabs
+    that closed meanwhile.
+    """
+
+    def __init__(self, delay: float) -> None:
+        self.delay = delay
+        self.passes = 0
+        """Passes run so far."""
+        self._lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+        self._closed = False
+        self._trim = _malloc_trim()
+
+    def soon(self) -> None:
+        """A tab closed: reclaim within ``delay`` (once for every tab closed meanwhile)."""
+        with self._lock:
+            if self._timer is None and not self._closed:
+                self._timer = threading.Timer(self.delay, self.now)
+                self._timer.daemon = True
+                self._timer.start()
+
+    def now(self) -> None:
+        """Collect the garbage of closed tabs and return free heap pages to the system."""
+        with self._lock:
+            self._timer = None
+        gc.collect()
+        if self._trim is not None:
+            self._trim(0)
+        self.passes += 1
+
+    def close(self) -> None:
+        """No more passes (the server stops)."""
+        with self._lock:
+            self._closed = True
+            if self._timer is not None:
+                self._timer.cancel()
+
+
+def _malloc_trim() -> Any:
+    """The C library's ``malloc_trim`` (glibc: returns free heap pages to the system), or None if it has none."""
+    try:
+        trim = ctypes.CDLL(None).malloc_trim
+    except (AttributeError, OSError):
+        return None
+    trim.argtypes, trim.restype = [ctypes.c_size_t], ctypes.c_int
+    return trim
 
 
 def _port_free(host: str, port: int) -> bool:

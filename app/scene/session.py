@@ -42,6 +42,7 @@ from .panel_view import PanelView, Syncing
 from .picture import Picture, motion_picture, static_picture
 from .shapes import PALETTES, EllipsoidView
 from .state import AppState, SceneConfig
+from .threads import later
 
 __all__ = ["Session"]
 
@@ -344,9 +345,7 @@ class Session:
 
     def _schedule(self, delay: float) -> None:
         if self._timer is None and (self._panels_due or self._plots_due or self._witness_due):
-            self._timer = threading.Timer(delay, self._flush)
-            self._timer.daemon = True
-            self._timer.start()
+            self._timer = later(delay, self._flush)  # on a long-lived thread: a thread each kept FLINT's caches
 
     def _flush(self) -> None:
         """The coalesced part of refresh: witnesses after a drag, the panel, the plot cursor."""
