@@ -404,9 +404,8 @@ class BodiesView:
             previous, self.selected = self.selected, body
             if previous is not None and previous != body:
                 k = m.pair_between(previous, body)
-                if k is not None:
-                    self.open_pair(k)
-                    return k
+                if k is not None and self.open_pair(k) is not None:
+                    return k  # else not opened (a body not drawn): the body is selected, and says why
             self._syncing = True
             try:
                 self.body_text.value = str(body)
@@ -424,8 +423,13 @@ class BodiesView:
         self.selected = body
         partners = m.partners(body)
         why = m.invalid.get(body)
+        undrawn = getattr(m, "undrawn", {}).get(body)
         if why:
             text = f"Body **{body}** is invalid: {html.escape(why)}"
+        elif undrawn:
+            text = (f"Body **{body}** is not drawn: {html.escape(undrawn)}. It touches or overlaps {len(partners)} bodies"
+                    + (f" ({', '.join(str(p) for p in partners[:12])}{' …' if len(partners) > 12 else ''})" if partners else "")
+                    + "; its pairs are listed, not opened in the two-body view.")
         elif partners:
             shown = ", ".join(str(p) for p in partners[:12]) + (" …" if len(partners) > 12 else "")
             if self.moving:
@@ -441,6 +445,9 @@ class BodiesView:
         for h in self.labels:
             h.remove()
         assert self.model is not None
+        if body in getattr(self.model, "undrawn", {}):  # no label on its speck at the origin
+            self.labels = []
+            return
         pos = self.model.positions[body] + np.array([0.0, 0.0, self.model.scales[body].max() if self.model.dim == 3 else 0.0])
         self.labels = [
             self.scene.add_label("/selected", f"body {body}", position=tuple(float(v) for v in pos), anchor="bottom-center")
@@ -534,8 +541,15 @@ class BodiesView:
         """
         if self.timeline is not None:
             return self.timeline.open_event(k)
-        assert self.model is not None
-        cfg, note = self.model.pair_config(k)
+        m = self.model
+        assert m is not None
+        i, j = int(m.result.i[k]), int(m.result.j[k])
+        gone = next((b for b in (i, j) if b in m.undrawn), None)
+        if gone is not None:  # its floats would overflow the two-body view's drawing and camera
+            self.body_md.content = (f"Pair {i} – {j} is not opened: body **{gone}** is not drawn "
+                                    f"({html.escape(m.undrawn[gone])}).")
+            return None
+        cfg, note = m.pair_config(k)
         return self._open_two_body(k, cfg, note)
 
     def _open_two_body(self, k: int, cfg: Any, note: str, *, motion: Any = None, target: dict[str, Any] | None = None) -> Any:
