@@ -42,7 +42,7 @@ from .panel_view import PanelView, Syncing
 from .picture import Picture, motion_picture, static_picture
 from .shapes import PALETTES, EllipsoidView
 from .state import AppState, SceneConfig
-from .threads import later
+from .threads import later, soon
 
 __all__ = ["Session"]
 
@@ -233,7 +233,7 @@ class Session:
         self.load(static)
         self.ready.clear()
 
-        def read() -> None:  # in a worker process, off the thread that called
+        def read() -> None:  # in a worker process, waited for on the scene's pool (off the thread that called)
             try:
                 model = self.cache.read_typed(motion)
             except MotionError as e:
@@ -242,7 +242,7 @@ class Session:
                 return
             self.motion_ctl.analyse_pending(model, t=config.t, event=config.event)
 
-        threading.Thread(target=read, name="read-config", daemon=True).start()
+        soon(read)
 
     def snapshot(self) -> SceneConfig:
         """What the tab shows, as a configuration (kept for a reload; the file to download)."""

@@ -6,7 +6,8 @@ multiplying a few large fmpz, left +113 MB resident; the same work on one thread
 scene deferred its panel refreshes with a ``threading.Timer`` each, a new thread per refresh: a
 tab opened and closed in a browser left ~0.5 MB, and a drag more, every second. :func:`later`
 keeps the timer's cancel but hands the call to :func:`pool`'s threads, which live on: their
-caches are reused, so the memory of the calls is bounded by the pool's size.
+caches are reused, so the memory of the calls is bounded by the pool's size; :func:`soon` hands
+over a call to make now.
 """
 
 from __future__ import annotations
@@ -17,10 +18,11 @@ from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
-__all__ = ["later", "pool", "POOL_THREADS"]
+__all__ = ["later", "soon", "pool", "POOL_THREADS"]
 
-POOL_THREADS = 4
-"""Threads running the deferred calls of every tab (their work holds the GIL: more would not help)."""
+POOL_THREADS = 8
+"""Threads running the deferred calls of every tab: their work holds the GIL, but a call may also
+wait (a tab's typed motion read in a worker process, :meth:`app.scene.session.Session.load_untrusted`)."""
 
 _POOL = ThreadPoolExecutor(max_workers=POOL_THREADS, thread_name_prefix="scene-later")
 """Its threads start on first use and live on."""
@@ -40,6 +42,11 @@ def later(delay: float, fn: Callable[..., Any], *args: Any) -> threading.Timer:
     timer.daemon = True
     timer.start()
     return timer
+
+
+def soon(fn: Callable[..., Any], *args: Any) -> None:
+    """Call ``fn(*args)`` on :func:`pool` now, off the calling thread (an error is printed)."""
+    _hand_over(fn, args)
 
 
 def _hand_over(fn: Callable[..., Any], args: tuple[Any, ...]) -> None:
