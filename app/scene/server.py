@@ -223,6 +223,19 @@ class SceneServer:
             s.close()
             self.reclaim.soon()
 
+    def registries(self) -> dict[str, int]:
+        """Sizes of every record the server keeps per connected tab: all 0 once every tab has left.
+
+        The sessions and tab addresses, tabs being built or left meanwhile, the upload guard's
+        records and viser's own (:func:`app.scene.wire.client_records`). The tabs' stored
+        configurations (a reload reopens them) are not per connection: :class:`TabStore` keeps
+        the newest ``size``.
+        """
+        with self._lock:
+            own = {"sessions": len(self.sessions), "tab addresses": len(self._tabs), "building": len(self._building),
+                   "left while building": len(self._left)}
+        return {**own, **{f"uploads: {k}": v for k, v in self.uploads.registries().items()}, **wire.client_records(self.server)}
+
     @property
     def port(self) -> int:
         """The port the scene listens on."""

@@ -13,7 +13,8 @@ This is the only module of the scene that touches viser's private attributes: al
 pose unless the new one is sent explicitly, even when it equals the new handle's default) and
 :class:`MessageCounter` (the benchmark's count of queued websocket messages) and
 :func:`handshake_path` (the page path a tab connected from: its tab address) and
-:class:`UploadGuard` (every byte a client uploads is counted before viser keeps it).
+:func:`client_records` (viser's records of connected clients) and :class:`UploadGuard` (every
+byte a client uploads is counted before viser keeps it).
 """
 
 from __future__ import annotations
@@ -21,13 +22,14 @@ from __future__ import annotations
 import asyncio
 import threading
 import time
+import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-__all__ = ["set_uplot_data", "set_position", "set_wxyz", "force_pose", "MessageCounter", "handshake_path",
+__all__ = ["set_uplot_data", "set_position", "set_wxyz", "force_pose", "MessageCounter", "handshake_path", "client_records",
            "UploadGuard", "Refusal", "too_large", "MAX_MESSAGE_BYTES", "MIN_PART_BYTES"]
 
 
@@ -106,6 +108,23 @@ class MessageCounter:
             orig(message)
 
         iface.queue_message = counting
+
+
+def client_records(server: Any) -> dict[str, int]:
+    """Sizes of viser's records of connected clients (all 0 once every tab has left).
+
+    Its clients, their message states and connections, and the broadcast buffer's cursors (one
+    per client reading it); -1 for a record this viser does not have.
+    """
+    ws = getattr(server, "_websock_server", None)
+    buffer = getattr(ws, "_broadcast_buffer", None)
+    found = {
+        "viser clients": getattr(server, "_connected_clients", None),
+        "viser client states": getattr(ws, "_client_state_from_id", None),
+        "viser connections": getattr(ws, "_live_connections", None),
+        "viser broadcast cursors": getattr(buffer, "generator_cursors", None),
+    }
+    return {k: -1 if v is None else len(v) for k, v in found.items()}
 
 
 def handshake_path(server: Any, client: Any) -> str | None:
@@ -254,17 +273,20 @@ class UploadGuard:
         self._acks: dict[int, tuple[float, float]] = {}
         """Per client: refusal acknowledgements it may still get, and when that was counted."""
         self._tell = ThreadPoolExecutor(max_workers=1, thread_name_prefix="upload-refused")
+        self._installed: weakref.WeakSet[Any] = weakref.WeakSet()
         self.install(server.gui)
         server.on_client_connect(self._on_connect)
         server.on_client_disconnect(self._on_disconnect)
 
     # ---------------------------------------------------------------- set-up
     def install(self, gui: Any) -> None:
-        """Replace viser's upload handlers of ``gui`` (a server's or a tab's GUI) by the guard's."""
+        """Replace viser's upload handlers of ``gui`` (a server's or a tab's GUI) by the guard's (once)."""
         from functools import partial
 
         from viser import _messages
 
+        if gui in self._installed:
+            return
         try:
             iface = gui._websock_interface
             start, part = gui._handle_file_transfer_start, gui._handle_file_transfer_part
@@ -276,6 +298,7 @@ class UploadGuard:
             raise RuntimeError(f"viser's upload handlers moved ({e!r}): the scene's upload limits cannot be installed") from None
         iface.register_handler(_messages.FileTransferStartUpload, partial(self._start, gui, start))
         iface.register_handler(_messages.FileTransferPart, partial(self._part, gui, part))
+        self._installed.add(gui)
 
     async def _on_connect(self, client: Any) -> None:  # async: on the event loop, before the tab's panel exists
         self.install(client.gui)
