@@ -7,6 +7,8 @@ msgpack protocol (:class:`RawTab`; viser's ``_messages`` classes serialise thems
 * **hostile upload**: a client declares a file of 10^12 bytes in 10^6 parts to the upload button,
   then sends 50 parts of 30 MB; the server's resident memory before, at its peak (sampled every
   20 ms) and after the client has left;
+* **a full budget**: a client declares 64 MiB (the button's limit) and sends all its parts of
+  512 KiB but the last, then leaves: the most one client may make the server keep;
 * **tab cycles**: tabs that open (their view built: the server has framed their camera), stay
   ``--hold`` seconds and close, one after another; the server's resident memory every ``--every``
   tabs, for the bodies view and for the two-body view (``--preset example-29``).
@@ -33,7 +35,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["RawTab", "SceneProcess", "camera_message", "free_port", "rss_mb", "hostile_upload", "tab_cycles", "write_small_bodies"]
+__all__ = ["RawTab", "SceneProcess", "camera_message", "free_port", "rss_mb", "hostile_upload", "budget_upload", "tab_cycles",
+           "write_small_bodies"]
 
 ROOT = Path(__file__).resolve().parents[1]
 TIMEOUT = 120.0
@@ -321,6 +324,37 @@ def hostile_upload(port: int, sample: Callable[[], float], *, parts: int = 50, p
     return {"before": before, "peak": peak.peak, "after": after, "sent": sent, "message": message, "close_code": code}
 
 
+def budget_upload(port: int, sample: Callable[[], float], *, label: str = "Open a file of bodies",
+                  size: int = 64 << 20, part: int = 512 * 1024) -> dict[str, Any]:
+    """One client declares ``size`` bytes (the button's limit) and sends every part but the last, as
+    viser's client does, then leaves: the most a client may make the server keep.
+
+    Returns:
+        ``before``, ``peak``, ``after`` (the server's memory, MB: ``sample()``) and ``sent`` (parts).
+    """
+    from viser import _messages
+
+    with RawTab(port) as warm:
+        warm.built()
+    before = settle(sample, rounds=3)
+    chunk = b"\1" * part
+    count = -(-size // part)
+    with Peak(sample) as peak:
+        with RawTab(port) as tab:
+            button = tab.upload_button(label)
+            tab.built()
+            transfer = secrets.token_hex(8)
+            tab.send(_messages.FileTransferStartUpload(source_component_uuid=button, transfer_uuid=transfer, filename="full.csv",
+                                                       mime_type="text/csv", part_count=count, size_bytes=size))
+            for k in range(count - 1):
+                tab.send(_messages.FileTransferPart(source_component_uuid=button, transfer_uuid=transfer, part_index=k,
+                                                    content=chunk))
+            tab.ws.ping().wait(TIMEOUT)  # answered once the server has read every part before it
+            time.sleep(0.5)
+    after = settle(sample)
+    return {"before": before, "peak": peak.peak, "after": after, "sent": count - 1}
+
+
 def tab_cycles(port: int, sample: Callable[[], float], n: int, every: int = 50, *, hold: float = 0.0,
                paths: Callable[[int], str] = lambda k: f"/s/tab{k:08d}/") -> Iterator[tuple[int, float]]:
     """Open and close ``n`` tabs one after another: (tabs so far, memory) every ``every``.
@@ -365,10 +399,16 @@ def main(argv: list[str] | None = None) -> int:
         bodies = write_small_bodies(Path(tmp) / "bodies.csv")
         with SceneProcess("--bodies", str(bodies)) as server:
             r = hostile_upload(server.port, server.rss_mb)
+            b = budget_upload(server.port, server.rss_mb)
         print("Hostile upload: FileTransferStartUpload(size_bytes=10^12, part_count=10^6), then 50 parts of 30 MB")
         print(_table([(f"{r['before']:.0f}", f"{r['peak']:.0f}", f"{r['after']:.0f}", f"{r['peak'] - r['before']:+.0f}",
                        f"{r['after'] - r['before']:+.0f}", str(r["sent"]), str(r["close_code"]), "yes" if r["message"] else "no")],
                      ("RSS before MB", "peak MB", "after MB", "peak-before", "after-before", "parts taken", "close code", "panel says limit")))
+        print()
+        print("The most a client may make the server keep: 64 MiB declared, 127 of its 128 parts of 512 KiB sent, then it leaves")
+        print(_table([(f"{b['before']:.0f}", f"{b['peak']:.0f}", f"{b['after']:.0f}", f"{b['peak'] - b['before']:+.0f}",
+                       f"{b['after'] - b['before']:+.0f}", str(b["sent"]))],
+                     ("RSS before MB", "peak MB", "after MB", "peak-before", "after-before", "parts sent")))
         print()
         for what, extra in (("bodies view", ("--bodies", str(bodies))), ("two-body view", ("--preset", "example-29"))):
             with SceneProcess(*extra) as server:

@@ -30,7 +30,8 @@ from app.scene.session import Session
 from app.scene.state import SceneConfig
 from app.scene.threads import POOL_THREADS, later, pool, soon
 from app.scene.wire import MAX_MESSAGE_BYTES
-from bench.scene_memory import RawTab, SceneProcess, hostile_upload, rss_mb, write_small_bodies
+from bench import scene_memory as M
+from bench.scene_memory import RawTab, SceneProcess, rss_mb
 
 BODIES_BUTTON = "Open a file of bodies"
 CONFIG_BUTTON = "Open a configuration (JSON)"
@@ -41,7 +42,7 @@ pytestmark = pytest.mark.filterwarnings("ignore:Queued a .* on a closed connecti
 
 @pytest.fixture(scope="module")
 def small_bodies(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return write_small_bodies(tmp_path_factory.mktemp("bodies") / "four.csv")
+    return M.write_small_bodies(tmp_path_factory.mktemp("bodies") / "four.csv")
 
 
 @pytest.fixture
@@ -78,13 +79,18 @@ def viser_uploads(client_gui) -> dict:
 # ------------------------------------------------------------------------------------ uploads
 def test_a_hostile_upload_moves_the_server_by_less_than_the_limit_and_the_memory_returns(small_bodies):
     """The issue's attack on the real server (``python -m app serve --bodies``): 10^12 bytes in 10^6
-    parts declared to the upload button, then parts of 30 MB. Was: 150 -> 1,720 MB, 1,106 MB kept."""
+    parts declared to the upload button, then parts of 30 MB. Was: 150 -> 1,720 MB, 1,106 MB kept.
+    Then the most a client may make it keep: the limit's 64 MiB in parts of 512 KiB, all but the
+    last, until it leaves (its parts, and ~16 MiB of messages read ahead)."""
     with SceneProcess("--bodies", str(small_bodies)) as server:
-        r = hostile_upload(server.port, server.rss_mb, parts=5)
+        r = M.hostile_upload(server.port, server.rss_mb, parts=5)
+        full = M.budget_upload(server.port, server.rss_mb)
     assert r["message"] is not None and "the limit is 67,108,864 bytes" in r["message"], r
     assert r["close_code"] == 1009, r  # the 30 MB message is over the message limit: the connection closes
     assert r["peak"] - r["before"] < UPLOAD_BYTES / MIB, r
     assert r["after"] - r["before"] < 16, r
+    assert full["peak"] - full["before"] < UPLOAD_BYTES / MIB + 32, full
+    assert full["after"] - full["before"] < 16, full
 
 
 def test_one_message_is_at_most_a_mebibyte(bodies_scene):
@@ -250,7 +256,7 @@ def test_tabs_opened_and_closed_leave_nothing(monkeypatch):
         assert growth < GROWTH_MB, f"{growth:.1f} MB over {TABS} tabs"
         gc.collect()
         assert len(sessions) == 0
-        assert threading.active_count() <= threads + 2  # no thread per tab left behind
+        assert threading.active_count() <= threads + POOL_THREADS  # no thread per tab left behind
         assert set(scene.registries().values()) == {0}, scene.registries()
     finally:
         scene.stop()
