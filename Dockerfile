@@ -60,7 +60,7 @@ COPY --from=build /wheels /wheels
 RUN pip install --no-deps /wheels/*.whl \
     && rm -rf /wheels \
     && python -c "from core.fixed import compiled; assert compiled.available(), compiled.status(); print(compiled.status())" \
-    && python -c "from core.moving import sweep_filter as s; assert s._library() is not None, s.filter_status(); print(s.filter_status())" \
+    && python -c "from core.moving import sweep_filter as s; assert s.available(), s.filter_status(); print(s.filter_status())" \
     && useradd --create-home --uid 10001 --shell /usr/sbin/nologin app
 
 USER app

@@ -116,8 +116,8 @@ setup(
             define_macros=_MACROS,
             libraries=[] if sys.platform == "win32" else ["m"],
         ),
-        # the first-contact filter of moving bodies (core/moving/sweep_filter.py calls it through
-        # ctypes); the same floating-point flags, for the same reason
+        # the first-contact filter of moving bodies (its kernel and the module around it, which
+        # core/moving/sweep_filter.py calls); the same floating-point flags, for the same reason
         Extension(
             "core.moving._sweep_filter",
             sources=["core/moving/_sweep_filter.c", "core/moving/_sweep_module.c"],

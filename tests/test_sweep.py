@@ -268,8 +268,10 @@ def test_periodic_box_limits():
     c0 = np.array([[0.5, 5, 5], [9.5, 5, 5]])
     with pytest.raises(ValueError, match="too large for the periodic box"):
         sweep_contacts(c0, c0 + [[0, 0, 0], [0, 4, 0]], [[1.5, 1, 1]] * 2, box=(10, 10, 10))  # 1.5 + (1.5 + 2) >= 10 / 2
-    with pytest.raises(ValueError, match="more than one box side"):
-        sweep_contacts([[0.5, 5, 5], [25, 5, 5]], [[0.5, 5, 5], [25, 5, 5]], [[1, 1, 1]] * 2, box=(10, 10, 10))
+    # bodies anywhere (issue 54): 25 is 5 two boxes on, 4.5 from 0.5; 21 is 1 two boxes on, 0.5 away
+    assert len(sweep_contacts([[0.5, 5, 5], [25, 5, 5]], [[0.5, 5, 5], [25, 5, 5]], [[1, 1, 1]] * 2, box=(10, 10, 10))) == 0
+    far = sweep_contacts([[0.5, 5, 5], [21, 5, 5]], [[0.5, 5, 5], [21, 5, 5]], [[1, 1, 1]] * 2, box=(10, 10, 10))
+    assert far.image.tolist() == [[-2, 0, 0]] and far.relation.tolist() == [Relation.OVERLAP]
     res = sweep_contacts(c0, c0, [[0.5, 0.5, 0.5]] * 2, box=(10, 10, 10))  # 1 apart across the face
     assert len(res) == 1 and res.relation[0] == Relation.TANGENT and res.image[0].tolist() == [-1, 0, 0]
 

@@ -101,7 +101,7 @@ def parse_box(text: str, dim: int) -> tuple[float, ...] | None:
     return sides
 
 
-def image_text(image: np.ndarray | None, k: int, box: np.ndarray | None) -> str:
+def image_text(image: np.ndarray | None, k: int, box: Any) -> str:
     """" [+x -y]": the image of pair k's second body ("" if none), by box vectors in a tilted box.
 
     In a tilted box the image counts box vectors, not axes: " [+a1 -a2]" (j moved by a1 - a2).
@@ -111,11 +111,13 @@ def image_text(image: np.ndarray | None, k: int, box: np.ndarray | None) -> str:
         ' [+x -y]'
         >>> image_text(np.array([[0, -1, 0]]), 0, np.array([8.0, 8.0, 8.0, 0.5, 0.0, 0.0]))
         ' [-a2]'
+        >>> image_text(np.array([[2, 0, -1]]), 0, None)
+        ' [+2x -z]'
     """
     if image is None or not image[k].any():
         return ""
     names = ("a1", "a2", "a3") if is_tilted(box) else ("x", "y", "z")
-    return " [" + " ".join(f"{'+' if v > 0 else '-'}{names[a]}" for a, v in enumerate(image[k]) if v) + "]"
+    return " [" + " ".join(f"{'+' if v > 0 else '-'}{abs(int(v)) if abs(v) > 1 else ''}{names[a]}" for a, v in enumerate(image[k]) if v) + "]"
 
 
 def box_phrase(box: tuple[float, ...] | None, dim: int) -> str:

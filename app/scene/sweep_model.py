@@ -43,7 +43,6 @@ from flint import fmpq
 from core import Certifier, Relation, analyse, classify, sweep_contacts
 from core.algebra.algebraic import RealAlgebraic
 from core.algebra.closedform import closed_form
-from core.bodies.periodic import lattice_shifts
 from core.bodies.sweep_result import SweepContacts
 from core.moving.motions import Motion, motion_to_dict
 from core.moving.signs import Signs, decide_with
@@ -463,7 +462,7 @@ class SweepModel(PairList):
         """The lattice vector v(image) the sweep moves a body's path by (None: no image, or open space)."""
         if not any(image) or self.result.box is None:
             return None
-        return lattice_shifts(self.result.box, np.array([image]))[0]
+        return self.result.box.shifts([image])[0]
 
     # ------------------------------------------------------------------ the two-body view
     def pair_config(self, k: int) -> tuple[SceneConfig, str]:

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 from flint import fmpq, fmpq_mat
 
+from ..filtered import predicate
 from ..fixed.compiled import get_threads
 from ..fixed.filters import centres, log2_size, prepared, space_scaled, times_power_of_two
 from ..shapes.numbers import to_float
@@ -66,6 +67,10 @@ _SHRINK = (1.0 - 2.0**-10, 1.0 - 2.0**-4, 0.5)
 the others rescue ill-conditioned bodies (radius + 3 %, or up to sqrt(2) larger)."""
 _CHUNK = 8192
 """Bodies per vectorised chunk: the (chunk, n, n) temporaries stay in cache (fastest measured)."""
+
+_BOUNDS = predicate("bounding_sphere")
+"""The filtered predicate of the spheres: float certificates, exact arithmetic for the rest
+(its counters, per body: :func:`core.filter_stats`)."""
 
 
 @dataclass
@@ -151,6 +156,32 @@ def bounding_spheres(Q: np.ndarray) -> BoundingSpheres:
         {0: 'body 0 has an empty interior: no real points (det > 0), not an ellipse'}
     """
     Q = np.asarray(Q, dtype=np.float64)
+    N = Q.shape[0]
+    invalid: dict[int, str] = {}
+
+    def exact(Q: np.ndarray, spheres: tuple[np.ndarray, np.ndarray], rest: np.ndarray) -> np.ndarray | None:
+        """The exact stage: the bodies the floats left, one by one (an invalid one is named)."""
+        centers, radii = spheres
+        failed = np.zeros(rest.size, dtype=bool)
+        for k, b in enumerate(rest.tolist()):
+            try:
+                centers[b], radii[b] = _exact_sphere(Q[b], f"body {b}")
+            except ValueError as e:
+                invalid[b] = str(e)
+                failed[k] = True
+        return failed if invalid else None
+
+    (centers, radii), _, rest = _BOUNDS.run(Q, N, _float_stage, exact)
+    return BoundingSpheres(centers, radii, invalid, exact=int(rest.size) - len(invalid))
+
+
+def _float_stage(Q: np.ndarray) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray | None]:
+    """The float stage of :func:`bounding_spheres`: ((centres, radii), mask of the bodies without a sphere).
+
+    The fast closed forms by chunks (threads), then the bodies far from size 1 in their own
+    units, then LAPACK's estimates for the ill-conditioned and loose ones: every sphere
+    certified in floats; the radius stays NaN where none is.
+    """
     N, n = Q.shape[0], Q.shape[-1]
     d = n - 1
     centers = np.full((N, d), np.nan)
@@ -190,13 +221,11 @@ def bounding_spheres(Q: np.ndarray) -> BoundingSpheres:
         radii[rest[better]] = rho[better]
         rest = in_own_units(rest, careful=True)
     rest = rest[~np.isfinite(radii[rest])]
-    invalid: dict[int, str] = {}
-    for k in rest.tolist():
-        try:
-            centers[k], radii[k] = _exact_sphere(Q[k], f"body {k}")
-        except ValueError as e:
-            invalid[k] = str(e)
-    return BoundingSpheres(centers, radii, invalid, exact=len(rest) - len(invalid))
+    if not rest.size:
+        return (centers, radii), None
+    unsure = np.zeros(N, dtype=bool)
+    unsure[rest] = True
+    return (centers, radii), unsure
 
 
 # -------------------------------------------------------------------------------------------

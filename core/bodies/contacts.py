@@ -6,6 +6,7 @@ from typing import Any
 
 from ..fixed.lazy import is_dask_array
 from ..options import Method, OnInvalid
+from .bodies import unpack
 from .narrowphase import CHUNK_PAIRS
 from .result import Contacts
 from .search import Progress, search
@@ -33,9 +34,10 @@ def contacts(
 
     Args:
         Q: (N, 4, 4) ellipsoids or (N, 3, 3) ellipses (float arrays; e.g. from
-            :func:`core.bodies_from_axes`), or a ``dask.array`` of them (then the search runs on
-            the Dask cluster, see ``scheduler``).
-        box: periodic box sides (Lx, Ly[, Lz]), a tilted box in HOOMD's convention
+            :func:`core.bodies_from_axes`), a ``dask.array`` of them (then the search runs on
+            the Dask cluster, see ``scheduler``), or :class:`core.Bodies` (their matrices, their
+            box unless ``box`` is given, and their ids: the result carries them).
+        box: a :class:`core.Box`, periodic box sides (Lx, Ly[, Lz]), a tilted box in HOOMD's convention
             (Lx, Ly, Lz, xy, xz, yz) (2D: (Lx, Ly, xy)), or None for open space. Minimum image
             convention: pairs across faces count (body i with the nearest image of body j, its
             exact translate by the float lattice vector v(k): :mod:`core.bodies.periodic`). The
@@ -90,15 +92,19 @@ def contacts(
         ...
         ValueError: body 2: centre x = 2.5 is more than one box side (Lx = 1.2) from body 0's (x = 0): the centres must lie in one box (wrap them into it first, e.g. x mod Lx)
     """
+    Q, box, ids = unpack(Q, box)
     if scheduler is not None or is_dask_array(Q):
         from .distributed import contacts_distributed
 
-        return contacts_distributed(
+        out = contacts_distributed(
             Q, box=box, method=method, on_invalid=on_invalid, scheduler=scheduler, partitions=partitions, chunk=chunk,
             progress=progress, max_pairs=max_pairs,
         )
-    return search(
-        Q, box=box, method=method, on_invalid=on_invalid, chunk=chunk,
-        progress=None if progress is True else progress or None, max_pairs=max_pairs,
-    )
+    else:
+        out = search(
+            Q, box=box, method=method, on_invalid=on_invalid, chunk=chunk,
+            progress=None if progress is True else progress or None, max_pairs=max_pairs,
+        )
+    out.ids = ids
+    return out
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -40,7 +41,9 @@ from ..fixed.classify import Certifier, classify_detailed
 from ..fixed.compiled import warm_up
 from ..options import check_options
 from ..relation import Relation
+from .bodies import unpack
 from .bounds import bounding_spheres
+from .box import Box
 from .periodic import (
     box_vectors_exact,
     cell_heights,
@@ -50,7 +53,6 @@ from .periodic import (
     fractional_point,
     is_tilted,
     lattice_shifts,
-    read_box,
     shift_error,
 )
 from .search import read_bodies
@@ -95,8 +97,8 @@ class IndexPairs:
     """int8 :class:`~core.Certifier` code of each pair (float filter or exact)."""
     image: np.ndarray | None = None
     """(M, d) int8 lattice image k of j (periodic box), else None."""
-    box: np.ndarray | None = None
-    """The index's box (:func:`core.bodies.periodic.read_box`), or None."""
+    box: Box | None = None
+    """The index's box (:class:`core.Box`), or None."""
     invalid: dict[int, str] = field(default_factory=dict)
     """New body -> why it is not an ellipse/ellipsoid (``on_invalid="mark"``)."""
     counts: dict[str, int] = field(default_factory=dict)
@@ -110,7 +112,7 @@ class IndexPairs:
         """(M, d) float64 lattice vectors v(k) of the images (None in open space)."""
         if self.image is None or self.box is None:
             return None
-        return lattice_shifts(self.box, self.image)
+        return self.box.shifts(self.image)
 
     def any(self) -> np.ndarray:
         """(number of new bodies,) bool: whether each new body touches or overlaps an indexed one."""
@@ -124,7 +126,8 @@ class BodyIndex:
 
     Args:
         Q: (N, 4, 4) ellipsoids or (N, 3, 3) ellipses (float matrices, e.g. from
-            :func:`core.bodies_from_axes`).
+            :func:`core.bodies_from_axes`), or :class:`core.Bodies` (their matrices, and their
+            box unless ``box`` is given).
         box: None (open space), periodic box sides, or a tilted box (HOOMD's
             ``(Lx, Ly, Lz, xy, xz, yz)``; 2D ``(Lx, Ly, xy)``): as :func:`core.contacts`.
         method: "adaptive" (default), "float" (may report UNDECIDED) or "exact".
@@ -136,7 +139,7 @@ class BodyIndex:
 
     The grid is sized when the index is built (its region, its largest body): bodies that later
     move far outside that region, or grow much larger, keep every answer right but make queries
-    slower; ``BodyIndex(index.Q, box)`` builds a fresh one. The indexed bodies may stand anywhere
+    slower; ``BodyIndex(index.Q, box=index.box)`` builds a fresh one. The indexed bodies may stand anywhere
     (also outside the box: the image of a pair is found by rounding fractional coordinates).
 
     Examples:
@@ -150,8 +153,14 @@ class BodyIndex:
         ['tangent', 'overlap']
     """
 
-    def __init__(self, Q: Any, box: Any = None, *, method: str = "adaptive", on_invalid: str = "raise") -> None:
+    def __init__(self, Q: Any, *args: Any, box: Any = None, method: str = "adaptive", on_invalid: str = "raise") -> None:
+        if args:  # BodyIndex(Q, box): the box is keyword-only, as in contacts and sweep_contacts
+            if len(args) > 1 or box is not None:
+                raise TypeError("BodyIndex(Q, *, box=None, method=..., on_invalid=...): give the box as box=")
+            warnings.warn("BodyIndex(Q, box): pass the box as a keyword, BodyIndex(Q, box=box)", DeprecationWarning, stacklevel=2)
+            box = args[0]
         check_options(method, on_invalid)
+        Q, box, _ = unpack(Q, box)
         warm_up(wait=False)
         self.method = method
         self.on_invalid = on_invalid
@@ -159,14 +168,16 @@ class BodyIndex:
         self._Q = np.array(Q, dtype=np.float64, order="C")
         self.n = int(self._Q.shape[-1])
         self.d = self.n - 1
-        self.box = read_box(box, self.d)
+        self.box: Box | None = Box.from_any(box, self.d)
+        """The periodic box (:class:`core.Box`), or None (open space)."""
+        self._L = None if self.box is None else self.box.array
         spheres = bounding_spheres(self._Q)
         if spheres.invalid and on_invalid == "raise":
             raise ValueError(next(iter(spheres.invalid.values())))
         self.invalid: dict[int, str] = dict(spheres.invalid)
         """Indexed body -> why it is no ellipse/ellipsoid (left out of the index)."""
-        if self.box is not None:  # the size rule; the centres may lie anywhere (images by rounding)
-            check_sizes(spheres.radii, self.box, self.d)
+        if self._L is not None:  # the size rule; the centres may lie anywhere (images by rounding)
+            check_sizes(spheres.radii, self._L, self.d)
         self._centers = spheres.centers
         self._radii = spheres.radii
         valid = np.isfinite(self._radii)
@@ -181,11 +192,11 @@ class BodyIndex:
         valid = np.flatnonzero(np.isfinite(self._radii))
         N = max(valid.size, 1)
         width = 2 * max(self._big, 1e-300) * _SLACK
-        if self.box is not None:
-            self._vectors = box_vectors_exact(self.box, d)
-            self._tilted = is_tilted(self.box)
-            self._heights = cell_heights(self.box, d)
-            self._limit = (float(np.min(self._heights)) / 2 - shift_error(self.box, d)) * _MARGIN
+        if self._L is not None:
+            self._vectors = box_vectors_exact(self._L, d)
+            self._tilted = is_tilted(self._L)
+            self._heights = cell_heights(self._L, d)
+            self._limit = (float(np.min(self._heights)) / 2 - shift_error(self._L, d)) * _MARGIN
             """A new body's radius plus the largest indexed one must stay below this (the size rule)."""
             n = np.clip(np.floor(self._heights / width), 1, _MAX_PERIODIC_CELLS).astype(np.int64)
             while float(np.prod(n.astype(float))) > _MAX_CELLS_PER_BODY * N + 27:
@@ -240,8 +251,8 @@ class BodyIndex:
         floor((c - origin) / h), clamped to the grid without its margin (both roundings are
         relative 2^-53 of at most 2^30 cells). Either way each coordinate is off by < 2^-20.
         """
-        if self.box is not None:
-            f, eps = fractional(centers, self.box)
+        if self._L is not None:
+            f, eps = fractional(centers, self._L)
             if not ((eps < 2.0**-30).all() and (np.abs(f) <= _FAR).all()):
                 raise ValueError(_FAR_MESSAGE)
             return np.floor(f * self._n).astype(np.int64) % self._n, f
@@ -251,7 +262,7 @@ class BodyIndex:
     def _place_one(self, c: list[float]) -> tuple[list[int], list[float] | None]:
         """:meth:`_place` of one centre in Python floats (the same operations)."""
         d = self.d
-        if self.box is not None:
+        if self._L is not None:
             f, eps = fractional_point(c, self._vectors)
             if not all(e < 2.0**-30 and abs(x) <= _FAR for x, e in zip(f, eps, strict=True)):
                 raise ValueError(_FAR_MESSAGE)
@@ -266,7 +277,7 @@ class BodyIndex:
             per_axis: list[Sequence[int]] = []
             for a in range(self.d):
                 n = int(self._n[a])
-                if self.box is not None and 2 * m[a] + 1 >= n:
+                if self._L is not None and 2 * m[a] + 1 >= n:
                     per_axis.append(range(n))  # every cell of the axis, once
                 else:
                     per_axis.append(range(-m[a], m[a] + 1))
@@ -344,7 +355,7 @@ class BodyIndex:
         certify, or one too large for the box): the general path then answers (or raises).
         """
         out = _one_sphere(Qn[0].tolist(), self.d)
-        if out is None or (self.box is not None and not out[1] + self._big < self._limit):
+        if out is None or (self._L is not None and not out[1] + self._big < self._limit):
             return None
         bj, image = self._near_one(out[0], out[1], exclude)
         qi = np.zeros(bj.size, dtype=np.int64)
@@ -412,7 +423,7 @@ class BodyIndex:
     def _extent(self, centers: np.ndarray) -> float:
         """Largest |centre coordinate| (plus 2 x the box's largest number): scales the sphere test's padding."""
         big = float(np.max(np.abs(centers))) if centers.size else 0.0
-        return big + (2 * float(np.abs(self.box).max()) if self.box is not None else 0.0)
+        return big + (2 * float(np.abs(self._L).max()) if self._L is not None else 0.0)
 
     def _remove(self, b: int) -> None:
         c = int(self._body_cell[b])
@@ -461,7 +472,7 @@ class BodyIndex:
                 if self.on_invalid == "raise":
                     raise ValueError(msg)
                 invalid[row] = msg
-        if self.box is not None:
+        if self._L is not None:
             ok = np.isfinite(radii)
             too = np.flatnonzero(ok & ~(radii + max(self._big, 0.0) < self._limit))
             if too.size:
@@ -486,14 +497,14 @@ class BodyIndex:
         d = self.d
         ok = np.flatnonzero(np.isfinite(radii))
         if not ok.size or not self._live:
-            return np.zeros(0, np.int64), np.zeros(0, np.int64), None if self.box is None else np.zeros((0, d), np.int8)
+            return np.zeros(0, np.int64), np.zeros(0, np.int64), None if self._L is None else np.zeros((0, d), np.int8)
         coords, frac = self._place(centers[ok])
         reach = radii[ok] + self._big
         m = np.ceil(reach[:, None] / self._cell * (1 + 2.0**-40) + _CELL_ERROR).astype(np.int64)
         if ok.size == 1:  # one new body: a few small operations
             offsets = self._offsets(tuple(m[0].tolist()))
             nb = coords[0] + offsets
-            if self.box is not None:
+            if self._L is not None:
                 nb %= self._n
             elif m.max() > 1:  # beyond the margin: leave out cells off the grid
                 nb = nb[((nb >= 0) & (nb < self._n)).all(axis=1)]
@@ -522,17 +533,17 @@ class BodyIndex:
             qi, body = qi[keep], body[keep]
         diff = self._centers[body] - centers[qi]
         k = None
-        if self.box is not None:
-            if is_tilted(self.box):
+        if self._L is not None:
+            if is_tilted(self._L):
                 assert frac is not None and self._frac is not None
                 fq = np.empty((centers.shape[0], d))
                 fq[ok] = frac
                 k = -np.rint(self._frac[body] - fq[qi])
             else:  # fractional coordinates of the difference: as the open broad phase does
-                k = -np.rint(diff / self.box)
+                k = -np.rint(diff / self._L)
             moved = np.flatnonzero(k.any(axis=1))
             if moved.size:
-                diff[moved] += lattice_shifts(self.box, self._images(k[moved]))
+                diff[moved] += lattice_shifts(self._L, self._images(k[moved]))
         scale = float(np.max(np.abs(centers[ok]))) + self._span + float(np.max(reach))
         r = radii[qi] + self._radii[body] + _PAD * scale
         with np.errstate(over="ignore"):  # squares past 1e308 (bodies near 1e154): inf, and the test stays conservative
@@ -548,7 +559,7 @@ class BodyIndex:
         m = tuple(math.ceil(reach / self._cell_l[a] * (1 + 2.0**-40) + _CELL_ERROR) for a in range(d))
         u, f = self._place_one(c)
         offsets = self._offsets(m)
-        if self.box is not None:
+        if self._L is not None:
             cells = ((np.array(u) + offsets) % self._n) @ self._strides
         elif max(m) == 1:  # within the margin
             cells = sum(u[a] * self._strides_l[a] for a in range(d)) + self._offsets_flat(m)
@@ -562,14 +573,14 @@ class BodyIndex:
         body = body.astype(np.int64)
         diff = self._centers[body] - np.array(c)
         k = None
-        if self.box is not None:  # k = -image: the fractional difference rounded (as in _candidates)
+        if self._L is not None:  # k = -image: the fractional difference rounded (as in _candidates)
             if self._tilted:
                 assert self._frac is not None and f is not None
                 k = np.rint(self._frac[body] - np.array(f))
             else:
-                k = np.rint(diff / self.box)
+                k = np.rint(diff / self._L)
             if k.any():
-                diff -= lattice_shifts(self.box, self._images(k))  # v(-k) = -v(k)
+                diff -= lattice_shifts(self._L, self._images(k))  # v(-k) = -v(k)
         pad = _PAD * (max(abs(x) for x in c) + self._span + reach)
         rr = self._radii[body] + (r + pad)
         with np.errstate(over="ignore"):  # as in _candidates
@@ -588,12 +599,12 @@ class BodyIndex:
         total = np.zeros((q,) + (1,) * d, dtype=np.int64)
         for a in range(d):
             n = int(self._n[a])
-            if self.box is not None and 2 * m[a] + 1 >= n:
+            if self._L is not None and 2 * m[a] + 1 >= n:
                 steps = np.arange(n)
             else:
                 steps = np.arange(-m[a], m[a] + 1)
             u = coords[:, a, None] + steps
-            u = u % n if self.box is not None else np.clip(u, 0, n - 1)
+            u = u % n if self._L is not None else np.clip(u, 0, n - 1)
             shape = [q] + [1] * d
             shape[1 + a] = steps.size
             total = total + (u * self._strides_l[a]).reshape(shape)
@@ -637,8 +648,8 @@ class BodyIndex:
             rel[plain], by[plain] = res.relation, res.certified_by
         moved = np.flatnonzero(shifted)
         if moved.size:
-            assert image is not None and self.box is not None
-            shift = lattice_shifts(self.box, -image[moved].astype(np.int64))
+            assert image is not None and self._L is not None
+            shift = lattice_shifts(self._L, -image[moved].astype(np.int64))
             rel[moved], by[moved] = classify_images(self._Q[bj[moved]], Qn[qi[moved]], shift, self.method)
         return rel, by
 

@@ -135,9 +135,9 @@ def read_box(box: Any, d: int) -> np.ndarray | None:
     return L
 
 
-def is_tilted(box: np.ndarray | None) -> bool:
-    """Whether a box from :func:`read_box` is tilted (its six numbers) rather than d sides."""
-    return box is not None and box.size == 6
+def is_tilted(box: Any) -> bool:
+    """Whether a box from :func:`read_box` (or a :class:`core.Box`) is tilted: six numbers rather than d sides."""
+    return box is not None and len(box) == 6
 
 
 def box_vectors(box: np.ndarray, d: int) -> np.ndarray:

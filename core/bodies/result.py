@@ -6,14 +6,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..fixed.classify import Certifier
 from ..relation import Relation
+from .box import Box
+from .pairs import PairTable
 
 __all__ = ["Contacts"]
 
 
 @dataclass
-class Contacts:
+class Contacts(PairTable):
     """Every pair of bodies that is not separate, with its certified relation.
 
     Pairs are (i, j) with i < j, sorted by (i, j). In a periodic box the pair is body i with the
@@ -32,9 +33,8 @@ class Contacts:
     """int8 :class:`~core.Certifier` code of each reported pair (float filter or exact)."""
     n_bodies: int
     """Number of bodies searched (valid or not)."""
-    box: np.ndarray | None = None
-    """Periodic box: its d sides, or the six numbers (Lx, Ly, Lz, xy, xz, yz) of a tilted box
-    (:func:`core.bodies.periodic.read_box`); None in open space."""
+    box: Box | None = None
+    """Periodic box (:class:`core.Box`); None in open space."""
     image: np.ndarray | None = None
     """(M, d) int8 lattice image k of j for each pair (periodic box), else None."""
     invalid: dict[int, str] = field(default_factory=dict)
@@ -47,9 +47,9 @@ class Contacts:
     ``overlap``, and ``exact_bounds`` (bodies whose bounding sphere needed exact arithmetic)."""
     seconds: dict[str, float] = field(default_factory=dict)
     """Wall-clock seconds per phase: ``bounds``, ``broad``, ``narrow``, ``total``."""
-
-    def __len__(self) -> int:
-        return int(self.i.size)
+    ids: np.ndarray | None = None
+    """(N,) the bodies' own ids (a file's particle ids, :class:`core.Bodies`), or None: the CSV and
+    JSON then carry ``id_i, id_j``."""
 
     def per_body(self) -> np.ndarray:
         """(N,) int8: the worst relation of each body (SEPARATE if in no pair; INVALID).
@@ -66,29 +66,6 @@ class Contacts:
         if self.invalid:
             worst[list(self.invalid)] = Relation.INVALID
         return worst
-
-    def shifts(self) -> np.ndarray | None:
-        """(M, d) float64: the vector v(k) body j of each pair was moved by; None in open space.
-
-        The exact float vectors the search translated j's matrix by
-        (:func:`core.bodies.periodic.lattice_shifts`): k L in an orthogonal box; in a tilted one
-        k1 a1 + k2 a2 + k3 a3 rounded to the nearest float per component.
-
-        Examples:
-            >>> c = Contacts(np.array([0]), np.array([1]), np.array([1], np.int8), np.array([2], np.int8), 2,
-            ...              box=np.array([10.0, 10.0, 0.0, 0.5, 0.0, 0.0]), image=np.array([[0, -1]], np.int8))
-            >>> c.shifts().tolist()
-            [[-5.0, -10.0]]
-        """
-        if self.image is None or self.box is None:
-            return None
-        from .periodic import lattice_shifts
-
-        return lattice_shifts(self.box, self.image)
-
-    def pairs_of(self, body: int) -> np.ndarray:
-        """Indices (into i, j, relation) of the pairs that contain ``body``."""
-        return np.flatnonzero((self.i == body) | (self.j == body))
 
     def to_rows(self) -> list[tuple[int, int, str]]:
         """``[(i, j, "tangent" | "overlap" | ...), ...]`` (the CSV rows)."""
@@ -116,7 +93,3 @@ class Contacts:
         if self.invalid:
             text += f"; {len(self.invalid)} invalid bodies"
         return text
-
-    def certified_counts(self) -> dict[str, int]:
-        """Reported pairs per certifier: ``{"float": ..., "exact": ...}``."""
-        return Certifier.counts(self.certified_by)

@@ -14,6 +14,7 @@ from ..options import check_options
 from ..relation import Relation
 from ..shapes.numbers import binary64_array
 from .bounds import BoundingSpheres, bounding_spheres
+from .box import Box
 from .broadphase import BroadPhase, Candidates, TooManyPairs
 from .narrowphase import CHUNK_PAIRS, classify_candidates
 from .periodic import check_box, read_box
@@ -230,7 +231,7 @@ class ContactsBuilder:
             relation=rel.astype(np.int8, copy=False),
             certified_by=by.astype(np.int8, copy=False),
             n_bodies=n_bodies,
-            box=box,
+            box=Box.from_any(box, self.d),
             image=cand.image,
             invalid=dict(sorted(spheres.invalid.items())),
             counts=counts,

@@ -28,10 +28,12 @@ from ..moving.first_contact import FirstContacts, first_contacts
 from ..moving.linear import LinearMotions, read_linear_motions
 from ..options import check_options
 from ..relation import Relation
+from .bodies import Bodies
+from .box import Box
 from .broadphase import Candidates
-from .periodic import check_box, lattice_shifts, read_box
+from .periodic import cell_heights, check_box, lattice_shifts, read_box
 from .sweep_result import SweepContacts
-from .swept import approaching, swept_plan, swept_spheres
+from .swept import SweptSpheres, approaching, swept_plan, swept_spheres
 
 __all__ = ["sweep_contacts"]
 
@@ -44,7 +46,7 @@ _BATCH = 1 << 18
 def sweep_contacts(
     centers0: Any,
     centers1: Any,
-    semi_axes: Any,
+    semi_axes: Any = None,
     orientations0: Any = None,
     orientations1: Any = None,
     *,
@@ -56,10 +58,17 @@ def sweep_contacts(
 ) -> SweepContacts:
     """Every pair of moving bodies that touches or overlaps during t in [0, 1], with its first contact.
 
+    Also ``sweep_contacts(start, end)`` with two :class:`core.Bodies` (two frames): their centres,
+    semi-axes (equal in both: the bodies are rigid), orientations, box (``start``'s unless ``box``
+    is given) and ids (``end`` is reordered to ``start``'s ids when both have ids; the result
+    carries them). In a box the frames may be wrapped: each body moves by its minimum-image
+    displacement (``end`` taken at the image nearest ``start``, :meth:`core.Box.unwrap`).
+
     Args:
-        centers0: (N, 3) centres at t = 0 (2D: (N, 2)); floats, read exactly.
+        centers0: (N, 3) centres at t = 0 (2D: (N, 2)); floats, read exactly. Or the :class:`core.Bodies` at t = 0.
         centers1: (N, d) centres at t = 1: body k's centre is c0 + t (c1 - c0). In a periodic
-            box give the unwrapped end (c0 plus the displacement), not a wrapped one.
+            box give the unwrapped end (c0 plus the displacement), not a wrapped one
+            (:meth:`core.Box.unwrap` makes it from two wrapped frames).
         semi_axes: (N, d) semi-axes, fixed during the step.
         orientations0: 3D: (N, 4) quaternions wxyz (any non-zero length); 2D: (N,) angles in
             radians or (N, 4) quaternions (w, 0, 0, z); None: axis-aligned.
@@ -71,11 +80,13 @@ def sweep_contacts(
             (Lx, Ly, Lz, xy, xz, yz; 2D: Lx, Ly, xy), or None (:func:`core.bodies.periodic.read_box`).
             Minimum image over the whole step: the image k of j is chosen once, from the
             midpoints of the paths, and j's whole path is moved by its lattice vector v(k)
-            (:func:`core.bodies.periodic.lattice_shifts`, as in :func:`core.contacts`). Limits
-            (else a ValueError names the body): the midpoints span at most one box vector along
-            each (fractional coordinates), and the two largest swept radii (largest semi-axis
+            (:meth:`core.Box.shifts`, as in :func:`core.contacts`). The bodies may stand
+            anywhere (a wrapped frame, an unwrapped trajectory): each path is placed by the
+            image of its midpoint, and k counts whole boxes (any integers up to 127). Limit
+            (else a ValueError names the body): the two largest swept radii (largest semi-axis
             plus half the displacement) sum to less than half the cell's smallest height (the
-            smallest side of an orthogonal box), so that only that image can meet body i.
+            smallest side of an orthogonal box), so that only that image can meet body i; a
+            body that moves further than that in one step is named (take shorter steps).
         on_invalid: "raise" a ValueError naming the first bad row (not a number, a semi-axis
             <= 0, a zero quaternion, an orientation path through zero), or "mark": report such
             rows in ``.invalid`` and search the rest.
@@ -118,6 +129,11 @@ def sweep_contacts(
     """
     check_options(method, on_invalid, ("adaptive", "exact"))
     t0 = time.perf_counter()
+    ids = None
+    if isinstance(centers0, Bodies) or isinstance(centers1, Bodies):
+        centers0, centers1, semi_axes, orientations0, orientations1, box, ids = _frames(
+            centers0, centers1, semi_axes, orientations0, orientations1, box
+        )
     bodies, bad = read_linear_motions(centers0, centers1, semi_axes, orientations0, orientations1)
     if bad and on_invalid == "raise":
         raise ValueError(next(iter(bad.values())))
@@ -132,7 +148,10 @@ def sweep_contacts(
             raise ValueError(msg)
         bad[k] = msg
     t1 = time.perf_counter()
+    wraps = None
     if L is not None:
+        spheres, wraps = _wrapped(spheres, Box.from_any(L, d))
+        _check_steps(bodies, spheres, L, d)
         check_box(spheres.centers, spheres.radii, L)
     plan = swept_plan(spheres, L, max_pairs=max_pairs)
     found = _Found(bodies, L, method)
@@ -143,8 +162,9 @@ def sweep_contacts(
     held = broad = 0
     chunks = plan.chunks()
     try:
-        for cand, examined in chunks:
-            broad += len(cand)
+        for local, examined in chunks:
+            broad += len(local)
+            cand = local if wraps is None else _whole_images(local, wraps)
             near = approaching(bodies, spheres, cand, L)
             if len(near):
                 waiting.append(near)
@@ -188,11 +208,12 @@ def sweep_contacts(
         certified_by=fc.certified_by[order].astype(np.int8),
         n_bodies=N,
         bodies=bodies,
-        box=L,
+        box=Box.from_any(L, d),
         image=None if cand.image is None else cand.image[order],
         invalid=dict(sorted(bad.items())),
         counts=counts,
         _times={int(where[k]): t for k, t in fc.times.items()},
+        ids=ids,
     )
     out.seconds = {"read": t1 - t0, "broad": t3 - t1 - found.narrow_s, "narrow": found.narrow_s, "total": time.perf_counter() - t0}
     return out
@@ -249,3 +270,98 @@ class _Found:
         fc = FirstContacts(joined("relation", np.int8), joined("t_lo", np.float64), joined("t_hi", np.float64),
                            joined("certified_by", np.int8), times)
         return cand, fc
+
+
+def _wrapped(spheres: SweptSpheres, box: Box | None) -> tuple[SweptSpheres, np.ndarray]:
+    """The swept balls moved by whole lattice vectors into the cell around the origin, and the images.
+
+    Ball i is moved by -v(m_i), m_i the image of its midpoint (:meth:`core.Box.images`), for the
+    broad phase only: a pair found between the moved balls with the local image k is the pair
+    (i, j) with j moved by v(k + m_i - m_j) (:func:`_whole_images`). The moved centre is rounded
+    once: each radius grows by 2^-50 of the lengths involved (far more than that rounding).
+    """
+    assert box is not None
+    ok = np.isfinite(spheres.radii)
+    m = np.zeros(spheres.centers.shape, dtype=np.int64)
+    if ok.any():
+        with np.errstate(invalid="ignore", over="ignore"):
+            f = box.fractional(np.where(ok[:, None], spheres.centers, 0.0))
+        far = ok & ~(np.abs(f) < 2.0**40).all(axis=1)
+        if far.any():
+            k = int(np.flatnonzero(far)[0])
+            raise ValueError(f"row {k}: its path lies more than 2^40 boxes from the origin: wrap the positions into the box")
+        m[ok] = np.floor(f[ok] + 0.5).astype(np.int64)
+    moved = m.any(axis=1)
+    if not moved.any():
+        return spheres, m
+    centers = spheres.centers.copy()
+    radii = spheres.radii.copy()
+    v = box.shifts(m[moved])
+    centers[moved] = spheres.centers[moved] - v
+    lengths = np.abs(centers[moved]).sum(axis=1) + np.abs(v).sum(axis=1) + np.abs(spheres.centers[moved]).sum(axis=1)
+    radii[moved] = radii[moved] + 2.0**-50 * lengths
+    return SweptSpheres(centers, radii, spheres.reach), m
+
+
+def _whole_images(cand: Candidates, wraps: np.ndarray) -> Candidates:
+    """Candidates of the moved balls (:func:`_wrapped`) as pairs of the bodies: k + m_i - m_j.
+
+    (Ball j - v(m_j) moved by v(k) meets ball i - v(m_i): body j moved by v(k + m_i - m_j) meets body i.)
+    """
+    if cand.image is None or not len(cand):
+        return cand
+    k = cand.image.astype(np.int64) + wraps[cand.i] - wraps[cand.j]
+    if np.abs(k).max(initial=0) > 127:
+        row = int(np.flatnonzero((np.abs(k) > 127).any(axis=1))[0])
+        raise ValueError(
+            f"rows {int(cand.i[row])} and {int(cand.j[row])} meet across more than 127 boxes of an unwrapped "
+            "trajectory: wrap the positions into the box"
+        )
+    return Candidates(cand.i, cand.j, k.astype(np.int8))
+
+
+def _check_steps(bodies: LinearMotions, spheres: SweptSpheres, L: np.ndarray, d: int) -> None:
+    """Name a body that moves too far in one step for the minimum image (before the size rule's message)."""
+    h = float(np.min(cell_heights(L, d)))
+    with np.errstate(all="ignore"):
+        step = np.sqrt(((bodies.centers1 - bodies.centers0) ** 2).sum(axis=1))
+    ok = np.isfinite(spheres.radii)
+    far = np.flatnonzero(ok & ~(step < h / 2))
+    if far.size:
+        k = int(far[np.argmax(step[far])])
+        raise ValueError(
+            f"row {k} moves {step[k]:.6g} in one step, more than half the smallest height of the periodic cell "
+            f"({h:.6g} / 2): which image it meets is not defined; take shorter steps (more frames), or give the "
+            "unwrapped end if the frames are not wrapped"
+        )
+
+
+def _frames(start: Any, end: Any, semi_axes: Any, o0: Any, o1: Any, box: Any) -> tuple[Any, ...]:
+    """The arrays of ``sweep_contacts(start, end)`` with two :class:`core.Bodies`, and their ids."""
+    if not (isinstance(start, Bodies) and isinstance(end, Bodies)):
+        raise ValueError("sweep_contacts: give two Bodies (start, end), or the arrays centers0, centers1, semi_axes, ...")
+    if semi_axes is not None or o0 is not None or o1 is not None:
+        raise ValueError("sweep_contacts(start, end): the Bodies carry the semi-axes and orientations; give no arrays")
+    if not (start.has_parameters and end.has_parameters):
+        raise ValueError("sweep_contacts: the Bodies need centres and semi-axes (not matrices alone)")
+    end = end.ordered_like(start)
+    if start.dimensions != end.dimensions:
+        raise ValueError(f"sweep_contacts: {start.dimensions}D bodies at the start and {end.dimensions}D at the end")
+    if box is None:
+        box = start.box if start.box is not None else end.box
+    centers1 = end.centers
+    if box is not None:  # frames of a trajectory are wrapped: each body moves by its minimum image
+        b = Box.from_any(box, start.dimensions)
+        assert b is not None
+        ok = np.isfinite(start.centers).all(axis=1) & np.isfinite(end.centers).all(axis=1)
+        centers1 = np.array(end.centers, dtype=np.float64, copy=True)
+        if ok.any():
+            centers1[ok] = b.unwrap(start.centers[ok], end.centers[ok])[0]
+    differ = np.flatnonzero((start.semi_axes != end.semi_axes).any(axis=1))
+    if differ.size:
+        k = int(differ[0])
+        raise ValueError(
+            f"sweep_contacts: {start.name(k)} has semi-axes {start.semi_axes[k].tolist()} at the start and "
+            f"{end.semi_axes[k].tolist()} at the end: the bodies must keep their shape during the step"
+        )
+    return start.centers, centers1, start.semi_axes, start.orientations, end.orientations, box, start.ids

@@ -3,22 +3,23 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 from flint import fmpq
 
 from ..algebra.algebraic import RealAlgebraic
-from ..fixed.classify import Certifier
 from ..moving.first_contact import first_contact
 from ..moving.linear import LinearMotions
 from ..relation import Relation
-from .periodic import lattice_shifts
+from .box import Box
+from .pairs import PairTable
 
 __all__ = ["SweepContacts"]
 
 
 @dataclass
-class SweepContacts:
+class SweepContacts(PairTable):
     """Every pair of moving bodies that is not separate somewhere in [0, 1], with its first contact.
 
     Pairs are (i, j) with i < j, sorted by (i, j). t* is the first t in [0, 1] at which the
@@ -43,9 +44,8 @@ class SweepContacts:
     """Number of bodies (valid or not)."""
     bodies: LinearMotions = field(repr=False)
     """The bodies, read exactly (what :meth:`time` computes with)."""
-    box: np.ndarray | None = None
-    """Periodic box: its d sides, or the six numbers (Lx, Ly, Lz, xy, xz, yz) of a tilted box
-    (:func:`core.bodies.periodic.read_box`); None in open space."""
+    box: Box | None = None
+    """Periodic box (:class:`core.Box`); None in open space."""
     image: np.ndarray | None = None
     """(M, d) int8 lattice image of j for each pair (periodic box), else None."""
     invalid: dict[int, str] = field(default_factory=dict)
@@ -57,9 +57,11 @@ class SweepContacts:
     seconds: dict[str, float] = field(default_factory=dict)
     """Wall-clock seconds: ``read``, ``broad``, ``narrow``, ``total``."""
     _times: dict[int, RealAlgebraic] = field(default_factory=dict, repr=False)
+    ids: np.ndarray | None = None
+    """(N,) the bodies' own ids (a file's particle ids, :class:`core.Bodies`), or None: the CSV and
+    JSON then carry ``id_i, id_j``."""
 
-    def __len__(self) -> int:
-        return int(self.i.size)
+    OWN_COLUMNS: ClassVar[tuple[str, ...]] = ("t_lo", "t_hi")
 
     def time(self, k: int) -> RealAlgebraic:
         """t* of pair k exactly: a real algebraic number with an isolating interval.
@@ -86,21 +88,6 @@ class SweepContacts:
                     raise RuntimeError(f"pair {k}: no contact in its certified bracket [{lo}, {hi}]")
                 self._times[k] = e.time
         return self._times[k]
-
-    def shifts(self) -> np.ndarray | None:
-        """(M, d) float64: the vector v(k) body j of each pair was moved by; None in open space.
-
-        The float vectors the sweep moved j's path by (:func:`core.bodies.periodic.lattice_shifts`,
-        as :meth:`core.Contacts.shifts`): k L in an orthogonal box; in a tilted one
-        k1 a1 + k2 a2 + k3 a3 rounded to the nearest float per component.
-        """
-        if self.image is None or self.box is None:
-            return None
-        return lattice_shifts(self.box, self.image)
-
-    def pairs_of(self, body: int) -> np.ndarray:
-        """Indices (into i, j, ...) of the pairs that contain ``body``."""
-        return np.flatnonzero((self.i == body) | (self.j == body))
 
     def first_time(self) -> np.ndarray:
         """(N,) float64: each body's earliest t_lo over its pairs (inf: it meets nothing)."""
@@ -139,7 +126,3 @@ class SweepContacts:
         if self.invalid:
             text += f"; {len(self.invalid)} invalid bodies"
         return text
-
-    def certified_counts(self) -> dict[str, int]:
-        """Reported pairs per certifier: ``{"float": ..., "exact": ...}``."""
-        return Certifier.counts(self.certified_by)

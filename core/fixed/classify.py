@@ -15,11 +15,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from enum import IntEnum
 from typing import Any, overload
 
 import numpy as np
 
+from ..errors import InvalidInput
+from ..filtered import Certifier, Predicate, Stats, predicate
 from ..formulae.decision import RULE_RELATION
 from ..options import METHODS, ON_INVALID, Method, OnInvalid, check_options
 from ..relation import Relation
@@ -42,39 +43,8 @@ __all__ = [
     "Stats",
 ]
 
-
-
-class Certifier(IntEnum):
-    """Which arithmetic certified a pair's relation (int8 codes of ``Classification.certified_by``)."""
-
-    NONE = 0
-    """Undecided (``method="float"``) or invalid."""
-    FLOAT = 1
-    """The float filter, with proven error bounds."""
-    EXACT = 2
-    """Exact rational arithmetic."""
-
-    def __str__(self) -> str:
-        return self.name.lower()
-
-    @staticmethod
-    def counts(certified_by: np.ndarray) -> dict[str, int]:
-        """Pairs per certifier in an array of codes: ``{"float": ..., "exact": ...}``."""
-        by = np.bincount(np.asarray(certified_by, dtype=np.int64).ravel(), minlength=3)
-        return {str(Certifier(k)): int(by[k]) for k in (Certifier.FLOAT, Certifier.EXACT)}
-
-
-class Stats:
-    """Counters of filter calls and failures (CGAL's profiler), filled when passed to classify."""
-
-    def __init__(self) -> None:
-        self.pairs = 0
-        """Pairs classified."""
-        self.escalated = 0
-        """Pairs the float filter left UNDECIDED (sent to exact under ``adaptive``)."""
-
-    def __repr__(self) -> str:
-        return f"Stats(pairs={self.pairs}, escalated={self.escalated})"
+_CLASSIFY: Predicate = predicate("classify")
+"""The counters of ``classify`` / ``classify_detailed`` (:func:`core.filter_stats`)."""
 
 
 @dataclass
@@ -214,18 +184,17 @@ def classify(
     if _single_float_pair(A, B) and (method == "adaptive" or (method == "float" and compiled.warm_up(wait=False))):
         # a drag in the scene: microseconds. Until the compiled kernels are loaded the adaptive
         # path goes straight to exact (~0.1 ms, faster than numpy on one pair)
-        rule = compiled.rule_one(np.ascontiguousarray(A), np.ascontiguousarray(B)) if compiled.warm_up(wait=False) else -1
-        codes = np.array([RULE_RELATION[rule] if rule >= 0 else Relation.UNDECIDED], dtype=np.int8)
-        if stats is not None:
-            stats.pairs += 1
-            stats.escalated += int(codes[0] == Relation.UNDECIDED)
-        if codes[0] == Relation.UNDECIDED:  # kernels still loading, or the filter abstained
-            _resolve(A[None], B[None], codes, np.zeros(1, np.int8), method, True, on_invalid)
-        return Relation(int(codes[0]))
-    res = _classify(A, B, method, on_invalid, None, certifiers=False)
-    if stats is not None:
-        stats.pairs += res.relation.size
-        stats.escalated += res.escalated + int(np.count_nonzero(res.relation == Relation.UNDECIDED))
+        warm = compiled.warm_up(wait=False)
+        code, _ = _CLASSIFY.one(
+            lambda: _rule_code(A, B),
+            lambda: _exact_code(A, B, 0, True, on_invalid, {}),
+            method if warm else "exact",
+            stats=stats,
+        )
+        if code is None:  # "float" and the filter abstained: invalid input is still an error
+            code = _checked_code(A, B, 0, True, on_invalid, {}, bool(certified_valid(A[None], B[None])[0]))
+        return Relation(code)
+    res = _classify(A, B, method, on_invalid, None, certifiers=False, stats=stats)
     if res.relation.ndim == 0:
         return Relation(int(res.relation))
     return res.relation
@@ -261,12 +230,21 @@ def classify_detailed(
     return _classify(A, B, method, on_invalid, progress, certifiers=True)
 
 
-def _classify(A: Any, B: Any, method: Method, on_invalid: OnInvalid, progress: Callable[[int, int], None] | None, *, certifiers: bool) -> Classification:
+def _classify(
+    A: Any,
+    B: Any,
+    method: Method,
+    on_invalid: OnInvalid,
+    progress: Callable[[int, int], None] | None,
+    *,
+    certifiers: bool,
+    stats: Stats | None = None,
+) -> Classification:
     """:func:`classify_detailed`, or for :func:`classify` (``certifiers=False``) a leaner result.
 
-    :func:`classify` reads only the relations and the escalation count: when the float filter
-    decides every pair, ``certified_by`` is then a read-only broadcast of FLOAT (no pass over the
-    batch, no second array written).
+    :func:`classify` reads only the relations (its ``stats`` are fed by :mod:`core.filtered`):
+    when the float filter decides every pair, ``certified_by`` is then a read-only broadcast of
+    FLOAT (no pass over the batch, no second array written).
     """
     a = _as_array(A, "A")
     b = _as_array(B, "B")
@@ -285,7 +263,7 @@ def _classify(A: Any, B: Any, method: Method, on_invalid: OnInvalid, progress: C
         raise ValueError(f"batch shapes {a.shape[:-2]} and {b.shape[:-2]} do not broadcast") from None
     scalar = batch_shape == ()
     codes, by, errors = _classify_flat(
-        _flatten(a, batch_shape, n), _flatten(b, batch_shape, n), method, scalar, on_invalid, progress, certifiers=certifiers
+        _flatten(a, batch_shape, n), _flatten(b, batch_shape, n), method, scalar, on_invalid, progress, certifiers=certifiers, stats=stats
     )
     return Classification(codes.reshape(batch_shape), by.reshape(batch_shape), errors)
 
@@ -310,6 +288,41 @@ def _validate_pair(a: Any, b: Any) -> None:
     validate_quadric(b, name="B")
 
 
+def _rule_code(A: np.ndarray, B: np.ndarray) -> int | None:
+    """The compiled filter's relation of one float pair, or None where it abstains."""
+    rule = compiled.rule_one(np.ascontiguousarray(A), np.ascontiguousarray(B))
+    return int(RULE_RELATION[rule]) if rule >= 0 else None
+
+
+def _exact_code(a: Any, b: Any, i: int, scalar: bool, on_invalid: str, errors: dict[int, str]) -> int:
+    """Exact relation code of pair i; an invalid pair raises or is marked (:func:`_invalid`)."""
+    try:
+        return int(classify_exact(a, b).relation)
+    except ValueError as e:
+        return _invalid(e, i, scalar, on_invalid, errors)
+
+
+def _checked_code(a: Any, b: Any, i: int, scalar: bool, on_invalid: str, errors: dict[int, str], proven: bool) -> int:
+    """UNDECIDED for pair i under "float" once it is known valid; else raise or mark it (:func:`_invalid`).
+
+    Valid: ``proven`` by the filter's own validity proof, else checked exactly.
+    """
+    try:
+        if not proven:
+            _validate_pair(a, b)
+        return int(Relation.UNDECIDED)
+    except ValueError as e:
+        return _invalid(e, i, scalar, on_invalid, errors)
+
+
+def _invalid(e: ValueError, i: int, scalar: bool, on_invalid: str, errors: dict[int, str]) -> int:
+    """``on_invalid`` for invalid pair i: raise its :class:`core.InvalidInput` naming the pair, or mark it INVALID."""
+    if on_invalid == "raise":
+        raise InvalidInput.of(e).at_pair(None if scalar else i, _where(i, scalar)) from None
+    errors[i] = str(e)
+    return int(Relation.INVALID)
+
+
 def _classify_flat(
     a: np.ndarray,
     b: np.ndarray,
@@ -319,60 +332,52 @@ def _classify_flat(
     progress: Callable[[int, int], None] | None = None,
     *,
     certifiers: bool = True,
+    stats: Stats | None = None,
 ) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
-    """Codes, certifiers and invalid reasons for (N, n, n) stacks (``certifiers``: see :func:`_classify`)."""
-    N = a.shape[0]
-    if method != "exact" and a.dtype.kind == "f" and b.dtype.kind == "f":
-        if a.dtype != b.dtype:  # float32 against float64: widen (exact)
-            a, b = a.astype(np.float64), b.astype(np.float64)
-        codes, all_decided = classify_float_counted(a, b, scalar=scalar)
-        if all_decided and not certifiers:  # the usual case: nothing left, nothing to record
-            return codes, np.broadcast_to(np.int8(Certifier.FLOAT), codes.shape), {}
-        by = (codes != Relation.UNDECIDED).view(np.int8)  # Certifier.FLOAT is 1, NONE 0
-    else:
-        codes = np.full(N, Relation.UNDECIDED, dtype=np.int8)
-        by = np.zeros(N, dtype=np.int8)
-    errors = _resolve(a, b, codes, by, method, scalar, on_invalid, progress)
-    return codes, by, errors
+    """Codes, certifiers and invalid reasons for (N, n, n) stacks (``certifiers``: see :func:`_classify`).
 
-
-def _resolve(
-    a: np.ndarray,
-    b: np.ndarray,
-    codes: np.ndarray,
-    by: np.ndarray,
-    method: str,
-    scalar: bool,
-    on_invalid: str,
-    progress: Callable[[int, int], None] | None = None,
-) -> dict[int, str]:
-    """Decide the UNDECIDED entries of ``codes`` in place (exactly; "float": validate only).
-
-    Returns the invalid reasons (``on_invalid="mark"``) or raises the first.
+    One evaluation of the ``classify`` predicate (:mod:`core.filtered`): the float filter
+    (float64 or float32 input; other input goes to exact under "adaptive"), exact arithmetic
+    pair by pair on what it leaves; under "float" the pairs it leaves are validated only.
     """
+    N = a.shape[0]
     errors: dict[int, str] = {}
-    undecided = codes == Relation.UNDECIDED
-    if not undecided.any():  # the usual case: no search for indices
-        return errors
-    todo = np.flatnonzero(undecided)
-    proven = np.zeros(todo.size, dtype=bool)
-    if method == "float" and a.dtype.kind == "f" and b.dtype.kind == "f":
+    floats = a.dtype.kind == "f" and b.dtype.kind == "f"
+    if floats and a.dtype != b.dtype:  # float32 against float64: widen (exact)
+        a, b = a.astype(np.float64), b.astype(np.float64)
+
+    def float_stage(_: None) -> tuple[np.ndarray, np.ndarray | None]:
+        if not floats:  # exact input under "float": nothing certified, every pair validated below
+            return np.full(N, Relation.UNDECIDED, dtype=np.int8), np.ones(N, dtype=bool)
+        codes, all_decided = classify_float_counted(a, b, scalar=scalar)
+        return codes, None if all_decided else codes == Relation.UNDECIDED
+
+    def exact_stage(_: None, codes: np.ndarray, todo: np.ndarray) -> np.ndarray | None:
+        failed = np.zeros(todo.size, dtype=bool)
+        for k, i in enumerate(todo.tolist()):
+            if progress is not None:
+                progress(k, todo.size)
+            codes[i] = _exact_code(a[i], b[i], i, scalar, on_invalid, errors)
+            failed[k] = codes[i] == Relation.INVALID
+        return failed if errors else None
+
+    codes, by, unsure = _CLASSIFY.run(
+        None,
+        N,
+        float_stage,
+        exact_stage,
+        method if floats or method != "adaptive" else "exact",
+        blank=lambda _: np.full(N, Relation.UNDECIDED, dtype=np.int8),
+        stats=stats,
+    )
+    if method == "float" and unsure.size:  # no exact classification, but invalid input is still an error
         # the filter's own validity proof spares the exact check where it holds (near tangency:
         # valid pairs whose relation no float sign decides); the same proof its labels rest on
-        proven = certified_valid(a[todo], b[todo])
-    for k, i in enumerate(todo):
-        if progress is not None:
-            progress(k, todo.size)
-        try:
-            if method == "float":  # no exact classification, but invalid input is still an error
-                if not proven[k]:
-                    _validate_pair(a[i], b[i])
-                continue
-            codes[i] = classify_exact(a[i], b[i]).relation
-            by[i] = Certifier.EXACT
-        except ValueError as e:
-            if on_invalid == "raise":
-                raise ValueError(_where(int(i), scalar) + str(e)) from None
-            codes[i] = Relation.INVALID
-            errors[int(i)] = str(e)
-    return errors
+        proven = certified_valid(a[unsure], b[unsure]) if floats else np.zeros(unsure.size, dtype=bool)
+        for k, i in enumerate(unsure.tolist()):
+            if progress is not None:
+                progress(k, unsure.size)
+            codes[i] = _checked_code(a[i], b[i], i, scalar, on_invalid, errors, bool(proven[k]))
+    if certifiers and not by.flags.writeable:  # classify_detailed's arrays are the caller's to keep
+        by = np.array(by)
+    return codes, by, errors

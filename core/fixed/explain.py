@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from flint import fmpq
 
+from ..filtered import predicate
 from ..formulae.decision import RULE_LIST, RULES, sign_variations
 from ..formulae.subresultants import hat_scale
 from ..shapes.numbers import binary64_array, format_rational, sign, to_float, to_fmpq
@@ -30,6 +31,9 @@ HAT_DEGREE_WEIGHT: dict[tuple[int, str], tuple[int, int]] = {
     (4, "s0"): (6, 12), (4, "s1"): (4, 10), (4, "s10"): (4, 9),
 }
 """(degree, weight) of each hat form: hs(mu * lambda^i a_i) = mu^deg lambda^weight hs(a)."""
+
+_EXPLAIN = predicate("explain")
+"""The filtered predicate of :func:`explain` (float explanation, else exact; :func:`core.filter_stats`)."""
 
 
 def display_float(v: fmpq) -> float | None:
@@ -51,15 +55,24 @@ def _q(name: str, v: fmpq) -> Quantity:
 def explain(A: Any, B: Any) -> Explanation:
     """Explain the relation of one pair (see module docstring).
 
+    The float filter's explanation where it certifies the pair (binary64 input), else the exact
+    one: one evaluation of the ``explain`` predicate (:mod:`core.filtered`).
+
     Examples:
         >>> circle = lambda x: [[1, 0, -x], [0, 1, 0], [-x, 0, x * x - 1]]
         >>> e = explain(circle(0), circle(2))
         >>> str(e.relation), e.rule, e.var, [q.exact for q in e.coefficients]
         ('tangent', '2d-s0=0', 2, ['-1', '1', '1', '-1'])
     """
-    fl = explain_float(A, B)
-    if fl is not None:
-        return fl
+    a, b = binary64_array(A, typed=True), binary64_array(B, typed=True)  # exact numbers: the exact explanation
+    floats = a is not None and b is not None
+    e, _ = _EXPLAIN.one(lambda: _explain_float(a, b), lambda: _explain_exact(A, B), "adaptive" if floats else "exact")
+    assert e is not None  # "adaptive" and "exact" always answer
+    return e
+
+
+def _explain_exact(A: Any, B: Any) -> Explanation:
+    """The exact stage of :func:`explain`: every number an exact rational."""
     pair = exact_pair(A, B, scaled=False)
     dec = pair.decide()
     n = pair.n
@@ -96,7 +109,11 @@ def explain_float(A: Any, B: Any) -> Explanation | None:
     proven) and are scaled back exactly; a value that would leave the float range defers to the
     exact path.
     """
-    a, b = binary64_array(A, typed=True), binary64_array(B, typed=True)  # exact numbers: the exact explanation
+    return _explain_float(binary64_array(A, typed=True), binary64_array(B, typed=True))
+
+
+def _explain_float(a: np.ndarray | None, b: np.ndarray | None) -> Explanation | None:
+    """The float stage of :func:`explain` on binary64 arrays (None: not binary64, or not certified)."""
     if a is None or b is None:
         return None
     if a.ndim != 2 or a.shape != b.shape or a.shape[0] not in (3, 4) or a.shape[0] != a.shape[1]:

@@ -9,7 +9,8 @@ the generated header; ``setup.py`` compiles them when the package is installed.
 Run ``python -m core.fixed.kernelgen`` after changing :mod:`core.formulae.pencil`,
 :mod:`core.formulae.subresultants`, :mod:`core.fixed.errorbound`, :mod:`core.fixed.driver` or
 :mod:`core.formulae.decision` (then reinstall: ``pip install -e .``); ``tests/test_filters.py``
-fails if the committed files are not what this module generates. Committing the generated text
+fails if the committed files are not what this module generates (``python -m core.generated --check``
+checks every generator's files at once). Committing the generated text
 (instead of ``exec`` at import) keeps every line of the fast path readable.
 """
 
@@ -53,6 +54,7 @@ __all__ = [
     "generate_module",
     "generate_c",
     "c_function",
+    "generated_files",
     "GENERATED_PATH",
     "GENERATED_C_PATH",
     "HATS",
@@ -636,20 +638,17 @@ def generate_c() -> str:
 GENERATED_C_PATH = Path(__file__).with_name("_kernels.h")
 
 
+def generated_files() -> dict[Path, str]:
+    """The files this generator writes, with their text today (:mod:`core.generated` checks them all)."""
+    return {GENERATED_PATH: generate_module(), GENERATED_C_PATH: generate_c()}
+
+
 def main(argv: list[str] | None = None) -> int:
     """Write (default) or ``--check`` the generated files core/fixed/_kernels.py and core/fixed/_kernels.h."""
+    from ..generated import write_or_check
+
     args = sys.argv[1:] if argv is None else argv
-    outputs = {GENERATED_PATH: generate_module(), GENERATED_C_PATH: generate_c()}
-    if "--check" in args:
-        stale = [str(p) for p, text in outputs.items() if not p.exists() or p.read_text() != text]
-        if stale:
-            print(f"stale: {', '.join(stale)}: run python -m core.fixed.kernelgen")
-            return 1
-        return 0
-    for path, text in outputs.items():
-        path.write_text(text)
-        print(f"wrote {path} ({len(text.splitlines())} lines)")
-    return 0
+    return write_or_check(generated_files(), "python -m core.fixed.kernelgen", check="--check" in args)
 
 
 if __name__ == "__main__":

@@ -1,9 +1,9 @@
 /* Certified float filter for the first contact of two ellipsoids (ellipses) in linear motion.
  *
- * Hand-written C, read by core/moving/sweep_filter.py (the proofs are there and here), built
- * when the package is installed (setup.py: the extension core.moving._sweep_filter, with
- * _sweep_module.c) with the project's flags: no -ffast-math, no contraction into FMA
- * (-ffp-contract=off): every operation rounds once, to nearest, as the bounds assume.
+ * Hand-written C, driven by core/moving/sweep_filter.py (the proofs are there and here), built
+ * when the package is installed (setup.py: the extension core.moving._sweep_filter, this kernel
+ * and its Python face _sweep_module.c) with the project's flags: no -ffast-math, no contraction
+ * into FMA (-ffp-contract=off): every operation rounds once, to nearest, as the bounds assume.
  *
  * Body k: semi-axes r, centre c(t) = c0 + t (c1 - c0), orientation R(q(t) / |q(t)|) with
  * q(t) = (1 - t) q0 + t q1 (3D quaternion wxyz; 2D half-angle number (w, s)). For a pair (A, B)
@@ -38,12 +38,13 @@
  * runs pair by pair.
  *
  * Radii: each operation's rounding (<= U |result|, U = 2^-52 >= u / (1 - u)) and underflow
- * (<= 2^-1075 per product; ETA = 2^-1022 per product is added, generously: a normal number,
- * so no operation ever runs on subnormals, which are slow) is added; the radius formulas are
- * themselves evaluated in floats on non-negative terms, so each computed radius is at least
- * (1 - u)^k times its formula's value after k dependent operations (a product's underflow
- * loss is covered by the ETAs added): comparisons use radius * RF, RF = 1 + 2^-30, which
- * covers k < 2^22, far more than any chain here.
+ * (<= 2^-1075 per product or quotient; ETA = 2^-1022, 2^53 times that, is added, generously: a
+ * normal number, so no operation ever runs on subnormals, which are slow) is added; the radius
+ * formulas are themselves evaluated in floats on non-negative terms, so each computed radius is
+ * at least (1 - u)^k times its formula's value after k dependent operations (a product's
+ * underflow loss is covered by the ETAs added): comparisons use radius * RF, RF = 1 + 2^-30,
+ * which covers k < 2^22, far more than any chain here. Each constant a radius formula adds is a
+ * named allowance below, checked against a trace of the operations it covers.
  */
 #include <math.h>
 #include <stdint.h>
@@ -53,6 +54,33 @@
 #define U 2.220446049250313e-16          /* 2^-52 */
 #define ETA 0x1p-1022                    /* 2^-1022 >= any underflow loss (2^-1075); normal, so never slow */
 #define RF (1.0 + 9.313225746154785e-10) /* 1 + 2^-30 */
+
+/* Error allowances: every constant a radius formula adds is one of these names (nothing else below
+ * uses U or ETA). core/moving/sweepbounds.py reads them from this file, re-derives from a trace of
+ * the operations each one covers (core.fixed.errorbound's rounding counts and constants) what it
+ * must be at least, and fails naming any that is smaller, any unused, and any use of U or ETA
+ * outside them: `python -m core.moving.sweepbounds` prints the table, `python -m core.generated
+ * --check` (run by the tests) checks it with the generated files. Several are generous (U is
+ * twice u; one ETA covers 2^53 underflows): the table shows by how much. */
+#define ADD_U U                          /* z = x +- y (badd, bsub, lf_addsub, lf_elevate): U |z| */
+#define ADD_ETA ETA
+#define MUL_U U                          /* z = x y of two balls (bmul, lf_scale): U |z| */
+#define MUL_ETA (5 * ETA)
+#define TIMES_ETA ETA                    /* z = c x, c in {-2, -1, 2} (lf_times): exact */
+#define DIV_U U                          /* z = x / C(n, k) (lf_bernstein): U |z| */
+#define DIV_ETA ETA
+#define INV_SQUARE_U (3 * U)             /* D = 1 / (s s) (load_body): on D; s >= 2^-60, no underflow */
+#define RESCALE_ETA ETA                  /* x 2^-e (load_pair): exact unless it underflows */
+#define LERP_MAG_U (4 * U)               /* (1 - t) x0 + t x1 (blerp): on its magnitude ... */
+#define LERP_Z_U (4 * U)                 /* ... and on |z| */
+#define LERP_ETA (6 * ETA)
+#define SPLIT_MAG_U (4 * U)              /* a de Casteljau step (f_split): on its magnitude */
+#define SPLIT_ETA (6 * ETA)
+#define DOT_U(m) ((m) * U)               /* a sum of m products in order (lf_mul): on sum |x_i y_i| */
+#define DOT_ETA(m) ((8 * (m) + 2) * ETA)
+#define COMBINE_U(m) ((m) * U)           /* P(t, T) = sum of m = n + 1 terms T^k b_k (combine) */
+#define COMBINE_ETA(m) ((4 * (m) + 4) * ETA)
+#define CERTIFY_STEPS_UP 4               /* nextafter steps making a computed (tb - ta) / (1 - ta) >= the exact one */
 #define MAXF 20                          /* coefficients per form: degree <= 19 (3D: 18) */
 #define MAXIT 100                        /* advancement steps before the filter abstains */
 #define STEP_MARGIN 0.99609375           /* target 1 - 2^-8 of the way to the predicted root */
@@ -61,6 +89,7 @@
 #define IN_RANGE(x) (fabs(x) <= 1.0 && (fabs(x) >= 0x1p-100 || (x) == 0.0))
 
 enum { NEVER = 0, CONTACT = 1, OVERLAP_AT_START = 2, UNDECIDED = -1 };
+const int8_t SWEEP_STATUS_CODES[4] = {NEVER, CONTACT, OVERLAP_AT_START, UNDECIDED}; /* the module's constants (_sweep_module.c) */
 
 typedef struct { double v, r; } ball;
 typedef struct { int n; double v[MAXF]; double r[MAXF]; } form;
@@ -68,11 +97,11 @@ typedef struct { int n; double v[MAXF]; double r[MAXF]; } form;
 /* ---------------------------------------------------------------- balls (midpoint, radius) */
 
 static inline ball bx(double x) { ball o = {x, 0.0}; return o; }
-static inline ball badd(ball x, ball y) { double z = x.v + y.v; ball o = {z, x.r + y.r + U * fabs(z) + ETA}; return o; }
-static inline ball bsub(ball x, ball y) { double z = x.v - y.v; ball o = {z, x.r + y.r + U * fabs(z) + ETA}; return o; }
+static inline ball badd(ball x, ball y) { double z = x.v + y.v; ball o = {z, x.r + y.r + ADD_U * fabs(z) + ADD_ETA}; return o; }
+static inline ball bsub(ball x, ball y) { double z = x.v - y.v; ball o = {z, x.r + y.r + ADD_U * fabs(z) + ADD_ETA}; return o; }
 static inline ball bmul(ball x, ball y) {
     double z = x.v * y.v;
-    ball o = {z, fabs(x.v) * y.r + x.r * (fabs(y.v) + y.r) + U * fabs(z) + 5 * ETA};
+    ball o = {z, fabs(x.v) * y.r + x.r * (fabs(y.v) + y.r) + MUL_U * fabs(z) + MUL_ETA};
     return o;
 }
 /* (1 - t) x0 + t x1 for a float t in [0, 1]: 1 - t is exact for t >= 1/2, else within u (1 - t) */
@@ -80,7 +109,7 @@ static inline ball blerp(ball x0, ball x1, double t) {
     double al = 1.0 - t;
     double z = al * x0.v + t * x1.v;
     double mag = al * (fabs(x0.v) + x0.r) + t * fabs(x1.v);
-    ball o = {z, al * x0.r + t * x1.r + 4 * U * mag + 4 * U * fabs(z) + 6 * ETA};
+    ball o = {z, al * x0.r + t * x1.r + LERP_MAG_U * mag + LERP_Z_U * fabs(z) + LERP_ETA};
     return o;
 }
 static inline int bneg(ball x) { return isfinite(x.v) && isfinite(x.r) && x.v < -x.r * RF; }
@@ -116,7 +145,7 @@ static void lf_elevate(lform *z, const lform *a, int n) {
         for (int k = m; k >= 1; k--)
             for (int l = 0; l < LANES; l++) {
                 double x = z->v[k][l] + z->v[k - 1][l];
-                z->r[k][l] = z->r[k][l] + z->r[k - 1][l] + U * fabs(x) + ETA;
+                z->r[k][l] = z->r[k][l] + z->r[k - 1][l] + ADD_U * fabs(x) + ADD_ETA;
                 z->v[k][l] = x;
             }
         z->n = m + 1;
@@ -132,7 +161,7 @@ static void lf_addsub(lform *z, const lform *a, const lform *b, double sa) {
     for (int k = 0; k <= n; k++)
         for (int l = 0; l < LANES; l++) {
             double x = a->v[k][l] + sa * b->v[k][l];
-            z->r[k][l] = a->r[k][l] + b->r[k][l] + U * fabs(x) + ETA;
+            z->r[k][l] = a->r[k][l] + b->r[k][l] + ADD_U * fabs(x) + ADD_ETA;
             z->v[k][l] = x;
         }
     z->n = n;
@@ -144,7 +173,7 @@ static void lf_sub(lform *z, const lform *a, const lform *b) { lf_addsub(z, a, b
 static void lf_times(lform *z, const lform *a, double c) {
     z->n = a->n;
     for (int k = 0; k <= a->n; k++)
-        for (int l = 0; l < LANES; l++) { z->v[k][l] = c * a->v[k][l]; z->r[k][l] = fabs(c) * a->r[k][l] + ETA; }
+        for (int l = 0; l < LANES; l++) { z->v[k][l] = c * a->v[k][l]; z->r[k][l] = fabs(c) * a->r[k][l] + TIMES_ETA; }
 }
 
 /* z = a b for a ball b per lane (each coefficient times the lane's ball, as bmul) */
@@ -153,7 +182,7 @@ static void lf_scale(lform *z, const lform *a, const lball *b) {
     for (int k = 0; k <= a->n; k++)
         for (int l = 0; l < LANES; l++) {
             double x = a->v[k][l], rx = a->r[k][l], y = b->v[l], ry = b->r[l], p = x * y;
-            z->r[k][l] = fabs(x) * ry + rx * (fabs(y) + ry) + U * fabs(p) + 5 * ETA;
+            z->r[k][l] = fabs(x) * ry + rx * (fabs(y) + ry) + MUL_U * fabs(p) + MUL_ETA;
             z->v[k][l] = p;
         }
 }
@@ -177,7 +206,7 @@ static void lf_mul(lform *z, const lform *a, const lform *b) {
         }
         for (int l = 0; l < LANES; l++) {
             z->v[k][l] = sv[l];
-            z->r[k][l] = R[l] + m * U * S[l] + (8 * m + 2) * ETA;
+            z->r[k][l] = R[l] + DOT_U(m) * S[l] + DOT_ETA(m);
         }
     }
     z->n = n;
@@ -190,7 +219,7 @@ static void lf_bernstein(form *z, const lform *a, int l) {
     for (int k = 0; k <= a->n; k++) {
         double x = a->v[k][l] / C;
         z->v[k] = x;
-        z->r[k] = a->r[k][l] / C + U * fabs(x) + ETA;
+        z->r[k] = a->r[k][l] / C + DIV_U * fabs(x) + DIV_ETA;
         C = C * (a->n - k) / (k + 1);
     }
 }
@@ -214,7 +243,7 @@ static void f_split(const form *b, double tau, form *left, form *right) {
         for (int i = 0; i <= n - lev; i++) {
             double x = al * v[i] + tau * v[i + 1];
             double mag = al * (fabs(v[i]) + r[i]) + tau * fabs(v[i + 1]);
-            r[i] = al * r[i] + tau * r[i + 1] + 4 * U * mag + 6 * ETA;
+            r[i] = al * r[i] + tau * r[i + 1] + SPLIT_MAG_U * mag + SPLIT_ETA;
             v[i] = x;
         }
         if (left) { left->v[lev] = v[0]; left->r[lev] = r[0]; }
@@ -256,9 +285,9 @@ static int load_body(body *b, const double *row, int d, double inv_len) {
     for (int a = 0; a < d; a++) {
         double s = r[a] * inv_len;          /* exact: a power of two */
         if (!(s >= 0x1p-60 && s <= 1.0)) return 0;
-        double s2 = s * s, D = 1.0 / s2;    /* two roundings: |D - 1/s^2| <= 3 U D */
+        double s2 = s * s, D = 1.0 / s2;    /* two roundings: |D - 1/s^2| <= INV_SQUARE_U D */
         b->D[a].v = D;
-        b->D[a].r = 3 * U * D;
+        b->D[a].r = INV_SQUARE_U * D;
     }
     return 1;
 }
@@ -399,8 +428,8 @@ static int load_pair(pair *p, int d, const double *ra, const double *rb, const d
             ball s = bx(sh);
             ball x0 = bsub(badd(bx(rb[a]), s), bx(ra[a]));
             ball x1 = bsub(badd(bx(rb[d + a]), s), bx(ra[d + a]));
-            p->d0[a] = (ball){x0.v * inv, x0.r * inv + ETA};
-            p->d1[a] = (ball){x1.v * inv, x1.r * inv + ETA};
+            p->d0[a] = (ball){x0.v * inv, x0.r * inv + RESCALE_ETA};
+            p->d1[a] = (ball){x1.v * inv, x1.r * inv + RESCALE_ETA};
         }
         if (!(fabs(p->d0[a].v) <= 0x1p+60 && fabs(p->d1[a].v) <= 0x1p+60)) return 0;
         if (rb[a] != rb[d + a] || ra[a] != ra[d + a]) p->moves = 1;
@@ -586,7 +615,7 @@ static void combine(const pair *p, double T, form *f) {
             R += Tk[k].v * p->b[k].r[j] + Tk[k].r * (fabs(y) + p->b[k].r[j]);
         }
         f->v[j] = s;
-        f->r[j] = R + (n + 1) * U * S + (4 * n + 8) * ETA;
+        f->r[j] = R + COMBINE_U(n + 1) * S + COMBINE_ETA(n + 1);
     }
 }
 
@@ -710,10 +739,11 @@ static double certify_prefix(const form *f, double ta, double tb) {
             if (f_positive(&g)) return 1.0;
         } else {
             /* u >= (tb - ta) / (1 - ta) exactly: the piece [ta, ta + u (1 - ta)] covers [ta, tb].
-             * Two subtractions and a division leave the quotient >= (1 - 3u) times the exact one;
-             * four steps up add at least 4u of it (an ulp is at least u times the value). */
+             * Two subtractions and a division leave the quotient >= (1 - u)^2 / (1 + u) times the
+             * exact one; each step up multiplies it by more than 1 + u (an ulp is more than u
+             * times the value): CERTIFY_STEPS_UP = 4 is the fewest that make up for it. */
             double u = (tb - ta) / span;
-            for (int up = 0; up < 4; up++) u = nextafter(u, 2.0);
+            for (int up = 0; up < CERTIFY_STEPS_UP; up++) u = nextafter(u, 2.0);
             if (u >= 1.0) { if (f_positive(&g)) return tb; }
             else {
                 f_split(&g, u, &h, NULL);
@@ -781,10 +811,12 @@ static void run_group(batch *bt, int key, int8_t *status, double *tlo, double *t
     bt->count[key] = 0;
 }
 
-/* Batch entry point: pairs (pi[k], pj[k]) of the bodies' rows (stride doubles each: c0, c1, r,
- * q0, q1), j moved by shift[k] (d floats, or NULL); writes status, t_lo, t_hi, iterations.
- * Returns 0, or -1 when out of memory (nothing written). */
-int32_t sweep_pairs(int32_t d, const double *bodies, int64_t stride, const int64_t *pi, const int64_t *pj,
+/* Batch entry point (called by _sweep_module.c without the GIL): pairs (pi[k], pj[k]) of the n
+ * bodies' rows (stride doubles each: c0, c1, r, q0, q1), j moved by shift[k] (d floats, or NULL);
+ * writes status, t_lo, t_hi, iterations. An index outside [0, n) makes its pair UNDECIDED (the
+ * caller refuses them; this guards against arrays changed by another thread meanwhile). Returns 0,
+ * or -1 when out of memory (nothing written). */
+int32_t sweep_batch(int32_t d, const double *bodies, int64_t n, int64_t stride, const int64_t *pi, const int64_t *pj,
                     const double *shift, int64_t m, int8_t *status, double *tlo, double *thi, int32_t *iters) {
     batch *bt = malloc(sizeof(batch));
     if (!bt) return -1;
@@ -793,7 +825,9 @@ int32_t sweep_pairs(int32_t d, const double *bodies, int64_t stride, const int64
         tlo[k] = thi[k] = NAN;
         iters[k] = 0;
         pair p;
-        if (!load_pair(&p, d, bodies + pi[k] * stride, bodies + pj[k] * stride, shift ? shift + k * d : NULL)) {
+        const int64_t a = pi[k], b = pj[k];  /* read once */
+        if (a < 0 || a >= n || b < 0 || b >= n ||
+            !load_pair(&p, d, bodies + a * stride, bodies + b * stride, shift ? shift + k * d : NULL)) {
             status[k] = UNDECIDED;
             continue;
         }

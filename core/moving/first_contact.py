@@ -30,7 +30,7 @@ from flint import fmpq
 from ..algebra.algebraic import RealAlgebraic
 from ..algebra.qsqrt import QSqrtPoly
 from ..algebra.realroots import roots_in_order
-from ..fixed.classify import Certifier
+from ..filtered import predicate
 from ..fixed.exact import classify_exact
 from ..options import check_choice
 from ..relation import Relation
@@ -47,6 +47,9 @@ from .signs import Signs, decide_with
 from .sweep_filter import CONTACT, OVERLAP_AT_START, UNDECIDED, first_contacts_float
 
 __all__ = ["first_contact", "first_contact_of", "first_contacts", "FirstContacts", "bracket"]
+
+_FIRST_CONTACT = predicate("sweep_first_contact")
+"""The filtered predicate of :func:`first_contacts` (the sweep's narrow phase; :func:`core.filter_stats`)."""
 
 
 def first_contact(A_t: Any, B_t: Any, interval: tuple[Any, Any] = (0, 1), *, digits: int = 20) -> Event | None:
@@ -242,46 +245,58 @@ def first_contacts(
     """
     check_choice(method, ("adaptive", "exact"), "method")
     M = int(np.asarray(i).size)
-    rel = np.full(M, Relation.SEPARATE, np.int8)
-    lo = np.full(M, np.nan)
-    hi = np.full(M, np.nan)
-    by = np.full(M, Certifier.FLOAT, np.int8)
-    status = np.full(M, UNDECIDED, np.int8)
     done = 0
-    if method == "adaptive":
+
+    def blank(_: None) -> FirstContacts:
+        """Every pair still to decide: SEPARATE, no bracket (the exact stage writes its answers)."""
+        return FirstContacts(np.full(M, Relation.SEPARATE, np.int8), np.full(M, np.nan), np.full(M, np.nan), np.zeros(0, np.int8))
+
+    def floats(_: None) -> tuple[FirstContacts, np.ndarray | None]:
+        """The float stage: the certified filter by chunks; its UNDECIDED pairs are the unsure."""
+        nonlocal done
+        out = blank(None)
+        status = np.full(M, UNDECIDED, np.int8)
         for s in range(0, M, chunk):
             part = slice(s, min(s + chunk, M))
             r = first_contacts_float(bodies, i[part], j[part], None if shift is None else shift[part])
-            status[part], lo[part], hi[part] = r.status, r.t_lo, r.t_hi
+            status[part], out.t_lo[part], out.t_hi[part] = r.status, r.t_lo, r.t_hi
             done = part.stop
             if progress is not None:
                 progress(done, M)
-    rel[status == CONTACT] = Relation.TANGENT
-    rel[status == OVERLAP_AT_START] = Relation.OVERLAP
-    out = FirstContacts(rel, lo, hi, by)
-    at_start: dict[int, list[list[fmpq]]] = {}
-    for k in np.flatnonzero(status == UNDECIDED).tolist():
-        a, b, sh = int(i[k]), int(j[k]), None if shift is None else shift[k]
-        by[k] = Certifier.EXACT
-        if a not in at_start:
-            at_start[a] = bodies.matrix_at_start(a)
-        if sh is not None and np.any(sh):
-            B0 = bodies.matrix_at_start(b, sh)
-        else:
-            if b not in at_start:
-                at_start[b] = bodies.matrix_at_start(b)
-            B0 = at_start[b]
-        start = classify_exact(at_start[a], B0).relation  # touching or overlapping at t = 0: t* = 0 (cheap)
-        if start != Relation.SEPARATE:
-            rel[k], lo[k], hi[k] = start, 0.0, 0.0
-            out.times[k] = RealAlgebraic.rational(fmpq(0))
-        elif (e := first_contact(bodies.motion(a), bodies.motion(b, sh), (0, 1))) is not None:
-            rel[k] = e.relation
-            lo[k], hi[k] = bracket(e.time)
-            out.times[k] = e.time
-        done += 1
-        if progress is not None:
-            progress(done, M)
+        out.relation[status == CONTACT] = Relation.TANGENT
+        out.relation[status == OVERLAP_AT_START] = Relation.OVERLAP
+        unsure = status == UNDECIDED
+        return out, unsure if unsure.any() else None
+
+    def exact(_: None, out: FirstContacts, todo: np.ndarray) -> None:
+        """The exact stage: pair by pair on the exact motions (module docstring of :func:`first_contacts`)."""
+        nonlocal done
+        rel, lo, hi = out.relation, out.t_lo, out.t_hi
+        at_start: dict[int, list[list[fmpq]]] = {}
+        for k in todo.tolist():
+            a, b, sh = int(i[k]), int(j[k]), None if shift is None else shift[k]
+            if a not in at_start:
+                at_start[a] = bodies.matrix_at_start(a)
+            if sh is not None and np.any(sh):
+                B0 = bodies.matrix_at_start(b, sh)
+            else:
+                if b not in at_start:
+                    at_start[b] = bodies.matrix_at_start(b)
+                B0 = at_start[b]
+            start = classify_exact(at_start[a], B0).relation  # touching or overlapping at t = 0: t* = 0 (cheap)
+            if start != Relation.SEPARATE:
+                rel[k], lo[k], hi[k] = start, 0.0, 0.0
+                out.times[k] = RealAlgebraic.rational(fmpq(0))
+            elif (e := first_contact(bodies.motion(a), bodies.motion(b, sh), (0, 1))) is not None:
+                rel[k] = e.relation
+                lo[k], hi[k] = bracket(e.time)
+                out.times[k] = e.time
+            done += 1
+            if progress is not None:
+                progress(done, M)
+
+    out, by, _ = _FIRST_CONTACT.run(None, M, floats, exact, method, blank=blank)
+    out.certified_by = by if by.flags.writeable else np.array(by)  # FLOAT (the filter) or EXACT
     return out
 
 

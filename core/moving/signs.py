@@ -15,6 +15,7 @@ from flint import fmpq
 
 from ..algebra.algebraic import RealAlgebraic, sign_at
 from ..algebra.qsqrt import QSqrtPoly
+from ..filtered import predicate
 from ..formulae.decision import Decision, decide, sign_variations
 from ..relation import Relation
 from ..shapes.numbers import to_fmpq
@@ -23,6 +24,15 @@ __all__ = ["SignRow", "Signs", "decide_with", "sign_row", "decide_at", "sign_row
 
 
 _SIGN = {1: "+", 0: "0", -1: "-"}
+
+_SIGN_AT = predicate("motion_sign")
+"""The filtered predicate of one sign a_i(t), ŝ_j(t) at a point (:func:`core.filter_stats`): the
+float Horner filter at a float t, exact evaluation otherwise (rational or algebraic t)."""
+
+
+def _no_float() -> int | None:
+    """The float stage where there is none (an exact point): never certain."""
+    return None
 
 
 @dataclass(frozen=True)
@@ -72,15 +82,18 @@ class Signs:
     def __call__(self, name: str) -> int:
         """Exact sign of the polynomial ``name`` ("a0".."a4", "s0", "s1", "s10") at the point."""
         if name not in self.cache:
-            if name in self.zero:
+            if name in self.zero:  # known to vanish here: no evaluation
                 self.cache[name] = 0
             else:
-                p = self.polys[name]
-                if isinstance(self.point, RealAlgebraic):
-                    self.cache[name] = sign_at(p, self.point)
-                else:
-                    fs = None if self.float_point is None else p.float_sign_at(self.float_point)
-                    self.cache[name] = fs if fs is not None else p.sign_at_rational(self.point)
+                p, point, fp = self.polys[name], self.point, self.float_point
+                if isinstance(point, RealAlgebraic):
+                    s, _ = _SIGN_AT.one(_no_float, lambda: sign_at(p, point), "exact")
+                elif fp is None:
+                    s, _ = _SIGN_AT.one(_no_float, lambda: p.sign_at_rational(point), "exact")
+                else:  # a float point: the certified float Horner step first
+                    s, _ = _SIGN_AT.one(lambda: p.float_sign_at(fp), lambda: p.sign_at_rational(point))
+                assert s is not None  # "adaptive" and "exact" always answer
+                self.cache[name] = s
         return self.cache[name]
 
 

@@ -16,35 +16,37 @@ lattice vector) the kernel ``core/moving/_sweep_filter.c`` returns one of
 The certificates are the paper's: two shapes are separate exactly when P(T) = det(T A + B) has
 two distinct positive roots, so P(t, T) > 0 for one T > 0 and every t of an interval proves
 separation there; it is proven by the Bernstein coefficients of P(., T) on that interval, each
-larger than its certified error radius. The proofs of the radii are in the C source's header.
+larger than its certified error radius. The proofs of the radii are in the C source's header;
+every constant a radius adds is a named allowance there, checked against a trace of the
+operations it covers by :mod:`core.moving.sweepbounds`.
 The search is a Newton-like advance: T maximises P(t_a, .) at the current t_a, the next float
 root of P(., T) is the target, and the advance converges quadratically to a transversal contact.
 
-The kernel is the extension ``core.moving._sweep_filter``, built when the package is installed
-(``setup.py``; nothing is compiled at run time) and called through ctypes. Without it every pair
-is UNDECIDED (the exact path answers all of them, slowly) and a :class:`RuntimeWarning` says so
-once, naming the cause and the fix.
+The kernel is the extension ``core.moving._sweep_filter`` (``_sweep_filter.pyi``), built when
+the package is installed (``setup.py``; nothing is compiled at run time): its ``sweep_pairs``
+takes the arrays through the buffer protocol, checks them, and releases the GIL while it runs, so
+a large batch is split over threads. Without it every pair is UNDECIDED (the exact path answers
+all of them, slowly) and a :class:`RuntimeWarning` says so once, naming the cause and the fix.
 """
 
 from __future__ import annotations
 
-import ctypes
 import importlib
 import threading
 import warnings
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import Any
+from types import ModuleType
 
 import numpy as np
 
 from ..fixed.compiled import FIX, get_threads
 from .linear import LinearMotions
 
-__all__ = ["NEVER", "CONTACT", "OVERLAP_AT_START", "UNDECIDED", "FilterResult", "first_contacts_float", "filter_status"]
+__all__ = ["NEVER", "CONTACT", "OVERLAP_AT_START", "UNDECIDED", "FilterResult", "first_contacts_float", "filter_status", "available"]
 
 NEVER, CONTACT, OVERLAP_AT_START, UNDECIDED = 0, 1, 2, -1
-"""Status codes of :class:`FilterResult` (the kernel's)."""
+"""Status codes of :class:`FilterResult` (the kernel's: its module constants of the same names)."""
 
 _MIN_CHUNK = 256
 """Pairs per thread below which a batch is not split."""
@@ -67,27 +69,30 @@ class FilterResult:
     """int32 advancement steps (diagnostics)."""
 
 
-def _library() -> ctypes.CDLL | None:
-    """The compiled kernel (loaded once), or None with a one-time warning saying why."""
+def _library() -> ModuleType | None:
+    """The compiled kernel's module (imported once), or None with a one-time warning saying why."""
     with _lock:
         if not _state["tried"]:
             _state["tried"] = True
-            lib: ctypes.CDLL | None = None
+            lib: ModuleType | None = None
             try:
-                module = importlib.import_module("core.moving._sweep_filter")
-                lib = ctypes.CDLL(str(module.__file__))
-                fn = lib.sweep_pairs
-                args: list[Any] = [ctypes.c_int32, ctypes.c_void_p, ctypes.c_int64] + [ctypes.c_void_p] * 3 + [ctypes.c_int64] + [ctypes.c_void_p] * 4
-                fn.argtypes = args
-                fn.restype = ctypes.c_int32
-                status = f"compiled sweep kernel loaded from {module.__file__}"
-            except (ImportError, OSError, AttributeError) as e:
+                lib = importlib.import_module("core.moving._sweep_filter")
+                if not callable(getattr(lib, "sweep_pairs", None)):  # built from an older source
+                    where = getattr(lib, "__file__", lib.__name__)
+                    raise ImportError(f"{where} has no sweep_pairs: it was built from an older core/moving/_sweep_module.c")
+                status = f"compiled sweep kernel loaded from {lib.__file__}"
+            except ImportError as e:
                 lib = None
                 status = f"the compiled sweep kernel is missing ({type(e).__name__}: {e}): exact arithmetic answers every pair"
                 warnings.warn(f"{status}; to fix it, {FIX}", RuntimeWarning, stacklevel=3)
             _state["lib"] = lib
             _state["status"] = status
     return _state["lib"]  # type: ignore[return-value]
+
+
+def available() -> bool:
+    """True when the compiled sweep filter serves (else a one-time warning; exact arithmetic answers)."""
+    return _library() is not None
 
 
 def filter_status() -> str:
@@ -115,36 +120,28 @@ def first_contacts_float(
 
     Returns:
         :class:`FilterResult` (every pair UNDECIDED when the kernel is unavailable).
+
+    Raises:
+        ValueError: i and j of different sizes, an index that is not a body, a shift of another shape.
     """
     M = int(np.asarray(i).size)
+    if int(np.asarray(j).size) != M:
+        raise ValueError(f"i and j must hold one body per pair each, got {M} and {np.asarray(j).size}")
     out = FilterResult(np.full(M, UNDECIDED, np.int8), np.full(M, np.nan), np.full(M, np.nan), np.zeros(M, np.int32))
     lib = _library()
     if lib is None or M == 0:
         return out
     rows = bodies.packed()
     d = bodies.dim
-    stride = rows.shape[1]
-    pi = np.ascontiguousarray(i, dtype=np.int64)
-    pj = np.ascontiguousarray(j, dtype=np.int64)
+    pi = np.ascontiguousarray(i, dtype=np.int64).reshape(M)
+    pj = np.ascontiguousarray(j, dtype=np.int64).reshape(M)
     sh = None if shift is None else np.ascontiguousarray(shift, dtype=np.float64).reshape(M, d)
     fn = lib.sweep_pairs
 
     def run(lo: int, hi: int) -> None:
-        failed = fn(
-            d,
-            rows.ctypes.data,
-            stride,
-            pi.ctypes.data + 8 * lo,
-            pj.ctypes.data + 8 * lo,
-            None if sh is None else sh.ctypes.data + 8 * d * lo,
-            hi - lo,
-            out.status.ctypes.data + lo,
-            out.t_lo.ctypes.data + 8 * lo,
-            out.t_hi.ctypes.data + 8 * lo,
-            out.iterations.ctypes.data + 4 * lo,
-        )
-        if failed:
-            raise MemoryError("the sweep filter could not allocate its workspace (400 kB)")
+        # the C checks the arrays (types, shapes, indices) and releases the GIL while it runs
+        s = slice(lo, hi)
+        fn(d, rows, pi[s], pj[s], None if sh is None else sh[s], out.status[s], out.t_lo[s], out.t_hi[s], out.iterations[s])
 
     k = min(threads or get_threads(), max(1, M // _MIN_CHUNK))
     if k <= 1:

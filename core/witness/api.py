@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from typing import Literal, TypeAlias, overload
 
+from ..filtered import predicate
 from ..options import Method, OnInvalid, check_options
 from ..relation import Relation
 from ..shapes.quadrics import Matrix, Stack
@@ -33,6 +34,12 @@ from .witness import Witness, compose
 __all__ = ["contact_scale", "separating_plane", "contact_point", "distance", "witness", "Matrix", "Stack"]
 
 Exact: TypeAlias = Literal["adaptive", "exact"]
+
+# the filtered predicates of the witnesses (their counters: core.filter_stats())
+_SCALE = predicate("contact_scale")
+_PLANE = predicate("separating_plane")
+_POINT = predicate("contact_point")
+_DISTANCE = predicate("distance")
 
 
 def _none(rel: Relation) -> str | None:
@@ -99,6 +106,7 @@ def contact_scale(
         missing=_none,
         float_stage=lambda p, todo: scale_float(p, todo, rtol),
         exact_stage=lambda p, i: scale_exact(p, i, rtol),
+        counter=_SCALE,
     )
     return finish(out, pairs, on_invalid)
 
@@ -150,7 +158,7 @@ def separating_plane(
     """
     check_options(method, on_invalid)
     pairs = read_pairs(A, B, method)
-    out = filtered(pairs, what="separating plane", missing=no_plane, float_stage=plane_float, exact_stage=plane_exact)
+    out = filtered(pairs, what="separating plane", missing=no_plane, float_stage=plane_float, exact_stage=plane_exact, counter=_PLANE)
     return finish(out, pairs, on_invalid)
 
 
@@ -197,7 +205,7 @@ def contact_point(
     """
     check_options(method, on_invalid)
     pairs = read_pairs(A, B, method)
-    out = filtered(pairs, what="contact point", missing=no_point, float_stage=point_float, exact_stage=point_exact)
+    out = filtered(pairs, what="contact point", missing=no_point, float_stage=point_float, exact_stage=point_exact, counter=_POINT)
     return finish(out, pairs, on_invalid)
 
 
@@ -249,6 +257,7 @@ def distance(
         missing=_none,
         float_stage=lambda p, todo: distance_float(p, todo, rtol),
         exact_stage=lambda p, i: distance_exact(p, i, rtol),
+        counter=_DISTANCE,
     )
     return finish(out, pairs, on_invalid)
 
@@ -309,9 +318,10 @@ def _witnesses(pairs: Pairs, rtol: float) -> list[Witness | NoWitness]:
         missing=_none,
         float_stage=lambda p, todo: scale_float(p, todo, rtol),
         exact_stage=lambda p, i: scale_exact(p, i, rtol),
+        counter=_SCALE,
     )
-    planes = filtered(pairs, what="separating plane", missing=no_plane, float_stage=plane_float, exact_stage=plane_exact)
-    points = filtered(pairs, what="contact point", missing=no_point, float_stage=point_float, exact_stage=point_exact)
+    planes = filtered(pairs, what="separating plane", missing=no_plane, float_stage=plane_float, exact_stage=plane_exact, counter=_PLANE)
+    points = filtered(pairs, what="contact point", missing=no_point, float_stage=point_float, exact_stage=point_exact, counter=_POINT)
     out: list[Witness | NoWitness] = []
     for s, pl, pt in zip(scales, planes, points, strict=True):
         rel = s.relation

@@ -2,7 +2,8 @@
 
 ``python -m core.witness.detgen`` writes core/witness/_det_kernels.py; ``--check`` reports
 whether the committed file is what the generator produces today (the test suite runs it, as it
-does for the filter's kernels, :mod:`core.fixed.kernelgen`). A determinant is the ring-generic
+does for the filter's kernels, :mod:`core.fixed.kernelgen`; ``python -m core.generated --check``
+checks both). A determinant is the ring-generic
 Laplace formula of :func:`core.formulae.pencil.determinant`, traced by
 :func:`core.fixed.errorbound.build_kernel` into straight-line float code with a proven error
 constant: |computed - det| <= C * M + floor, M >= the permanent of |rows| (product of absolute
@@ -19,7 +20,7 @@ from typing import Any
 from ..fixed.errorbound import Kernel, build_kernel
 from ..formulae.pencil import determinant
 
-__all__ = ["SIZES", "kernel", "generate_module", "main", "GENERATED_PATH"]
+__all__ = ["SIZES", "kernel", "generate_module", "generated_files", "main", "GENERATED_PATH"]
 
 SIZES = (2, 3)
 """Matrix sizes with a kernel: the quadratic blocks of ellipses and ellipsoids."""
@@ -72,18 +73,17 @@ def generate_module() -> str:
     return "\n\n".join(parts)
 
 
+def generated_files() -> dict[Path, str]:
+    """The file this generator writes, with its text today (:mod:`core.generated` checks them all)."""
+    return {GENERATED_PATH: generate_module()}
+
+
 def main(argv: list[str] | None = None) -> int:
     """Write (default) or ``--check`` the generated module core/witness/_det_kernels.py."""
+    from ..generated import write_or_check
+
     args = sys.argv[1:] if argv is None else argv
-    text = generate_module()
-    if "--check" in args:
-        if not GENERATED_PATH.exists() or GENERATED_PATH.read_text() != text:
-            print(f"stale: {GENERATED_PATH}: run python -m core.witness.detgen")
-            return 1
-        return 0
-    GENERATED_PATH.write_text(text)
-    print(f"wrote {GENERATED_PATH} ({len(text.splitlines())} lines)")
-    return 0
+    return write_or_check(generated_files(), "python -m core.witness.detgen", check="--check" in args)
 
 
 if __name__ == "__main__":

@@ -8,7 +8,9 @@ Every public witness (:mod:`core.witness.api`) is the same three steps over a pa
    undecided);
 2. the **float stage**, vectorised over the stack, certified, allowed to abstain
    (:mod:`core.witness.floatcert`), for binary64 input unless ``method="exact"``;
-3. the **exact stage**, pair by pair, for what the floats left: never under ``method="float"``
+3. the **exact stage**, pair by pair, for what the floats left (steps 2 and 3 are one
+   evaluation of a :class:`core.filtered.Predicate`, one per witness, counted by
+   :func:`core.filter_stats`): never under ``method="float"``
    (those pairs are ``NoWitness(kind="undecided")``, as ``classify`` answers UNDECIDED). A pair
    whose exact stage fails (never expected) becomes ``NoWitness(kind="failed")``: in a stack, one
    hard pair never costs the others their answers.
@@ -28,7 +30,8 @@ from typing import Any, Literal, TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from ..fixed.classify import Certifier, classify, classify_detailed
+from ..filtered import Certifier, Predicate
+from ..fixed.classify import classify, classify_detailed
 from ..options import Method, OnInvalid
 from ..relation import Relation
 from ..shapes.numbers import binary64_array
@@ -149,8 +152,14 @@ def filtered(
     missing: Callable[[Relation], str | None],
     float_stage: Callable[[Pairs, np.ndarray], dict[int, T]] | None,
     exact_stage: Callable[[Pairs, int], T],
+    counter: Predicate,
 ) -> list[T | NoWitness]:
     """The witness of every pair: float stage first, exact stage for what it leaves.
+
+    The pairs with an answer by their relation alone (invalid, undecided, no such witness) get
+    their :class:`NoWitness` first; the others are one evaluation of ``counter``
+    (:class:`core.filtered.Predicate`: the control flow, ``method``, the counters). Input the
+    floats cannot read (exact numbers) goes to the exact stage under "adaptive".
 
     Args:
         pairs: the pairs (:func:`read_pairs`).
@@ -159,6 +168,7 @@ def filtered(
         float_stage: certified float results for the pairs of a mask (vectorised; may omit
             any), or None when floats cannot give this witness.
         exact_stage: the exact result of pair i (its relation is certified).
+        counter: the predicate that runs and counts this witness.
 
     Returns:
         One result or :class:`NoWitness` per pair, in flat order.
@@ -172,21 +182,46 @@ def filtered(
             out[i] = NoWitness(rel, "undecided", "the float filter could not certify the relation (method='float')")
         elif (why := missing(rel)) is not None:
             out[i] = NoWitness(rel, "none", why)
-    todo = np.array([o is None for o in out], dtype=bool)
-    if float_stage is not None and pairs.method != "exact" and todo.any() and pairs.floats is not None:
-        for i, r in float_stage(pairs, todo).items():
-            out[i] = r
-    for i in range(pairs.size):
-        if out[i] is not None:
-            continue
-        rel = Relation(int(pairs.relation[i]))
-        if pairs.method == "float":
-            out[i] = NoWitness(rel, "undecided", f"the floats could not certify the {what} (method='float'; 'adaptive' finishes it exactly)")
-            continue
-        try:  # one pair's trouble stays that pair's: the others keep their answers
-            out[i] = exact_stage(pairs, i)
-        except (ArithmeticError, RuntimeError, ValueError) as e:
-            out[i] = NoWitness(rel, "failed", f"{what}: {e} (please report this pair)")
+    todo = np.flatnonzero(np.array([o is None for o in out], dtype=bool))
+    if not todo.size:
+        return [o for o in out if o is not None]
+    method = pairs.method
+    floats = float_stage is not None and method != "exact" and pairs.floats is not None
+    if not floats and method == "adaptive":  # no float stage for this input: exact, not a float failure
+        method = "exact"
+
+    def floated(_: None) -> tuple[np.ndarray, np.ndarray | None]:
+        values = np.empty(todo.size, dtype=object)
+        if not floats:  # "float" without a float stage: every pair stays undecided
+            return values, np.ones(todo.size, dtype=bool)
+        assert float_stage is not None
+        mask = np.zeros(pairs.size, dtype=bool)
+        mask[todo] = True
+        where = np.cumsum(mask) - 1  # pair index -> its position in todo
+        decided = np.zeros(todo.size, dtype=bool)
+        for i, r in float_stage(pairs, mask).items():
+            values[where[i]] = r
+            decided[where[i]] = True
+        return values, None if decided.all() else ~decided
+
+    def exact(_: None, values: np.ndarray, idx: np.ndarray) -> np.ndarray | None:
+        failed = np.zeros(idx.size, dtype=bool)
+        for k, pos in enumerate(idx.tolist()):
+            i = int(todo[pos])
+            try:  # one pair's trouble stays that pair's: the others keep their answers
+                values[pos] = exact_stage(pairs, i)
+            except (ArithmeticError, RuntimeError, ValueError) as e:
+                values[pos] = NoWitness(Relation(int(pairs.relation[i])), "failed", f"{what}: {e} (please report this pair)")
+                failed[k] = True
+        return failed if failed.any() else None
+
+    values, _, _ = counter.run(None, int(todo.size), floated, exact, method, blank=lambda _: np.empty(todo.size, dtype=object))
+    for pos, i in enumerate(todo.tolist()):
+        v = values[pos]
+        if v is None:  # "float": the floats could not certify it
+            rel = Relation(int(pairs.relation[i]))
+            v = NoWitness(rel, "undecided", f"the floats could not certify the {what} (method='float'; 'adaptive' finishes it exactly)")
+        out[i] = v
     return [o for o in out if o is not None]
 
 
