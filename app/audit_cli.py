@@ -43,9 +43,13 @@ import time
 from collections.abc import Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from core import Contacts, SweepContacts
+    from core.options import OnInvalid
 
 __all__ = ["add_parser", "run_audit", "frames_argument", "audit_frame", "FrameReport", "EXIT_OVERLAP"]
 
@@ -153,7 +157,7 @@ def _rows(frame: int, table: Any, d: int, has_ids: bool, *, bracket: bool = True
     return "".join(",".join(row) + "\n" for row in zip(*parts, strict=True))
 
 
-def audit_frame(frame: int, bodies: Any, box: Any, following: Any = None, *, on_invalid: str = "raise",
+def audit_frame(frame: int, bodies: Any, box: Any, following: Any = None, *, on_invalid: OnInvalid = "raise",
                 threads: int | None = None) -> FrameReport:
     """The check of one frame, and of its step to the ``following`` frame when given (a worker's task).
 
@@ -180,6 +184,7 @@ def audit_frame(frame: int, bodies: Any, box: Any, following: Any = None, *, on_
     if errors and on_invalid == "raise":
         k, why = next(iter(errors.items()))
         raise ValueError(f"{where}: {bodies.where(k)}: {why}")
+    found: Contacts | SweepContacts
     try:
         if bodies.has_parameters:  # the bodies the file's numbers describe, read exactly (as --between does)
             found = sweep_contacts(bodies, bodies, box=use_box, on_invalid=on_invalid)

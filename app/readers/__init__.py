@@ -32,8 +32,8 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
-from pathlib import Path
 from collections.abc import Iterator
+from pathlib import Path
 from typing import IO, Any
 
 from .bodyset import BodySet, file_box, usable_box
