@@ -187,7 +187,7 @@ def benchmarks() -> str:
     """The benchmark page's tables, rendered from ``bench/results/*.json``."""
     from bench.render import render
 
-    return render(ROOT / "bench" / "results", link_root="../")
+    return render(ROOT / "bench" / "results")
 
 
 def generate(app: Any = None) -> None:
