@@ -1,0 +1,131 @@
+"""The documentation site builds with warnings as errors, and every example in it runs (issue 56).
+
+* ``test_the_site_builds``: ``python -m sphinx -W --keep-going -b html docs <tmp>`` (the command of
+  docs/develop/docs.md), so a broken link, reference or docstring fails the suite.
+* ``test_the_examples_of`` one page: every ```python block of README.md and docs/**/*.md runs, the
+  blocks of a page in one namespace, in order (a doctest of the page), in a temporary folder holding
+  docs/data/; every ```bash / ```console block runs there with bash (``set -e``, so a pipeline is judged by its last command, as `| head` is; in a console
+  block only the ``$ `` lines). A block preceded by ``<!-- no-run: why -->`` or fenced
+  ```python no-run is skipped (a server that never returns, an install).
+* ``test_the_readme_is_short``: at most 150 lines.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+CHROMIUM = os.path.exists("/usr/bin/chromium")
+PAGES = [ROOT / "README.md"] + sorted(
+    p for p in DOCS.rglob("*.md") if not {"_build", "_generated", "data"} & set(p.relative_to(DOCS).parts[:-1])
+)
+_FENCE = re.compile(r"^```([\w-]*)([^\n]*)\n(.*?)^```[ \t]*$", re.M | re.S)
+_NO_RUN = re.compile(r"<!--\s*no-run\b[^>]*-->\s*$")
+RUN_LANGS = {"python": "python", "bash": "shell", "console": "shell", "sh": "shell", "shell": "shell"}
+NEEDS_BROWSER = re.compile(r"HeadlessScene|python -m app screenshot")
+
+
+@dataclass(frozen=True)
+class Block:
+    """One fenced code block of a page: its language ("python" or "shell"), text and first line."""
+
+    kind: str
+    code: str
+    line: int
+
+
+def blocks(text: str) -> list[Block]:
+    """The blocks of a Markdown page that the suite runs, in order (no-run blocks left out)."""
+    out = []
+    for m in _FENCE.finditer(text):
+        lang, info, code = m.group(1).lower(), m.group(2), m.group(3)
+        before = text[: m.start()].rstrip("\n").rsplit("\n", 1)[-1]
+        if lang not in RUN_LANGS or "no-run" in info or _NO_RUN.search(before):
+            continue
+        out.append(Block(RUN_LANGS[lang], code, text[: m.start()].count("\n") + 2))
+    return out
+
+
+def _shell_script(block: Block) -> str:
+    """A console block's ``$ `` commands (its other lines are output), or a bash block as it is."""
+    lines = block.code.splitlines()
+    if any(line.startswith("$ ") for line in lines):
+        lines = [line[2:] for line in lines if line.startswith("$ ")]
+    return "\n".join(lines)
+
+
+def _param(page: Path) -> object:
+    """One page as a test parameter; pages that draw in a browser are marked ``browser``."""
+    marks = []
+    if NEEDS_BROWSER.search("\n".join(b.code for b in blocks(page.read_text(encoding="utf-8")))):
+        marks = [pytest.mark.browser, pytest.mark.skipif(not CHROMIUM, reason="needs Debian chromium at /usr/bin/chromium")]
+    return pytest.param(page, id=str(page.relative_to(ROOT)), marks=marks)
+
+
+def test_the_fences_are_read_as_the_docs_say():
+    """The extraction itself: languages, the two no-run forms, console prompts, line numbers."""
+    text = ("# t\n\n```python\nx = 1\n```\n\n<!-- no-run: a server -->\n```bash\npython -m app serve\n```\n"
+            "```python no-run\nwhile True: pass\n```\n```console\n$ echo hi\nhi\n```\n```json\n{}\n```\n")
+    got = blocks(text)
+    assert [(b.kind, b.line) for b in got] == [("python", 4), ("shell", 15)]
+    assert _shell_script(got[1]) == "echo hi"
+
+
+@pytest.mark.parametrize("page", [_param(p) for p in PAGES])
+def test_the_examples_of(page: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+    """Every runnable block of one page runs, in order, in a folder holding docs/data/."""
+    found = blocks(page.read_text(encoding="utf-8"))
+    if not found:
+        pytest.skip("no runnable example on this page")
+    for f in (DOCS / "data").iterdir():
+        if f.is_file() and f.name != "README.md":
+            shutil.copy(f, tmp_path / f.name)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.syspath_prepend(str(ROOT))
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}",
+           "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    namespace: dict[str, object] = {"__name__": f"docs_page_{page.stem}"}
+    where = page.relative_to(ROOT)
+    for b in found:
+        if b.kind == "python":
+            try:
+                exec(compile(b.code, f"{where}:{b.line}", "exec"), namespace)  # noqa: S102  (the page's own example)
+            except Exception as e:
+                raise AssertionError(f"{where}, the python block at line {b.line} failed: {e!r}") from e
+        else:
+            done = subprocess.run(["bash", "-c", "set -e\n" + _shell_script(b)], cwd=tmp_path, env=env,
+                                  capture_output=True, text=True, timeout=240, check=False)
+            assert done.returncode == 0, f"{where}, the shell block at line {b.line} exited {done.returncode}:\n{done.stderr[-3000:]}"
+
+
+def test_the_readme_is_short():
+    """The README is a front door (at most 150 lines); the rest lives in docs/."""
+    lines = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+    assert len(lines) <= 150, f"README.md has {len(lines)} lines (at most 150: move the rest into docs/)"
+
+
+def test_the_site_builds(tmp_path: Path):
+    """``sphinx-build -W``: every warning (a broken link, a bad docstring) fails the build."""
+    pytest.importorskip("sphinx", reason="the docs extra: pip install -e '.[docs]'")
+    cmd = [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-j", "auto", "-b", "html",
+           "-d", str(tmp_path / "doctrees"), str(DOCS), str(tmp_path / "html")]
+    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600, check=False)
+    assert done.returncode == 0, f"the docs build failed:\n{done.stderr[-6000:]}"
+    html = tmp_path / "html"
+    for page in ("index", "getting-started", "concepts", "reference/python", "reference/cli", "reference/http",
+                 "benchmarks", "develop/index", "changelog"):
+        assert (html / f"{page}.html").is_file(), page
+    python_ref = (html / "reference" / "python.html").read_text(encoding="utf-8")
+    import core
+
+    missing = [name for name in core.__all__ if f'id="core.{name}"' not in python_ref]
+    assert not missing, f"names of core.__all__ without an entry in the Python reference: {missing}"
