@@ -1,0 +1,201 @@
+"""Benchmarks as data: write ``bench/results/<name>.json``, render them as the Benchmarks page.
+
+The benchmark commands write their numbers with :func:`write_result` (the command, the CPU, the
+cores, the date and one or more tables); this module renders every result file as one short
+section per question, the anchor it is measured against beside it, and the command that produced
+it. The documentation's Benchmarks page is this rendering (``docs/_ext/generated.py``), and
+``bench/REPORT.md`` is the same text, generated only::
+
+    python -m bench.render              # print the page
+    python -m bench.render --write      # write bench/REPORT.md from bench/results/*.json
+
+A result file::
+
+    {"command": "python -m bench.throughput --write", "cpu": "AMD EPYC", "cores": 2,
+     "date": "2026-12-05 07:24 UTC", "question": "...", "anchor": "...",
+     "tables": [{"title": "...", "columns": ["data", "..."], "rows": [["random 3D", "52.28 M/s"]]}]}
+
+``bench/results/audit*.json`` (``python -m bench.bench_audit``) keep their own nested form and are
+flattened into tables here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import re
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "bench" / "results"
+REPORT = ROOT / "bench" / "REPORT.md"
+
+__all__ = ["RESULTS", "REPORT", "cpu_name", "tables_from_markdown", "write_result", "render", "write_report", "main"]
+
+ORDER = ["targets", "throughput", "static", "near-tangent", "moving", "sweep", "bodies", "index", "audit", "scales",
+         "witness", "stages", "api", "scene"]
+"""The order of the questions on the page (files not named here come after, by name)."""
+
+
+def cpu_name() -> str:
+    """The CPU's model name (``/proc/cpuinfo``), else what ``platform`` says."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine() or "unknown"
+
+
+def tables_from_markdown(text: str, default_title: str = "") -> list[dict[str, Any]]:
+    """Every pipe table of a Markdown text, titled by the heading or bold line before it.
+
+    What the benchmark commands print is Markdown; this turns it into the tables of a result
+    file, so each command keeps one formatter for its terminal and its data.
+    """
+    tables: list[dict[str, Any]] = []
+    title = default_title
+    lines = text.splitlines()
+    k = 0
+    while k < len(lines):
+        line = lines[k].strip()
+        if line.startswith("#"):
+            title = line.lstrip("#").strip()
+        elif line.startswith("**") and line.count("**") >= 2:
+            title = line.split("**")[1].strip()
+        elif line.startswith("|") and k + 1 < len(lines) and re.fullmatch(r"\|?[\s:|-]+\|?", lines[k + 1].strip()):
+            columns = _cells(line)
+            rows = []
+            k += 2
+            while k < len(lines) and lines[k].strip().startswith("|"):
+                rows.append(_cells(lines[k].strip()))
+                k += 1
+            tables.append({"title": title, "columns": columns, "rows": rows})
+            continue
+        k += 1
+    return tables
+
+
+def _cells(line: str) -> list[str]:
+    """The cells of one Markdown table row (escaped pipes kept)."""
+    inner = line.strip().removeprefix("|").removesuffix("|")
+    return [c.strip().replace("\\|", "|") for c in re.split(r"(?<!\\)\|", inner)]
+
+
+def write_result(name: str, *, command: str, question: str, anchor: str, tables: list[dict[str, Any]],
+                 results: Path = RESULTS, **extra: Any) -> Path:
+    """Write ``results/<name>.json``: the command, the machine, the date and the tables."""
+    data = {"command": command, "cpu": cpu_name(), "cores": os.cpu_count(),
+            "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "question": question, "anchor": anchor,
+            **extra, "tables": tables}
+    results.mkdir(parents=True, exist_ok=True)
+    path = results / f"{name}.json"
+    path.write_text(json.dumps(data, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    return path
+
+
+def _esc(value: Any) -> str:
+    """One table cell: one line, pipes escaped."""
+    return " ".join(str(value).split()).replace("|", "\\|")
+
+
+def _table(t: dict[str, Any]) -> list[str]:
+    """A table of a result file as Markdown lines."""
+    cols = t["columns"]
+    out = [f"**{_esc(t['title'])}**", ""] if t.get("title") else []
+    out += ["| " + " | ".join(_esc(c) for c in cols) + " |", "|" + "---|" * len(cols)]
+    out += ["| " + " | ".join(_esc(c) for c in row) + " |" for row in t["rows"]]
+    return out + [""]
+
+
+def _flatten(prefix: str, value: Any, rows: list[list[str]]) -> None:
+    """Rows (key path, value) of a nested dict."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _flatten(f"{prefix}.{k}" if prefix else str(k), v, rows)
+    else:
+        rows.append([prefix, f"{value:.3g}" if isinstance(value, float) else str(value)])
+
+
+def _audit_tables(data: dict[str, Any]) -> list[dict[str, Any]]:
+    """The tables of a ``bench_audit`` result (its nested speed and accuracy figures)."""
+    tables = []
+    for key in ("speed", "accuracy"):
+        if isinstance(data.get(key), dict):
+            rows: list[list[str]] = []
+            _flatten("", data[key], rows)
+            tables.append({"title": key, "columns": ["figure", "value"], "rows": rows})
+    return tables
+
+
+_AUDIT = {"question": "Auditing a trajectory: how long, and how many labels are right, against the uncertified pipeline?",
+          "anchor": "scipy cKDTree on bounding spheres + Perram-Wertheim in numpy (float tolerances 0 and 1e-10)"}
+
+
+def _load(path: Path) -> dict[str, Any]:
+    """One result file, with defaults for the audit benchmark's form."""
+    data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+    if "tables" not in data:
+        data = {**_AUDIT, **data, "tables": _audit_tables(data)}
+    return data
+
+
+def _key(path: Path) -> tuple[int, str]:
+    """Sort key of a result file: its place in ORDER, then its name."""
+    stem = path.stem
+    base = next((n for n in ORDER if stem == n or stem.startswith(n + "-")), None)
+    return (ORDER.index(base) if base else len(ORDER), stem)
+
+
+def render(results: Path = RESULTS) -> str:
+    """The Benchmarks page: one section per result file, its question, anchor, command and tables."""
+    files = sorted(results.glob("*.json"), key=_key)
+    out = ["<!-- generated by bench/render.py from bench/results/*.json: do not edit -->", ""]
+    if not files:
+        return "\n".join(out + ["No results yet: run a benchmark command (each writes bench/results/<name>.json).", ""])
+    for path in files:
+        data = _load(path)
+        machine = ", ".join(str(x) for x in (data.get("cpu"), f"{data['cores']} cores" if data.get("cores") else None,
+                                             data.get("date")) if x)
+        out += [f"## {data.get('question') or path.stem}", ""]
+        if data.get("anchor"):
+            out += [f"Against: {data['anchor']}.", ""]
+        out += [f"Command: `{data.get('command', '?')}`" + (f" ({machine})" if machine else "") + f"; data: `bench/results/{path.name}`"
+                + (f" ({data['source']})" if data.get("source") else "") + ".", ""]
+        shown = None
+        for t in data["tables"]:
+            out += _table(t if t.get("title") != shown else {**t, "title": ""})
+            shown = t.get("title")
+    return "\n".join(out)
+
+
+def write_report(results: Path = RESULTS, path: Path = REPORT) -> Path:
+    """Write bench/REPORT.md: the rendered page, generated only."""
+    head = ("# Benchmark report\n\nGenerated by `python -m bench.render --write` from `bench/results/*.json` (each written "
+            "by the benchmark command it names); do not edit: rerun the command, then this one. The same tables are the "
+            "documentation's Benchmarks page (`docs/benchmarks.md`). Ground truth of every label: `tests/oracle.py`, never "
+            "the code under test.\n\n")
+    path.write_text(head + render(results), encoding="utf-8")
+    return path
+
+
+def main(argv: list[str] | None = None) -> None:
+    """``python -m bench.render [--write]``: print the page, or write bench/REPORT.md."""
+    ap = argparse.ArgumentParser(description="Render bench/results/*.json as Markdown (the Benchmarks page).")
+    ap.add_argument("--write", action="store_true", help="write bench/REPORT.md instead of printing")
+    ap.add_argument("--results", type=Path, default=RESULTS, help="folder of result files (default: bench/results)")
+    a = ap.parse_args(argv)
+    if a.write:
+        print(f"wrote {write_report(a.results)}", file=sys.stderr)
+    else:
+        print(render(a.results))
+
+
+if __name__ == "__main__":
+    main()
