@@ -15,7 +15,7 @@ def main() -> None:
     """Classify an ellipsoid against a sphere at its tip, then a hair further away."""
     A = quadric_from_axes([0, 0, 0], [2, 1, 1], [1, 0, 0, 0])
     B = quadric_from_axes([3, 0, 0], [1, 1, 1], [1, 0, 0, 0])
-    relation = classify(A, B)
+    relation = Relation(classify(A, B))                  # one pair: one Relation
     print("sphere at x = 3:", relation.name, "-", explain(A, B).rule_text)
     assert relation == Relation.TANGENT
 

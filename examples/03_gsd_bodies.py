@@ -41,10 +41,11 @@ def main(argv: list[str] | None = None) -> None:
         bodies = read_bodies(str(path), frame=-1)
         res = contacts(bodies)
         print(f"{len(bodies)} bodies, box {bodies.box}")
-        for i, j, rel, image in zip(res.i, res.j, res.relation, res.image):
+        images = res.image if res.image is not None else [(0, 0, 0)] * len(res.i)  # None in open space
+        for i, j, rel, image in zip(res.i, res.j, res.relation, images, strict=True):
             print(f"  {i} - {j}: {Relation(rel).name}, image {tuple(int(k) for k in image)}")
         if not args:
-            assert [(int(i), int(j)) for i, j in zip(res.i, res.j)] == [(0, 1), (2, 3)]
+            assert [(int(i), int(j)) for i, j in zip(res.i, res.j, strict=True)] == [(0, 1), (2, 3)]
 
 
 if __name__ == "__main__":
