@@ -15,8 +15,8 @@ def main() -> None:
     """Classify an ellipsoid against a sphere at its tip, then a hair further away."""
     A = quadric_from_axes([0, 0, 0], [2, 1, 1], [1, 0, 0, 0])
     B = quadric_from_axes([3, 0, 0], [1, 1, 1], [1, 0, 0, 0])
-    relation = Relation(classify(A, B))                  # one pair: one Relation
-    print("sphere at x = 3:", relation.name, "-", explain(A, B).rule_text)
+    relation = classify(A, B)                           # one pair: a Relation (a stack: int8 codes)
+    print("sphere at x = 3:", relation, "-", explain(A, B).rule_text)
     assert relation == Relation.TANGENT
 
     far = quadric_from_axes([Fraction("3.000000001"), 0, 0], [1, 1, 1], [1, 0, 0, 0], exact=True)
