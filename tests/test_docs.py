@@ -129,3 +129,50 @@ def test_the_site_builds(tmp_path: Path):
 
     missing = [name for name in core.__all__ if f'id="core.{name}"' not in python_ref]
     assert not missing, f"names of core.__all__ without an entry in the Python reference: {missing}"
+
+
+def test_the_guide_is_served_at_guide_when_built(tmp_path: Path):
+    """``/guide/`` serves the built site (index, pages, assets); a missing file is a 404."""
+    from fastapi.testclient import TestClient
+
+    from app.api import ApiSettings, create_api
+
+    site = tmp_path / "html"
+    (site / "_static").mkdir(parents=True)
+    (site / "index.html").write_text("<h1>the guide's front page</h1>")
+    (site / "concepts.html").write_text("<h1>Concepts</h1>")
+    (site / "_static" / "furo.css").write_text("body {}")
+    with TestClient(create_api(ApiSettings(scene_url=None), guide_dir=site)) as c:
+        front = c.get("/guide/")
+        assert (front.status_code, front.text) == (200, "<h1>the guide's front page</h1>")
+        assert c.get("/guide/concepts.html").text == "<h1>Concepts</h1>"
+        assert c.get("/guide/_static/furo.css").status_code == 200
+        assert c.get("/guide/no-such-page.html").status_code == 404
+
+
+def test_an_unbuilt_guide_answers_404_saying_how_to_build_it(tmp_path: Path):
+    """Before the site is built: a 404 of one line naming the build command; built later: served."""
+    from fastapi.testclient import TestClient
+
+    from app.api import ApiSettings, create_api
+    from app.api.factory import GUIDE_BUILD
+
+    site = tmp_path / "html"
+    with TestClient(create_api(ApiSettings(scene_url=None), guide_dir=site)) as c:
+        r = c.get("/guide/")
+        assert r.status_code == 404 and GUIDE_BUILD in r.text and len(r.text.strip().splitlines()) == 1
+        assert c.get("/guide/concepts.html").status_code == 404
+        site.mkdir()
+        (site / "index.html").write_text("built after the start")
+        assert c.get("/guide/").text == "built after the start"
+
+
+def test_the_landing_page_links_to_the_guide():
+    """The landing page at / links to the guide and to its concepts page (what the scene shows)."""
+    from fastapi.testclient import TestClient
+
+    from app.api import ApiSettings, create_api
+
+    with TestClient(create_api(ApiSettings(scene_url=None))) as c:
+        page = c.get("/").text
+    assert 'href="/guide/"' in page and 'href="/guide/concepts.html"' in page
