@@ -35,10 +35,41 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "bench" / "results"
 REPORT = ROOT / "bench" / "REPORT.md"
 
-__all__ = ["RESULTS", "REPORT", "cpu_name", "tables_from_markdown", "write_result", "render", "write_report", "main"]
+__all__ = ["RESULTS", "REPORT", "QUESTIONS", "cpu_name", "tables_from_markdown", "write_result", "publish", "render",
+           "write_report", "main"]
 
-ORDER = ["targets", "throughput", "static", "near-tangent", "moving", "sweep", "bodies", "index", "audit", "scales",
-         "witness", "stages", "api", "scene"]
+_AUDIT = {"question": "Auditing a trajectory: how long, and how many labels are right, against the uncertified pipeline?",
+          "anchor": "scipy cKDTree on bounding spheres + Perram-Wertheim in numpy (float tolerances 0 and 1e-10)"}
+
+QUESTIONS: dict[str, tuple[str, str]] = {
+    "targets": ("Does each target hold?", "the target beside each measurement"),
+    "throughput": ("How fast is the certified filter, on one core and on every core?",
+                   "the paper's tree in plain C (bench/baseline_tree.c, gcc -O3 -march=native, no error bound) and a "
+                   "memory read of the inputs"),
+    "static": ("Static pairs: how fast, and how many wrong labels?",
+               "numpy eigenvalues with a tolerance; GJK from coal and python-fcl (3D, boolean)"),
+    "near-tangent": ("Near-tangent pairs: wrong labels per gap decade", "numpy eigenvalues; GJK from coal and python-fcl"),
+    "moving": ("Moving shapes: the exact analysis against uniform sampling",
+               "uniform sampling of t with the certified static classifier at each sample"),
+    "sweep": ("Moving many bodies: certified first contact times", "the exact analysis of each pair, and uniform sampling of t"),
+    "bodies": ("Contacts among N ellipsoids: how long?",
+               "the uncertified pipeline a user would write: scipy cKDTree on bounding spheres + the paper's tree in plain C"),
+    "index": ("An index asked about new bodies (BodyIndex): one query, a batch, an update",
+              "core.contacts on the union (differences must be 0)"),
+    "audit": (_AUDIT["question"], _AUDIT["anchor"]),
+    "scales": ("Bodies at any float scale: which arithmetic certifies them, how long?", "the same pairs at scale 1"),
+    "witness": ("Witnesses: contact scale, planes, points, distance", "the relation alone (classify) on the same pairs"),
+    "stages": ("Where the filter's time goes: cycles per pair in each stage", "random 3D pairs (the ratio column)"),
+    "api": ("The HTTP API: a batch, concurrent requests, bursts of large bodies",
+            "the targets (p99 < 100 ms at concurrency 32, /healthz while bodies are read)"),
+    "api-line": ("The HTTP API under load: large bodies through the one bounded line",
+                 "the same load on an earlier checkout (--against)"),
+    "scene": ("The scene: server cost of one update, presets and bodies in a browser",
+              "the targets: a drag < 2 ms, a t-step < 1 ms of server time; a preset on screen < 300 ms"),
+}
+"""The question each result file answers and the anchor it is measured against, by file name."""
+
+ORDER = list(QUESTIONS)
 """The order of the questions on the page (files not named here come after, by name)."""
 
 
@@ -88,15 +119,26 @@ def _cells(line: str) -> list[str]:
     return [c.strip().replace("\\|", "|") for c in re.split(r"(?<!\\)\|", inner)]
 
 
-def write_result(name: str, *, command: str, question: str, anchor: str, tables: list[dict[str, Any]],
-                 results: Path = RESULTS, **extra: Any) -> Path:
-    """Write ``results/<name>.json``: the command, the machine, the date and the tables."""
+def write_result(name: str, *, command: str, tables: list[dict[str, Any]], results: Path = RESULTS, **extra: Any) -> Path:
+    """Write ``results/<name>.json``: the command, the machine, the date, the question and the tables."""
+    question, anchor = QUESTIONS.get(name, QUESTIONS.get(name.split("-")[0], (name, "")))
     data = {"command": command, "cpu": cpu_name(), "cores": os.cpu_count(),
             "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "question": question, "anchor": anchor,
             **extra, "tables": tables}
     results.mkdir(parents=True, exist_ok=True)
     path = results / f"{name}.json"
     path.write_text(json.dumps(data, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    return path
+
+
+def publish(name: str, *, command: str, markdown: str, results: Path = RESULTS, report: Path | None = REPORT,
+            **extra: Any) -> Path:
+    """What a benchmark command does with its numbers: the tables of its Markdown into
+    ``results/<name>.json`` (with ``extra`` fields: the load average, the seconds), then bench/REPORT.md
+    rendered again (None: not rendered)."""
+    path = write_result(name, command=command, tables=tables_from_markdown(markdown), results=results, **extra)
+    if report is not None:
+        write_report(results, report)
     return path
 
 
@@ -134,10 +176,6 @@ def _audit_tables(data: dict[str, Any]) -> list[dict[str, Any]]:
     return tables
 
 
-_AUDIT = {"question": "Auditing a trajectory: how long, and how many labels are right, against the uncertified pipeline?",
-          "anchor": "scipy cKDTree on bounding spheres + Perram-Wertheim in numpy (float tolerances 0 and 1e-10)"}
-
-
 def _load(path: Path) -> dict[str, Any]:
     """One result file, with defaults for the audit benchmark's form."""
     data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
@@ -161,8 +199,9 @@ def render(results: Path = RESULTS) -> str:
         return "\n".join(out + ["No results yet: run a benchmark command (each writes bench/results/<name>.json).", ""])
     for path in files:
         data = _load(path)
+        load = f"load average {data['load_average']}" if data.get("load_average") else None
         machine = ", ".join(str(x) for x in (data.get("cpu"), f"{data['cores']} cores" if data.get("cores") else None,
-                                             data.get("date")) if x)
+                                             data.get("date"), load) if x)
         out += [f"## {data.get('question') or path.stem}", ""]
         if data.get("anchor"):
             out += [f"Against: {data['anchor']}.", ""]

@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -176,3 +177,32 @@ def test_the_landing_page_links_to_the_guide():
     with TestClient(create_api(ApiSettings(scene_url=None))) as c:
         page = c.get("/").text
     assert 'href="/guide/"' in page and 'href="/guide/concepts.html"' in page
+
+
+def test_benchmark_results_are_data_and_the_report_their_rendering(tmp_path: Path):
+    """A benchmark's Markdown tables go into bench/results/<name>.json and come back on the page."""
+    from bench import render
+
+    md = "## Throughput\n\n**one core**\n\n| data | pairs/s |\n|---|---:|\n| random 3D | 52.3 M/s |\n| a \\| b | 1 |\n"
+    path = render.publish("throughput", command="python -m bench.throughput --write", markdown=md, results=tmp_path,
+                          report=tmp_path / "REPORT.md", load_average="1.0 at the start")
+    data = json.loads(path.read_text())
+    assert path.name == "throughput.json" and data["command"] == "python -m bench.throughput --write"
+    assert data["cores"] == os.cpu_count() and data["cpu"] and data["anchor"] == render.QUESTIONS["throughput"][1]
+    assert data["tables"] == [{"title": "one core", "columns": ["data", "pairs/s"], "rows": [["random 3D", "52.3 M/s"], ["a | b", "1"]]}]
+    page = (tmp_path / "REPORT.md").read_text()
+    for text in (render.QUESTIONS["throughput"][0], "python -m bench.throughput --write", "| random 3D | 52.3 M/s |",
+                 "| a \\| b | 1 |", "load average 1.0 at the start"):
+        assert text in page, text
+
+
+def test_the_committed_report_is_the_rendering_of_the_results():
+    """bench/REPORT.md is generated only: exactly what ``python -m bench.render --write`` writes."""
+    from bench import render
+
+    committed = render.REPORT.read_text(encoding="utf-8")
+    with_results = render.render(render.RESULTS)
+    assert committed.endswith(with_results), "bench/REPORT.md differs from bench/results/*.json: run python -m bench.render --write"
+    for path in sorted(render.RESULTS.glob("*.json")):
+        data = json.loads(path.read_text(encoding="utf-8"))
+        assert data.get("command", "").startswith("python"), f"{path.name}: the command that produced it"
