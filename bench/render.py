@@ -22,21 +22,24 @@ flattened into tables here.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import os
 import platform
 import re
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "bench" / "results"
 REPORT = ROOT / "bench" / "REPORT.md"
 
 __all__ = ["RESULTS", "REPORT", "QUESTIONS", "cpu_name", "tables_from_markdown", "write_result", "publish", "render",
-           "write_report", "main"]
+           "published", "write_report", "main"]
 
 _AUDIT = {"question": "Auditing a trajectory: how long, and how many labels are right, against the uncertified pipeline?",
           "anchor": "scipy cKDTree on bounding spheres + Perram-Wertheim in numpy (float tolerances 0 and 1e-10)"}
@@ -140,6 +143,39 @@ def publish(name: str, *, command: str, markdown: str, results: Path = RESULTS, 
     if report is not None:
         write_report(results, report)
     return path
+
+
+class _Tee(io.TextIOBase):
+    """A text stream that writes to the terminal and keeps a copy."""
+
+    def __init__(self, out: TextIO) -> None:
+        self.out, self.copy = out, io.StringIO()
+
+    def write(self, s: str) -> int:
+        """Write to both."""
+        self.copy.write(s)
+        return self.out.write(s)
+
+    def flush(self) -> None:
+        """Flush the terminal's stream."""
+        self.out.flush()
+
+
+@contextlib.contextmanager
+def published(name: str, *, command: str, write: bool = True, results: Path = RESULTS,
+              report: Path | None = REPORT) -> Iterator[None]:
+    """Print as usual; with ``write``, what was printed inside becomes ``results/<name>.json`` at the end.
+
+    For the benchmark commands that print Markdown tables (``--write`` publishes them).
+    """
+    if not write:
+        yield
+        return
+    tee = _Tee(sys.stdout)
+    with contextlib.redirect_stdout(tee):  # type: ignore[type-var]
+        yield
+    path = publish(name, command=command, markdown=tee.copy.getvalue(), results=results, report=report)
+    print(f"wrote {path}", file=sys.stderr)
 
 
 def _esc(value: Any) -> str:

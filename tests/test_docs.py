@@ -206,3 +206,14 @@ def test_the_committed_report_is_the_rendering_of_the_results():
     for path in sorted(render.RESULTS.glob("*.json")):
         data = json.loads(path.read_text(encoding="utf-8"))
         assert data.get("command", "").startswith("python"), f"{path.name}: the command that produced it"
+
+
+def test_a_printed_benchmark_table_is_published(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    """``published``: what a command prints still reaches the terminal, and its tables the result file."""
+    from bench import render
+
+    with render.published("index", command="python bench/bench_index.py --write", results=tmp_path, report=None):
+        print("# BodyIndex: 10 new against 100\n| space | pairs |\n|---|---:|\n| open | 24 |")
+    assert "| open | 24 |" in capsys.readouterr().out
+    data = json.loads((tmp_path / "index.json").read_text())
+    assert data["tables"] == [{"title": "BodyIndex: 10 new against 100", "columns": ["space", "pairs"], "rows": [["open", "24"]]}]
