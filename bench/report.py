@@ -5,9 +5,11 @@ Run from the repository root::
     python -m bench.report            # full run (about 5-10 minutes on 2 cores; the HTTP API rows: bench/api_load.py)
     python -m bench.report --quick    # small sizes, under a minute
 
-Writes ``bench/REPORT.md`` (tables, targets, machine, the command, a reading of the numbers) and
-``bench/figures/*.png`` (matplotlib, the ``bench`` extra; without it the report says so and has
-no figures). ``--out DIR`` writes elsewhere (the smoke test uses a temporary directory).
+Writes the tables of each section into ``bench/results/<name>.json`` (targets, throughput, static,
+near-tangent, moving, scene, api: :func:`publish_sections`), renders ``bench/REPORT.md`` from every
+result file (:mod:`bench.render`), and draws ``bench/figures/*.png`` (matplotlib, the ``bench``
+extra). ``--out DIR`` writes the full Markdown report into DIR instead and no data (the smoke test
+uses a temporary directory).
 """
 
 from __future__ import annotations
