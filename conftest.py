@@ -24,14 +24,14 @@ worker process, and pytest-xdist 3.8 (``--dist loadfile``) then runs the crashed
 new worker; so the limit raises in the test instead (SIGALRM, main thread only), and the next test runs.
 """
 
-_stderr_fd: int | None = None
+_STDERR: dict[str, int] = {}
+"""A copy of the real stderr (capturing replaces fd 2 during tests) for the stack dump."""
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    """Keep a copy of the real stderr (capturing replaces fd 2 during tests) for the stack dump."""
-    global _stderr_fd
-    if _stderr_fd is None:
-        _stderr_fd = os.dup(sys.__stderr__.fileno() if sys.__stderr__ else 2)
+    """Copy the real stderr's file descriptor once."""
+    if "fd" not in _STDERR:
+        _STDERR["fd"] = os.dup(sys.__stderr__.fileno() if sys.__stderr__ else 2)
 
 
 class _Hang:
@@ -41,9 +41,10 @@ class _Hang:
         self.where = f"{item.nodeid} ({phase})"
 
     def __call__(self, signum: int, frame: object) -> None:
-        if _stderr_fd is not None:
-            os.write(_stderr_fd, f"\n--- {self.where} over {HANG_SECONDS:g} s; stacks:\n".encode())
-            faulthandler.dump_traceback(file=_stderr_fd, all_threads=True)
+        fd = _STDERR.get("fd")
+        if fd is not None:
+            os.write(fd, f"\n--- {self.where} over {HANG_SECONDS:g} s; stacks:\n".encode())
+            faulthandler.dump_traceback(file=fd, all_threads=True)
         pytest.fail(f"over {HANG_SECONDS:g} s (ELLIPSOID_TEST_HANG_SECONDS): every thread's stack is on stderr",
                     pytrace=False)
 
@@ -62,14 +63,17 @@ def _limited(item: pytest.Item, phase: str) -> Generator[None, object, object]:
 
 @pytest.hookimpl(wrapper=True, tryfirst=True)
 def pytest_runtest_setup(item: pytest.Item) -> Generator[None, object, object]:
+    """Setup within :data:`HANG_SECONDS`."""
     return (yield from _limited(item, "setup"))
 
 
 @pytest.hookimpl(wrapper=True, tryfirst=True)
 def pytest_runtest_call(item: pytest.Item) -> Generator[None, object, object]:
+    """The test within :data:`HANG_SECONDS`."""
     return (yield from _limited(item, "call"))
 
 
 @pytest.hookimpl(wrapper=True, tryfirst=True)
 def pytest_runtest_teardown(item: pytest.Item, nextitem: pytest.Item | None) -> Generator[None, object, object]:
+    """Teardown within :data:`HANG_SECONDS`."""
     return (yield from _limited(item, "teardown"))
