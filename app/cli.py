@@ -36,12 +36,13 @@ is left half written (:mod:`app.output`). Messages and progress go to stderr, da
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import re
 import signal
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
 from .scene.mesh_detail import SPHERE_SUBDIVISIONS, SPHERE_SUBDIVISIONS_RANGE
@@ -452,13 +453,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (module docstring: 0, 1, 2, 130, 141, 143)."""
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
-    from .bodies_cli import COMMANDS, run_classify, run_contacts
+    from .bodies_cli import COMMANDS
 
     if not argv or (argv[0] not in ("serve", "screenshot", "export", "sweep", "audit", *COMMANDS) and argv[0] not in ("-h", "--help", "--version")):
         argv = ["serve", *argv]  # no sub-command: serve with the given options (or defaults)
     args = parser.parse_args(argv)
-    if args.command != "serve" and args.command is not None:
-        _on_sigterm()  # serve has its own shutdown (app.lifecycle)
+    if args.command == "serve" or args.command is None:
+        return _run(args)  # serve has its own shutdown (app.lifecycle)
+    try:
+        with _sigterm_unwinds():
+            return _run(args)
+    except Terminated:  # between the command's end and the handler's restoring
+        return _fail("terminated (SIGTERM): no output written", EXIT_TERMINATED)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """The parsed command, its failures turned into one line on stderr and the exit status."""
+    from .bodies_cli import run_classify, run_contacts
+
     try:
         if args.command == "screenshot":
             return _screenshot(args)
@@ -514,9 +526,19 @@ def _fail(message: str, status: int) -> int:
     return status
 
 
-def _on_sigterm() -> None:
-    """SIGTERM unwinds a command like Ctrl+C does (the main thread only can set handlers)."""
+@contextlib.contextmanager
+def _sigterm_unwinds() -> Iterator[None]:
+    """SIGTERM unwinds a command like Ctrl+C does, while the command runs; the caller's handler after.
+
+    Only the main thread can set handlers (main() called from a test's thread leaves them alone). The
+    previous handler comes back so that a program calling :func:`main` (a test runner) keeps its own.
+    """
     try:
-        signal.signal(signal.SIGTERM, _terminate)
-    except ValueError:  # not the main thread (main() called from a test's thread)
-        pass
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)

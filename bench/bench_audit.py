@@ -24,8 +24,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import platform
 import subprocess
 import sys
 import tempfile
@@ -37,9 +35,8 @@ import numpy as np
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.machine import RESULTS, cores, cpu_model
 from bench.trajectory_data import FCC_AXES, fcc_trajectory, touching_pairs, write_gsd
-
-RESULTS = Path(__file__).resolve().parent / "results"
 
 
 def rotations(q: np.ndarray) -> np.ndarray:
@@ -142,7 +139,7 @@ def speed(cells: tuple[int, int, int], frames: int, folder: Path, jobs: int | No
     rows = sum(1 for _ in open(folder / "report.csv")) - 1
     return {"bodies": n, "frames": frames, "fraction": 0.5, "certified_s": certified, "certified_overlaps": rows,
             "certified_exit": done.returncode, "anchor_s": anchor, "anchor_candidates": candidates, "anchor_overlaps": flagged,
-            "jobs": jobs or len(os.sched_getaffinity(0))}
+            "jobs": jobs or cores()}
 
 
 def accuracy(m: int) -> dict[str, object]:
@@ -196,7 +193,7 @@ def main(argv: list[str] | None = None) -> int:
         sp = speed(cells, frames, Path(d), args.jobs)
     acc = accuracy(m)
     command = "python -m bench.bench_audit" + (" --quick" if args.quick else "")
-    result = {"command": command, "cpu": platform.processor() or _cpu(), "cores": len(os.sched_getaffinity(0)),
+    result = {"command": command, "cpu": cpu_model(), "cores": cores(),
               "speed": sp, "accuracy": acc}
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / ("audit-quick.json" if args.quick else "audit.json")).write_text(json.dumps(result, indent=2) + "\n")
@@ -213,15 +210,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| {name} | {r['wrong']:,} | {r['false_overlaps']:,} | {r['missed_overlaps']:,} |")
     return 0
 
-
-def _cpu() -> str:
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.machine()
 
 
 if __name__ == "__main__":

@@ -13,7 +13,8 @@ msgpack protocol (:class:`RawTab`; viser's ``_messages`` classes serialise thems
   ``--hold`` seconds and close, one after another; the server's resident memory every ``--every``
   tabs, for the bodies view and for the two-body view (``--preset example-29``).
 
-Run: ``python -m bench.scene_memory [--tabs 400] [--every 50] [--hold 0.3]``. The table is printed; the figures
+Run: ``python -m bench.scene_memory [--tabs 400] [--every 50] [--hold 0.3]``. The table is printed and
+written with the command and the machine to ``bench/results/scene_memory.json``; the figures
 depend on the machine (and, on a shared one, on its load): tests assert only generous bounds
 (tests/test_scene_surfaces.py).
 """
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import html
+import json
 import os
 import secrets
 import signal
@@ -34,6 +36,8 @@ import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+
+from bench.machine import RESULTS, cores, cpu_model
 
 __all__ = ["RawTab", "SceneProcess", "camera_message", "free_port", "rss_mb", "hostile_upload", "budget_upload", "tab_cycles",
            "write_small_bodies"]
@@ -395,11 +399,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--every", type=int, default=50, help="print the memory every this many tabs (default 50)")
     p.add_argument("--hold", type=float, default=0.3, help="seconds each tab stays open once built (default 0.3)")
     args = p.parse_args(argv)
+    result: dict[str, Any] = {"command": "python -m bench.scene_memory " + " ".join(argv if argv is not None else sys.argv[1:]),
+                              "cpu": cpu_model(), "cores": cores(), "tabs": args.tabs, "hold_s": args.hold}
     with tempfile.TemporaryDirectory() as tmp:
         bodies = write_small_bodies(Path(tmp) / "bodies.csv")
         with SceneProcess("--bodies", str(bodies)) as server:
             r = hostile_upload(server.port, server.rss_mb)
             b = budget_upload(server.port, server.rss_mb)
+        result["hostile_upload_mb"] = {k: r[k] for k in ("before", "peak", "after")}
+        result["full_budget_upload_mb"] = {k: b[k] for k in ("before", "peak", "after")}
         print("Hostile upload: FileTransferStartUpload(size_bytes=10^12, part_count=10^6), then 50 parts of 30 MB")
         print(_table([(f"{r['before']:.0f}", f"{r['peak']:.0f}", f"{r['after']:.0f}", f"{r['peak'] - r['before']:+.0f}",
                        f"{r['after'] - r['before']:+.0f}", str(r["sent"]), str(r["close_code"]), "yes" if r["message"] else "no")],
@@ -422,7 +430,14 @@ def main(argv: list[str] | None = None) -> int:
                   f"{seconds:.0f} s")
             print(_table(rows, ("tabs", "RSS MB", "growth MB")))
             print()
+            result[f"tab_cycles_{what.split()[0]}_mb"] = {"start": start, "every": args.every,
+                                                           "rss": [float(row[1]) for row in rows[1:]], "seconds": seconds}
+    out = RESULTS / "scene_memory.json"
+    out.parent.mkdir(exist_ok=True)
+    out.write_text(json.dumps(result, indent=2) + "\n")
+    print(f"wrote {out}")
     return 0
+
 
 
 if __name__ == "__main__":

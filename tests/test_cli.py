@@ -116,6 +116,26 @@ def test_bad_input_of_every_command_exits_2_with_one_line(argv, message, tmp_pat
     assert os.listdir(files["out"].parent) == []
 
 
+def test_a_command_run_in_process_gives_back_the_callers_sigterm_handler(tmp_path, capsys):
+    """main() makes SIGTERM unwind a command only while it runs: a program that calls it (a test
+    runner's worker) keeps its own handler after, so a later SIGTERM is its to handle."""
+    import signal
+
+    def mine(signum, frame):  # pragma: no cover - never delivered
+        pass
+
+    previous = signal.signal(signal.SIGTERM, mine)
+    try:
+        bodies = tmp_path / "b.csv"
+        bodies.write_text(BODIES)
+        assert main(["contacts", str(bodies), "--out", str(tmp_path / "c.csv")]) == 0
+        assert signal.getsignal(signal.SIGTERM) is mine
+        assert main(["contacts", str(tmp_path / "missing.csv"), "--out", str(tmp_path / "d.csv")]) == 2  # a failing one
+        assert signal.getsignal(signal.SIGTERM) is mine
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def test_serve_budgets_default_to_the_api_settings_and_say_so():
     """``serve --request-budget/--analysis-budget``: absent, the API keeps ApiSettings' budgets, and
     the help states those defaults (one value, read from the settings)."""

@@ -137,8 +137,10 @@ def test_the_kernel_runs_without_the_gil():
         done = threading.Event()
 
         def work(t_lo=t_lo, done=done):
-            ext.sweep_pairs(3, bodies.packed(), i, i + 1, None, np.zeros(i.size, np.int8), t_lo, np.zeros(i.size), np.zeros(i.size, np.int32))
-            done.set()
+            try:
+                ext.sweep_pairs(3, bodies.packed(), i, i + 1, None, np.zeros(i.size, np.int8), t_lo, np.zeros(i.size), np.zeros(i.size, np.int32))
+            finally:
+                done.set()  # also when the call raises: the loop below must end
 
         thread = threading.Thread(target=work)
         thread.start()
