@@ -15,8 +15,9 @@ A result file::
      "date": "2026-12-05 07:24 UTC", "question": "...", "anchor": "...",
      "tables": [{"title": "...", "columns": ["data", "..."], "rows": [["random 3D", "52.28 M/s"]]}]}
 
-``bench/results/audit*.json`` (``python -m bench.bench_audit``) keep their own nested form and are
-flattened into tables here.
+Files in a nested form of their own (``bench/results/audit*.json`` of ``python -m bench.bench_audit``,
+``scene_memory.json``) are flattened into tables of their figures here. The CPU, the cores and the
+results folder come from :mod:`bench.machine`.
 """
 
 from __future__ import annotations
@@ -25,8 +26,6 @@ import argparse
 import contextlib
 import io
 import json
-import os
-import platform
 import re
 import sys
 import time
@@ -34,15 +33,13 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, TextIO
 
+from .machine import RESULTS, cores, cpu_model
+
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "bench" / "results"
 REPORT = ROOT / "bench" / "REPORT.md"
 
-__all__ = ["RESULTS", "REPORT", "QUESTIONS", "cpu_name", "tables_from_markdown", "write_result", "publish", "render",
+__all__ = ["RESULTS", "REPORT", "QUESTIONS", "tables_from_markdown", "write_result", "publish", "render",
            "published", "write_report", "main"]
-
-_AUDIT = {"question": "Auditing a trajectory: how long, and how many labels are right, against the uncertified pipeline?",
-          "anchor": "scipy cKDTree on bounding spheres + Perram-Wertheim in numpy (float tolerances 0 and 1e-10)"}
 
 QUESTIONS: dict[str, tuple[str, str]] = {
     "targets": ("Does each target hold?", "the target beside each measurement"),
@@ -59,7 +56,8 @@ QUESTIONS: dict[str, tuple[str, str]] = {
                "the uncertified pipeline a user would write: scipy cKDTree on bounding spheres + the paper's tree in plain C"),
     "index": ("An index asked about new bodies (BodyIndex): one query, a batch, an update",
               "core.contacts on the union (differences must be 0)"),
-    "audit": (_AUDIT["question"], _AUDIT["anchor"]),
+    "audit": ("Auditing a trajectory: how long, and how many labels are right, against the uncertified pipeline?",
+              "scipy cKDTree on bounding spheres + Perram-Wertheim in numpy (float tolerances 0 and 1e-10)"),
     "scales": ("Bodies at any float scale: which arithmetic certifies them, how long?", "the same pairs at scale 1"),
     "witness": ("Witnesses: contact scale, planes, points, distance", "the relation alone (classify) on the same pairs"),
     "stages": ("Where the filter's time goes: cycles per pair in each stage", "random 3D pairs (the ratio column)"),
@@ -69,22 +67,13 @@ QUESTIONS: dict[str, tuple[str, str]] = {
                  "the same load on an earlier checkout (--against)"),
     "scene": ("The scene: server cost of one update, presets and bodies in a browser",
               "the targets: a drag < 2 ms, a t-step < 1 ms of server time; a preset on screen < 300 ms"),
+    "scene_memory": ("The scene's memory: what a hostile or a full upload and 400 tabs leave behind (resident MB)",
+                     "the server's memory before (it must come back)"),
 }
 """The question each result file answers and the anchor it is measured against, by file name."""
 
 ORDER = list(QUESTIONS)
 """The order of the questions on the page (files not named here come after, by name)."""
-
-
-def cpu_name() -> str:
-    """The CPU's model name (``/proc/cpuinfo``), else what ``platform`` says."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine() or "unknown"
 
 
 def tables_from_markdown(text: str, default_title: str = "") -> list[dict[str, Any]]:
@@ -125,7 +114,7 @@ def _cells(line: str) -> list[str]:
 def write_result(name: str, *, command: str, tables: list[dict[str, Any]], results: Path = RESULTS, **extra: Any) -> Path:
     """Write ``results/<name>.json``: the command, the machine, the date, the question and the tables."""
     question, anchor = QUESTIONS.get(name, QUESTIONS.get(name.split("-")[0], (name, "")))
-    data = {"command": command, "cpu": cpu_name(), "cores": os.cpu_count(),
+    data = {"command": command, "cpu": cpu_model(), "cores": cores(),
             "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "question": question, "anchor": anchor,
             **extra, "tables": tables}
     results.mkdir(parents=True, exist_ok=True)
@@ -197,26 +186,39 @@ def _flatten(prefix: str, value: Any, rows: list[list[str]]) -> None:
     if isinstance(value, dict):
         for k, v in value.items():
             _flatten(f"{prefix}.{k}" if prefix else str(k), v, rows)
+    elif isinstance(value, list) and all(isinstance(v, int | float) for v in value):
+        rows.append([prefix, ", ".join(f"{v:.4g}" for v in value)])
     else:
-        rows.append([prefix, f"{value:.3g}" if isinstance(value, float) else str(value)])
+        rows.append([prefix, f"{value:.4g}" if isinstance(value, float) else str(value)])
 
 
-def _audit_tables(data: dict[str, Any]) -> list[dict[str, Any]]:
-    """The tables of a ``bench_audit`` result (its nested speed and accuracy figures)."""
+_META = {"command", "cpu", "cores", "date", "question", "anchor", "source", "load_average", "seconds"}
+"""Fields of a result file that describe the run, not its figures."""
+
+
+def _figure_tables(data: dict[str, Any]) -> list[dict[str, Any]]:
+    """Tables of a result file written in its own nested form (``bench_audit``, ``scene_memory``):
+    one (figure, value) table per nested group, one for the loose figures."""
+    loose: list[list[str]] = []
     tables = []
-    for key in ("speed", "accuracy"):
-        if isinstance(data.get(key), dict):
+    for key, value in data.items():
+        if key in _META:
+            continue
+        if isinstance(value, dict):
             rows: list[list[str]] = []
-            _flatten("", data[key], rows)
+            _flatten("", value, rows)
             tables.append({"title": key, "columns": ["figure", "value"], "rows": rows})
-    return tables
+        else:
+            _flatten(key, value, loose)
+    return ([{"title": "", "columns": ["figure", "value"], "rows": loose}] if loose else []) + tables
 
 
 def _load(path: Path) -> dict[str, Any]:
-    """One result file, with defaults for the audit benchmark's form."""
+    """One result file; one in its own nested form gets tables of its figures and its question."""
     data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
     if "tables" not in data:
-        data = {**_AUDIT, **data, "tables": _audit_tables(data)}
+        question, anchor = QUESTIONS.get(path.stem, QUESTIONS.get(path.stem.split("-")[0], (path.stem, "")))
+        data = {"question": question, "anchor": anchor, **data, "tables": _figure_tables(data)}
     return data
 
 
