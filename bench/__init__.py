@@ -1,7 +1,8 @@
 """Benchmarks of the certified classifier: static pairs, moving shapes and the scene's server cost.
 
-``python -m bench.report`` runs all three and writes ``bench/REPORT.md`` and ``bench/figures/*.png``
-(``--quick`` for a run under a minute). Timings are on one core: the BLAS thread pools are pinned
+``python -m bench.report`` runs all three and writes their tables into ``bench/results/*.json``,
+rendered as ``bench/REPORT.md`` and the documentation's Benchmarks page (``bench.render``), and
+``bench/figures/*.png`` (``--quick`` for a run under a minute). Timings are on one core: the BLAS thread pools are pinned
 to one thread here, before numpy is imported, when this package is imported first.
 """
 

@@ -36,6 +36,7 @@ if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.machine import RESULTS, cores, cpu_model
+from bench.render import write_report
 from bench.trajectory_data import FCC_AXES, fcc_trajectory, touching_pairs, write_gsd
 
 
@@ -197,6 +198,7 @@ def main(argv: list[str] | None = None) -> int:
               "speed": sp, "accuracy": acc}
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / ("audit-quick.json" if args.quick else "audit.json")).write_text(json.dumps(result, indent=2) + "\n")
+    write_report()  # bench/REPORT.md: the rendering of every result file
     print(f"| audit of {sp['frames']} frames x {sp['bodies']:,} ellipsoids (fraction 0.5) | seconds | overlaps found |")
     print("|---|---:|---:|")
     print(f"| python -m app audit (certified, {sp['jobs']} processes) | {sp['certified_s']:.1f} | {sp['certified_overlaps']} |")

@@ -29,6 +29,7 @@ if __package__ in (None, ""):
 import numpy as np
 
 from bench.bodies_data import random_bodies
+from bench.render import published
 from core import BodyIndex, bodies_from_axes, contacts, warm_up
 from core.fixed.compiled import get_threads
 
@@ -122,7 +123,15 @@ def run(n: int, m: int, space: str) -> dict[str, float]:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--quick", action="store_true", help="small sizes (a few seconds)")
+    p.add_argument("--write", action="store_true", help="write bench/results/index.json and render bench/REPORT.md")
     args = p.parse_args(argv)
+    command = "python bench/bench_index.py" + (" --quick" if args.quick else "") + " --write"
+    with published("index", command=command, write=args.write):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Time the index in open space, a periodic cube and a tilted box; print the table."""
     n, m = (20_000, 2_000) if args.quick else (100_000, 10_000)
     warm_up()
     load = " ".join(f"{x:.1f}" for x in os.getloadavg())

@@ -33,6 +33,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.render import published  # noqa: E402
 from core import (  # noqa: E402
     Certifier,  # noqa: E402
     classify,
@@ -132,7 +133,15 @@ def per_pair(fn: Callable[[Any, Any], Any], pairs: list[tuple[Any, Any]], repeat
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer pairs and repeats")
+    ap.add_argument("--write", action="store_true", help="write bench/results/witness.json and render bench/REPORT.md")
     args = ap.parse_args()
+    command = "python bench/bench_witness.py" + (" --quick" if args.quick else "") + " --write"
+    with published("witness", command=command, write=args.write):
+        _run(args)
+
+
+def _run(args: argparse.Namespace) -> None:
+    """Time every witness and print the tables."""
     n_one, n_batch, repeat = (30, 2000, 1) if args.quick else (200, 10000, 3)
     warm_up()
     rng = np.random.default_rng(15)

@@ -5,9 +5,11 @@ Run from the repository root::
     python -m bench.report            # full run (about 5-10 minutes on 2 cores; the HTTP API rows: bench/api_load.py)
     python -m bench.report --quick    # small sizes, under a minute
 
-Writes ``bench/REPORT.md`` (tables, targets, machine, the command, a reading of the numbers) and
-``bench/figures/*.png`` (matplotlib, the ``bench`` extra; without it the report says so and has
-no figures). ``--out DIR`` writes elsewhere (the smoke test uses a temporary directory).
+Writes the tables of each section into ``bench/results/<name>.json`` (targets, throughput, static,
+near-tangent, moving, scene, api: :func:`publish_sections`), renders ``bench/REPORT.md`` from every
+result file (:mod:`bench.render`), and draws ``bench/figures/*.png`` (matplotlib, the ``bench``
+extra). ``--out DIR`` writes the full Markdown report into DIR instead and no data (the smoke test
+uses a temporary directory).
 """
 
 from __future__ import annotations
@@ -534,11 +536,36 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
     return path
 
 
+SECTIONS = {"Targets": "targets", "Throughput": "throughput", "Static pairs": "static", "Moving shapes": "moving",
+            "Scene": "scene", "Many bodies in a browser": "scene", "HTTP API": "api"}
+"""The result file (bench/results/<name>.json) each section of the report's Markdown goes to, by title prefix."""
+
+
+def publish_sections(text: str, command: str, results: Path | None = None) -> list[Path]:
+    """Write the tables of a report's sections into bench/results/*.json and render bench/REPORT.md."""
+    from . import render
+
+    folder = results or render.RESULTS
+    parts: dict[str, list[str]] = {}
+    for section in re.split(r"^(?=## )", text, flags=re.M):
+        title = section.splitlines()[0].removeprefix("## ").strip() if section.startswith("## ") else ""
+        name = next((v for k, v in SECTIONS.items() if title.startswith(k)), None)
+        own, _, near = section.partition("### Near-tangent")
+        if name == "static":  # its near-tangent subsection is a question of its own
+            parts.setdefault("near-tangent", []).append("### Near-tangent" + near)
+        if name is not None:
+            parts.setdefault(name, []).append(own if name == "static" else section)
+    paths = [render.publish(name, command=command, markdown="\n".join(md), results=folder, report=None) for name, md in parts.items()]
+    render.write_report(folder, render.REPORT if results is None else folder / "REPORT.md")
+    return paths
+
+
 def main(argv: list[str] | None = None) -> Path:
     ap = argparse.ArgumentParser(description="Run the static, moving and scene benchmarks; write bench/REPORT.md and figures.")
     ap.add_argument("--quick", action="store_true", help="small sizes (under a minute)")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--out", type=Path, default=HERE, help="directory for REPORT.md and figures/ (default: bench/)")
+    ap.add_argument("--out", type=Path, default=HERE, help="directory for REPORT.md and figures/ (default: bench/, where "
+                    "the numbers go to bench/results/*.json and REPORT.md is rendered from them)")
     ap.add_argument("--skip", nargs="*", default=[], choices=["moving", "scene", "browser", "api", "profiles", "throughput"], help="parts to leave out")
     ap.add_argument("--allow-missing-peers", action="store_true", help="run even if a peer (coal, python-fcl, scipy) is missing")
     a = ap.parse_args(argv)
@@ -596,6 +623,10 @@ def main(argv: list[str] | None = None) -> Path:
     command = "python -m bench.report" + (" --quick" if a.quick else "") + (f" --seed {a.seed}" if a.seed else "")
     path = write_report(st, mv, sc, outdir=a.out, command=command, info=info, profiles=profiles, seconds=time.perf_counter() - t0,
                         api=api, tp=tp)
+    if a.out.resolve() == HERE.resolve():  # the repository's report: its numbers become data, REPORT.md their rendering
+        for p in publish_sections(path.read_text(), command):
+            log(f"# wrote {p}")
+        path = HERE / "REPORT.md"
     log(f"# wrote {path} in {time.perf_counter() - t0:.0f} s")
     return path
 

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 import core
+from bench.render import published
 from core import Certifier, classify_detailed
 
 __all__ = ["SCALES", "run_scales", "format_scales", "run_contacts", "format_contacts", "run_sweep", "format_sweep"]
@@ -125,7 +126,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--pairs", type=int, default=1000)
     p.add_argument("--bodies", type=int, default=20_000, help="bodies for the contacts table (0: skip it)")
     p.add_argument("--moving", type=int, default=5_000, help="moving bodies for the sweep_contacts table (0: skip it)")
+    p.add_argument("--write", action="store_true", help="write bench/results/scales.json and render bench/REPORT.md")
     args = p.parse_args(argv)
+    command = f"python -m bench.scales --pairs {args.pairs} --bodies {args.bodies} --moving {args.moving} --write"
+    with published("scales", command=command, write=args.write):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Print the tables."""
     print(f"# {args.pairs:,} random ellipsoid pairs per scale, bodies_from_axes(c * s, r * s, q), classify (adaptive)")
     print(format_scales(run_scales(args.pairs)))
     if args.bodies:

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from bench.machine import RESULTS, cores, cpu_model
+from bench.render import write_report
 
 __all__ = ["RawTab", "SceneProcess", "camera_message", "free_port", "rss_mb", "hostile_upload", "budget_upload", "tab_cycles",
            "write_small_bodies"]
@@ -435,7 +436,7 @@ def main(argv: list[str] | None = None) -> int:
     out = RESULTS / "scene_memory.json"
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(result, indent=2) + "\n")
-    print(f"wrote {out}")
+    print(f"wrote {out} and {write_report()}")  # bench/REPORT.md: the rendering of every result file
     return 0
 
 

@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from bench import datasets as D
+from bench.render import published
 
 ROOT = Path(__file__).resolve().parent.parent
 FIXED = ROOT / "core" / "fixed"
@@ -194,14 +195,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--variant", default=None, choices=tuple(VARIANT_FILES), help="default: the variant the extension runs on this CPU")
     p.add_argument("--define", action="append", default=[], metavar="NAME=VALUE",
                    help="a macro of core/fixed/_variant.h for an experiment (CHUNK4=16, PF_DIST=4, ...)")
+    p.add_argument("--write", action="store_true", help="write bench/results/stages.json and render bench/REPORT.md")
     a = p.parse_args(argv)
     if platform.machine() not in ("x86_64", "AMD64") or shutil.which("gcc") is None:
         print("needs x86-64 and gcc")
         return 1
     a.variant = a.variant or default_variant()
     extra = f", {' '.join(a.define)}" if a.define else ""
-    print(f"cycles per pair (rdtsc), {a.variant}, {a.dim}D, {a.pairs:,} pairs, fastest of {a.rounds} runs, one core{extra}")
-    print(format_rows(run(a.dim, a.pairs, a.rounds, a.variant, defines=tuple(a.define))))
+    command = f"python -m bench.stage_cycles --dim {a.dim} --pairs {a.pairs} --variant {a.variant}{''.join(' --define ' + d for d in a.define)} --write"
+    with published("stages", command=command, write=a.write):
+        print(f"**cycles per pair (rdtsc), {a.variant}, {a.dim}D, {a.pairs:,} pairs, fastest of {a.rounds} runs, one core{extra}**\n")
+        print(format_rows(run(a.dim, a.pairs, a.rounds, a.variant, defines=tuple(a.define))))
     return 0
 
 

@@ -320,19 +320,23 @@ def write_section(tp: dict[str, Any], path: Path, *, command: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m bench.throughput [--quick] [--write]``: print the tables (and update bench/REPORT.md)."""
+    """``python -m bench.throughput [--quick] [--write]``: print the tables (``--write``: bench/results/throughput.json)."""
     import argparse
 
     ap = argparse.ArgumentParser(description="Throughput of the certified filter against the C tree and the memory read.")
     ap.add_argument("--quick", action="store_true", help="100k pairs instead of 1M")
-    ap.add_argument("--write", action="store_true", help="replace the throughput section and rows of bench/REPORT.md")
+    ap.add_argument("--write", action="store_true", help="write bench/results/throughput.json and render bench/REPORT.md")
     a = ap.parse_args(argv)
     tp = run_throughput(quick=a.quick, log=lambda s: print(s, file=sys.stderr, flush=True))
     print(format_throughput(tp))
     for t, m, v, _ in throughput_targets(tp):
         print(f"| {t} | {m} | {v} |")
     if a.write:
-        write_section(tp, ROOT / "bench" / "REPORT.md", command="python -m bench.throughput --write" + (" --quick" if a.quick else ""))
+        from .render import publish
+
+        targets = "\n".join(["| target | measured | verdict |", "|---|---|---|"] + [f"| {t} | {m} | {v} |" for t, m, v, _ in throughput_targets(tp)])
+        publish("throughput", command="python -m bench.throughput --write" + (" --quick" if a.quick else ""),
+                markdown=format_throughput(tp) + "\n\n**Targets**\n\n" + targets + "\n")
     return 0
 
 

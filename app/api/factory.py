@@ -5,11 +5,14 @@ from __future__ import annotations
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 from fastapi.staticfiles import StaticFiles
+from starlette.responses import PlainTextResponse
+from starlette.types import Receive, Scope, Send
 
 from core import warm_up
 
@@ -20,7 +23,16 @@ from .line import Line, RequestLine
 from .routes import classify, contacts, health, landing, motion, presets, sweep, witness
 from .settings import ApiSettings
 
-__all__ = ["create_api", "DOCS_ASSETS"]
+__all__ = ["create_api", "DOCS_ASSETS", "GUIDE", "GUIDE_DIR", "GUIDE_BUILD"]
+
+GUIDE = "/guide"
+"""Where the documentation site is served (offline: classrooms without internet)."""
+
+GUIDE_DIR = Path(__file__).resolve().parents[2] / "docs" / "_build" / "html"
+"""The built documentation site of this checkout (docs/develop/docs.md builds it)."""
+
+GUIDE_BUILD = "python -m sphinx -W --keep-going -b html docs docs/_build/html"
+"""The command that builds it, named by the 404 of an unbuilt guide."""
 
 DOCS_ASSETS = "/docs-assets"
 """Where Swagger UI's and ReDoc's scripts are served from (the ``fastapi-offline`` package's copies)."""
@@ -32,11 +44,13 @@ floats they are, strings like "3/7" or "0.1" are exact. Matrices are symmetric 3
 4x4 (ellipsoid), interior X^T A X < 0; P(T) = det(T A + B), coefficients ascending."""
 
 
-def create_api(settings: ApiSettings | None = None) -> FastAPI:
+def create_api(settings: ApiSettings | None = None, *, guide_dir: Path | None = GUIDE_DIR) -> FastAPI:
     """The HTTP API as an ASGI app (serve it with uvicorn; nothing starts at import).
 
     Args:
         settings: limits and the scene link; defaults to ``ApiSettings()``.
+        guide_dir: the built documentation site served at ``/guide/`` (looked for at each
+            request, so a site built after the start is served; None: no guide).
 
     Returns:
         A FastAPI app with /api/classify, /api/explain, /api/analyse, the witness routes,
@@ -101,7 +115,21 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
         app.mount("/static", StaticFiles(directory=settings.static_dir), name="static")
     if settings.bench_dir is not None:  # may be written later by python -m bench.report
         app.mount("/bench/figures", StaticFiles(directory=settings.bench_dir, check_dir=False), name="bench")
+    if guide_dir is not None:
+        app.mount(GUIDE, _Guide(directory=guide_dir, html=True, check_dir=False), name="guide")
     return app
+
+
+class _Guide(StaticFiles):
+    """The documentation site's files, or a one-line 404 saying how to build it while it is not built."""
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Serve the file asked for; 404 with the build command when the site's folder is missing."""
+        if self.directory is None or not (Path(self.directory) / "index.html").is_file():
+            message = f"The guide is not built on this server: run `{GUIDE_BUILD}` in the repository.\n"
+            await PlainTextResponse(message, status_code=404)(scope, receive, send)
+            return
+        await super().__call__(scope, receive, send)
 
 
 REDOC_JS = "/redoc-assets/redoc.standalone.js"
