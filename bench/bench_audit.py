@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import subprocess
 import sys
 import tempfile
@@ -189,12 +190,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="10 frames of 20,000 bodies, a 12^3 lattice")
     ap.add_argument("--jobs", type=int, default=None, help="the command's worker processes (default: every core)")
     args = ap.parse_args(argv)
+    load_before = os.getloadavg()[0]  # a shared machine: the figures depend on what else runs
     cells, frames, m = ((10, 20, 25), 10, 20_000) if args.quick else ((25, 40, 25), 100, 100_000)
     with tempfile.TemporaryDirectory(prefix="audit-bench-") as d:
         sp = speed(cells, frames, Path(d), args.jobs)
     acc = accuracy(m)
     command = "python -m bench.bench_audit" + (" --quick" if args.quick else "")
     result = {"command": command, "cpu": cpu_model(), "cores": cores(),
+              "load_average": f"{load_before:.1f} at the start, {os.getloadavg()[0]:.1f} at the end",
               "speed": sp, "accuracy": acc}
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / ("audit-quick.json" if args.quick else "audit.json")).write_text(json.dumps(result, indent=2) + "\n")
