@@ -35,41 +35,63 @@ AXIS_COLOUR = "#9ecae1"
 
 ROOT_COLOURS = ["#08519c", "#6a3d9a", "#e6550d", "#636363"]
 
+RING_LABELS = {2: "×2 double root (a ring)", 3: "×3 triple root (a 2nd ring)", 4: "×4 quadruple root (a 3rd ring)"}
+"""Legend of the multiplicity rings (:data:`RINGS`)."""
+
+SCALE_WORDS = {
+    "linear": "Axes: **Re T and Im T, linear** (what the paper draws).",
+    "asinh": "Axes: **asinh(Re T), asinh(Im T)**: like T near 0, like ±log(2|T|) far away, so roots such as "
+             "1/4 and 4 (reciprocal) are both readable.",
+}
+"""What the roots picture's axes show, under the picture (the "Roots axes" dropdown)."""
+
 
 def _f(v: Any, scale: str) -> Any:
     return np.arcsinh(v) if scale == "asinh" else v
 
 
-def plane_data(pic: RootsPicture, scale: str = "asinh") -> tuple[tuple[np.ndarray, ...], tuple[float, float], tuple[float, float]]:
-    """The uPlot data of the complex-plane picture: (x, positive axis, real roots, double roots, complex).
+RINGS = (2, 3, 4)
+"""Multiplicities drawn as rings: a root of multiplicity m has a ring for each of 2..m (×2: one ring)."""
+
+
+def plane_data(pic: RootsPicture, scale: str = "linear") -> tuple[tuple[np.ndarray, ...], tuple[float, float], tuple[float, float]]:
+    """The uPlot data of the complex-plane picture.
+
+    Columns: x, the positive axis, real roots (a dot), the tangency's positive double root,
+    complex roots, then one column per multiplicity of :data:`RINGS`: every real root of
+    multiplicity m >= k has a ring in column "×k", positive or negative (a double root is never
+    one plain dot: a quartic's four roots are all counted).
 
     Returns:
         (data arrays, x range, y range). x ascending (uPlot's aligned mode); each row is one
-        point of one series, NaN in the others; the axis series is 0 on every row with x >= 0
-        so that it draws as one thick segment along T > 0.
+        root (NaN in the columns it is not drawn in); the axis series is 0 on every row with
+        x >= 0 so that it draws as one thick segment along T > 0.
 
     Examples:
         >>> from app.scene.roots import roots_of_pencil
         >>> data, xr, yr = plane_data(roots_of_pencil([-1, 0, 2, 0, -1]), "linear")
-        >>> [np.nan_to_num(a, nan=9).tolist() for a in data][:4]   # T = -1 (double), T = 1 (double)
-        [[-1.0, 0.0, 1.0, 1.5], [9.0, 0.0, 0.0, 0.0], [0.0, 9.0, 9.0, 9.0], [9.0, 9.0, 0.0, 9.0]]
+        >>> [np.nan_to_num(a, nan=9).tolist() for a in data][:6]   # T = -1 (double), T = 1 (double)
+        [[-1.0, 0.0, 1.0, 1.5], [9.0, 0.0, 0.0, 0.0], [0.0, 9.0, 9.0, 9.0], [9.0, 9.0, 0.0, 9.0], [9.0, 9.0, 9.0, 9.0], [0.0, 9.0, 0.0, 9.0]]
     """
-    pts: list[tuple[float, float, int]] = []
+    pts: list[tuple[float, float, int, int]] = []
     for r in pic.roots:
         rx, ry = float(_f(r.re, scale)), float(_f(r.im, scale))
         kind = 3 if not r.real else (2 if r.mult >= 2 and r.re > 0 else 1)  # 2: the tangency's positive double root
-        pts.append((rx, ry, kind))
+        pts.append((rx, ry, kind, r.mult if r.real else 1))
     xs = [p[0] for p in pts] or [0.0]
     span = max([1.0, *(abs(v) for v in xs)])
     xmax = max([*xs, 0.0]) + 0.5 * span
-    pts += [(0.0, 0.0, 0), (xmax, 0.0, 0)]
+    pts += [(0.0, 0.0, 0, 1), (xmax, 0.0, 0, 1)]
     pts.sort(key=lambda p: (p[0], p[2]))
     n = len(pts)
-    cols = [np.full(n, np.nan) for _ in range(4)]
+    cols = [np.full(n, np.nan) for _ in range(4 + len(RINGS))]
     x = np.array([p[0] for p in pts])
-    for i, (px, py, kind) in enumerate(pts):
+    for i, (px, py, kind, mult) in enumerate(pts):
         if kind:
             cols[kind][i] = py
+        for j, k in enumerate(RINGS):
+            if kind and mult >= k:
+                cols[4 + j][i] = py
         if px >= 0:
             cols[0][i] = 0.0
     ys = [abs(p[1]) for p in pts]
@@ -130,7 +152,7 @@ def roots_words(pic: RootsPicture, expl: dict[str, Any] | None, where: str) -> s
     if reals:
         parts = []
         for r in reals:
-            what = "double root" if r.mult == 2 else ("triple root" if r.mult == 3 else "root")
+            what = {2: "double root (×2)", 3: "triple root (×3)", 4: "quadruple root (×4)"}.get(r.mult, "root")
             if r.interval is None:
                 enc = f" ≈ {r.re:.6g}"
             elif f"{r.interval[0]:.10g}" == f"{r.interval[1]:.10g}":  # a ball of radius 0: exact
@@ -160,13 +182,16 @@ def roots_words(pic: RootsPicture, expl: dict[str, Any] | None, where: str) -> s
 class RootsView:
     """The roots panel of one tab: a switch, the words and two uPlot plots (built when shown)."""
 
-    def __init__(self, gui: viser.GuiApi) -> None:
+    def __init__(self, gui: viser.GuiApi, *, expand: bool = False) -> None:
         self._gui = gui
-        with gui.add_folder("Roots of P(T) (the paper's picture)", expand_by_default=False) as folder:
+        with gui.add_folder("Roots of P(T) (the paper's picture)", expand_by_default=expand) as folder:
             self.folder = folder
             self.show_roots = gui.add_checkbox(
                 "Show the roots of P(T)", False, hint="the roots of det(T A + B) at t, and over a motion the real roots against t"
             )
+            self.axes = gui.add_dropdown("Roots axes", list(SCALE_WORDS), initial_value="linear",
+                                         hint="linear: T itself; asinh: roots near 0 and far from 0 both readable")
+            self.axes_words = gui.add_markdown(SCALE_WORDS["linear"])
             self.words = gui.add_markdown("")
         self.plane: viser.GuiUplotHandle | None = None
         self.locus_plot: viser.GuiUplotHandle | None = None
@@ -176,6 +201,11 @@ class RootsView:
         self._cache: dict[Any, RootsPicture] = {}
         self._locus_cache: dict[Any, tuple[np.ndarray, np.ndarray, list[tuple[float, float | None]]]] = {}
         self._cursor = -1
+
+    @property
+    def scale(self) -> str:
+        """The roots picture's axes: "linear" (the default) or "asinh"."""
+        return "asinh" if self.axes.value == "asinh" else "linear"
 
     @property
     def on(self) -> bool:
@@ -234,6 +264,8 @@ class RootsView:
         if not self.on:
             self.clear()
             return
+        if self.axes_words.content != SCALE_WORDS[scale]:
+            self.axes_words.content = SCALE_WORDS[scale]
         pic, where = self.picture(state)
         if pic is None:
             self._set_words("No certified pair to show (invalid shapes, or the motion is being analysed).")
@@ -249,10 +281,16 @@ class RootsView:
                     (
                         uplot.Series(label="Re T" if scale == "linear" else "asinh Re T"),
                         uplot.Series(label="T > 0 (positive real axis)", stroke=AXIS_COLOUR, width=7, points={"show": False}),
-                        uplot.Series(label="real root", stroke="rgba(0,0,0,0)", width=0, points={"show": True, "size": 11, "fill": ROOT_COLOURS[0]}),
+                        # a marker in the legend: uPlot draws a series' marker from its points' stroke when the line has no width
+                        uplot.Series(label="real root", stroke="rgba(0,0,0,0)", width=0,
+                                     points={"show": True, "size": 11, "fill": ROOT_COLOURS[0], "stroke": ROOT_COLOURS[0], "width": 2}),
                         uplot.Series(label="positive double root (tangency)", stroke="rgba(0,0,0,0)", width=0,
                                      points={"show": True, "size": 20, "fill": "#ffbf00", "stroke": "#000", "width": 2}),
-                        uplot.Series(label="complex pair", stroke="rgba(0,0,0,0)", width=0, points={"show": True, "size": 10, "fill": "#d62728"}),
+                        uplot.Series(label="complex pair", stroke="rgba(0,0,0,0)", width=0,
+                                     points={"show": True, "size": 10, "fill": "#d62728", "stroke": "#d62728", "width": 2}),
+                        *(uplot.Series(label=RING_LABELS[k], stroke="rgba(0,0,0,0)", width=0,
+                                       points={"show": True, "size": 14 + 9 * (k - 1), "fill": "rgba(0,0,0,0)", "stroke": "#222",
+                                               "width": 1.5}) for k in RINGS),
                     ),
                     title="Roots of P(T) in the complex plane",
                     scales={"x": {"time": False, "auto": False, "range": list(xr)}, "y": {"auto": False, "range": list(yr)}},
@@ -307,10 +345,11 @@ class RootsView:
                     (
                         uplot.Series(label="t"),
                         *(uplot.Series(label=f"real root {k + 1}", stroke="rgba(0,0,0,0)", width=0,
-                                       points={"show": True, "size": 3, "fill": ROOT_COLOURS[k % 4], "stroke": ROOT_COLOURS[k % 4]})
+                                       points={"show": True, "size": 3, "fill": ROOT_COLOURS[k % 4], "stroke": ROOT_COLOURS[k % 4],
+                                               "width": 2})
                           for k in range(n)),
                         uplot.Series(label="T = 0", stroke="#999", width=1, points={"show": False}),
-                        *(uplot.Series(label=f"α{k + 1}" + (" (certified)" if k == 0 else ""), stroke="#000", width=1.5,
+                        *(uplot.Series(label=f"α{k + 1} (certified)", stroke="#000", width=1.5,
                                        points={"show": False}) for k in range(len(evs))),
                         uplot.Series(label="double root", stroke="rgba(0,0,0,0)", width=0,
                                      points={"show": True, "size": 14, "fill": "#ffbf00", "stroke": "#000", "width": 2}),

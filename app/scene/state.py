@@ -430,7 +430,7 @@ class AppState:
     (12 - 2 sqrt 2)/17), or None: the relation and the readout are certified at this value; the
     shapes are drawn at its float ``t``."""
     t_text: str | None = None
-    """How the t box shows ``t_exact`` (the text as typed, normalised)."""
+    """How the t box shows t: the text the user typed ("3/4" stays "3/4"), or None (the number)."""
     event: int | None = None
     """1-based index of the event shown exactly, or None when showing ``t``."""
     auto_t: bool = False
