@@ -20,7 +20,7 @@ import ctypes
 import gc
 import socket
 import threading
-from collections.abc import Iterable
+from collections.abc import Callable, Collection, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
@@ -104,6 +104,8 @@ class SceneServer:
         """Counts what tabs upload before viser keeps it (installed before any tab's panel exists)."""
         self.shared: Session | None = None
         """The one session every tab sees (presenter mode), or None (one session per tab)."""
+        self.lesson: str | None = None
+        """The lesson a new tab opens on (``serve --lesson``; :mod:`app.scene.lesson`), or None."""
         self.cache.warm()
         self.prefetched = self.cache.prefetch(_preset_models) if prefetch else None
         """The thread analysing the presets at start (joined: every preset is in the cache), or None."""
@@ -138,20 +140,30 @@ class SceneServer:
             session = self.shared  # the scene is shared; every tab's camera is framed
         else:
             tab = tab_id_of(wire.handshake_path(self.server, client))
-            session = self._session(client, self.store.get(tab) if tab is not None else None)
+            from .lesson_view import lesson_session
+
+            session = lesson_session(self, client, tab) or self._session(client, self.store.get(tab) if tab is not None else None)
         session.frame_camera()
         self._register(client.client_id, session, tab)
 
-    def _session(self, client: viser.ClientHandle, saved: SceneConfig | dict[str, Any] | None) -> Session:
-        """A new session of ``client`` on a tab's stored configuration, a link's (a dict) or the default (None)."""
+    def _session(
+        self, client: viser.ClientHandle, saved: SceneConfig | dict[str, Any] | None, open_folders: Collection[str] | None = None,
+    ) -> Session:
+        """A new session of ``client`` on a tab's stored configuration, a link's (a dict) or the default (None).
+
+        ``open_folders``: the panel's folders shown open (a lesson step's); None: the usual ones.
+        """
         session = Session(client, self.config if isinstance(saved, dict) or saved is None else saved,
                           cache=self.cache, executor=self.executor, defer_load=isinstance(saved, dict),
-                          sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads)
+                          sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads, open_folders=open_folders)
         if isinstance(saved, dict):  # a link: user input, read like an uploaded file
             session.load_untrusted(saved)
         return session
 
-    def renew(self, client_id: int, link: dict[str, Any]) -> Session:
+    def renew(
+        self, client_id: int, link: dict[str, Any], *, open_folders: Collection[str] | None = None,
+        then: Callable[[Session], object] | None = None,
+    ) -> Session:
         """Start the tab ``client_id`` again on ``link`` (a link's configuration), without a page load.
 
         The tab gets what a new tab opened on the link gets: its session is closed, its panel and
@@ -159,7 +171,8 @@ class SceneServer:
         old panel, such as open folders and lists, goes with its elements) and a new session is
         built on ``link``, read as user input. The page keeps its loaded client and WebGL context:
         a renewal costs the browser ~0.4 CPU-s, a page load ~1.5 (software WebGL). The tab keeps
-        its address, and a reload then reopens the new state.
+        its address, and a reload then reopens the new state. ``open_folders``: the new panel's
+        open folders (a lesson step's); ``then(session)`` runs in the same batch (a lesson's folder).
 
         Raises:
             KeyError: no tab ``client_id`` has a session (closed, or still being built).
@@ -183,7 +196,9 @@ class SceneServer:
             with client.atomic():
                 client.scene.reset()  # before the panel: a page that shows the old panel gone has no old scene
                 client.gui.reset()
-                session = self._session(client, link)
+                session = self._session(client, link, open_folders)
+                if then is not None:
+                    then(session)
                 session.frame_camera()
             self._register(client_id, session, tab)
         finally:
