@@ -141,7 +141,7 @@ PAPER: dict[str, Any] = {
             "open": ["timeline", "plots"],
         },
         {
-            "title": "Example 29 at α1 = (12 − 2√2)/17: tangent",
+            "title": "Example 29 at the event α1 = (12 − 2√2)/17",
             "scene": {"dim": 3, "preset": "example-29", "event": 1},
             "words": (
                 "At the root α1 = (12 − 2√2)/17 ≈ 0.5395042868 of 17t² − 24t + 8, "

@@ -35,6 +35,9 @@ AXIS_COLOUR = "#9ecae1"
 
 ROOT_COLOURS = ["#08519c", "#6a3d9a", "#e6550d", "#636363"]
 
+WINDOW_WIDTH = 420.0
+"""Width (CSS px) of the window of the roots' plots, docked on the left (the scene keeps the middle)."""
+
 RING_LABELS = {2: "×2 double root (a ring)", 3: "×3 triple root (a 2nd ring)", 4: "×4 quadruple root (a 3rd ring)"}
 """Legend of the multiplicity rings (:data:`RINGS`)."""
 
@@ -192,7 +195,12 @@ class RootsView:
             self.axes = gui.add_dropdown("Roots axes", list(SCALE_WORDS), initial_value="linear",
                                          hint="linear: T itself; asinh: roots near 0 and far from 0 both readable")
             self.axes_words = gui.add_markdown(SCALE_WORDS["linear"])
+            gui.add_markdown("<span style='font-size:11px;color:#555'>The plots: in the window “Roots of P(T)” on the "
+                             "left of the scene (drag its title to move it).</span>")
             self.words = gui.add_markdown("")
+        self.window: Any = None
+        """The floating window of the plots (a viser panel), or None while they are off."""
+        self.window_tab: Any = None
         self.plane: viser.GuiUplotHandle | None = None
         self.locus_plot: viser.GuiUplotHandle | None = None
         self._plane_key: Any = None
@@ -201,6 +209,20 @@ class RootsView:
         self._cache: dict[Any, RootsPicture] = {}
         self._locus_cache: dict[Any, tuple[np.ndarray, np.ndarray, list[tuple[float, float | None]]]] = {}
         self._cursor = -1
+
+    def _window(self) -> Any:
+        """The floating window the plots are drawn in (made on first use).
+
+        Beside the panel, not at the bottom of it: at 1280x720 the folder's plots were below the
+        fold of a long panel (issue 55); the window is docked on the left of the scene (the scene
+        keeps the middle), and a teacher can move it.
+        """
+        if self.window is None:
+            self.window = self._gui.add_panel()
+            self.window_tab = self.window.add_tab("Roots of P(T)")
+            self.window.dock_left()
+            self.window.set_width(WINDOW_WIDTH)
+        return self.window_tab
 
     @property
     def scale(self) -> str:
@@ -218,6 +240,9 @@ class RootsView:
             if h is not None:
                 h.remove()
         self.plane = self.locus_plot = None
+        if self.window is not None:
+            self.window.remove()
+            self.window = self.window_tab = None
         self._plane_key = self._locus_key = None
         if self._words:
             self._words = ""
@@ -275,7 +300,7 @@ class RootsView:
         if self.plane is None or self._plane_key != (len(data[0]), scale):
             if self.plane is not None:
                 self.plane.remove()
-            with self.folder:
+            with self._window():
                 self.plane = self._gui.add_uplot(
                     data,
                     (
@@ -289,8 +314,8 @@ class RootsView:
                         uplot.Series(label="complex pair", stroke="rgba(0,0,0,0)", width=0,
                                      points={"show": True, "size": 10, "fill": "#d62728", "stroke": "#d62728", "width": 2}),
                         *(uplot.Series(label=RING_LABELS[k], stroke="rgba(0,0,0,0)", width=0,
-                                       points={"show": True, "size": 14 + 9 * (k - 1), "fill": "rgba(0,0,0,0)", "stroke": "#222",
-                                               "width": 1.5}) for k in RINGS),
+                                       points={"show": True, "size": 26 + 10 * (k - 2), "fill": "rgba(0,0,0,0)", "stroke": "#222",
+                                               "width": 2}) for k in RINGS),
                     ),
                     title="Roots of P(T) in the complex plane",
                     scales={"x": {"time": False, "auto": False, "range": list(xr)}, "y": {"auto": False, "range": list(yr)}},
@@ -339,7 +364,7 @@ class RootsView:
             if self.locus_plot is not None:
                 self.locus_plot.remove()
             n = real.shape[1]
-            with self.folder:
+            with self._window():
                 self.locus_plot = self._gui.add_uplot(
                     data,
                     (
