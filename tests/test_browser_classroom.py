@@ -1,0 +1,88 @@
+"""Issue 55 in a real browser: a lesson step by step (links, Previous/Next, Reveal, reload) and undo by the keyboard.
+
+The relations checked are the paper's and hand arithmetic's (tests/test_classroom.py): step 3 of the
+paper lesson is separate, step 4 tangent (unit circle at (3, 0) against x²/4 + y² = 1).
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+from browser_helpers import text_shown, until
+
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian chromium at /usr/bin/chromium"),
+]
+
+UPLOT_TITLES_JS = """() => Object.values(window.__viserTestpoints?.uplots ?? {})
+  .filter(u => document.body.contains(u.chart.root)).map(u => u.chart.root.querySelector('.u-title')?.textContent ?? '')"""
+
+
+def lesson_session(hs, k: int):
+    """The tab's session once it shows step ``k`` (a step starts the tab's session again)."""
+    from app.scene.lesson_view import view_of
+
+    found = []
+
+    def shown() -> bool:
+        found[:] = [s for s in list(hs.scene.sessions.values()) if (v := view_of(s)) is not None and v.k == k]
+        return bool(found)
+
+    until(shown, what=f"a session on step {k}")
+    hs.session = found[0]
+    hs.wait_settled()
+    return found[0]
+
+
+def test_lesson_link_steps_reveal_and_reload(headless_scene):
+    hs = headless_scene
+    page = hs.page
+    hs.goto("/?lesson=paper&step=3")
+    s = lesson_session(hs, 3)
+    text_shown(page, "step 3 of 11: Separate ⇔ Var = 2 and s0 > 0 (Descartes)")
+    assert s.state.relation == "separate" and s.state.dim == 2
+    page.wait_for_function(f"() => ({UPLOT_TITLES_JS})().some(t => t.startsWith('Roots of P(T) in the complex plane'))")
+    page.get_by_role("button", name="Next ▶").click()
+    s = lesson_session(hs, 4)
+    text_shown(page, "step 4 of 11: External tangency")
+    assert s.state.relation == "tangent"
+    assert page.get_by_text("Tangent at (2, 0)").count() == 0  # the answer waits for Reveal
+    page.get_by_role("button", name="Reveal the answer").click()
+    text_shown(page, "Tangent at (2, 0)")
+    href = page.get_by_role("link", name="Link to this step").get_attribute("href")
+    assert href is not None and href.endswith("?lesson=paper&step=4")
+    page.reload()  # the tab reopens where the student was: step 4, not the link's step 3
+    s = lesson_session(hs, 4)
+    text_shown(page, "step 4 of 11")
+    page.get_by_role("button", name="◀ Previous").click()
+    lesson_session(hs, 3)
+    text_shown(page, "step 3 of 11")
+
+
+def test_lesson_link_to_a_missing_step_or_lesson_says_so(headless_scene):
+    hs = headless_scene
+    hs.goto("/?lesson=paper&step=40")
+    lesson_session(hs, 11)
+    assert "lesson paper: there is no step 40 (steps 1..11)" in hs.session.state.errors["config"]
+    s = hs.goto("/?lesson=nosuch&step=1")
+    until(lambda: "config" in s.state.errors, what="the error")
+    assert "there is no lesson 'nosuch'" in s.state.errors["config"]
+
+
+def test_undo_redo_by_keyboard(headless_scene):
+    hs = headless_scene
+    s = hs.open({"dim": 2, "preset": None, "A": {"center": ["0", "0"], "semi_axes": ["1", "1"]},
+                 "B": {"center": ["3", "0"], "semi_axes": ["1", "1"]}})
+    s.history.note()
+    assert s.set_shape("B", center="2, 0") == "tangent"
+    until(lambda: s.history.steps[0] >= 1, what="the change kept")
+    page = hs.page
+    page.mouse.click(150, 150)  # focus the scene, not a field
+    page.keyboard.press("Control+z")
+    until(lambda: s.state.relation == "separate" and s.history.steps == (0, 1), what="undone")
+    page.keyboard.press("Control+Shift+z")
+    until(lambda: s.state.relation == "tangent" and s.history.steps == (1, 0), what="redone")
+    page.get_by_role("button", name="↶ Undo").click()
+    until(lambda: s.state.relation == "separate", what="undone by the button")
