@@ -368,3 +368,12 @@ def test_landing_page_opens_the_lesson():
     with TestClient(create_api(ApiSettings(scene_url="http://127.0.0.1:8080"))) as c:
         page = c.get("/").text
     assert 'id="lesson-link" class="button" href="http://127.0.0.1:8080/?lesson=paper&amp;step=1"' in page
+
+
+def test_gizmos_hidden_until_move_is_ticked(server):
+    s = Session(server, unit_circles("3"))
+    assert not s.state.gizmos and all(v.control.opacity == 0.0 and v.control.disable_axes for v in s.views.values())
+    s.ui.view.gizmos.value = True  # "Move the shapes (gizmos)", at the top of the panel
+    assert s.state.gizmos and all(v.control.opacity == 1.0 and not v.control.disable_axes for v in s.views.values())
+    assert s.ui.view.gizmos.label == "Move the shapes (gizmos)"
+    s.close()

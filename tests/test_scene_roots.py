@@ -169,7 +169,8 @@ def test_touch_then_static_shapes_the_controls_say_the_state():
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
         s = Session(server, SceneConfig.from_dict({"dim": 2, "preset": None, "A": {"center": [0, 0], "semi_axes": [1, 1]},
-                                                   "B": {"center": [3, "1/2"], "semi_axes": ["1/2", "1/2"]}}))
+                                                   "B": {"center": [3, "1/2"], "semi_axes": ["1/2", "1/2"]},
+                                                   "gizmos": True}))  # "Move" on: the motion hides them and says so
         s.motion_ctl.on_touch()
         deadline = time.monotonic() + 60
         while not (s.state.motion is not None and s.state.analysis is not None and s.state.event is not None):

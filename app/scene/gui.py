@@ -119,8 +119,9 @@ class ViewGui:
     folder: viser.GuiFolderHandle
     dimension: viser.GuiDropdownHandle
     gizmos: viser.GuiCheckboxHandle
+    """"Move the shapes (gizmos)": at the top of the panel, not in the folder (off by default)."""
     gizmo_note: viser.GuiMarkdownHandle
-    """Shown while a motion runs: the gizmos are hidden, and how to get them back."""
+    """Shown while a motion runs: the gizmos are hidden, and how to get them back (under "Move")."""
     plane: viser.GuiCheckboxHandle
     palette: viser.GuiDropdownHandle
     follow: viser.GuiCheckboxHandle
@@ -199,6 +200,11 @@ def build_gui(
     readout = gui.add_markdown("")
     touch = gui.add_button("Touch: slide B to A", hint="B slides along the line of centres to the exact contact (certified)")
     touch_error = gui.add_markdown("", visible=False)
+    move = gui.add_checkbox("Move the shapes (gizmos)", gizmos, hint="show the arrows and rings that drag and turn A and B")
+    gizmo_note = gui.add_markdown(
+        "*A motion drives the shapes: the gizmos are hidden. Pick “(static shapes)” as the Preset to drag them.*",
+        visible=False,
+    )
     with gui.add_folder("What am I seeing?", expand_by_default=is_open("words", False)):
         words = gui.add_markdown("")
     with gui.add_folder("Timeline", visible=False, expand_by_default=is_open("timeline", True)) as tl_folder:
@@ -280,11 +286,8 @@ def build_gui(
         view = ViewGui(
             folder=v_folder,
             dimension=gui.add_dropdown("Dimension", list(DIM_LABELS.values()), initial_value=DIM_LABELS[dim]),
-            gizmos=gui.add_checkbox("Transform gizmos", gizmos),
-            gizmo_note=gui.add_markdown(
-                "*A motion drives the shapes: the gizmos are hidden. Pick “(static shapes)” as the Preset to drag them.*",
-                visible=False,
-            ),
+            gizmos=move,  # at the top of the panel (issue 55: hidden until the user asks to move a shape)
+            gizmo_note=gizmo_note,
             plane=gui.add_checkbox("Separating plane (when separate)", plane),
             palette=gui.add_dropdown("Palette", list(PALETTES), initial_value=next(iter(PALETTES))),
             follow=gui.add_checkbox("Camera follows the shapes", False),

@@ -294,8 +294,8 @@ class SceneConfig:
     """Live uPlot plots (skipped entirely when False)."""
     separating_plane: bool = False
     """Draw a separating plane when the shapes are separate."""
-    gizmos: bool = True
-    """Show the transform gizmos."""
+    gizmos: bool = False
+    """Show the transform gizmos ("Move the shapes"; off by default: they covered the shapes)."""
     palette: str | None = None
     """Relation palette name (:data:`app.scene.shapes.PALETTES`; None: the default)."""
 
@@ -450,7 +450,7 @@ class AppState:
     "shape B" (shape folders), "t" (t box)."""
     show_plots: bool = True
     separating_plane: bool = False
-    gizmos: bool = True
+    gizmos: bool = False
     palette: str = "green / amber / red"
     """Name of the relation palette (:data:`app.scene.shapes.PALETTES`)."""
     follow: bool = False
