@@ -86,3 +86,24 @@ def test_undo_redo_by_keyboard(headless_scene):
     until(lambda: s.state.relation == "tangent" and s.history.steps == (1, 0), what="redone")
     page.get_by_role("button", name="↶ Undo").click()
     until(lambda: s.state.relation == "separate", what="undone by the button")
+
+
+def test_screenshot_of_a_lesson_step_from_a_teachers_file(tmp_path):
+    """``screenshot --lesson FILE --step K``: the step drawn as its link shows it (a PNG of the page)."""
+    import json
+
+    import browser_helpers
+
+    from app.cli import main
+
+    lesson = tmp_path / "circles.json"
+    lesson.write_text(json.dumps({"title": "Two circles", "steps": [
+        {"title": "apart", "scene": {"dim": 2, "preset": None, "B": {"center": ["3", "0"], "semi_axes": ["1", "1"]}}},
+        {"title": "touching", "scene": {"dim": 2, "preset": None, "A": {"center": ["0", "0"], "semi_axes": ["1", "1"]},
+                                        "B": {"center": ["2", "0"], "semi_axes": ["1", "1"]}},
+         "question": "Predict?", "answer": "Tangent: 2 = 1 + 1.", "roots": True, "open": ["roots"]}]}))
+    out = tmp_path / "step2.png"
+    assert main(["screenshot", "--lesson", str(lesson), "--step", "2", "--width", "900", "--height", "600", "--out", str(out),
+                 "--browser", browser_helpers.CHROMIUM_OF_THIS_PROCESS.get()]) == 0
+    data = out.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and int.from_bytes(data[16:20], "big") == 900
