@@ -191,7 +191,7 @@ class PanelView:
             elif state.t_exact is not None:
                 where, at = f"at t = {state.t_text or state.t_exact}", state.t_exact
             else:
-                where, at = f"at t = {state.t:.6g}", an.inside(state.t)
+                where, at = f"at t = {state.t_text or format(state.t, '.6g')}", an.inside(state.t)  # as typed ("3/4")
             expl = an.readout_at(model, at, state.t, event)
             if expl is None:
                 expl = {"n": an.n, "relation": state.relation, "certified_by": "exact", "coefficients": [], "var": 0, "rule_text": ""}

@@ -117,13 +117,18 @@ def locus_data(
         real_roots: (len(ts), n) real roots per sample, NaN-padded (:func:`app.scene.roots.locus`).
         events: (time, double root position or None) of each certified event.
         t: the current time (cursor).
-        scale: "asinh" or "linear" (the y axis: T or asinh T).
+        scale: "asinh" or "linear" (the y axis: T or asinh T; linear: clipped to 1.5 times the
+            10th / 90th percentiles of the roots drawn, so that a root running off to 10^4 leaves
+            the others readable).
     """
     n_t = len(ts)
     ys = [_f(real_roots[:, k], scale) for k in range(real_roots.shape[1])]
     finite = np.concatenate([y[np.isfinite(y)] for y in ys]) if ys else np.zeros(1)
     top = float(np.max(finite)) if finite.size else 1.0
     bot = float(np.min(finite)) if finite.size else -1.0
+    if scale == "linear" and finite.size:  # a root running off to 10^4 must not flatten the others: clipped
+        top = min(top, 1.5 * float(np.percentile(finite, 90)))
+        bot = max(bot, 1.5 * float(np.percentile(finite, 10)))
     top, bot = max(top, 0.5), min(bot, -0.5)
     pad = 0.08 * (top - bot)
     zero = np.zeros(n_t)
@@ -273,7 +278,7 @@ class RootsView:
         elif state.t_exact is not None:
             t, where = state.t_exact, f"at t = {state.t_text or state.t_exact}"
         else:
-            t, where = an.inside(state.t), f"at t = {state.t:.6g}"
+            t, where = an.inside(state.t), f"at t = {state.t_text or format(state.t, '.6g')}"
         key = (id(an), repr(t), event)
         if key not in self._cache:
             self._remember(key, roots_at(list(an.result.a), t, state.t, state.relation))
