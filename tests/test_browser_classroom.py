@@ -107,3 +107,16 @@ def test_screenshot_of_a_lesson_step_from_a_teachers_file(tmp_path):
                  "--browser", browser_helpers.CHROMIUM_OF_THIS_PROCESS.get()]) == 0
     data = out.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and int.from_bytes(data[16:20], "big") == 900
+
+
+def test_served_lesson_opens_every_new_tab_on_step_one(headless_scene):
+    """``serve --lesson paper``: a tab opened on the scene's root starts at step 1 (its own step after)."""
+    hs = headless_scene
+    hs.scene.lesson = "paper"
+    try:
+        hs.goto("/")
+        s = lesson_session(hs, 1)
+        text_shown(hs.page, "step 1 of 11: An ellipse is a matrix")
+        assert s.state.relation == "separate" and s.state.shapes["A"].matrix is not None
+    finally:
+        hs.scene.lesson = None

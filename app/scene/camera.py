@@ -96,6 +96,7 @@ class Framing:
         free: float = FREE,
         fill: float = 0.9,
         view: tuple[float, float, float] = (0.3, -1.05, 0.6),
+        whole: bool = True,
     ) -> None:
         """Point one camera at the box (the one framing arithmetic of the scene and the bodies view).
 
@@ -104,6 +105,8 @@ class Framing:
             free: share of the width not covered by a panel (1: the whole view).
             fill: distance factor (larger: the box looks smaller).
             view: 3D direction from the box's centre to the camera.
+            whole: 3D: the box's bounding sphere fits the view whole (two shapes); False: the
+                distance of the tangent rule, with the caller's ``fill`` (the many-bodies overview).
         """
         try:
             fov, aspect = float(cam.fov), float(cam.aspect)
@@ -113,7 +116,7 @@ class Framing:
         seen = half_h * min(1.0, free * aspect)  # tan of the half-angle the box must fit in
         # 2D: the shapes lie in a plane facing the camera; 3D: the box's bounding sphere, whose
         # apparent half-angle is asin(r / d), fits in that half-angle (the tangent cut solids off)
-        dist = fill * self.radius / (seen if self.dim == 2 else math.sin(math.atan(seen)))
+        dist = fill * self.radius / (seen if self.dim == 2 or not whole else math.sin(math.atan(seen)))
         shift = (0.5 - free / 2) * 2 * dist * half_h * aspect
         c = self.centre
         if self.dim == 2:
