@@ -120,3 +120,16 @@ def test_served_lesson_opens_every_new_tab_on_step_one(headless_scene):
         assert s.state.relation == "separate" and s.state.shapes["A"].matrix is not None
     finally:
         hs.scene.lesson = None
+
+
+def test_t_box_in_the_page_widens_the_slider_and_keeps_the_text(headless_scene):
+    """The issue's reproducer: Example 33 (I = R), "3" typed showed "at t = 1" and rewrote the box to 1.0."""
+    from browser_helpers import field_input, set_field
+
+    hs = headless_scene
+    s = hs.open({"preset": "example-33"})
+    set_field(hs.page, "t (exact)", "5/2")
+    until(lambda: s.state.t == 2.5 and not s.pending(), what="t = 5/2")
+    assert s.state.relation == "tangent" and s.state.analysis.window[1] >= 2.5
+    text_shown(hs.page, "at t = 5/2")
+    until(lambda: field_input(hs.page, "t (exact)").input_value() == "5/2", what="the box keeps 5/2")

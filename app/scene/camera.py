@@ -114,9 +114,10 @@ class Framing:
             fov, aspect = 1.3, 1.5
         half_h = math.tan(fov / 2)
         seen = half_h * min(1.0, free * aspect)  # tan of the half-angle the box must fit in
-        # 2D: the shapes lie in a plane facing the camera; 3D: the box's bounding sphere, whose
-        # apparent half-angle is asin(r / d), fits in that half-angle (the tangent cut solids off)
-        dist = fill * self.radius / (seen if self.dim == 2 or not whole else math.sin(math.atan(seen)))
+        if self.dim == 2 or not whole:  # 2D: the shapes lie in the plane facing the camera
+            dist = fill * self.radius / seen
+        else:  # the box's bounding sphere: its apparent half-angle asin(r / d) fits (the tangent cut solids off)
+            dist = fill * self.radius / math.sin(math.atan(seen))
         shift = (0.5 - free / 2) * 2 * dist * half_h * aspect
         c = self.centre
         if self.dim == 2:
