@@ -126,6 +126,13 @@ class History:
         if due and not self._busy():
             self.note()
 
+    def close(self) -> None:
+        """The tab went away: the pending check is dropped (its timer no longer holds the session)."""
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+
     # ------------------------------------------------------------------ undo / redo
     @property
     def steps(self) -> tuple[int, int]:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import html
 import threading
 import weakref
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import viser
 
@@ -36,12 +36,15 @@ REVEAL = "Reveal the answer"
 LESSON_ORDER = -1000.0
 """The Lesson folder's place in the panel: first (viser orders elements by this number)."""
 
-_VIEWS: weakref.WeakKeyDictionary[Any, LessonView] = weakref.WeakKeyDictionary()
+_VIEWS: weakref.WeakValueDictionary[int, LessonView] = weakref.WeakValueDictionary()
+"""id(session) -> its lesson view. Weak values: a view lives as long as its buttons' callbacks (the
+tab's panel), and it holds its session, so an id here is never a dead session's."""
 
 
 def view_of(session: Session) -> LessonView | None:
     """The lesson view of a session, or None (the tab is not in a lesson)."""
-    return _VIEWS.get(session)
+    view = _VIEWS.get(id(session))
+    return view if view is not None and view.session is session else None
 
 
 def heading(lesson: Lesson, k: int) -> str:
@@ -83,7 +86,7 @@ class LessonView:
             )
         self.nav.on_click(lambda ev: self.on_nav(str(ev.target.value)))
         self.reveal.on_click(lambda _ev: self.show_answer())
-        _VIEWS[session] = self
+        _VIEWS[id(session)] = self
 
     def on_nav(self, which: str) -> None:
         """"◀ Previous" / "Next ▶" clicked."""

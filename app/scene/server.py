@@ -20,6 +20,7 @@ import ctypes
 import gc
 import socket
 import threading
+import time
 from collections.abc import Callable, Collection, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
@@ -96,6 +97,10 @@ class SceneServer:
         """Clients whose session is being built."""
         self._left: set[int] = set()
         """Of those, the ones that disconnected meanwhile (see :meth:`_register`)."""
+        self._framed: dict[int, list[Any]] = {}
+        """Per tab: the shape of its view last seen and until when a change frames again (:meth:`_frame_on_resize`)."""
+        self._resize_hooked: set[int] = set()
+        """Tabs whose camera calls :meth:`_frame_on_resize`'s callback."""
         self._lock = threading.Lock()
         self.new_session = threading.Condition(self._lock)
         self.reclaim = Reclaimer(RECLAIM_SECONDS)
@@ -144,7 +149,43 @@ class SceneServer:
 
             session = lesson_session(self, client, tab) or self._session(client, self.store.get(tab) if tab is not None else None)
         session.frame_camera()
+        self._frame_on_resize(client)
         self._register(client.client_id, session, tab)
+
+    FRAME_ON_RESIZE = 10.0
+    """Seconds after a tab opens (or starts again) during which a change of its view's shape frames the shapes again."""
+
+    def _frame_on_resize(self, client: viser.ClientHandle) -> None:
+        """Frame the tab's shapes again when its view first reports, or changes shape, soon after it opens.
+
+        A tab's first framing runs before its page says what it sees (field of view and shape of
+        the view guessed), and a window docked beside the scene (the roots of P(T)) narrows the
+        view after the shapes were framed: a camera keeps its vertical field of view, so a wide
+        pair came out cut at the sides (issue 55: framed 3.99 from a pair that needs 5.12). Only
+        within :attr:`FRAME_ON_RESIZE` s of the tab's (re)start: later, a resize keeps the user's camera.
+        """
+        with self._lock:
+            self._framed[client.client_id] = [None, time.monotonic() + self.FRAME_ON_RESIZE]
+
+        def seen(cam: viser.CameraHandle) -> None:
+            try:
+                aspect = float(cam.aspect)
+            except AssertionError:
+                return
+            with self._lock:
+                record = self._framed.get(client.client_id)
+                session = self.sessions.get(client.client_id)
+                if record is None:
+                    return
+                old, until = record
+                record[0] = aspect
+            if session is None or time.monotonic() > until or (old is not None and abs(aspect - old) <= 1e-3):
+                return
+            session.frame_camera(grid=False)
+
+        if client.client_id not in self._resize_hooked:
+            self._resize_hooked.add(client.client_id)
+            client.camera.on_update(seen)
 
     def _session(
         self, client: viser.ClientHandle, saved: SceneConfig | dict[str, Any] | None, open_folders: Collection[str] | None = None,
@@ -201,6 +242,7 @@ class SceneServer:
                     then(session)
                 session.frame_camera()
             self._register(client_id, session, tab)
+            self._frame_on_resize(client)
         finally:
             with self._lock:
                 self._building.discard(client_id)
@@ -230,6 +272,8 @@ class SceneServer:
         with self._lock:
             s = self.sessions.pop(client.client_id, None)
             tab = self._tabs.pop(client.client_id, None)
+            self._framed.pop(client.client_id, None)
+            self._resize_hooked.discard(client.client_id)
             if s is None and client.client_id in self._building:  # _register closes it when built
                 self._left.add(client.client_id)
         if s is not None and s is not self.shared:
@@ -248,7 +292,7 @@ class SceneServer:
         """
         with self._lock:
             own = {"sessions": len(self.sessions), "tab addresses": len(self._tabs), "building": len(self._building),
-                   "left while building": len(self._left)}
+                   "left while building": len(self._left), "framings": len(self._framed) + len(self._resize_hooked)}
         return {**own, **{f"uploads: {k}": v for k, v in self.uploads.registries().items()}, **wire.client_records(self.server)}
 
     @property

@@ -460,6 +460,7 @@ class Session:
         caller may stop the server next, and messages queued after that go nowhere (viser warns).
         """
         self.closed = True
+        self.history.close()
         timer = self._timer
         if timer is not None:
             timer.cancel()
