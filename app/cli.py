@@ -183,6 +183,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--preset", default=None, help="preset the scene opens on (default example-29; 'none' for static shapes)")
     s.add_argument("--config", default=None, help="JSON configuration the scene opens on")
     s.add_argument("--shared", action="store_true", help="presenter mode: every tab sees and drives one scene")
+    s.add_argument("--lesson", default=None, metavar="NAME|FILE",
+                   help="every new tab opens on this lesson's first step: 'paper' (the paper step by step) or a lesson JSON file")
     s.add_argument(
         "--allow-origin", action="append", default=[], type=_origin, metavar="URL",
         help="also accept scene connections from pages at this origin, e.g. https://example.org "
@@ -221,6 +223,9 @@ def build_parser() -> argparse.ArgumentParser:
     sh.add_argument("--no-plots", action="store_true", help="hide the live plots")
     sh.add_argument("--out", required=True, help="output PNG path, or a folder for several images")
     sh.add_argument("--timeout", type=float, default=120.0, help="seconds to wait for rendering")
+    sh.add_argument("--lesson", default=None, metavar="NAME|FILE", help="draw a lesson's steps: 'paper' or a lesson JSON file")
+    sh.add_argument("--step", type=int, action="append", default=None,
+                    help="the lesson's step K (1-based; repeatable; default every step, --out a folder)")
     sh.add_argument(
         "--browser", type=_devtools_address, default=None, metavar="URL",
         help="DevTools address of a Chromium that already runs (chromium --headless --remote-debugging-port=PORT: "
@@ -235,6 +240,10 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--seconds", type=float, default=12.0, help="playing time of the sweep over I (default 12)")
     ex.add_argument("--frames", type=int, default=240, help="time steps recorded (default 240)")
     ex.add_argument("--out", required=True, help="output HTML path")
+    ex.add_argument("--lesson", default=None, metavar="NAME|FILE",
+                    help="write a lesson instead: every step's picture and words in one offline page ('paper' or a JSON file)")
+    ex.add_argument("--width", type=_size, default=1280, help="--lesson: picture width in px (default 1280)")
+    ex.add_argument("--height", type=_size, default=720, help="--lesson: picture height in px (default 720)")
     _add_sphere_subdivisions(ex, f"default {SPHERE_SUBDIVISIONS}; fewer make a smaller file")
     from .bodies_cli import add_body_file_options, add_parsers, box_argument, frame_argument
 
@@ -323,11 +332,17 @@ def _serve(args: argparse.Namespace) -> int:
     if not args.api_only:
         from .scene.server import start_scene
 
+        lesson = _lesson(args)
         scene = start_scene(
             args.host, args.port, config_from_args(args), shared=args.shared, allow_origins=args.allow_origin,
             bodies=_bodies_model(args), sphere_subdivisions=args.sphere_subdivisions,
         )
         scene_url = scene.url
+        if lesson is not None:
+            from .scene.lesson import step_link
+
+            scene.lesson = lesson.name
+            print(f"Lesson: {lesson.title} ({len(lesson.steps)} steps): {scene_url}{step_link(lesson, 1)}", flush=True)
         print(f"Scene (open in a browser): {scene_url}", flush=True)
     try:
         from .api import ApiSettings, create_api
@@ -398,11 +413,57 @@ def _bodies_model(args: argparse.Namespace) -> object:
     return model
 
 
+def _lesson(args: argparse.Namespace) -> Any:
+    """The lesson of ``--lesson`` (registered: links name it), or None."""
+    if getattr(args, "lesson", None) is None:
+        return None
+    if getattr(args, "shared", False) or getattr(args, "bodies", None) is not None:
+        raise ValueError("--lesson shows one tab's scene: not with --shared or --bodies")
+    from .scene.lesson import load_lesson, register
+
+    lesson = load_lesson(args.lesson)
+    register(lesson)
+    return lesson
+
+
+def _lesson_screenshots(args: argparse.Namespace, lesson: Any) -> int:
+    """``screenshot --lesson L [--step K ...]``: one PNG per step (a folder for several)."""
+    from pathlib import Path
+
+    from .scene.lesson_export import step_pictures
+
+    steps = _listed(args.step) or list(range(1, len(lesson.steps) + 1))
+    for k in steps:
+        lesson.step(k)  # ValueError: no such step
+    one = len(steps) == 1 and not args.out.endswith(("/", os.sep))
+    written = []
+    for k, png in step_pictures(lesson, steps, width=args.width, height=args.height, timeout=args.timeout, cdp=args.browser):
+        path = Path(args.out) if one else Path(args.out) / f"step-{k:02d}.png"
+        target = _output_file(path)
+        with target as f:
+            f.write(png)
+        written.append(path)
+    for path in written:
+        print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
+def _output_file(path: Any) -> Any:
+    from .output import Output
+
+    return Output(path, binary=True, make_folders=True)
+
+
 def _screenshot(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from .screenshot import screenshots, shots_for
 
+    lesson = _lesson(args)
+    if lesson is not None:
+        return _lesson_screenshots(args, lesson)
+    if getattr(args, "step", None):
+        raise ValueError("--step is a lesson's step: give --lesson too")
     configs = _listed(args.config)
     ts, events = _listed(args.t), _listed(args.event)
     if getattr(args, "to", None) is not None:  # moving bodies: --t in the step, --event K the K-th contact event
@@ -440,6 +501,18 @@ def _export(args: argparse.Namespace) -> int:
     from .output import Output
 
     out = Path(args.out)
+    lesson = _lesson(args)
+    if lesson is not None:  # every step's picture and words in one offline page
+        from .scene.lesson_export import lesson_html, step_pictures
+
+        target = Output(out, make_folders=True)
+        with target as f:
+            steps = list(range(1, len(lesson.steps) + 1))
+            page = lesson_html(lesson, dict(step_pictures(lesson, steps, width=args.width, height=args.height)))
+            f.write(page)
+        print(f"wrote {out} ({len(page) // 1024} kB, {len(lesson.steps)} steps; open it in a browser, no server needed)",
+              file=sys.stderr)
+        return 0
     target = Output(out, make_folders=True)  # documented: the folders are created; checked before the replay is built
     with target as f:
         html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames,

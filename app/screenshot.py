@@ -153,6 +153,7 @@ class HeadlessScene:
             (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`): the default for pictures; the
             browser tests, which read colours, poses and the panel, take 3 (a frame in software
             WebGL ~23 instead of ~60 ms of CPU).
+        start_path: the page the tab opens first: ``/`` (``config``), or a lesson step's link.
     """
 
     def __init__(
@@ -169,8 +170,11 @@ class HeadlessScene:
         cdp: str | None = None,
         settle_ms: float | None = None,
         sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
+        start_path: str = "/",
     ) -> None:
         self.sphere_subdivisions = check_sphere_subdivisions(sphere_subdivisions)
+        self.start_path = start_path
+        """The page the tab opens first (``/``, or a lesson step's ``/?lesson=paper&step=3``)."""
         if not 0.1 <= dpr <= 4:
             raise ValueError(f"dpr must be in [0.1, 4], not {dpr}")
         if settle_ms is not None and not 0 <= settle_ms <= SETTLE_MAX_MS:
@@ -231,7 +235,7 @@ class HeadlessScene:
                 )
                 self.page = self._browser.pages[0] if self._browser.pages else self._browser.new_page()
             self.page.set_default_timeout(self.timeout * 1000)
-            self.session = self.goto("/")
+            self.session = self.goto(self.start_path)
         except BaseException:
             self.__exit__(None, None, None)
             raise

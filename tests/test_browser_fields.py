@@ -340,7 +340,7 @@ def test_dragging_a_gizmo_certifies_the_shape_the_fields_show(headless_scene):
     hs = headless_scene
     # B left of A: its +x arrow points at A, in the middle of the canvas (not under the GUI panel)
     cfg = {"preset": None, "A": {"center": ["3", "0", "0"], "semi_axes": ["1", "1", "1"]},
-           "B": {"center": ["0", "0", "0"], "semi_axes": ["1", "1", "1"]}}
+           "B": {"center": ["0", "0", "0"], "semi_axes": ["1", "1", "1"]}, "gizmos": True}  # "Move the shapes" on
     s = hs.open(cfg)
     page = hs.page
     d = Driver(hs, random.Random(0))

@@ -45,7 +45,7 @@ def test_roots_of_p_follow_t_and_mark_the_tangency(headless_scene):
     plane = series(page, "Roots of P(T)")
     assert plane["positive double root (tangency)"] == 1 and plane["complex pair"] == 0, plane
     locus = series(page, "Root locus")
-    assert locus["α1 (certified)"] == 2 and locus["α2"] == 2 and locus["double root"] == 2, locus
+    assert locus["α1 (certified)"] == 2 and locus["α2 (certified)"] == 2 and locus["double root"] == 2, locus
     page.wait_for_function("() => document.body.innerText.includes('a positive double root')")
     set_field(page, "t (exact)", "0.7")  # overlap: the positive roots have left the real axis
     until(lambda: s.state.t == 0.7 and s.state.event is None, what="t = 0.7")

@@ -160,9 +160,9 @@ def test_open_starts_the_tab_as_its_link_does_without_a_page_load(hs, monkeypatc
 
     build = server.SceneServer._session
 
-    def slow_build(self, client, saved):
+    def slow_build(self, client, saved, *more):
         time.sleep(0.3)
-        return build(self, client, saved)
+        return build(self, client, saved, *more)
 
     link = {"preset": "example-30", "t": 0.5}
     old = load_link(hs, {"preset": "example-29", "t": 0.3})

@@ -89,9 +89,11 @@ def test_plane_picture_marks_the_double_root_and_the_positive_axis():
     A, B = circle_pair("3/2")
     pic = roots_of_pencil(pencil_coefficients(A, B))
     data, xr, yr = plane_data(pic, "linear")
-    x, axis, simple, double, cplx = data
+    x, axis, simple, double, cplx, ring2, *more_rings = data
     assert list(np.flatnonzero(~np.isnan(double))) == [int(np.flatnonzero(np.isclose(x, pic.positive[0].re))[0])]
     assert np.all(axis[x >= 0] == 0) and np.all(np.isnan(axis[x < 0]))
+    assert np.array_equal(~np.isnan(ring2), ~np.isnan(double))  # the double root's ring (×2); no other multiple root
+    assert all(np.all(np.isnan(r)) for r in more_rings)
     assert xr[0] < min(x) and xr[1] >= max(x) and yr[0] < 0 < yr[1]
 
 
@@ -167,7 +169,8 @@ def test_touch_then_static_shapes_the_controls_say_the_state():
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
         s = Session(server, SceneConfig.from_dict({"dim": 2, "preset": None, "A": {"center": [0, 0], "semi_axes": [1, 1]},
-                                                   "B": {"center": [3, "1/2"], "semi_axes": ["1/2", "1/2"]}}))
+                                                   "B": {"center": [3, "1/2"], "semi_axes": ["1/2", "1/2"]},
+                                                   "gizmos": True}))  # "Move" on: the motion hides them and says so
         s.motion_ctl.on_touch()
         deadline = time.monotonic() + 60
         while not (s.state.motion is not None and s.state.analysis is not None and s.state.event is not None):

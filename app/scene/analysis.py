@@ -136,9 +136,12 @@ class AnalysisView:
     _readouts: dict[Any, dict[str, Any] | None] = field(default_factory=dict, repr=False)
 
     @classmethod
-    def of(cls, result: MotionAnalysis, seconds: float = 0.0) -> AnalysisView:
-        """Prepare a result for drawing (event floats, samples: a few milliseconds)."""
-        samples = result.samples(PLOT_SAMPLES)
+    def of(cls, result: MotionAnalysis, seconds: float = 0.0, window: tuple[float, float] | None = None) -> AnalysisView:
+        """Prepare a result for drawing (event floats, samples: a few milliseconds).
+
+        ``window``: the slider's (default: I when finite, else around the events).
+        """
+        samples = result.samples(PLOT_SAMPLES, *(window or (None, None)))
         ts = np.asarray(samples["t"], dtype=float)
         window = (float(ts[0]), float(ts[-1]))
         series: dict[str, np.ndarray] = {f"a{i}": np.asarray(v, dtype=float) for i, v in enumerate(samples["a"])}
@@ -161,6 +164,22 @@ class AnalysisView:
             samples=series,
             polys=result.polynomials(),
         )
+
+    def widened(self, t: float) -> AnalysisView:
+        """The same analysis with a slider window that shows ``t`` (a typed t inside an unbounded I).
+
+        The window grows on t's side by 5 % beyond t (never past a finite end of I); a new view,
+        since views are shared by the tabs through the cache.
+        """
+        lo, hi = self.window
+        if lo <= t <= hi:
+            return self
+        ilo, ihi = (None if e is None else float(e) for e in self.result.interval)
+        pad = 0.05 * (max(hi, t) - min(lo, t))
+        lo = min(lo, t - pad) if t < lo else lo
+        hi = max(hi, t + pad) if t > hi else hi
+        lo, hi = (lo if ilo is None else max(lo, ilo)), (hi if ihi is None else min(hi, ihi))
+        return AnalysisView.of(self.result, self.seconds, window=(lo, hi))
 
     @property
     def n(self) -> int:

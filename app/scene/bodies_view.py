@@ -633,7 +633,7 @@ class BodiesView:
         if cam is None or self.model is None or len(self.model.bodies) == 0:
             return
         lo, hi = self.model.extent()
-        Framing(np.array([lo, hi]), self.model.dim).aim(cam, fill=1.35 if self.model.dim == 3 else 1.0, view=(0.55, -1.0, 0.7))
+        Framing(np.array([lo, hi]), self.model.dim).aim(cam, fill=1.35 if self.model.dim == 3 else 1.0, view=(0.55, -1.0, 0.7), whole=False)
 
     def close(self) -> None:
         """The tab went away: stop the two-body view's work, the timeline and the camera timer.

@@ -96,6 +96,7 @@ class Framing:
         free: float = FREE,
         fill: float = 0.9,
         view: tuple[float, float, float] = (0.3, -1.05, 0.6),
+        whole: bool = True,
     ) -> None:
         """Point one camera at the box (the one framing arithmetic of the scene and the bodies view).
 
@@ -104,13 +105,23 @@ class Framing:
             free: share of the width not covered by a panel (1: the whole view).
             fill: distance factor (larger: the box looks smaller).
             view: 3D direction from the box's centre to the camera.
+            whole: the box fits whole (two shapes; a margin of ``fill`` / 0.8): in 2D its width in
+                the free part of the view and its height, in 3D its bounding sphere. False: the
+                tangent rule on the box's radius with the caller's ``fill`` (the many-bodies overview).
         """
         try:
             fov, aspect = float(cam.fov), float(cam.aspect)
         except Exception:  # noqa: BLE001 - camera state not known yet: typical values
             fov, aspect = 1.3, 1.5
         half_h = math.tan(fov / 2)
-        dist = fill * self.radius / (half_h * min(1.0, free * aspect))
+        seen = half_h * min(1.0, free * aspect)  # tan of the half-angle the box must fit in
+        if not whole:
+            dist = fill * self.radius / seen
+        elif self.dim == 2:  # the box itself, in the plane facing the camera: its width within the free part
+            hx, hy = (float(v) / 2 for v in (self.hi - self.lo)[:2])
+            dist = max(hy, hx / (free * aspect), 1.0) / half_h * fill / 0.8
+        else:  # the box's bounding sphere: its apparent half-angle asin(r / d) fits (the tangent cut solids off)
+            dist = fill * self.radius / math.sin(math.atan(seen))
         shift = (0.5 - free / 2) * 2 * dist * half_h * aspect
         c = self.centre
         if self.dim == 2:

@@ -14,6 +14,7 @@ from concurrent.futures import Future
 from typing import TYPE_CHECKING
 
 from .analysis import AnalysisView
+from .exact_shapes import exact_shapes_at
 from .gui import STATIC
 from .motion import MotionError, MotionModel
 from .motion_form import form_text
@@ -259,6 +260,8 @@ class MotionControl:
             st.t = an.events[event - 1].t
         t_text = self._then[0]
         self._then = (None, None)
+        if isinstance(t_text, int | float) and not isinstance(t_text, bool) and not lo <= t_text <= hi:
+            t_text = repr(float(t_text))  # outside the slider: widened (unbounded I) or refused, never clamped
         if isinstance(t_text, str) and event is None:  # an exact time from a configuration
             error = s.timeline_ctl.apply_text(t_text)
             if error is not None:
@@ -288,15 +291,29 @@ class MotionControl:
         st = s.state
         if st.motion is None:
             return
+        exact = exact_shapes_at(st.motion, self.exact_t(), st.shapes)  # a tangency reached stays one
         shapes = {}
         for name, sh in st.shapes.items():
             try:
-                shapes[name] = sh.rationalised()
+                shapes[name] = exact[name] if name in exact else sh.rationalised()
             except ValueError:
                 shapes[name] = sh
         st.shapes = shapes
         self.leave()
-        st.status = self.FROZEN
+        st.status = self.EXACT if len(exact) == len(shapes) else self.FROZEN
+
+    EXACT = "Static shapes: exactly the shapes of the motion at the t shown; the relation is certified for them."
+    """Status after leaving a motion whose shapes at t have a short exact form (:mod:`app.scene.exact_shapes`)."""
+
+    def exact_t(self) -> object:
+        """The time shown, exactly: the event's, the typed one, or the float's binary value (or its end of I)."""
+        st = self.s.state
+        an = st.analysis
+        if st.event is not None and an is not None:
+            return an.events[st.event - 1].event.time
+        if st.t_exact is not None:
+            return st.t_exact
+        return an.inside(st.t) if an is not None else st.t
 
     def leave(self) -> None:
         """Turn the scene static (a drag, a typed shape, "(static shapes)").

@@ -57,6 +57,7 @@ class ShapeControl:
         ui.plots.live.on_update(lambda _ev: self.on_option("show_plots", bool(ui.plots.live.value)))
         ui.plots.scale.on_update(lambda _ev: self.on_option("plot_scale", str(ui.plots.scale.value)))
         ui.roots.show_roots.on_update(lambda _ev: self.on_roots())
+        ui.roots.axes.on_update(lambda _ev: self.on_roots())
 
     def attach_gizmos(self) -> None:
         """Listen to the gizmos of the current shape views (after they are (re)built)."""

@@ -57,7 +57,7 @@ class TimelineControl:
                 float). A float outside the window is clamped (slider, playback).
             event: show the exact event k instead (set by "jump to").
             defer_panels: coalesce the panel updates (slider and playback).
-            text: how the t box shows an exact t.
+            text: how the t box shows t: the text the user typed (None: the number itself).
 
         Returns:
             The certified relation drawn at t (None while the analysis is running).
@@ -74,7 +74,7 @@ class TimelineControl:
             if exact is None and not lo <= tf <= hi:
                 tf = min(max(tf, lo), hi)
             st.t, st.t_exact, st.event = tf, exact, event
-            st.t_text = text if exact is not None else None
+            st.t_text = text
             st.errors.pop("t", None)
             return s.refresh(defer=defer_panels)
 
@@ -136,14 +136,20 @@ class TimelineControl:
             if not an.contains(t):
                 lo, hi = an.result.interval
                 return f"t = {shown} is outside I = [{'-∞' if lo is None else lo}, {'∞' if hi is None else hi}]"
+            tf = _float(t)
+            if not math.isfinite(tf):
+                return f"t = {shown} is too large to draw (the scene draws |t| < 1e308)"
+            wlo, whi = an.window
+            if not wlo <= tf <= whi:  # inside an unbounded I, outside the slider: the slider widens to show it
+                s.state.analysis = an = an.widened(tf)
             s.state.auto_t = False
             k = an.event_at(t)
             if k is not None:  # exactly an event: show it as the event
                 self.jump_to_event(k)
-            elif isinstance(t, fmpq) and math.isfinite(_float(t)) and to_fmpq(_float(t)) == t:
-                self.set_t(_float(t))  # a float's exact value typed: the float path
+            elif isinstance(t, fmpq) and to_fmpq(tf) == t:
+                self.set_t(tf, text=text if len(text) <= 40 else None)  # a float's exact value typed: the float path
             else:
-                self.set_t(t, text=shown)
+                self.set_t(t, text=text if len(text) <= 40 else None)
             return None
 
     # ------------------------------------------------------------------ playback

@@ -11,7 +11,7 @@ contents.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -119,8 +119,9 @@ class ViewGui:
     folder: viser.GuiFolderHandle
     dimension: viser.GuiDropdownHandle
     gizmos: viser.GuiCheckboxHandle
+    """"Move the shapes (gizmos)": at the top of the panel, not in the folder (off by default)."""
     gizmo_note: viser.GuiMarkdownHandle
-    """Shown while a motion runs: the gizmos are hidden, and how to get them back."""
+    """Shown while a motion runs: the gizmos are hidden, and how to get them back (under "Move")."""
     plane: viser.GuiCheckboxHandle
     palette: viser.GuiDropdownHandle
     follow: viser.GuiCheckboxHandle
@@ -179,17 +180,34 @@ def ignoring_event(fn: Callable[[], object]) -> Callable[[object], None]:
     return callback
 
 
-def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bool, gizmos: bool, plane: bool) -> Gui:
-    """Lay out the panel of one tab (or of the shared scene) and return its handles."""
+def build_gui(
+    gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bool, gizmos: bool, plane: bool,
+    open_folders: Collection[str] | None = None,
+) -> Gui:
+    """Lay out the panel of one tab (or of the shared scene) and return its handles.
+
+    ``open_folders``: the folders shown open (names of :data:`app.scene.lesson.FOLDERS`, a lesson
+    step's); None: the usual ones (Timeline, Plots, Motion). A browser opens a folder as the
+    panel is built only: a lesson step builds the panel anew.
+    """
+
+    def is_open(name: str, default: bool) -> bool:
+        return default if open_folders is None else name in open_folders
+
     gui.configure_theme(control_width="large", show_share_button=False)
     title = gui.add_markdown("**Ellipse / ellipsoid interference** (certified)")
     legend = gui.add_html("")
     readout = gui.add_markdown("")
     touch = gui.add_button("Touch: slide B to A", hint="B slides along the line of centres to the exact contact (certified)")
     touch_error = gui.add_markdown("", visible=False)
-    with gui.add_folder("What am I seeing?", expand_by_default=False):
+    move = gui.add_checkbox("Move the shapes (gizmos)", gizmos, hint="show the arrows and rings that drag and turn A and B")
+    gizmo_note = gui.add_markdown(
+        "*A motion drives the shapes: the gizmos are hidden. Pick “(static shapes)” as the Preset to drag them.*",
+        visible=False,
+    )
+    with gui.add_folder("What am I seeing?", expand_by_default=is_open("words", False)):
         words = gui.add_markdown("")
-    with gui.add_folder("Timeline", visible=False) as tl_folder:
+    with gui.add_folder("Timeline", visible=False, expand_by_default=is_open("timeline", True)) as tl_folder:
         timeline = TimelineGui(
             folder=tl_folder,
             bar=gui.add_html(""),
@@ -202,15 +220,15 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
             events_md=gui.add_html(""),
             events_folder=gui.add_folder("Events (jump to)"),
         )
-    with gui.add_folder("Plots", visible=False) as pl_folder:
+    with gui.add_folder("Plots", visible=False, expand_by_default=is_open("plots", True)) as pl_folder:
         plots = PlotsGui(
             folder=pl_folder,
             live=gui.add_checkbox("Live plots", show_plots),
             scale=gui.add_dropdown("Plot scale", list(SCALES), initial_value="asinh"),
             about=gui.add_markdown(""),
         )
-    roots = RootsView(gui)
-    with gui.add_folder("Motion") as mo_folder:
+    roots = RootsView(gui, expand=is_open("roots", False))
+    with gui.add_folder("Motion", expand_by_default=is_open("motion", True)) as mo_folder:
         preset = gui.add_dropdown("Preset", [STATIC, *presets], initial_value=STATIC)
         description = gui.add_markdown("")
         fields: dict[str, viser.GuiTextHandle] = {}
@@ -248,7 +266,7 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
         )
     shapes: dict[str, ShapeGui] = {}
     for name in ("A", "B"):
-        with gui.add_folder(f"Shape {name}", expand_by_default=False) as folder:
+        with gui.add_folder(f"Shape {name}", expand_by_default=is_open(f"shape {name}", False)) as folder:
             shapes[name] = ShapeGui(
                 folder=folder,
                 fields={
@@ -262,23 +280,20 @@ def build_gui(gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bo
                 error=gui.add_markdown("", visible=False),
                 exact=gui.add_html("", visible=False),
             )
-    with gui.add_folder("Sign table", expand_by_default=False):
+    with gui.add_folder("Sign table", expand_by_default=is_open("sign table", False)):
         sign_table = gui.add_markdown("")
-    with gui.add_folder("View", expand_by_default=False) as v_folder:
+    with gui.add_folder("View", expand_by_default=is_open("view", False)) as v_folder:
         view = ViewGui(
             folder=v_folder,
             dimension=gui.add_dropdown("Dimension", list(DIM_LABELS.values()), initial_value=DIM_LABELS[dim]),
-            gizmos=gui.add_checkbox("Transform gizmos", gizmos),
-            gizmo_note=gui.add_markdown(
-                "*A motion drives the shapes: the gizmos are hidden. Pick “(static shapes)” as the Preset to drag them.*",
-                visible=False,
-            ),
+            gizmos=move,  # at the top of the panel (issue 55: hidden until the user asks to move a shape)
+            gizmo_note=gizmo_note,
             plane=gui.add_checkbox("Separating plane (when separate)", plane),
             palette=gui.add_dropdown("Palette", list(PALETTES), initial_value=next(iter(PALETTES))),
             follow=gui.add_checkbox("Camera follows the shapes", False),
             frame=gui.add_button("Frame the shapes (F)"),
         )
-    with gui.add_folder("Share and keep", expand_by_default=False) as sh_folder:
+    with gui.add_folder("Share and keep", expand_by_default=is_open("share", False)) as sh_folder:
         share = ShareGui(
             folder=sh_folder,
             link=gui.add_button("Link to this view"),

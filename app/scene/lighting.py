@@ -14,8 +14,16 @@ import viser
 __all__ = ["light_scene"]
 
 
+HEMISPHERE = ((255, 255, 255), (150, 150, 165), 1.6)
+"""Sky colour, ground colour and intensity of the hemisphere light (issue 55: the default lights alone
+left the lower half of every solid black; from below, a solid is now lit grey-blue, not black)."""
+
+
 def light_scene(scene: viser.SceneApi) -> None:
-    """Configure ``scene`` (a tab's or the shared one): z up, default lights, no shadows, no HDRI."""
+    """Configure ``scene`` (a tab's or the shared one): z up, default lights and a hemisphere light, no shadows, no HDRI."""
     scene.configure_environment_map(hdri=None)
     scene.configure_default_lights(enabled=True, cast_shadow=False)
     scene.set_up_direction("+z")
+    sky, ground, intensity = HEMISPHERE
+    # three.js takes a hemisphere light's position as its sky direction: +z, the scene's up
+    scene.add_light_hemisphere("/lights/hemisphere", sky_color=sky, ground_color=ground, intensity=intensity, position=(0.0, 0.0, 1.0))

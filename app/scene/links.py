@@ -28,6 +28,7 @@ from collections.abc import Callable
 from typing import Any
 from urllib.parse import urlsplit
 
+from .lesson import LessonMarks
 from .page import (
     CLIENT_PREFIX,
     SHARED_CLIENT_DIR,
@@ -109,6 +110,8 @@ class TabStore:
         self._items: OrderedDict[str, SceneConfig | dict[str, Any]] = OrderedDict()
         self._lock = threading.Lock()
         self.size = size
+        self.lessons = LessonMarks(size)
+        """The lesson and step of each tab in one (:mod:`app.scene.lesson`)."""
 
     def new_id(self) -> str:
         """A fresh tab id (random, unguessable)."""
@@ -189,6 +192,8 @@ class Router:
             m = _TAB.match(parts.path)
             if m is not None:  # the page itself, or a file next to it
                 rest = parts.path[m.end():]
+                if rest in ("", "index.html") and parts.query:  # ?lesson=paper&step=3: the tab's lesson
+                    self.store.lessons.note_query(m.group(1), parts.query)
                 if rest in ("", "index.html"):  # viser's page with labels tied to inputs; the
                     return page_response(request, TAB_CLIENT_DIR)  # client relative: proxies
                 request = dataclasses.replace(request, path="/" + rest + query)

@@ -191,7 +191,7 @@ class PanelView:
             elif state.t_exact is not None:
                 where, at = f"at t = {state.t_text or state.t_exact}", state.t_exact
             else:
-                where, at = f"at t = {state.t:.6g}", an.inside(state.t)
+                where, at = f"at t = {state.t_text or format(state.t, '.6g')}", an.inside(state.t)  # as typed ("3/4")
             expl = an.readout_at(model, at, state.t, event)
             if expl is None:
                 expl = {"n": an.n, "relation": state.relation, "certified_by": "exact", "coefficients": [], "var": 0, "rule_text": ""}
@@ -289,6 +289,8 @@ class PanelView:
             self.set_value(tg.t_box, an.events[event - 1].typed)
         elif state.t_exact is not None:
             self.set_value(tg.t_box, state.t_text or str(state.t_exact))
+        elif state.t_text is not None:  # a float typed as text ("3/4"): the box keeps the text
+            self.set_value(tg.t_box, state.t_text)
         else:
             self.set_value(tg.t_box, repr(t) if len(repr(t)) < 12 else f"{t:.6g}")
         self.set_error(tg.t_error, state.errors.get("t"))
@@ -324,7 +326,7 @@ class PanelView:
         Also the roots of P(T) (when switched on): like the plot cursor, never on the hot path of
         a jump or a drag, but with the coalesced part of the refresh (within PANEL_PERIOD).
         """
-        self.gui.roots.show(state, self.expl, "linear" if state.plot_scale == "linear" else "asinh")
+        self.gui.roots.show(state, self.expl, self.gui.roots.scale)
         an = state.analysis
         self.set_value(self.gui.plots.scale, state.plot_scale)
         self.set_text(self.gui.plots.about, f"y axis: {SCALES[state.plot_scale]}. Only signs and zeros carry meaning "

@@ -35,41 +35,66 @@ AXIS_COLOUR = "#9ecae1"
 
 ROOT_COLOURS = ["#08519c", "#6a3d9a", "#e6550d", "#636363"]
 
+WINDOW_WIDTH = 420.0
+"""Width (CSS px) of the window of the roots' plots, docked on the left (the scene keeps the middle)."""
+
+RING_LABELS = {2: "×2 double root (a ring)", 3: "×3 triple root (a 2nd ring)", 4: "×4 quadruple root (a 3rd ring)"}
+"""Legend of the multiplicity rings (:data:`RINGS`)."""
+
+SCALE_WORDS = {
+    "linear": "Axes: **Re T and Im T, linear** (what the paper draws).",
+    "asinh": "Axes: **asinh(Re T), asinh(Im T)**: like T near 0, like ±log(2|T|) far away, so roots such as "
+             "1/4 and 4 (reciprocal) are both readable.",
+}
+"""What the roots picture's axes show, under the picture (the "Roots axes" dropdown)."""
+
 
 def _f(v: Any, scale: str) -> Any:
     return np.arcsinh(v) if scale == "asinh" else v
 
 
-def plane_data(pic: RootsPicture, scale: str = "asinh") -> tuple[tuple[np.ndarray, ...], tuple[float, float], tuple[float, float]]:
-    """The uPlot data of the complex-plane picture: (x, positive axis, real roots, double roots, complex).
+RINGS = (2, 3, 4)
+"""Multiplicities drawn as rings: a root of multiplicity m has a ring for each of 2..m (×2: one ring)."""
+
+
+def plane_data(pic: RootsPicture, scale: str = "linear") -> tuple[tuple[np.ndarray, ...], tuple[float, float], tuple[float, float]]:
+    """The uPlot data of the complex-plane picture.
+
+    Columns: x, the positive axis, real roots (a dot), the tangency's positive double root,
+    complex roots, then one column per multiplicity of :data:`RINGS`: every real root of
+    multiplicity m >= k has a ring in column "×k", positive or negative (a double root is never
+    one plain dot: a quartic's four roots are all counted).
 
     Returns:
         (data arrays, x range, y range). x ascending (uPlot's aligned mode); each row is one
-        point of one series, NaN in the others; the axis series is 0 on every row with x >= 0
-        so that it draws as one thick segment along T > 0.
+        root (NaN in the columns it is not drawn in); the axis series is 0 on every row with
+        x >= 0 so that it draws as one thick segment along T > 0.
 
     Examples:
         >>> from app.scene.roots import roots_of_pencil
         >>> data, xr, yr = plane_data(roots_of_pencil([-1, 0, 2, 0, -1]), "linear")
-        >>> [np.nan_to_num(a, nan=9).tolist() for a in data][:4]   # T = -1 (double), T = 1 (double)
-        [[-1.0, 0.0, 1.0, 1.5], [9.0, 0.0, 0.0, 0.0], [0.0, 9.0, 9.0, 9.0], [9.0, 9.0, 0.0, 9.0]]
+        >>> [np.nan_to_num(a, nan=9).tolist() for a in data][:6]   # T = -1 (double), T = 1 (double)
+        [[-1.0, 0.0, 1.0, 1.5], [9.0, 0.0, 0.0, 0.0], [0.0, 9.0, 9.0, 9.0], [9.0, 9.0, 0.0, 9.0], [9.0, 9.0, 9.0, 9.0], [0.0, 9.0, 0.0, 9.0]]
     """
-    pts: list[tuple[float, float, int]] = []
+    pts: list[tuple[float, float, int, int]] = []
     for r in pic.roots:
         rx, ry = float(_f(r.re, scale)), float(_f(r.im, scale))
         kind = 3 if not r.real else (2 if r.mult >= 2 and r.re > 0 else 1)  # 2: the tangency's positive double root
-        pts.append((rx, ry, kind))
+        pts.append((rx, ry, kind, r.mult if r.real else 1))
     xs = [p[0] for p in pts] or [0.0]
     span = max([1.0, *(abs(v) for v in xs)])
     xmax = max([*xs, 0.0]) + 0.5 * span
-    pts += [(0.0, 0.0, 0), (xmax, 0.0, 0)]
+    pts += [(0.0, 0.0, 0, 1), (xmax, 0.0, 0, 1)]
     pts.sort(key=lambda p: (p[0], p[2]))
     n = len(pts)
-    cols = [np.full(n, np.nan) for _ in range(4)]
+    cols = [np.full(n, np.nan) for _ in range(4 + len(RINGS))]
     x = np.array([p[0] for p in pts])
-    for i, (px, py, kind) in enumerate(pts):
+    for i, (px, py, kind, mult) in enumerate(pts):
         if kind:
             cols[kind][i] = py
+        for j, k in enumerate(RINGS):
+            if kind and mult >= k:
+                cols[4 + j][i] = py
         if px >= 0:
             cols[0][i] = 0.0
     ys = [abs(p[1]) for p in pts]
@@ -92,13 +117,18 @@ def locus_data(
         real_roots: (len(ts), n) real roots per sample, NaN-padded (:func:`app.scene.roots.locus`).
         events: (time, double root position or None) of each certified event.
         t: the current time (cursor).
-        scale: "asinh" or "linear" (the y axis: T or asinh T).
+        scale: "asinh" or "linear" (the y axis: T or asinh T; linear: clipped to 1.5 times the
+            10th / 90th percentiles of the roots drawn, so that a root running off to 10^4 leaves
+            the others readable).
     """
     n_t = len(ts)
     ys = [_f(real_roots[:, k], scale) for k in range(real_roots.shape[1])]
     finite = np.concatenate([y[np.isfinite(y)] for y in ys]) if ys else np.zeros(1)
     top = float(np.max(finite)) if finite.size else 1.0
     bot = float(np.min(finite)) if finite.size else -1.0
+    if scale == "linear" and finite.size:  # a root running off to 10^4 must not flatten the others: clipped
+        top = min(top, 1.5 * float(np.percentile(finite, 90)))
+        bot = max(bot, 1.5 * float(np.percentile(finite, 10)))
     top, bot = max(top, 0.5), min(bot, -0.5)
     pad = 0.08 * (top - bot)
     zero = np.zeros(n_t)
@@ -130,7 +160,7 @@ def roots_words(pic: RootsPicture, expl: dict[str, Any] | None, where: str) -> s
     if reals:
         parts = []
         for r in reals:
-            what = "double root" if r.mult == 2 else ("triple root" if r.mult == 3 else "root")
+            what = {2: "double root (×2)", 3: "triple root (×3)", 4: "quadruple root (×4)"}.get(r.mult, "root")
             if r.interval is None:
                 enc = f" ≈ {r.re:.6g}"
             elif f"{r.interval[0]:.10g}" == f"{r.interval[1]:.10g}":  # a ball of radius 0: exact
@@ -160,14 +190,22 @@ def roots_words(pic: RootsPicture, expl: dict[str, Any] | None, where: str) -> s
 class RootsView:
     """The roots panel of one tab: a switch, the words and two uPlot plots (built when shown)."""
 
-    def __init__(self, gui: viser.GuiApi) -> None:
+    def __init__(self, gui: viser.GuiApi, *, expand: bool = False) -> None:
         self._gui = gui
-        with gui.add_folder("Roots of P(T) (the paper's picture)", expand_by_default=False) as folder:
+        with gui.add_folder("Roots of P(T) (the paper's picture)", expand_by_default=expand) as folder:
             self.folder = folder
             self.show_roots = gui.add_checkbox(
                 "Show the roots of P(T)", False, hint="the roots of det(T A + B) at t, and over a motion the real roots against t"
             )
+            self.axes = gui.add_dropdown("Roots axes", list(SCALE_WORDS), initial_value="linear",
+                                         hint="linear: T itself; asinh: roots near 0 and far from 0 both readable")
+            self.axes_words = gui.add_markdown(SCALE_WORDS["linear"])
+            gui.add_markdown("<span style='font-size:11px;color:#555'>The plots: in the window “Roots of P(T)” on the "
+                             "left of the scene (drag its title to move it).</span>")
             self.words = gui.add_markdown("")
+        self.window: Any = None
+        """The floating window of the plots (a viser panel), or None while they are off."""
+        self.window_tab: Any = None
         self.plane: viser.GuiUplotHandle | None = None
         self.locus_plot: viser.GuiUplotHandle | None = None
         self._plane_key: Any = None
@@ -176,6 +214,25 @@ class RootsView:
         self._cache: dict[Any, RootsPicture] = {}
         self._locus_cache: dict[Any, tuple[np.ndarray, np.ndarray, list[tuple[float, float | None]]]] = {}
         self._cursor = -1
+
+    def _window(self) -> Any:
+        """The floating window the plots are drawn in (made on first use).
+
+        Beside the panel, not at the bottom of it: at 1280x720 the folder's plots were below the
+        fold of a long panel (issue 55); the window is docked on the left of the scene (the scene
+        keeps the middle), and a teacher can move it.
+        """
+        if self.window is None:
+            self.window = self._gui.add_panel()
+            self.window_tab = self.window.add_tab("Roots of P(T)")
+            self.window.dock_left()
+            self.window.set_width(WINDOW_WIDTH)
+        return self.window_tab
+
+    @property
+    def scale(self) -> str:
+        """The roots picture's axes: "linear" (the default) or "asinh"."""
+        return "asinh" if self.axes.value == "asinh" else "linear"
 
     @property
     def on(self) -> bool:
@@ -188,6 +245,9 @@ class RootsView:
             if h is not None:
                 h.remove()
         self.plane = self.locus_plot = None
+        if self.window is not None:
+            self.window.remove()
+            self.window = self.window_tab = None
         self._plane_key = self._locus_key = None
         if self._words:
             self._words = ""
@@ -218,7 +278,7 @@ class RootsView:
         elif state.t_exact is not None:
             t, where = state.t_exact, f"at t = {state.t_text or state.t_exact}"
         else:
-            t, where = an.inside(state.t), f"at t = {state.t:.6g}"
+            t, where = an.inside(state.t), f"at t = {state.t_text or format(state.t, '.6g')}"
         key = (id(an), repr(t), event)
         if key not in self._cache:
             self._remember(key, roots_at(list(an.result.a), t, state.t, state.relation))
@@ -234,6 +294,8 @@ class RootsView:
         if not self.on:
             self.clear()
             return
+        if self.axes_words.content != SCALE_WORDS[scale]:
+            self.axes_words.content = SCALE_WORDS[scale]
         pic, where = self.picture(state)
         if pic is None:
             self._set_words("No certified pair to show (invalid shapes, or the motion is being analysed).")
@@ -243,16 +305,22 @@ class RootsView:
         if self.plane is None or self._plane_key != (len(data[0]), scale):
             if self.plane is not None:
                 self.plane.remove()
-            with self.folder:
+            with self._window():
                 self.plane = self._gui.add_uplot(
                     data,
                     (
                         uplot.Series(label="Re T" if scale == "linear" else "asinh Re T"),
                         uplot.Series(label="T > 0 (positive real axis)", stroke=AXIS_COLOUR, width=7, points={"show": False}),
-                        uplot.Series(label="real root", stroke="rgba(0,0,0,0)", width=0, points={"show": True, "size": 11, "fill": ROOT_COLOURS[0]}),
+                        # a marker in the legend: uPlot draws a series' marker from its points' stroke when the line has no width
+                        uplot.Series(label="real root", stroke="rgba(0,0,0,0)", width=0,
+                                     points={"show": True, "size": 11, "fill": ROOT_COLOURS[0], "stroke": ROOT_COLOURS[0], "width": 2}),
                         uplot.Series(label="positive double root (tangency)", stroke="rgba(0,0,0,0)", width=0,
                                      points={"show": True, "size": 20, "fill": "#ffbf00", "stroke": "#000", "width": 2}),
-                        uplot.Series(label="complex pair", stroke="rgba(0,0,0,0)", width=0, points={"show": True, "size": 10, "fill": "#d62728"}),
+                        uplot.Series(label="complex pair", stroke="rgba(0,0,0,0)", width=0,
+                                     points={"show": True, "size": 10, "fill": "#d62728", "stroke": "#d62728", "width": 2}),
+                        *(uplot.Series(label=RING_LABELS[k], stroke="rgba(0,0,0,0)", width=0,
+                                       points={"show": True, "size": 26 + 10 * (k - 2), "fill": "rgba(0,0,0,0)", "stroke": "#222",
+                                               "width": 2}) for k in RINGS),
                     ),
                     title="Roots of P(T) in the complex plane",
                     scales={"x": {"time": False, "auto": False, "range": list(xr)}, "y": {"auto": False, "range": list(yr)}},
@@ -301,16 +369,17 @@ class RootsView:
             if self.locus_plot is not None:
                 self.locus_plot.remove()
             n = real.shape[1]
-            with self.folder:
+            with self._window():
                 self.locus_plot = self._gui.add_uplot(
                     data,
                     (
                         uplot.Series(label="t"),
                         *(uplot.Series(label=f"real root {k + 1}", stroke="rgba(0,0,0,0)", width=0,
-                                       points={"show": True, "size": 3, "fill": ROOT_COLOURS[k % 4], "stroke": ROOT_COLOURS[k % 4]})
+                                       points={"show": True, "size": 3, "fill": ROOT_COLOURS[k % 4], "stroke": ROOT_COLOURS[k % 4],
+                                               "width": 2})
                           for k in range(n)),
                         uplot.Series(label="T = 0", stroke="#999", width=1, points={"show": False}),
-                        *(uplot.Series(label=f"α{k + 1}" + (" (certified)" if k == 0 else ""), stroke="#000", width=1.5,
+                        *(uplot.Series(label=f"α{k + 1} (certified)", stroke="#000", width=1.5,
                                        points={"show": False}) for k in range(len(evs))),
                         uplot.Series(label="double root", stroke="rgba(0,0,0,0)", width=0,
                                      points={"show": True, "size": 14, "fill": "#ffbf00", "stroke": "#000", "width": 2}),

@@ -20,7 +20,8 @@ import ctypes
 import gc
 import socket
 import threading
-from collections.abc import Iterable
+import time
+from collections.abc import Callable, Collection, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
@@ -96,6 +97,10 @@ class SceneServer:
         """Clients whose session is being built."""
         self._left: set[int] = set()
         """Of those, the ones that disconnected meanwhile (see :meth:`_register`)."""
+        self._framed: dict[int, list[Any]] = {}
+        """Per tab: the shape of its view last seen and until when a change frames again (:meth:`_frame_on_resize`)."""
+        self._resize_hooked: set[int] = set()
+        """Tabs whose camera calls :meth:`_frame_on_resize`'s callback."""
         self._lock = threading.Lock()
         self.new_session = threading.Condition(self._lock)
         self.reclaim = Reclaimer(RECLAIM_SECONDS)
@@ -104,6 +109,8 @@ class SceneServer:
         """Counts what tabs upload before viser keeps it (installed before any tab's panel exists)."""
         self.shared: Session | None = None
         """The one session every tab sees (presenter mode), or None (one session per tab)."""
+        self.lesson: str | None = None
+        """The lesson a new tab opens on (``serve --lesson``; :mod:`app.scene.lesson`), or None."""
         self.cache.warm()
         self.prefetched = self.cache.prefetch(_preset_models) if prefetch else None
         """The thread analysing the presets at start (joined: every preset is in the cache), or None."""
@@ -138,20 +145,66 @@ class SceneServer:
             session = self.shared  # the scene is shared; every tab's camera is framed
         else:
             tab = tab_id_of(wire.handshake_path(self.server, client))
-            session = self._session(client, self.store.get(tab) if tab is not None else None)
+            from .lesson_view import lesson_session
+
+            session = lesson_session(self, client, tab) or self._session(client, self.store.get(tab) if tab is not None else None)
         session.frame_camera()
+        self._frame_on_resize(client)
         self._register(client.client_id, session, tab)
 
-    def _session(self, client: viser.ClientHandle, saved: SceneConfig | dict[str, Any] | None) -> Session:
-        """A new session of ``client`` on a tab's stored configuration, a link's (a dict) or the default (None)."""
+    FRAME_ON_RESIZE = 10.0
+    """Seconds after a tab opens (or starts again) during which a change of its view's shape frames the shapes again."""
+
+    def _frame_on_resize(self, client: viser.ClientHandle) -> None:
+        """Frame the tab's shapes again when its view first reports, or changes shape, soon after it opens.
+
+        A tab's first framing runs before its page says what it sees (field of view and shape of
+        the view guessed), and a window docked beside the scene (the roots of P(T)) narrows the
+        view after the shapes were framed: a camera keeps its vertical field of view, so a wide
+        pair came out cut at the sides (issue 55: framed 3.99 from a pair that needs 5.12). Only
+        within :attr:`FRAME_ON_RESIZE` s of the tab's (re)start: later, a resize keeps the user's camera.
+        """
+        with self._lock:
+            self._framed[client.client_id] = [None, time.monotonic() + self.FRAME_ON_RESIZE]
+
+        def seen(cam: viser.CameraHandle) -> None:
+            try:
+                aspect = float(cam.aspect)
+            except AssertionError:
+                return
+            with self._lock:
+                record = self._framed.get(client.client_id)
+                session = self.sessions.get(client.client_id)
+                if record is None:
+                    return
+                old, until = record
+                record[0] = aspect
+            if session is None or time.monotonic() > until or (old is not None and abs(aspect - old) <= 1e-3):
+                return
+            session.frame_camera(grid=False)
+
+        if client.client_id not in self._resize_hooked:
+            self._resize_hooked.add(client.client_id)
+            client.camera.on_update(seen)
+
+    def _session(
+        self, client: viser.ClientHandle, saved: SceneConfig | dict[str, Any] | None, open_folders: Collection[str] | None = None,
+    ) -> Session:
+        """A new session of ``client`` on a tab's stored configuration, a link's (a dict) or the default (None).
+
+        ``open_folders``: the panel's folders shown open (a lesson step's); None: the usual ones.
+        """
         session = Session(client, self.config if isinstance(saved, dict) or saved is None else saved,
                           cache=self.cache, executor=self.executor, defer_load=isinstance(saved, dict),
-                          sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads)
+                          sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads, open_folders=open_folders)
         if isinstance(saved, dict):  # a link: user input, read like an uploaded file
             session.load_untrusted(saved)
         return session
 
-    def renew(self, client_id: int, link: dict[str, Any]) -> Session:
+    def renew(
+        self, client_id: int, link: dict[str, Any], *, open_folders: Collection[str] | None = None,
+        then: Callable[[Session], object] | None = None,
+    ) -> Session:
         """Start the tab ``client_id`` again on ``link`` (a link's configuration), without a page load.
 
         The tab gets what a new tab opened on the link gets: its session is closed, its panel and
@@ -159,7 +212,8 @@ class SceneServer:
         old panel, such as open folders and lists, goes with its elements) and a new session is
         built on ``link``, read as user input. The page keeps its loaded client and WebGL context:
         a renewal costs the browser ~0.4 CPU-s, a page load ~1.5 (software WebGL). The tab keeps
-        its address, and a reload then reopens the new state.
+        its address, and a reload then reopens the new state. ``open_folders``: the new panel's
+        open folders (a lesson step's); ``then(session)`` runs in the same batch (a lesson's folder).
 
         Raises:
             KeyError: no tab ``client_id`` has a session (closed, or still being built).
@@ -183,9 +237,12 @@ class SceneServer:
             with client.atomic():
                 client.scene.reset()  # before the panel: a page that shows the old panel gone has no old scene
                 client.gui.reset()
-                session = self._session(client, link)
+                session = self._session(client, link, open_folders)
+                if then is not None:
+                    then(session)
                 session.frame_camera()
             self._register(client_id, session, tab)
+            self._frame_on_resize(client)
         finally:
             with self._lock:
                 self._building.discard(client_id)
@@ -215,6 +272,8 @@ class SceneServer:
         with self._lock:
             s = self.sessions.pop(client.client_id, None)
             tab = self._tabs.pop(client.client_id, None)
+            self._framed.pop(client.client_id, None)
+            self._resize_hooked.discard(client.client_id)
             if s is None and client.client_id in self._building:  # _register closes it when built
                 self._left.add(client.client_id)
         if s is not None and s is not self.shared:
@@ -233,7 +292,7 @@ class SceneServer:
         """
         with self._lock:
             own = {"sessions": len(self.sessions), "tab addresses": len(self._tabs), "building": len(self._building),
-                   "left while building": len(self._left)}
+                   "left while building": len(self._left), "framings": len(self._framed) + len(self._resize_hooked)}
         return {**own, **{f"uploads: {k}": v for k, v in self.uploads.registries().items()}, **wire.client_records(self.server)}
 
     @property

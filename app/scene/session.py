@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import threading
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Collection, Iterable
 from concurrent.futures import Executor
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any
@@ -34,6 +34,7 @@ from .control_shapes import ShapeControl
 from .control_share import ShareControl
 from .control_timeline import TimelineControl
 from .gui import build_gui
+from .history import History
 from .lighting import light_scene
 from .markers import WitnessMarkers
 from .mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
@@ -63,6 +64,7 @@ class Session:
             (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`; fewer draw faster in software WebGL).
         uploads: the server's :class:`~app.scene.wire.UploadGuard` (the configuration upload's
             limit is set on it, and a refused file is shown next to the button), or None.
+        open_folders: the panel's folders shown open (a lesson step's); None: the usual ones.
     """
 
     PANEL_PERIOD = 0.05
@@ -89,6 +91,7 @@ class Session:
         defer_load: bool = False,
         sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
         uploads: wire.UploadGuard | None = None,
+        open_folders: Collection[str] | None = None,
     ) -> None:
         self.sphere_subdivisions = check_sphere_subdivisions(sphere_subdivisions)
         self.uploads = uploads
@@ -116,6 +119,7 @@ class Session:
             show_plots=self.config.show_plots,
             gizmos=self.config.gizmos,
             plane=self.config.separating_plane,
+            open_folders=open_folders,
         )
         self.timeline_ctl = TimelineControl(self)
         self.panel = PanelView(self.ui, self.gui_api, self.syncing, on_event=self.timeline_ctl.jump_to_event)
@@ -125,6 +129,8 @@ class Session:
         self.motion_ctl = MotionControl(self)
         self.share_ctl = ShareControl(self)
         self.keys_ctl = KeyControl(self)
+        self.history = History(self)
+        """Undo / redo of what the tab shows (:mod:`app.scene.history`)."""
         self._build_views()
         self._timer: threading.Timer | None = None
         self.grid: tuple[viser.GridHandle, tuple[float, float, float, float]] | None = None
@@ -266,7 +272,7 @@ class Session:
                     cfg.motion = model.texts()
                 if st.event is not None:
                     cfg.event = st.event
-                elif st.t_exact is not None and st.t_text is not None:
+                elif st.t_text is not None:  # the text typed in the t box ("3/4", a closed form)
                     cfg.t = st.t_text
                 else:
                     cfg.t = st.t
@@ -296,6 +302,7 @@ class Session:
             st = self.state
             if self.closed:  # the tab went away: messages to it would never be delivered
                 return st.relation
+            self.history.changed()
             if st.motion is None:
                 pic = static_picture(st.shapes, quick=dragged is not None, plane=st.separating_plane)
             else:
@@ -453,6 +460,7 @@ class Session:
         caller may stop the server next, and messages queued after that go nowhere (viser warns).
         """
         self.closed = True
+        self.history.close()
         timer = self._timer
         if timer is not None:
             timer.cancel()

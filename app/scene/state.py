@@ -294,8 +294,8 @@ class SceneConfig:
     """Live uPlot plots (skipped entirely when False)."""
     separating_plane: bool = False
     """Draw a separating plane when the shapes are separate."""
-    gizmos: bool = True
-    """Show the transform gizmos."""
+    gizmos: bool = False
+    """Show the transform gizmos ("Move the shapes"; off by default: they covered the shapes)."""
     palette: str | None = None
     """Relation palette name (:data:`app.scene.shapes.PALETTES`; None: the default)."""
 
@@ -430,7 +430,7 @@ class AppState:
     (12 - 2 sqrt 2)/17), or None: the relation and the readout are certified at this value; the
     shapes are drawn at its float ``t``."""
     t_text: str | None = None
-    """How the t box shows ``t_exact`` (the text as typed, normalised)."""
+    """How the t box shows t: the text the user typed ("3/4" stays "3/4"), or None (the number)."""
     event: int | None = None
     """1-based index of the event shown exactly, or None when showing ``t``."""
     auto_t: bool = False
@@ -450,7 +450,7 @@ class AppState:
     "shape B" (shape folders), "t" (t box)."""
     show_plots: bool = True
     separating_plane: bool = False
-    gizmos: bool = True
+    gizmos: bool = False
     palette: str = "green / amber / red"
     """Name of the relation palette (:data:`app.scene.shapes.PALETTES`)."""
     follow: bool = False

@@ -24,7 +24,9 @@ router = APIRouter(include_in_schema=False)
 def _scene_link(scene_url: str | None) -> str:
     if scene_url:
         url = html.escape(scene_url, quote=True)
-        return f'<p><a id="scene-link" class="button" href="{url}">Open the 3D scene</a></p>'
+        lesson = html.escape(scene_url.rstrip("/") + "/?lesson=paper&step=1", quote=True)  # app.scene.lesson
+        return (f'<p><a id="scene-link" class="button" href="{url}">Open the 3D scene</a> '
+                f'<a id="lesson-link" class="button" href="{lesson}">A lesson: the paper, step by step</a></p>')
     return '<p id="scene-link" class="muted">The 3D scene is not running on this server (API only).</p>'
 
 

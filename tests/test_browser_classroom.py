@@ -1,0 +1,135 @@
+"""Issue 55 in a real browser: a lesson step by step (links, Previous/Next, Reveal, reload) and undo by the keyboard.
+
+The relations checked are the paper's and hand arithmetic's (tests/test_classroom.py): step 3 of the
+paper lesson is separate, step 4 tangent (unit circle at (3, 0) against x²/4 + y² = 1).
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+from browser_helpers import text_shown, until
+
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian chromium at /usr/bin/chromium"),
+]
+
+UPLOT_TITLES_JS = """() => Object.values(window.__viserTestpoints?.uplots ?? {})
+  .filter(u => document.body.contains(u.chart.root)).map(u => u.chart.root.querySelector('.u-title')?.textContent ?? '')"""
+
+
+def lesson_session(hs, k: int):
+    """The tab's session once it shows step ``k`` (a step starts the tab's session again)."""
+    from app.scene.lesson_view import view_of
+
+    found = []
+
+    def shown() -> bool:
+        found[:] = [s for s in list(hs.scene.sessions.values()) if (v := view_of(s)) is not None and v.k == k]
+        return bool(found)
+
+    until(shown, what=f"a session on step {k}")
+    hs.session = found[0]
+    hs.wait_settled()
+    return found[0]
+
+
+def test_lesson_link_steps_reveal_and_reload(headless_scene):
+    hs = headless_scene
+    page = hs.page
+    hs.goto("/?lesson=paper&step=3")
+    s = lesson_session(hs, 3)
+    text_shown(page, "step 3 of 11: Separate ⇔ Var = 2 and s0 > 0 (Descartes)")
+    assert s.state.relation == "separate" and s.state.dim == 2
+    page.wait_for_function(f"() => ({UPLOT_TITLES_JS})().some(t => t.startsWith('Roots of P(T) in the complex plane'))")
+    page.get_by_role("button", name="Next ▶").click()
+    s = lesson_session(hs, 4)
+    text_shown(page, "step 4 of 11: External tangency")
+    assert s.state.relation == "tangent"
+    assert page.get_by_text("Tangent at (2, 0)").count() == 0  # the answer waits for Reveal
+    page.get_by_role("button", name="Reveal the answer").click()
+    text_shown(page, "Tangent at (2, 0)")
+    href = page.get_by_role("link", name="Link to this step").get_attribute("href")
+    assert href is not None and href.endswith("?lesson=paper&step=4")
+    page.reload()  # the tab reopens where the student was: step 4, not the link's step 3
+    s = lesson_session(hs, 4)
+    text_shown(page, "step 4 of 11")
+    page.get_by_role("button", name="◀ Previous").click()
+    lesson_session(hs, 3)
+    text_shown(page, "step 3 of 11")
+
+
+def test_lesson_link_to_a_missing_step_or_lesson_says_so(headless_scene):
+    hs = headless_scene
+    hs.goto("/?lesson=paper&step=40")
+    lesson_session(hs, 11)
+    assert "lesson paper: there is no step 40 (steps 1..11)" in hs.session.state.errors["config"]
+    s = hs.goto("/?lesson=nosuch&step=1")
+    until(lambda: "config" in s.state.errors, what="the error")
+    assert "there is no lesson 'nosuch'" in s.state.errors["config"]
+
+
+def test_undo_redo_by_keyboard(headless_scene):
+    hs = headless_scene
+    s = hs.open({"dim": 2, "preset": None, "A": {"center": ["0", "0"], "semi_axes": ["1", "1"]},
+                 "B": {"center": ["3", "0"], "semi_axes": ["1", "1"]}})
+    s.history.note()
+    assert s.set_shape("B", center="2, 0") == "tangent"
+    until(lambda: s.history.steps[0] >= 1, what="the change kept")
+    page = hs.page
+    page.mouse.click(150, 150)  # focus the scene, not a field
+    page.keyboard.press("Control+z")
+    until(lambda: s.state.relation == "separate" and s.history.steps == (0, 1), what="undone")
+    page.keyboard.press("Control+Shift+z")
+    until(lambda: s.state.relation == "tangent" and s.history.steps == (1, 0), what="redone")
+    page.get_by_role("button", name="↶ Undo").click()
+    until(lambda: s.state.relation == "separate", what="undone by the button")
+
+
+def test_screenshot_of_a_lesson_step_from_a_teachers_file(tmp_path):
+    """``screenshot --lesson FILE --step K``: the step drawn as its link shows it (a PNG of the page)."""
+    import json
+
+    import browser_helpers
+
+    from app.cli import main
+
+    lesson = tmp_path / "circles.json"
+    lesson.write_text(json.dumps({"title": "Two circles", "steps": [
+        {"title": "apart", "scene": {"dim": 2, "preset": None, "B": {"center": ["3", "0"], "semi_axes": ["1", "1"]}}},
+        {"title": "touching", "scene": {"dim": 2, "preset": None, "A": {"center": ["0", "0"], "semi_axes": ["1", "1"]},
+                                        "B": {"center": ["2", "0"], "semi_axes": ["1", "1"]}},
+         "question": "Predict?", "answer": "Tangent: 2 = 1 + 1.", "roots": True, "open": ["roots"]}]}))
+    out = tmp_path / "step2.png"
+    assert main(["screenshot", "--lesson", str(lesson), "--step", "2", "--width", "900", "--height", "600", "--out", str(out),
+                 "--browser", browser_helpers.CHROMIUM_OF_THIS_PROCESS.get()]) == 0
+    data = out.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and int.from_bytes(data[16:20], "big") == 900
+
+
+def test_served_lesson_opens_every_new_tab_on_step_one(headless_scene):
+    """``serve --lesson paper``: a tab opened on the scene's root starts at step 1 (its own step after)."""
+    hs = headless_scene
+    hs.scene.lesson = "paper"
+    try:
+        hs.goto("/")
+        s = lesson_session(hs, 1)
+        text_shown(hs.page, "step 1 of 11: An ellipse is a matrix")
+        assert s.state.relation == "separate" and s.state.shapes["A"].matrix is not None
+    finally:
+        hs.scene.lesson = None
+
+
+def test_t_box_in_the_page_widens_the_slider_and_keeps_the_text(headless_scene):
+    """The issue's reproducer: Example 33 (I = R), "3" typed showed "at t = 1" and rewrote the box to 1.0."""
+    from browser_helpers import field_input, set_field
+
+    hs = headless_scene
+    s = hs.open({"preset": "example-33"})
+    set_field(hs.page, "t (exact)", "5/2")
+    until(lambda: s.state.t == 2.5 and not s.pending(), what="t = 5/2")
+    assert s.state.relation == "tangent" and s.state.analysis.window[1] >= 2.5
+    text_shown(hs.page, "at t = 5/2")
+    until(lambda: field_input(hs.page, "t (exact)").input_value() == "5/2", what="the box keeps 5/2")
