@@ -17,6 +17,23 @@
  * (core/fixed/filters.py: _balanced, whose numpy code is the twin of this loop, bit for bit): each
  * pair of float64 matrices with space scaled by 2^e, e from the bodies' sizes, where that is
  * exact; returns how many pairs moved (e != 0 in e_out).
+ *
+ * spheres(n, m, centres_out, radii_out, status_out): certified bounding spheres of count bodies
+ * (m: count n x n float64 matrices; _spheres.h, the float proof of core/bodies/bounds.py), the
+ * status of each (0 tight, 1 loose, 2 none, 3 not exactly symmetric); returns how many have a
+ * sphere.
+ *
+ * query_one(geometry_i, geometry_d, table, cr, frac, Q, B, rel, out, kout, codes, exclude): one new
+ * body B asked of a BodyIndex (_near.h): its certified sphere (_spheres.h), its cell, the indexed bodies whose spheres meet its own, sorted (ids to out, their
+ * lattice images to kout in a box), and with Q (the indexed matrices; empty: none) the relations
+ * of the pairs without an image through the filter (codes[i] = rel[rule]; NEAR_MOVED for a pair
+ * with an image, left to the caller), keeping only the pairs that are not separate (and those
+ * left to the caller), their certifiers to by (1: the filter, 0: left). geometry_i: int64 (d, cap, periodic, tilted, n[3],
+ * stride[3]); geometry_d: float64 (L[3], H[9], origin[3], cell[3], big, span, limit, pad,
+ * cell_error, far, eps_max, gamma, tiny), packed by the index. Returns (candidates, kept, left):
+ * the pairs whose spheres meet, the pairs written, and of those the ones left to the caller (all
+ * of them without Q); or (a negative code, 0, 0): QUERY_GENERAL, NEAR_TOO_FAR, NEAR_FAR_BOX,
+ * QUERY_SPACE - needed.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -286,6 +303,199 @@ static PyObject *balance(PyObject *self, PyObject *args) {
     return result;
 }
 
+#include "_spheres.h"
+
+static PyObject *spheres(PyObject *self, PyObject *args) {
+    int n;
+    Py_buffer m, c, r, st;
+    if (!PyArg_ParseTuple(args, "iy*w*w*w*", &n, &m, &c, &r, &st)) return NULL;
+    PyObject *result = NULL;
+    const Py_ssize_t count = st.len;
+    if (n != 3 && n != 4) {
+        PyErr_Format(PyExc_ValueError, "n must be 3 or 4, got %d", n);
+    } else if (m.len != count * n * n * 8 || c.len != count * (n - 1) * 8 || r.len != count * 8) {
+        PyErr_Format(PyExc_ValueError, "m, centres_out and radii_out must hold %zd float64 bodies of %dx%d, centres and radii", count, n, n);
+    } else if (!PyBuffer_IsContiguous(&m, 'C') || !PyBuffer_IsContiguous(&c, 'C') || !PyBuffer_IsContiguous(&r, 'C') ||
+               !PyBuffer_IsContiguous(&st, 'C')) {
+        PyErr_SetString(PyExc_ValueError, "buffers must be C-contiguous");
+    } else {
+        int64_t found = 0;
+        const double *M = (const double *)m.buf;
+        double *C = (double *)c.buf, *R = (double *)r.buf;
+        signed char *S = (signed char *)st.buf;
+        Py_BEGIN_ALLOW_THREADS
+        for (Py_ssize_t k = 0; k < count; k++) {
+            S[k] = (signed char)sphere_one(M + k * n * n, n, C + k * (n - 1), R + k);
+            found += S[k] <= SPHERE_LOOSE;
+        }
+        Py_END_ALLOW_THREADS
+        result = PyLong_FromLongLong((long long)found);
+    }
+    PyBuffer_Release(&m);
+    PyBuffer_Release(&c);
+    PyBuffer_Release(&r);
+    PyBuffer_Release(&st);
+    return result;
+}
+
+#include "_near.h"
+
+#define QUERY_GEOMETRY_D 27 /* doubles of query_one's float geometry (core.bodies.index: _pack_geometry) */
+
+/* (id, image) pairs of near(): sorted by id before they are classified */
+typedef struct {
+    int64_t id;
+    signed char k[3];
+} near_hit;
+
+static int near_hit_order(const void *x, const void *y) {
+    const int64_t a = ((const near_hit *)x)->id, b = ((const near_hit *)y)->id;
+    return (a > b) - (a < b);
+}
+
+/* Outcomes of query_one besides a count (>= 0) and NEAR_TOO_FAR, NEAR_FAR_BOX */
+#define QUERY_GENERAL (-2) /* no float sphere here, or a body too large for the box: the general path */
+#define QUERY_SPACE (-10)  /* -(QUERY_SPACE + needed): the outputs must hold `needed` bodies */
+
+static PyObject *query_one(PyObject *self, PyObject *args) {
+    Py_buffer gi, gd, table, cr, frac, Q, B, rel, out, kout, codes, by;
+    long long exclude;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*w*w*w*w*L", &gi, &gd, &table, &cr, &frac, &Q, &B, &rel, &out, &kout, &codes, &by, &exclude))
+        return NULL;
+    /* the caller (core.bodies.index) packs the geometry and sizes the buffers; these checks keep a
+     * wrong call from reading or writing out of bounds */
+    PyObject *result = NULL;
+    near_hit *hits = NULL;
+    double *pa = NULL;
+    signed char *res = NULL;
+    const int64_t *G = (const int64_t *)gi.buf;
+    const double *D = (const double *)gd.buf;
+    if (gi.len != 10 * 8 || gd.len != QUERY_GEOMETRY_D * 8 || (G[0] != 2 && G[0] != 3) || G[1] < 1) {
+        PyErr_SetString(PyExc_ValueError, "query_one: bad geometry");
+        goto done;
+    }
+    const int d = (int)G[0], nn = (d + 1) * (d + 1), periodic = (int)G[2], tilted = (int)G[3];
+    const int64_t cap = G[1], *n = G + 4, *stride = G + 7;
+    int64_t cells = 1, nbody = cr.len / (8 * (d + 1));
+    for (int a = 0; a < d; a++) cells *= n[a];
+    const int classify = Q.len > 0;
+    if (table.len != cells * cap * 4 || B.len != nn * 8 || (tilted && frac.len != nbody * d * 8) ||
+        (classify && (Q.len != nbody * nn * 8 || rel.len != 256)) || out.len % 8 || (periodic && kout.len < out.len / 8 * d) ||
+        codes.len < out.len / 8 || by.len < out.len / 8) {
+        PyErr_SetString(PyExc_ValueError, "query_one: buffers of the wrong size");
+        goto done;
+    }
+    const double *L = D, *H = D + 3, *o = D + 12, *h = D + 15, big = D[18], span = D[19], limit = D[20], pad = D[21], cell_error = D[22],
+                 far = D[23], eps_max = D[24], gamma = D[25], tiny = D[26];
+    /* the body's certified sphere (_spheres.h) */
+    double c[3] = {0.0, 0.0, 0.0}, rho;
+    if (sphere_one((const double *)B.buf, d + 1, c, &rho) > SPHERE_LOOSE || (periodic && !(rho + big < limit))) {
+        result = Py_BuildValue("LLL", (long long)QUERY_GENERAL, 0LL, 0LL);
+        goto done;
+    }
+    /* its cell, the cells within its reach, the padding of the sphere test (BodyIndex._near_one) */
+    const double reach = rho + big;
+    int64_t u[3] = {0, 0, 0}, m[3] = {0, 0, 0}, visit = 1;
+    double f[3] = {0.0, 0.0, 0.0}, top = 0.0;
+    for (int a = 0; a < d; a++) {
+        m[a] = (int64_t)ceil(reach / h[a] * (1 + 0x1p-40) + cell_error);
+        visit *= (periodic && 2 * m[a] + 1 >= n[a]) ? n[a] : 2 * m[a] + 1;
+        top = fabs(c[a]) > top ? fabs(c[a]) : top;
+    }
+    const double rpad = rho + pad * (top + span + reach);
+    if (place_one(d, periodic, H, n, o, h, gamma, tiny, eps_max, far, c, u, f) < 0) {
+        result = Py_BuildValue("LLL", (long long)NEAR_FAR_BOX, 0LL, 0LL);
+        goto done;
+    }
+    if (out.len / 8 < visit * cap) {
+        result = Py_BuildValue("LLL", QUERY_SPACE - (long long)(visit * cap), 0LL, 0LL);
+        goto done;
+    }
+    int64_t *ids = (int64_t *)out.buf;
+    signed char *K = (signed char *)kout.buf;
+    const int64_t found = near_one(d, (const int32_t *)table.buf, cap, nbody, n, stride, periodic, tilted, L, H, (const double *)cr.buf,
+                                   (const double *)frac.buf, u, m, c, f, rpad, (int64_t)exclude, ids, K);
+    if (found < 0) {
+        result = Py_BuildValue("LLL", (long long)found, 0LL, 0LL);
+        goto done;
+    }
+    if (found > 1) { /* sorted by indexed body, the images along */
+        hits = (near_hit *)PyMem_Malloc(sizeof(near_hit) * (size_t)found);
+        if (!hits) {
+            PyErr_NoMemory();
+            goto done;
+        }
+        for (int64_t i = 0; i < found; i++) {
+            hits[i].id = ids[i];
+            for (int a = 0; a < d; a++) hits[i].k[a] = periodic ? K[i * d + a] : 0;
+        }
+        qsort(hits, (size_t)found, sizeof(near_hit), near_hit_order);
+        for (int64_t i = 0; i < found; i++) {
+            ids[i] = hits[i].id;
+            if (periodic)
+                for (int a = 0; a < d; a++) K[i * d + a] = hits[i].k[a];
+        }
+    }
+    signed char *code = (signed char *)codes.buf, *cert = (signed char *)by.buf;
+    int64_t kept = found, open = found;
+    if (classify && found > 0) { /* the pairs (indexed body, new body) without an image, through the filter */
+        pa = (double *)PyMem_Malloc(sizeof(double) * (size_t)(2 * found * nn));
+        res = (signed char *)PyMem_Malloc((size_t)found);
+        if (!pa || !res) {
+            PyErr_NoMemory();
+            goto done;
+        }
+        double *pb = pa + found * nn;
+        int64_t q = 0;
+        for (int64_t i = 0; i < found; i++) {
+            int moved = 0;
+            if (periodic)
+                for (int a = 0; a < d; a++) moved |= K[i * d + a] != 0;
+            if (moved) continue;
+            memcpy(pa + q * nn, (const double *)Q.buf + ids[i] * nn, sizeof(double) * nn);
+            memcpy(pb + q * nn, B.buf, sizeof(double) * nn);
+            q++;
+        }
+        if (q) current->f64[d - 2](pa, pb, res, q, (const signed char *)rel.buf);
+        /* keep the pairs that are not separate (and those left to the caller), in order */
+        kept = open = 0;
+        for (int64_t i = 0, j = 0; i < found; i++) {
+            int moved = 0;
+            if (periodic)
+                for (int a = 0; a < d; a++) moved |= K[i * d + a] != 0;
+            const signed char r = moved ? (signed char)NEAR_MOVED : res[j++];
+            if (r == 0) continue; /* separate */
+            ids[kept] = ids[i];
+            if (periodic)
+                for (int a = 0; a < d; a++) K[kept * d + a] = K[i * d + a];
+            code[kept] = r;
+            cert[kept] = r >= 0; /* Certifier.FLOAT where the filter decided */
+            open += r < 0;
+            kept++;
+        }
+    }
+    result = Py_BuildValue("LLL", (long long)found, (long long)kept, (long long)open);
+    goto done;
+    result = PyLong_FromLongLong((long long)found);
+done:
+    PyMem_Free(hits);
+    PyMem_Free(pa);
+    PyMem_Free(res);
+    PyBuffer_Release(&gi);
+    PyBuffer_Release(&gd);
+    PyBuffer_Release(&table);
+    PyBuffer_Release(&cr);
+    PyBuffer_Release(&frac);
+    PyBuffer_Release(&Q);
+    PyBuffer_Release(&B);
+    PyBuffer_Release(&rel);
+    PyBuffer_Release(&out);
+    PyBuffer_Release(&kout);
+    PyBuffer_Release(&codes);
+    PyBuffer_Release(&by);
+    return result;
+}
+
 #ifndef KERNELS_SHA256
 #define KERNELS_SHA256 "unknown"
 #endif
@@ -295,6 +505,8 @@ static PyMethodDef METHODS[] = {
     {"kernels_sha256", kernels_sha256, METH_NOARGS, "First 16 hex digits of the SHA-256 of the _kernels.h this module was built from."},
     {"classify", classify, METH_VARARGS, "classify(n, a, b, out[, table]): rule ids (or table[rule id] with a 256-byte table) of count pairs into the int8 buffer out, GIL released; returns how many are undecided."},
     {"balance", balance, METH_VARARGS, "balance(n, a, b, a_out, b_out, e_out[, shift, shift_out]): pairs with space scaled by 2^e to the bodies' size where exact (e_out 0 elsewhere), GIL released; returns how many moved."},
+    {"spheres", spheres, METH_VARARGS, "spheres(n, m, centres_out, radii_out, status_out): certified bounding spheres of float64 bodies (status 0 tight, 1 loose, 2 none, 3 not exactly symmetric), GIL released; returns how many have one."},
+    {"query_one", query_one, METH_VARARGS, "query_one(geometry_i, geometry_d, table, cr, frac, Q, B, rel, out, kout, codes, by, exclude): one new body asked of a BodyIndex (its sphere, the bodies near it, sorted, their images, the relations of the pairs without one, the separate ones dropped); returns (candidates, kept, left), or (a negative code, 0, 0)."},
     {"variant", get_variant, METH_NOARGS, "The SIMD variant in use."},
     {"variants", get_variants, METH_NOARGS, "The variants of this build that this CPU can run (slowest first)."},
     {"select", select_variant, METH_VARARGS, "select(name): use this variant (ValueError if unknown or unsupported here)."},

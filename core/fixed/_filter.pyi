@@ -15,6 +15,25 @@ def balance(n: int, a: Any, b: Any, a_out: Any, b_out: Any, e_out: Any, shift: A
     the scaling is not exact or not needed). Returns how many pairs moved.
     """
 
+def spheres(n: int, m: Any, centres_out: Any, radii_out: Any, status_out: Any, /) -> int:
+    """Certified bounding spheres of len(status_out) float64 n x n bodies (core/fixed/_spheres.h).
+
+    centres_out (count, n - 1) and radii_out (count,) float64 (NaN where none), status_out int8:
+    0 tight, 1 loose, 2 none here, 3 not exactly symmetric. Returns how many have a sphere.
+    """
+
+def query_one(
+    geometry_i: Any, geometry_d: Any, table: Any, cr: Any, frac: Any, Q: Any, B: Any, rel: Any, out: Any, kout: Any, codes: Any,
+    by: Any, exclude: int, /,
+) -> tuple[int, int, int]:
+    """One new body asked of a BodyIndex (core/fixed/_near.h), the separate pairs dropped.
+
+    Its sphere, the bodies near it (sorted), their images, and (Q given) the relations of the pairs
+    without an image (-3 for the others). Returns (candidates, kept, left to the caller), or
+    (code, 0, 0): -1 an image beyond 127 boxes, -2 the general path, -4 a centre too far from the
+    box, -10 - needed: the outputs must hold `needed` bodies.
+    """
+
 def variant() -> str:
     """The SIMD variant in use."""
 
