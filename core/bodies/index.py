@@ -44,7 +44,7 @@ import numpy as np
 from ..filtered import predicate
 from ..fixed import compiled
 from ..fixed.classify import Certifier, classify_pairs
-from ..fixed.compiled import warm_up
+from ..fixed.compiled import get_threads, warm_up
 from ..fixed.filters import _RELATION_OF
 from ..options import check_options
 from ..relation import Relation
@@ -89,6 +89,8 @@ _MARGIN = 1.0 - 2.0**-20
 _C_ONE = compiled.query_one_available()
 """One new body takes the extension's spheres and grid lookup (else the general path in numpy)."""
 _NO_IMAGES = np.zeros((0, 3), dtype=np.int8)
+_BODIES_PER_THREAD = 2048
+"""A batch of new bodies is split over the filter's threads in ranges of at least this many."""
 _NONE = np.zeros(0)
 """An empty buffer: no matrices for the compiled lookup (it then classifies nothing)."""
 _CLASSIFY = predicate("classify")
@@ -368,6 +370,11 @@ class BodyIndex:
         ex = None
         if exclude is not None:
             ex = np.broadcast_to(np.asarray(exclude, dtype=np.int64), (M,))
+        if _C_ONE and M > 1:
+            many = self._query_many(Qn, centers, radii, ex)
+            if many is not None:
+                many.invalid = invalid
+                return many
         if M == 1 and np.isfinite(radii[0]):
             bj, image = self._near_one(centers[0].tolist(), float(radii[0]), -1 if ex is None else int(ex[0]))
             qi = np.zeros(bj.size, dtype=np.int64)
@@ -453,16 +460,87 @@ class BodyIndex:
             image = None if image is None else image[keep]
         return IndexPairs(np.zeros(keep.size, dtype=np.int64), bj, rel, cert, image, self.box, {}, counts)
 
+    def _query_many(self, Qn: np.ndarray, centers: np.ndarray, radii: np.ndarray, exclude: np.ndarray | None) -> IndexPairs | None:
+        """:meth:`query` of a batch with its certified spheres, new body by new body in C.
+
+        The steps of :meth:`_query_one` after the sphere, for every new body in one compiled loop
+        (:func:`core.fixed.compiled.query_many`, the GIL released), its pairs appended in order of
+        the new bodies (sorted by (i, j)); the outputs grow when full. What the filter leaves
+        (images, undecided pairs, a method other than "adaptive") is classified as
+        :meth:`_classify` does. None where the compiled loop cannot answer (out of memory in it):
+        the numpy path then does.
+        """
+        M, d = Qn.shape[0], self.d
+        adaptive = self.method == "adaptive"
+        spheres = np.empty((M, d + 1))
+        spheres[:, :d] = np.where(np.isfinite(centers), centers, 0.0)
+        spheres[:, d] = radii
+        ex = np.full(M, -1, dtype=np.int64) if exclude is None else np.ascontiguousarray(exclude, dtype=np.int64)
+        Qc = np.ascontiguousarray(Qn, dtype=np.float64)
+        Q = self._Q if adaptive else _NONE
+
+        def run(lo: int, hi: int) -> tuple[list[tuple[np.ndarray, ...]], int, int, int]:
+            """Bodies [lo, hi): their parts of the outputs, candidates, pairs left, status (0 or a code)."""
+            size, start, candidates, left = max(4096, 8 * (hi - lo)), lo, 0, 0
+            parts: list[tuple[np.ndarray, ...]] = []
+            while start < hi:
+                qout, out = np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64)
+                kout = _NO_IMAGES if self._L is None else np.empty((size, d), dtype=np.int8)
+                codes, by = np.empty(size, dtype=np.int8), np.empty(size, dtype=np.int8)
+                done, found, kept, open_, status = compiled.query_many(
+                    self._geo_i, self._geo_d, self._table, self._cr, self._frac_buf, Q, Qc[:hi], _RELATION_OF,
+                    spheres[:hi], ex[:hi], qout, out, kout, codes, by, start,
+                )
+                parts.append((qout[:kept], out[:kept], kout[:kept], codes[:kept], by[:kept]))
+                candidates, left, start = candidates + found, left + open_, done
+                if status == 0:
+                    break
+                if status > compiled.QUERY_SPACE:
+                    return parts, candidates, left, status
+                size = max(2 * size, compiled.QUERY_SPACE - status)  # full: more room, from the body that did not fit
+            return parts, candidates, left, 0
+
+        k = min(get_threads(), max(1, M // _BODIES_PER_THREAD))
+        bounds = np.linspace(0, M, k + 1).astype(np.int64).tolist()
+        if k == 1:
+            results = [run(0, M)]
+        else:  # ranges of new bodies side by side (the compiled loop releases the GIL), in order
+            futures = [compiled.pool(k - 1).submit(run, lo, hi) for lo, hi in zip(bounds[1:-1], bounds[2:], strict=True)]
+            results = [run(bounds[0], bounds[1])] + [f.result() for f in futures]
+        parts = [p for r in results for p in r[0]]
+        candidates, left = sum(r[1] for r in results), sum(r[2] for r in results)
+        status = next((r[3] for r in results if r[3]), 0)
+        if status == compiled.QUERY_GENERAL:
+            return None
+        if status:
+            raise ValueError(_FAR_MESSAGE if status == compiled.QUERY_FAR_BOX else _IMAGES_MESSAGE)
+        qi, bj, image, rel, cert = (np.concatenate(x) if len(parts) > 1 else x[0] for x in zip(*parts, strict=True))
+        image = None if self._L is None else image
+        counts = {"queries": M, "candidates": candidates, "float": candidates - left, "exact": 0, "undecided": 0}
+        if candidates > left:
+            _CLASSIFY.count(candidates - left, 0, 0)
+        if left:
+            first = rel if adaptive else None
+            rel, cert = self._classify_found(Qn, bj, image, first, qi)
+            counts["float"] += int(np.count_nonzero((cert if first is None else cert[first < 0]) == Certifier.FLOAT))
+            counts["exact"] = int(np.count_nonzero(cert == Certifier.EXACT))
+            counts["undecided"] = int(np.count_nonzero(rel == Relation.UNDECIDED)) if self.method == "float" else 0
+            keep = np.flatnonzero(rel)
+            if keep.size != rel.size:
+                qi, bj, rel, cert = qi[keep], bj[keep], rel[keep], cert[keep]
+                image = None if image is None else image[keep]
+        return IndexPairs(qi, bj, rel, cert, image, self.box, {}, counts)
+
     def _classify_found(
-        self, Qn: np.ndarray, bj: np.ndarray, image: np.ndarray | None, rel: np.ndarray | None
+        self, Qn: np.ndarray, bj: np.ndarray, image: np.ndarray | None, rel: np.ndarray | None, qi: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """(relations, certifiers) of one new body's candidates beyond what the compiled lookup decided.
+        """(relations, certifiers) of candidates beyond what the compiled lookup decided.
 
         ``rel``: its codes (a relation where the filter decided, UNDECIDED where it did not,
         :data:`core.fixed.compiled.QUERY_MOVED` for a pair with an image), or None (nothing
-        classified yet).
+        classified yet); ``qi``: the new body of each pair (None: all the first).
         """
-        qi = np.zeros(bj.size, dtype=np.int64)
+        qi = np.zeros(bj.size, dtype=np.int64) if qi is None else qi
         if rel is None:
             return self._classify(Qn, qi, bj, image)
         rel, by = rel.copy(), (rel >= 0).view(np.int8)  # Certifier.FLOAT where decided

@@ -34,6 +34,13 @@
  * the pairs whose spheres meet, the pairs written, and of those the ones left to the caller (all
  * of them without Q); or (a negative code, 0, 0): QUERY_GENERAL, NEAR_TOO_FAR, NEAR_FAR_BOX,
  * QUERY_SPACE - needed.
+ *
+ * query_many(geometry_i, geometry_d, table, cr, frac, Q, B, rel, spheres, exclude, qout, out, kout,
+ * codes, by, start): query_one for each new body k >= start of B (M of them) with its certified
+ * sphere given (spheres: (M, d + 1) centre and radius, NaN radius: none, skipped) and its own
+ * excluded body, the pairs appended in order (qout: the new body of each); stops where the
+ * outputs are full. Returns (bodies done, candidates, kept, left, status), status 0 or the code
+ * that stopped it at body `bodies done` (QUERY_SPACE - needed: room for that body).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -340,9 +347,24 @@ static PyObject *spheres(PyObject *self, PyObject *args) {
 
 #include "_near.h"
 
-#define QUERY_GEOMETRY_D 27 /* doubles of query_one's float geometry (core.bodies.index: _pack_geometry) */
+#define QUERY_GEOMETRY_D 27 /* doubles of the float geometry (core.bodies.index: _pack_geometry) */
+/* Outcomes besides a count (>= 0) and NEAR_TOO_FAR, NEAR_FAR_BOX */
+#define QUERY_GENERAL (-2) /* no float sphere here, or a body too large for the box: the general path */
+#define QUERY_SPACE (-10)  /* QUERY_SPACE - needed: the outputs must hold `needed` more bodies */
 
-/* (id, image) pairs of near(): sorted by id before they are classified */
+/* The index as query_one / query_many read it (geometry packed by core.bodies.index._pack_geometry). */
+typedef struct {
+    int d, nn, periodic, tilted;
+    int64_t cap, nbody;
+    const int64_t *n, *stride;
+    const double *L, *H, *o, *h;
+    double big, span, limit, pad, cell_error, far, eps_max, gamma, tiny;
+    const int32_t *table;
+    const double *cr, *frac, *Q; /* Q NULL: classify nothing */
+    const signed char *rel;
+} grid;
+
+/* (id, image) pairs: sorted by id before they are classified */
 typedef struct {
     int64_t id;
     signed char k[3];
@@ -353,134 +375,170 @@ static int near_hit_order(const void *x, const void *y) {
     return (a > b) - (a < b);
 }
 
-/* Outcomes of query_one besides a count (>= 0) and NEAR_TOO_FAR, NEAR_FAR_BOX */
-#define QUERY_GENERAL (-2) /* no float sphere here, or a body too large for the box: the general path */
-#define QUERY_SPACE (-10)  /* -(QUERY_SPACE + needed): the outputs must hold `needed` bodies */
+/* Reads the buffers of a call into g; 0, or -1 with a Python error set. */
+static int read_grid(grid *g, Py_buffer *gi, Py_buffer *gd, Py_buffer *table, Py_buffer *cr, Py_buffer *frac, Py_buffer *Q, Py_buffer *rel) {
+    const int64_t *G = (const int64_t *)gi->buf;
+    const double *D = (const double *)gd->buf;
+    if (gi->len != 10 * 8 || gd->len != QUERY_GEOMETRY_D * 8 || (G[0] != 2 && G[0] != 3) || G[1] < 1) {
+        PyErr_SetString(PyExc_ValueError, "BodyIndex query: bad geometry");
+        return -1;
+    }
+    g->d = (int)G[0];
+    g->nn = (g->d + 1) * (g->d + 1);
+    g->cap = G[1];
+    g->periodic = (int)G[2];
+    g->tilted = (int)G[3];
+    g->n = G + 4;
+    g->stride = G + 7;
+    g->nbody = cr->len / (8 * (g->d + 1));
+    int64_t cells = 1;
+    for (int a = 0; a < g->d; a++) cells *= g->n[a];
+    if (table->len != cells * g->cap * 4 || (g->tilted && frac->len != g->nbody * g->d * 8) ||
+        (Q->len && (Q->len != g->nbody * g->nn * 8 || rel->len != 256))) {
+        PyErr_SetString(PyExc_ValueError, "BodyIndex query: buffers of the wrong size");
+        return -1;
+    }
+    g->L = D;
+    g->H = D + 3;
+    g->o = D + 12;
+    g->h = D + 15;
+    g->big = D[18];
+    g->span = D[19];
+    g->limit = D[20];
+    g->pad = D[21];
+    g->cell_error = D[22];
+    g->far = D[23];
+    g->eps_max = D[24];
+    g->gamma = D[25];
+    g->tiny = D[26];
+    g->table = (const int32_t *)table->buf;
+    g->cr = (const double *)cr->buf;
+    g->frac = (const double *)frac->buf;
+    g->Q = Q->len ? (const double *)Q->buf : NULL;
+    g->rel = (const signed char *)rel->buf;
+    return 0;
+}
+
+/* One new body with its certified sphere (c, rho) asked of the grid (BodyIndex._place_one and
+ * _near_one): writes the indexed bodies whose spheres meet its own at ids (their lattice images
+ * at K), sorted by body, room for `room`. Returns how many, or a negative code: NEAR_TOO_FAR,
+ * NEAR_FAR_BOX, QUERY_GENERAL (too large for the box, or out of memory), QUERY_SPACE - needed
+ * (room too small: nothing written). */
+static int64_t lookup_body(const grid *g, const double *c, double rho, int64_t exclude, int64_t room, int64_t *ids, signed char *K) {
+    const int d = g->d;
+    if (g->periodic && !(rho + g->big < g->limit)) return QUERY_GENERAL;
+    /* its cell, the cells within its reach, the padding of the sphere test */
+    const double reach = rho + g->big;
+    int64_t u[3] = {0, 0, 0}, m[3] = {0, 0, 0}, visit = 1;
+    double f[3] = {0.0, 0.0, 0.0}, top = 0.0;
+    for (int a = 0; a < d; a++) {
+        m[a] = (int64_t)ceil(reach / g->h[a] * (1 + 0x1p-40) + g->cell_error);
+        visit *= (g->periodic && 2 * m[a] + 1 >= g->n[a]) ? g->n[a] : 2 * m[a] + 1;
+        top = fabs(c[a]) > top ? fabs(c[a]) : top;
+    }
+    if (room < visit * g->cap) return QUERY_SPACE - visit * g->cap;
+    const double rpad = rho + g->pad * (top + g->span + reach);
+    if (place_one(d, g->periodic, g->H, g->n, g->o, g->h, g->gamma, g->tiny, g->eps_max, g->far, c, u, f) < 0) return NEAR_FAR_BOX;
+    const int64_t found = near_one(d, g->table, g->cap, g->nbody, g->n, g->stride, g->periodic, g->tilted, g->L, g->H, g->cr, g->frac, u, m, c,
+                                   f, rpad, exclude, ids, K);
+    if (found > 1) { /* sorted by indexed body, the images along */
+        near_hit small[64], *hits = found <= 64 ? small : (near_hit *)malloc(sizeof(near_hit) * (size_t)found);
+        if (!hits) return QUERY_GENERAL;
+        for (int64_t i = 0; i < found; i++) {
+            hits[i].id = ids[i];
+            for (int a = 0; a < d; a++) hits[i].k[a] = g->periodic ? K[i * d + a] : 0;
+        }
+        qsort(hits, (size_t)found, sizeof(near_hit), near_hit_order);
+        for (int64_t i = 0; i < found; i++) {
+            ids[i] = hits[i].id;
+            if (g->periodic)
+                for (int a = 0; a < d; a++) K[i * d + a] = hits[i].k[a];
+        }
+        if (hits != small) free(hits);
+    }
+    return found;
+}
+
+#define QUERY_GATHER 2048 /* pairs gathered for one call of the filter (2 x 512 kB of ellipsoids) */
+
+/* The `count` pairs (indexed body ids[i], new body B + qi[i] * nn; qi NULL: B itself) through the
+ * filter where they have no lattice image (codes rel[rule]; NEAR_MOVED for the others), the
+ * separate ones dropped: the arrays (qi, ids, K, code, cert) compacted in place, cert 1 where the
+ * filter decided. Without Q every pair is kept and left. Adds the kept pairs to *kept and those left
+ * to the caller (images, undecided) to *left; -1 when out of memory, else 0. */
+static int classify_found(const grid *g, const double *B, int64_t *qi, int64_t *ids, signed char *K, signed char *code, signed char *cert,
+                          int64_t count, int64_t *kept, int64_t *left) {
+    const int d = g->d, nn = g->nn;
+    if (!g->Q) {
+        for (int64_t i = 0; i < count; i++) code[i] = NEAR_MOVED, cert[i] = 0;
+        *kept += count;
+        *left += count;
+        return 0;
+    }
+    const int64_t chunk = count < QUERY_GATHER ? count : QUERY_GATHER;
+    double small_a[2 * 16 * 16];
+    double *pa = chunk <= 16 ? small_a : (double *)malloc(sizeof(double) * (size_t)(2 * chunk * nn));
+    if (!pa) return -1;
+    double *pb = pa + chunk * nn;
+    signed char res[QUERY_GATHER];
+    int64_t slot[QUERY_GATHER];
+    for (int64_t s0 = 0; s0 < count; s0 += chunk) { /* the filter writes each pair's code in place */
+        const int64_t s1 = s0 + chunk < count ? s0 + chunk : count;
+        int64_t q = 0;
+        for (int64_t i = s0; i < s1; i++) {
+            int moved = 0;
+            if (g->periodic)
+                for (int a = 0; a < d; a++) moved |= K[i * d + a] != 0;
+            code[i] = (signed char)NEAR_MOVED;
+            if (moved) continue;
+            memcpy(pa + q * nn, g->Q + ids[i] * nn, sizeof(double) * nn);
+            memcpy(pb + q * nn, B + (qi ? qi[i] : 0) * nn, sizeof(double) * nn);
+            slot[q++] = i;
+        }
+        if (q) current->f64[d - 2](pa, pb, res, q, g->rel);
+        for (int64_t j = 0; j < q; j++) code[slot[j]] = res[j];
+    }
+    if (pa != small_a) free(pa);
+    /* keep the pairs that are not separate (and those left to the caller), in order */
+    int64_t w = 0;
+    for (int64_t i = 0; i < count; i++) {
+        const signed char r = code[i];
+        if (r == 0) continue; /* separate */
+        if (qi) qi[w] = qi[i];
+        ids[w] = ids[i];
+        if (g->periodic)
+            for (int a = 0; a < d; a++) K[w * d + a] = K[i * d + a];
+        code[w] = r;
+        cert[w] = r >= 0; /* Certifier.FLOAT where the filter decided */
+        *left += r < 0;
+        w++;
+    }
+    *kept += w;
+    return 0;
+}
 
 static PyObject *query_one(PyObject *self, PyObject *args) {
     Py_buffer gi, gd, table, cr, frac, Q, B, rel, out, kout, codes, by;
     long long exclude;
     if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*w*w*w*w*L", &gi, &gd, &table, &cr, &frac, &Q, &B, &rel, &out, &kout, &codes, &by, &exclude))
         return NULL;
-    /* the caller (core.bodies.index) packs the geometry and sizes the buffers; these checks keep a
-     * wrong call from reading or writing out of bounds */
     PyObject *result = NULL;
-    near_hit *hits = NULL;
-    double *pa = NULL;
-    signed char *res = NULL;
-    const int64_t *G = (const int64_t *)gi.buf;
-    const double *D = (const double *)gd.buf;
-    if (gi.len != 10 * 8 || gd.len != QUERY_GEOMETRY_D * 8 || (G[0] != 2 && G[0] != 3) || G[1] < 1) {
-        PyErr_SetString(PyExc_ValueError, "query_one: bad geometry");
-        goto done;
-    }
-    const int d = (int)G[0], nn = (d + 1) * (d + 1), periodic = (int)G[2], tilted = (int)G[3];
-    const int64_t cap = G[1], *n = G + 4, *stride = G + 7;
-    int64_t cells = 1, nbody = cr.len / (8 * (d + 1));
-    for (int a = 0; a < d; a++) cells *= n[a];
-    const int classify = Q.len > 0;
-    if (table.len != cells * cap * 4 || B.len != nn * 8 || (tilted && frac.len != nbody * d * 8) ||
-        (classify && (Q.len != nbody * nn * 8 || rel.len != 256)) || out.len % 8 || (periodic && kout.len < out.len / 8 * d) ||
-        codes.len < out.len / 8 || by.len < out.len / 8) {
-        PyErr_SetString(PyExc_ValueError, "query_one: buffers of the wrong size");
-        goto done;
-    }
-    const double *L = D, *H = D + 3, *o = D + 12, *h = D + 15, big = D[18], span = D[19], limit = D[20], pad = D[21], cell_error = D[22],
-                 far = D[23], eps_max = D[24], gamma = D[25], tiny = D[26];
-    /* the body's certified sphere (_spheres.h) */
-    double c[3] = {0.0, 0.0, 0.0}, rho;
-    if (sphere_one((const double *)B.buf, d + 1, c, &rho) > SPHERE_LOOSE || (periodic && !(rho + big < limit))) {
-        result = Py_BuildValue("LLL", (long long)QUERY_GENERAL, 0LL, 0LL);
-        goto done;
-    }
-    /* its cell, the cells within its reach, the padding of the sphere test (BodyIndex._near_one) */
-    const double reach = rho + big;
-    int64_t u[3] = {0, 0, 0}, m[3] = {0, 0, 0}, visit = 1;
-    double f[3] = {0.0, 0.0, 0.0}, top = 0.0;
-    for (int a = 0; a < d; a++) {
-        m[a] = (int64_t)ceil(reach / h[a] * (1 + 0x1p-40) + cell_error);
-        visit *= (periodic && 2 * m[a] + 1 >= n[a]) ? n[a] : 2 * m[a] + 1;
-        top = fabs(c[a]) > top ? fabs(c[a]) : top;
-    }
-    const double rpad = rho + pad * (top + span + reach);
-    if (place_one(d, periodic, H, n, o, h, gamma, tiny, eps_max, far, c, u, f) < 0) {
-        result = Py_BuildValue("LLL", (long long)NEAR_FAR_BOX, 0LL, 0LL);
-        goto done;
-    }
-    if (out.len / 8 < visit * cap) {
-        result = Py_BuildValue("LLL", QUERY_SPACE - (long long)(visit * cap), 0LL, 0LL);
-        goto done;
-    }
-    int64_t *ids = (int64_t *)out.buf;
-    signed char *K = (signed char *)kout.buf;
-    const int64_t found = near_one(d, (const int32_t *)table.buf, cap, nbody, n, stride, periodic, tilted, L, H, (const double *)cr.buf,
-                                   (const double *)frac.buf, u, m, c, f, rpad, (int64_t)exclude, ids, K);
-    if (found < 0) {
-        result = Py_BuildValue("LLL", (long long)found, 0LL, 0LL);
-        goto done;
-    }
-    if (found > 1) { /* sorted by indexed body, the images along */
-        hits = (near_hit *)PyMem_Malloc(sizeof(near_hit) * (size_t)found);
-        if (!hits) {
-            PyErr_NoMemory();
-            goto done;
-        }
-        for (int64_t i = 0; i < found; i++) {
-            hits[i].id = ids[i];
-            for (int a = 0; a < d; a++) hits[i].k[a] = periodic ? K[i * d + a] : 0;
-        }
-        qsort(hits, (size_t)found, sizeof(near_hit), near_hit_order);
-        for (int64_t i = 0; i < found; i++) {
-            ids[i] = hits[i].id;
-            if (periodic)
-                for (int a = 0; a < d; a++) K[i * d + a] = hits[i].k[a];
+    grid g;
+    if (read_grid(&g, &gi, &gd, &table, &cr, &frac, &Q, &rel) == 0) {
+        const int64_t room = out.len / 8;
+        if (B.len != g.nn * 8 || out.len % 8 || (g.periodic && kout.len < room * g.d) || codes.len < room || by.len < room) {
+            PyErr_SetString(PyExc_ValueError, "query_one: buffers of the wrong size");
+        } else {
+            double c[3] = {0.0, 0.0, 0.0}, rho;
+            int64_t kept = 0, left = 0, found = QUERY_GENERAL;
+            if (sphere_one((const double *)B.buf, g.d + 1, c, &rho) <= SPHERE_LOOSE) /* its certified sphere (_spheres.h) */
+                found = lookup_body(&g, c, rho, (int64_t)exclude, room, (int64_t *)out.buf, (signed char *)kout.buf);
+            if (found > 0 && classify_found(&g, (const double *)B.buf, NULL, (int64_t *)out.buf, (signed char *)kout.buf, (signed char *)codes.buf,
+                                            (signed char *)by.buf, found, &kept, &left) < 0)
+                found = QUERY_GENERAL;
+            result = Py_BuildValue("LLL", (long long)found, (long long)kept, (long long)left);
         }
     }
-    signed char *code = (signed char *)codes.buf, *cert = (signed char *)by.buf;
-    int64_t kept = found, open = found;
-    if (classify && found > 0) { /* the pairs (indexed body, new body) without an image, through the filter */
-        pa = (double *)PyMem_Malloc(sizeof(double) * (size_t)(2 * found * nn));
-        res = (signed char *)PyMem_Malloc((size_t)found);
-        if (!pa || !res) {
-            PyErr_NoMemory();
-            goto done;
-        }
-        double *pb = pa + found * nn;
-        int64_t q = 0;
-        for (int64_t i = 0; i < found; i++) {
-            int moved = 0;
-            if (periodic)
-                for (int a = 0; a < d; a++) moved |= K[i * d + a] != 0;
-            if (moved) continue;
-            memcpy(pa + q * nn, (const double *)Q.buf + ids[i] * nn, sizeof(double) * nn);
-            memcpy(pb + q * nn, B.buf, sizeof(double) * nn);
-            q++;
-        }
-        if (q) current->f64[d - 2](pa, pb, res, q, (const signed char *)rel.buf);
-        /* keep the pairs that are not separate (and those left to the caller), in order */
-        kept = open = 0;
-        for (int64_t i = 0, j = 0; i < found; i++) {
-            int moved = 0;
-            if (periodic)
-                for (int a = 0; a < d; a++) moved |= K[i * d + a] != 0;
-            const signed char r = moved ? (signed char)NEAR_MOVED : res[j++];
-            if (r == 0) continue; /* separate */
-            ids[kept] = ids[i];
-            if (periodic)
-                for (int a = 0; a < d; a++) K[kept * d + a] = K[i * d + a];
-            code[kept] = r;
-            cert[kept] = r >= 0; /* Certifier.FLOAT where the filter decided */
-            open += r < 0;
-            kept++;
-        }
-    }
-    result = Py_BuildValue("LLL", (long long)found, (long long)kept, (long long)open);
-    goto done;
-    result = PyLong_FromLongLong((long long)found);
-done:
-    PyMem_Free(hits);
-    PyMem_Free(pa);
-    PyMem_Free(res);
     PyBuffer_Release(&gi);
     PyBuffer_Release(&gd);
     PyBuffer_Release(&table);
@@ -489,6 +547,61 @@ done:
     PyBuffer_Release(&Q);
     PyBuffer_Release(&B);
     PyBuffer_Release(&rel);
+    PyBuffer_Release(&out);
+    PyBuffer_Release(&kout);
+    PyBuffer_Release(&codes);
+    PyBuffer_Release(&by);
+    return result;
+}
+
+static PyObject *query_many(PyObject *self, PyObject *args) {
+    Py_buffer gi, gd, table, cr, frac, Q, B, rel, spheres, exclude, qout, out, kout, codes, by;
+    long long start;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*y*y*w*w*w*w*w*L", &gi, &gd, &table, &cr, &frac, &Q, &B, &rel, &spheres, &exclude, &qout, &out,
+                          &kout, &codes, &by, &start))
+        return NULL;
+    PyObject *result = NULL;
+    grid g;
+    if (read_grid(&g, &gi, &gd, &table, &cr, &frac, &Q, &rel) == 0) {
+        const int64_t room = out.len / 8, M = exclude.len / 8;
+        if (B.len != M * g.nn * 8 || spheres.len != M * (g.d + 1) * 8 || exclude.len % 8 || out.len % 8 || qout.len != out.len ||
+            (g.periodic && kout.len < room * g.d) || codes.len < room || by.len < room || start < 0 || start > M) {
+            PyErr_SetString(PyExc_ValueError, "query_many: buffers of the wrong size");
+        } else {
+            const double *S = (const double *)spheres.buf, *Bm = (const double *)B.buf;
+            const int64_t *ex = (const int64_t *)exclude.buf;
+            int64_t *qi = (int64_t *)qout.buf, *ids = (int64_t *)out.buf;
+            signed char *K = (signed char *)kout.buf, *code = (signed char *)codes.buf, *cert = (signed char *)by.buf;
+            int64_t k = start, kept = 0, left = 0, candidates = 0, status = 0;
+            Py_BEGIN_ALLOW_THREADS
+            for (; k < M; k++) { /* every body's candidates, then one pass of the filter over them all */
+                const double *s = S + k * (g.d + 1);
+                if (!(s[g.d] >= 0.0)) continue; /* no sphere (an invalid body): nothing to find */
+                const int64_t found = lookup_body(&g, s, s[g.d], ex[k], room - candidates, ids + candidates, K + candidates * g.d);
+                if (found < 0) {
+                    status = found;
+                    break;
+                }
+                for (int64_t i = candidates; i < candidates + found; i++) qi[i] = k;
+                candidates += found;
+            }
+            if (classify_found(&g, Bm, qi, ids, K, code, cert, candidates, &kept, &left) < 0) status = QUERY_GENERAL;
+            Py_END_ALLOW_THREADS
+            /* (bodies done, candidates, kept, left, status): status QUERY_SPACE - needed stops at body k */
+            result = Py_BuildValue("LLLLL", (long long)k, (long long)candidates, (long long)kept, (long long)left, (long long)status);
+        }
+    }
+    PyBuffer_Release(&gi);
+    PyBuffer_Release(&gd);
+    PyBuffer_Release(&table);
+    PyBuffer_Release(&cr);
+    PyBuffer_Release(&frac);
+    PyBuffer_Release(&Q);
+    PyBuffer_Release(&B);
+    PyBuffer_Release(&rel);
+    PyBuffer_Release(&spheres);
+    PyBuffer_Release(&exclude);
+    PyBuffer_Release(&qout);
     PyBuffer_Release(&out);
     PyBuffer_Release(&kout);
     PyBuffer_Release(&codes);
@@ -506,6 +619,7 @@ static PyMethodDef METHODS[] = {
     {"classify", classify, METH_VARARGS, "classify(n, a, b, out[, table]): rule ids (or table[rule id] with a 256-byte table) of count pairs into the int8 buffer out, GIL released; returns how many are undecided."},
     {"balance", balance, METH_VARARGS, "balance(n, a, b, a_out, b_out, e_out[, shift, shift_out]): pairs with space scaled by 2^e to the bodies' size where exact (e_out 0 elsewhere), GIL released; returns how many moved."},
     {"spheres", spheres, METH_VARARGS, "spheres(n, m, centres_out, radii_out, status_out): certified bounding spheres of float64 bodies (status 0 tight, 1 loose, 2 none, 3 not exactly symmetric), GIL released; returns how many have one."},
+    {"query_many", query_many, METH_VARARGS, "query_many(geometry_i, geometry_d, table, cr, frac, Q, B, rel, spheres, exclude, qout, out, kout, codes, by, start): query_one for new bodies B with their spheres, from body start on, GIL released; returns (bodies done, candidates, kept, left, status)."},
     {"query_one", query_one, METH_VARARGS, "query_one(geometry_i, geometry_d, table, cr, frac, Q, B, rel, out, kout, codes, by, exclude): one new body asked of a BodyIndex (its sphere, the bodies near it, sorted, their images, the relations of the pairs without one, the separate ones dropped); returns (candidates, kept, left), or (a negative code, 0, 0)."},
     {"variant", get_variant, METH_NOARGS, "The SIMD variant in use."},
     {"variants", get_variants, METH_NOARGS, "The variants of this build that this CPU can run (slowest first)."},

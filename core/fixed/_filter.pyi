@@ -34,6 +34,16 @@ def query_one(
     box, -10 - needed: the outputs must hold `needed` bodies.
     """
 
+def query_many(
+    geometry_i: Any, geometry_d: Any, table: Any, cr: Any, frac: Any, Q: Any, B: Any, rel: Any, spheres: Any, exclude: Any,
+    qout: Any, out: Any, kout: Any, codes: Any, by: Any, start: int, /,
+) -> tuple[int, int, int, int, int]:
+    """query_one for new bodies B (M, n, n) with their spheres (M, n), from body start on, their pairs appended.
+
+    Returns (bodies done, candidates, kept, left to the caller, status): status 0, or the code that
+    stopped at body `bodies done` (-10 - needed: room for that body).
+    """
+
 def variant() -> str:
     """The SIMD variant in use."""
 

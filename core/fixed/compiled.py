@@ -29,7 +29,7 @@ from typing import cast
 import numpy as np
 
 __all__ = [
-    "available", "balance_available", "balance", "spheres_available", "spheres", "query_one_available", "query_one", "SPHERE_TIGHT", "SPHERE_LOOSE", "SPHERE_NONE", "SPHERE_OTHER", "pool", "warm_up", "status", "variant", "variants", "select", "rules", "mapped", "rule_one", "set_threads", "get_threads",
+    "available", "balance_available", "balance", "spheres_available", "spheres", "query_one_available", "query_one", "query_many", "SPHERE_TIGHT", "SPHERE_LOOSE", "SPHERE_NONE", "SPHERE_OTHER", "pool", "warm_up", "status", "variant", "variants", "select", "rules", "mapped", "rule_one", "set_threads", "get_threads",
     "header_sha256", "FIX", "HEADER",
 ]
 
@@ -286,6 +286,15 @@ def query_one(*args: object) -> tuple[int, int, int]:
     Only :meth:`core.bodies.index.BodyIndex._query_one` calls it, with the buffers it sized.
     """
     out: tuple[int, int, int] = _EXT.query_one(*args)  # type: ignore[union-attr]
+    return out
+
+
+def query_many(*args: object) -> tuple[int, int, int, int, int]:
+    """New bodies with their spheres asked of a :class:`core.BodyIndex` in C (``core/fixed/_near.h``; arguments: ``_filter.pyi``).
+
+    Only :meth:`core.bodies.index.BodyIndex._query_many` calls it, with the buffers it sized.
+    """
+    out: tuple[int, int, int, int, int] = _EXT.query_many(*args)  # type: ignore[union-attr]
     return out
 
 
