@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import math
 import sys
 import time
 from typing import Any, TextIO
@@ -32,14 +33,37 @@ COMMANDS = ("contacts", "classify")
 
 
 def box_argument(text: str) -> tuple[float, ...]:
-    """``--box Lx,Ly[,Lz]`` (or ``Lx,Ly,Lz,xy,xz,yz``, a tilted box) as a tuple of floats (argparse type)."""
+    """``--box Lx,Ly[,Lz]`` (or ``Lx,Ly,Lz,xy,xz,yz``, a tilted box) as a tuple of floats (argparse type).
+
+    Checked before any work: finite numbers, the sides Lx, Ly (and Lz of six) positive; whether
+    a third number is Lz or a 2D tilt, and the rest, the library checks against the bodies.
+    """
     try:
         sides = tuple(float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"--box takes Lx,Ly[,Lz] (numbers), got {text!r}") from None
     if len(sides) not in (2, 3, 6):
         raise argparse.ArgumentTypeError(f"--box takes 2 or 3 sides (or Lx,Ly,Lz,xy,xz,yz), got {text!r}")
+    if not all(map(math.isfinite, sides)):
+        raise argparse.ArgumentTypeError(f"--box takes finite numbers, got {text!r}")
+    if not all(v > 0 for v in sides[: 3 if len(sides) == 6 else 2]):
+        raise argparse.ArgumentTypeError(f"--box: the sides must be positive, got {text!r}")
     return sides
+
+
+def scheduler_argument(text: str) -> str:
+    """``--scheduler ADDRESS``: a Dask scheduler's address (argparse type; checked as Dask reads it, when installed)."""
+    try:
+        from distributed.comm.addressing import parse_address, parse_host_port
+    except ImportError:  # run_contacts says what to install
+        return text
+    try:
+        scheme, location = parse_address(text)
+        if scheme in ("tcp", "tls"):
+            parse_host_port(location)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(f"not a scheduler address ({e}), e.g. tcp://HOST:8786: {text!r}") from None
+    return text
 
 
 def frame_argument(text: str) -> int:
@@ -50,12 +74,15 @@ def frame_argument(text: str) -> int:
         raise argparse.ArgumentTypeError(f"--frame takes a frame number (0 first, -1 last), got {text!r}") from None
 
 
-def add_body_file_options(parser: argparse.ArgumentParser) -> None:
-    """``--frame`` and ``--format``: which frame of a trajectory, and which reader (:mod:`app.readers`)."""
+def add_body_file_options(parser: argparse.ArgumentParser, *, dim: bool = False) -> None:
+    """``--frame`` and ``--format``: which frame of a trajectory, and which reader (:mod:`app.readers`); ``--dim`` too if asked."""
     from .readers import FORMATS
 
     parser.add_argument("--frame", type=frame_argument, default=None, help="frame of a trajectory (GSD, LAMMPS, XYZ): 0 first, -1 last (default)")
     parser.add_argument("--format", choices=FORMATS, default=None, help="file format (default: from the name, else the first bytes)")
+    if dim:
+        parser.add_argument("--dim", type=int, choices=(2, 3), default=None,
+                            help="2: read a 3D file of a 2D system (z = 0, turned about z) as ellipses; default: the file says")
 
 
 def add_parsers(sub: Any) -> None:
@@ -67,14 +94,14 @@ def add_parsers(sub: Any) -> None:
         help="output: CSV i,j,relation,certified_by,image_x,image_y,image_z (NPZ for a .npz name), or - for stdout",
     )
     c.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz], or a tilted box Lx,Ly,Lz,xy,xz,yz (2D: Lx,Ly,xy) (minimum image); default: the file's box")
-    add_body_file_options(c)
+    add_body_file_options(c, dim=True)
     c.add_argument("--method", choices=("adaptive", "float", "exact"), default="adaptive")
     c.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bad bodies and go on")
     c.add_argument(
         "--with", dest="extras", action="append", choices=("scale",), default=[],
         help="scale: add a certified contact-scale bracket scale_lo,scale_hi and a containment flag per pair",
     )
-    c.add_argument("--scheduler", default=None, help="run on Dask: scheduler address tcp://host:8786 (pip install 'ellipsoid-interference[dask]')")
+    c.add_argument("--scheduler", type=scheduler_argument, default=None, help="run on Dask: scheduler address tcp://host:8786 (pip install 'ellipsoid-interference[dask]')")
     c.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
 
     k = sub.add_parser("classify", help="certified relations of a file of pairs (NPZ with stacks A, B)")
@@ -98,7 +125,8 @@ class ProgressBar:
         delay: any run draws once it has taken this many seconds.
     """
 
-    def __init__(self, stream: TextIO, label: str, *, min_total: int = 1_000_000, delay: float = 1.0) -> None:
+    def __init__(self, stream: TextIO, label: str, *, min_total: int = 1_000_000, delay: float = 1.0, unit: str = "pairs") -> None:
+        self.unit = unit
         self.stream = stream
         self.label = label
         self.min_total = min_total
@@ -117,7 +145,7 @@ class ProgressBar:
             return
         self.last = pct
         bar = "#" * (pct * 30 // 100)
-        line = f"{self.label} [{bar:<30}] {pct:3d}% {done:,}/{total:,} pairs, {elapsed:.1f} s"
+        line = f"{self.label} [{bar:<30}] {pct:3d}% {done:,}/{total:,} {self.unit}, {elapsed:.1f} s"
         self.stream.write(("\r" + line) if self.tty else line + "\n")
         if self.tty and done >= total:
             self.stream.write("\n")
@@ -142,7 +170,7 @@ def warn_invalid(invalid: dict[int, str], where: Any) -> None:
 
 
 def _connect(address: str) -> Any:
-    """A ``distributed.Client`` on ``address``, or a one-line error (RuntimeError) within seconds."""
+    """A ``distributed.Client`` on ``address`` (checked by :func:`scheduler_argument`), or a one-line RuntimeError within seconds."""
     try:
         import distributed  # noqa: F401
     except ImportError:
@@ -155,37 +183,50 @@ def _connect(address: str) -> Any:
     return connect(address)
 
 
+def command_box(given: Any, bodies: Any) -> Any:
+    """The box of a command: ``--box`` (any form :meth:`core.Box.from_any` reads), else the file's.
+
+    Raises:
+        ValueError: a ``--box`` that is no box for the bodies' dimension, saying what was expected.
+    """
+    from core import Box
+
+    if given is None:
+        return bodies.box
+    try:
+        return Box.from_any(given, bodies.dimensions)
+    except ValueError as e:
+        raise ValueError(f"--box: {str(e).removeprefix('box: ')}") from None
+
+
 def run_contacts(args: argparse.Namespace) -> int:
     """``python -m app contacts``: read, search, write, summarise. Returns the exit status."""
     from core import contacts
 
     from .bodyfiles import write_pairs_csv, write_pairs_npz
     from .output import Output
-    from .readers import read_bodies, usable_box
+    from .readers import read_bodies
 
     as_npz = args.out.lower().endswith(".npz")
     out = Output(args.out, binary=as_npz)  # checked (and its temporary file made) before any work
     with out as f:
         t0 = time.perf_counter()
-        bodies = read_bodies(args.bodies, frame=args.frame, format=args.format)
+        bodies = read_bodies(args.bodies, frame=args.frame, format=args.format, dim=args.dim)
         source = "<stdin>" if args.bodies == "-" else args.bodies
         if bodies.errors and args.on_invalid == "raise":
             k, why = next(iter(bodies.errors.items()))
             raise ValueError(f"{source}: {bodies.where(k)}: {why}")
-        box = args.box if args.box is not None else bodies.box
-        if box is not None and len(box) != 6 and len(box) != bodies.dim and not (bodies.dim == 2 and len(box) == 3):
-            raise ValueError(f"--box has {len(box)} sides but the bodies are {bodies.dim}D")
-        box = usable_box(box, bodies.dim, source)
+        box = command_box(args.box, bodies)
         t1 = time.perf_counter()
         what = "ellipsoids" if bodies.dim == 3 else "ellipses"
         frame = f" (frame {bodies.frame})" if bodies.frame is not None else ""
-        say(args, f"read {len(bodies):,} {what} from {source}{frame} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
+        say(args, f"read {len(bodies):,} {what} from {source}{frame} in {t1 - t0:.1f} s" + (f"; periodic box {box.describe()}" if box is not None else ""))
         scheduler = _connect(args.scheduler) if args.scheduler else None
         try:
             progress = None if args.quiet else (True if scheduler is not None else ProgressBar(sys.stderr, "classifying"))
             chunk = 10_000 if args.method == "exact" else None  # exact: ~1 ms of work per 10 pairs, progress every second or so
             res = contacts(
-                bodies.Q, box=box, method=args.method, on_invalid=args.on_invalid, scheduler=scheduler, progress=progress,
+                bodies, box=box, method=args.method, on_invalid=args.on_invalid, scheduler=scheduler, progress=progress,
                 **({"chunk": chunk} if chunk else {}),
             )
         finally:
@@ -201,9 +242,9 @@ def run_contacts(args: argparse.Namespace) -> int:
             say(args, f"contact scales and containment of {len(res):,} pairs in {time.perf_counter() - ts:.1f} s")
         t2 = time.perf_counter()
         if as_npz:
-            write_pairs_npz(f, res.i, res.j, res.relation, res.certified_by, res.image, details)
+            write_pairs_npz(f, res, details)
         else:
-            write_pairs_csv(f, res.i, res.j, res.relation, res.certified_by, res.image, details)
+            write_pairs_csv(f, res, details)
     t3 = time.perf_counter()
     invalid = dict(res.invalid)
     invalid.update(bodies.errors)  # the reason from the file's parameters, not "NaN"

@@ -9,7 +9,9 @@ Pairs out (``python -m app contacts --out PAIRS``), one row per pair that is not
 * CSV: ``i,j,relation,certified_by,image_x,image_y,image_z`` (relation ``tangent|overlap``;
   certified_by ``float|exact``: which arithmetic certified the relation; image: the periodic
   image k of body j, c_j + k L, all 0 in open space and image_z 0 in 2D), and with ``--with
-  scale`` also ``scale_lo,scale_hi,contained`` (:mod:`core.bodies.details`).
+  scale`` also ``scale_lo,scale_hi,contained`` (:mod:`core.bodies.details`), then ``id_i,id_j``
+  when the file gave the bodies ids (a LAMMPS, CSV or XYZ ``id`` column). One writer:
+  :meth:`core.PairTable.to_csv`.
 * NPZ (``--out PAIRS.npz``): the same columns as arrays of the same names (relation and
   certified_by as int8 codes, image as one (M, 3) int8 array), plus ``relation_names``.
 """
@@ -21,7 +23,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from core import Certifier, Relation
+from core import PairTable, Relation
 
 from .readers import COLUMNS, BodySet, read_bodies, read_bodies_bytes
 
@@ -32,9 +34,6 @@ __all__ = [
 
 PAIR_COLUMNS = ("i", "j", "relation", "certified_by", "image_x", "image_y", "image_z")
 """Columns of a pairs CSV (``--with scale`` adds ``scale_lo, scale_hi, contained``)."""
-
-_BY_NAME = {int(Certifier.FLOAT): "float", int(Certifier.EXACT): "exact"}
-
 
 def write_bodies_csv(path: str | Path, centers: Any, semi_axes: Any, orientations: Any) -> None:
     """Write bodies as CSV (3D: x,y,z,a,b,c,qw,qx,qy,qz; 2D: x,y,a,b,angle), floats round-trip exactly."""
@@ -55,67 +54,36 @@ def _images(image: np.ndarray | None, m: int) -> np.ndarray:
     return out
 
 
-def write_pairs_csv(
-    out: str | Path | IO[str],
-    i: np.ndarray,
-    j: np.ndarray,
-    relation: np.ndarray,
-    certified_by: np.ndarray | None = None,
-    image: np.ndarray | None = None,
-    details: dict[str, np.ndarray] | None = None,
-) -> None:
-    """Write the pairs as CSV (module docstring): to a path or an open text file.
+def write_pairs_csv(out: IO[str], pairs: PairTable, details: dict[str, np.ndarray] | None = None) -> None:
+    """Write the pairs as CSV (module docstring) to an open text file (e.g. an :class:`app.output.Output`).
 
     Args:
-        out: a path, or a text file open for writing (e.g. an :class:`app.output.Output`).
-        i: first bodies.
-        j: second bodies.
-        relation: int8 Relation codes.
-        certified_by: int8 Certifier codes (None: the column is left out, as in old files).
-        image: (M, d) periodic images of j, or None (open space: zeros).
+        out: a text file open for writing.
+        pairs: :class:`core.Contacts` (or any :class:`core.PairTable`): its columns in their order,
+            ``id_i, id_j`` last when the bodies had ids.
         details: ``--with scale`` columns (``scale_lo``, ``scale_hi`` floats, ``contained``
-            strings), or None.
+            strings), written before the ids, or None.
     """
-    if not hasattr(out, "write"):
-        with open(out, "w", newline="") as opened:  # type: ignore[arg-type]
-            return write_pairs_csv(opened, i, j, relation, certified_by, image, details)
-    f: Any = out
-    names = np.array([str(Relation(k)) for k in range(-2, 3)], dtype=object)  # codes -2 .. 2
-    rel = names[relation.astype(np.int64) + 2]
-    cols: list[tuple[str, Any]] = [("i", i.tolist()), ("j", j.tolist()), ("relation", rel.tolist())]
-    if certified_by is not None:
-        cols.append(("certified_by", [_BY_NAME.get(int(c), "none") for c in certified_by.tolist()]))
-        im = _images(image, len(i))
-        cols += [("image_x", im[:, 0].tolist()), ("image_y", im[:, 1].tolist()), ("image_z", im[:, 2].tolist())]
+    extra = None
     if details:
-        cols += [("scale_lo", [repr(v) for v in details["scale_lo"].tolist()]),
-                 ("scale_hi", [repr(v) for v in details["scale_hi"].tolist()]),
-                 ("contained", list(details["contained"]))]
-    f.write(",".join(name for name, _ in cols) + "\n")
-    step = 1 << 16
-    values = [v for _, v in cols]
-    for s in range(0, len(i), step):
-        f.write("".join(",".join(map(str, row)) + "\n" for row in zip(*(v[s : s + step] for v in values), strict=True)))
+        extra = {"scale_lo": details["scale_lo"].tolist(), "scale_hi": details["scale_hi"].tolist(),
+                 "contained": list(details["contained"])}
+    pairs.to_csv(out, extra=extra)
 
 
-def write_pairs_npz(
-    out: IO[bytes] | str | Path,
-    i: np.ndarray,
-    j: np.ndarray,
-    relation: np.ndarray,
-    certified_by: np.ndarray,
-    image: np.ndarray | None = None,
-    details: dict[str, np.ndarray] | None = None,
-) -> None:
+def write_pairs_npz(out: IO[bytes] | str | Path, pairs: PairTable, details: dict[str, np.ndarray] | None = None) -> None:
     """Write the pairs as NPZ arrays (module docstring) to a path or an open binary file."""
     arrays: dict[str, Any] = {
-        "i": np.asarray(i, np.int64), "j": np.asarray(j, np.int64), "relation": np.asarray(relation, np.int8),
-        "certified_by": np.asarray(certified_by, np.int8), "image": _images(image, len(i)),
+        "i": np.asarray(pairs.i, np.int64), "j": np.asarray(pairs.j, np.int64), "relation": np.asarray(pairs.relation, np.int8),
+        "certified_by": np.asarray(pairs.certified_by, np.int8), "image": _images(pairs.image, len(pairs)),
         "relation_names": np.array([str(Relation(k)) for k in range(-2, 3)]),
     }
     if details:
         arrays.update(details)
         arrays["contained"] = np.asarray(details["contained"]).astype(str)
+    ids = pairs.pair_ids()
+    if ids is not None:
+        arrays["id_i"], arrays["id_j"] = ids
     np.savez(out, **arrays)
 
 

@@ -21,6 +21,8 @@
   moving bodies over one step (the timeline, the contact events: :mod:`app.scene.sweep_view`).
 * ``python -m app sweep START.csv END.csv --out EVENTS.csv``: first contact times of moving
   bodies (:mod:`app.sweep_cli`).
+* ``python -m app audit TRAJECTORY --out REPORT.csv [--between]``: a certified check of a
+  hard-particle trajectory, frame by frame; exit status 3 when a pair overlaps (:mod:`app.audit_cli`).
 * ``python -m app --version``. The console script ``ellipsoids`` is the same command.
 
 Exit status: 0 done; 1 the work could not be done here (a missing optional package or
@@ -36,10 +38,11 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import signal
 import sys
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .scene.mesh_detail import SPHERE_SUBDIVISIONS, SPHERE_SUBDIVISIONS_RANGE
 
@@ -53,7 +56,16 @@ EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_TERMINATED, EXIT_PIPE =
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors ("python -m app contacts: error: ...; see --help"), exit 2."""
+    """argparse with one-line errors ("python -m app contacts: error: ...; see --help"), exit 2.
+
+    A value that starts with a minus and a digit is a value, never an option: ``--box -1,2,3``
+    and ``--t -0.5`` (Python 3.13's rule; before it only ``-1`` and ``-1.5`` were, so ``--box
+    -1,2,3`` was "expected one argument"). No option of this program starts with a digit.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"-\.?\d")  # argparse reads it (and sub-parsers are _Parsers)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         """Print one line to stderr and exit with status 2."""
@@ -239,6 +251,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .sweep_cli import add_parser as add_sweep_parser
 
     add_sweep_parser(sub)
+    from .audit_cli import add_parser as add_audit_parser
+
+    add_audit_parser(sub)
     return p
 
 
@@ -266,7 +281,12 @@ def config_from_args(args: argparse.Namespace, path: str | None = None) -> Scene
 
     configs = _listed(getattr(args, "config", None))
     path = path or (configs[0] if configs else None)
-    cfg = SceneConfig.from_json_file(path) if path else SceneConfig()
+    try:
+        cfg = SceneConfig.from_json_file(path) if path else SceneConfig()
+    except RecursionError:
+        raise ValueError(f"config file {path}: JSON nested too deeply") from None
+    except (TypeError, OverflowError, KeyError, AttributeError) as e:  # a value of the wrong kind the reader let through
+        raise ValueError(f"config file {path}: a value of the wrong kind or size ({type(e).__name__}: {e})") from None
     if getattr(args, "dim", None) is not None and args.dim != cfg.dim:
         d = cfg.to_dict()
         d.update(dim=args.dim, A=None, B=None, preset=None)
@@ -419,9 +439,7 @@ def _export(args: argparse.Namespace) -> int:
     from .output import Output
 
     out = Path(args.out)
-    if not out.is_dir():
-        out.parent.mkdir(parents=True, exist_ok=True)  # documented: the folders are created
-    target = Output(out)  # checked before the replay is built
+    target = Output(out, make_folders=True)  # documented: the folders are created; checked before the replay is built
     with target as f:
         html = replay_html(config_from_args(args), seconds=args.seconds, frames=args.frames,
                            sphere_subdivisions=args.sphere_subdivisions)
@@ -436,7 +454,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     from .bodies_cli import COMMANDS, run_classify, run_contacts
 
-    if not argv or (argv[0] not in ("serve", "screenshot", "export", "sweep", *COMMANDS) and argv[0] not in ("-h", "--help", "--version")):
+    if not argv or (argv[0] not in ("serve", "screenshot", "export", "sweep", "audit", *COMMANDS) and argv[0] not in ("-h", "--help", "--version")):
         argv = ["serve", *argv]  # no sub-command: serve with the given options (or defaults)
     args = parser.parse_args(argv)
     if args.command != "serve" and args.command is not None:
@@ -454,6 +472,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from .sweep_cli import run_sweep
 
             return run_sweep(args)
+        if args.command == "audit":
+            from .audit_cli import run_audit
+
+            return run_audit(args)
         return _serve(args)
     except ValueError as e:
         return _fail(f"error: {e}", EXIT_USAGE)
@@ -479,9 +501,16 @@ def run() -> None:
     raise SystemExit(main())
 
 
+_MESSAGE_CHARS = 1000
+"""Longest message printed: a longer one (a value quoted from a file) is cut in the middle."""
+
+
 def _fail(message: str, status: int) -> int:
-    """One line on stderr (the first line of the message), and the exit status."""
-    print(message.splitlines()[0] if message else "error", file=sys.stderr, flush=True)
+    """One line on stderr (the first line of the message, at most :data:`_MESSAGE_CHARS`), and the exit status."""
+    line = message.splitlines()[0] if message else "error"
+    if len(line) > _MESSAGE_CHARS:
+        line = f"{line[: _MESSAGE_CHARS // 2]} ... {line[-_MESSAGE_CHARS // 2 :]}"
+    print(line, file=sys.stderr, flush=True)
     return status
 
 

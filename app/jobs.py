@@ -219,15 +219,12 @@ def contacts_job(body: ContactsIn, seconds: float, max_candidates: int, max_pair
     batches, and the number of pairs found is checked against ``max_pairs`` before the answer
     is built. The JSON is written here, so the server process only passes the bytes on.
     """
-    from typing import cast
-
-    from core import Certifier, Relation, contacts
+    from core import contacts
     from core.bodies.broadphase import TooManyPairs
 
-    from .api.contacts_schemas import ContactsOut, PairOut, PairRelation
+    from .api.contacts_schemas import ContactsOut, PairOut
     from .api.convert import bad_input, contacts_matrices
     from .api.limits import contacts_answer_message, contacts_limit_message
-    from .api.schemas import CertifiedBy
 
     budget = _budget(seconds)
     with _as_job_errors():
@@ -247,19 +244,32 @@ def contacts_job(body: ContactsIn, seconds: float, max_candidates: int, max_pair
                 raise ValueError(contacts_limit_message(n, e.pairs, e.limit)) from None
         if len(res) > max_pairs:
             raise ValueError(contacts_answer_message(n, len(res), max_pairs))
-        names = {int(r): str(r) for r in Relation}  # core lists the non-separate pairs of valid bodies
-        by_name: dict[int, CertifiedBy] = {int(Certifier.FLOAT): "float", int(Certifier.EXACT): "exact"}
-        images = res.image.tolist() if res.image is not None else None
-        pairs = [
-            PairOut(i=a, j=b, relation=cast(PairRelation, names[r]), certified_by=by_name.get(c),
-                    image=None if images is None else images[k],
-                    **({} if images is None else dict(zip(("image_x", "image_y", "image_z"), images[k], strict=False))))
-            for k, (a, b, r, c) in enumerate(
-                zip(res.i.tolist(), res.j.tolist(), res.relation.tolist(), res.certified_by.tolist(), strict=True)
-            )
-        ]
+        res.ids = _ids(body.ids, n)
+        pairs = [PairOut(**_json_row(row)) for row in res.rows()]  # the columns of core.PairTable, as the CSV
         out = ContactsOut(bodies=res.n_bodies, pairs=pairs, counts=res.counts, invalid=res.invalid, summary=res.summary())
-        return out.model_dump_json().encode()
+        return out.model_dump_json(exclude=None if res.ids is not None else _NO_IDS).encode()
+
+
+_NO_IDS: Any = {"pairs": {"__all__": {"id_i", "id_j"}}}
+"""Left out of an answer whose request gave no ids (its pairs are named by their rows alone)."""
+
+
+def _ids(ids: list[int] | None, n: int) -> Any:
+    """The request's ``ids`` as an array, checked against the number of bodies (None: no ids)."""
+    import numpy as np
+
+    if ids is None:
+        return None
+    if len(ids) != n:
+        raise ValueError(f"ids: {len(ids)} ids for {n} bodies: give one id per body, in the order of the rows")
+    return np.asarray(ids, dtype=np.int64)
+
+
+def _json_row(row: dict[str, Any]) -> dict[str, Any]:
+    """A row of :meth:`core.PairTable.rows` as the API's pair: "none" (not certified) is null."""
+    if row.get("certified_by") == "none":
+        row["certified_by"] = None
+    return row
 
 
 def sweep_job(body: SweepIn, seconds: float, max_candidates: int, max_pairs: int, max_times: int) -> bytes:
@@ -271,15 +281,12 @@ def sweep_job(body: SweepIn, seconds: float, max_candidates: int, max_pairs: int
     answer is built; with ``exact_times``, their number against ``max_times`` before any is
     computed, and the budget between them.
     """
-    from typing import cast
-
-    from core import Certifier, Relation, sweep_contacts
+    from core import sweep_contacts
     from core.bodies.broadphase import TooManyPairs
 
     from .api.limits import sweep_answer_message, sweep_limit_message, sweep_times_message
-    from .api.schemas import AlgebraicOut, CertifiedBy
+    from .api.schemas import AlgebraicOut
     from .api.sweep_schemas import (
-        PairRelation,
         SweepOut,
         SweepPairOut,
         in_api_words,
@@ -313,20 +320,8 @@ def sweep_job(body: SweepIn, seconds: float, max_candidates: int, max_pairs: int
             for k in range(m):
                 budget.check(f"after {k:,} of {m:,} exact times")
                 times[k] = AlgebraicOut(**res.time(k).to_dict(body.digits))
-        names = {int(x): str(x) for x in Relation}
-        by_name: dict[int, CertifiedBy] = {int(Certifier.FLOAT): "float", int(Certifier.EXACT): "exact"}
-        images = res.image.tolist() if res.image is not None else None
-        pairs = [
-            SweepPairOut(
-                i=a, j=b, t_lo=lo, t_hi=hi, relation=cast(PairRelation, names[x]), certified_by=by_name[c], time=times[k],
-                image=None if images is None else images[k],
-                **({} if images is None else dict(zip(("image_x", "image_y", "image_z"), images[k], strict=False))),
-            )
-            for k, (a, b, lo, hi, x, c) in enumerate(zip(
-                res.i.tolist(), res.j.tolist(), res.t_lo.tolist(), res.t_hi.tolist(), res.relation.tolist(),
-                res.certified_by.tolist(), strict=True,
-            ))
-        ]
+        res.ids = _ids(body.ids, n)
+        pairs = [SweepPairOut(**_json_row(row), time=times[k]) for k, row in enumerate(res.rows())]
         invalid = {k: in_api_words(why) for k, why in res.invalid.items()}
         out = SweepOut(bodies=res.n_bodies, pairs=pairs, counts=res.counts, invalid=invalid, summary=res.summary())
-        return out.model_dump_json().encode()
+        return out.model_dump_json(exclude=None if res.ids is not None else _NO_IDS).encode()

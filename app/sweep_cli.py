@@ -13,10 +13,12 @@ q(t) = (1 - t) q0 + t q1 (:func:`core.sweep_contacts`). The box is ``--box``, el
 a box vector away along one (a wrapped trajectory: it crossed a face) is taken at the nearest
 image of its end centre (:func:`unwrapped`).
 
-EVENTS is CSV ``i,j,t_lo,t_hi,relation`` (or ``-``: standard output): every pair that touches or
+EVENTS is CSV ``i,j,t_lo,t_hi,relation,certified_by,image_x,image_y,image_z`` (or ``-``: standard
+output), then ``id_i,id_j`` when the files give the bodies ids: every pair that touches or
 overlaps during the step, t_lo <= t* <= t_hi (floats written so that they read back exactly),
-the relation at t* (``tangent``, or ``overlap`` when they already overlap at t = 0), sorted by
-(i, j). It is written whole or not at all (:mod:`app.output`). Messages and the progress bar go
+the relation at t* (``tangent``, or ``overlap`` when they already overlap at t = 0), which
+arithmetic certified it (``float`` or ``exact``) and the image k of body j (j's path moved by
+v(k)), sorted by (i, j) (one writer: :meth:`core.PairTable.to_csv`). It is written whole or not at all (:mod:`app.output`). Messages and the progress bar go
 to standard error.
 """
 
@@ -27,16 +29,16 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 if TYPE_CHECKING:
     from .readers import BodySet
 
-__all__ = ["add_parser", "run_sweep", "MovingBodies", "read_moving_bodies", "unwrapped", "write_events_csv", "read_events_csv", "EVENTS_HEADER"]
+__all__ = ["add_parser", "run_sweep", "MovingBodies", "read_moving_bodies", "unwrapped", "read_events_csv", "EVENTS_HEADER"]
 
-EVENTS_HEADER = "i,j,t_lo,t_hi,relation"
+EVENTS_HEADER = "i,j,t_lo,t_hi,relation,certified_by,image_x,image_y,image_z"
 
 
 def add_parser(sub: Any) -> None:
@@ -48,7 +50,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("end", help="the same bodies at t = 1 (same rows, same semi-axes)")
     s.add_argument("--out", required=True, help=f"output CSV {EVENTS_HEADER}, or - for stdout")
     s.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz], or a tilted box Lx,Ly,Lz,xy,xz,yz (2D: Lx,Ly,xy) (minimum image over the step); default: START's box")
-    add_body_file_options(s)
+    add_body_file_options(s, dim=True)
     s.add_argument("--end-frame", type=frame_argument, default=None, help="frame of END when it is a trajectory (default: --frame)")
     s.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bad bodies and go on")
     s.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
@@ -64,8 +66,8 @@ class MovingBodies:
     """The same bodies at t = 1."""
     centers1: np.ndarray
     """END's centres, in a box taken at the nearest image of START's (:func:`unwrapped`)."""
-    box: tuple[float, ...] | None
-    """The periodic box (``--box``, else START's), or None."""
+    box: Any
+    """The periodic :class:`core.Box` (``--box``, else START's), or None."""
     errors: dict[int, str]
     """Row -> why START or END describes no body there (the files' reasons)."""
     names: tuple[str, str]
@@ -90,8 +92,9 @@ def read_moving_bodies(
     frame: int | None = None,
     end_frame: int | None = None,
     format: str | None = None,
-    box: tuple[float, ...] | None = None,
+    box: Any = None,
     on_invalid: str = "raise",
+    dim: int | None = None,
 ) -> MovingBodies:
     """Read START and END (files of the same bodies at t = 0 and t = 1) and check that they match.
 
@@ -104,20 +107,23 @@ def read_moving_bodies(
         frame: frame of START when it is a trajectory (None: the last).
         end_frame: frame of END (None: ``frame``).
         format: reader (None: from the name, else the first bytes).
-        box: periodic box sides (None: START's box, if any).
+        box: periodic box (any form of :meth:`core.Box.from_any`; None: START's box, if any).
         on_invalid: "raise" a ValueError for the first row that is no body, or "mark" (the
             reasons are in :attr:`MovingBodies.errors`).
+        dim: 2 reads 3D files of a 2D system as ellipses (:func:`app.readers.read_bodies`).
 
     Raises:
         ValueError: unreadable files, matrices instead of parameters, different numbers of
             bodies or semi-axes, a bad row (``on_invalid="raise"``), a box that does not fit.
     """
-    from .readers import read_bodies, usable_box
+    from .readers import read_bodies
 
     if start == "-" and end == "-":
         raise ValueError("START and END cannot both be standard input")
-    s = read_bodies(start, frame=frame, format=format)
-    e = read_bodies(end, frame=end_frame if end_frame is not None else frame, format=format)
+    s = read_bodies(start, frame=frame, format=format, dim=dim)
+    e = read_bodies(end, frame=end_frame if end_frame is not None else frame, format=format, dim=dim)
+    if s.ids is not None and e.ids is not None and len(s) == len(e):
+        e = e.ordered_like(s)  # LAMMPS writes atoms in any order; ids pair them
     names = ("<stdin>" if start == "-" else start, "<stdin>" if end == "-" else end)
     for b, name in zip((s, e), names, strict=True):
         if b.centers is None or b.semi_axes is None:
@@ -136,23 +142,18 @@ def read_moving_bodies(
             f"{s.where(k)}: the semi-axes differ between {names[0]} ({s.semi_axes[k].tolist()}) and "
             f"{names[1]} ({e.semi_axes[k].tolist()}): a body keeps its shape during the step"
         )
-    errors = {k: f"{names[0]}: {why}" for k, why in s.errors.items()}
-    errors.update({k: f"{names[1]}: {why}" for k, why in e.errors.items() if k not in errors})
+    errors = {k: f"{names[0]}: {why}" for k, why in s.parameter_errors.items()}  # no float matrix is built
+    errors.update({k: f"{names[1]}: {why}" for k, why in e.parameter_errors.items() if k not in errors})
     if errors and on_invalid == "raise":
         k, why = min(errors.items())
         raise ValueError(f"{s.where(k)}: {why}")
-    box = box if box is not None else s.box
-    if box is not None and len(box) != 6 and len(box) != s.dim:
-        raise ValueError(f"--box has {len(box)} sides but the bodies are {s.dim}D")
-    box = usable_box(box, s.dim, names[0])
+    from .bodies_cli import command_box
+
+    box = command_box(box, s)
     centers1, moved = e.centers, 0
     if box is not None:
-        from core.bodies.periodic import read_box
-
-        L = read_box(box, s.dim)
-        assert L is not None  # a box was given
-        centers1, moved = unwrapped(s.centers, e.centers, L)
-    return MovingBodies(s, e, centers1, None if box is None else tuple(box), errors, names, moved)
+        centers1, moved = unwrapped(s.centers, e.centers, box)
+    return MovingBodies(s, e, centers1, box, errors, names, moved)
 
 
 def run_sweep(args: argparse.Namespace) -> int:
@@ -169,18 +170,19 @@ def run_sweep(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         moving = read_moving_bodies(
             args.start, args.end, frame=args.frame, end_frame=args.end_frame, format=args.format, box=args.box,
-            on_invalid=args.on_invalid,
+            on_invalid=args.on_invalid, dim=args.dim,
         )
         start, names, box, errors = moving.start, moving.names, moving.box, moving.errors
         t1 = time.perf_counter()
         kind = "ellipsoids" if start.dim == 3 else "ellipses"
-        say(args, f"read {len(start):,} moving {kind} from {names[0]} and {names[1]} in {t1 - t0:.1f} s" + (f"; periodic box {list(box)}" if box else ""))
+        say(args, f"read {len(start):,} moving {kind} from {names[0]} and {names[1]} in {t1 - t0:.1f} s" + (f"; periodic box {box.describe()}" if box is not None else ""))
         if moving.moved:
             say(args, f"{moving.moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
         progress = None if args.quiet else ProgressBar(sys.stderr, "first contacts", min_total=50_000)
         res = sweep_contacts(*moving.arguments(), box=box, on_invalid=args.on_invalid, progress=progress)
+        res.ids = moving.start.ids
         t2 = time.perf_counter()
-        write_events_csv(f, res.i, res.j, res.t_lo, res.t_hi, res.relation)
+        res.to_csv(f)
     t3 = time.perf_counter()
     invalid = dict(res.invalid)
     invalid.update(errors)  # the reason from the files' parameters, not the stand-in's
@@ -192,62 +194,40 @@ def run_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
-def unwrapped(c0: np.ndarray, c1: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, int]:
+def unwrapped(c0: np.ndarray, c1: np.ndarray, box: Any) -> tuple[np.ndarray, int]:
     """END's centres moved by whole lattice vectors so that each body moves by its minimum image.
 
     Trajectories in a periodic box store wrapped positions: a body that crosses a face between
     two frames jumps by about one box vector. Its end centre is taken as c1 - v(k), k the
-    rounded difference of the fractional coordinates (orthogonal box: k = round((c1 - c0) / L)),
-    v(k) the box's lattice vector (:func:`core.bodies.periodic.lattice_shifts`; the subtraction
-    in float64: the nearest float to that image). ``box`` as :func:`core.bodies.periodic.read_box`
-    gives it. Returns (centres, how many moved).
+    rounded difference of the fractional coordinates (:meth:`core.Box.unwrap`, which checks that
+    the subtraction is exact). Rows that are not bodies (NaN) are left as they are, for the
+    reader's message. Returns (centres, how many moved).
 
     Examples:
-        >>> c, n = unwrapped(np.array([[9.5, 5.0]]), np.array([[0.25, 5.0]]), np.array([10.0, 10.0]))
+        >>> from core import Box
+        >>> c, n = unwrapped(np.array([[9.5, 5.0]]), np.array([[0.25, 5.0]]), Box(10, 10))
         >>> c.tolist(), n
         ([[10.25, 5.0]], 1)
-        >>> tilted = np.array([10.0, 10.0, 0.0, 0.5, 0.0, 0.0])     # 2D, a2 = (5, 10): crossed the top face
-        >>> c, n = unwrapped(np.array([[5.0, 9.5]]), np.array([[0.0, 0.25]]), tilted)
+        >>> c, n = unwrapped(np.array([[5.0, 9.5]]), np.array([[0.0, 0.25]]), Box(10, 10, xy=0.5))   # a2 = (5, 10)
         >>> c.tolist(), n
         ([[5.0, 10.25]], 1)
     """
-    from core.bodies.periodic import fractional, is_tilted, lattice_shifts
-
-    with np.errstate(invalid="ignore", over="ignore"):
-        k = np.rint(fractional(c1, box)[0] - fractional(c0, box)[0]) if is_tilted(box) else np.rint((c1 - c0) / box)
-    k[~np.isfinite(k)] = 0  # a row that is not a body: left to the reader's message
-    moved = np.flatnonzero((k != 0).any(axis=1))
+    ok = np.isfinite(c0).all(axis=1) & np.isfinite(c1).all(axis=1)
     out = c1.copy()
-    out[moved] = c1[moved] - lattice_shifts(box, k[moved].astype(np.int64))
-    return out, int(moved.size)
-
-
-def write_events_csv(f: IO[str], i: np.ndarray, j: np.ndarray, t_lo: np.ndarray, t_hi: np.ndarray, relation: np.ndarray) -> None:
-    """Write ``i,j,t_lo,t_hi,relation`` rows (header first) to a text file object.
-
-    Floats are written with ``repr`` (the shortest text that reads back to the same float), so
-    the brackets stay certified after a round trip.
-    """
-    from core import Relation
-
-    names = {int(r): str(r) for r in Relation}
-    f.write(EVENTS_HEADER + "\n")
-    step = 1 << 16
-    for s in range(0, len(i), step):
-        rows = zip(
-            i[s : s + step].tolist(), j[s : s + step].tolist(), t_lo[s : s + step].tolist(),
-            t_hi[s : s + step].tolist(), relation[s : s + step].tolist(), strict=True,
-        )
-        f.write("".join(f"{a},{b},{lo!r},{hi!r},{names[r]}\n" for a, b, lo, hi, r in rows))
+    if not ok.any():
+        return out, 0
+    ends, k = box.unwrap(c0[ok], c1[ok])
+    out[ok] = ends
+    return out, int(np.count_nonzero(k.any(axis=1)))
 
 
 def read_events_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Read a file written by :func:`write_events_csv`: (i, j, t_lo, t_hi, int8 Relation codes)."""
+    """Read the first columns of an EVENTS file (module docstring): (i, j, t_lo, t_hi, int8 Relation codes)."""
     from core import Relation
 
     lines = Path(path).read_text().splitlines()
-    if not lines or lines[0].strip() != EVENTS_HEADER:
-        raise ValueError(f"{path}: expected the header {EVENTS_HEADER}")
+    if not lines or not lines[0].strip().startswith("i,j,t_lo,t_hi,relation"):
+        raise ValueError(f"{path}: expected a header starting with {EVENTS_HEADER}")
     rows = [ln.split(",") for ln in lines[1:] if ln.strip()]
     return (
         np.array([int(r[0]) for r in rows], dtype=np.int64),

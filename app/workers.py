@@ -270,6 +270,7 @@ class WorkerPool:
         timeout: float,
         cancel: threading.Event | None = None,
         grace: float = 0.0,
+        wait_until: float | None = None,
         **kwargs: Any,
     ) -> Any:
         """Run ``fn(*args, **kwargs)`` in a child process and return its result.
@@ -287,6 +288,10 @@ class WorkerPool:
                 the queue.
             grace: extra seconds for a job that checks its own budget of ``timeout`` seconds
                 (it then raises :class:`WorkerTimeout` saying where it stopped).
+            wait_until: ``time.monotonic()`` after which the caller stops waiting in the queue,
+                if sooner than ``max_wait_s`` from now (a request that already waited to be
+                read: its wait is one, :data:`app.api.budget.WAIT_UNTIL`). A free slot is taken
+                even when it has passed.
             **kwargs: its keyword arguments.
 
         Raises:
@@ -299,7 +304,7 @@ class WorkerPool:
             WorkerDied: the child process died or ran out of memory.
             WorkerFailed: the job raised another exception.
         """
-        self._acquire(cancel)
+        self._acquire(cancel, wait_until)
         try:
             return self._run(fn, args, kwargs, timeout, grace, cancel)
         finally:
@@ -307,7 +312,7 @@ class WorkerPool:
                 self._busy -= 1
                 self._turn.notify_all()
 
-    def _acquire(self, cancel: threading.Event | None) -> None:
+    def _acquire(self, cancel: threading.Event | None, wait_until: float | None = None) -> None:
         """Take a slot: at once, or in turn after the callers queued before this one."""
         with self._turn:
             if self._closed:
@@ -321,6 +326,8 @@ class WorkerPool:
             ticket = object()
             self._queue.append(ticket)
             deadline = time.monotonic() + self.max_wait_s
+            if wait_until is not None:
+                deadline = min(deadline, wait_until)
             try:
                 while not (self._queue[0] is ticket and self._busy < self.max_jobs):
                     if self._closed:

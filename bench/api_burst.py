@@ -7,15 +7,15 @@ Starts the real server (``python -m app serve --api-only``) and sends ``--burst`
     python -m bench.api_burst                  # prints the table
     python -m bench.api_burst --bodies 5000 --burst 6
 
-Each body is read and validated in a worker thread, one at a time (app/api/json_body.py), so
-the event loop answers ``/healthz`` meanwhile; the table gives its worst and median latency.
+Each body is read and validated in a worker thread, one at a time, in its turn in the line of
+large bodies (app/api/line.py: 16 places, 503 beyond, a wait of 10 s), so the event loop answers
+``/healthz`` meanwhile; the table gives its worst and median latency, and the answers.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
-import json
 import threading
 import time
 from typing import Any
@@ -23,31 +23,14 @@ from typing import Any
 import httpx
 import numpy as np
 
-from bench.api_load import serve_api
+from bench.api_load import large_body, serve_api
 
 __all__ = ["run_burst", "format_burst"]
 
 
-def _rows(n: int, seed: int) -> np.ndarray:
-    """n ellipsoids spread over a 400-wide box (few contacts: the reading is what is measured)."""
-    rng = np.random.default_rng(seed)
-    q = rng.normal(size=(n, 4))
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
-    return np.hstack([rng.random((n, 3)) * 400, rng.random((n, 3)) * 0.5 + 0.1, q])
-
-
-def _body(path: str, n: int) -> bytes:
-    start = _rows(n, 1)
-    if path == "/api/contacts":
-        return json.dumps({"bodies": start.tolist()}).encode()
-    end = start.copy()
-    end[:, 0] += 1.0
-    return json.dumps({"start": start.tolist(), "end": end.tolist()}).encode()
-
-
 def run_burst(path: str, n: int, burst: int) -> dict[str, Any]:
     """Worst and median /healthz latency (s) during ``burst`` requests of ``n`` bodies to ``path``."""
-    content = _body(path, n)
+    content = large_body(path, n)
     with serve_api() as server:
         base = f"http://127.0.0.1:{server.port}"
         latencies: list[float] = []

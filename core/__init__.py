@@ -9,7 +9,7 @@ for ellipses and ellipsoids: new formulae". Conventions are documented once, in
     from core import analyse                              # moving pairs: events and intervals
     from core import read_motion, read_interval           # user text, under limits (one grammar)
     from core import quadric_from_axes, axes_from_quadric, validate_quadric
-    from core import warm_up, set_threads                 # compiled filter available?; threads
+    from core import warm_up, set_threads, get_threads, threads   # start the filter's threads; how many
     from core import filter_stats, Stats                  # how often each float stage fails (core.filtered)
     from core import contact_scale, separating_plane, contact_point, distance   # witnesses (core.witness)
     from core import contacts, Contacts, bodies_from_axes  # N bodies (core.bodies)
@@ -34,6 +34,7 @@ from .bodies.pairs import PairTable as PairTable
 from .bodies.result import Contacts as Contacts
 from .bodies.sweep import sweep_contacts as sweep_contacts
 from .bodies.sweep_result import SweepContacts as SweepContacts
+from .errors import InvalidInput as InvalidInput
 from .filtered import Certifier as Certifier
 from .filtered import FilterCounts as FilterCounts
 from .filtered import Stats as Stats
@@ -41,7 +42,9 @@ from .filtered import filter_stats as filter_stats
 from .fixed.classify import Classification as Classification
 from .fixed.classify import classify as classify
 from .fixed.classify import classify_detailed as classify_detailed
+from .fixed.compiled import get_threads as get_threads
 from .fixed.compiled import set_threads as set_threads
+from .fixed.compiled import threads as threads
 from .fixed.compiled import warm_up as warm_up
 from .fixed.explain import explain as explain
 from .fixed.explanation import Explanation as Explanation
@@ -68,9 +71,11 @@ from .shapes.quadrics import rotation_from_quaternion as rotation_from_quaternio
 from .shapes.quadrics import validate_quadric as validate_quadric
 from .witness import ContactPoint as ContactPoint
 from .witness import ContactScale as ContactScale
+from .witness import DistanceBracket as DistanceBracket
 from .witness import NoWitness as NoWitness
 from .witness import SeparatingPlane as SeparatingPlane
 from .witness import Witness as Witness
+from .witness import WitnessArray as WitnessArray
 from .witness import contact_point as contact_point
 from .witness import contact_scale as contact_scale
 from .witness import distance as distance
@@ -81,6 +86,7 @@ __all__ = [
     "BodyIndex",
     "Box",
     "IndexPairs",
+    "InvalidInput",
     "PairTable",
     "METHODS",
     "ON_INVALID",
@@ -126,6 +132,10 @@ __all__ = [
     "rotation_from_quaternion",
     "separating_plane",
     "set_threads",
+    "get_threads",
+    "threads",
+    "DistanceBracket",
+    "WitnessArray",
     "sweep_contacts",
     "validate_quadric",
     "warm_up",

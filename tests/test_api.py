@@ -380,7 +380,8 @@ def test_body_size_limit_declared_and_streamed():
 def test_healthz_and_docs(client):
     r = client.get("/healthz")
     assert (r.status_code, r.json()) == (200, {"status": "ok", "analyses_running": 0, "max_concurrent_analyses": 2,
-                                              "analyses_waiting": 0, "max_queued_analyses": 16})
+                                              "analyses_waiting": 0, "max_queued_analyses": 16,
+                                              "large_bodies": 0, "max_large_bodies": 16})
     assert client.get("/docs").status_code == 200
     spec = client.get("/openapi.json").json()
     for path in ("/api/classify", "/api/explain", "/healthz"):

@@ -162,3 +162,17 @@ def test_a_body_too_far_from_the_origin_for_its_size_is_refused_not_mislabelled(
         r = client.post("/api/contacts", json={"bodies": [[x, 0, 1, 1, 0], [x + 2, 0, 1, 1, 0]]})
         assert r.status_code == 422, (x, r.text)
         assert "is more than 2^26 times the smallest semi-axis (1.0) from the origin" in r.text, r.text
+
+
+def test_ids_name_the_pairs_as_the_command_line_does(client):
+    """Issue 54.3: a request's ids come back as id_i, id_j (and only then); a wrong count is a 422."""
+    bodies = [[0, 0, 0.5, 0.5, 0], [1, 0, 0.5, 0.5, 0], [9, 0, 0.5, 0.5, 0]]
+    r = client.post("/api/contacts", json={"bodies": bodies, "box": [10, 10], "ids": [70, 80, 90]})
+    assert r.status_code == 200, r.text
+    pairs = r.json()["pairs"]
+    assert [(p["i"], p["j"], p["id_i"], p["id_j"], p["relation"], p["image"]) for p in pairs] == [
+        (0, 1, 70, 80, "tangent", [0, 0]), (0, 2, 70, 90, "tangent", [-1, 0])]
+    plain = client.post("/api/contacts", json={"bodies": bodies, "box": [10, 10]}).json()["pairs"]
+    assert "id_i" not in plain[0] and [p["j"] for p in plain] == [1, 2]
+    r = client.post("/api/contacts", json={"bodies": bodies, "ids": [1, 2]})
+    assert r.status_code == 422 and "ids: 2 ids for 3 bodies" in r.json()["detail"]

@@ -374,3 +374,14 @@ def test_the_sweep_runs_in_a_worker_process():
         status, out = post(c, {"start": HAND_START, "end": HAND_END})
     assert status == 200 and out == hand_answer(out, times=False)
     assert jobs == ["sweep_job"]
+
+
+def test_ids_name_the_pairs(client):
+    """Issue 54.3: ids in, id_i and id_j out, with the image and the certifier."""
+    body = {"start": [sphere(1, 5, 5), sphere(7, 5, 5)], "end": [sphere(1, 5, 5), sphere(9.5, 5, 5)], "box": [10, 10, 10],
+            "ids": [41, 42]}
+    status, out = post(client, body)
+    assert status == 200, out
+    (pair,) = out["pairs"]
+    assert (pair["id_i"], pair["id_j"], pair["image"], pair["certified_by"]) == (41, 42, [-1, 0, 0], "float")
+    assert Fraction(pair["t_lo"]) <= Fraction(4, 5) <= Fraction(pair["t_hi"])

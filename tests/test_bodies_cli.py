@@ -106,17 +106,27 @@ def test_classify_command_round_trip(tmp_path, capsys):
 
 
 def test_pairs_csv_writer_reader():
+    import io
+
+    from core import Box, Contacts
+
+    res = Contacts(np.array([0, 3]), np.array([5, 4]), np.array([1, 2], np.int8), np.array([1, 2], np.int8), 6,
+                   box=Box(10, 10), image=np.array([[0, 0], [-1, 1]], np.int8))
+    f = io.StringIO()
+    write_pairs_csv(f, res)
+    assert f.getvalue() == "i,j,relation,certified_by,image_x,image_y,image_z\n0,5,tangent,float,0,0,0\n3,4,overlap,exact,-1,1,0\n"
+    res.ids = np.array([10, 11, 12, 13, 14, 15])
+    f = io.StringIO()
+    write_pairs_csv(f, res, {"scale_lo": np.array([0.5, 1.0]), "scale_hi": np.array([0.75, 1.0]), "contained": np.array(["no", "A"])})
+    assert f.getvalue().splitlines() == [
+        "i,j,relation,certified_by,image_x,image_y,image_z,scale_lo,scale_hi,contained,id_i,id_j",
+        "0,5,tangent,float,0,0,0,0.5,0.75,no,10,15", "3,4,overlap,exact,-1,1,0,1.0,1.0,A,13,14",
+    ]
     import tempfile
 
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "p.csv"
-        write_pairs_csv(p, np.array([0, 3]), np.array([5, 4]), np.array([1, 2], np.int8))
-        assert p.read_text() == "i,j,relation\n0,5,tangent\n3,4,overlap\n"
-        write_pairs_csv(p, np.array([0, 3]), np.array([5, 4]), np.array([1, 2], np.int8), np.array([1, 2], np.int8),
-                        np.array([[0, 0], [-1, 1]], np.int8))
-        assert p.read_text() == (
-            "i,j,relation,certified_by,image_x,image_y,image_z\n0,5,tangent,float,0,0,0\n3,4,overlap,exact,-1,1,0\n"
-        )
+        p.write_text(f.getvalue())
         assert [a.tolist() for a in read_pairs_csv(p)] == [[0, 3], [5, 4], [1, 2]]
 
 

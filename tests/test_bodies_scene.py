@@ -69,7 +69,7 @@ def test_model_colours_every_body_by_its_worst_relation(tmp_path):
     want = [RELATION_COLORS["tangent"], RELATION_COLORS["overlap"], RELATION_COLORS["overlap"], RELATION_COLORS["separate"]]
     assert [tuple(int(v) for v in row) for row in m.colours()] == want
     Q = np.stack([m.bodies.Q[0], np.full((3, 3), np.nan)])  # a body that is no ellipse: grey
-    bad = BodiesModel(BodySet(Q), None)
+    bad = BodiesModel(BodySet.of_matrices(Q), None)
     assert bad.worst.tolist() == [Relation.SEPARATE, Relation.INVALID]
     assert tuple(int(v) for v in bad.colours()[1]) == NEUTRAL
 
@@ -113,7 +113,7 @@ def test_model_periodic_pair_config_and_labels(tmp_path):
 def test_two_body_config_rebuilds_the_same_matrices():
     b = random_bodies(300, dim=3, seed=6)
     Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
-    m = BodiesModel(BodySet(Q, b.centers, b.semi_axes, b.orientations), None, name="random")
+    m = BodiesModel(BodySet(b.centers, b.semi_axes, b.orientations), None, name="random")
     for k in range(0, len(m.result), max(1, len(m.result) // 20)):
         cfg, _ = m.pair_config(k)
         A, B = (s.quadric() for s in cfg.shapes())

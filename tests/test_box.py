@@ -109,7 +109,7 @@ def test_bodies_build_matrices_once_and_keep_ids_and_box():
     assert b.box == Box(4, 4, 4) and b.ids.tolist() == [7, 3] and b.name(1) == "body 1 (id 3)"
     with pytest.raises(ValueError, match="ids must be 2 integers"):
         Bodies(c, r, q, ids=[1])
-    with pytest.raises(ValueError, match="same shape"):
+    with pytest.raises(ValueError, match="of one shape"):
         Bodies(c, [[1, 1]] * 2)
     m = Bodies.from_matrices(b.matrices, ids=[1, 2])
     assert not m.has_parameters and len(m) == 2 and m.dimensions == 3
@@ -136,7 +136,7 @@ def test_contacts_of_bodies_carry_their_ids_box_and_write_one_csv():
     assert lines[1].split(",")[:3] == ["0", "1", "tangent"] and lines[1].split(",")[-2:] == ["100", "200"]
     assert lines[2].split(",")[:5] == ["0", "2", "overlap", res.columns()["certified_by"][1], "-1"]
     rows = list(res.rows())
-    assert rows[1]["image"] == [-1, 0, 0] and rows[1]["id_j"] == 300
+    assert rows[1]["image"] == [-1, 0] and rows[1]["image_z"] == 0 and rows[1]["id_j"] == 300
     assert "id_i" not in want.columns()  # no ids: no id columns
 
 
@@ -166,3 +166,21 @@ def test_body_index_takes_the_box_as_a_keyword():
     assert hits.j.tolist() == old.j.tolist() == [0, 1] and hits.box == Box(5, 5)
     assert hits.shifts().tolist() == [[5.0, 0.0], [0.0, 0.0]]  # body 0's image at x = 5
     assert BodyIndex(Bodies([[0, 0], [2.5, 0]], [[1, 1]] * 2, box=(5, 5))).box == Box(5, 5)
+
+
+def test_invalid_input_says_which_pair_and_matrix():
+    from core import InvalidInput, classify
+
+    circle = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]
+    hyperbola = [[1, 0, 0], [0, -1, 0], [0, 0, -1]]
+    with pytest.raises(InvalidInput) as one:
+        classify(circle, hyperbola)
+    assert (one.value.pair, one.value.matrix) == (None, "B") and str(one.value).startswith("B is not an ellipse")
+    with pytest.raises(InvalidInput) as batch:
+        classify([circle, circle, hyperbola], circle)
+    assert (batch.value.pair, batch.value.matrix) == (2, "A") and str(batch.value).startswith("pair 2: A is not an ellipse")
+    assert batch.value.reason.startswith("A is not an ellipse")
+    with pytest.raises(InvalidInput) as entry:
+        classify([[1, 0, 0], [0, 1, 0], [0, 0, float("nan")]], circle)
+    assert entry.value.matrix == "A" and "entry (2,2)" in str(entry.value)
+    assert isinstance(entry.value, ValueError)

@@ -61,6 +61,61 @@ def test_bad_arguments_exit_2(argv, message, capsys):
     assert message in capsys.readouterr().err
 
 
+def test_negative_numbers_are_values_not_options(capsys):
+    """``--box -1,2,3`` reaches the box's own check (argparse took it for an option: "expected one argument")."""
+    p = build_parser()
+    assert p.parse_args(["contacts", "b.csv", "--out", "p.csv", "--box", "10,10,10,-0.5,0,0"]).box == (10, 10, 10, -0.5, 0, 0)
+    assert p.parse_args(["screenshot", "--t", "-1/2", "--out", "x.png"]).t == [-0.5]
+    assert p.parse_args(["screenshot", "--t", "-.25", "--out", "x.png"]).t == [-0.25]
+    assert p.parse_args(["contacts", "b.csv", "--out", "p.csv", "--frame", "-2"]).frame == -2
+    for argv in (["contacts", "b.csv", "--out", "p.csv", "--box", "-1,2,3"], ["sweep", "s", "e", "--out", "o", "--box", "-.5,2"]):
+        with pytest.raises(SystemExit):
+            p.parse_args(argv)
+        assert "the sides must be positive" in capsys.readouterr().err
+
+
+BODIES = "x,y,z,a,b,c,qw,qx,qy,qz\n0,0,0,1,1,1,1,0,0,0\n2,0,0,1,1,1,1,0,0,0\n"
+BAD_INPUTS = [
+    (["contacts", "{b}", "--out", "{out}", "--box", "-1,2,3"], "argument --box: --box: the sides must be positive, got '-1,2,3'"),
+    (["contacts", "{b}", "--out", "{out}", "--box=-1,2,3"], "the sides must be positive"),
+    (["sweep", "{b}", "{b}", "--out", "{out}", "--box", "-5,5,5"], "the sides must be positive"),
+    (["contacts", "{b}", "--out", "{out}", "--box", "10,10,nan"], "--box takes finite numbers"),
+    (["contacts", "{b}", "--out", "{out}", "--scheduler", "notanaddress"], "not a scheduler address"),
+    (["contacts", "{dump}", "--out", "{out}"], "NUMBER OF ATOMS is -5"),
+    (["sweep", "{b}", "{dump}", "--out", "{out}"], "NUMBER OF ATOMS is -5"),
+    (["classify", "{b}", "--out", "{out}"], "not an .npz file"),
+    (["export", "--config", "{deep}", "--out", "{out}"], "JSON nested too deeply"),
+    (["export", "--config", "{palette}", "--out", "{out}"], "a value of the wrong kind or size"),
+    (["export", "--config", "{huge_t}", "--out", "{out}"], "a value of the wrong kind or size"),
+    (["screenshot", "--config", "{palette}", "--out", "{out}"], "a value of the wrong kind or size"),
+    (["export", "--out", "/proc/no-such-folder/x.html"], "cannot create the folder /proc/no-such-folder"),
+    (["export", "--frames", "1", "--out", "{out}"], "--frames in 2..5000"),
+]
+
+
+@pytest.mark.parametrize("argv, message", BAD_INPUTS, ids=[f"{a[0]}-{k}" for k, (a, _) in enumerate(BAD_INPUTS)])
+def test_bad_input_of_every_command_exits_2_with_one_line(argv, message, tmp_path, capsys):
+    """The README's exit status 2 (bad arguments or input): one line on stderr, no output file.
+
+    The input is checked before any work, so not even the progress line comes first."""
+    files = {"b": tmp_path / "b.csv", "dump": tmp_path / "neg.dump", "deep": tmp_path / "deep.json",
+             "palette": tmp_path / "palette.json", "huge_t": tmp_path / "t.json", "out": tmp_path / "out" / "result.csv"}
+    files["b"].write_text(BODIES)
+    files["dump"].write_text("ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n-5\nITEM: BOX BOUNDS pp pp pp\n0 9\n0 9\n0 9\n"
+                             "ITEM: ATOMS id type x y z shapex shapey shapez\n1 1 0 0 0 2 2 2\n")
+    files["deep"].write_text("[" * 100_000)
+    files["palette"].write_text(json.dumps({"palette": [1, 2]}))
+    files["huge_t"].write_text('{"t": 1' + "0" * 400 + "}")
+    files["out"].parent.mkdir()
+    try:
+        code = main([a.format(**files) for a in argv])
+    except SystemExit as e:  # argparse's errors
+        code = e.code
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and message in err, err
+    assert os.listdir(files["out"].parent) == []
+
+
 def test_serve_budgets_default_to_the_api_settings_and_say_so():
     """``serve --request-budget/--analysis-budget``: absent, the API keeps ApiSettings' budgets, and
     the help states those defaults (one value, read from the settings)."""

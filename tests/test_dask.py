@@ -167,3 +167,77 @@ def test_an_unreachable_scheduler_is_a_clear_error():
     with dask.config.set({"ellipsoids.connect-timeout": "1s"}):  # the documented knob; 10 s by default
         with pytest.raises(RuntimeError, match=f"cannot reach the Dask scheduler at tcp://127.0.0.1:{port}"):
             contacts(Q, scheduler=f"tcp://127.0.0.1:{port}")
+
+
+def test_a_worker_killed_mid_search_leaves_the_search_to_the_survivor():
+    """SIGKILL one of two workers as the first partition finishes: the search ends with the local answer.
+
+    Its running tasks are rescheduled on the survivor (``retries=``), and if it held scattered
+    blocks the search warns and starts again. A cluster of its own: the module's keeps two workers.
+    """
+    import os
+    import signal
+    import warnings
+
+    Q, _ = _bodies(20000, seed=6)
+    local = contacts(Q)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
+            distributed.Client(cluster) as c:
+        contacts(Q[:200], scheduler=c)  # the kernels' plugin is registered, the workers warm
+        victim = sorted(c.run(os.getpid).values())[0]
+        killed = []
+
+        def kill_once(done, total):
+            if not killed:
+                killed.append(done)
+                os.kill(victim, signal.SIGKILL)
+
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", "a Dask worker was lost", RuntimeWarning)
+            got = contacts(Q, scheduler=c, partitions=6, progress=kill_once)
+    assert killed == [1]
+    _same(got, local)
+
+
+def test_a_lost_connection_is_a_lost_worker_and_a_killed_worker_one_clear_error(client, monkeypatch):
+    """A worker lost as the plugin is installed or the blocks are scattered (Dask's CommClosedError) is
+    survived like a cancelled future; a task that keeps killing its workers is one RuntimeError line."""
+    from types import SimpleNamespace
+
+    from distributed.comm.core import CommClosedError
+    from distributed.scheduler import KilledWorker
+
+    from core.bodies import distributed as dist
+
+    Q, _ = _bodies(3000, seed=8)
+    local = contacts(Q)
+
+    def closed(*args, **kwargs):
+        raise CommClosedError("in <TCP (closed) ConnectionPool.register_worker_plugin>: Stream is closed")
+
+    with monkeypatch.context() as m:
+        m.setattr(dist, "register", closed)
+        _same(contacts(Q, scheduler=client, partitions=3), local)
+
+    blocks, calls = dist._blocks, []
+
+    def scatter_lost_once(Q, client):
+        calls.append(1)
+        if len(calls) == 1:
+            raise CommClosedError("in <TCP (closed) ConnectionPool.scatter>: Stream is closed")
+        return blocks(Q, client)
+
+    with monkeypatch.context() as m:
+        m.setattr(dist, "_blocks", scatter_lost_once)
+        with pytest.warns(RuntimeWarning, match=r"starting it again \(CommClosedError: in <TCP \(closed\) ConnectionPool.scatter>"):
+            _same(contacts(Q, scheduler=client, partitions=3), local)
+    assert len(calls) == 2
+
+    def killed(self, tasks, label, *, final=False):
+        raise KilledWorker("_partition_task-0", SimpleNamespace(address="tcp://127.0.0.1:1234"), 3)
+
+    with monkeypatch.context() as m:
+        m.setattr(dist._Runner, "compute", killed)
+        with pytest.raises(RuntimeError, match=r"^a task of this search killed the Dask workers that ran it, again and again: ") as e:
+            contacts(Q, scheduler=client, partitions=3)
+    assert "\n" not in str(e.value) and "'_partition_task-0' on 4 different workers" in str(e.value)

@@ -526,9 +526,11 @@ def test_relation_at_lookup_agrees_with_static_classifier():
         hi = r.interval[1] if r.interval[1] is not None else fmpq(6)
         for k in range(0, 41):
             t = lo + (hi - lo) * fmpq(k, 40)
-            assert r.relation_at(t) == r.relation_at(t, method="classify"), (name, t)
+            assert r.relation_at(t) == r.relation_at(t, via="classify"), (name, t)
     with pytest.raises(ValueError, match="valid options"):
-        r.relation_at(0, method="guess")
+        r.relation_at(0, via="guess")
+    with pytest.warns(DeprecationWarning, match="via="):  # the old keyword still answers
+        assert r.relation_at(lo, method="classify") == r.relation_at(lo)
 
 
 def test_sign_row_at_agrees_with_the_static_explanation():

@@ -177,9 +177,16 @@ def test_lammps_tilted_open_and_mixed_boundaries(tmp_path):
     assert s.box == (*(float(v) for v in L), 1.0 / L[1], 0.5 / L[2], 0.25 / L[2])  # tilt lengths -> HOOMD factors
     lammps_dump(tmp_path / "open.dump", [(b.centers, 2 * b.semi_axes, b.orientations)], boundary="ff ff ff")
     assert read_bodies(tmp_path / "open.dump").box is None
-    lammps_dump(tmp_path / "mixed.dump", [(b.centers, 2 * b.semi_axes, b.orientations)], boundary="pp pp ff")
-    with pytest.raises(ValueError, match="mix periodic and open axes"):
-        read_bodies(tmp_path / "mixed.dump")
+    # a slab (issue 54.4): periodic in x and y, open in z: z padded beyond any image's reach
+    lo, hi = lammps_dump(tmp_path / "mixed.dump", [(b.centers, 2 * b.semi_axes, b.orientations)], boundary="pp pp ff")
+    slab = read_bodies(tmp_path / "mixed.dump")
+    extent = float(np.ptp(b.centers[:, 2]))
+    assert slab.box.Lx == hi[0] - lo[0] and slab.box.Lz >= extent + 4 * float(b.semi_axes.max())
+    far = contacts(slab.Q, box=(slab.box.Lx, slab.box.Ly, 1e6))  # open along z: no image of z can be nearest
+    same_contacts(contacts(slab), far)
+    lammps_dump(tmp_path / "tilted-slab.dump", [(b.centers, 2 * b.semi_axes, b.orientations)], tilt=(1.0, 0.5, 0.25), boundary="pp pp ff")
+    with pytest.raises(ValueError, match=r"tilted \(xz = .*\) along an open axis"):
+        read_bodies(tmp_path / "tilted-slab.dump")
     (tmp_path / "atoms.dump").write_text("ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS pp pp pp\n0 1\n0 1\n0 1\nITEM: ATOMS id x y z\n1 0 0 0\n")
     with pytest.raises(ValueError, match="no column shapex, shapey, shapez"):
         read_bodies(tmp_path / "atoms.dump")
@@ -239,3 +246,104 @@ def test_format_is_told_from_the_name_or_the_bytes():
         "gsd", "lammps", "lammps", "xyz", "parquet", "npz", "csv"]
     assert format_of("-", b"ITEM: TIMESTEP\n0\n") == "lammps"
     assert format_of("-", b"2\nLattice=\"1 0 0 0 1 0 0 0 1\" Properties=pos:R:3\n") == "xyz"
+
+
+def test_extended_xyz_frames_are_read_alone_blank_ends_empty_frames_and_crlf(tmp_path):
+    """The checked scan hands the parser one frame: any frame of many, after a frame of 0 atoms
+    (which crashes the C parser), with blank lines at the end or CRLF line ends."""
+    props = 'Properties=species:S:1:pos:R:3:aspherical_shape:R:3 pbc="F F F"'
+    frames = [(2, "A 0 0 0 1 1 1\nB 2 0 0 1 1 1\n"), (0, ""), (2, "A 0 0 0 1 1 1\nB 2.5 0 0 1 1 1\n"), (1, "A 0 0 0 1 1 1\n")]
+    path = tmp_path / "frames.xyz"
+    path.write_text("".join(f"{n}\n{props}\n{rows}" for n, rows in frames) + "\n\n  \n")
+    got = [read_bodies(path, frame=k) for k in range(4)]
+    assert [len(s) for s in got] == [2, 0, 2, 1] and [s.frame for s in got] == [0, 1, 2, 3]
+    assert read_bodies(path).frame == 3 and read_bodies(path, frame=-2).centers.tolist() == [[0, 0, 0], [2.5, 0, 0]]
+    assert contacts(got[0].Q).relation.tolist() == [Relation.TANGENT] and len(contacts(got[2].Q)) == 0
+    with pytest.raises(ValueError, match=r"frames.xyz: no frame 4: the file has 4 frames"):
+        read_bodies(path, frame=4)
+    crlf = tmp_path / "crlf.xyz"
+    crlf.write_bytes(f"2\r\n{props}\r\nA 0 0 0 1 1 1\r\nB 2 0 0 1 1 1\r\n".encode())
+    assert np.array_equal(read_bodies(crlf).Q, got[0].Q)
+    mid = tmp_path / "mid.xyz"
+    mid.write_text(f"2\n{props}\nA 0 0 0 1 1 1\nB 2 0 0 1 1 1\n\n2\n{props}\nA 0 0 0 1 1 1\nB 2 0 0 1 1 1\n")
+    with pytest.raises(ValueError, match=r"mid.xyz: line 5: a blank line where frame 1 should start with its atom count"):
+        read_bodies(mid)
+
+
+def test_text_tables_with_a_bom_crlf_and_long_extra_values_read_as_before(tmp_path):
+    b = random_bodies(50, dim=3, seed=5)
+    values = np.concatenate([b.centers, b.semi_axes, b.orientations], axis=1)
+    Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
+    rows = "".join(",".join(repr(v) for v in row) + f',"{"n" * 200_000}"\r\n' for row in values.tolist())
+    path = tmp_path / "bom.csv"
+    path.write_bytes(("\ufeffx,y,z,a,b,c,qw,qx,qy,qz,note\r\n" + rows).encode())
+    assert np.array_equal(read_bodies(path).Q, Q)  # a value of 200,000 characters in a column not read
+    dump = tmp_path / "crlf.dump"
+    dump.write_bytes(b"ITEM: TIMESTEP\r\n0\r\nITEM: NUMBER OF ATOMS\r\n2\r\nITEM: BOX BOUNDS pp pp pp\r\n0 10\r\n0 10\r\n0 10\r\n"
+                     b"ITEM: ATOMS id type x y z shapex shapey shapez\r\n1 1 1 1 1 2 2 2\r\n2 1 3 1 1 2 2 2\r\n")
+    s = read_bodies(dump)
+    assert s.centers.tolist() == [[1, 1, 1], [3, 1, 1]] and contacts(s.Q).relation.tolist() == [Relation.TANGENT]
+
+
+# --- issue 54.4: valid input is read; ids ----------------------------------------------------
+
+
+def test_extended_xyz_without_a_lattice_is_open_space_and_keeps_its_ids(tmp_path):
+    (tmp_path / "open.xyz").write_text(
+        "3\nProperties=species:S:1:pos:R:3:radius:R:1:id:I:1\n"
+        "A 0 0 0 0.5 10\nA 1 0 0 0.5 20\nA 30 0 0 0.5 30\n"
+    )
+    s = read_bodies(tmp_path / "open.xyz")
+    assert s.box is None and s.ids.tolist() == [10, 20, 30]
+    c = contacts(s)
+    assert (c.i.tolist(), c.j.tolist(), c.relation.tolist()) == ([0], [1], [Relation.TANGENT])
+    assert c.pair_ids()[0].tolist() == [10] and c.pair_ids()[1].tolist() == [20]
+
+
+def test_extended_xyz_2d_cell_with_pbc_t_t_f_is_read_as_ellipses(tmp_path):
+    # ellipses a = 1, b = 0.5 at x = 0.25 and 9.75 in a 10 x 10 periodic plane: they meet across x = 10
+    (tmp_path / "flat.xyz").write_text(
+        '2\nLattice="10 0 0 0 10 0 0 0 3" pbc="T T F" Properties=species:S:1:pos:R:3:aspherical_shape:R:3\n'
+        "A 0.25 5 0 1 0.5 7\nA 9.75 5 0 1 0.5 7\n"
+    )
+    s = read_bodies(tmp_path / "flat.xyz")
+    assert s.dimensions == 2 and s.box == (10.0, 10.0) and s.semi_axes.tolist() == [[1.0, 0.5]] * 2
+    c = contacts(s)
+    assert c.relation.tolist() == [Relation.OVERLAP] and c.image.tolist() == [[-1, 0]]
+    slab = read_bodies(tmp_path / "flat.xyz", dim=3)  # --dim 3: ellipsoids in a slab, open along z (padded)
+    assert slab.dimensions == 3 and slab.box.Lz >= 4 * 7 and slab.box.Lx == 10
+
+
+def test_lammps_2d_dump_is_read_as_ellipses(tmp_path):
+    """LAMMPS' dimension 2: z bounds -0.5 0.5, z = 0, shapez 1 (ignored), turned about z."""
+    c, s = 1.0, 1.0  # (1, 0, 0, 1): exactly 90 degrees about z (any length): the long axis (2) along y
+    (tmp_path / "flat.dump").write_text(
+        "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n2\nITEM: BOX BOUNDS pp pp pp\n0 20\n0 20\n-0.5 0.5\n"
+        "ITEM: ATOMS id type x y z shapex shapey shapez quatw quati quatj quatk\n"
+        f"7 1 5 5 0 4 1 1 {c!r} 0 0 {s!r}\n9 1 5 7.5 0 1 1 1 1 0 0 0\n"
+    )
+    b = read_bodies(tmp_path / "flat.dump")
+    assert b.dimensions == 2 and b.box == (20.0, 20.0) and b.ids.tolist() == [7, 9]
+    assert b.semi_axes.tolist() == [[2.0, 0.5], [0.5, 0.5]]
+    res = contacts(b)  # the long axis reaches y = 7, the circle of radius 1/2 at y = 7.5 starts there
+    assert res.relation.tolist() == [Relation.TANGENT] and res.pair_ids()[1].tolist() == [9]
+    assert read_bodies(tmp_path / "flat.dump", dim=3).dimensions == 3  # --dim 3 keeps the file's 3D
+
+
+def test_dim_2_reads_a_3d_file_of_a_plane_and_refuses_bodies_off_it(tmp_path):
+    (tmp_path / "p.csv").write_text("x,y,z,a,b,c,qw,qx,qy,qz\n0,0,0,1,1,1,1,0,0,0\n2,0,0,1,1,1,1,0,0,0\n")
+    flat = read_bodies(tmp_path / "p.csv", dim=2)
+    assert flat.dimensions == 2 and contacts(flat).relation.tolist() == [Relation.TANGENT]
+    (tmp_path / "q.csv").write_text("x,y,z,a,b,c,qw,qx,qy,qz\n0,0,0,1,1,1,1,0,0,0\n2,0,0.5,1,1,1,1,0,0,0\n")
+    with pytest.raises(ValueError, match=r"body 1 \(line 3\) has z = 0.5: 2D bodies lie in the plane z = 0"):
+        read_bodies(tmp_path / "q.csv", dim=2)
+
+
+def test_csv_and_parquet_id_columns_become_the_bodies_ids(tmp_path):
+    (tmp_path / "ids.csv").write_text("id,x,y,a,b,angle\n101,0,0,1,1,0\n7,2,0,1,1,0\n55,9,0,1,1,0\n")
+    s = read_bodies(tmp_path / "ids.csv")
+    assert s.ids.tolist() == [101, 7, 55] and s.where(1) == "body 1 (line 3)"
+    assert contacts(s).pair_ids()[1].tolist() == [7]
+    (tmp_path / "bad.csv").write_text("id,x,y,a,b,angle\n1.5,0,0,1,1,0\n")
+    with pytest.raises(ValueError, match=r"line 2: id 1.5 is not an integer"):
+        read_bodies(tmp_path / "bad.csv")

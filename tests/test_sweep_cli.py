@@ -15,7 +15,7 @@ import pytest
 
 from app.bodyfiles import write_bodies_csv
 from app.cli import main
-from app.sweep_cli import read_events_csv, write_events_csv
+from app.sweep_cli import EVENTS_HEADER, read_events_csv
 from bench.sweep_data import grazing_pairs, random_pairs
 from core import Relation, sweep_contacts
 
@@ -38,7 +38,7 @@ def test_sweep_command_writes_exact_brackets(tmp_path, capsys):
     start, end = write_pair(tmp_path, m)
     out = tmp_path / "events.csv"
     assert main(["sweep", str(start), str(end), "--out", str(out)]) == 0
-    assert out.read_text().splitlines()[0] == "i,j,t_lo,t_hi,relation"
+    assert out.read_text().splitlines()[0] == EVENTS_HEADER == "i,j,t_lo,t_hi,relation,certified_by,image_x,image_y,image_z"
     i, j, lo, hi, rel = read_events_csv(out)
     assert i.tolist() == [0, 2, 4, 6, 8, 10] and j.tolist() == [1, 3, 5, 7, 9, 11]
     assert (rel == Relation.TANGENT).all() and (hi - lo <= 1e-9).all()
@@ -55,8 +55,9 @@ def test_sweep_command_to_stdout(tmp_path, capsys):
     assert main(["sweep", str(start), str(end), "--out", "-", "--quiet"]) == 0
     captured = capsys.readouterr()
     lines = captured.out.splitlines()
-    assert lines[0] == "i,j,t_lo,t_hi,relation" and len(lines) == 3 and captured.err == ""
-    i, j, lo, hi, rel = lines[1].split(",")  # pair 0
+    assert lines[0] == EVENTS_HEADER and len(lines) == 3 and captured.err == ""
+    i, j, lo, hi, rel, by, *image = lines[1].split(",")  # pair 0
+    assert by in ("float", "exact") and image == ["0", "0", "0"]
     assert Fraction(float(lo)) <= m.t_exact[0] <= Fraction(float(hi))
 
 
@@ -147,11 +148,16 @@ def test_sweep_command_errors(tmp_path, capsys):
 
 
 def test_events_file_round_trip(tmp_path):
-    t = np.array([0.1, 1 / 3, 0.0])
+    # three circles meeting at t = 1/3, 0.1 and at t = 0 (overlapping): brackets that are no short decimals
+    from core import sweep_contacts
+
+    res = sweep_contacts([[0, 0], [3, 0], [10, 0], [11.5, 0], [20, 0], [22.5, 0]],
+                         [[0, 0], [0, 0], [10, 0], [11.5, 0], [20, 0], [21.5, 0]], [[1, 1]] * 6)
     with open(tmp_path / "e.csv", "w") as f:
-        write_events_csv(f, np.array([0, 1, 2]), np.array([1, 2, 3]), t, np.nextafter(t, 1), np.array([1, 1, 2], np.int8))
+        res.to_csv(f)
     i, j, lo, hi, rel = read_events_csv(tmp_path / "e.csv")
-    assert lo.tolist() == t.tolist() and hi.tolist() == np.nextafter(t, 1).tolist() and rel.tolist() == [1, 1, 2]
+    assert len(lo) == 3 and lo.tolist() == res.t_lo.tolist() and hi.tolist() == res.t_hi.tolist()  # floats read back exactly
+    assert rel.tolist() == res.relation.tolist() and (tmp_path / "e.csv").read_text().startswith(EVENTS_HEADER + "\n")
     with pytest.raises(ValueError, match="header"):
         (tmp_path / "bad.csv").write_text("a,b\n")
         read_events_csv(tmp_path / "bad.csv")

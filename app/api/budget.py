@@ -41,6 +41,7 @@ __all__ = [
     "STOPPING",
     "RETRY_AFTER_S",
     "JOB_GRACE_S",
+    "WAIT_UNTIL",
     "run_off_loop",
     "run_job",
     "budget_error",
@@ -60,6 +61,12 @@ STOPPING = threading.Event()
 
 _WATCH_S = 0.1
 """How often the event loop checks whether the client has gone."""
+
+WAIT_UNTIL = "app.wait_until"
+"""Key of the request's ASGI scope: until when (``time.monotonic()``) it may wait for its work to
+start, set when its body is whole (:class:`app.api.line.RequestLine`). One wait for the whole
+line: the reader of large bodies and then a worker (:func:`run_job`) share it, so a request never
+waits longer than ``ApiSettings.queue_wait_s`` in all."""
 
 
 class BudgetExceeded(RuntimeError):
@@ -126,7 +133,8 @@ async def run_job(
     """``fn(*args)`` in a worker process (queued, budgeted, killed on disconnect); errors as HTTP.
 
     Args:
-        request: the request (its disconnect cancels the job).
+        request: the request (its disconnect cancels the job; its wait in the queue ends at
+            :data:`WAIT_UNTIL`, or after the pool's own longest wait).
         workers: the app's pool.
         fn: a module-level job (:mod:`app.jobs`).
         *args: its arguments (picklable).
@@ -142,9 +150,11 @@ async def run_job(
             Retry-After when busy, over the budget, cancelled, out of memory or shutting down,
             500 for a bug in the job.
     """
+    wait_until: float | None = request.scope.get(WAIT_UNTIL)
 
     def work(cancel: threading.Event) -> T:
-        return workers.run(fn, *args, timeout=seconds, grace=JOB_GRACE_S if checks_budget else 0.0, cancel=cancel)
+        return workers.run(fn, *args, timeout=seconds, grace=JOB_GRACE_S if checks_budget else 0.0, cancel=cancel,
+                           wait_until=wait_until)
 
     tail = f"; {hint}" if hint else ""
     try:

@@ -80,6 +80,10 @@ class ContactsIn(BaseModel):
     on_invalid: Literal["raise", "mark"] = Field(
         default="raise", description="raise: 422 naming the first bad body; mark: list bad bodies in 'invalid'"
     )
+    ids: list[Annotated[int, Field(ge=-(2**63), lt=2**63)]] | None = Field(
+        default=None, description="the bodies' own ids, one per body in row order (a simulation's particle ids): "
+        "each pair then carries id_i and id_j"
+    )
 
 
 PairRelation = Literal["tangent", "overlap", "undecided"]
@@ -101,6 +105,10 @@ class PairOut(BaseModel):
     image_y: int = 0
     image_z: int = 0
     """The lattice image k of j as three numbers (j stands at c_j + k L, or c_j + k1 a1 + k2 a2 + k3 a3 in a tilted box; all 0 in open space, image_z 0 in 2D)."""
+    id_i: int | None = None
+    """The id of body i (only when the request gave ``ids``)."""
+    id_j: int | None = None
+    """The id of body j (only when the request gave ``ids``)."""
 
 
 class ContactsOut(BaseModel):

@@ -1,7 +1,12 @@
-"""Dependencies of the routes: the settings, the worker pool and the pair batcher of this app.
+"""Dependencies of the routes: the settings, the worker pool, the pair batcher and the line of this app.
 
-Both live on ``app.state`` (set by :func:`app.api.create_api`), are reached through ``Depends``
+They live on ``app.state`` (set by :func:`app.api.create_api`), are reached through ``Depends``
 and can be swapped in tests with ``app.dependency_overrides[get_settings] = ...``.
+
+The getters are ``async`` so that FastAPI calls them on the event loop: a plain function
+dependency runs in a thread of anyio's pool (40 threads, shared with the work that waits there
+for a worker process), so ``/healthz`` (three dependencies) waited for a free thread when the
+pool was taken, and made three thread round trips on a loaded machine.
 """
 
 from __future__ import annotations
@@ -12,26 +17,33 @@ from fastapi import Depends, Request
 
 from ..workers import WorkerPool
 from .batching import PairBatcher
+from .line import Line
 from .settings import ApiSettings
 
-__all__ = ["get_settings", "get_workers", "get_batcher", "SettingsDep", "WorkersDep", "BatcherDep"]
+__all__ = ["get_settings", "get_workers", "get_batcher", "get_line", "SettingsDep", "WorkersDep", "BatcherDep", "LineDep"]
 
 
-def get_settings(request: Request) -> ApiSettings:
+async def get_settings(request: Request) -> ApiSettings:
     """Settings of the app serving this request."""
     return request.app.state.settings
 
 
-def get_workers(request: Request) -> WorkerPool:
+async def get_workers(request: Request) -> WorkerPool:
     """Process pool for motion analyses of the app serving this request."""
     return request.app.state.workers
 
 
-def get_batcher(request: Request) -> PairBatcher:
+async def get_batcher(request: Request) -> PairBatcher:
     """The thread that classifies single pairs of JSON numbers together, off the event loop."""
     return request.app.state.batcher
+
+
+async def get_line(request: Request) -> Line:
+    """The places of large request bodies and their reader (:mod:`app.api.line`)."""
+    return request.app.state.line
 
 
 SettingsDep = Annotated[ApiSettings, Depends(get_settings)]
 WorkersDep = Annotated[WorkerPool, Depends(get_workers)]
 BatcherDep = Annotated[PairBatcher, Depends(get_batcher)]
+LineDep = Annotated[Line, Depends(get_line)]

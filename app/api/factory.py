@@ -15,7 +15,8 @@ from core import warm_up
 
 from ..workers import WorkerPool
 from .batching import PairBatcher
-from .limits import BodySizeLimit, validation_error_handler
+from .limits import validation_error_handler
+from .line import Line, RequestLine
 from .routes import classify, contacts, health, landing, motion, presets, sweep, witness
 from .settings import ApiSettings
 
@@ -51,6 +52,7 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     )
 
     batcher = PairBatcher(settings.request_budget_s)
+    line = Line(settings.max_large_bodies, settings.queue_wait_s, settings.body_stall_s, settings.body_read_s)
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -72,10 +74,12 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     app.state.settings = settings
     app.state.workers = workers
     app.state.batcher = batcher
+    app.state.line = line
     # ignored: starlette types every handler as taking any Exception; this one is registered for its class only
     app.add_exception_handler(RequestValidationError, validation_error_handler)  # type: ignore[arg-type]
     app.add_middleware(
-        BodySizeLimit,
+        RequestLine,
+        line=line,
         max_bytes=settings.max_body_bytes,
         # /api/sweep: start and end rows, twice the bytes of the same bodies in /api/contacts
         per_path={"/api/contacts": settings.max_contacts_body_bytes, "/api/sweep": 2 * settings.max_contacts_body_bytes},

@@ -6,24 +6,24 @@ a generic parse error. :class:`JsonRoute` reads bodies with hooks instead: a num
 cannot hold, or an integer over the edge limit, becomes an :class:`OutOfRange` marker that the
 number validator (:func:`app.api.schemas.checked_number`) refuses with a message naming the
 field; a body nested too deeply is a 400 that says so. A large body is read and validated as
-the route's model in a worker thread, one at a time, so a burst of them leaves the event loop
-(and ``/healthz``) answering.
+the route's model in a worker thread, one at a time and in its turn (:meth:`app.api.line.Line.parse`:
+its wait is bounded, 503 beyond), so a burst of them leaves the event loop (and ``/healthz``)
+answering.
 """
 
 from __future__ import annotations
 
-import asyncio
 import json
-import weakref
 from collections.abc import Callable, Coroutine
 from typing import Any
 
-import anyio
 from fastapi import HTTPException, Request, Response
 from fastapi.routing import APIRoute
 from pydantic import BaseModel, ValidationError
 
 from core.shapes.limits import SERVER
+
+from .line import INLINE_BYTES, Line
 
 __all__ = ["INLINE_BYTES", "JsonRoute", "OutOfRange", "read_json"]
 
@@ -87,32 +87,6 @@ def read_json(body: bytes | str) -> Any:
         ) from None
 
 
-INLINE_BYTES = 64 * 1024
-"""Bodies up to this size are read on the event loop (microseconds); larger ones in a worker
-thread, read *and validated* there (:class:`JsonRoute`), so that the server's other requests
-(``/healthz``, small classifications) are answered meanwhile: 10,000 moving bodies (4 MB) take
-~0.2 s to read and ~0.15 s to validate on a quiet core (a loaded run once saw /healthz wait 1.6 s
-behind one)."""
-
-_READERS = 1
-"""Large bodies read at once (the others wait their turn). A reader holds the interpreter lock
-most of the time: with a burst of 12 bodies of 4 MB read in 12 threads (and validated on the
-loop), the event loop got the lock 1/13 of the time and /healthz took 2.9 s on a quiet machine;
-with one reader, validating off the loop, 0.3 s (tests/test_hostile_server.py,
-``test_a_burst_of_the_largest_bodies_leaves_healthz_answering``)."""
-
-_limiters: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, anyio.CapacityLimiter] = weakref.WeakKeyDictionary()
-
-
-def _reader_limiter() -> anyio.CapacityLimiter:
-    """The readers' limiter of the running event loop (a limiter serves the loop it was made in)."""
-    loop = asyncio.get_running_loop()
-    limiter = _limiters.get(loop)
-    if limiter is None:
-        limiter = _limiters[loop] = anyio.CapacityLimiter(_READERS)
-    return limiter
-
-
 def _read_checked(body: bytes, model: type[BaseModel] | None) -> Any:
     """The body read, and validated as ``model`` when it can be: the model instance, else the data.
 
@@ -139,14 +113,16 @@ class _JsonRequest(Request):
             if len(body) <= INLINE_BYTES:
                 self._json = read_json(body)
             else:
-                self._json = await anyio.to_thread.run_sync(_read_checked, body, self.model, limiter=_reader_limiter())
+                line: Line = self.app.state.line
+                self._json = await line.parse(self, _read_checked, body, self.model)
         return self._json
 
 
 class JsonRoute(APIRoute):
     """APIRoute whose handler reads JSON with :func:`read_json` (FastAPI's custom-route hook).
 
-    A large body is read and validated in a worker thread, one body at a time.
+    A large body is read and validated in a worker thread, one body at a time, in its turn
+    (:meth:`app.api.line.Line.parse`).
     """
 
     def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:

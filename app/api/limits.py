@@ -1,4 +1,6 @@
-"""Request-level guards: body size, the contact search's per-request limits, validation errors.
+"""Request-level guards: the contact search's per-request limits, validation errors.
+
+Body sizes are limited where bodies arrive (:mod:`app.api.line`).
 
 The library has no limits (``core.contacts`` answers any input it can hold); the server's
 limits are applied here, at the edge, with messages that say what was asked, the limit and what
@@ -20,10 +22,8 @@ from typing import Any
 from fastapi import Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 __all__ = [
-    "BodySizeLimit",
     "validation_error_handler",
     "contacts_limit_message",
     "contacts_answer_message",
@@ -85,71 +85,6 @@ def sweep_times_message(pairs: int, limit: int) -> str:
         "arithmetic per pair): ask without exact_times (t_lo, t_hi are certified brackets), send fewer bodies, or ask "
         "/api/analyse about one pair; `core.sweep_contacts(...).time(k)` has no such limit"
     )
-
-
-class BodySizeLimit:
-    """ASGI middleware: 413 for a request body over ``max_bytes`` (declared or streamed).
-
-    ``per_path`` gives some paths their own limit (``/api/contacts`` and ``/api/sweep`` take
-    thousands of bodies).
-    """
-
-    def __init__(self, app: ASGIApp, max_bytes: int, per_path: dict[str, int] | None = None) -> None:
-        self.app = app
-        self.max_bytes = max_bytes
-        self.per_path = dict(per_path or {})
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        """Pass the request on, or answer 413 when its body is over the limit of its path."""
-        if scope["type"] != "http":
-            await self.app(scope, receive, send)
-            return
-        limit = self.per_path.get(scope.get("path", ""), self.max_bytes)
-        if limit != self.max_bytes:
-            await BodySizeLimit(self.app, limit)(scope, receive, send)
-            return
-        declared = dict(scope.get("headers") or ()).get(b"content-length")
-        if declared is not None:
-            try:
-                too_big = int(declared) > self.max_bytes
-            except ValueError:
-                too_big = False
-            if too_big:
-                await self._reject(scope, receive, send)
-                return
-        # Read the body up front (bounded), then replay it: works for chunked uploads too.
-        chunks: list[bytes] = []
-        size = 0
-        more = True
-        while more:
-            message = await receive()
-            if message["type"] != "http.request":
-                break
-            chunk = message.get("body", b"")
-            size += len(chunk)
-            if size > self.max_bytes:
-                await self._reject(scope, receive, send)
-                return
-            chunks.append(chunk)
-            more = message.get("more_body", False)
-        body = b"".join(chunks)
-        sent = False
-
-        async def replay() -> Message:
-            nonlocal sent
-            if not sent:
-                sent = True
-                return {"type": "http.request", "body": body, "more_body": False}
-            return await receive()
-
-        await self.app(scope, replay, send)
-
-    async def _reject(self, scope: Scope, receive: Receive, send: Send) -> None:
-        response = JSONResponse(
-            status_code=413,
-            content={"detail": f"request body too large: the limit is {self.max_bytes} bytes"},
-        )
-        await response(scope, receive, send)
 
 
 def _clean(error: dict[str, Any]) -> dict[str, Any]:

@@ -246,6 +246,7 @@ class ErrorOut(BaseModel):
 
 ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     400: {"model": ErrorOut, "description": "Unreadable body (e.g. JSON nested too deeply)"},
+    408: {"model": ErrorOut, "description": "Body stalled or too slow to arrive (ApiSettings.body_stall_s, body_read_s); the connection is closed"},
     413: {"model": ErrorOut, "description": "Body over the size limit"},
     415: {"model": ErrorOut, "description": "Body not sent as JSON (content-type: application/json)"},
     422: {"model": ErrorOut, "description": "Invalid input: the message says what is wrong"},
@@ -282,3 +283,6 @@ class HealthOut(BaseModel):
     analyses_waiting: int = 0
     """Requests waiting in the queue for a worker."""
     max_queued_analyses: int = 0
+    large_bodies: int = 0
+    """Requests with a body over 64 kB in the server (received, read, waiting for a worker or running)."""
+    max_large_bodies: int = 0

@@ -86,7 +86,17 @@ class ApiSettings:
     """Requests that may wait for a worker (first come, first served); beyond them, 503 with
     Retry-After at once."""
     queue_wait_s: float = 10.0
-    """Longest wait in the queue for a worker; then 503 with Retry-After."""
+    """Longest wait of a request, from when its body has arrived to when its work starts (for the
+    reader of large bodies, then in the queue for a worker); then 503 with Retry-After."""
+    max_large_bodies: int = 16
+    """Requests with a body over 64 kB the server holds at once (from their first byte over 64 kB
+    to their answer: received, read, waiting for a worker, running); one more is answered 503
+    with Retry-After at once, its body unread. Their memory is bounded by this times the body
+    limit (:mod:`app.api.line`)."""
+    body_stall_s: float = 10.0
+    """Longest pause while a request body arrives; then 408 and the connection closed."""
+    body_read_s: float = 60.0
+    """Longest time for a whole request body to arrive; then 408 and the connection closed."""
     memory_limit_mb: int | None = 2048
     """Address-space cap of an analysis worker process (None: no cap)."""
     static_dir: Path | None = field(default_factory=default_static_dir)
@@ -98,14 +108,14 @@ class ApiSettings:
         """Reject limits that make no sense (a ValueError naming the field)."""
         for name in ("max_body_bytes", "max_batch", "max_expression_chars", "max_degree",
                      "max_digits", "max_concurrent_analyses", "max_contacts_bodies", "max_contacts_body_bytes",
-                     "max_contacts_candidates", "max_contacts_pairs", "max_sweep_exact_times"):
+                     "max_contacts_candidates", "max_contacts_pairs", "max_sweep_exact_times", "max_large_bodies"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"ApiSettings.{name} must be a positive integer, got {value!r}")
         q = self.max_queued_analyses
         if isinstance(q, bool) or not isinstance(q, int) or q < 0:
             raise ValueError(f"ApiSettings.max_queued_analyses must be a non-negative integer, got {q!r}")
-        for name in ("time_budget_s", "request_budget_s", "queue_wait_s"):
+        for name in ("time_budget_s", "request_budget_s", "queue_wait_s", "body_stall_s", "body_read_s"):
             if not (getattr(self, name) > 0):
                 raise ValueError(f"ApiSettings.{name} must be > 0, got {getattr(self, name)!r}")
 

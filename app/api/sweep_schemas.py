@@ -68,6 +68,10 @@ class SweepIn(BaseModel):
     on_invalid: Literal["raise", "mark"] = Field(
         default="raise", description="raise: 422 naming the first bad row; mark: list bad rows in 'invalid' and sweep the rest"
     )
+    ids: list[Annotated[int, Field(ge=-(2**63), lt=2**63)]] | None = Field(
+        default=None, description="the bodies' own ids, one per row (a simulation's particle ids): each pair then "
+        "carries id_i and id_j"
+    )
     exact_times: bool = Field(
         default=False,
         description="also give each pair's t* exactly ('time': a real algebraic number); costly (exact arithmetic per "
@@ -103,6 +107,10 @@ class SweepPairOut(BaseModel):
     image_y: int = 0
     image_z: int = 0
     """The lattice image k of j as three numbers (all 0 in open space, image_z 0 in 2D)."""
+    id_i: int | None = None
+    """The id of body i (only when the request gave ``ids``)."""
+    id_j: int | None = None
+    """The id of body j (only when the request gave ``ids``)."""
 
 
 class SweepOut(BaseModel):

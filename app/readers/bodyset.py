@@ -12,47 +12,82 @@ matrix with the reason in :attr:`BodySet.errors`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from core import bodies_from_axes
-from core.shapes.quadrics import axes_row_errors
+from core import Bodies
 
-__all__ = ["BodySet", "from_parameters", "file_box"]
+__all__ = ["BodySet", "from_parameters", "file_box", "cell_box"]
 
 
 @dataclass
-class BodySet:
-    """Bodies read from a file: their matrices and, when the file had them, their parameters."""
+class BodySet(Bodies):
+    """Bodies read from a file (:class:`core.Bodies`: parameters or matrices, ids, box) and where they came from.
 
-    Q: np.ndarray
-    """(N, d+1, d+1) float64 matrices (NaN rows: bodies whose parameters are no shape)."""
-    centers: np.ndarray | None = None
-    semi_axes: np.ndarray | None = None
-    orientations: np.ndarray | None = None
-    """(N, 4) quaternions wxyz (3D) or (N,) angles (2D); None with matrices only or no column."""
-    errors: dict[int, str] = field(default_factory=dict)
-    """Body -> why its parameters are no shape (those rows of Q are NaN)."""
+    ``box`` is a :class:`core.Box` (or None: open space, or no box in the file); ``ids`` the
+    file's own particle ids (a LAMMPS ``id`` column, a CSV or XYZ ``id`` column), if it has them.
+    """
+
     source: str = ""
     """File name, for messages."""
-    box: tuple[float, ...] | None = None
-    """The file's periodic box (module docstring), or None (open space, or no box in the file)."""
     first_line: int | None = None
     """Text tables: the line of the file that holds body 0 (messages say "line ...")."""
-    ids: np.ndarray | None = None
-    """Particle ids of the file (LAMMPS ``id``), if it has them (messages name them)."""
     frame: int | None = None
     """The frame read (trajectory files), counted from 0."""
+
+    @classmethod
+    def of_matrices(cls, Q: Any, *, source: str = "", box: Any = None, ids: Any = None) -> BodySet:
+        """Bodies given by their matrices only (an NPZ of matrices)."""
+        out = cls.from_matrices(Q, ids=ids, box=box)
+        assert isinstance(out, BodySet)
+        out.source, out.first_line, out.frame = source, None, None
+        return out
+
+    @property
+    def Q(self) -> np.ndarray:
+        """(N, d+1, d+1) float64 matrices (NaN rows: bodies whose parameters are no shape)."""
+        return self.matrices
 
     @property
     def dim(self) -> int:
         """2 or 3."""
-        return int(self.Q.shape[-1] - 1)
+        return self.dimensions
 
-    def __len__(self) -> int:
-        return int(self.Q.shape[0])
+    def in_plane(self) -> BodySet:
+        """These 3D bodies as 2D ones (ellipses in the plane z = 0): a 2D system stored as 3D.
+
+        LAMMPS (``dimension 2``) and extended XYZ store 2D systems with z = 0 and orientations
+        about z; the ellipses are the bodies' sections by that plane: semi-axes a, b; the box
+        Lx, Ly, xy.
+
+        Raises:
+            ValueError: a body off the plane, turned out of it, or a box tilted along z.
+        """
+        if self.dimensions == 2:
+            return self
+        if not self.has_parameters:
+            raise ValueError(f"{self.source}: 2D bodies need centres and semi-axes (this file has matrices)")
+        c = np.asarray(self.centers)
+        off = np.flatnonzero(c[:, 2] != 0)
+        if off.size:
+            k = int(off[0])
+            raise ValueError(f"{self.source}: {self.where(k)} has z = {c[k, 2]:g}: 2D bodies lie in the plane z = 0")
+        q = None if self.orientations is None else np.asarray(self.orientations, dtype=np.float64)
+        if q is not None:
+            turned = np.flatnonzero((q[:, 1] != 0) | (q[:, 2] != 0))
+            if turned.size:
+                k = int(turned[0])
+                raise ValueError(f"{self.source}: {self.where(k)} is turned out of the plane (quaternion {q[k].tolist()}): "
+                                 "2D bodies turn about z, (w, 0, 0, z)")
+        box = None
+        if self.box is not None:
+            if self.box.xz or self.box.yz:
+                raise ValueError(f"{self.source}: the box is tilted along z (xz, yz = {self.box.xz:g}, {self.box.yz:g}): not a 2D box")
+            box = (self.box.Lx, self.box.Ly, self.box.xy)
+        return BodySet(c[:, :2].copy(), np.asarray(self.semi_axes)[:, :2].copy(), q, self.ids, box,
+                       source=self.source, first_line=self.first_line, frame=self.frame)
 
     def where(self, k: int) -> str:
         """Where body k is in the file: "body 7 (line 9)", "body 7 (id 12)" or "body 7"."""
@@ -70,14 +105,10 @@ def from_parameters(centers: Any, semi_axes: Any, orientations: Any, name: str, 
         ValueError: arrays of the wrong shapes, or values that are not numbers.
     """
     try:
-        c = np.asarray(centers, dtype=np.float64)
-        r = np.asarray(semi_axes, dtype=np.float64)
-        o = None if orientations is None else np.asarray(orientations, dtype=np.float64)
-        errors = axes_row_errors(c, r, o)
-        Q = bodies_from_axes(c, r, o, on_invalid="mark")
+        out = BodySet(centers, semi_axes, orientations, source=name, **extra)
     except (ValueError, TypeError) as e:
         raise ValueError(f"{name}: {e}") from None
-    return BodySet(Q, c, r, o, errors, name, **extra)
+    return out
 
 
 def file_box(sides: Any, tilts: Any = (0.0, 0.0, 0.0), *, dim: int) -> tuple[float, ...]:
@@ -102,6 +133,41 @@ def file_box(sides: Any, tilts: Any = (0.0, 0.0, 0.0), *, dim: int) -> tuple[flo
     if not any(t):
         return tuple(L[:dim])
     return (*L, *t)
+
+
+def cell_box(sides: Any, tilts: Any, periodic: Any, centers: Any, semi_axes: Any, *, name: str) -> tuple[float, ...] | None:
+    """A 3D file's box when its cell may be periodic on some axes only (LAMMPS ``pp pp ff``, XYZ ``pbc``).
+
+    Every axis periodic: the box (:func:`file_box`); none: None (open space). A mix: each open
+    axis gets a side longer than the bodies' extent along it plus four times the largest
+    semi-axis, so that no image across it can touch a body (the answer is that of open space
+    along that axis, exactly); a tilt that couples an open axis with another is refused.
+
+    Raises:
+        ValueError: a tilt along an open axis.
+
+    Examples:
+        >>> cell_box((10, 10, 10), (0, 0, 0), (True, True, False), [[0, 0, 1], [0, 0, 4]], [[1, 1, 1]] * 2, name="f")
+        (10.0, 10.0, 8.0)
+    """
+    per = [bool(v) for v in periodic]
+    if all(per):
+        return file_box(sides, tilts, dim=3)
+    if not any(per):
+        return None
+    L = [float(v) for v in np.asarray(sides, dtype=np.float64).reshape(-1)[:3]]
+    t = [float(v) for v in np.asarray(tilts, dtype=np.float64).reshape(-1)[:3]]
+    for k, (a, b) in enumerate(((0, 1), (0, 2), (1, 2))):
+        if t[k] and not (per[a] and per[b]):
+            raise ValueError(f"{name}: the cell is tilted ({('xy', 'xz', 'yz')[k]} = {t[k]:g}) along an open axis: not supported")
+    c = np.asarray(centers, dtype=np.float64).reshape(-1, 3)
+    r = np.asarray(semi_axes, dtype=np.float64).reshape(-1, 3)
+    reach = 4 * float(np.nanmax(r)) if r.size and np.isfinite(r).any() else 1.0
+    for a in range(3):
+        if not per[a]:
+            extent = float(np.nanmax(c[:, a]) - np.nanmin(c[:, a])) if c.size and np.isfinite(c[:, a]).any() else 0.0
+            L[a] = extent + reach + 1.0  # 4 R where 2 R would do: room for every rounding
+    return file_box(L, t, dim=3)
 
 
 def usable_box(box: tuple[float, ...] | None, dim: int, source: str = "") -> tuple[float, ...] | None:

@@ -12,6 +12,7 @@ message (loading pickles runs code from the file; that is never offered).
 from __future__ import annotations
 
 import io
+import math
 import zipfile
 import zlib
 from collections.abc import Sequence
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .bodyset import BodySet, file_box, from_parameters
+from .guard import one_line
 
 __all__ = ["npz_arrays", "read_npz"]
 
@@ -31,6 +33,11 @@ def npz_arrays(
 ) -> dict[str, np.ndarray]:
     """The arrays of an .npz file (all, or those of ``wanted`` that it has).
 
+    Each array's header (shape, dtype) is read and checked against the bytes its member of the
+    archive holds before the array is made, and the member's size against what its compression
+    can give (:func:`_checked_member`): a small file that claims a huge array is refused, never
+    allocated.
+
     Args:
         source: a path, or the bytes of the file.
         name: the file's name, for messages.
@@ -39,7 +46,9 @@ def npz_arrays(
 
     Raises:
         ValueError: not an .npz archive (a single .npy array, or not a zip file at all), a
-            damaged or truncated archive, an array of Python objects.
+            damaged or truncated archive, an array of Python objects, a member that is no .npy
+            array, encrypted or compressed otherwise than numpy writes, an array whose header
+            claims more than its member holds.
     """
     try:
         if isinstance(source, bytes):
@@ -54,27 +63,68 @@ def npz_arrays(
     if not head.startswith(b"PK"):
         raise ValueError(f"{name}: not an .npz file (a zip archive of .npy arrays, as np.savez writes)")
     out: dict[str, np.ndarray] = {}
-    key = ""
     try:
-        with np.load(io.BytesIO(source) if isinstance(source, bytes) else source, allow_pickle=False) as z:
-            missing = [r for r in required if r not in z.files]
+        with zipfile.ZipFile(io.BytesIO(source) if isinstance(source, bytes) else source) as z:
+            members = {info.filename: info for info in z.infolist()}
+            keys = {m[:-4] if m.endswith(".npy") else m: m for m in sorted(members, key=lambda m: m.endswith(".npy"))}
+            missing = [r for r in required if r not in keys]
             if missing:
-                raise _Missing(f"{name}: expected arrays {' and '.join(required)}, found {sorted(z.files) or 'none'}")
-            for key in z.files if wanted is None else [w for w in wanted if w in z.files]:
-                out[key] = z[key]
-    except _Missing as e:
-        raise ValueError(str(e)) from None
-    except ValueError as e:
-        if "pickle" in str(e):
-            raise ValueError(f"{name}: array {key!r} holds Python objects; only arrays of numbers are read") from None
-        raise ValueError(f"{name}: damaged or truncated .npz file ({e})") from None
-    except (OSError, EOFError, zipfile.BadZipFile, zlib.error) as e:
-        raise ValueError(f"{name}: damaged or truncated .npz file ({e})") from None
+                raise ValueError(f"{name}: expected arrays {' and '.join(required)}, found {sorted(keys) or 'none'}")
+            for key in keys if wanted is None else [w for w in wanted if w in keys]:
+                info = members[keys[key]]
+                _checked_member(z, info, key, name)
+                with z.open(info) as f:
+                    try:
+                        out[key] = np.lib.format.read_array(f, allow_pickle=False)
+                    except ValueError as e:
+                        raise ValueError(f"{name}: array {key!r}: damaged .npy data ({one_line(e)})") from None
+    except zipfile.BadZipFile as e:
+        raise ValueError(f"{name}: damaged or truncated .npz file: not a zip archive ({one_line(e)})") from None
+    except (OSError, EOFError, zlib.error, RuntimeError, NotImplementedError) as e:
+        raise ValueError(f"{name}: damaged or truncated .npz file ({one_line(e)})") from None
     return out
 
 
-class _Missing(Exception):
-    """A required array is missing (told apart from numpy's own ValueErrors)."""
+_DEFLATE_RATIO = 1032
+"""Most bytes deflate expands one compressed byte into (RFC 1951's longest match: 258 bytes from 2 bits)."""
+
+
+def _checked_member(z: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, name: str) -> None:
+    """Refuse a member that is not an .npy array numpy could have written, or claims more than it holds.
+
+    Raises:
+        ValueError: encrypted; compressed otherwise than stored or deflated (what np.savez and
+            np.savez_compressed write); an uncompressed size deflate cannot reach; not an .npy
+            array; an array of Python objects; a header whose shape and dtype need more bytes
+            than the member holds.
+    """
+    where = f"{name}: array {key!r}"
+    if info.flag_bits & 0x1:
+        raise ValueError(f"{where} is encrypted: numpy's archives are not")
+    if info.compress_type not in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED):
+        method = {zipfile.ZIP_BZIP2: "bzip2", zipfile.ZIP_LZMA: "LZMA"}.get(info.compress_type, f"method {info.compress_type}")
+        raise ValueError(f"{where} is compressed with {method}: only stored or deflated members (as np.savez and np.savez_compressed write) are read")
+    most = info.compress_size if info.compress_type == zipfile.ZIP_STORED else info.compress_size * _DEFLATE_RATIO + 64
+    if info.file_size > most:
+        raise ValueError(f"{where} claims {info.file_size:,} bytes from {info.compress_size:,} compressed: more than its compression can give")
+    if not info.filename.endswith(".npy"):
+        raise ValueError(f"{where} is not an .npy array (a member {info.filename!r} of the archive); np.savez writes NAME.npy")
+    with z.open(info) as f:
+        try:
+            version = np.lib.format.read_magic(f)
+            if version == (1, 0):
+                shape, _, dtype = np.lib.format.read_array_header_1_0(f)
+            else:
+                shape, _, dtype = np.lib.format.read_array_header_2_0(f)
+        except ValueError as e:
+            raise ValueError(f"{where} has no valid .npy header ({one_line(e)})") from None
+        start = f.tell()
+    if dtype.hasobject:
+        raise ValueError(f"{where} holds Python objects; only arrays of numbers are read")
+    need = math.prod(shape) * dtype.itemsize
+    holds = info.file_size - start
+    if need > holds:
+        raise ValueError(f"{where} claims shape {tuple(shape)} of {dtype} ({need:,} bytes) but holds {max(holds, 0):,} bytes")
 
 
 def read_npz(source: str | Path | bytes, name: str) -> BodySet:
@@ -91,7 +141,7 @@ def read_npz(source: str | Path | bytes, name: str) -> BodySet:
             raise ValueError(f"{name}: Q must be (N, 3, 3) or (N, 4, 4), got shape {Q.shape}")
         if Q.dtype.kind not in "fiu":
             raise ValueError(f"{name}: Q must hold numbers, got dtype {Q.dtype}")
-        return BodySet(Q.astype(np.float64), source=name, box=None if box is None else box(Q.shape[1] - 1))
+        return BodySet.of_matrices(Q.astype(np.float64), source=name, box=None if box is None else box(Q.shape[1] - 1))
     missing = {"centers", "semi_axes"} - set(arrays)
     if missing:
         raise ValueError(f"{name}: expected arrays centers, semi_axes, orientations (or Q); missing {sorted(missing)}")

@@ -33,6 +33,7 @@ from core.bodies.periodic import is_tilted
 from core.shapes.quadrics import rotations_from_orientations
 
 from ..bodyfiles import BodySet
+from .mesh_detail import DRAWABLE
 from .state import SceneConfig
 
 __all__ = ["BodiesModel", "UPLOAD_PAIRS", "UPLOAD_SECONDS", "UPLOAD_BYTES", "parse_box", "tab_bodies_job", "PairList", "PairEntry", "PairPage", "PAGE_SIZE", "RELATION_FILTERS", "pick_body", "relation_colours"]
@@ -301,6 +302,9 @@ class BodiesModel(PairList):
             ) from None
         self.invalid = {**self.result.invalid, **bodies.errors}
         self.worst = self.result.per_body()
+        self.undrawn: dict[int, str] = {}
+        """Valid bodies outside the scene's drawing range (:data:`~app.scene.mesh_detail.DRAWABLE`),
+        by index, and why: listed with their contacts, drawn as a grey speck at the origin."""
         self.positions, self.wxyz, self.scales = self._poses()
         res = self.result
         self.order = np.lexsort((res.j, res.i, -(res.relation == Relation.TANGENT).astype(np.int8)))
@@ -327,6 +331,8 @@ class BodiesModel(PairList):
                 else:
                     q[k] = (math.cos(p.orientation[0] / 2), 0.0, 0.0, math.sin(p.orientation[0] / 2))
         bad = ~np.isfinite(c).all(axis=1) | ~np.isfinite(r).all(axis=1) | ~(r > 0).all(axis=1) | ~np.isfinite(q).all(axis=1)
+        self.undrawn = _undrawn(c, r, bad | (self.worst == Relation.INVALID))
+        bad[list(self.undrawn)] = True
         c = np.where(bad[:, None], 0.0, c)
         r = np.where(bad[:, None], 1e-3, r)
         norm = np.linalg.norm(q, axis=1)
@@ -335,6 +341,13 @@ class BodiesModel(PairList):
             c = np.concatenate([c, np.zeros((N, 1))], axis=1)
             r = np.concatenate([r, np.ones((N, 1))], axis=1)
         return c.astype(np.float64), q.astype(np.float64), r.astype(np.float64)
+
+    def colours(self) -> np.ndarray:
+        """(N, 3) uint8: each body in the colour of its worst certified relation; grey if not drawn."""
+        rows = relation_colours(self.worst)
+        if self.undrawn:
+            rows[list(self.undrawn)] = relation_colours(np.array([Relation.INVALID]))[0]
+        return rows
 
     def box_corner(self) -> np.ndarray:
         """Lower corner of the periodic box as drawn (the lowest centre)."""
@@ -360,6 +373,10 @@ class BodiesModel(PairList):
         ]
         if self.invalid:
             lines.append(f"{len(self.invalid)} invalid bodies (grey), e.g. {next(iter(self.invalid.values()))}")
+        if self.undrawn:
+            k, why = next(iter(self.undrawn.items()))
+            lines.append(f"{_bodies(len(self.undrawn))} not drawn (a grey speck at the origin; their contacts are listed), "
+                         f"e.g. body {k}: {why}")
         return "\n\n".join(lines)
 
     def contact_segments(self) -> np.ndarray:
@@ -370,6 +387,11 @@ class BodiesModel(PairList):
         shifts = res.shifts()  # the lattice vectors v(k) the search moved j by
         if shifts is not None:
             b[:, : self.dim] += shifts
+        if self.undrawn:  # a contact of a body not drawn: no line to its speck at the origin
+            gone = np.zeros(len(self.bodies), dtype=bool)
+            gone[list(self.undrawn)] = True
+            a[gone[res.i]] = b[gone[res.i]]
+            b[gone[res.j]] = a[gone[res.j]]
         return np.stack([a, b], axis=1)
 
     # ------------------------------------------------------------------ the two-body view
@@ -391,6 +413,37 @@ class BodiesModel(PairList):
         if self.bodies.centers is None:
             note += " Parameters recovered from the matrices in floats (approximate)."
         return cfg, note
+
+
+def _undrawn(centers: np.ndarray, axes: np.ndarray, skip: np.ndarray) -> dict[int, str]:
+    """The bodies (not in ``skip``) outside the drawing range, and why (centre or semi-axes).
+
+    Examples:
+        >>> why = _undrawn(np.array([[0.0, 0.0], [1e300, 0.0], [0.0, 0.0], [0.0, 0.0]]),
+        ...                np.array([[1.0, 1.0], [1.0, 1.0], [1e300, 1.0], [2.0, 1e-300]]), np.zeros(4, dtype=bool))
+        >>> for k, text in why.items():
+        ...     print(k, text)
+        1 its centre (1e+300, 0) is beyond the scene's drawing range (|x| <= 1e+12)
+        2 a semi-axis of 1e+300 is outside the scene's drawing range [1e-12, 1e+12]
+        3 a semi-axis of 1e-300 is outside the scene's drawing range [1e-12, 1e+12]
+    """
+    out: dict[int, str] = {}
+    with np.errstate(invalid="ignore", over="ignore"):
+        far = ~(np.abs(centers) <= DRAWABLE).all(axis=1)
+        odd = ~((axes >= 1 / DRAWABLE) & (axes <= DRAWABLE)).all(axis=1)
+    for k in map(int, np.flatnonzero((far | odd) & ~skip)):
+        if far[k]:
+            out[k] = (f"its centre ({', '.join(f'{v:g}' for v in centers[k])}) is beyond the scene's drawing range "
+                      f"(|x| <= {DRAWABLE:g})")
+        else:
+            worst = max((float(v) for v in axes[k]), key=lambda v: abs(math.log10(v)))
+            out[k] = f"a semi-axis of {worst:g} is outside the scene's drawing range [{1 / DRAWABLE:g}, {DRAWABLE:g}]"
+    return out
+
+
+def _bodies(n: int) -> str:
+    """'1 body', '3 bodies'."""
+    return f"{n:,} bod{'y' if n == 1 else 'ies'}"
 
 
 def relation_colours(worst: np.ndarray, pending: Any = None) -> np.ndarray:

@@ -39,6 +39,7 @@ from .camera import Framing
 from .lighting import light_scene
 from .mesh_detail import SPHERE_SUBDIVISIONS
 from .shapes import RELATION_HEX
+from .wire import Refusal, too_large
 
 __all__ = ["BodiesView", "load_model", "NO_PAIRS"]
 
@@ -71,13 +72,17 @@ class BodiesView:
         cache: analysis cache handed to the two-body view.
         executor: where the two-body view runs analyses.
         sphere_subdivisions: of the two-body view's solids (:class:`app.scene.session.Session`).
+        uploads: the server's :class:`~app.scene.wire.UploadGuard`: a file over
+            :data:`~app.scene.bodies.UPLOAD_BYTES` is refused before the server keeps it, and the
+            panel says so (None: checked once received).
     """
 
     def __init__(
         self, target: Any, model: BodiesModel | None, *, cache: Any = None, executor: Executor | None = None,
-        sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
+        sphere_subdivisions: int = SPHERE_SUBDIVISIONS, uploads: Any = None,
     ) -> None:
         self.sphere_subdivisions = sphere_subdivisions
+        self.uploads = uploads
         self.target = target
         self.scene = target.scene
         self.gui = target.gui
@@ -237,6 +242,8 @@ class BodiesView:
         self._bodies_gui += [view_folder, file_folder]
         with file_folder:
             self.upload = gui.add_upload_button("Open a file of bodies", mime_type=".csv,.npz", hint="CSV (x,y,z,a,b,c,qw,qx,qy,qz or x,y,a,b,angle) or NPZ")
+            if self.uploads is not None:  # at once: a larger file is refused before the server keeps it
+                self.uploads.limit(self.upload, UPLOAD_BYTES, self._on_refused)
             self.box_text = gui.add_text("Periodic box", _box_text(m.box if m is not None else None), hint="Lx, Ly(, Lz), or Lx, Ly, Lz, xy, xz, yz (tilted); empty: open space")
             self.file_md = gui.add_markdown("")
         self._refresh_list()
@@ -269,7 +276,7 @@ class BodiesView:
             self.listing = m.page(self.relation, self.body, self.page_no)
         except ValueError as e:
             self.listing = None
-            self.list_md.content = f'<span style="color:#d62728">⚠ {html.escape(str(e))}</span>'
+            self.list_md.content = _warning(str(e))
             self._set_pair_options([])
             return
         pg = self.listing
@@ -324,7 +331,7 @@ class BodiesView:
         try:
             body = int(text)
         except ValueError:
-            self.list_md.content = f'<span style="color:#d62728">⚠ body: expected a whole number, got {html.escape(text)!s}</span>'
+            self.list_md.content = _warning(f"body: expected a whole number, got {text}")
             return
         self.filter_pairs(body=body)
         if self.listing is not None and self.model is not None:
@@ -397,9 +404,8 @@ class BodiesView:
             previous, self.selected = self.selected, body
             if previous is not None and previous != body:
                 k = m.pair_between(previous, body)
-                if k is not None:
-                    self.open_pair(k)
-                    return k
+                if k is not None and self.open_pair(k) is not None:
+                    return k  # else not opened (a body not drawn): the body is selected, and says why
             self._syncing = True
             try:
                 self.body_text.value = str(body)
@@ -417,8 +423,13 @@ class BodiesView:
         self.selected = body
         partners = m.partners(body)
         why = m.invalid.get(body)
+        undrawn = getattr(m, "undrawn", {}).get(body)
         if why:
             text = f"Body **{body}** is invalid: {html.escape(why)}"
+        elif undrawn:
+            text = (f"Body **{body}** is not drawn: {html.escape(undrawn)}. It touches or overlaps {len(partners)} bodies"
+                    + (f" ({', '.join(str(p) for p in partners[:12])}{' …' if len(partners) > 12 else ''})" if partners else "")
+                    + "; its pairs are listed, not opened in the two-body view.")
         elif partners:
             shown = ", ".join(str(p) for p in partners[:12]) + (" …" if len(partners) > 12 else "")
             if self.moving:
@@ -434,6 +445,9 @@ class BodiesView:
         for h in self.labels:
             h.remove()
         assert self.model is not None
+        if body in getattr(self.model, "undrawn", {}):  # no label on its speck at the origin
+            self.labels = []
+            return
         pos = self.model.positions[body] + np.array([0.0, 0.0, self.model.scales[body].max() if self.model.dim == 3 else 0.0])
         self.labels = [
             self.scene.add_label("/selected", f"body {body}", position=tuple(float(v) for v in pos), anchor="bottom-center")
@@ -442,6 +456,13 @@ class BodiesView:
     def _on_upload(self, ev: Any) -> None:
         f = ev.target.value
         self.load_bytes(f.name, f.content)
+
+    def _on_refused(self, refusal: Refusal) -> None:
+        """An upload refused before it was kept (too large, stalled, ...): the panel says why."""
+        text = refusal.message() + (_TOO_LARGE_HINT if refusal.reason == "too large" else "")
+        with self._lock:
+            if not self._closed:
+                self.file_md.content = _warning(text)
 
     def load_bytes(self, name: str, content: bytes) -> str | None:
         """Show the bodies of an uploaded file; returns an error message (also shown) or None.
@@ -452,14 +473,13 @@ class BodiesView:
         """
         try:
             if len(content) > UPLOAD_BYTES:
-                raise ValueError(f"{name} is too large ({len(content):,} bytes, the limit is {UPLOAD_BYTES:,}): "
-                                 "find its contacts with `python -m app contacts`, or start the scene on it (--bodies)")
+                raise ValueError(too_large(name, len(content), UPLOAD_BYTES) + _TOO_LARGE_HINT)
             self.file_md.content = f"Reading {html.escape(name)} and finding its contacts…"
             model = self._tab_bodies(content, name)
             if model.bodies.box is not None:  # the file's own box (GSD, LAMMPS, extxyz) wins, and is shown
                 self.box_text.value = _box_text(model.box)
         except ValueError as e:
-            self.file_md.content = f'<span style="color:#d62728">⚠ {html.escape(str(e))}</span>'
+            self.file_md.content = _warning(str(e))
             return str(e)
         with self._lock:
             self.model = model
@@ -489,7 +509,7 @@ class BodiesView:
         try:
             model = self._tab_bodies(self.model.bodies, self.model.name)
         except ValueError as e:
-            self.file_md.content = f'<span style="color:#d62728">⚠ {html.escape(str(e))}</span>'
+            self.file_md.content = _warning(str(e))
             return
         with self._lock:
             self.model = model
@@ -521,8 +541,15 @@ class BodiesView:
         """
         if self.timeline is not None:
             return self.timeline.open_event(k)
-        assert self.model is not None
-        cfg, note = self.model.pair_config(k)
+        m = self.model
+        assert m is not None
+        i, j = int(m.result.i[k]), int(m.result.j[k])
+        gone = next((b for b in (i, j) if b in m.undrawn), None)
+        if gone is not None:  # its floats would overflow the two-body view's drawing and camera
+            self.body_md.content = (f"Pair {i} – {j} is not opened: body **{gone}** is not drawn "
+                                    f"({html.escape(m.undrawn[gone])}).")
+            return None
+        cfg, note = m.pair_config(k)
         return self._open_two_body(k, cfg, note)
 
     def _open_two_body(self, k: int, cfg: Any, note: str, *, motion: Any = None, target: dict[str, Any] | None = None) -> Any:
@@ -549,7 +576,7 @@ class BodiesView:
                 self.pair_folder = self.gui.add_folder("Two-body view", order=-998.0)
                 with self.pair_folder:
                     self.session = Session(self.target, cfg, cache=self.analysis_cache(), executor=self.executor,
-                                           sphere_subdivisions=self.sphere_subdivisions)
+                                           sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads)
             else:
                 self.pair_folder.visible = True
                 self._show_session_nodes(True)
@@ -622,6 +649,14 @@ class BodiesView:
                 self.timeline.close()
             if self.session is not None:
                 self.session.close()
+
+
+_TOO_LARGE_HINT = ": find its contacts with `python -m app contacts`, or start the scene on it (--bodies)"
+
+
+def _warning(text: str) -> str:
+    """A message of the panel in the warning colour (HTML-escaped)."""
+    return f'<span style="color:#d62728">⚠ {html.escape(text)}</span>'
 
 
 def _camera_of(cam: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:

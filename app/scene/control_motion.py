@@ -9,7 +9,6 @@ with the reason next to the motion field, never a panel waiting forever.
 
 from __future__ import annotations
 
-import threading
 import time
 from concurrent.futures import Future
 from typing import TYPE_CHECKING
@@ -21,6 +20,7 @@ from .motion_form import form_text
 from .panels import analysed_text
 from .state import SceneConfig, StatusError
 from .texts import SHOWN_DIGITS, read_time, time_float
+from .threads import later
 from .touch import touch_event, touch_motion
 
 if TYPE_CHECKING:
@@ -189,9 +189,7 @@ class MotionControl:
         s.state.analysing = True
         s.state.status = "Analysing the motion (exact)…"
         if quiet:
-            timer = threading.Timer(self.QUIET, self._still_analysing, (model.key,))
-            timer.daemon = True
-            timer.start()
+            later(self.QUIET, self._still_analysing, model.key)
         else:
             s.refresh()
         fut = s.cache.submit(model, s.executor)

@@ -17,16 +17,13 @@ import viser
 from core.shapes.numbers import to_fmpq
 
 from .gui import DIM_LABELS, ignoring_event
+from .mesh_detail import DRAWABLE
 from .state import SceneConfig, ShapeState
 
 if TYPE_CHECKING:
     from .session import Session
 
 __all__ = ["ShapeControl", "drawable", "DRAWABLE"]
-
-DRAWABLE = 10**12
-"""Largest |coordinate| and semi-axis (and 1 / smallest semi-axis) of a shape typed in the
-scene: entries of its matrix stay below 1e48 and the readout's floats finite."""
 
 
 def drawable(shape: ShapeState) -> ShapeState:

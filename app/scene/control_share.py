@@ -21,6 +21,7 @@ import viser
 from .export import analysis_csv, analysis_json, dumps
 from .links import link_path
 from .panels import copy_button
+from .wire import too_large
 
 if TYPE_CHECKING:
     from .session import Session
@@ -40,6 +41,8 @@ class ShareControl:
         ui.link.on_click(lambda ev: self.on_link())
         ui.download.on_click(lambda ev: self.download("scene.json", dumps(self.s.snapshot().to_dict()), ev.client))
         ui.upload.on_upload(lambda ev: self.on_upload(ev.target.value))
+        if session.uploads is not None:  # a larger file is refused before the server keeps it
+            session.uploads.limit(ui.upload, MAX_UPLOAD_BYTES, lambda r: self.s.field_error("config", r.message()))
         ui.analysis_json.on_click(lambda ev: self.on_analysis("json", ev.client))
         ui.analysis_csv.on_click(lambda ev: self.on_analysis("csv", ev.client))
 
@@ -65,7 +68,7 @@ class ShareControl:
         s = self.s
         try:
             if len(file.content) > MAX_UPLOAD_BYTES:
-                raise ValueError(f"the file is too large ({len(file.content)} > {MAX_UPLOAD_BYTES} bytes)")
+                raise ValueError(too_large(file.name, len(file.content), MAX_UPLOAD_BYTES))
             try:
                 data = json.loads(file.content.decode("utf-8"))
             except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as e:

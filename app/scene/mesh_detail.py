@@ -1,4 +1,4 @@
-"""How finely the scene draws a solid: the icosphere's subdivisions (no viser: the command line reads it).
+"""How finely the scene draws a solid (the icosphere's subdivisions), and how large (no viser: the command line reads it).
 
 The drawn mesh of an ellipsoid is a unit icosphere scaled by the semi-axes (:mod:`app.scene.shapes`).
 Its vertices lie on the sphere, so at any detail a drawing lies inside its shape and two tangent
@@ -8,7 +8,13 @@ be, and what a frame costs where WebGL runs in software.
 
 from __future__ import annotations
 
-__all__ = ["SPHERE_SUBDIVISIONS", "SPHERE_SUBDIVISIONS_RANGE", "check_sphere_subdivisions"]
+__all__ = ["SPHERE_SUBDIVISIONS", "SPHERE_SUBDIVISIONS_RANGE", "check_sphere_subdivisions", "DRAWABLE"]
+
+DRAWABLE = 10**12
+"""Largest |coordinate| and semi-axis (and 1 / smallest semi-axis) the scene draws: entries of a
+shape's matrix stay below 1e48 and the floats of drawing (poses, camera, readout) finite. A shape
+typed in the scene is refused outside it (:func:`app.scene.control_shapes.drawable`); a body of a
+file is listed but not drawn (:class:`app.scene.bodies.BodiesModel`)."""
 
 SPHERE_SUBDIVISIONS = 5
 """Icosphere subdivisions of a shape's mesh: 20,480 faces, whose planes lie within

@@ -198,10 +198,11 @@ class OriginPolicy:
         return check
 
 
-def start_viser(policy: OriginPolicy, router: Any = None, **kwargs: Any) -> Any:
+def start_viser(policy: OriginPolicy, router: Any = None, *, max_message: int | None = None, **kwargs: Any) -> Any:
     """``viser.ViserServer(**kwargs)`` whose websocket handshake applies ``policy``.
 
-    ``router`` (an :class:`app.scene.links.Router`) also routes the HTTP requests (tab addresses).
+    ``router`` (an :class:`app.scene.links.Router`) also routes the HTTP requests (tab addresses);
+    ``max_message`` replaces viser's largest websocket message a client may send (50 MB).
 
     Raises:
         RuntimeError: viser started its server some other way, so the check is not in place
@@ -221,6 +222,8 @@ def start_viser(policy: OriginPolicy, router: Any = None, **kwargs: Any) -> Any:
         installed.append(True)
         if router is not None:
             process_request = router.process_request(process_request)
+        if max_message is not None:
+            kw["max_size"] = max_message
         started.append(original(*args, process_request=policy.process_request(process_request), **kw))
         return started[-1]
 

@@ -42,6 +42,7 @@ from .panel_view import PanelView, Syncing
 from .picture import Picture, motion_picture, static_picture
 from .shapes import PALETTES, EllipsoidView
 from .state import AppState, SceneConfig
+from .threads import later, soon
 
 __all__ = ["Session"]
 
@@ -60,6 +61,8 @@ class Session:
         defer_load: build the scene but load nothing yet (the caller loads, e.g. a link).
         sphere_subdivisions: of the icosphere the solids are drawn with
             (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`; fewer draw faster in software WebGL).
+        uploads: the server's :class:`~app.scene.wire.UploadGuard` (the configuration upload's
+            limit is set on it, and a refused file is shown next to the button), or None.
     """
 
     PANEL_PERIOD = 0.05
@@ -85,8 +88,10 @@ class Session:
         cameras: Callable[[], Iterable[viser.CameraHandle]] | None = None,
         defer_load: bool = False,
         sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
+        uploads: wire.UploadGuard | None = None,
     ) -> None:
         self.sphere_subdivisions = check_sphere_subdivisions(sphere_subdivisions)
+        self.uploads = uploads
         self.target = target
         self.scene: viser.SceneApi = target.scene
         self.gui_api: viser.GuiApi = target.gui
@@ -228,7 +233,7 @@ class Session:
         self.load(static)
         self.ready.clear()
 
-        def read() -> None:  # in a worker process, off the thread that called
+        def read() -> None:  # in a worker process, waited for on the scene's pool (off the thread that called)
             try:
                 model = self.cache.read_typed(motion)
             except MotionError as e:
@@ -237,7 +242,7 @@ class Session:
                 return
             self.motion_ctl.analyse_pending(model, t=config.t, event=config.event)
 
-        threading.Thread(target=read, name="read-config", daemon=True).start()
+        soon(read)
 
     def snapshot(self) -> SceneConfig:
         """What the tab shows, as a configuration (kept for a reload; the file to download)."""
@@ -340,9 +345,7 @@ class Session:
 
     def _schedule(self, delay: float) -> None:
         if self._timer is None and (self._panels_due or self._plots_due or self._witness_due):
-            self._timer = threading.Timer(delay, self._flush)
-            self._timer.daemon = True
-            self._timer.start()
+            self._timer = later(delay, self._flush)  # on a long-lived thread: a thread each kept FLINT's caches
 
     def _flush(self) -> None:
         """The coalesced part of refresh: witnesses after a drag, the panel, the plot cursor."""

@@ -12,8 +12,9 @@ rather than parameters use :meth:`Bodies.from_matrices`.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 
@@ -62,7 +63,7 @@ class Bodies:
                 raise ValueError(f"bodies: centres, semi-axes and orientations must be arrays of numbers ({e})") from None
             c, r = self.centers, self.semi_axes
             if c.ndim != 2 or c.shape[1] not in (2, 3) or r.shape != c.shape:
-                raise ValueError(f"bodies: expected (N, 2) or (N, 3) centres and semi-axes of the same shape, got {c.shape} and {r.shape}")
+                raise ValueError(f"bodies: centers and semi_axes must be (N, 2) or (N, 3) arrays of one shape, got {c.shape} and {r.shape}")
             n = c.shape[0]
         else:
             assert self._matrices is not None
@@ -121,11 +122,18 @@ class Bodies:
             self._errors = axes_row_errors(self.centers, self.semi_axes, self.orientations)
         return self._errors
 
+    @property
+    def parameter_errors(self) -> dict[int, str]:
+        """Row -> why its parameters are no shape, without the float matrices' own limit (what the sweep reads)."""
+        if not self.has_parameters:
+            return {}
+        return axes_row_errors(self.centers, self.semi_axes, self.orientations, matrices=False)
+
     def name(self, k: int) -> str:
         """How messages name body k: "body 7" or, with ids, "body 7 (id 12)"."""
         return f"body {k}" if self.ids is None else f"body {k} (id {int(self.ids[k])})"
 
-    def ordered_like(self, other: Bodies) -> Bodies:
+    def ordered_like(self, other: Bodies) -> Self:
         """These bodies in the order of ``other``'s ids (two frames of one trajectory); self when already so.
 
         Raises:
@@ -141,12 +149,17 @@ class Bodies:
         rows = order[where]
         if len(self) != len(other) or not np.array_equal(self.ids[rows], other.ids) or np.unique(self.ids).size != len(self):
             raise ValueError("bodies: the two frames do not hold the same ids (each body once): a body appeared or left")
-        def pick(a: Any) -> Any:
-            return None if a is None else np.asarray(a)[rows]
-
-        if self._matrices is not None and self.centers is None:
-            return Bodies.from_matrices(self._matrices[rows], ids=self.ids[rows], box=self.box)
-        return Bodies(pick(self.centers), pick(self.semi_axes), pick(self.orientations), self.ids[rows], self.box)
+        out = copy.copy(self)  # a subclass keeps its own fields (a file's name, its frame)
+        if self.has_parameters:
+            out.centers = np.asarray(self.centers)[rows]
+            out.semi_axes = np.asarray(self.semi_axes)[rows]
+            out.orientations = None if self.orientations is None else np.asarray(self.orientations)[rows]
+            out._matrices = out._errors = None
+        else:
+            assert self._matrices is not None
+            out._matrices = self._matrices[rows]
+        out.ids = self.ids[rows]
+        return out
 
 
 def unpack(bodies: Any, box: Any) -> tuple[Any, Any, np.ndarray | None]:

@@ -25,7 +25,7 @@ from .periodic import box_vectors, cell_heights, fractional, lattice_shifts, rea
 __all__ = ["Box"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Box:
     """A periodic box: sides and tilt factors (HOOMD's convention, module docstring).
 
@@ -224,6 +224,20 @@ class Box:
     def tolist(self) -> list[float]:
         """:meth:`to_tuple` as a list (JSON)."""
         return list(self.to_tuple())
+
+    def __eq__(self, other: object) -> bool:
+        """Equal to another Box of the same numbers, or to the tuple :meth:`to_tuple` gives (the old form)."""
+        if isinstance(other, Box):
+            return self.to_tuple() == other.to_tuple() and self.dimensions == other.dimensions
+        if isinstance(other, tuple | list):
+            try:
+                return self.to_tuple() == tuple(float(v) for v in other)
+            except (TypeError, ValueError):
+                return False
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(self.to_tuple())
 
     def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
         """``np.asarray(box)``: :attr:`array` (code that took the box as an array keeps working)."""

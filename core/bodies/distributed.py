@@ -27,9 +27,14 @@ there; every later task names blocks by their futures, so the task graphs hold n
    search does (:func:`core.bodies.search.contacts_of`): the same pairs, relations, certifiers
    and counts as ``contacts(Q)`` on one machine.
 
-A worker lost while it held the search's data (a crash, a restart, or the scheduler's
-``distributed.scheduler.worker-ttl`` after it stopped answering) cancels the futures that needed
-the data: the search warns and starts again once from step 1, then raises RuntimeError.
+A lost worker (a crash, a kill, a restart, or the scheduler's ``distributed.scheduler.worker-ttl``
+after it stopped answering): the scheduler runs its tasks again on the workers left (every task is
+submitted with ``retries=`` :data:`_TASK_RETRIES`, and one whose worker died is rescheduled), but
+the blocks scattered to it are gone, which cancels the futures that needed them, and a message to
+it fails: the search warns and starts again from step 1 (:data:`_RETRIES` times), then raises one
+RuntimeError saying so. A task that killed its workers again and again (Dask's KilledWorker) is a
+RuntimeError at once. The kernels' plugin is registered on the scheduler, which installs it on
+every worker that joins; a worker lost while it is installed does not fail the search.
 
 Progress (``progress=True``): Dask's own progress bar (``distributed``'s on a cluster, or
 ``dask.diagnostics.ProgressBar`` on a local scheduler), drawn on stderr, one bar per step; a
@@ -50,14 +55,16 @@ import sys
 import time
 import warnings
 from collections.abc import Sequence
+from concurrent.futures import CancelledError
 from dataclasses import dataclass
 from typing import Any
 
 import dask
 import numpy as np
-from distributed.client import FutureCancelledError
+from distributed.comm.core import CommClosedError
 from distributed.diagnostics.plugin import WorkerPlugin
 from distributed.diagnostics.progressbar import TextProgressBar
+from distributed.scheduler import KilledWorker
 
 from ..fixed.lazy import PAIR_CHUNK, is_dask_array
 from ..options import check_options
@@ -82,6 +89,13 @@ _RETRIES = 1
 """Times a search starts again after a worker was lost with its data (scattered blocks are not
 recomputed: the futures that needed them are cancelled). A worker can be lost by a crash, a
 restart, or the scheduler's ``distributed.scheduler.worker-ttl`` when it stops answering."""
+
+_TASK_RETRIES = 2
+"""``retries=`` of every task: a task that fails (e.g. its worker shut down under it) runs again elsewhere."""
+
+_LOST = (CancelledError, CommClosedError)
+"""What a lost worker makes the client raise: cancelled futures (Dask's FutureCancelledError and
+FuturesCancelledError are CancelledErrors), a closed connection to it."""
 
 BODY_CHUNK = 1 << 18
 """Bodies per chunk when numpy input is handed to Dask (32 MiB of ellipsoid matrices)."""
@@ -157,22 +171,37 @@ def contacts_distributed(
     client, own = _client(scheduler)
     try:
         if client is not None:
-            register(client)
+            try:
+                register(client)
+            except _LOST:  # stored on the scheduler before it is sent: every worker that joins gets it
+                pass
         run = _Runner(client, scheduler if isinstance(scheduler, str) and client is None else None, progress)
         for attempt in range(1 + _RETRIES):
             try:
                 return _search(run, Q, box, method, on_invalid, partitions, chunk, max_pairs)
-            except FutureCancelledError as e:
+            except KilledWorker as e:
+                raise RuntimeError(f"a task of this search killed the Dask workers that ran it, again and again: {_first_line(e)}") from e
+            except _LOST as e:
                 if client is None or attempt == _RETRIES:
                     raise RuntimeError(
                         f"the Dask cluster lost a worker holding this search's data in each of {attempt + 1} "
-                        f"attempt(s) (a lost worker: a crash, a restart, or silent past distributed.scheduler.worker-ttl): {e}"
+                        "attempt(s) (a lost worker: a crash, a restart, or silent past distributed.scheduler.worker-ttl): "
+                        f"{type(e).__name__}: {_first_line(e)}"
                     ) from e
-                warnings.warn(f"a Dask worker was lost with data of this search; starting it again ({e})", RuntimeWarning, stacklevel=2)
+                warnings.warn(
+                    f"a Dask worker was lost with data of this search; starting it again ({type(e).__name__}: {_first_line(e)})",
+                    RuntimeWarning, stacklevel=2,
+                )
         raise AssertionError("unreachable")
     finally:
         if own and client is not None:
             client.close()
+
+
+def _first_line(e: BaseException) -> str:
+    """An exception's message as one line (Dask's span several)."""
+    text = str(e).strip()
+    return text.splitlines()[0] if text else type(e).__name__
 
 
 def _search(
@@ -234,7 +263,7 @@ class _Runner:
     def compute(self, tasks: Sequence[Any], label: str, *, final: bool = False) -> tuple[list[Any], list[Any]]:
         """(handles usable in later tasks, the results); the callable progress counts the final step."""
         if self.client is not None:
-            futures = self.client.compute(list(tasks))
+            futures = self.client.compute(list(tasks), retries=_TASK_RETRIES)
             if self.progress is True:
                 _StderrProgressBar(futures, label, interval="200ms")
             elif callable(self.progress) and final:

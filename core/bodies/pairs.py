@@ -134,11 +134,11 @@ class PairTable:
             out.write("".join(",".join(row) + "\n" for row in zip(*(v[s : s + step] for v in values), strict=True)))
 
     def rows(self, *, image_dims: int | None = None) -> Iterator[dict[str, Any]]:
-        """One dict per pair with the CSV's columns, and ``image`` as a list (the JSON form)."""
+        """One dict per pair (the JSON form): the CSV's columns, and ``image`` as d integers (None in open space)."""
         cols = self.columns(image_dims=image_dims)
-        d = sum(1 for name in cols if name.startswith("image_"))
         names = list(cols)
-        for values in zip(*cols.values(), strict=True):
+        images = None if self.image is None else self.image.tolist()
+        for k, values in enumerate(zip(*cols.values(), strict=True)):
             row = dict(zip(names, values, strict=True))
-            row["image"] = [row[f"image_{'xyz'[a]}"] for a in range(d)] if self.image is not None else None
+            row["image"] = None if images is None else images[k]
             yield row

@@ -61,7 +61,8 @@ def sweep_contacts(
     Also ``sweep_contacts(start, end)`` with two :class:`core.Bodies` (two frames): their centres,
     semi-axes (equal in both: the bodies are rigid), orientations, box (``start``'s unless ``box``
     is given) and ids (``end`` is reordered to ``start``'s ids when both have ids; the result
-    carries them).
+    carries them). In a box the frames may be wrapped: each body moves by its minimum-image
+    displacement (``end`` taken at the image nearest ``start``, :meth:`core.Box.unwrap`).
 
     Args:
         centers0: (N, 3) centres at t = 0 (2D: (N, 2)); floats, read exactly. Or the :class:`core.Bodies` at t = 0.
@@ -346,6 +347,16 @@ def _frames(start: Any, end: Any, semi_axes: Any, o0: Any, o1: Any, box: Any) ->
     end = end.ordered_like(start)
     if start.dimensions != end.dimensions:
         raise ValueError(f"sweep_contacts: {start.dimensions}D bodies at the start and {end.dimensions}D at the end")
+    if box is None:
+        box = start.box if start.box is not None else end.box
+    centers1 = end.centers
+    if box is not None:  # frames of a trajectory are wrapped: each body moves by its minimum image
+        b = Box.from_any(box, start.dimensions)
+        assert b is not None
+        ok = np.isfinite(start.centers).all(axis=1) & np.isfinite(end.centers).all(axis=1)
+        centers1 = np.array(end.centers, dtype=np.float64, copy=True)
+        if ok.any():
+            centers1[ok] = b.unwrap(start.centers[ok], end.centers[ok])[0]
     differ = np.flatnonzero((start.semi_axes != end.semi_axes).any(axis=1))
     if differ.size:
         k = int(differ[0])
@@ -353,6 +364,4 @@ def _frames(start: Any, end: Any, semi_axes: Any, o0: Any, o1: Any, box: Any) ->
             f"sweep_contacts: {start.name(k)} has semi-axes {start.semi_axes[k].tolist()} at the start and "
             f"{end.semi_axes[k].tolist()} at the end: the bodies must keep their shape during the step"
         )
-    if box is None:
-        box = start.box if start.box is not None else end.box
-    return start.centers, end.centers, start.semi_axes, start.orientations, end.orientations, box, start.ids
+    return start.centers, centers1, start.semi_axes, start.orientations, end.orientations, box, start.ids

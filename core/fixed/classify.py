@@ -19,6 +19,7 @@ from typing import Any, overload
 
 import numpy as np
 
+from ..errors import InvalidInput
 from ..filtered import Certifier, Predicate, Stats, predicate
 from ..formulae.decision import RULE_RELATION
 from ..options import METHODS, ON_INVALID, Method, OnInvalid, check_options
@@ -342,9 +343,9 @@ def _checked_code(a: Any, b: Any, i: int, scalar: bool, on_invalid: str, errors:
 
 
 def _invalid(e: ValueError, i: int, scalar: bool, on_invalid: str, errors: dict[int, str]) -> int:
-    """``on_invalid`` for invalid pair i: raise its error naming the pair, or keep it and return INVALID."""
+    """``on_invalid`` for invalid pair i: raise its :class:`core.InvalidInput` naming the pair, or mark it INVALID."""
     if on_invalid == "raise":
-        raise ValueError(_where(i, scalar) + str(e)) from None
+        raise InvalidInput.of(e).at_pair(None if scalar else i, _where(i, scalar)) from None
     errors[i] = str(e)
     return int(Relation.INVALID)
 

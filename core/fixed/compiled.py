@@ -21,7 +21,9 @@ import hashlib
 import os
 import threading
 import warnings
+from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 from types import ModuleType
 from typing import cast
@@ -29,7 +31,7 @@ from typing import cast
 import numpy as np
 
 __all__ = [
-    "available", "balance_available", "balance", "spheres_available", "spheres", "query_one_available", "query_one", "query_many", "SPHERE_TIGHT", "SPHERE_LOOSE", "SPHERE_NONE", "SPHERE_OTHER", "pool", "warm_up", "status", "variant", "variants", "select", "rules", "mapped", "rule_one", "set_threads", "get_threads",
+    "available", "balance_available", "balance", "spheres_available", "spheres", "query_one_available", "query_one", "query_many", "SPHERE_TIGHT", "SPHERE_LOOSE", "SPHERE_NONE", "SPHERE_OTHER", "pool", "warm_up", "status", "variant", "variants", "select", "rules", "mapped", "rule_one", "set_threads", "get_threads", "threads",
     "header_sha256", "FIX", "HEADER",
 ]
 
@@ -94,11 +96,23 @@ def available() -> bool:
 
 
 def warm_up(*, wait: bool = True) -> bool:
-    """Whether the compiled kernels serve (they load with the module: nothing to wait for).
+    """Start the filter's thread pool now, and say whether the compiled kernels serve.
 
-    Kept for callers that prepared the kernels ahead of time (the scene, the API, Dask workers).
+    The kernels load with the module; what a first large batch would otherwise pay is the
+    start of the pool's threads (one per :func:`get_threads`). A server or a Dask worker calls
+    this once at start-up. ``wait=False`` starts them without waiting.
+
+    Returns:
+        True when the compiled extension serves (False: the numpy filter, ~100x slower).
     """
-    del wait
+    if _EXT is not None:
+        n = get_threads()
+        if n > 1:
+            runner = pool(n)
+            started = [runner.submit(int) for _ in range(n)]
+            if wait:
+                for f in started:
+                    f.result()
     return _EXT is not None
 
 
@@ -138,9 +152,28 @@ def set_threads(n: int | None) -> None:
 
 
 def get_threads() -> int:
-    """Threads a batch is split over."""
+    """Threads a batch is split over (:func:`set_threads`, else ``ELLIPSOID_THREADS``, else every core)."""
     n = _state["threads"] or int(os.environ.get("ELLIPSOID_THREADS", "0") or 0) or _CPUS
     return int(cast(int, n))
+
+
+@contextmanager
+def threads(n: int | None) -> Iterator[None]:
+    """Within the block, batches use ``n`` threads (as :func:`set_threads`); the setting is restored after.
+
+    Examples:
+        >>> with threads(1):
+        ...     get_threads()
+        1
+    """
+    with _lock:
+        before = _state["threads"]
+    set_threads(n)
+    try:
+        yield
+    finally:
+        with _lock:
+            _state["threads"] = before
 
 
 def pool(k: int) -> ThreadPoolExecutor:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import bisect
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -240,26 +241,32 @@ class MotionAnalysis:
             raise ValueError(f"t = {t} is outside the analysed interval [{lo}, {hi}]")
         return tq
 
-    def relation_at(self, t: Any, *, method: str = "lookup") -> Relation:
+    def relation_at(self, t: Any, *, via: str = "lookup", method: str | None = None) -> Relation:
         """Certified relation at one time t (float = exact binary rational, int, "p/q", "0.1").
 
-        ``method="lookup"`` (default, a few microseconds) compares t exactly with the
-        candidates' isolating intervals (one polynomial evaluation when t falls inside one) and
-        returns the relation of that instant or open interval, decided exactly during
-        :func:`analyse`. ``method="classify"`` evaluates the exact matrices A(t), B(t) and runs
-        the static classifier :func:`core.classify` on them (an independent check; rational
-        motions only, ~0.1-1 ms).
+        ``via="lookup"`` (default, a few microseconds) compares t exactly with the candidates'
+        isolating intervals (one polynomial evaluation when t falls inside one) and returns the
+        relation of that instant or open interval, decided exactly during :func:`analyse`.
+        ``via="classify"`` evaluates the exact matrices A(t), B(t) and runs the static
+        classifier :func:`core.classify` on them (an independent check; rational motions only,
+        ~0.1-1 ms). Both are exact: ``method=`` means the arithmetic everywhere else in core, so
+        the choice of algorithm is ``via=`` (``method="lookup" | "classify"`` still works, with a
+        DeprecationWarning).
 
         Raises:
             ValueError: t outside I or not a number; "classify" on a motion with sqrt(d) entries.
         """
+        if method is not None:
+            warnings.warn('relation_at(t, method=...) chooses the algorithm: use via="lookup" or via="classify"',
+                          DeprecationWarning, stacklevel=2)
+            via = method
+        check_choice(via, ("lookup", "classify"), "via")
         tq = self._in_interval(t)
-        if method == "classify":
+        if via == "classify":
             from ..fixed.classify import classify
             from .motions import matrix_at_exact
 
             return classify(matrix_at_exact(self.A, tq), matrix_at_exact(self.B, tq))
-        check_choice(method, ("lookup", "classify"), "method")
         i = bisect.bisect_left(self._his, tq)
         if i < len(self._points):
             c = self._points[i].compare(tq)

@@ -33,6 +33,7 @@ from typing import Any, Literal, TypeAlias, overload
 import numpy as np
 from flint import fmpq, fmpz
 
+from ..errors import InvalidInput
 from ..formulae.pencil import determinant
 from .numbers import sign, to_fmpq
 from .rotation import rotation_numerator
@@ -259,7 +260,8 @@ def _far_limit(r: np.ndarray) -> np.ndarray:
         return np.asarray(FAR_FROM_ORIGIN * r.min(axis=1, initial=np.inf), dtype=np.float64)
 
 
-def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, first: bool = False) -> dict[int, str]:
+def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, first: bool = False,
+                    matrices: bool = True) -> dict[int, str]:
     """Row -> why those parameters are no shape (the checks of :func:`quadrics_from_axes`).
 
     Args:
@@ -267,6 +269,9 @@ def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, f
         semi_axes: (N, d) floats.
         orientations: (N, 4) quaternions, (N,) angles (2D) or None.
         first: stop at the first bad row.
+        matrices: also refuse a centre so far from the origin (2^26 times the smallest
+            semi-axis) that no float64 matrix holds the shape; False for the computations that
+            read the parameters exactly and build no float matrix (the sweep).
 
     Returns:
         ``{row: reason}`` for rows with a non-finite number, a semi-axis <= 0, a zero quaternion
@@ -282,7 +287,7 @@ def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, f
         (~(np.isfinite(c).all(axis=1) & np.isfinite(r).all(axis=1)),
          lambda k: f"centre and semi-axes must be finite numbers, got {c[k].tolist()} and {r[k].tolist()}"),
         (~(r > 0).all(axis=1), lambda k: f"semi-axes must be positive, got {r[k].tolist()}"),
-        (np.abs(c).max(axis=1, initial=0.0) > _far_limit(r),
+        (np.abs(c).max(axis=1, initial=0.0) > _far_limit(r) if matrices else np.zeros(N, dtype=bool),
          lambda k: f"centre {c[k].tolist()} is more than 2^26 times the smallest semi-axis ({float(r[k].min())!r}) from "
                    "the origin: the float64 matrix would not be this shape (its constant term rounds by as much as "
                    "the shape's own size); place the origin nearer the bodies"),
@@ -629,25 +634,28 @@ def normalised_quadratic_part(M: Any, *, name: str = "matrix") -> ExactMatrix:
     :func:`validate_quadric`, is left to the caller (the exact classifier reads it off the
     pencil: det A = a_n, det B = a_0).
     """
-    rows = _rows(M, name)
-    n = len(rows)
-    E = symmetric_part([[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)], name)
+    try:
+        rows = _rows(M, name)
+        n = len(rows)
+        E = symmetric_part([[_entry(v, name, i, j) for j, v in enumerate(row)] for i, row in enumerate(rows)], name)
+    except ValueError as e:
+        raise InvalidInput.of(e, matrix=name) from None
     minors = [determinant([row[:k] for row in E[:k]]) for k in range(1, n)]
     flip = interior_sign([sign(m) for m in minors])
     if flip == 1:
         return E
     if flip == -1:
         return [[-v for v in row] for row in E]
-    raise ValueError(not_a_quadric_message(name, n))
+    raise InvalidInput(not_a_quadric_message(name, n), matrix=name)
 
 
 def check_determinant_sign(det_sign: int, n: int, name: str) -> None:
     """Raise unless det < 0 (given the sign of det of the normalised matrix)."""
     kind = "ellipse" if n == 3 else "ellipsoid"
     if det_sign == 0:
-        raise ValueError(f"{name} is a degenerate {kind} (det = 0: a single point)")
+        raise InvalidInput(f"{name} is a degenerate {kind} (det = 0: a single point)", matrix=name)
     if det_sign > 0:
-        raise ValueError(f"{name} has an empty interior: no real points (det > 0), not an {kind}")
+        raise InvalidInput(f"{name} has an empty interior: no real points (det > 0), not an {kind}", matrix=name)
 
 
 def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
@@ -661,8 +669,9 @@ def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
         Nested lists of ``fmpq`` with interior X^T M X < 0 (signs flipped if needed).
 
     Raises:
-        ValueError: wrong shape, not symmetric, NaN/inf or unreadable entry, quadratic part
-            not definite, degenerate (det = 0) or empty (no real points).
+        InvalidInput: (a ValueError naming ``name``) wrong shape, not symmetric, NaN/inf or
+            unreadable entry, quadratic part not definite, degenerate (det = 0) or empty (no
+            real points).
 
     Examples:
         >>> validate_quadric([[-1, 0, 0], [0, -1, 0], [0, 0, 1]])   # flipped unit circle
@@ -670,7 +679,7 @@ def validate_quadric(M: Any, *, name: str = "matrix") -> ExactMatrix:
         >>> validate_quadric([[1, 0, 0], [0, -1, 0], [0, 0, -1]])
         Traceback (most recent call last):
         ...
-        ValueError: matrix is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)
+        core.errors.InvalidInput: matrix is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)
     """
     E = normalised_quadratic_part(M, name=name)
     d = determinant(E)
