@@ -95,6 +95,27 @@ def test_queries_equal_contacts_on_the_union(d, box):
     assert hits.counts["candidates"] >= len(hits) and hits.counts["queries"] == len(Qnew)
 
 
+@pytest.mark.parametrize("d, box", [(3, None), (3, TILTED_3D), (2, (9.0, 8.0))])
+def test_a_large_batch_of_trial_moves_in_any_order(d, box):
+    """Thousands of trial moves of random rows (asked in grid order, split over threads, the
+    outputs grown past their first size) answer like contacts on the union, sorted by (i, j)."""
+    rng = np.random.default_rng(21)
+    Q = bodies(1500, d, box, seed=11, size=0.5)
+    index = BodyIndex(Q, box=box)
+    rows = rng.integers(0, len(Q), 5000)  # > 2 ranges of 2048 new bodies: two threads
+    big = bodies(5000, d, box, seed=12, size=1.6)  # many pairs each: more than the first outputs hold
+    trial = np.where((np.arange(5000) % 2 == 0)[:, None, None], big, Q[rows])
+    compiled.set_threads(2)
+    try:
+        hits = index.query(trial, exclude=rows)
+    finally:
+        compiled.set_threads(None)
+    assert np.all(np.diff(hits.i * len(Q) + hits.j) > 0)
+    want = {key: v for key, v in expected(Q, trial, box).items() if key[1] != rows[key[0]]}
+    assert as_dict(hits) == want and len(want) > 8 * 5000
+    assert not any((int(i), int(j)) for i, j in zip(hits.i, hits.j, strict=True) if j == rows[i])
+
+
 @pytest.mark.parametrize("d, box", CASES)
 def test_updates_move_bodies_without_rebuilding(d, box):
     rng = np.random.default_rng(5)

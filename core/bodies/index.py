@@ -469,14 +469,21 @@ class BodyIndex:
         (images, undecided pairs, a method other than "adaptive") is classified as
         :meth:`_classify` does. None where the compiled loop cannot answer (out of memory in it):
         the numpy path then does.
+
+        The new bodies are asked in the order of the grid cells their centres fall in (the
+        answers do not depend on it): neighbouring new bodies then read the same cells and
+        indexed bodies from cache. Trial moves drawn at random over 100,000 bodies ran 2-3x
+        faster so (bench/bench_index.py).
         """
         M, d = Qn.shape[0], self.d
         adaptive = self.method == "adaptive"
+        c = np.where(np.isfinite(centers), centers, 0.0)
+        order = np.argsort(self._cell_key(c), kind="stable")
         spheres = np.empty((M, d + 1))
-        spheres[:, :d] = np.where(np.isfinite(centers), centers, 0.0)
-        spheres[:, d] = radii
-        ex = np.full(M, -1, dtype=np.int64) if exclude is None else np.ascontiguousarray(exclude, dtype=np.int64)
-        Qc = np.ascontiguousarray(Qn, dtype=np.float64)
+        spheres[:, :d] = c[order]
+        spheres[:, d] = radii[order]
+        ex = np.full(M, -1, dtype=np.int64) if exclude is None else np.asarray(exclude, dtype=np.int64)[order]
+        Qc = np.ascontiguousarray(Qn[order], dtype=np.float64)
         Q = self._Q if adaptive else _NONE
 
         def run(lo: int, hi: int) -> tuple[list[tuple[np.ndarray, ...]], int, int, int]:
@@ -515,7 +522,10 @@ class BodyIndex:
         if status:
             raise ValueError(_FAR_MESSAGE if status == compiled.QUERY_FAR_BOX else _IMAGES_MESSAGE)
         qi, bj, image, rel, cert = (np.concatenate(x) if len(parts) > 1 else x[0] for x in zip(*parts, strict=True))
-        image = None if self._L is None else image
+        qi = order[qi]  # back to the rows of Qnew; each body's pairs are sorted by j, so a stable sort by i sorts by (i, j)
+        by_row = np.argsort(qi, kind="stable")
+        qi, bj, rel, cert = qi[by_row], bj[by_row], rel[by_row], cert[by_row]
+        image = None if self._L is None else image[by_row]
         counts = {"queries": M, "candidates": candidates, "float": candidates - left, "exact": 0, "undecided": 0}
         if candidates > left:
             _CLASSIFY.count(candidates - left, 0, 0)
@@ -637,6 +647,18 @@ class BodyIndex:
         self._body_slot[b] = s
 
     # ------------------------------------------------------------------ steps of a query
+    def _cell_key(self, centers: np.ndarray) -> np.ndarray:
+        """(M,) int64: a key of the grid cell of each centre in Cartesian coordinates, for ordering only.
+
+        Nearby centres get nearby keys (axis 0 slowest); a periodic box is not wrapped here, as
+        only locality matters.
+        """
+        u = np.clip(np.floor((centers - self._origin) / self._cell), 1 - 2.0**20, 2.0**20 - 1).astype(np.int64) + 2**20
+        key = u[:, 0]
+        for a in range(1, self.d):
+            key = key * 2**21 + u[:, a]
+        return key
+
     def _spheres(
         self, Qn: np.ndarray, what: str, names: Any = None, errors: dict[int, str] | None = None
     ) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
