@@ -111,7 +111,7 @@ setup(
         Extension(
             "core.fixed._filter",
             sources=_SOURCES,
-            depends=["core/fixed/_kernels.h", "core/fixed/_blocks.h", "core/fixed/_variant.h"],
+            depends=["core/fixed/_kernels.h", "core/fixed/_blocks.h", "core/fixed/_variant.h", "core/fixed/_spheres.h", "core/fixed/_near.h"],
             extra_compile_args=_FLAGS,
             define_macros=_MACROS,
             libraries=[] if sys.platform == "win32" else ["m"],

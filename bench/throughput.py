@@ -184,6 +184,8 @@ def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -
                 "wrong": int(np.count_nonzero(res.relation != ds.truth)),
             })
             log(f"# {kind} {dim}D: {rate / 1e6:.1f} M/s ({structured[-1]['ratio']:.2f}x random), escalated {structured[-1]['escalated']}")
+    log("# structured 3D by the rule that decides each pair (one core)")
+    outcomes = structured_outcomes(200_000 if quick else 400_000, 3 if quick else 5)
     hard: list[dict[str, Any]] = []
     for dim in (3, 2):
         for gap in (1e-3, 1e-2, 1e-1):
@@ -197,8 +199,46 @@ def run_throughput(*, quick: bool = False, log: Callable[[str], None] = print) -
                 })
     log("# first call in a fresh process")
     fc = first_call(100_000 if quick else 400_000, 2 if quick else 3)
-    return {"rows": rows, "structured": structured, "hard": hard, "first_call": fc, "size": size, "cores": cores,
+    return {"rows": rows, "structured": structured, "outcomes": outcomes, "hard": hard, "first_call": fc, "size": size, "cores": cores,
             "variant": compiled.variant(), "variants": compiled.variants(), "rounds": rounds}
+
+
+def structured_outcomes(size: int, rounds: int) -> list[dict[str, Any]]:
+    """Why structured 3D pairs are slower: the cost of each set against its pairs grouped by the rule that decides them.
+
+    On one pinned core (CPU time, best of ``rounds`` interleaved rounds), ns per pair of the
+    compiled filter on: each data set as it comes (4,000 labelled pairs tiled to ``size``), and
+    the same pairs sorted into one set per deciding rule (``var``: the tree, stage 1;
+    ``3d-s0<0`` / ``3d-s0>0``: the semi-static s0 test, stage 2; ``sep-witness``: the
+    certificates of stage 3; ``common-point``: the full certificate). The filter runs blocks of
+    8 pairs, each later stage in place on every lane of a block when most of its pairs need it:
+    a mixed block pays for the most expensive outcome it holds.
+    """
+    import core
+    from core.fixed import compiled
+    from core.formulae.decision import RULE_LIST
+
+    names = {r.id: r.key for r in RULE_LIST}
+    sets: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    shares: dict[str, float] = {}
+    for kind in ("random", "spheres", "translated copies", "homothetic copies"):
+        ds = D.random_pairs(3, 4000, seed=11) if kind == "random" else D.structured_pairs(3, 4000, kind=kind, seed=12)
+        rules = compiled.rules(ds.A, ds.B)
+        sets[f"{kind}|all"] = _tile(ds, size)
+        shares[f"{kind}|all"] = 1.0
+        for rule in np.unique(rules).tolist():
+            pick = rules == rule
+            if pick.mean() >= 0.02:
+                sets[f"{kind}|{names.get(rule, 'undecided')}"] = _tile(D.Dataset(ds.name, ds.family, 3, ds.A[pick], ds.B[pick], ds.truth[pick]), size)
+                shares[f"{kind}|{names.get(rule, 'undecided')}"] = float(pick.mean())
+    with _one_cpu():
+        core.set_threads(1)
+        try:
+            rate = _rounds({k: (lambda A=A, B=B: compiled.rules(A, B, threads=1)) for k, (A, B) in sets.items()}, size, rounds,
+                           clock=time.process_time)
+        finally:
+            core.set_threads(None)
+    return [{"data": k.split("|")[0], "rule": k.split("|")[1], "share": shares[k], "ns": 1e9 / rate[k]} for k in sets]
 
 
 def throughput_targets(tp: dict[str, Any]) -> list[tuple[str, str, str, bool | None]]:
@@ -222,11 +262,16 @@ def throughput_targets(tp: dict[str, Any]) -> list[tuple[str, str, str, bool | N
                 f"3D one core {r3['f32_one'] / 1e6:.1f} M/s ({r3['f32_one'] / r3['one']:.2f}x float64), every core "
                 f"{r3['f32_all'] / 1e6:.1f} M/s; 2D {r2['f32_one'] / 1e6:.1f} / {r2['f32_all'] / 1e6:.1f} M/s; labels = exact "
                 f"{100 * min(r3['f32_right'], r2['f32_right']):.0f} %", "reported", None))
-    worst = min(tp["structured"], key=lambda s: s["ratio"])
-    ok = worst["ratio"] >= 0.5 and all(s["wrong"] == 0 for s in tp["structured"])
-    out.append(("spheres, translated / homothetic copies, numpy-built: >= 0.5x random, 0 wrong",
-                f"worst {worst['name']} {worst['ratio']:.2f}x; wrong {sum(s['wrong'] for s in tp['structured'])}; escalated "
-                f"{sum(s['escalated'] for s in tp['structured'])} / {sum(s['n'] for s in tp['structured'])}", "met" if ok else "missed", ok))
+    copies = [s for s in tp["structured"] if not s["name"].startswith("numpy-built")]
+    worst = min(copies, key=lambda s: s["ratio"])
+    built = min((s for s in tp["structured"] if s["name"].startswith("numpy-built")), key=lambda s: s["ratio"])
+    ok = worst["ratio"] >= 0.8 and all(s["wrong"] == 0 for s in tp["structured"])
+    out.append(("spheres, translated / homothetic copies: >= 0.8x random (every core, same rounds), 0 wrong (issue 54)",
+                f"worst {worst['name']} {worst['ratio']:.2f}x (3D {min(s['ratio'] for s in copies if s['dim'] == 3):.2f}-"
+                f"{max(s['ratio'] for s in copies if s['dim'] == 3):.2f}x, 2D {min(s['ratio'] for s in copies if s['dim'] == 2):.2f}-"
+                f"{max(s['ratio'] for s in copies if s['dim'] == 2):.2f}x); numpy-built worst {built['ratio']:.2f}x; wrong "
+                f"{sum(s['wrong'] for s in tp['structured'])}; escalated {sum(s['escalated'] for s in tp['structured'])} / "
+                f"{sum(s['n'] for s in tp['structured'])}", "met" if ok else "missed", ok))
     und = sum(h["undecided"] for h in tp["hard"])
     tot = sum(h["n"] for h in tp["hard"])
     wrong = sum(h["wrong"] for h in tp["hard"])
@@ -270,6 +315,12 @@ def format_throughput(tp: dict[str, Any]) -> str:
     L.append("\n| structured data | pairs/s (every core) | vs random | escalated to exact | wrong |\n|---|---:|---:|---:|---:|")
     for s in tp["structured"]:
         L.append(f"| {s['name']} | {s['rate'] / 1e6:.2f} M/s | {s['ratio']:.2f}x | {s['escalated']} / {s['n']} | {s['wrong']} |")
+    if tp.get("outcomes"):
+        L.append("\nStructured 3D by the rule that decides each pair (`structured_outcomes`: one pinned core, CPU time, the "
+                 "compiled filter alone; `all`: the set as it comes, the others: its pairs of one outcome only):\n")
+        L.append("| data | pairs | share | ns per pair |\n|---|---|---:|---:|")
+        for o in tp["outcomes"]:
+            L.append(f"| {o['data']} | {o['rule']} | {100 * o['share']:.0f} % | {o['ns']:.1f} |")
     L.append("\n| hard but decidable (float filter alone) | pairs | undecided | wrong |\n|---|---:|---:|---:|")
     for h in tp["hard"]:
         L.append(f"| {h['name']} | {h['n']} | {h['undecided']} | {h['wrong']} |")

@@ -159,7 +159,9 @@ def test_throughput_section_and_rows_replace_the_old_ones(tmp_path):
     rows = [{"kind": "random", "dim": d, "all": 30e6, "one": 20e6, "baseline": 10e6, "read": 40e6, "f32_one": 22e6,
              "f32_all": 33e6, "baseline_right": 1.0, "f32_right": 1.0, "cores": 2,
              "cpu": {"certified": 25e6, "baseline": 12e6, "read": 50e6, "float32": 27e6}} for d in (3, 2)]
-    tp = {"rows": rows, "structured": [{"name": "spheres 3D", "dim": 3, "n": 10, "rate": 15e6, "ratio": 0.5, "escalated": 0, "wrong": 0}],
+    tp = {"rows": rows, "structured": [{"name": "spheres 3D", "dim": 3, "n": 10, "rate": 15e6, "ratio": 0.5, "escalated": 0, "wrong": 0},
+                                       {"name": "spheres 2D", "dim": 2, "n": 10, "rate": 25e6, "ratio": 0.9, "escalated": 0, "wrong": 0},
+                                       {"name": "numpy-built 3D", "dim": 3, "n": 10, "rate": 12e6, "ratio": 0.4, "escalated": 0, "wrong": 0}],
           "hard": [{"name": "big-small +0.001 3D", "n": 10, "undecided": 0, "wrong": 0}],
           "first_call": {"pairs": 400, "import": 0.5, "first": 0.011, "second": 0.01, "ratio": 1.1, "variant": "avx2"},
           "size": 1000, "cores": 2, "variant": "avx2", "variants": ["baseline", "avx2"], "rounds": 3}

@@ -340,6 +340,24 @@ def test_numpy_and_every_simd_variant_agree_bit_for_bit(n):
 
 
 @pytest.mark.parametrize("n", [3, 4])
+def test_a_pair_answers_alike_whatever_its_neighbours_in_the_block(n):
+    """The C runs each later stage in place or on packed subsets, by how many pairs of a block of
+    8 or 16 need it: shuffled, repeated and cut at several lengths, each pair still gets the rule
+    of the numpy description, and the undecided count is that of its rules."""
+    A, B = _mixed(n)
+    expected = rules_numpy(A, B)
+    rng = np.random.default_rng(n)
+    order = np.concatenate([rng.permutation(len(A)) for _ in range(3)])
+    A2, B2, want = np.ascontiguousarray(A[order]), np.ascontiguousarray(B[order]), expected[order]
+    for v, got in _every_variant(A2, B2).items():
+        assert (got == want).all(), (v, np.flatnonzero(got != want)[:10])
+    table = np.arange(256, dtype=np.int64).astype(np.int8)  # rule ids through the table: the same bytes
+    for count in (1, 7, 9, 17, 100, len(A2)):
+        got, undecided = compiled.mapped(A2[:count], B2[:count], table, threads=1)
+        assert (got == want[:count]).all() and undecided == int(np.count_nonzero(want[:count] < 0))
+
+
+@pytest.mark.parametrize("n", [3, 4])
 def test_kernel_writes_relation_codes_and_counts_the_undecided(n):
     # classify_float's path: the C maps each rule id through a 256-byte table as it finishes a
     # block and returns how many pairs it left undecided; the same as relations() of the rule ids

@@ -4,8 +4,9 @@ The reference is :func:`core.contacts` on the union of the indexed and the new b
 tests check it against brute force): the index must give exactly its pairs between an indexed
 and a new body, with the same relations, certifiers and images (the image of the indexed body
 here is minus the image of the new body there), in open space, in orthogonal and tilted
-periodic boxes, one query at a time and in batches, and after moves. The small-batch bounding
-spheres are checked on sampled boundary points and against the bounds module's spheres.
+periodic boxes, one query at a time and in batches, and after moves, for matrices and for
+core.Bodies. The float bounding spheres themselves are checked against exact arithmetic in
+tests/test_sphere_proof.py.
 """
 
 from __future__ import annotations
@@ -14,10 +15,8 @@ import numpy as np
 import pytest
 
 from bench.bodies_data import random_bodies
-from core import BodyIndex, Certifier, Relation, bodies_from_axes, contacts
-from core.bodies.bounds import bounding_spheres
-from core.bodies.index import _small_spheres
-from core.shapes.quadrics import rotation_from_quaternion
+from core import Bodies, BodyIndex, Certifier, Relation, bodies_from_axes, contacts
+from core.fixed import compiled
 
 TILTED_3D = (9.0, 8.0, 8.5, 0.4, -0.5, 0.3)
 TILTED_2D = (9.0, 8.0, -0.45)
@@ -49,10 +48,10 @@ def bodies(n, d, box, seed, size=0.6):
     return bodies_from_axes(c, semi, orient)
 
 
-def expected(Q, Qnew, box):
+def expected(Q, Qnew, box, method="adaptive"):
     """The pairs (new row, indexed body) of contacts on the union, with relation, certifier, image."""
     N = len(Q)
-    res = contacts(np.concatenate([Q, Qnew]), box=box)
+    res = contacts(np.concatenate([Q, Qnew]), box=box, method=method)
     out = {}
     for k in range(len(res)):
         a, b = int(res.i[k]), int(res.j[k])
@@ -94,6 +93,27 @@ def test_queries_equal_contacts_on_the_union(d, box):
         shifts = hits.shifts()
         assert shifts is not None and shifts.shape == (len(hits), d)
     assert hits.counts["candidates"] >= len(hits) and hits.counts["queries"] == len(Qnew)
+
+
+@pytest.mark.parametrize("d, box", [(3, None), (3, TILTED_3D), (2, (9.0, 8.0))])
+def test_a_large_batch_of_trial_moves_in_any_order(d, box):
+    """Thousands of trial moves of random rows (asked in grid order, split over threads, the
+    outputs grown past their first size) answer like contacts on the union, sorted by (i, j)."""
+    rng = np.random.default_rng(21)
+    Q = bodies(1500, d, box, seed=11, size=0.5)
+    index = BodyIndex(Q, box=box)
+    rows = rng.integers(0, len(Q), 5000)  # > 2 ranges of 2048 new bodies: two threads
+    big = bodies(5000, d, box, seed=12, size=1.6)  # many pairs each: more than the first outputs hold
+    trial = np.where((np.arange(5000) % 2 == 0)[:, None, None], big, Q[rows])
+    compiled.set_threads(2)
+    try:
+        hits = index.query(trial, exclude=rows)
+    finally:
+        compiled.set_threads(None)
+    assert np.all(np.diff(hits.i * len(Q) + hits.j) > 0)
+    want = {key: v for key, v in expected(Q, trial, box).items() if key[1] != rows[key[0]]}
+    assert as_dict(hits) == want and len(want) > 8 * 5000
+    assert not any((int(i), int(j)) for i, j in zip(hits.i, hits.j, strict=True) if j == rows[i])
 
 
 @pytest.mark.parametrize("d, box", CASES)
@@ -214,31 +234,81 @@ def test_size_rule_in_a_box_names_the_body():
         index.update([4], huge)
 
 
-def test_small_batch_spheres_are_certified_and_tight():
+def test_one_body_path_and_its_fallbacks_answer_like_contacts():
+    """One new body takes the compiled spheres; bodies they do not certify (symmetric only up to
+    rounding, ill-conditioned, signs flipped, far from size 1) take the general path: the same
+    answers as contacts either way, and the short path's counts add up."""
     rng = np.random.default_rng(7)
-    for d in (2, 3):
-        b = random_bodies(200, dim=d, ratio=8.0, seed=5)
-        b.centers *= 10.0 ** rng.integers(-3, 5, (200, 1))
-        Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
-        Q[::5] *= -1.0  # flipped signs: the same bodies
-        c, r = _small_spheres(Q)
-        assert np.isfinite(r).all()
-        ref = bounding_spheres(Q)
-        assert np.all(r <= ref.radii * (1 + 1e-6) + 1e-12)  # no looser than the bounds module
-        u = rng.normal(size=(64, d))
-        u /= np.linalg.norm(u, axis=1)[:, None]
-        for k in range(200):
-            if d == 3:
-                R = rotation_from_quaternion(b.orientations[k])
-            else:
-                t = float(b.orientations[k])
-                R = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
-            pts = b.centers[k] + (u * b.semi_axes[k]) @ R.T
-            assert np.linalg.norm(pts - c[k], axis=1).max() <= r[k] * (1 + 1e-12)
-            assert r[k] >= b.semi_axes[k].max() * (1 - 1e-9) - np.linalg.norm(c[k] - b.centers[k])
-    asym = Q[:2].copy()
-    asym[0, 0, 1] += 1e-13  # not exactly symmetric: left to bounding_spheres
-    assert np.isnan(_small_spheres(asym)[1][0]) and np.isfinite(_small_spheres(asym)[1][1])
+    Q = bodies(400, 3, None, seed=4)
+    index = BodyIndex(Q)
+    c = rng.uniform(0, 9, (12, 3))
+    semi = rng.uniform(0.6, 1.5, (12, 3))
+    semi[:3, 0] *= 2e-6  # discs of axis ratio ~1e6 (their matrices still the shapes): no fast float sphere
+    new = bodies_from_axes(c, semi, rng.normal(size=(12, 4)))
+    new[3] *= -1.0  # the same body, signs flipped
+    new[4, 0, 1] = np.nextafter(new[4, 0, 1], np.inf)  # symmetric only up to rounding
+    statuses = compiled.spheres(new)[2].tolist() if compiled.spheres_available() else []
+    want = expected(Q, new, None)
+    got = {}
+    for k in range(len(new)):
+        single = index.query(new[k])
+        got.update({(k, j): v for (_, j), v in as_dict(single).items()})
+        counts = single.counts
+        assert counts["queries"] == 1 and counts["candidates"] >= len(single) and counts["float"] + counts["exact"] == counts["candidates"]
+    assert got == want and len(want) > 10 and len({k for k, _ in want if k < 5}) >= 3
+    if statuses:  # the fallbacks were taken where the compiled proof abstains
+        assert statuses[4] == compiled.SPHERE_OTHER and compiled.SPHERE_NONE in statuses[:3] and statuses[3] <= 1
+
+
+@pytest.mark.parametrize("method", ["float", "exact"])
+@pytest.mark.parametrize("box", [None, (9.0, 8.0, 8.5)])
+def test_methods_like_contacts(method, box):
+    """method="float" (UNDECIDED where the filter abstains) and "exact", one body at a time and in a
+    batch: the answers and certifiers of contacts with that method, with touching pairs among them."""
+    Q = bodies(120, 3, box, seed=6)
+    Qnew = np.concatenate([bodies(12, 3, box, seed=7), Q[:3]])  # copies of indexed bodies: overlaps
+    touching = bodies_from_axes([[2.0, 2.0, 2.0], [3.0, 2.0, 2.0]], [[0.5, 0.5, 0.5]] * 2)
+    Q = np.concatenate([Q, touching[:1]])
+    Qnew = np.concatenate([Qnew, touching[1:]])
+    index = BodyIndex(Q, box=box, method=method)
+    want = expected(Q, Qnew, box, method)
+    assert as_dict(index.query(Qnew)) == want
+    got = {}
+    for k in range(len(Qnew)):
+        single = index.query(Qnew[k])
+        got.update({(k, j): v for (_, j), v in as_dict(single).items()})
+        c = single.counts
+        assert c["float"] + c["exact"] + c["undecided"] <= c["candidates"]
+    assert got == want
+    tangent = want[(len(Qnew) - 1, len(Q) - 1)]
+    assert tangent == ((int(Relation.UNDECIDED), int(Certifier.NONE), tangent[2]) if method == "float" else (int(Relation.TANGENT), int(Certifier.EXACT), tangent[2]))
+
+
+def test_new_bodies_from_parameters():
+    """query and update take core.Bodies (a Monte Carlo code's trial: centre, semi-axes, orientation):
+    the answers of their matrices; a row whose parameters are no shape is named, or marked."""
+    b = random_bodies(300, dim=3, fraction=0.2, seed=9)
+    Q = bodies_from_axes(b.centers, b.semi_axes, b.orientations)
+    index = BodyIndex(Q)
+    rng = np.random.default_rng(4)
+    rows = rng.choice(300, size=20, replace=False)
+    c = b.centers[rows] + rng.normal(scale=0.4, size=(20, 3))
+    trial = Bodies(c, b.semi_axes[rows], b.orientations[rows])
+    assert as_dict(index.query(trial, exclude=rows)) == as_dict(index.query(trial.matrices, exclude=rows))
+    for k in range(3):
+        one = Bodies(c[k : k + 1], b.semi_axes[rows[k : k + 1]], b.orientations[rows[k : k + 1]])
+        assert as_dict(index.query(one, exclude=int(rows[k]))) == as_dict(index.query(one.matrices[0], exclude=int(rows[k])))
+    bad = Bodies(c[:3], np.array([[1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [0.5, 0.5, 0.5]]))
+    with pytest.raises(ValueError, match=r"^new body 1: semi-axes must be positive"):
+        index.query(bad)
+    marked = BodyIndex(Q, on_invalid="mark").query(bad)
+    assert list(marked.invalid) == [1] and "semi-axes must be positive" in marked.invalid[1] and 1 not in marked.i.tolist()
+    index.update(rows[:2], Bodies(c[:2], b.semi_axes[rows[:2]], b.orientations[rows[:2]]))
+    moved = Q.copy()
+    moved[rows[:2]] = trial.matrices[:2]
+    assert np.array_equal(index.Q, moved)
+    with pytest.raises(ValueError, match=rf"^body {rows[1]}: semi-axes must be positive"):
+        index.update(rows[:3], bad)
 
 
 def test_empty_index_and_empty_queries():

@@ -24,7 +24,10 @@ small and rho tight). Everything is computed in float64 with certified bounds:
 Most matrices are exactly symmetric: their entries are exact (radius 0), so the same proof runs
 on contiguous columns of the entries with only the operations' roundings carried
 (:func:`_exact_spheres`, the fast path: several times faster than the general one, which also
-carries the symmetrisation's radii and scales every matrix by a power of two).
+carries the symmetrisation's radii and scales every matrix by a power of two). The compiled
+extension runs that fast path in C, operation for operation (``core/fixed/_spheres.h``, body by
+body: a one-body query of :class:`core.BodyIndex` takes microseconds), the numpy code serving
+where the extension is not built.
 
 The same proof certifies validity: Q - lambda I > 0 with lambda > 0 makes Q positive definite,
 and f0 < 0 (certified) gives det M = det Q * min f <= det Q * f0 < 0. A body the float
@@ -47,6 +50,7 @@ import numpy as np
 from flint import fmpq, fmpq_mat
 
 from ..filtered import predicate
+from ..fixed import compiled
 from ..fixed.compiled import get_threads
 from ..fixed.filters import centres, log2_size, prepared, space_scaled, times_power_of_two
 from ..shapes.numbers import to_float
@@ -279,7 +283,7 @@ def _float_spheres(
     general path below.
     """
     if fast:
-        c, rho, loose, other = _exact_spheres(M)
+        c, rho, loose, other = _exact_spheres_c(M) if compiled.spheres_available() else _exact_spheres(M)
         if other.any():
             c[other], rho[other], loose[other] = _float_spheres(M[other], careful=careful)
         return c, rho, loose
@@ -376,6 +380,12 @@ def _exact_spheres(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
         rho, loose, good = _radius(g, f0, lam, lam_est)
         ok &= good
     return np.ascontiguousarray(c.T), np.where(ok, rho, np.nan), loose & ok, other
+
+
+def _exact_spheres_c(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_exact_spheres` in C (``core/fixed/_spheres.h``: the same proof, operation for operation)."""
+    c, rho, status = compiled.spheres(M)
+    return c, rho, status == compiled.SPHERE_LOOSE, status == compiled.SPHERE_OTHER
 
 
 def _radius(g: list[_Ball], f0: _Ball, lam: np.ndarray, lam_est: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

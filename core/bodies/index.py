@@ -20,10 +20,14 @@ size rule of :mod:`core.bodies.periodic`), and classifies those candidates with 
 classifier, exactly as :func:`core.contacts` does: the indexed body as A, the new body as B,
 moved by the lattice vector v(-k) in a box (:func:`core.bodies.periodic.classify_images`).
 
-Small batches are kept cheap: a few new bodies get their bounding spheres from a short exact
-computation (:func:`_small_spheres`, the proof of :mod:`core.bodies.bounds` in rational
-arithmetic with a float centre and a float eigenvalue estimate), the grid lookup is a handful of
-numpy operations, and the narrow phase is one call of :func:`core.classify_detailed`.
+One new body (a Monte Carlo move) is kept cheap: its bounding sphere is the float proof of
+:mod:`core.bodies.bounds` run in C on its matrix (:func:`core.fixed.compiled.spheres`: a few
+microseconds; exact arithmetic only for a body that proof does not certify), the grid lookup
+and the sphere test are a handful of numpy operations on one table of centres and radii, and
+the narrow phase is one call of the compiled filter (:func:`core.fixed.classify.classify_pairs`).
+New bodies may be given as :class:`core.Bodies` (parameters, e.g. a trial move's centre,
+semi-axes and orientation): their matrices are built by :func:`core.bodies_from_axes` and the
+same certified spheres bound the bodies those matrices describe.
 """
 
 from __future__ import annotations
@@ -37,14 +41,19 @@ from typing import Any
 
 import numpy as np
 
-from ..fixed.classify import Certifier, classify_detailed
-from ..fixed.compiled import warm_up
+from ..filtered import predicate
+from ..fixed import compiled
+from ..fixed.classify import Certifier, classify_pairs
+from ..fixed.compiled import get_threads, warm_up
+from ..fixed.filters import _RELATION_OF
 from ..options import check_options
 from ..relation import Relation
-from .bodies import unpack
+from .bodies import Bodies, unpack
 from .bounds import bounding_spheres
 from .box import Box
 from .periodic import (
+    _GAMMA,
+    _TINY,
     box_vectors_exact,
     cell_heights,
     check_sizes,
@@ -72,10 +81,20 @@ _MAX_PERIODIC_CELLS = 1024
 """Most cells across a periodic box per axis (keeps the float cell coordinates' error < 2^-20)."""
 _FAR = 2.0**20
 """Centres within this many boxes of the origin (fractional coordinates, see _place)."""
+_FRAC_ERROR = 2.0**-30
+"""Fractional coordinates must be this accurate (see _place)."""
 _FAR_MESSAGE = "a body lies too far from the periodic box for float64 fractional coordinates: wrap the centres into the box"
-_SMALL = 16
-"""Up to this many new bodies get their spheres from :func:`_small_spheres`."""
+_IMAGES_MESSAGE = "a body lies more than 127 boxes from another: wrap the centres into the box"
 _MARGIN = 1.0 - 2.0**-20
+_C_ONE = compiled.query_one_available()
+"""One new body takes the extension's spheres and grid lookup (else the general path in numpy)."""
+_NO_IMAGES = np.zeros((0, 3), dtype=np.int8)
+_BODIES_PER_THREAD = 2048
+"""A batch of new bodies is split over the filter's threads in ranges of at least this many."""
+_NONE = np.zeros(0)
+"""An empty buffer: no matrices for the compiled lookup (it then classifies nothing)."""
+_CLASSIFY = predicate("classify")
+"""The counters of classify (:func:`core.filter_stats`), which the one-body path's filter calls feed too."""
 
 
 @dataclass
@@ -178,8 +197,12 @@ class BodyIndex:
         """Indexed body -> why it is no ellipse/ellipsoid (left out of the index)."""
         if self._L is not None:  # the size rule; the centres may lie anywhere (images by rounding)
             check_sizes(spheres.radii, self._L, self.d)
-        self._centers = spheres.centers
-        self._radii = spheres.radii
+        self._cr = np.empty((len(self._Q), self.d + 1))
+        """Centre and radius of each indexed body's sphere in one row: a query gathers both at once."""
+        self._centers = self._cr[:, : self.d]
+        self._radii = self._cr[:, self.d]
+        self._centers[:] = spheres.centers
+        self._radii[:] = spheres.radii
         valid = np.isfinite(self._radii)
         self._big = float(np.max(self._radii[valid])) if valid.any() else 0.0
         self._span = self._extent(self._centers[valid])
@@ -242,6 +265,27 @@ class BodyIndex:
         """Bodies in the grid (valid ones)."""
         self._body_cell[bodies] = sorted_cells
         self._body_slot[bodies] = rank
+        self._pack_geometry()
+
+    def _pack_geometry(self) -> None:
+        """The grid's numbers as the compiled lookup of one body reads them (core/fixed/_near.h)."""
+        d = self.d
+        pad = [0] * (3 - d)
+        self._geo_i = np.array(
+            [d, self._table.shape[1], self._L is not None, self._L is not None and self._tilted, *self._nl, *pad, *self._strides_l, *pad],
+            dtype=np.int64,
+        )
+        geo_d = np.zeros(27)
+        if self._L is not None and not self._tilted:
+            geo_d[:d] = self._L[:d]
+        if self._L is not None:
+            geo_d[3 : 3 + d * d] = np.array(self._vectors, dtype=np.float64).reshape(-1)  # rows: components, columns: vectors
+        geo_d[12 : 12 + d] = self._origin
+        geo_d[15 : 15 + d] = self._cell
+        geo_d[18:] = (self._big, self._span, self._limit if self._L is not None else 0.0, _PAD, _CELL_ERROR, _FAR, _FRAC_ERROR, _GAMMA, _TINY)
+        self._geo_d = geo_d
+        self._frac_buf = self._frac if self._frac is not None and self._tilted else self._cr
+        self._one_size = 3**d * self._table.shape[1]
 
     def _place(self, centers: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
         """(M, d) int64 cell coordinates, and the fractional coordinates in a periodic box.
@@ -253,7 +297,7 @@ class BodyIndex:
         """
         if self._L is not None:
             f, eps = fractional(centers, self._L)
-            if not ((eps < 2.0**-30).all() and (np.abs(f) <= _FAR).all()):
+            if not ((eps < _FRAC_ERROR).all() and (np.abs(f) <= _FAR).all()):
                 raise ValueError(_FAR_MESSAGE)
             return np.floor(f * self._n).astype(np.int64) % self._n, f
         u = np.floor((centers - self._origin) / self._cell)
@@ -264,7 +308,7 @@ class BodyIndex:
         d = self.d
         if self._L is not None:
             f, eps = fractional_point(c, self._vectors)
-            if not all(e < 2.0**-30 and abs(x) <= _FAR for x, e in zip(f, eps, strict=True)):
+            if not all(e < _FRAC_ERROR and abs(x) <= _FAR for x, e in zip(f, eps, strict=True)):
                 raise ValueError(_FAR_MESSAGE)
             return [math.floor(f[a] * self._nl[a]) % self._nl[a] for a in range(d)], f
         o, h, n = self._origin_l, self._cell_l, self._nl
@@ -300,7 +344,9 @@ class BodyIndex:
         """Every indexed body each new body is not separate from, certified.
 
         Args:
-            Qnew: (M, n, n) new bodies (or one (n, n) matrix: M = 1).
+            Qnew: (M, n, n) new bodies (or one (n, n) matrix: M = 1), or :class:`core.Bodies`
+                (their matrices, built from the parameters by :func:`core.bodies_from_axes`;
+                a row whose parameters are no shape is an invalid new body).
             exclude: None, or one indexed body per new body to leave out (an int for all, or
                 an (M,) array; -1: none), e.g. the body's own old place in a Monte Carlo move.
 
@@ -314,21 +360,21 @@ class BodyIndex:
             ValueError: bad shapes, an invalid new body (``on_invalid="raise"``), or a new body
                 too large for the periodic box.
         """
-        Qn = Qnew
-        if not (type(Qn) is np.ndarray and Qn.dtype == np.float64 and Qn.ndim == 3 and Qn.shape[1] == Qn.shape[2]):
-            Qn = np.asarray(Qnew)
-            Qn = read_bodies(Qn[None] if Qn.ndim == 2 else Qn)
-        if Qn.shape[-1] != self.n:
-            raise ValueError(f"new bodies are {Qn.shape[-1]}x{Qn.shape[-1]} matrices but the index holds {self.n}x{self.n}")
+        Qn, errors = self._matrices(Qnew, "new body")
         M = Qn.shape[0]
-        if M == 1 and (exclude is None or np.ndim(exclude) == 0):
+        if M == 1 and not errors and (exclude is None or type(exclude) is int or np.ndim(exclude) == 0):
             one = self._query_one(Qn, -1 if exclude is None else int(exclude))
             if one is not None:
                 return one
-        centers, radii, invalid = self._spheres(Qn, "new body")
+        centers, radii, invalid = self._spheres(Qn, "new body", errors=errors)
         ex = None
         if exclude is not None:
             ex = np.broadcast_to(np.asarray(exclude, dtype=np.int64), (M,))
+        if _C_ONE and M > 1:
+            many = self._query_many(Qn, centers, radii, ex)
+            if many is not None:
+                many.invalid = invalid
+                return many
         if M == 1 and np.isfinite(radii[0]):
             bj, image = self._near_one(centers[0].tolist(), float(radii[0]), -1 if ex is None else int(ex[0]))
             qi = np.zeros(bj.size, dtype=np.int64)
@@ -348,39 +394,177 @@ class BodyIndex:
             qi[keep], bj[keep], rel[keep], by[keep], None if image is None else image[keep], self.box, invalid, counts
         )
 
+    def _matrices(self, bodies: Any, what: str) -> tuple[np.ndarray, dict[int, str]]:
+        """(M, n, n) float64 matrices of new bodies (or of :class:`core.Bodies`), and the rows that are no shape.
+
+        The rows whose parameters are no shape come with their reasons (:attr:`core.Bodies.errors`).
+        """
+        errors: dict[int, str] = {}
+        if isinstance(bodies, Bodies):
+            Qn = bodies.matrices
+            errors = {k: f"{what} {k}: {why}" for k, why in bodies.errors.items()} if bodies.has_parameters else {}
+        else:
+            Qn = bodies
+        if not (type(Qn) is np.ndarray and Qn.dtype == np.float64 and Qn.ndim == 3 and Qn.shape[1] == Qn.shape[2]):
+            Qn = np.asarray(Qn)
+            Qn = read_bodies(Qn[None] if Qn.ndim == 2 else Qn)
+        if Qn.shape[-1] != self.n:
+            raise ValueError(f"new bodies are {Qn.shape[-1]}x{Qn.shape[-1]} matrices but the index holds {self.n}x{self.n}")
+        if errors and self.on_invalid == "raise":
+            raise ValueError(next(iter(errors.values())))
+        return Qn, errors
+
     def _query_one(self, Qn: np.ndarray, exclude: int) -> IndexPairs | None:
         """:meth:`query` of one new body, with as few array operations as it takes.
 
-        None when the short path does not apply (a body :func:`_small_spheres` does not
-        certify, or one too large for the box): the general path then answers (or raises).
+        One compiled call (:func:`core.fixed.compiled.query_one`, ``core/fixed/_near.h``): the
+        body's certified sphere (the float proof of :mod:`core.bodies.bounds`), its cell, the
+        bodies whose spheres meet its own (the steps of :meth:`_place_one` and
+        :meth:`_near_one`), and the pairs without a lattice image through the float filter.
+        What that leaves (pairs the filter does not decide, pairs with an image, a method other
+        than "adaptive") is classified as :meth:`_classify` does. None when the short path does
+        not apply (no extension, a body the float proof does not certify, or one too large for
+        the box): the general path then answers (or raises).
         """
-        out = _one_sphere(Qn[0].tolist(), self.d)
-        if out is None or (self._L is not None and not out[1] + self._big < self._limit):
+        if not _C_ONE:
             return None
-        bj, image = self._near_one(out[0], out[1], exclude)
-        qi = np.zeros(bj.size, dtype=np.int64)
-        if image is not None and image.any():
-            rel, by = self._classify(Qn, qi, bj, image)
-        elif bj.size:
-            res = classify_detailed(self._Q[bj], Qn[qi], method=self.method)  # type: ignore[arg-type]
-            rel, by = res.relation, res.certified_by
-        else:
-            rel, by = np.zeros(0, np.int8), np.zeros(0, np.int8)
-        counts = {"queries": 1, "candidates": int(bj.size), "float": int(np.count_nonzero(by == Certifier.FLOAT))}
-        counts["exact"] = int(bj.size) - counts["float"] - int(np.count_nonzero(by == Certifier.NONE))
+        adaptive = self.method == "adaptive"
+        size = self._one_size
+        while True:
+            out = np.empty(size, dtype=np.int64)
+            kout = _NO_IMAGES if self._L is None else np.empty((size, self.d), dtype=np.int8)
+            codes, by = np.empty(size, dtype=np.int8), np.empty(size, dtype=np.int8)
+            found, kept, left = compiled.query_one(self._geo_i, self._geo_d, self._table, self._cr, self._frac_buf,
+                                                   self._Q if adaptive else _NONE, Qn, _RELATION_OF, out, kout, codes, by, exclude)
+            if found > compiled.QUERY_SPACE:
+                break
+            size = compiled.QUERY_SPACE - found  # a body reaching further than one ring of cells
+        if found < 0:
+            if found == compiled.QUERY_GENERAL:
+                return None
+            raise ValueError(_FAR_MESSAGE if found == compiled.QUERY_FAR_BOX else _IMAGES_MESSAGE)
+        bj, image = out[:kept], None if self._L is None else kout[:kept]
+        counts = {"queries": 1, "candidates": found, "float": found - left, "exact": 0, "undecided": 0}
+        if found > left:
+            _CLASSIFY.count(found - left, 0, 0)
+        if not left:  # the filter decided every pair (the separate ones are dropped)
+            return IndexPairs(np.zeros(kept, dtype=np.int64), bj, codes[:kept], by[:kept], image, self.box, {}, counts)
+        first = codes[:kept] if adaptive else None  # what the filter decided in C (None: nothing)
+        rel, cert = self._classify_found(Qn, bj, image, first)
+        counts["float"] += int(np.count_nonzero((cert if first is None else cert[first < 0]) == Certifier.FLOAT))
+        counts["exact"] = int(np.count_nonzero(cert == Certifier.EXACT))
         counts["undecided"] = int(np.count_nonzero(rel == Relation.UNDECIDED)) if self.method == "float" else 0
-        keep = rel != Relation.SEPARATE
-        if not keep.all():
-            qi, bj, rel, by = qi[keep], bj[keep], rel[keep], by[keep]
+        keep = np.flatnonzero(rel)  # not SEPARATE (0)
+        if keep.size != kept:
+            bj, rel, cert = bj[keep], rel[keep], cert[keep]
             image = None if image is None else image[keep]
-        return IndexPairs(qi, bj, rel, by, image, self.box, {}, counts)
+        return IndexPairs(np.zeros(keep.size, dtype=np.int64), bj, rel, cert, image, self.box, {}, counts)
+
+    def _query_many(self, Qn: np.ndarray, centers: np.ndarray, radii: np.ndarray, exclude: np.ndarray | None) -> IndexPairs | None:
+        """:meth:`query` of a batch with its certified spheres, new body by new body in C.
+
+        The steps of :meth:`_query_one` after the sphere, for every new body in one compiled loop
+        (:func:`core.fixed.compiled.query_many`, the GIL released), its pairs appended in order of
+        the new bodies (sorted by (i, j)); the outputs grow when full. What the filter leaves
+        (images, undecided pairs, a method other than "adaptive") is classified as
+        :meth:`_classify` does. None where the compiled loop cannot answer (out of memory in it):
+        the numpy path then does.
+
+        The new bodies are asked in the order of the grid cells their centres fall in (the
+        answers do not depend on it): neighbouring new bodies then read the same cells and
+        indexed bodies from cache. Trial moves drawn at random over 100,000 bodies ran 2-3x
+        faster so (bench/bench_index.py).
+        """
+        M, d = Qn.shape[0], self.d
+        adaptive = self.method == "adaptive"
+        c = np.where(np.isfinite(centers), centers, 0.0)
+        order = np.argsort(self._cell_key(c), kind="stable")
+        spheres = np.empty((M, d + 1))
+        spheres[:, :d] = c[order]
+        spheres[:, d] = radii[order]
+        ex = np.full(M, -1, dtype=np.int64) if exclude is None else np.asarray(exclude, dtype=np.int64)[order]
+        Qc = np.ascontiguousarray(Qn[order], dtype=np.float64)
+        Q = self._Q if adaptive else _NONE
+
+        def run(lo: int, hi: int) -> tuple[list[tuple[np.ndarray, ...]], int, int, int]:
+            """Bodies [lo, hi): their parts of the outputs, candidates, pairs left, status (0 or a code)."""
+            size, start, candidates, left = max(4096, 8 * (hi - lo)), lo, 0, 0
+            parts: list[tuple[np.ndarray, ...]] = []
+            while start < hi:
+                qout, out = np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64)
+                kout = _NO_IMAGES if self._L is None else np.empty((size, d), dtype=np.int8)
+                codes, by = np.empty(size, dtype=np.int8), np.empty(size, dtype=np.int8)
+                done, found, kept, open_, status = compiled.query_many(
+                    self._geo_i, self._geo_d, self._table, self._cr, self._frac_buf, Q, Qc[:hi], _RELATION_OF,
+                    spheres[:hi], ex[:hi], qout, out, kout, codes, by, start,
+                )
+                parts.append((qout[:kept], out[:kept], kout[:kept], codes[:kept], by[:kept]))
+                candidates, left, start = candidates + found, left + open_, done
+                if status == 0:
+                    break
+                if status > compiled.QUERY_SPACE:
+                    return parts, candidates, left, status
+                size = max(2 * size, compiled.QUERY_SPACE - status)  # full: more room, from the body that did not fit
+            return parts, candidates, left, 0
+
+        k = min(get_threads(), max(1, M // _BODIES_PER_THREAD))
+        bounds = np.linspace(0, M, k + 1).astype(np.int64).tolist()
+        if k == 1:
+            results = [run(0, M)]
+        else:  # ranges of new bodies side by side (the compiled loop releases the GIL), in order
+            futures = [compiled.pool(k - 1).submit(run, lo, hi) for lo, hi in zip(bounds[1:-1], bounds[2:], strict=True)]
+            results = [run(bounds[0], bounds[1])] + [f.result() for f in futures]
+        parts = [p for r in results for p in r[0]]
+        candidates, left = sum(r[1] for r in results), sum(r[2] for r in results)
+        status = next((r[3] for r in results if r[3]), 0)
+        if status == compiled.QUERY_GENERAL:
+            return None
+        if status:
+            raise ValueError(_FAR_MESSAGE if status == compiled.QUERY_FAR_BOX else _IMAGES_MESSAGE)
+        qi, bj, image, rel, cert = (np.concatenate(x) if len(parts) > 1 else x[0] for x in zip(*parts, strict=True))
+        qi = order[qi]  # back to the rows of Qnew; each body's pairs are sorted by j, so a stable sort by i sorts by (i, j)
+        by_row = np.argsort(qi, kind="stable")
+        qi, bj, rel, cert = qi[by_row], bj[by_row], rel[by_row], cert[by_row]
+        image = None if self._L is None else image[by_row]
+        counts = {"queries": M, "candidates": candidates, "float": candidates - left, "exact": 0, "undecided": 0}
+        if candidates > left:
+            _CLASSIFY.count(candidates - left, 0, 0)
+        if left:
+            first = rel if adaptive else None
+            rel, cert = self._classify_found(Qn, bj, image, first, qi)
+            counts["float"] += int(np.count_nonzero((cert if first is None else cert[first < 0]) == Certifier.FLOAT))
+            counts["exact"] = int(np.count_nonzero(cert == Certifier.EXACT))
+            counts["undecided"] = int(np.count_nonzero(rel == Relation.UNDECIDED)) if self.method == "float" else 0
+            keep = np.flatnonzero(rel)
+            if keep.size != rel.size:
+                qi, bj, rel, cert = qi[keep], bj[keep], rel[keep], cert[keep]
+                image = None if image is None else image[keep]
+        return IndexPairs(qi, bj, rel, cert, image, self.box, {}, counts)
+
+    def _classify_found(
+        self, Qn: np.ndarray, bj: np.ndarray, image: np.ndarray | None, rel: np.ndarray | None, qi: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(relations, certifiers) of candidates beyond what the compiled lookup decided.
+
+        ``rel``: its codes (a relation where the filter decided, UNDECIDED where it did not,
+        :data:`core.fixed.compiled.QUERY_MOVED` for a pair with an image), or None (nothing
+        classified yet); ``qi``: the new body of each pair (None: all the first).
+        """
+        qi = np.zeros(bj.size, dtype=np.int64) if qi is None else qi
+        if rel is None:
+            return self._classify(Qn, qi, bj, image)
+        rel, by = rel.copy(), (rel >= 0).view(np.int8)  # Certifier.FLOAT where decided
+        rest = np.flatnonzero(rel < 0)
+        rel[rest], by[rest] = self._classify(Qn, qi[rest], bj[rest], None if image is None else image[rest])
+        return rel, by
 
     def update(self, rows: Any, Qrows: Any) -> None:
         """Replace indexed bodies ``rows`` by ``Qrows`` (moved, turned or reshaped), in place.
 
         Args:
             rows: indexed body numbers (distinct).
-            Qrows: (len(rows), n, n) their new matrices (or one (n, n) matrix for one row).
+            Qrows: (len(rows), n, n) their new matrices (or one (n, n) matrix for one row), or
+                :class:`core.Bodies` of len(rows) bodies.
 
         Raises:
             ValueError: bad rows or shapes, an invalid body (``on_invalid="raise"``; with
@@ -390,6 +574,11 @@ class BodyIndex:
         r = np.atleast_1d(np.asarray(rows))
         if r.dtype.kind not in "iu" or r.ndim != 1:
             raise ValueError(f"rows must be integer body numbers, got {rows!r}")
+        errors: dict[int, str] = {}
+        if isinstance(Qrows, Bodies):
+            if Qrows.has_parameters and Qrows.errors and len(Qrows) == r.size:
+                errors = {k: f"body {int(r[k])}: {why}" for k, why in Qrows.errors.items()}
+            Qrows = Qrows.matrices
         Qr = np.asarray(Qrows)
         if Qr.ndim == 2:
             Qr = Qr[None]
@@ -400,7 +589,9 @@ class BodyIndex:
             raise ValueError(f"update: rows must be in [0, {len(self)}), got {r.tolist()}")
         if np.unique(r).size != r.size:
             raise ValueError("update: rows must be distinct")
-        centers, radii, invalid = self._spheres(Qr, "body", names=r)
+        if errors and self.on_invalid == "raise":
+            raise ValueError(next(iter(errors.values())))
+        centers, radii, invalid = self._spheres(Qr, "body", names=r, errors=errors)
         ok = np.isfinite(radii)
         coords, frac = self._place(np.where(ok[:, None], centers, 0.0))
         flat = coords @ self._strides
@@ -419,6 +610,7 @@ class BodyIndex:
         if ok.any():
             self._big = max(self._big, float(np.max(radii[ok])))
             self._span = max(self._span, self._extent(centers[ok]))
+            self._geo_d[18:20] = (self._big, self._span)
 
     def _extent(self, centers: np.ndarray) -> float:
         """Largest |centre coordinate| (plus 2 x the box's largest number): scales the sphere test's padding."""
@@ -446,6 +638,8 @@ class BodyIndex:
             grown = np.full((self._table.shape[0], 2 * s), -1, dtype=np.int32)
             grown[:, :s] = self._table
             self._table = grown
+            self._geo_i[1] = 2 * s
+            self._one_size = 3**self.d * 2 * s
         self._table[c, s] = b
         self._count[c] = s + 1
         self._live += 1
@@ -453,25 +647,37 @@ class BodyIndex:
         self._body_slot[b] = s
 
     # ------------------------------------------------------------------ steps of a query
-    def _spheres(self, Qn: np.ndarray, what: str, names: Any = None) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
-        """Certified spheres of new bodies; invalid ones raise or are marked; the box's size rule."""
-        M = Qn.shape[0]
-        if M <= _SMALL:
-            centers, radii = _small_spheres(Qn)
-            rest = np.flatnonzero(~np.isfinite(radii))
-        else:
-            centers, radii = np.full((M, self.d), np.nan), np.full(M, np.nan)
-            rest = np.arange(M)
+    def _cell_key(self, centers: np.ndarray) -> np.ndarray:
+        """(M,) int64: a key of the grid cell of each centre in Cartesian coordinates, for ordering only.
+
+        Nearby centres get nearby keys (axis 0 slowest); a periodic box is not wrapped here, as
+        only locality matters.
+        """
+        u = np.clip(np.floor((centers - self._origin) / self._cell), 1 - 2.0**20, 2.0**20 - 1).astype(np.int64) + 2**20
+        key = u[:, 0]
+        for a in range(1, self.d):
+            key = key * 2**21 + u[:, a]
+        return key
+
+    def _spheres(
+        self, Qn: np.ndarray, what: str, names: Any = None, errors: dict[int, str] | None = None
+    ) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
+        """Certified spheres of new bodies; invalid ones raise or are marked; the box's size rule.
+
+        ``errors``: rows already known to be no shape (:attr:`core.Bodies.errors`, named), marked
+        with that reason (the caller raised for them under "raise").
+        """
+        s = bounding_spheres(Qn)
+        centers, radii = s.centers, s.radii
         invalid: dict[int, str] = {}
-        if rest.size:
-            s = bounding_spheres(Qn[rest])
-            centers[rest], radii[rest] = s.centers, s.radii
-            for k, why in s.invalid.items():
-                row = int(rest[k])
-                msg = why.replace(f"body {k}", f"{what} {row if names is None else int(names[row])}", 1)
-                if self.on_invalid == "raise":
-                    raise ValueError(msg)
-                invalid[row] = msg
+        for k, why in s.invalid.items():
+            msg = why.replace(f"body {k}", f"{what} {k if names is None else int(names[k])}", 1)
+            if self.on_invalid == "raise" and not (errors and k in errors):
+                raise ValueError(msg)
+            invalid[k] = msg
+        for k, why in (errors or {}).items():
+            centers[k], radii[k] = np.nan, np.nan
+            invalid[k] = why
         if self._L is not None:
             ok = np.isfinite(radii)
             too = np.flatnonzero(ok & ~(radii + max(self._big, 0.0) < self._limit))
@@ -483,7 +689,7 @@ class BodyIndex:
                     f"indexed one, {self._big:.6g}, must be less than half the smallest height of the cell "
                     f"({float(np.min(self._heights)):.6g} / 2), so that only the nearest image of a body can touch another"
                 )
-        return centers, radii, invalid
+        return centers, radii, dict(sorted(invalid.items()))
 
     def _candidates(
         self, centers: np.ndarray, radii: np.ndarray, exclude: np.ndarray | None
@@ -553,41 +759,44 @@ class BodyIndex:
         return qi[near], body[near], None if k is None else k[near].astype(np.int8)
 
     def _near_one(self, c: list[float], r: float, exclude: int) -> tuple[np.ndarray, np.ndarray | None]:
-        """:meth:`_candidates` for one new body (centre c, radius r): (indexed bodies, images)."""
+        """:meth:`_candidates` for one new body (centre c, radius r): (indexed bodies, images).
+
+        The same cells, images and padded sphere test as :meth:`_candidates` in a few array
+        operations (the general path of one body; the short one does this in C:
+        ``core/fixed/_near.h``).
+        """
         d = self.d
         reach = r + self._big
         m = tuple(math.ceil(reach / self._cell_l[a] * (1 + 2.0**-40) + _CELL_ERROR) for a in range(d))
         u, f = self._place_one(c)
-        offsets = self._offsets(m)
-        if self._L is not None:
-            cells = ((np.array(u) + offsets) % self._n) @ self._strides
-        elif max(m) == 1:  # within the margin
-            cells = sum(u[a] * self._strides_l[a] for a in range(d)) + self._offsets_flat(m)
+        rpad = r + _PAD * (max(abs(x) for x in c) + self._span + reach)
+        if self._L is None and max(m) == 1:  # within the margin: no cell leaves the grid
+            ids = self._table[sum(u[a] * self._strides_l[a] for a in range(d)) + self._offsets_flat(m)]
+        elif self._L is not None:
+            ids = self._table[((np.array(u) + self._offsets(m)) % self._n) @ self._strides]
         else:
-            nb = np.array(u) + offsets
-            cells = nb[((nb >= 0) & (nb < self._n)).all(axis=1)] @ self._strides
-        ids = self._table[cells].ravel()
-        body = ids[ids >= 0]
+            nb = np.array(u) + self._offsets(m)
+            ids = self._table[nb[((nb >= 0) & (nb < self._n)).all(axis=1)] @ self._strides]
+        ids = ids[ids >= 0]
         if exclude >= 0:
-            body = body[body != exclude]
-        body = body.astype(np.int64)
-        diff = self._centers[body] - np.array(c)
+            ids = ids[ids != exclude]
+        P = self._cr[ids]
+        diff = P[:, :d] - c
         k = None
         if self._L is not None:  # k = -image: the fractional difference rounded (as in _candidates)
             if self._tilted:
                 assert self._frac is not None and f is not None
-                k = np.rint(self._frac[body] - np.array(f))
+                k = np.rint(self._frac[ids] - np.array(f))
             else:
                 k = np.rint(diff / self._L)
             if k.any():
                 diff -= lattice_shifts(self._L, self._images(k))  # v(-k) = -v(k)
-        pad = _PAD * (max(abs(x) for x in c) + self._span + reach)
-        rr = self._radii[body] + (r + pad)
+        rr = P[:, d] + rpad
         with np.errstate(over="ignore"):  # as in _candidates
             near = np.flatnonzero(np.einsum("ij,ij->i", diff, diff) <= rr * rr)
-        if near.size > 1:
-            near = near[np.argsort(body[near], kind="stable")]
-        return body[near], None if k is None else (-k[near]).astype(np.int8)
+        found_ids = ids[near].astype(np.int64)
+        order = np.argsort(found_ids, kind="stable")
+        return found_ids[order], None if k is None else (-k[near][order]).astype(np.int8)
 
     def _cells(self, coords: np.ndarray, m: tuple[int, ...]) -> np.ndarray:
         """(q, K) flat cells within m[a] cells of each cell coordinate row, axis by axis.
@@ -626,7 +835,7 @@ class BodyIndex:
         errors (the size rule's margin), so rounding finds it.
         """
         if k.size and not np.abs(k).max() <= 127:
-            raise ValueError("a body lies more than 127 boxes from another: wrap the centres into the box")
+            raise ValueError(_IMAGES_MESSAGE)
         return k.astype(np.int8)
 
     def _classify(
@@ -643,157 +852,13 @@ class BodyIndex:
             return rel, by
         shifted = np.zeros(M, dtype=bool) if image is None else image.any(axis=1)
         plain = np.flatnonzero(~shifted)
-        if plain.size:
-            res = classify_detailed(self._Q[bj[plain]], Qn[qi[plain]], method=self.method)  # type: ignore[arg-type]
-            rel[plain], by[plain] = res.relation, res.certified_by
+        if plain.size == M:
+            rel, by = classify_pairs(self._Q[bj], Qn[qi], self.method)  # type: ignore[arg-type]
+        elif plain.size:
+            rel[plain], by[plain] = classify_pairs(self._Q[bj[plain]], Qn[qi[plain]], self.method)  # type: ignore[arg-type]
         moved = np.flatnonzero(shifted)
         if moved.size:
             assert image is not None and self._L is not None
             shift = lattice_shifts(self._L, -image[moved].astype(np.int64))
             rel[moved], by[moved] = classify_images(self._Q[bj[moved]], Qn[qi[moved]], shift, self.method)
         return rel, by
-
-
-
-
-# ----------------------------------------------------------------------------- small batches
-
-
-def _small_spheres(Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Certified bounding spheres of a few bodies (NaN where this path does not certify one).
-
-    The proof of :mod:`core.bodies.bounds` (any float centre c, any 0 < lambda <= lambda_min(Q):
-    the body lies within (|g| + sqrt(|g|^2 - lambda f(c))) / lambda of c, g = Q c + m), evaluated
-    exactly in integers: every float is an integer times 2^E (E the smallest exponent in play,
-    at most 0), c is a float estimate (Cramer's rule) and lambda a float eigenvalue estimate
-    shrunk by 2^-10, proven by the leading minors of Q - lambda I (exact); g, f(c), |g|^2 are
-    exact; the square roots are rounded up (integer square roots) and the quotient rounded up
-    to a float. The same proof shows the body valid (Q > 0, f(c) < 0). A body that is not
-    exactly symmetric, not finite, or not proven here gets NaN: the caller asks
-    :func:`core.bodies.bounds.bounding_spheres`, which also names what is wrong.
-    """
-    N, n = Q.shape[0], Q.shape[-1]
-    d = n - 1
-    centers = np.full((N, d), np.nan)
-    radii = np.full(N, np.nan)
-    for k in range(N):
-        out = _one_sphere(Q[k].tolist(), d)
-        if out is not None:
-            centers[k], radii[k] = out
-    return centers, radii
-
-
-def _one_sphere(M: list[list[float]], d: int) -> tuple[list[float], float] | None:
-    """(centre, radius) of one body by the exact integer proof of :func:`_small_spheres`, or None."""
-    if any(M[i][j] != M[j][i] for i in range(d + 1) for j in range(i)):
-        return None
-    if not all(math.isfinite(v) for row in M for v in row):
-        return None
-    if M[0][0] < 0:
-        M = [[-v for v in row] for row in M]
-    if not M[0][0] > 0:
-        return None
-    c = _centre_estimate(M, d)
-    lam_est = _lambda_estimate(M, d)
-    if c is None or not (lam_est > 0 and math.isfinite(lam_est)) or not all(math.isfinite(v) for v in c):
-        return None
-    lams = [lam_est * f for f in (1.0 - 2.0**-10, 1.0 - 2.0**-4, 0.5)]
-    floats = [M[i][j] for i in range(d + 1) for j in range(i, d + 1)] + c + lams
-    E = min([math.frexp(v)[1] - 53 for v in floats if v != 0.0] + [0])
-
-    def whole(x: float) -> int:  # x / 2^E, exactly
-        if x == 0.0:
-            return 0
-        m, e = math.frexp(x)
-        return int(m * 9007199254740992.0) << (e - 53 - E)  # 2^53
-
-    Q = [[whole(M[min(i, j)][max(i, j)]) for j in range(d)] for i in range(d)]
-    m = [whole(M[i][d]) << -E for i in range(d)]  # m / 2^(2E): the scale of Q c
-    C = [whole(v) for v in c]
-    G = [sum(Q[i][j] * C[j] for j in range(d)) + m[i] for i in range(d)]  # g / 2^(2E)
-    F0 = sum(C[i] * (G[i] + m[i]) for i in range(d)) + (whole(M[d][d]) << -2 * E)  # f(c) / 2^(3E)
-    if not F0 < 0:
-        return None
-    for lam in lams:
-        L = whole(lam)
-        if L > 0 and _definite([[Q[i][j] - (L if i == j else 0) for j in range(d)] for i in range(d)], d):
-            break
-    else:
-        return None
-    G2 = sum(v * v for v in G)  # |g|^2 / 2^(4E)
-    num = _ceil_sqrt(G2) + _ceil_sqrt(G2 - L * F0)
-    den = L << -E  # rho <= num / den (module docstring of bounds: rho = (|g| + sqrt(|g|^2 - lambda f)) / lambda)
-    try:
-        rho = num / den
-    except OverflowError:
-        return None
-    p, q = rho.as_integer_ratio()
-    if p * den < num * q:
-        rho = math.nextafter(rho, math.inf)
-    return (c, rho) if math.isfinite(rho) else None
-
-
-def _ceil_sqrt(n: int) -> int:
-    """The smallest integer >= sqrt(n), n >= 0."""
-    r = math.isqrt(n)
-    return r if r * r == n else r + 1
-
-
-def _centre_estimate(M: list[list[float]], d: int) -> list[float] | None:
-    """-Q^-1 m in floats (Cramer's rule): any float vector is a valid centre, a good one is tight."""
-    m = [M[i][d] for i in range(d)]
-    try:
-        if d == 2:
-            a, b, e = M[0][0], M[0][1], M[1][1]
-            det = a * e - b * b
-            return [-(e * m[0] - b * m[1]) / det, -(a * m[1] - b * m[0]) / det]
-        q = [[M[i][j] for j in range(3)] for i in range(3)]
-        adj = [
-            [q[1][1] * q[2][2] - q[1][2] * q[2][1], q[0][2] * q[2][1] - q[0][1] * q[2][2], q[0][1] * q[1][2] - q[0][2] * q[1][1]],
-            [q[1][2] * q[2][0] - q[1][0] * q[2][2], q[0][0] * q[2][2] - q[0][2] * q[2][0], q[0][2] * q[1][0] - q[0][0] * q[1][2]],
-            [q[1][0] * q[2][1] - q[1][1] * q[2][0], q[0][1] * q[2][0] - q[0][0] * q[2][1], q[0][0] * q[1][1] - q[0][1] * q[1][0]],
-        ]
-        det = q[0][0] * adj[0][0] + q[0][1] * adj[1][0] + q[0][2] * adj[2][0]
-        return [-(adj[i][0] * m[0] + adj[i][1] * m[1] + adj[i][2] * m[2]) / det for i in range(3)]
-    except (ZeroDivisionError, OverflowError):
-        return None
-
-
-def _lambda_estimate(M: list[list[float]], d: int) -> float:
-    """Smallest eigenvalue of the quadratic block, in floats (closed forms; only an estimate)."""
-    try:
-        if d == 2:
-            h = (M[0][0] + M[1][1]) / 2
-            return h - math.hypot((M[0][0] - M[1][1]) / 2, M[0][1])
-        q = (M[0][0] + M[1][1] + M[2][2]) / 3
-        b = [[M[i][j] - (q if i == j else 0.0) for j in range(3)] for i in range(3)]
-        p = math.sqrt(sum(b[i][j] ** 2 for i in range(3) for j in range(3)) / 6)
-        if p == 0:
-            return q
-        bn = [[v / p for v in row] for row in b]
-        det = (
-            bn[0][0] * (bn[1][1] * bn[2][2] - bn[1][2] * bn[2][1])
-            - bn[0][1] * (bn[1][0] * bn[2][2] - bn[1][2] * bn[2][0])
-            + bn[0][2] * (bn[1][0] * bn[2][1] - bn[1][1] * bn[2][0])
-        )
-        phi = math.acos(max(-1.0, min(1.0, det / 2))) / 3
-        return q + 2 * p * math.cos(phi + 2 * math.pi / 3)
-    except (ValueError, OverflowError, ZeroDivisionError):
-        return math.nan
-
-
-def _definite(P: list[list[int]], d: int) -> bool:
-    """P positive definite (its leading principal minors are positive; exact integers)."""
-    if not P[0][0] > 0:
-        return False
-    m2 = P[0][0] * P[1][1] - P[0][1] * P[1][0]
-    if not m2 > 0:
-        return False
-    if d == 2:
-        return True
-    m3 = (
-        P[0][0] * (P[1][1] * P[2][2] - P[1][2] * P[2][1])
-        - P[0][1] * (P[1][0] * P[2][2] - P[1][2] * P[2][0])
-        + P[0][2] * (P[1][0] * P[2][1] - P[1][1] * P[2][0])
-    )
-    return m3 > 0

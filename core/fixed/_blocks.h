@@ -3,7 +3,7 @@
  * Included by _variant.h once per (dimension, input type), with these macros defined:
  *   N          3 (ellipses) or 4 (ellipsoids)
  *   T          double or float (float is widened exactly: certified for the float values given)
- *   FIRST_NOSCALE, FIRST, FULL, SECOND, THIRD, THIRD_FAST, FOURTH   the lane functions of _kernels.h for this N and T
+ *   FIRST_NOSCALE, FIRST, FULL, SECOND, THIRD_SEP_NOSCALE, THIRD_SEP_FAST, THIRD_SEP, THIRD_FAST, THIRD, FOURTH   the lane functions of _kernels.h for this N and T
  *   CHUNK      pairs per block (CHUNK3 or CHUNK4 of _variant.h)
  *   TP, TRANSPOSE_T   pairs per transpose for T (4 for doubles, 8 for floats, or 0: element by element) and the TP x TP transpose
  *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
@@ -59,15 +59,17 @@
         for (int64_t q = 0; q < k; q++) code[open[q]] = dc[q];                                \
     }
 
-/* The certificates (LANE(a, b, c, stride) -> rule or -1) on the open pairs of one route;
- * a pair whose s0 is still unknown keeps NEEDS_S0_RADIUS where they fail. */
-#define CERT_STAGE(LANE, ROUTE)                                                                                   \
-    SUBSET((code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && viafull[p] == (ROUTE))                       \
+/* A certificate (LANE(a, b, c, stride) -> rule or -1) on the open pairs whose first pass ROUTE
+ * holds for (an expression of route[p]: 0 unscaled, 1 scaled, 2 the full prepare); where it
+ * fails a pair keeps its code when KEEP (stage 3a: the full certificates follow), else keeps
+ * NEEDS_S0_RADIUS if its s0 is still unknown and is left undecided (-1) otherwise. */
+#define CERT_STAGE(LANE, ROUTE, KEEP)                                                                             \
+    SUBSET((code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && (ROUTE))                                      \
     if (2 * k > m) {                                                                                              \
         for (int64_t p = 0; p < m; p++) {                                                                         \
             const int64_t cert = LANE(a + p, b + p, c + p, CHUNK);                                                \
-            const int64_t open_ = (code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && viafull[p] == (ROUTE); \
-            const int64_t left = code[p] == NEEDS_S0_RADIUS ? NEEDS_S0_RADIUS : -1;                               \
+            const int64_t open_ = (code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) && (ROUTE);              \
+            const int64_t left = (KEEP) || code[p] == NEEDS_S0_RADIUS ? code[p] : -1;                             \
             code[p] = open_ ? (cert >= 0 ? cert : left) : code[p];                                                \
         }                                                                                                         \
     } else if (k) {                                                                                               \
@@ -80,7 +82,7 @@
         for (int64_t q = 0; q < k; q++) dc[q] = LANE(pa + q, pb + q, d + q, CHUNK);                               \
         for (int64_t q = 0; q < k; q++) {                                                                         \
             const int64_t p = open[q];                                                                            \
-            code[p] = dc[q] >= 0 ? dc[q] : (code[p] == NEEDS_S0_RADIUS ? NEEDS_S0_RADIUS : -1);                   \
+            code[p] = dc[q] >= 0 ? dc[q] : ((KEEP) || code[p] == NEEDS_S0_RADIUS ? code[p] : -1);                 \
         }                                                                                                         \
     }
 
@@ -138,7 +140,7 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
         double c[2 * (N + 1) * CHUNK];        /* a_0..a_n, then their radii: the same layout */
         int64_t code[CHUNK], idx[CHUNK];
         int32_t open[CHUNK];
-        int64_t viafull[CHUNK]; /* the pair went through the full prepare */
+        int64_t route[CHUNK]; /* the first pass that gave the pair's a_i: 0 unscaled, 1 scaled, 2 the full prepare */
         int64_t done = 0, k = 0;
 #if PF_DIST > 0
         const char *pf_a = (const char *)(A + (i0 + PF_DIST * CHUNK) * N * N), *pf_b = (const char *)(B + (i0 + PF_DIST * CHUNK) * N * N);
@@ -186,12 +188,13 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
 #endif
         /* stage 1 again with the scaling, where a largest entry is outside [2^-8, 2^24] (and where
          * a matrix is not exactly symmetric: the scaled pass sends those on to the full prepare) */
+        for (int64_t p = 0; p < m; p++) route[p] = use_scaled || code[p] == NEEDS_SCALE;
         if (!use_full && !use_scaled) {
             SUBSET(code[p] == NEEDS_SCALE)
             scaled_run = 2 * k > m;
             AGAIN(FIRST, NEEDS_SCALE)
         }
-        for (int64_t p = 0; p < m; p++) viafull[p] = use_full || code[p] == NEEDS_FULL;
+        for (int64_t p = 0; p < m; p++) route[p] = use_full || code[p] == NEEDS_FULL ? 2 : route[p];
         /* stage 1 again with the full prepare, where a matrix is symmetric only up to rounding */
         if (!use_full) {
             SUBSET(code[p] == NEEDS_FULL)
@@ -202,9 +205,14 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
         /* stage 2, where the tree asks for s0: the semi-static test */
         S0_STAGE(SECOND, NEEDS_S0)
         PREFETCH(5)
-        /* stage 3, valid pairs still open: the certificates, on the prepare each pair took */
-        CERT_STAGE(THIRD_FAST, 0)
-        CERT_STAGE(THIRD, 1)
+        /* stage 3, valid pairs still open: the certificates, on the prepare each pair took; first
+         * the cheap separation certificate (T* from the a_i and the traces: spheres, translated and
+         * homothetic copies that are separate), then the full ones on the pairs it left */
+        CERT_STAGE(THIRD_SEP_NOSCALE, route[p] == 0, 1)
+        CERT_STAGE(THIRD_SEP_FAST, route[p] == 1, 1)
+        CERT_STAGE(THIRD_SEP, route[p] == 2, 1)
+        CERT_STAGE(THIRD_FAST, route[p] != 2, 0)
+        CERT_STAGE(THIRD, route[p] == 2, 0)
         PREFETCH(6)
         /* stage 4, s0 still needed: the running-error test */
         S0_STAGE(FOURTH, NEEDS_S0_RADIUS)

@@ -4,7 +4,7 @@
  * - the straight-line kernels (pencil{n}, hat_s0_rel_{n}, hat_s0_{n}, pencil_at{n}, form{n}) are the traced
  *   ring-generic formulas of core/fixed/_kernels.py, the same operations in the same order, so
  *   their proven error constants (core/fixed/errorbound.py) hold;
- * - the lane functions (first{n}_*, full{n}_*, second{n}, third{n}_*, fourth{n}) are core/fixed/driver.py written out
+ * - the lane functions (first{n}_*, full{n}_*, second{n}, third_sep{n}_*, third{n}_*, fourth{n}) are core/fixed/driver.py written out
  *   in C: prepare, pencil with bounds, validity, the tree (tables of
  *   core.formulae.decision.decide_signs), s0 where the tree asks, the certificates. The numpy
  *   filter runs that same description on arrays, and the two agree bit for bit.
@@ -760,6 +760,115 @@ static inline __attribute__((always_inline)) int64_t full3_f64(const double *res
     return first;
 }
 
+/* Stage 3a (driver.certify_sep, on the traces of the pair prepared again): sep-witness or -1. */
+static inline __attribute__((always_inline)) int64_t third_sep3_f64(const double *restrict a, const double *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax11 = (double)a[4 * s];
+    const double ax12 = (double)a[5 * s];
+    const double ax22 = (double)a[8 * s];
+    const double ay01 = (double)a[3 * s];
+    const double ay02 = (double)a[6 * s];
+    const double ay12 = (double)a[7 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay12));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak1 = imin2(ak, 1000);
+    const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
+    const double ag2 = pow2((ak - ak1));
+    const double aX00 = ((ax00 * ag1) * ag2);
+    const double aX11 = ((ax11 * ag1) * ag2);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx11 = (double)b[4 * s];
+    const double bx12 = (double)b[5 * s];
+    const double bx22 = (double)b[8 * s];
+    const double by01 = (double)b[3 * s];
+    const double by02 = (double)b[6 * s];
+    const double by12 = (double)b[7 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22)), abs_bits(by01)), abs_bits(by02)), abs_bits(by12));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk1 = imin2(bk, 1000);
+    const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
+    const double bg2 = pow2((bk - bk1));
+    const double bX00 = ((bx00 * bg1) * bg2);
+    const double bX11 = ((bx11 * bg1) * bg2);
+    const double Tq = ((((bX00 + bX11) * c[3 * s]) - ((aX00 + aX11) * c[2 * s])) / ((2.0 * (aX00 + aX11)) * c[3 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[4] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s]};
+    const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
+    double r_pencil_at3[2];
+    pencil_at3(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at3);
+    const int64_t sepq = (tqin & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
+/* Stage 3a for a pair the unscaled first pass prepared (largest entries in [2^-8, 2^24]: W is M, the sign apart): the same answer as third_sep, without finding a scale. */
+static inline __attribute__((always_inline)) int64_t third_sep3_noscale_f64(const double *restrict a, const double *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax11 = (double)a[4 * s];
+    const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
+    const double bx00 = (double)b[0 * s];
+    const double bx11 = (double)b[4 * s];
+    const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
+    const double Tq = (((((bx00 + bx11) * bsign) * c[3 * s]) - (((ax00 + ax11) * asign) * c[2 * s])) / ((2.0 * ((ax00 + ax11) * asign)) * c[3 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[4] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s]};
+    const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
+    double r_pencil_at3[2];
+    pencil_at3(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at3);
+    const int64_t sepq = (tqin & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
+/* Stage 3a for a pair the fast first pass prepared: the same answer as third_sep, cheaper. */
+static inline __attribute__((always_inline)) int64_t third_sep3_fast_f64(const double *restrict a, const double *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax11 = (double)a[4 * s];
+    const double ax12 = (double)a[5 * s];
+    const double ax22 = (double)a[8 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak1 = imin2(ak, 1000);
+    const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
+    const double aw00 = (ax00 * ag1);
+    const double aw11 = (ax11 * ag1);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx11 = (double)b[4 * s];
+    const double bx12 = (double)b[5 * s];
+    const double bx22 = (double)b[8 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk1 = imin2(bk, 1000);
+    const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
+    const double bw00 = (bx00 * bg1);
+    const double bw11 = (bx11 * bg1);
+    const double Tq = ((((bw00 + bw11) * c[3 * s]) - ((aw00 + aw11) * c[2 * s])) / ((2.0 * (aw00 + aw11)) * c[3 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[4] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s]};
+    const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
+    double r_pencil_at3[2];
+    pencil_at3(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at3);
+    const int64_t sepq = (tqin & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
 /* Stage 3 (driver.certify, on the pair prepared again): sep-witness, common-point or -1. */
 static inline __attribute__((always_inline)) int64_t third3_f64(const double *restrict a, const double *restrict b, const double *restrict c, const int64_t s) {
     const double ax00 = (double)a[0 * s];
@@ -1334,6 +1443,115 @@ static inline __attribute__((always_inline)) int64_t full3_f32(const float *rest
     c[7 * s] = c3r;
     *idx_out = idx;
     return first;
+}
+
+/* Stage 3a (driver.certify_sep, on the traces of the pair prepared again): sep-witness or -1. */
+static inline __attribute__((always_inline)) int64_t third_sep3_f32(const float *restrict a, const float *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax11 = (double)a[4 * s];
+    const double ax12 = (double)a[5 * s];
+    const double ax22 = (double)a[8 * s];
+    const double ay01 = (double)a[3 * s];
+    const double ay02 = (double)a[6 * s];
+    const double ay12 = (double)a[7 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay12));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak1 = imin2(ak, 1000);
+    const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
+    const double ag2 = pow2((ak - ak1));
+    const double aX00 = ((ax00 * ag1) * ag2);
+    const double aX11 = ((ax11 * ag1) * ag2);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx11 = (double)b[4 * s];
+    const double bx12 = (double)b[5 * s];
+    const double bx22 = (double)b[8 * s];
+    const double by01 = (double)b[3 * s];
+    const double by02 = (double)b[6 * s];
+    const double by12 = (double)b[7 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22)), abs_bits(by01)), abs_bits(by02)), abs_bits(by12));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk1 = imin2(bk, 1000);
+    const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
+    const double bg2 = pow2((bk - bk1));
+    const double bX00 = ((bx00 * bg1) * bg2);
+    const double bX11 = ((bx11 * bg1) * bg2);
+    const double Tq = ((((bX00 + bX11) * c[3 * s]) - ((aX00 + aX11) * c[2 * s])) / ((2.0 * (aX00 + aX11)) * c[3 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[4] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s]};
+    const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
+    double r_pencil_at3[2];
+    pencil_at3(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at3);
+    const int64_t sepq = (tqin & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
+/* Stage 3a for a pair the unscaled first pass prepared (largest entries in [2^-8, 2^24]: W is M, the sign apart): the same answer as third_sep, without finding a scale. */
+static inline __attribute__((always_inline)) int64_t third_sep3_noscale_f32(const float *restrict a, const float *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax11 = (double)a[4 * s];
+    const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
+    const double bx00 = (double)b[0 * s];
+    const double bx11 = (double)b[4 * s];
+    const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
+    const double Tq = (((((bx00 + bx11) * bsign) * c[3 * s]) - (((ax00 + ax11) * asign) * c[2 * s])) / ((2.0 * ((ax00 + ax11) * asign)) * c[3 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[4] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s]};
+    const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
+    double r_pencil_at3[2];
+    pencil_at3(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at3);
+    const int64_t sepq = (tqin & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
+/* Stage 3a for a pair the fast first pass prepared: the same answer as third_sep, cheaper. */
+static inline __attribute__((always_inline)) int64_t third_sep3_fast_f32(const float *restrict a, const float *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax11 = (double)a[4 * s];
+    const double ax12 = (double)a[5 * s];
+    const double ax22 = (double)a[8 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax22));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak1 = imin2(ak, 1000);
+    const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
+    const double aw00 = (ax00 * ag1);
+    const double aw11 = (ax11 * ag1);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx11 = (double)b[4 * s];
+    const double bx12 = (double)b[5 * s];
+    const double bx22 = (double)b[8 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx22));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk1 = imin2(bk, 1000);
+    const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
+    const double bw00 = (bx00 * bg1);
+    const double bw11 = (bx11 * bg1);
+    const double Tq = ((((bw00 + bw11) * c[3 * s]) - ((aw00 + aw11) * c[2 * s])) / ((2.0 * (aw00 + aw11)) * c[3 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[4] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s]};
+    const double cr[4] = {c[4 * s], c[5 * s], c[6 * s], c[7 * s]};
+    double r_pencil_at3[2];
+    pencil_at3(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at3);
+    const int64_t sepq = (tqin & (r_pencil_at3[0] > ((r_pencil_at3[1] * 1.0000000000009095) + 1.3852838126536086e-288)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
 }
 
 /* Stage 3 (driver.certify, on the pair prepared again): sep-witness, common-point or -1. */
@@ -2836,6 +3054,143 @@ static inline __attribute__((always_inline)) int64_t full4_f64(const double *res
     return first;
 }
 
+/* Stage 3a (driver.certify_sep, on the traces of the pair prepared again): sep-witness or -1. */
+static inline __attribute__((always_inline)) int64_t third_sep4_f64(const double *restrict a, const double *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax03 = (double)a[3 * s];
+    const double ax11 = (double)a[5 * s];
+    const double ax12 = (double)a[6 * s];
+    const double ax13 = (double)a[7 * s];
+    const double ax22 = (double)a[10 * s];
+    const double ax23 = (double)a[11 * s];
+    const double ax33 = (double)a[15 * s];
+    const double ay01 = (double)a[4 * s];
+    const double ay02 = (double)a[8 * s];
+    const double ay03 = (double)a[12 * s];
+    const double ay12 = (double)a[9 * s];
+    const double ay13 = (double)a[13 * s];
+    const double ay23 = (double)a[14 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay03)), abs_bits(ay12)), abs_bits(ay13)), abs_bits(ay23));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak1 = imin2(ak, 1000);
+    const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
+    const double ag2 = pow2((ak - ak1));
+    const double aX00 = ((ax00 * ag1) * ag2);
+    const double aX11 = ((ax11 * ag1) * ag2);
+    const double aX22 = ((ax22 * ag1) * ag2);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx03 = (double)b[3 * s];
+    const double bx11 = (double)b[5 * s];
+    const double bx12 = (double)b[6 * s];
+    const double bx13 = (double)b[7 * s];
+    const double bx22 = (double)b[10 * s];
+    const double bx23 = (double)b[11 * s];
+    const double bx33 = (double)b[15 * s];
+    const double by01 = (double)b[4 * s];
+    const double by02 = (double)b[8 * s];
+    const double by03 = (double)b[12 * s];
+    const double by12 = (double)b[9 * s];
+    const double by13 = (double)b[13 * s];
+    const double by23 = (double)b[14 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33)), abs_bits(by01)), abs_bits(by02)), abs_bits(by03)), abs_bits(by12)), abs_bits(by13)), abs_bits(by23));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk1 = imin2(bk, 1000);
+    const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
+    const double bg2 = pow2((bk - bk1));
+    const double bX00 = ((bx00 * bg1) * bg2);
+    const double bX11 = ((bx11 * bg1) * bg2);
+    const double bX22 = ((bx22 * bg1) * bg2);
+    const double Tq = ((((2.0 * ((bX00 + bX11) + bX22)) * c[4 * s]) - (((aX00 + aX11) + aX22) * c[3 * s])) / ((2.0 * ((aX00 + aX11) + aX22)) * c[4 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[5] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s], c[4 * s]};
+    const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
+    double r_pencil_at4[2];
+    pencil_at4(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at4);
+    const int64_t sepq = (tqin & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
+/* Stage 3a for a pair the unscaled first pass prepared (largest entries in [2^-8, 2^24]: W is M, the sign apart): the same answer as third_sep, without finding a scale. */
+static inline __attribute__((always_inline)) int64_t third_sep4_noscale_f64(const double *restrict a, const double *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax11 = (double)a[5 * s];
+    const double ax22 = (double)a[10 * s];
+    const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
+    const double bx00 = (double)b[0 * s];
+    const double bx11 = (double)b[5 * s];
+    const double bx22 = (double)b[10 * s];
+    const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
+    const double Tq = ((((2.0 * (((bx00 + bx11) + bx22) * bsign)) * c[4 * s]) - ((((ax00 + ax11) + ax22) * asign) * c[3 * s])) / ((2.0 * (((ax00 + ax11) + ax22) * asign)) * c[4 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[5] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s], c[4 * s]};
+    const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
+    double r_pencil_at4[2];
+    pencil_at4(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at4);
+    const int64_t sepq = (tqin & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
+/* Stage 3a for a pair the fast first pass prepared: the same answer as third_sep, cheaper. */
+static inline __attribute__((always_inline)) int64_t third_sep4_fast_f64(const double *restrict a, const double *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax03 = (double)a[3 * s];
+    const double ax11 = (double)a[5 * s];
+    const double ax12 = (double)a[6 * s];
+    const double ax13 = (double)a[7 * s];
+    const double ax22 = (double)a[10 * s];
+    const double ax23 = (double)a[11 * s];
+    const double ax33 = (double)a[15 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak1 = imin2(ak, 1000);
+    const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
+    const double aw00 = (ax00 * ag1);
+    const double aw11 = (ax11 * ag1);
+    const double aw22 = (ax22 * ag1);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx03 = (double)b[3 * s];
+    const double bx11 = (double)b[5 * s];
+    const double bx12 = (double)b[6 * s];
+    const double bx13 = (double)b[7 * s];
+    const double bx22 = (double)b[10 * s];
+    const double bx23 = (double)b[11 * s];
+    const double bx33 = (double)b[15 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk1 = imin2(bk, 1000);
+    const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
+    const double bw00 = (bx00 * bg1);
+    const double bw11 = (bx11 * bg1);
+    const double bw22 = (bx22 * bg1);
+    const double Tq = ((((2.0 * ((bw00 + bw11) + bw22)) * c[4 * s]) - (((aw00 + aw11) + aw22) * c[3 * s])) / ((2.0 * ((aw00 + aw11) + aw22)) * c[4 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[5] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s], c[4 * s]};
+    const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
+    double r_pencil_at4[2];
+    pencil_at4(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at4);
+    const int64_t sepq = (tqin & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
 /* Stage 3 (driver.certify, on the pair prepared again): sep-witness, common-point or -1. */
 static inline __attribute__((always_inline)) int64_t third4_f64(const double *restrict a, const double *restrict b, const double *restrict c, const int64_t s) {
     const double ax00 = (double)a[0 * s];
@@ -3681,6 +4036,143 @@ static inline __attribute__((always_inline)) int64_t full4_f32(const float *rest
     c[9 * s] = c4r;
     *idx_out = idx;
     return first;
+}
+
+/* Stage 3a (driver.certify_sep, on the traces of the pair prepared again): sep-witness or -1. */
+static inline __attribute__((always_inline)) int64_t third_sep4_f32(const float *restrict a, const float *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax03 = (double)a[3 * s];
+    const double ax11 = (double)a[5 * s];
+    const double ax12 = (double)a[6 * s];
+    const double ax13 = (double)a[7 * s];
+    const double ax22 = (double)a[10 * s];
+    const double ax23 = (double)a[11 * s];
+    const double ax33 = (double)a[15 * s];
+    const double ay01 = (double)a[4 * s];
+    const double ay02 = (double)a[8 * s];
+    const double ay03 = (double)a[12 * s];
+    const double ay12 = (double)a[9 * s];
+    const double ay13 = (double)a[13 * s];
+    const double ay23 = (double)a[14 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33)), abs_bits(ay01)), abs_bits(ay02)), abs_bits(ay03)), abs_bits(ay12)), abs_bits(ay13)), abs_bits(ay23));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak1 = imin2(ak, 1000);
+    const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
+    const double ag2 = pow2((ak - ak1));
+    const double aX00 = ((ax00 * ag1) * ag2);
+    const double aX11 = ((ax11 * ag1) * ag2);
+    const double aX22 = ((ax22 * ag1) * ag2);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx03 = (double)b[3 * s];
+    const double bx11 = (double)b[5 * s];
+    const double bx12 = (double)b[6 * s];
+    const double bx13 = (double)b[7 * s];
+    const double bx22 = (double)b[10 * s];
+    const double bx23 = (double)b[11 * s];
+    const double bx33 = (double)b[15 * s];
+    const double by01 = (double)b[4 * s];
+    const double by02 = (double)b[8 * s];
+    const double by03 = (double)b[12 * s];
+    const double by12 = (double)b[9 * s];
+    const double by13 = (double)b[13 * s];
+    const double by23 = (double)b[14 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33)), abs_bits(by01)), abs_bits(by02)), abs_bits(by03)), abs_bits(by12)), abs_bits(by13)), abs_bits(by23));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk1 = imin2(bk, 1000);
+    const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
+    const double bg2 = pow2((bk - bk1));
+    const double bX00 = ((bx00 * bg1) * bg2);
+    const double bX11 = ((bx11 * bg1) * bg2);
+    const double bX22 = ((bx22 * bg1) * bg2);
+    const double Tq = ((((2.0 * ((bX00 + bX11) + bX22)) * c[4 * s]) - (((aX00 + aX11) + aX22) * c[3 * s])) / ((2.0 * ((aX00 + aX11) + aX22)) * c[4 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[5] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s], c[4 * s]};
+    const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
+    double r_pencil_at4[2];
+    pencil_at4(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at4);
+    const int64_t sepq = (tqin & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
+/* Stage 3a for a pair the unscaled first pass prepared (largest entries in [2^-8, 2^24]: W is M, the sign apart): the same answer as third_sep, without finding a scale. */
+static inline __attribute__((always_inline)) int64_t third_sep4_noscale_f32(const float *restrict a, const float *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax11 = (double)a[5 * s];
+    const double ax22 = (double)a[10 * s];
+    const double asign = ((ax00 < 0.0) ? -1.0 : 1.0);
+    const double bx00 = (double)b[0 * s];
+    const double bx11 = (double)b[5 * s];
+    const double bx22 = (double)b[10 * s];
+    const double bsign = ((bx00 < 0.0) ? -1.0 : 1.0);
+    const double Tq = ((((2.0 * (((bx00 + bx11) + bx22) * bsign)) * c[4 * s]) - ((((ax00 + ax11) + ax22) * asign) * c[3 * s])) / ((2.0 * (((ax00 + ax11) + ax22) * asign)) * c[4 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[5] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s], c[4 * s]};
+    const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
+    double r_pencil_at4[2];
+    pencil_at4(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at4);
+    const int64_t sepq = (tqin & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
+}
+
+/* Stage 3a for a pair the fast first pass prepared: the same answer as third_sep, cheaper. */
+static inline __attribute__((always_inline)) int64_t third_sep4_fast_f32(const float *restrict a, const float *restrict b, const double *restrict c, const int64_t s) {
+    const double ax00 = (double)a[0 * s];
+    const double ax01 = (double)a[1 * s];
+    const double ax02 = (double)a[2 * s];
+    const double ax03 = (double)a[3 * s];
+    const double ax11 = (double)a[5 * s];
+    const double ax12 = (double)a[6 * s];
+    const double ax13 = (double)a[7 * s];
+    const double ax22 = (double)a[10 * s];
+    const double ax23 = (double)a[11 * s];
+    const double ax33 = (double)a[15 * s];
+    const int64_t amxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(ax00), abs_bits(ax01)), abs_bits(ax02)), abs_bits(ax03)), abs_bits(ax11)), abs_bits(ax12)), abs_bits(ax13)), abs_bits(ax22)), abs_bits(ax23)), abs_bits(ax33));
+    const double amx = from_bits(amxbits);
+    const int64_t afinite = ((amxbits <= 0x7fefffffffffffffLL) & (ax00 != 0.0));
+    const int64_t ak = (((amx >= 0.00390625) & (amx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((afinite ? amx : 1.0))), -1022), 2044));
+    const int64_t ak1 = imin2(ak, 1000);
+    const double ag1 = ((ax00 < 0.0) ? (-pow2(ak1)) : pow2(ak1));
+    const double aw00 = (ax00 * ag1);
+    const double aw11 = (ax11 * ag1);
+    const double aw22 = (ax22 * ag1);
+    const double bx00 = (double)b[0 * s];
+    const double bx01 = (double)b[1 * s];
+    const double bx02 = (double)b[2 * s];
+    const double bx03 = (double)b[3 * s];
+    const double bx11 = (double)b[5 * s];
+    const double bx12 = (double)b[6 * s];
+    const double bx13 = (double)b[7 * s];
+    const double bx22 = (double)b[10 * s];
+    const double bx23 = (double)b[11 * s];
+    const double bx33 = (double)b[15 * s];
+    const int64_t bmxbits = imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(imax2(abs_bits(bx00), abs_bits(bx01)), abs_bits(bx02)), abs_bits(bx03)), abs_bits(bx11)), abs_bits(bx12)), abs_bits(bx13)), abs_bits(bx22)), abs_bits(bx23)), abs_bits(bx33));
+    const double bmx = from_bits(bmxbits);
+    const int64_t bfinite = ((bmxbits <= 0x7fefffffffffffffLL) & (bx00 != 0.0));
+    const int64_t bk = (((bmx >= 0.00390625) & (bmx <= 16777216.0)) ? 0 : imin2(imax2((1 - frexp_exponent((bfinite ? bmx : 1.0))), -1022), 2044));
+    const int64_t bk1 = imin2(bk, 1000);
+    const double bg1 = ((bx00 < 0.0) ? (-pow2(bk1)) : pow2(bk1));
+    const double bw00 = (bx00 * bg1);
+    const double bw11 = (bx11 * bg1);
+    const double bw22 = (bx22 * bg1);
+    const double Tq = ((((2.0 * ((bw00 + bw11) + bw22)) * c[4 * s]) - (((aw00 + aw11) + aw22) * c[3 * s])) / ((2.0 * ((aw00 + aw11) + aw22)) * c[4 * s]));
+    const int64_t tqin = ((Tq >= 9.5367431640625e-07) & (Tq <= 1048576.0));
+    const double c_1[5] = {c[0 * s], c[1 * s], c[2 * s], c[3 * s], c[4 * s]};
+    const double cr[5] = {c[5 * s], c[6 * s], c[7 * s], c[8 * s], c[9 * s]};
+    double r_pencil_at4[2];
+    pencil_at4(c_1, cr, (tqin ? Tq : 1.0), r_pencil_at4);
+    const int64_t sepq = (tqin & (r_pencil_at4[0] > ((r_pencil_at4[1] * 1.0000000000009095) + 1.2997436692120506e-274)));
+    const int64_t certq = (sepq ? 10 : -1);
+    return certq;
 }
 
 /* Stage 3 (driver.certify, on the pair prepared again): sep-witness, common-point or -1. */

@@ -114,6 +114,9 @@ static inline void transpose8_f32(const float *restrict src, int64_t ld_src, flo
 #define FOURTH fourth3
 #define THIRD third3_f64
 #define THIRD_FAST third3_fast_f64
+#define THIRD_SEP third_sep3_f64
+#define THIRD_SEP_FAST third_sep3_fast_f64
+#define THIRD_SEP_NOSCALE third_sep3_noscale_f64
 #define CLASSIFY GLUE(classify3_f64, VARIANT)
 F64_BEGIN
 #include "_blocks.h"
@@ -126,6 +129,9 @@ F64_END
 #undef FULL
 #undef THIRD
 #undef THIRD_FAST
+#undef THIRD_SEP
+#undef THIRD_SEP_FAST
+#undef THIRD_SEP_NOSCALE
 #undef CLASSIFY
 #define T float
 #define FIRST first3_f32
@@ -135,6 +141,9 @@ F64_END
 #define FULL full3_f32
 #define THIRD third3_f32
 #define THIRD_FAST third3_fast_f32
+#define THIRD_SEP third_sep3_f32
+#define THIRD_SEP_FAST third_sep3_fast_f32
+#define THIRD_SEP_NOSCALE third_sep3_noscale_f32
 #define CLASSIFY GLUE(classify3_f32, VARIANT)
 #include "_blocks.h"
 #undef N
@@ -149,6 +158,9 @@ F64_END
 #undef FOURTH
 #undef THIRD
 #undef THIRD_FAST
+#undef THIRD_SEP
+#undef THIRD_SEP_FAST
+#undef THIRD_SEP_NOSCALE
 #undef CLASSIFY
 
 #define N 4
@@ -163,6 +175,9 @@ F64_END
 #define FOURTH fourth4
 #define THIRD third4_f64
 #define THIRD_FAST third4_fast_f64
+#define THIRD_SEP third_sep4_f64
+#define THIRD_SEP_FAST third_sep4_fast_f64
+#define THIRD_SEP_NOSCALE third_sep4_noscale_f64
 #define CLASSIFY GLUE(classify4_f64, VARIANT)
 F64_BEGIN
 #include "_blocks.h"
@@ -175,6 +190,9 @@ F64_END
 #undef FULL
 #undef THIRD
 #undef THIRD_FAST
+#undef THIRD_SEP
+#undef THIRD_SEP_FAST
+#undef THIRD_SEP_NOSCALE
 #undef CLASSIFY
 #define T float
 #define FIRST first4_f32
@@ -184,6 +202,9 @@ F64_END
 #define FULL full4_f32
 #define THIRD third4_f32
 #define THIRD_FAST third4_fast_f32
+#define THIRD_SEP third_sep4_f32
+#define THIRD_SEP_FAST third_sep4_fast_f32
+#define THIRD_SEP_NOSCALE third_sep4_noscale_f32
 #define CLASSIFY GLUE(classify4_f32, VARIANT)
 #include "_blocks.h"
 #undef N
@@ -198,4 +219,7 @@ F64_END
 #undef FOURTH
 #undef THIRD
 #undef THIRD_FAST
+#undef THIRD_SEP
+#undef THIRD_SEP_FAST
+#undef THIRD_SEP_NOSCALE
 #undef CLASSIFY

@@ -28,12 +28,13 @@ from ..shapes.numbers import binary64_array
 from ..shapes.quadrics import Matrix, Stack, validate_quadric
 from . import compiled
 from .exact import classify_exact, valid_float_matrix
-from .filters import certified_valid, classify_float_counted
+from .filters import _RELATION_OF, certified_valid, classify_float_counted
 from .lazy import LazyArray, is_dask_array
 
 __all__ = [
     "classify",
     "classify_detailed",
+    "classify_pairs",
     "Classification",
     "Certifier",
     "Method",
@@ -228,6 +229,32 @@ def classify_detailed(
     """
     check_options(method, on_invalid)
     return _classify(A, B, method, on_invalid, progress, certifiers=True)
+
+
+def classify_pairs(a: np.ndarray, b: np.ndarray, method: Method = "adaptive") -> tuple[np.ndarray, np.ndarray]:
+    """(relation, certified_by) of float64 stacks (N, n, n) of valid bodies: :func:`classify_detailed`'s answers.
+
+    For the bodies' narrow phases (a one-body query of :class:`core.BodyIndex` classifies a
+    handful of pairs), whose matrices are float64 and already proven valid (their bounding
+    spheres): under "adaptive" one call of the compiled filter, and :func:`classify_detailed` only
+    on the pairs it leaves (which it runs through the same filter again, then its second stage
+    and exact arithmetic), so every answer and certifier is the one :func:`classify_detailed`
+    gives the whole stack; no checks of shapes, types or options, no broadcasting. Other
+    methods, or no extension: :func:`classify_detailed` itself.
+    """
+    if method != "adaptive" or not compiled.available():
+        res = classify_detailed(a, b, method=method)
+        return res.relation, res.certified_by
+    codes, undecided = compiled.mapped(a, b, _RELATION_OF)
+    by = np.ones(codes.size, dtype=np.int8)  # Certifier.FLOAT
+    if not undecided:
+        _CLASSIFY.count(codes.size, 0, 0)
+        return codes, by
+    rows = np.flatnonzero(codes == Relation.UNDECIDED)
+    _CLASSIFY.count(codes.size - rows.size, 0, 0)
+    res = classify_detailed(a[rows], b[rows])
+    codes[rows], by[rows] = res.relation, res.certified_by
+    return codes, by
 
 
 def _classify(

@@ -31,7 +31,7 @@ from typing import cast
 import numpy as np
 
 __all__ = [
-    "available", "balance_available", "balance", "pool", "warm_up", "status", "variant", "variants", "select", "rules", "mapped", "rule_one", "set_threads", "get_threads", "threads",
+    "available", "balance_available", "balance", "spheres_available", "spheres", "query_one_available", "query_one", "query_many", "SPHERE_TIGHT", "SPHERE_LOOSE", "SPHERE_NONE", "SPHERE_OTHER", "pool", "warm_up", "status", "variant", "variants", "select", "rules", "mapped", "rule_one", "set_threads", "get_threads", "threads",
     "header_sha256", "FIX", "HEADER",
 ]
 
@@ -43,6 +43,9 @@ _MIN_CHUNK = 16384
 
 _lock = threading.Lock()
 _state: dict[str, object] = {"threads": None, "pool": None, "warned": False}
+_CPUS = os.cpu_count() or 1
+"""Cores, read once: ``os.cpu_count()`` reads /sys on Linux (~20 us a call, measured), and
+:func:`get_threads` runs on every classify call (a one-body index query classifies a few pairs)."""
 
 
 HEADER = Path(__file__).with_name("_kernels.h")
@@ -150,7 +153,7 @@ def set_threads(n: int | None) -> None:
 
 def get_threads() -> int:
     """Threads a batch is split over (:func:`set_threads`, else ``ELLIPSOID_THREADS``, else every core)."""
-    n = _state["threads"] or int(os.environ.get("ELLIPSOID_THREADS", "0") or 0) or os.cpu_count() or 1
+    n = _state["threads"] or int(os.environ.get("ELLIPSOID_THREADS", "0") or 0) or _CPUS
     return int(cast(int, n))
 
 
@@ -178,7 +181,7 @@ def pool(k: int) -> ThreadPoolExecutor:
     with _lock:
         pool = _state["pool"]
         if pool is None or pool._max_workers < k:  # type: ignore[attr-defined]
-            pool = ThreadPoolExecutor(max_workers=max(k, os.cpu_count() or 1), thread_name_prefix="filter")
+            pool = ThreadPoolExecutor(max_workers=max(k, _CPUS), thread_name_prefix="filter")
             _state["pool"] = pool
         return pool  # type: ignore[return-value]
 
@@ -271,6 +274,61 @@ def balance(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None) -> tuple[n
     s2 = np.empty_like(s)
     _EXT.balance(n, a, b, a2, b2, e, s, s2)  # type: ignore[union-attr]
     return a2, b2, s2, e != 0
+
+
+SPHERE_TIGHT, SPHERE_LOOSE, SPHERE_NONE, SPHERE_OTHER = 0, 1, 2, 3
+"""Status codes of :func:`spheres` (``core/fixed/_spheres.h``): certified; certified but more than
+1 % loose; no sphere from this proof (the careful paths of :mod:`core.bodies.bounds` decide); not
+exactly symmetric or M_00 = 0 (its general path)."""
+
+
+def spheres_available() -> bool:
+    """True when the extension has ``spheres`` (a build older than it: the numpy proof serves)."""
+    return _EXT is not None and hasattr(_EXT, "spheres")
+
+
+def spheres(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Certified bounding spheres of float64 bodies (N, n, n) in C: (centres, radii, status).
+
+    The float proof of :mod:`core.bodies.bounds` for exactly symmetric matrices
+    (``core/fixed/_spheres.h``, the twin of its ``_exact_spheres``): centres (N, n - 1) and radii
+    (N,), NaN where there is none; status int8 codes ``SPHERE_*``. One body at a time in C (the
+    caller splits a large batch over threads: the GIL is released).
+    """
+    n, N = M.shape[-1], M.shape[0]
+    c, r, st = np.empty((N, n - 1)), np.empty(N), np.empty(N, dtype=np.int8)
+    _EXT.spheres(n, np.ascontiguousarray(M, dtype=np.float64), c, r, st)  # type: ignore[union-attr]
+    return c, r, st
+
+
+def query_one_available() -> bool:
+    """True when the extension has ``query_one`` (one new body asked of a :class:`core.BodyIndex`)."""
+    return _EXT is not None and hasattr(_EXT, "query_one")
+
+
+QUERY_TOO_FAR, QUERY_GENERAL, QUERY_FAR_BOX, QUERY_SPACE, QUERY_MOVED = -1, -2, -4, -10, -3
+"""Outcomes of :func:`query_one` besides a count: an image beyond 127 boxes; the general path
+decides (no float sphere, or a body too large for the box); a centre too far from the box;
+``QUERY_SPACE - needed``: the outputs must hold ``needed`` bodies. ``QUERY_MOVED``: the code of a
+pair with a lattice image (not classified there)."""
+
+
+def query_one(*args: object) -> tuple[int, int, int]:
+    """One new body asked of a :class:`core.BodyIndex` in C (``core/fixed/_near.h``; arguments: ``_filter.pyi``).
+
+    Only :meth:`core.bodies.index.BodyIndex._query_one` calls it, with the buffers it sized.
+    """
+    out: tuple[int, int, int] = _EXT.query_one(*args)  # type: ignore[union-attr]
+    return out
+
+
+def query_many(*args: object) -> tuple[int, int, int, int, int]:
+    """New bodies with their spheres asked of a :class:`core.BodyIndex` in C (``core/fixed/_near.h``; arguments: ``_filter.pyi``).
+
+    Only :meth:`core.bodies.index.BodyIndex._query_many` calls it, with the buffers it sized.
+    """
+    out: tuple[int, int, int, int, int] = _EXT.query_many(*args)  # type: ignore[union-attr]
+    return out
 
 
 def rule_one(A: np.ndarray, B: np.ndarray) -> int:

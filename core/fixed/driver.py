@@ -19,7 +19,9 @@ the earlier ones left open):
 2. where the tree asks for s0: :func:`decide_s0`, the semi-static test (one evaluation of hs0
    and one of its permanent, for a_i known to relative accuracy 2^-20: random pairs);
 3. where a valid pair is still open (s0 vanishes identically for spheres and translated or
-   homothetic copies): :func:`certify` (a T* > 0 with P(T*) > 0, or a point inside both);
+   homothetic copies): :func:`certify_sep` (a T* > 0 with P(T*) > 0 guessed from the a_i and
+   the traces: one division), then on the pairs still open :func:`certify` (a T* from the
+   centres, or a point inside both);
 4. where s0 is still needed and stage 2 could not tell its sign (near tangency):
    :func:`decide_s0_radius`, the running-error test (a radius for every operation).
 
@@ -56,6 +58,7 @@ __all__ = [
     "decide_s0_radius",
     "centre",
     "quad",
+    "certify_sep",
     "certify",
     "TABLES",
     "RULE_SEP",
@@ -348,6 +351,43 @@ def quad(x: Any, n: int, W: dict[tuple[int, int], Any], u: list[Any]) -> Any:
         for j in range(i + 1, d):
             acc = acc + (((2.0 * W[i, j]) * u[i]) * u[j])
     return acc
+
+
+def certify_sep(
+    x: Any, n: int, WA: dict[tuple[int, int], Any], WB: dict[tuple[int, int], Any], c: list[Any], cr: list[Any],
+    signs: tuple[Any, Any] | None = None,
+) -> Any:
+    """Rule id sep-witness or -1: a T* > 0 with P(T*) > 0 guessed from the a_i alone (stage 3a).
+
+    The cheap first try of the certificates, before :func:`certify`. Where the quadratic blocks
+    are proportional, Q_B = rho Q_A (spheres, translated and homothetic copies: the pairs whose
+    s0 vanishes identically), P(T) = (T + rho)^(d-1) q(T) with q quadratic, and the two positive
+    roots of P (a separate pair) are those of q, around the vertex T* = -e1 / (2 e2) of q, where
+    e2 = a_n and e1 = a_{n-1} - (d-1) rho a_n: T* = ((d-1) rho a_n - a_{n-1}) / (2 a_n), with
+    rho = tr Q_B / tr Q_A from the prepared matrices. T* is only a guess (one division, no
+    centre): it is verified as :func:`certify` verifies its own, P(T*) > 0 certified with a_n,
+    a_0 < 0 (a valid pair), so a pair of any shape gains a certificate where the guess holds and
+    loses nothing where it does not (the full certificates follow).
+
+    ``signs``: the flips to a negative interior that W does not carry (the unscaled first pass,
+    :attr:`Prepared.sign`); times +-1 is exact, so the traces are those of the prepared matrices.
+    """
+    d = n - 1
+    ta = WA[0, 0]
+    tb = WB[0, 0]
+    for i in range(1, d):
+        ta = ta + WA[i, i]
+        tb = tb + WB[i, i]
+    if signs is not None:
+        ta, tb = ta * signs[0], tb * signs[1]
+    # T* = ((d-1) tb a_n - ta a_{n-1}) / (2 ta a_n): rho = tb / ta folded into one division
+    num = (((2.0 * tb) if d == 3 else tb) * c[n]) - (ta * c[n - 1])
+    T = x.let("Tq", num / ((2.0 * ta) * c[n]))
+    tin = x.let("tqin", (T >= float(CERT_T_MIN)) & (T <= float(CERT_T_MAX)))
+    name = f"pencil_at{n}"
+    p, pr = x.call(name, [x.vector(c, "c"), x.vector(cr, "cr")], [x.where(tin, T, 1.0)])
+    sep = x.let("sepq", tin & (p > ((pr * RADIUS_FACTOR) + x.info(name).floor)))
+    return x.let("certq", x.where(sep, RULE_SEP, -1))
 
 
 def certify(

@@ -33,6 +33,7 @@ from .driver import (
     NEEDS_S0_RADIUS,
     Prepared,
     certify,
+    certify_sep,
     decide,
     decide_s0,
     decide_s0_radius,
@@ -137,7 +138,12 @@ def _later_stages(n: int, code: np.ndarray, idx: np.ndarray, c: list[np.ndarray]
     if need.size:  # s0, semi-static, only where the tree asks for it
         code[need] = decide_s0(_X, n, _take(c, need), _take(cr, need), idx[need])
     todo = np.flatnonzero((code == NEEDS_CERT) | (code == NEEDS_S0_RADIUS))
-    if todo.size:  # the certificates only where a valid pair is still open
+    if todo.size:  # the cheap separation certificate where a valid pair is still open
+        WA, _, WB, _ = matrices(todo)
+        cert = np.asarray(certify_sep(_X, n, WA, WB, _take(c, todo), _take(cr, todo)), dtype=np.int64)
+        code[todo] = np.where(cert >= 0, cert, code[todo])
+    todo = np.flatnonzero((code == NEEDS_CERT) | (code == NEEDS_S0_RADIUS))
+    if todo.size:  # the full certificates where one is still open
         WA, RA, WB, RB = matrices(todo)
         cert = np.asarray(certify(_X, n, WA, RA, WB, RB, _take(c, todo), _take(cr, todo)), dtype=np.int64)
         code[todo] = np.where(cert >= 0, cert, np.where(code[todo] == NEEDS_S0_RADIUS, NEEDS_S0_RADIUS, -1))

@@ -424,7 +424,7 @@ _C_HEADER = """/* The certified float filter's lane functions, in C. GENERATED b
  * - the straight-line kernels (pencil{n}, hat_s0_rel_{n}, hat_s0_{n}, pencil_at{n}, form{n}) are the traced
  *   ring-generic formulas of core/fixed/_kernels.py, the same operations in the same order, so
  *   their proven error constants (core/fixed/errorbound.py) hold;
- * - the lane functions (first{n}_*, full{n}_*, second{n}, third{n}_*, fourth{n}) are core/fixed/driver.py written out
+ * - the lane functions (first{n}_*, full{n}_*, second{n}, third_sep{n}_*, third{n}_*, fourth{n}) are core/fixed/driver.py written out
  *   in C: prepare, pencil with bounds, validity, the tree (tables of
  *   core.formulae.decision.decide_signs), s0 where the tree asks, the certificates. The numpy
  *   filter runs that same description on arrays, and the two agree bit for bit.
@@ -502,6 +502,7 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
         NEEDS_FULL,
         NEEDS_SCALE,
         certify,
+        certify_sep,
         decide,
         decide_s0,
         decide_s0_radius,
@@ -543,6 +544,16 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             code: CExpr = certify(x, n, Pa.W, radii(x, Pa.W, Pa.rounded, "a"), Pb.W, radii(x, Pb.W, Pb.rounded, "b"), c, cr)
             return code
 
+        def third_sep(x: CLanes, entry: Any = entry, fast: bool = False, unscaled: bool = False) -> CExpr:
+            # the traces of the matrices the pair's a_i were computed from (fast: the fast pass's
+            # W; unscaled: the unscaled first pass's, M itself with the sign apart: no scale to find)
+            Pa = prepare(x, n, entry("a"), "a", exact_only=fast or unscaled, unscaled=unscaled)
+            Pb = prepare(x, n, entry("b"), "b", exact_only=fast or unscaled, unscaled=unscaled)
+            c = [CExpr(f"c[{i} * s]", "d") for i in range(n + 1)]
+            cr = [CExpr(f"c[{n + 1 + i} * s]", "d") for i in range(n + 1)]
+            code: CExpr = certify_sep(x, n, Pa.W, Pb.W, c, cr, (Pa.sign, Pb.sign) if unscaled else None)
+            return code
+
         params = f"const {T} *restrict a, const {T} *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out"
         out.append(_lane_c(
             f"first{n}_{suffix}", params, first, infos,
@@ -560,6 +571,25 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             f"full{n}_{suffix}", params, lambda x, first=first: first(x, fast=False), infos,
             "Stage 1 for the pairs the fast pass left to the full prepare (a matrix symmetric only up to rounding): "
             "the same outputs, never NEEDS_FULL.",
+        ))
+        out.append(_lane_c(
+            f"third_sep{n}_{suffix}",
+            f"const {T} *restrict a, const {T} *restrict b, const double *restrict c, const int64_t s",
+            third_sep, infos,
+            "Stage 3a (driver.certify_sep, on the traces of the pair prepared again): sep-witness or -1.",
+        ))
+        out.append(_lane_c(
+            f"third_sep{n}_noscale_{suffix}",
+            f"const {T} *restrict a, const {T} *restrict b, const double *restrict c, const int64_t s",
+            lambda x, third_sep=third_sep: third_sep(x, unscaled=True), infos,
+            "Stage 3a for a pair the unscaled first pass prepared (largest entries in [2^-8, 2^24]: W is M, "
+            "the sign apart): the same answer as third_sep, without finding a scale.",
+        ))
+        out.append(_lane_c(
+            f"third_sep{n}_fast_{suffix}",
+            f"const {T} *restrict a, const {T} *restrict b, const double *restrict c, const int64_t s",
+            lambda x, third_sep=third_sep: third_sep(x, fast=True), infos,
+            "Stage 3a for a pair the fast first pass prepared: the same answer as third_sep, cheaper.",
         ))
         out.append(_lane_c(
             f"third{n}_{suffix}",
