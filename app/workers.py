@@ -32,6 +32,8 @@ from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, cast
 
+from core.errors import InvalidInput
+
 if TYPE_CHECKING:
     from multiprocessing.context import ForkContext, ForkServerContext, SpawnContext
 
@@ -42,6 +44,7 @@ JOB_MODULES: tuple[str, ...] = (
     "core.moving.analysis",
     "core.witness",
     "app.jobs",
+    "app.api.jobs",
     "app.api.convert",
     "app.api.witness_out",
     "app.api.contacts_schemas",
@@ -183,8 +186,8 @@ def _child(
             pass
     try:
         result = ("ok", fn(*args, **kwargs))
-    except ValueError as e:
-        result = ("value_error", str(e))
+    except ValueError as e:  # bad input: its message, and its pair and matrix when core said (InvalidInput)
+        result = ("value_error", (str(e), getattr(e, "pair", None), getattr(e, "matrix", None), getattr(e, "reason", None)))
     except WorkerTimeout as e:  # the job's own budget check: it says where it stopped
         result = ("timeout", str(e))
     except MemoryError:
@@ -218,7 +221,7 @@ class WorkerPool:
         >>> pool.run(math.sqrt, -1.0, timeout=60)
         Traceback (most recent call last):
         ...
-        ValueError: math domain error
+        core.errors.InvalidInput: math domain error
     """
 
     def __init__(
@@ -300,7 +303,8 @@ class WorkerPool:
             WorkerTimeout: ``timeout`` seconds passed; the child was killed (or stopped itself).
             WorkerCancelled: ``cancel`` was set; the child was killed (or the caller left the
                 queue).
-            ValueError: the job raised ValueError (bad input): same message.
+            core.InvalidInput: the job raised ValueError (bad input): same message, and its
+                ``pair``, ``matrix`` and ``reason`` when it was an InvalidInput.
             WorkerDied: the child process died or ran out of memory.
             WorkerFailed: the job raised another exception.
         """
@@ -393,7 +397,8 @@ class WorkerPool:
         if status == "ok":
             return payload
         if status == "value_error":
-            raise ValueError(payload)
+            message, pair, matrix, reason = payload
+            raise InvalidInput(message, pair=pair, matrix=matrix, reason=reason)
         if status == "timeout":
             raise WorkerStopped(payload)
         if status == "died":

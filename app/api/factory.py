@@ -11,11 +11,11 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 from fastapi.staticfiles import StaticFiles
 
-from core import warm_up
+from core import InvalidInput, warm_up
 
 from ..workers import WorkerPool
 from .batching import PairBatcher
-from .limits import validation_error_handler
+from .errors import invalid_input_handler, validation_error_handler
 from .line import Line, RequestLine
 from .routes import classify, contacts, health, landing, motion, presets, sweep, witness
 from .settings import ApiSettings
@@ -77,6 +77,7 @@ def create_api(settings: ApiSettings | None = None) -> FastAPI:
     app.state.line = line
     # ignored: starlette types every handler as taking any Exception; this one is registered for its class only
     app.add_exception_handler(RequestValidationError, validation_error_handler)  # type: ignore[arg-type]
+    app.add_exception_handler(InvalidInput, invalid_input_handler)  # type: ignore[arg-type]  # bad input: 422, once
     app.add_middleware(
         RequestLine,
         line=line,

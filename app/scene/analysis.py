@@ -27,8 +27,8 @@ from core.algebra.closedform import closed_form, polynomial_text
 from core.moving.result import Event, MotionAnalysis
 from core.shapes.numbers import format_rational, to_float, to_fmpq
 
-from ..jobs import analyse_job, read_motion_job
-from .motion import MAX_MOTION_TEXT, MotionError, MotionModel
+from ..jobs import analyse_job
+from .motion import MAX_MOTION_TEXT, MotionError, MotionModel, read_motion_job
 from .readout import explanation_at
 
 T = TypeVar("T")

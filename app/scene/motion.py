@@ -5,7 +5,8 @@
 drawing only (a float never decides a relation: the analysis does,
 :mod:`app.scene.analysis`). The text is read by core's readers (one grammar for the scene, the
 API and the library: :func:`core.moving.motions.read_motion`, :func:`core.moving.motions.read_interval`).
-Imports only ``core``: worker processes load it (:func:`app.jobs.read_motion_job`).
+Imports only ``core`` and the scene's state: worker processes load it (:func:`read_motion_job`, the
+scene's job, lives here beside the model it builds).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from core.shapes.quadrics import axes_from_quadric
 
 from .state import ShapeState
 
-__all__ = ["MotionError", "MotionModel", "list_presets", "load_motion", "MAX_MOTION_TEXT"]
+__all__ = ["MotionError", "MotionModel", "list_presets", "load_motion", "read_motion_job", "MAX_MOTION_TEXT"]
 
 MAX_MOTION_TEXT = 32 * (SERVER.expression_chars or 2000)
 """Longest motion text (JSON) typed in one field: room for every entry of a motion at the
@@ -210,7 +211,7 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, limits: Li
         motion: the typed texts {"A", "B", "interval"} (or dicts).
         limits: size limits of the text (:mod:`core.shapes.limits`); typed motions from a browser
             are read with :data:`core.shapes.limits.SERVER` in a worker process
-            (:func:`app.jobs.read_motion_job`).
+            (:func:`read_motion_job`).
 
     Raises:
         MotionError: unknown preset, or a typed motion/interval core cannot read (the error
@@ -264,3 +265,18 @@ def load_motion(*, preset: str | None, motion: dict[str, Any] | None, limits: Li
     return MotionModel(
         parsed["A"], parsed["B"], interval, preset=preset if motion is None else None, description=description, texts=texts
     )
+
+
+def read_motion_job(motion: dict[str, Any]) -> MotionModel | tuple[str, str]:
+    """Read a scene's typed motion under :data:`core.shapes.limits.SERVER` and build its exact matrices.
+
+    The scene's worker job (module-level: it pickles by reference to :class:`app.workers.WorkerPool`).
+
+    Returns:
+        The loaded model (it pickles with its exact matrices), or (message, field) for a
+        :class:`MotionError` (an exception would lose its field on the way back).
+    """
+    try:
+        return load_motion(preset=None, motion=motion, limits=SERVER)
+    except MotionError as e:
+        return str(e), e.field

@@ -20,6 +20,7 @@ import viser
 from . import wire
 from .markers import vec3
 from .mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
+from .state import PALETTES, RELATION_HEX
 
 __all__ = [
     "RELATION_COLORS",
@@ -34,21 +35,6 @@ __all__ = [
     "DISC_SEGMENTS",
     "rgb",
 ]
-
-RELATION_HEX: dict[str, str] = {
-    "separate": "#2ca02c",
-    "tangent": "#ffbf00",
-    "overlap": "#d62728",
-}
-"""Relation -> colour of the default palette (shapes, bars, the readout, the legend)."""
-
-PALETTES: dict[str, dict[str, str]] = {
-    "green / amber / red": RELATION_HEX,
-    # Okabe & Ito's colour-blind safe set: blue, orange, vermillion differ in lightness and
-    # hue for deuteranopes, protanopes and tritanopes alike
-    "colour-blind safe": {"separate": "#0072b2", "tangent": "#e69f00", "overlap": "#d55e00"},
-}
-"""Named palettes (View -> Palette); the first is the default."""
 
 
 def rgb(hex_colour: str) -> tuple[int, int, int]:

@@ -20,7 +20,22 @@ from core.shapes.numbers import to_float
 
 from .texts import APPROX, Number, exact_text, parse_matrix, parse_vector, read_time, round_decimal
 
-__all__ = ["ShapeState", "SceneConfig", "AppState", "StatusError", "DEFAULT_PRESET"]
+__all__ = ["ShapeState", "SceneConfig", "AppState", "StatusError", "DEFAULT_PRESET", "PALETTES", "RELATION_HEX"]
+
+RELATION_HEX: dict[str, str] = {
+    "separate": "#2ca02c",
+    "tangent": "#ffbf00",
+    "overlap": "#d62728",
+}
+"""Relation -> colour of the default palette (shapes, bars, the readout, the legend)."""
+
+PALETTES: dict[str, dict[str, str]] = {
+    "green / amber / red": RELATION_HEX,
+    # Okabe & Ito's colour-blind safe set: blue, orange, vermillion differ in lightness and
+    # hue for deuteranopes, protanopes and tritanopes alike
+    "colour-blind safe": {"separate": "#0072b2", "tangent": "#e69f00", "overlap": "#d55e00"},
+}
+"""Named palettes (View -> Palette); the first is the default."""
 
 if TYPE_CHECKING:
     from .analysis import AnalysisView
@@ -297,7 +312,7 @@ class SceneConfig:
     gizmos: bool = True
     """Show the transform gizmos."""
     palette: str | None = None
-    """Relation palette name (:data:`app.scene.shapes.PALETTES`; None: the default)."""
+    """Relation palette name (:data:`PALETTES`; None: the default)."""
 
     def shapes(self) -> tuple[ShapeState, ShapeState]:
         """The static shapes, defaults filled in."""
@@ -362,8 +377,6 @@ class SceneConfig:
                 raise ValueError(f"config: event must be a positive integer (1-based), got {ev!r}")
             cfg.event = ev
         if d.get("palette") is not None:
-            from .shapes import PALETTES
-
             if d["palette"] not in PALETTES:
                 raise ValueError(f"config: palette must be one of {', '.join(PALETTES)}")
             cfg.palette = d["palette"]
@@ -452,7 +465,7 @@ class AppState:
     separating_plane: bool = False
     gizmos: bool = True
     palette: str = "green / amber / red"
-    """Name of the relation palette (:data:`app.scene.shapes.PALETTES`)."""
+    """Name of the relation palette (:data:`PALETTES`)."""
     follow: bool = False
     """The camera follows the moving shapes."""
     plot_scale: str = "asinh"
