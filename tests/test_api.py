@@ -331,7 +331,7 @@ def test_body_without_json_content_type_is_415(client):
     r = client.post("/api/analyse", content=text)
     assert (r.status_code, r.json()) == (415, {"detail": "send the body as JSON with the header 'content-type: application/json' (no content-type header)"})
     r = client.post("/api/explain", content=text, headers={"content-type": "application/json; charset=utf-8"})
-    assert r.status_code == 200
+    assert (r.status_code, r.json()["relation"]) == (200, "tangent")  # read as JSON: the unit circles 2 apart
 
 
 def test_huge_integer_and_long_string(client):
@@ -807,7 +807,7 @@ def test_only_ascii_digits_are_numbers_at_the_api(client, text):
 
 def test_exponent_limit_at_the_edge_states_the_real_limit(client):
     ok = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, "-1e1000"]]})
-    assert ok.status_code == 200
+    assert (ok.status_code, ok.json()["relation"]) == (200, "overlap")  # a disc of radius 10^500 around the unit circle
     r = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, "-1e1001"]]})
     assert r.status_code == 422
     assert r.json()["detail"][0]["msg"] == "Value error, exponent out of range in '-1e1001': |e| <= 1000 after 'e'"

@@ -6,6 +6,7 @@ Golden relations are hand-checkable: unit spheres/circles whose centres are 2 ap
 
 from __future__ import annotations
 
+import gc
 import time
 from fractions import Fraction
 
@@ -139,17 +140,15 @@ def test_drag_recolours_from_classify_and_the_readout_follows(server, monkeypatc
     import app.scene.picture as picture
 
     s = Session(server, unit_spheres(3, "3"))
-    time.sleep(0.15)  # sessions of earlier tests on this server finish their coalesced refreshes
+    for other in [o for o in gc.get_objects() if isinstance(o, Session)]:
+        quiet(other)  # sessions of earlier tests on this server finish their coalesced refreshes
     calls = []
     full = picture.explain  # explain, readout, contact point, plane
     monkeypatch.setattr(picture, "explain", lambda A, B: calls.append(1) or full(A, B))
     assert s.apply_drag("B", (1.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) == "overlap"
     assert colours(s) == {RED} and calls == []  # recoloured by classify, no explain yet
     assert "SEPARATE" in s.ui.readout.content  # the readout follows, not yet there
-    for _ in range(100):  # the full readout follows within the panel period (50 ms)
-        if calls and "OVERLAP" in s.ui.readout.content:
-            break
-        time.sleep(0.02)
+    quiet(s)  # the full readout follows within the panel period (50 ms)
     assert "OVERLAP" in s.ui.readout.content and calls == [1]
     assert "overlapping by 25 %" in s.ui.readout.content  # unit spheres 1.5 apart: mu = 3/4
 
@@ -322,7 +321,7 @@ def test_drag_leaves_the_motion(server):
     # centres 3.4 apart along x with half-lengths 2 + 2 along x, 0.5 apart in y: overlap
     assert rel == oracle_relation(a.quadric(), b.quadric()) == "overlap"
     assert colours(s) == {RED}
-    time.sleep(0.2)  # the panel follows: timeline hidden, fields show the static shapes
+    quiet(s)  # the panel follows: timeline hidden, fields show the static shapes
     assert not s.ui.timeline.folder.visible and not s.ui.plots.folder.visible
     assert s.ui.motion.preset.value == "(static shapes)"
     assert s.ui.shapes["B"].fields["center"].value == "4, 0.5, 0"
@@ -513,18 +512,22 @@ def test_separating_plane_separates(server):
 
 
 def test_play_advances_t_and_stops(server):
-    import time
-
     s = motion_session(server, t=0.1)
-    s.ui.timeline.speed.value = 5.0  # half of I per second
+    s.ui.timeline.speed.value = 5.0  # half of I per second: 1/40 of I per step
     s.ui.timeline.play.value = True  # runs the GUI callback: starts the playback thread
-    time.sleep(0.5)
+    player = s.timeline_ctl._thread
+    assert player is not None
+    deadline = time.monotonic() + 60
+    while s.state.t <= 0.1:  # playback moves t forward, step by step (40 steps before it wraps)
+        assert time.monotonic() < deadline and player.is_alive(), "playback did not move t"
+        time.sleep(0.01)
     s.ui.timeline.play.value = False
-    time.sleep(0.15)
+    player.join(60)  # the thread ends at its next step
+    assert not player.is_alive(), "unchecking Play did not stop the playback thread"
     t_stopped = s.state.t
-    assert 0.15 < t_stopped < 0.6
-    time.sleep(0.2)
-    assert s.state.t == t_stopped
+    assert t_stopped != 0.1 and s.state.analysis is not None
+    lo, hi = s.state.analysis.window
+    assert lo <= t_stopped <= hi
     s.close()
 
 
@@ -816,10 +819,7 @@ def test_touch_slides_b_to_the_exact_contact(server, dim, dx, want):
     # B's centre is t * (dx, 0...): tangent where t * dx = 2, an exact rational
     assert str(ev.event.time.value) == ev.exact == str(Fraction(2) / Fraction(dx))
     assert abs(float(s.state.shapes["B"].center[0]) - want) < 1e-12
-    for _ in range(200):  # the panel follows the picture within the panel period
-        if not s.pending():
-            break
-        time.sleep(0.01)
+    quiet(s)  # the panel follows the picture within the panel period
     assert "TANGENT" in s.ui.readout.content
 
 

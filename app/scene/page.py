@@ -84,7 +84,27 @@ _SETTLE = re.compile(
     re.S,
 )
 """viser 1.1.1's render scheduler (minified): ``var <settle>=250,<heartbeat>=1e3;function ...
-requestRender=()=>{<ref>.current=performance.now()+<settle>, ...``."""
+requestRender=()=>{<ref>.current=performance.now()+<settle>, ...``.
+
+This one regex cannot be replaced by something independent of the minified code: viser has no
+option for its settle window, so the only handle is its code. It names no minified identifier
+(any word, with back-references), anchors on what minifying keeps (the literals ``250`` and ``1e3``,
+``requestRender``, ``performance.now()``), must match exactly once, and fails safe: no match
+serves viser's code unchanged and :func:`settle_flag_supported` says so (a test fails on a new
+viser)."""
+
+
+def settle_reader_js(own: str) -> str:
+    """The expression put in place of viser's settle window ``own`` (ms): it reads :data:`SETTLE_FLAG`.
+
+    Examples:
+        >>> settle_reader_js("250").startswith("(()=>{const v=new URLSearchParams(location.search)")
+        True
+    """
+    return (
+        f'(()=>{{const v=new URLSearchParams(location.search).get("{SETTLE_FLAG}"),n=v===null||v===""?NaN:Number(v);'
+        f"return globalThis.__renderSettleMs=n>=0&&n<={SETTLE_MAX_MS}?n:{own}}})()"
+    )
 
 
 def _with_settle_flag(js: str) -> str | None:
@@ -98,12 +118,7 @@ def _with_settle_flag(js: str) -> str | None:
         return None
 
     def settle(m: re.Match[str]) -> str:
-        own = m.group(2)
-        read = (
-            f'(()=>{{const v=new URLSearchParams(location.search).get("{SETTLE_FLAG}"),n=v===null||v===""?NaN:Number(v);'
-            f"return globalThis.__renderSettleMs=n>=0&&n<={SETTLE_MAX_MS}?n:{own}}})()"
-        )
-        return f"var {m.group(1)}={read},{m.group(3)}=1e3;{m.group(4)}"
+        return f"var {m.group(1)}={settle_reader_js(m.group(2))},{m.group(3)}=1e3;{m.group(4)}"
 
     return _SETTLE.sub(settle, js, count=1)
 
