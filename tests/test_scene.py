@@ -140,7 +140,7 @@ def test_drag_recolours_from_classify_and_the_readout_follows(server, monkeypatc
     import app.scene.picture as picture
 
     s = Session(server, unit_spheres(3, "3"))
-    for other in [o for o in gc.get_objects() if isinstance(o, Session)]:
+    for other in [o for o in gc.get_objects() if isinstance(o, Session) and o.target is server and not o.closed]:
         quiet(other)  # sessions of earlier tests on this server finish their coalesced refreshes
     calls = []
     full = picture.explain  # explain, readout, contact point, plane
