@@ -307,7 +307,7 @@ def config_from_args(args: argparse.Namespace, path: str | None = None) -> Scene
     return cfg
 
 
-def _listed(value: object) -> list:
+def _listed(value: object) -> list[Any]:
     """A repeatable option as a list (None: empty; a single value from older callers: [value])."""
     if value is None:
         return []

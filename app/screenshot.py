@@ -365,11 +365,13 @@ class HeadlessScene:
 
     def mesh_color(self, name: str) -> str | None:
         """Material colour "#rrggbb" of a mesh node as three.js has it, or None if absent."""
-        return self.page.evaluate(_MESH_COLOR_JS, f"/shapes/{name}/mesh")
+        colour: str | None = self.page.evaluate(_MESH_COLOR_JS, f"/shapes/{name}/mesh")
+        return colour
 
     def drawn_pose(self, name: str) -> list[float] | None:
         """[x, y, z, w, qx, qy, qz] of node ``/shapes/<name>`` as three.js has it (None if absent)."""
-        return self.page.evaluate(_POSE_JS, f"/shapes/{name}")
+        pose: list[float] | None = self.page.evaluate(_POSE_JS, f"/shapes/{name}")
+        return pose
 
     def expected(self, session: Any = None) -> tuple[dict[str, list[float]], dict[str, str], str | None]:
         """What the browser must show for a two-body session (default: the tab's): poses, colours, word."""

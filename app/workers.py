@@ -30,12 +30,14 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 from core.errors import InvalidInput
 
 if TYPE_CHECKING:
     from multiprocessing.context import ForkContext, ForkServerContext, SpawnContext
+
+T = TypeVar("T")
 
 __all__ = ["JOB_MODULES", "job_clock", "WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerStopped", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
 
@@ -170,7 +172,7 @@ def job_clock() -> float | None:
 
 
 def _child(
-    conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_mb: int | None, clock: float | None = None
+    conn: Any, fn: Callable[..., Any], args: tuple[Any, ...], kwargs: dict[str, Any], memory_mb: int | None, clock: float | None = None
 ) -> None:
     if clock is not None:
         _JOB_CLOCK[:] = [clock]
@@ -267,7 +269,7 @@ class WorkerPool:
 
     def run(
         self,
-        fn: Callable[..., Any],
+        fn: Callable[..., T],
         /,
         *args: Any,
         timeout: float,
@@ -275,7 +277,7 @@ class WorkerPool:
         grace: float = 0.0,
         wait_until: float | None = None,
         **kwargs: Any,
-    ) -> Any:
+    ) -> T:
         """Run ``fn(*args, **kwargs)`` in a child process and return its result.
 
         ``fn``, its arguments and its result must be picklable (module-level functions). A
@@ -348,8 +350,9 @@ class WorkerPool:
                 self._turn.notify_all()  # the next in line may now be first
 
     def _run(
-        self, fn: Callable[..., Any], args: tuple, kwargs: dict, timeout: float, grace: float, cancel: threading.Event | None
-    ) -> Any:
+        self, fn: Callable[..., T], args: tuple[Any, ...], kwargs: dict[str, Any], timeout: float, grace: float,
+        cancel: threading.Event | None,
+    ) -> T:
         recv, send = self._ctx.Pipe(duplex=False)
         clock = time.monotonic()  # the job's own budget counts from here (job_clock), the kill from after start
         proc = self._ctx.Process(target=_child, args=(send, fn, args, kwargs, self._memory_mb, clock), daemon=True)
@@ -395,7 +398,7 @@ class WorkerPool:
             if proc.exitcode is not None:
                 proc.close()
         if status == "ok":
-            return payload
+            return cast(T, payload)  # what fn returned, pickled back
         if status == "value_error":
             message, pair, matrix, reason = payload
             raise InvalidInput(message, pair=pair, matrix=matrix, reason=reason)

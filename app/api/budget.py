@@ -138,7 +138,7 @@ async def run_off_loop(request: Request, fn: Callable[[threading.Event], T]) -> 
     The event loop stays free for other requests (and /healthz) while ``fn`` runs.
     """
     cancel = threading.Event()
-    work: asyncio.Future[Any] = asyncio.ensure_future(anyio.to_thread.run_sync(fn, cancel))
+    work: asyncio.Future[T] = asyncio.ensure_future(anyio.to_thread.run_sync(fn, cancel))
     try:
         while True:
             done, _ = await asyncio.wait({work}, timeout=_WATCH_S)

@@ -129,7 +129,8 @@ def _redoc_js(path: Any) -> bytes:
     text = path.read_text(encoding="utf-8")
     if REDOC_LOGO_URL not in text:
         raise RuntimeError(f"{path} does not load {REDOC_LOGO_URL} any more: check /redoc for other CDN requests")
-    return text.replace(REDOC_LOGO_URL, REDOC_LOGO).encode("utf-8")
+    script: bytes = text.replace(REDOC_LOGO_URL, REDOC_LOGO).encode("utf-8")
+    return script
 
 
 def _offline_docs(app: FastAPI) -> None:

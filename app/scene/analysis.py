@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable, Hashable, Iterable
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any, TypeVar, cast
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 from flint import fmpq
@@ -30,6 +30,9 @@ from core.shapes.numbers import format_rational, to_float, to_fmpq
 from ..jobs import analyse_job
 from .motion import MAX_MOTION_TEXT, MotionError, MotionModel, read_motion_job
 from .readout import explanation_at
+
+if TYPE_CHECKING:
+    from app.workers import WorkerPool
 
 T = TypeVar("T")
 
@@ -308,7 +311,7 @@ class AnalysisCache:
         self._pinned: set[Hashable] = set()
         self.closed = False
         """Set by :meth:`shutdown`: background prefetching stops."""
-        self._pool: Any = None
+        self._pool: WorkerPool | None = None
         if processes:
             from app.workers import WorkerPool
 
@@ -319,13 +322,14 @@ class AnalysisCache:
 
         The first analysis a tab asks for then does not pay its start (half a second).
         """
-        if self._pool is None:
+        pool = self._pool
+        if pool is None:
             return
         from app.workers import WorkerBusy
 
         def run() -> None:
             try:
-                self._pool.run(read_motion_job, {}, timeout=30)
+                pool.run(read_motion_job, {}, timeout=30)
             except (WorkerBusy, RuntimeError, ValueError):
                 pass
 
@@ -463,7 +467,7 @@ class AnalysisCache:
         from app.workers import WorkerBusy, WorkerDied, WorkerFailed, WorkerTimeout
 
         try:
-            return cast(T, self._pool.run(fn, *args, timeout=timeout))
+            return self._pool.run(fn, *args, timeout=timeout)
         except WorkerBusy as e:
             raise ValueError(f"{e}: try again in a moment") from None
         except WorkerTimeout:

@@ -351,7 +351,8 @@ class BodiesModel(PairList):
 
     def box_corner(self) -> np.ndarray:
         """Lower corner of the periodic box as drawn (the lowest centre)."""
-        return self.positions.min(axis=0)
+        corner: np.ndarray = self.positions.min(axis=0)
+        return corner
 
     def pair_label(self, k: int) -> str:
         """"3 – 17  tangent (exact)" (with the image in a box: "3 – 17 [+x]  overlap (float)")."""

@@ -26,7 +26,7 @@ import html
 import threading
 import time
 from concurrent.futures import Executor
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -40,6 +40,9 @@ from .lighting import light_scene
 from .mesh_detail import SPHERE_SUBDIVISIONS
 from .shapes import RELATION_HEX
 from .wire import Refusal, too_large
+
+if TYPE_CHECKING:
+    from .analysis import AnalysisCache
 
 __all__ = ["BodiesView", "load_model", "NO_PAIRS"]
 
@@ -89,7 +92,7 @@ class BodiesView:
         if getattr(model, "moving", False):  # moving bodies: this tab's own time (the sweep is shared)
             model = model.for_view()  # type: ignore[union-attr]
         self.model = model
-        self.cache = cache
+        self.cache: AnalysisCache | None = cache
         self.executor = executor
         self.session: Any = None
         """The two-body :class:`~app.scene.session.Session` (built at the first "Open pair", then
@@ -522,7 +525,7 @@ class BodiesView:
         """True when the view shows moving bodies (a timeline, events)."""
         return bool(getattr(self.model, "moving", False))
 
-    def analysis_cache(self) -> Any:
+    def analysis_cache(self) -> AnalysisCache:
         """The analysis cache the two-body view shares (created here when the server gave none)."""
         if self.cache is None:
             from .analysis import AnalysisCache

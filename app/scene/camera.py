@@ -54,7 +54,8 @@ class Framing:
     @property
     def centre(self) -> np.ndarray:
         """Centre of the box."""
-        return (self.lo + self.hi) / 2
+        centre: np.ndarray = (self.lo + self.hi) / 2
+        return centre
 
     @property
     def radius(self) -> float:

@@ -155,4 +155,5 @@ def contact_point(A: Any, B: Any, coefficients: Sequence[float]) -> np.ndarray |
     v = vt[-1]
     if v[-1] == 0:
         return None
-    return v[:-1] / v[-1] + 0.0  # + 0.0 turns -0.0 into 0.0
+    point: np.ndarray = v[:-1] / v[-1] + 0.0  # + 0.0 turns -0.0 into 0.0
+    return point

@@ -55,12 +55,12 @@ class TimelineGui:
 
     folder: viser.GuiFolderHandle
     bar: viser.GuiHtmlHandle
-    slider: viser.GuiSliderHandle
+    slider: viser.GuiSliderHandle[float]
     t_box: viser.GuiTextHandle
     t_error: viser.GuiMarkdownHandle
     play: viser.GuiCheckboxHandle
     pause_at_events: viser.GuiCheckboxHandle
-    speed: viser.GuiSliderHandle
+    speed: viser.GuiSliderHandle[float]
     events_md: viser.GuiHtmlHandle
     """The exact events (closed forms, copy buttons)."""
     events_folder: viser.GuiFolderHandle
@@ -73,7 +73,7 @@ class PlotsGui:
 
     folder: viser.GuiFolderHandle
     live: viser.GuiCheckboxHandle
-    scale: viser.GuiDropdownHandle
+    scale: viser.GuiDropdownHandle[str]
     """"asinh" or "linear" (:data:`app.scene.plots.SCALES`)."""
     about: viser.GuiMarkdownHandle
     """What the y axis shows."""
@@ -84,7 +84,7 @@ class MotionGui:
     """Motion folder: preset, description, the editor texts with their errors, Analyse, status."""
 
     folder: viser.GuiFolderHandle
-    preset: viser.GuiDropdownHandle
+    preset: viser.GuiDropdownHandle[str]
     presets: list[str]
     """The presets' names (the dropdown also lists STATIC, and TYPED / TOUCH while one runs)."""
     description: viser.GuiMarkdownHandle
@@ -117,12 +117,12 @@ class ViewGui:
     """View folder: dimension, gizmos, separating plane, palette."""
 
     folder: viser.GuiFolderHandle
-    dimension: viser.GuiDropdownHandle
+    dimension: viser.GuiDropdownHandle[str]
     gizmos: viser.GuiCheckboxHandle
     gizmo_note: viser.GuiMarkdownHandle
     """Shown while a motion runs: the gizmos are hidden, and how to get them back."""
     plane: viser.GuiCheckboxHandle
-    palette: viser.GuiDropdownHandle
+    palette: viser.GuiDropdownHandle[str]
     follow: viser.GuiCheckboxHandle
     """The camera follows the moving shapes."""
     frame: viser.GuiButtonHandle

@@ -173,7 +173,7 @@ class PanelView:
     def _show_readout(self, state: AppState) -> None:
         g = self.gui
         model, an = state.motion, state.analysis
-        expl: dict | None = None
+        expl: dict[str, Any] | None = None
         if model is None:
             if state.explanation is None:
                 text = readout_markdown(None, error=state.errors.get("shapes", "no shapes"))

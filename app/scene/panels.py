@@ -145,7 +145,10 @@ def intervals_bar_html(
         palette: relation -> colour.
     """
     span = (hi - lo) or 1.0
-    x = lambda t: 6 + (width - 12) * (min(max(t, lo), hi) - lo) / span
+
+    def x(t: float) -> float:
+        return 6 + (width - 12) * (min(max(t, lo), hi) - lo) / span
+
     parts = [
         f'<svg viewBox="0 0 {width} 56" width="100%" xmlns="http://www.w3.org/2000/svg" '
         'style="font:10px sans-serif">'

@@ -242,7 +242,8 @@ class SweepModel(PairList):
 
     def box_corner(self) -> np.ndarray:
         """Lower corner of the periodic box as drawn (START's lowest centre)."""
-        return self._poses(0.0)[0].min(axis=0)
+        corner: np.ndarray = self._poses(0.0)[0].min(axis=0)
+        return corner
 
     # ------------------------------------------------------------------ the bodies at t
     @property
@@ -370,7 +371,8 @@ class SweepModel(PairList):
         over[res.i[hit]] = True
         over[res.j[hit]] = True
         need = und[~(over[res.i[und]] & over[res.j[und]])]
-        return need.tolist()
+        rows: list[int] = need.tolist()
+        return rows
 
     def decide(self, m: Moment, stop: Callable[[], bool] = lambda: False, progress: Callable[[], None] | None = None) -> bool:
         """Decide the moment's pending pairs exactly (module docstring); False if ``stop`` said so.
@@ -462,7 +464,8 @@ class SweepModel(PairList):
         """The lattice vector v(image) the sweep moves a body's path by (None: no image, or open space)."""
         if not any(image) or self.result.box is None:
             return None
-        return self.result.box.shifts([image])[0]
+        shift: np.ndarray = self.result.box.shifts([image])[0]
+        return shift
 
     # ------------------------------------------------------------------ the two-body view
     def pair_config(self, k: int) -> tuple[SceneConfig, str]:
