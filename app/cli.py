@@ -44,10 +44,10 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from .scene.mesh_detail import SPHERE_SUBDIVISIONS, SPHERE_SUBDIVISIONS_RANGE
+from .scene.common.mesh_detail import SPHERE_SUBDIVISIONS, SPHERE_SUBDIVISIONS_RANGE
 
 if TYPE_CHECKING:  # imported where used: the command line starts without viser
-    from .scene.state import SceneConfig
+    from .scene.common.state import SceneConfig
 
 __all__ = ["main", "run", "build_parser", "config_from_args", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
 
@@ -92,7 +92,7 @@ def _port(text: str) -> int:
 
 
 def _origin(text: str) -> str:
-    from .scene.origin import normalise_origin
+    from .scene.common.origin import normalise_origin
 
     try:
         return normalise_origin(text)
@@ -277,7 +277,7 @@ def config_from_args(args: argparse.Namespace, path: str | None = None) -> Scene
     Raises:
         ValueError: unreadable config file or bad values.
     """
-    from .scene.state import SceneConfig
+    from .scene.common.state import SceneConfig
 
     configs = _listed(getattr(args, "config", None))
     path = path or (configs[0] if configs else None)
@@ -378,7 +378,7 @@ def _bodies_model(args: argparse.Namespace) -> object:
     if getattr(args, "to", None) is not None:
         if getattr(args, "bodies", None) is None:
             raise ValueError("--to END needs --bodies START (the bodies at t = 0)")
-        from .scene.sweep_model import SweepModel
+        from .scene.bodies.sweep_model import SweepModel
         from .sweep_cli import read_moving_bodies
 
         moving = read_moving_bodies(
@@ -390,7 +390,7 @@ def _bodies_model(args: argparse.Namespace) -> object:
         return sweep
     if getattr(args, "bodies", None) is None:
         return None
-    from .scene.bodies_view import load_model
+    from .scene.bodies.bodies_view import load_model
 
     model = load_model(args.bodies, args.box, frame=getattr(args, "frame", None), format=getattr(args, "format", None))
     print(f"Bodies: {model.result.summary()}", file=sys.stderr, flush=True)
@@ -432,7 +432,7 @@ def _screenshot(args: argparse.Namespace) -> int:
 def _export(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from .scene.replay import replay_html
+    from .scene.pair.replay import replay_html
 
     if not 0 < args.seconds <= 600 or not 2 <= args.frames <= 5000:
         raise ValueError("--seconds must be in (0, 600] and --frames in 2..5000")

@@ -31,7 +31,7 @@ import importlib.util
 import os
 from typing import Any
 
-from .scene.state import SceneConfig
+from .scene.common.state import SceneConfig
 
 __all__ = ["show", "NotebookScene", "NotebookReplay"]
 
@@ -120,7 +120,7 @@ class NotebookReplay:
     """A self-contained replay shown in a notebook cell (kept in the saved notebook)."""
 
     def __init__(self, config: SceneConfig, *, height: int = 500, seconds: float = 12.0) -> None:
-        from .scene.replay import replay_html
+        from .scene.pair.replay import replay_html
 
         self.height = height
         self.html = replay_html(config, seconds=seconds)

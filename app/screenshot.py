@@ -23,10 +23,10 @@ from pathlib import Path
 from typing import Any
 
 from .output import Output
-from .scene.mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
-from .scene.page import SETTLE_FLAG, SETTLE_MAX_MS
-from .scene.shapes import PALETTES, RELATION_HEX
-from .scene.state import SceneConfig
+from .scene.common.mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
+from .scene.common.page import SETTLE_FLAG, SETTLE_MAX_MS
+from .scene.common.shapes import PALETTES, RELATION_HEX
+from .scene.common.state import SceneConfig
 
 __all__ = ["CHROMIUM", "CHROMIUM_FLAGS", "HeadlessScene", "Shot", "screenshot", "screenshots", "SCREENSHOT_EXTRA"]
 
@@ -523,7 +523,7 @@ def _check_events(shots: Sequence[Shot]) -> None:
     from core.shapes.limits import SERVER
 
     from .jobs import analyse_job
-    from .scene.motion import MotionError, load_motion
+    from .scene.pair.motion import MotionError, load_motion
 
     counts: dict[int, int | None] = {}
     for shot in shots:

@@ -52,7 +52,7 @@ JOB_MODULES: tuple[str, ...] = (
     "app.api.contacts_schemas",
     "app.api.sweep_schemas",
     "app.api.limits",
-    "app.scene.motion",
+    "app.scene.pair.motion",
     "core.moving._sweep_filter",
 )
 """What the fork server imports once, for every job of :mod:`app.jobs` and its arguments.

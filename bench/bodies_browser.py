@@ -83,8 +83,8 @@ def _orbit(page: Any, steps: int) -> list[float]:
 
 def measure(n: int, folder: Path, *, steps: int = 8) -> dict[str, Any]:
     """All the measurements for n random bodies (one server and one browser)."""
-    from app.scene.bodies_view import load_model
-    from app.scene.state import SceneConfig
+    from app.scene.bodies.bodies_view import load_model
+    from app.scene.common.state import SceneConfig
     from app.screenshot import _DRAWN_JS, HeadlessScene
     from core import Relation
 
@@ -180,8 +180,8 @@ def _write_moving(n: int, folder: Path) -> tuple[Path, Path]:
 
 def measure_moving(n: int, folder: Path, *, times: tuple[float, ...] = (0.25, 0.5, 0.75)) -> dict[str, Any]:
     """Moving bodies: a t-step's server time, the frame that shows it, the certified colours."""
-    from app.scene.state import SceneConfig
-    from app.scene.sweep_model import SweepModel
+    from app.scene.bodies.sweep_model import SweepModel
+    from app.scene.common.state import SceneConfig
     from app.screenshot import HeadlessScene
     from app.sweep_cli import read_moving_bodies
 

@@ -319,8 +319,8 @@ def profile_t_step(n: int = 200) -> str:
 
     import viser
 
-    from app.scene import session as S
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair import session as S
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:

@@ -90,9 +90,9 @@ def run_scene_cost(
 
     import core.moving.analysis as cp
     from app.scene import measure_update_costs
-    from app.scene import picture as P
-    from app.scene import session as S
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair import picture as P
+    from app.scene.pair import session as S
 
     repeats = repeats or (50 if quick else 300)
     rounds = rounds or (1 if quick else 3)
@@ -182,8 +182,8 @@ def roots_update_ms(presets: tuple[str, ...], repeats: int = 60) -> dict[str, fl
     """
     import viser
 
-    from app.scene import session as S
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair import session as S
 
     out: dict[str, float] = {}
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
@@ -224,8 +224,8 @@ def profile_drag(top: int = 12) -> str:
 
     import viser
 
-    from app.scene import session as S
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair import session as S
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:

@@ -178,7 +178,7 @@ def test_app_floors_have_no_import_circle():
     assert not cycles, "import circles between the floors of app/:\n" + "\n".join(" -> ".join(c) for c in cycles)
 
 
-@pytest.mark.parametrize(("start", "may_reach"), [("app.jobs", ()), ("app.api.jobs", ("app.api",)), ("app.scene.motion", ("app.scene",))])
+@pytest.mark.parametrize(("start", "may_reach"), [("app.jobs", ()), ("app.api.jobs", ("app.api",)), ("app.scene.pair.motion", ("app.scene",))])
 def test_worker_side_imports_no_fastapi_nor_the_other_floors(start, may_reach):
     """What the worker processes run imports only core and app.workers (the API's and the scene's jobs
     also their own floor's models), and no module of it loads FastAPI or viser."""

@@ -18,9 +18,9 @@ import pytest
 import viser
 import zstandard
 
-from app.scene import page
+from app.scene.common import page
+from app.scene.common.state import SceneConfig
 from app.scene.server import start_scene
-from app.scene.state import SceneConfig
 
 VISER_PAGE = (Path(viser.__file__).parent / "client" / "build" / "index.html").read_text(
     encoding="utf-8"

@@ -22,7 +22,7 @@ import pytest
 
 import app.api.jobs
 import app.jobs
-import app.scene.motion
+import app.scene.pair.motion
 from app.api.contacts_schemas import ContactsIn
 from app.api.schemas import PairItem
 from app.api.sweep_schemas import SweepIn
@@ -48,7 +48,7 @@ CALLS = {  # each job with arguments as its route builds them (app/api/routes, a
                                           "exact_times": True}), 30.0, 1000, 1000, 10),
 }
 
-JOB_HOMES = (app.jobs, app.api.jobs, app.scene.motion)
+JOB_HOMES = (app.jobs, app.api.jobs, app.scene.pair.motion)
 """Where the jobs live: the shared one at the bottom, the API's and the scene's beside their models."""
 
 CHILD = """

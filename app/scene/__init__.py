@@ -31,19 +31,19 @@ from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from .costs import measure_update_costs as measure_update_costs
+    from .common.state import SceneConfig as SceneConfig
+    from .pair.costs import measure_update_costs as measure_update_costs
+    from .pair.session import Session as Session
     from .server import SceneServer as SceneServer
     from .server import start_scene as start_scene
-    from .session import Session as Session
-    from .state import SceneConfig as SceneConfig
 
 __all__ = ["SceneConfig", "SceneServer", "Session", "measure_update_costs", "start_scene"]
 
 _HOME = {
-    "SceneConfig": "state",
+    "SceneConfig": "common.state",
     "SceneServer": "server",
-    "Session": "session",
-    "measure_update_costs": "costs",
+    "Session": "pair.session",
+    "measure_update_costs": "pair.costs",
     "start_scene": "server",
 }
 

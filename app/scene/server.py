@@ -26,13 +26,13 @@ from typing import Any
 
 import viser
 
-from . import page, wire
-from .analysis import AnalysisCache
-from .bodies import UPLOAD_BYTES
-from .links import Router, TabStore, tab_id_of
-from .mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
-from .session import Session
-from .state import SceneConfig
+from .bodies.model import UPLOAD_BYTES
+from .common import page, wire
+from .common.links import Router, TabStore, tab_id_of
+from .common.mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
+from .common.state import SceneConfig
+from .pair.analysis import AnalysisCache
+from .pair.session import Session
 
 __all__ = ["SceneServer", "start_scene", "PortBusy", "UPLOADS_TOTAL_BYTES"]
 
@@ -127,7 +127,7 @@ class SceneServer:
 
     def _open(self, client: viser.ClientHandle) -> None:
         if self.bodies is not None and self.shared is None:  # many bodies (issue 14): one view per tab
-            from .bodies_view import BodiesView
+            from .bodies.bodies_view import BodiesView
 
             view = BodiesView(client, self.bodies, cache=self.cache, executor=self.executor,
                               sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads)
@@ -263,7 +263,7 @@ class SceneServer:
 
     def stop(self) -> None:
         """Stop the server and the analysis workers."""
-        from .origin import stop_viser
+        from .common.origin import stop_viser
 
         for s in list(self.sessions.values()):
             s.close()
@@ -379,7 +379,7 @@ def start_scene(
     """
     from core import warm_up
 
-    from .origin import OriginPolicy, start_viser, stop_viser
+    from .common.origin import OriginPolicy, start_viser, stop_viser
 
     check_sphere_subdivisions(sphere_subdivisions)  # before a port is taken
     if port and not _port_free(host, port):
@@ -403,6 +403,6 @@ def start_scene(
 
 def _preset_models() -> list[Any]:
     """The motions of the presets (fixed inputs): analysed once at start, so a pick shows at once."""
-    from .motion import list_presets, load_motion
+    from .pair.motion import list_presets, load_motion
 
     return [load_motion(preset=name, motion=None) for name in list_presets()]

@@ -35,7 +35,7 @@ def scene_link(scene_url: str, preset: str) -> str:
         >>> scene_link("http://127.0.0.1:8080", "example-29").startswith("http://127.0.0.1:8080/c/")
         True
     """
-    from app.scene.links import link_path
+    from app.scene.common.links import link_path
 
     return scene_url.rstrip("/") + link_path({"preset": preset})
 

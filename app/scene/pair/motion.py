@@ -24,7 +24,7 @@ from core.shapes.limits import SERVER, Limits
 from core.shapes.numbers import to_fmpq
 from core.shapes.quadrics import axes_from_quadric
 
-from .state import ShapeState
+from ..common.state import ShapeState
 
 __all__ = ["MotionError", "MotionModel", "list_presets", "load_motion", "read_motion_job", "MAX_MOTION_TEXT"]
 

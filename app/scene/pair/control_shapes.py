@@ -16,9 +16,9 @@ import viser
 
 from core.shapes.numbers import to_fmpq
 
+from ..common.mesh_detail import DRAWABLE
+from ..common.state import SceneConfig, ShapeState
 from .gui import DIM_LABELS, ignoring_event
-from .mesh_detail import DRAWABLE
-from .state import SceneConfig, ShapeState
 
 if TYPE_CHECKING:
     from .session import Session

@@ -18,10 +18,10 @@ from typing import TYPE_CHECKING, Any
 
 import viser
 
+from ..common.links import link_path
+from ..common.wire import too_large
 from .export import analysis_csv, analysis_json, dumps
-from .links import link_path
 from .panels import copy_button
-from .wire import too_large
 
 if TYPE_CHECKING:
     from .session import Session

@@ -11,7 +11,7 @@ import html
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from .shapes import RELATION_HEX
+from ..common.shapes import RELATION_HEX
 
 __all__ = [
     "relation_badge",

@@ -20,7 +20,7 @@ from flint import fmpq
 
 from core.shapes.numbers import to_fmpq
 
-from .texts import read_time, time_float
+from ..common.texts import read_time, time_float
 
 if TYPE_CHECKING:
     from .session import Session

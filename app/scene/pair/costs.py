@@ -6,8 +6,8 @@ import time
 
 import numpy as np
 
+from ..common.state import SceneConfig
 from .session import Session
-from .state import SceneConfig
 
 __all__ = ["measure_update_costs"]
 

@@ -20,7 +20,7 @@ from core.moving.result import Event
 from core.relation import Relation
 from core.shapes.numbers import to_fmpq
 
-from .state import ShapeState
+from ..common.state import ShapeState
 
 __all__ = ["touch_motion", "touch_event"]
 

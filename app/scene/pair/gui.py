@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING
 
 import viser
 
+from ..common.shapes import PALETTES
 from .plots import SCALES
 from .roots_view import RootsView
-from .shapes import PALETTES
 
 if TYPE_CHECKING:  # what GuiApi.add_progress_bar returns; viser 1.1.1 does not export it at the top level
     from viser._gui_handles import GuiProgressBarHandle

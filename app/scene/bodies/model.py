@@ -32,9 +32,9 @@ from core.bodies.broadphase import TooManyPairs
 from core.bodies.periodic import is_tilted
 from core.shapes.quadrics import rotations_from_orientations
 
-from ..bodyfiles import BodySet
-from .mesh_detail import DRAWABLE
-from .state import SceneConfig
+from ...bodyfiles import BodySet
+from ..common.mesh_detail import DRAWABLE
+from ..common.state import SceneConfig
 
 __all__ = ["BodiesModel", "UPLOAD_PAIRS", "UPLOAD_SECONDS", "UPLOAD_BYTES", "parse_box", "tab_bodies_job", "PairList", "PairEntry", "PairPage", "PAGE_SIZE", "RELATION_FILTERS", "pick_body", "relation_colours"]
 
@@ -148,8 +148,8 @@ def tab_bodies_job(source: bytes | BodySet, name: str, box_text: str, max_pairs:
     Raises:
         ValueError: an unreadable file, a bad box, or too many pairs to examine.
     """
-    from ..bodyfiles import read_bodies_bytes
-    from ..readers import usable_box
+    from ...bodyfiles import read_bodies_bytes
+    from ...readers import usable_box
 
     if isinstance(source, bytes | bytearray):
         bodies = read_bodies_bytes(bytes(source), name)
@@ -454,7 +454,7 @@ def relation_colours(worst: np.ndarray, pending: Any = None) -> np.ndarray:
         worst: (N,) :class:`core.Relation` codes.
         pending: colour of UNDECIDED codes (None: the grey of invalid bodies).
     """
-    from .shapes import NEUTRAL, RELATION_COLORS
+    from ..common.shapes import NEUTRAL, RELATION_COLORS
 
     # rows for the codes INVALID (-2), UNDECIDED (-1), SEPARATE, TANGENT, OVERLAP
     rows = [NEUTRAL, NEUTRAL if pending is None else pending, *(RELATION_COLORS[k] for k in ("separate", "tangent", "overlap"))]

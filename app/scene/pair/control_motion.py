@@ -13,14 +13,14 @@ import time
 from concurrent.futures import Future
 from typing import TYPE_CHECKING
 
+from ..common.state import SceneConfig, StatusError
+from ..common.texts import SHOWN_DIGITS, read_time, time_float
+from ..common.threads import later
 from .analysis import AnalysisView
 from .gui import STATIC
 from .motion import MotionError, MotionModel
 from .motion_form import form_text
 from .panels import analysed_text
-from .state import SceneConfig, StatusError
-from .texts import SHOWN_DIGITS, read_time, time_float
-from .threads import later
 from .touch import touch_event, touch_motion
 
 if TYPE_CHECKING:

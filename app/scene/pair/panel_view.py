@@ -18,6 +18,9 @@ from typing import Any
 
 import viser
 
+from ..common.shapes import PALETTES
+from ..common.state import AppState, ShapeState, StatusError
+from ..common.texts import APPROX
 from .analysis import AnalysisView
 from .gui import DIM_LABELS, STATIC, TOUCH, TYPED, Gui, ignoring_event
 from .motion_form import form_from_source
@@ -30,9 +33,6 @@ from .panels import (
     sign_table_markdown,
 )
 from .plots import SCALES, PlotsView
-from .shapes import PALETTES
-from .state import AppState, ShapeState, StatusError
-from .texts import APPROX
 from .words import plain_words
 
 __all__ = ["PanelView", "Syncing", "error_html"]

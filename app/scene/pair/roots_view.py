@@ -25,7 +25,7 @@ import numpy as np
 import viser
 import viser.uplot as uplot
 
-from . import wire
+from ..common import wire
 from .roots import RootsPicture, locus, roots_at, roots_of_pencil
 
 __all__ = ["RootsView", "plane_data", "locus_data", "roots_words"]
@@ -49,7 +49,7 @@ def plane_data(pic: RootsPicture, scale: str = "asinh") -> tuple[tuple[np.ndarra
         so that it draws as one thick segment along T > 0.
 
     Examples:
-        >>> from app.scene.roots import roots_of_pencil
+        >>> from app.scene.pair.roots import roots_of_pencil
         >>> data, xr, yr = plane_data(roots_of_pencil([-1, 0, 2, 0, -1]), "linear")
         >>> [np.nan_to_num(a, nan=9).tolist() for a in data][:4]   # T = -1 (double), T = 1 (double)
         [[-1.0, 0.0, 1.0, 1.5], [9.0, 0.0, 0.0, 0.0], [0.0, 9.0, 9.0, 9.0], [9.0, 9.0, 0.0, 9.0]]

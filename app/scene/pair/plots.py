@@ -22,7 +22,7 @@ import numpy as np
 import viser
 import viser.uplot as uplot
 
-from . import wire
+from ..common import wire
 
 __all__ = ["compress", "PlotData", "PlotsView", "SERIES_COLORS", "SCALES"]
 

@@ -31,8 +31,8 @@ import numpy as np
 
 from core import Relation
 
+from ..common.shapes import RELATION_COLORS, unit_disc
 from .bodies_lod import TRIANGLE_BUDGET, ViewPose, choose_detail
-from .shapes import RELATION_COLORS, unit_disc
 
 __all__ = ["BodyLayers", "SEPARATE_MODES", "ROOT", "FINE_NODE", "COARSE_NODE", "NETWORK_NODE", "points_node"]
 

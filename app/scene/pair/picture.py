@@ -16,11 +16,11 @@ import numpy as np
 
 from core import Relation, classify, explain
 
+from ..common.shapes import Pose
+from ..common.state import ShapeState
 from .analysis import AnalysisView
 from .contact import WitnessView, contact_point, witness_view
 from .motion import MotionModel
-from .shapes import Pose
-from .state import ShapeState
 
 __all__ = ["Picture", "static_picture", "motion_picture"]
 

@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 
+from ..common.camera import Framing, extent_of
+from ..common.markers import vec3
+from ..common.mesh_detail import SPHERE_SUBDIVISIONS
+from ..common.state import SceneConfig
 from .analysis import AnalysisCache
-from .camera import Framing, extent_of
-from .markers import vec3
-from .mesh_detail import SPHERE_SUBDIVISIONS
 from .session import Session
-from .state import SceneConfig
 
 __all__ = ["replay_html"]
 

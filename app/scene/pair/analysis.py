@@ -27,7 +27,7 @@ from core.algebra.closedform import closed_form, polynomial_text
 from core.moving.result import Event, MotionAnalysis
 from core.shapes.numbers import format_rational, to_float, to_fmpq
 
-from ..jobs import analyse_job
+from ...jobs import analyse_job
 from .motion import MAX_MOTION_TEXT, MotionError, MotionModel, read_motion_job
 from .readout import explanation_at
 

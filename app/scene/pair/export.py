@@ -38,7 +38,7 @@ def analysis_csv(model: MotionModel, an: AnalysisView) -> str:
     """Events, intervals and the sign table as one CSV table (exact values as text).
 
     Examples:
-        >>> from app.scene.motion import load_motion
+        >>> from app.scene.pair.motion import load_motion
         >>> from core import analyse
         >>> m = load_motion(preset="circles-crossing", motion=None)
         >>> text = analysis_csv(m, AnalysisView.of(analyse(m.A, m.B, m.interval)))

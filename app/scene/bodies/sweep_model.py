@@ -47,13 +47,13 @@ from core.bodies.sweep_result import SweepContacts
 from core.moving.motions import Motion, motion_to_dict
 from core.moving.signs import Signs, decide_with
 
-from .bodies import PairList, box_phrase, image_text
-from .motion import MotionModel
-from .state import SceneConfig
+from ..common.state import SceneConfig
+from ..pair.motion import MotionModel
+from .model import PairList, box_phrase, image_text
 
 if TYPE_CHECKING:
-    from ..sweep_cli import MovingBodies
-    from .analysis import AnalysisView
+    from ...sweep_cli import MovingBodies
+    from ..pair.analysis import AnalysisView
 
 __all__ = ["SweepModel", "Moment", "same_time", "compare_times", "PENDING_COLOUR", "CLOSED_FORM_CHARS"]
 
@@ -276,7 +276,7 @@ class SweepModel(PairList):
 
     def colours(self) -> np.ndarray:
         """(N, 3) uint8 colours at the current t (deciding: :data:`PENDING_COLOUR`)."""
-        from .bodies import relation_colours
+        from .model import relation_colours
 
         return relation_colours(self.worst, pending=PENDING_COLOUR)
 

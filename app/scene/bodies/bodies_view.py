@@ -30,19 +30,19 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..bodyfiles import BodySet, read_bodies
-from ..readers import usable_box
-from .bodies import UPLOAD_BYTES, UPLOAD_SECONDS, BodiesModel, PairPage, tab_bodies_job
+from ...bodyfiles import BodySet, read_bodies
+from ...readers import usable_box
+from ..common.camera import Framing
+from ..common.lighting import light_scene
+from ..common.mesh_detail import SPHERE_SUBDIVISIONS
+from ..common.shapes import RELATION_HEX
+from ..common.wire import Refusal, too_large
 from .bodies_layers import SEPARATE_MODES, BodyLayers, relation_colour_rows
 from .bodies_lod import ViewPose
-from .camera import Framing
-from .lighting import light_scene
-from .mesh_detail import SPHERE_SUBDIVISIONS
-from .shapes import RELATION_HEX
-from .wire import Refusal, too_large
+from .model import UPLOAD_BYTES, UPLOAD_SECONDS, BodiesModel, PairPage, tab_bodies_job
 
 if TYPE_CHECKING:
-    from .analysis import AnalysisCache
+    from ..pair.analysis import AnalysisCache
 
 __all__ = ["BodiesView", "load_model", "NO_PAIRS"]
 
@@ -528,7 +528,7 @@ class BodiesView:
     def analysis_cache(self) -> AnalysisCache:
         """The analysis cache the two-body view shares (created here when the server gave none)."""
         if self.cache is None:
-            from .analysis import AnalysisCache
+            from ..pair.analysis import AnalysisCache
 
             self.cache = AnalysisCache(self.executor)
         return self.cache
@@ -557,7 +557,7 @@ class BodiesView:
 
     def _open_two_body(self, k: int, cfg: Any, note: str, *, motion: Any = None, target: dict[str, Any] | None = None) -> Any:
         """Show the two-body view on ``cfg`` (and then on ``motion``, at ``target``: event or t)."""
-        from .session import Session
+        from ..pair.session import Session
 
         with self._lock:
             if self._closed:  # the tab went away: a session built now would never be closed

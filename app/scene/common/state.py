@@ -38,9 +38,9 @@ PALETTES: dict[str, dict[str, str]] = {
 """Named palettes (View -> Palette); the first is the default."""
 
 if TYPE_CHECKING:
-    from .analysis import AnalysisView
-    from .contact import WitnessView
-    from .motion import MotionModel
+    from ..pair.analysis import AnalysisView
+    from ..pair.contact import WitnessView
+    from ..pair.motion import MotionModel
 
 
 DEFAULT_PRESET = "example-29"

@@ -25,24 +25,24 @@ from typing import Any
 
 import viser
 
-from . import wire
+from ..common import wire
+from ..common.camera import Framing, extent_of, frame_cameras
+from ..common.lighting import light_scene
+from ..common.markers import WitnessMarkers
+from ..common.mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
+from ..common.shapes import PALETTES, EllipsoidView
+from ..common.state import AppState, SceneConfig
+from ..common.threads import later, soon
 from .analysis import AnalysisCache
-from .camera import Framing, extent_of, frame_cameras
 from .control_keys import KeyControl
 from .control_motion import MotionControl
 from .control_shapes import ShapeControl
 from .control_share import ShareControl
 from .control_timeline import TimelineControl
 from .gui import build_gui
-from .lighting import light_scene
-from .markers import WitnessMarkers
-from .mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
 from .motion import MotionError, MotionModel, list_presets, load_motion
 from .panel_view import PanelView, Syncing
 from .picture import Picture, motion_picture, static_picture
-from .shapes import PALETTES, EllipsoidView
-from .state import AppState, SceneConfig
-from .threads import later, soon
 
 __all__ = ["Session"]
 
