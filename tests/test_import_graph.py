@@ -189,3 +189,24 @@ def test_worker_side_imports_no_fastapi_nor_the_other_floors(start, may_reach):
     assert not foreign, f"{start} reaches {sorted(foreign)}"
     heavy = {m: bad for m in reached if (bad := _third_party(m) & {"fastapi", "starlette", "viser", "uvicorn"})}
     assert not heavy, f"{start} reaches modules importing {heavy}"
+
+
+SCENE_FLOORS = ("app.scene.common", "app.scene.pair", "app.scene.bodies", "app.scene.server")
+"""The scene's floors, bottom first: each imports only the floors below it (and the rest of app)."""
+
+
+def test_the_scene_floors_import_downwards():
+    """common (tab state, drawing, page, wire) imports neither product; the two-shape scene (pair)
+    not the many-bodies one (bodies, which opens a pair); neither imports the server that holds both."""
+    graph = import_graph()
+    assert all(any(m.startswith(f) for m in graph) for f in SCENE_FLOORS)
+    up = []
+    for m, targets in graph.items():
+        level = next((k for k, f in enumerate(SCENE_FLOORS) if m == f or m.startswith(f + ".")), None)
+        if level is None:
+            continue
+        for t in targets:
+            above = [f for f in SCENE_FLOORS[level + 1:] if t == f or t.startswith(f + ".")]
+            if above:
+                up.append(f"{m} -> {t}")
+    assert not up, "imports up the scene's floors:\n" + "\n".join(sorted(up))
