@@ -210,3 +210,14 @@ def test_the_scene_floors_import_downwards():
             if above:
                 up.append(f"{m} -> {t}")
     assert not up, "imports up the scene's floors:\n" + "\n".join(sorted(up))
+
+
+def test_controllers_see_the_session_through_its_narrow_face():
+    """The controllers import app.scene.pair.session_view (the SessionView protocol: mypy holds them to
+    its members), never the session module, not even for type checking (was a circle of six files)."""
+    controllers = sorted((APP / "scene" / "pair").glob("control_*.py"))
+    assert len(controllers) >= 5
+    for path in controllers:
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        names = {f"{'.' * n.level}{n.module or ''}" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+        assert ".session_view" in names and ".session" not in names, (path.name, sorted(names))

@@ -18,7 +18,7 @@ import viser
 from .gui import ignoring_event
 
 if TYPE_CHECKING:
-    from .session import Session
+    from .session_view import SessionView
 
 __all__ = ["KeyControl", "STEPS_PER_WINDOW"]
 
@@ -32,7 +32,7 @@ class KeyControl:
     FOLLOW_PERIOD = 0.1
     """Seconds between camera moves while following."""
 
-    def __init__(self, session: Session) -> None:
+    def __init__(self, session: SessionView) -> None:
         self.s = session
         gui = session.gui_api
         self.commands: list[viser.CommandHandle] = []

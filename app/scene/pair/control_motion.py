@@ -24,7 +24,7 @@ from .panels import analysed_text
 from .touch import touch_event, touch_motion
 
 if TYPE_CHECKING:
-    from .session import Session
+    from .session_view import SessionView
 
 __all__ = ["MotionControl"]
 
@@ -34,7 +34,7 @@ EDITOR_FIELDS = ("A", "B", "interval")
 class MotionControl:
     """Callbacks of the Motion folder and the life cycle of a session's motion."""
 
-    def __init__(self, session: Session) -> None:
+    def __init__(self, session: SessionView) -> None:
         self.s = session
         ui = session.ui.motion
         ui.preset.on_update(lambda _ev: self.on_preset())

@@ -21,7 +21,7 @@ from ..common.state import SceneConfig, ShapeState
 from .gui import DIM_LABELS, ignoring_event
 
 if TYPE_CHECKING:
-    from .session import Session
+    from .session_view import SessionView
 
 __all__ = ["ShapeControl", "drawable", "DRAWABLE"]
 
@@ -44,7 +44,7 @@ def drawable(shape: ShapeState) -> ShapeState:
 class ShapeControl:
     """Callbacks of the shape folders, the gizmos and the View folder of one session."""
 
-    def __init__(self, session: Session) -> None:
+    def __init__(self, session: SessionView) -> None:
         self.s = session
         ui = session.ui
         for name, sg in ui.shapes.items():

@@ -24,7 +24,7 @@ from .export import analysis_csv, analysis_json, dumps
 from .panels import copy_button
 
 if TYPE_CHECKING:
-    from .session import Session
+    from .session_view import SessionView
 
 __all__ = ["ShareControl", "MAX_UPLOAD_BYTES"]
 
@@ -35,7 +35,7 @@ MAX_UPLOAD_BYTES = 256 * 1024
 class ShareControl:
     """Callbacks of the "Share and keep" folder of one session."""
 
-    def __init__(self, session: Session) -> None:
+    def __init__(self, session: SessionView) -> None:
         self.s = session
         ui = session.ui.share
         ui.link.on_click(lambda ev: self.on_link())

@@ -23,7 +23,7 @@ from core.shapes.numbers import to_fmpq
 from ..common.texts import read_time, time_float
 
 if TYPE_CHECKING:
-    from .session import Session
+    from .session_view import SessionView
 
 __all__ = ["TimelineControl"]
 
@@ -37,7 +37,7 @@ def _float(t: Any) -> float:
 class TimelineControl:
     """Callbacks of the Timeline folder of one session, and its playback thread."""
 
-    def __init__(self, session: Session) -> None:
+    def __init__(self, session: SessionView) -> None:
         self.s = session
         tg = session.ui.timeline
         tg.slider.on_update(lambda _ev: self.on_slider())
