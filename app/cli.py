@@ -6,7 +6,7 @@
   [--allow-origin URL ...]``: the same with options; uvicorn serves the API in the main thread,
   viser serves the scene from its own thread; ``--shared`` is the presenter mode (one scene for
   every tab); ``--allow-origin`` lets pages at another origin open scene sessions
-  (:mod:`app.scene.origin`). SIGTERM/SIGINT stop the running analyses and exit within seconds
+  (:mod:`app.scene.common.origin`). SIGTERM/SIGINT stop the running analyses and exit within seconds
   (:mod:`app.lifecycle`).
 * ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png [--config file.json]
   [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly;
@@ -18,7 +18,7 @@
   classify PAIRS.npz --out LABELS.npy``: many bodies and files of pairs (:mod:`app.bodies_cli`);
   ``serve --bodies FILE`` / ``screenshot --bodies FILE`` show many bodies in the scene, and
   ``serve --bodies START --to END`` / ``screenshot --bodies START --to END [--t T] [--event K]``
-  moving bodies over one step (the timeline, the contact events: :mod:`app.scene.sweep_view`).
+  moving bodies over one step (the timeline, the contact events: :mod:`app.scene.bodies.sweep_view`).
 * ``python -m app sweep START.csv END.csv --out EVENTS.csv``: first contact times of moving
   bodies (:mod:`app.sweep_cli`).
 * ``python -m app audit TRAJECTORY --out REPORT.csv [--between]``: a certified check of a
@@ -157,7 +157,7 @@ def _time(text: str) -> float:
 
 
 def _add_sphere_subdivisions(parser: argparse.ArgumentParser, why: str) -> None:
-    """``--sphere-subdivisions K`` (app.scene.mesh_detail): how finely the ellipsoids are drawn."""
+    """``--sphere-subdivisions K`` (app.scene.common.mesh_detail): how finely the ellipsoids are drawn."""
     lo, hi = SPHERE_SUBDIVISIONS_RANGE[0], SPHERE_SUBDIVISIONS_RANGE[-1]
     parser.add_argument(
         "--sphere-subdivisions", type=int, choices=SPHERE_SUBDIVISIONS_RANGE, default=SPHERE_SUBDIVISIONS, metavar="K",
@@ -372,7 +372,7 @@ def _wait_forever() -> None:
 def _bodies_model(args: argparse.Namespace) -> object:
     """The bodies of ``--bodies FILE`` with their contacts (``--box``), or None.
 
-    With ``--to END``: the moving bodies of a step (:class:`app.scene.sweep_model.SweepModel`,
+    With ``--to END``: the moving bodies of a step (:class:`app.scene.bodies.sweep_model.SweepModel`,
     START and END read as ``python -m app sweep`` reads them).
     """
     if getattr(args, "to", None) is not None:

@@ -15,7 +15,7 @@ each expression parsed once), never in the process serving the tabs and the requ
   :func:`budgeted` reports its stop from a worker as :class:`app.workers.WorkerTimeout` saying where.
 
 The jobs that need the API's models live beside them (:mod:`app.api.jobs`), the scene's beside
-the scene (:func:`app.scene.motion.read_motion_job`). Bad input is :class:`core.InvalidInput`
+the scene (:func:`app.scene.pair.motion.read_motion_job`). Bad input is :class:`core.InvalidInput`
 (a ValueError): it crosses the process boundary with its pair and matrix, and the API's one
 exception handler answers it 422.
 """

@@ -144,13 +144,13 @@ class HeadlessScene:
             every other tab opened since, while the browser keeps running. None: launch one (a
             browser start costs ~1.5 CPU-s more than a connection; the test suite shares one).
         settle_ms: how long the client keeps drawing after each change (the page's
-            ``renderSettleMs``, :data:`app.scene.page.SETTLE_FLAG`); None: viser's 250 ms, right
+            ``renderSettleMs``, :data:`app.scene.common.page.SETTLE_FLAG`); None: viser's 250 ms, right
             for pictures (a change's asynchronous tails, such as a label's glyphs, are drawn
             before the picture is taken). The browser tests, which read three.js state and the
             panel, take 0: one frame per change (in software WebGL the window is 3 frames), 14 %
             less CPU in tests/test_browser_scene.py.
         sphere_subdivisions: of the icosphere the solids are drawn with
-            (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`): the default for pictures; the
+            (:data:`app.scene.common.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`): the default for pictures; the
             browser tests, which read colours, poses and the panel, take 3 (a frame in software
             WebGL ~23 instead of ~60 ms of CPU).
     """
@@ -180,7 +180,7 @@ class HeadlessScene:
         self.dpr = dpr
         self.prefetch = prefetch
         self.bodies = bodies
-        """Many bodies to show instead of ``config`` (:mod:`app.scene.bodies_view`), or None."""
+        """Many bodies to show instead of ``config`` (:mod:`app.scene.bodies.bodies_view`), or None."""
         self.width = width
         self.height = height
         self.timeout = timeout
@@ -557,7 +557,7 @@ def screenshot(
         width: viewport width in pixels.
         height: viewport height in pixels.
         timeout: seconds to wait for rendering (the analysis of a preset included).
-        bodies: many bodies to show instead (``--bodies FILE``: :mod:`app.scene.bodies_view`).
+        bodies: many bodies to show instead (``--bodies FILE``: :mod:`app.scene.bodies.bodies_view`).
         cdp: DevTools address of a running Chromium to draw in (a tab of it), or None: launch one.
 
     Returns:

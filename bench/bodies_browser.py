@@ -1,7 +1,7 @@
 """Many bodies in a real browser: frame time while orbiting, "Open pair", screenshots.
 
 Random ellipsoids (``bench.bodies_data.random_bodies``, packing fraction 0.3, seed 1) are shown
-with ``python -m app serve --bodies`` 's view (:mod:`app.scene.bodies_view`) in headless Debian
+with ``python -m app serve --bodies`` 's view (:mod:`app.scene.bodies.bodies_view`) in headless Debian
 Chromium (software WebGL, SwiftShader), 1200 x 800 pixels:
 
 * **first picture**: server and browser start until every body is drawn (points, and the
@@ -16,7 +16,7 @@ Chromium (software WebGL, SwiftShader), 1200 x 800 pixels:
 * **screenshot --bodies**: the whole command (read the file, search the contacts, browser,
   picture).
 
-Moving bodies (``serve --bodies START --to END``, :mod:`app.scene.sweep_view`; random moving,
+Moving bodies (``serve --bodies START --to END``, :mod:`app.scene.bodies.sweep_view`; random moving,
 turning ellipsoids ``bench.sweep_data.moving_bodies``, seed 1):
 
 * **model**: both files read and swept (forward, and backward for the last contacts);

@@ -124,7 +124,7 @@ def assert_pose(hs, name: str, position, scale=None) -> None:
 
 # ---------------------------------------------------------------------------- defect 1
 def test_a_new_tab_runs_the_client_from_the_browser_cache(hs, monkeypatch):
-    """The client's code and style are files the browser keeps (app/scene/page.py): a new tab in
+    """The client's code and style are files the browser keeps (app/scene/common/page.py): a new tab in
     the same browser asks the server for neither, and runs the code from the file, not inline."""
     import app.scene.common.links as links
 
@@ -182,7 +182,7 @@ def test_open_starts_the_tab_as_its_link_does_without_a_page_load(hs, monkeypatc
 
 
 def test_the_settle_window_is_what_the_page_address_says(hs):
-    """``renderSettleMs`` (app/scene/page.py): the test tabs draw one frame per change (0 ms), and
+    """``renderSettleMs`` (app/scene/common/page.py): the test tabs draw one frame per change (0 ms), and
     the client reads the flag as documented: a number in 0..10000, else viser's own 250 ms."""
     from app.scene.common.page import SETTLE_FLAG, settle_flag_supported, settle_reader_js
     from conftest import TEST_SETTLE_MS

@@ -1,4 +1,4 @@
-"""The scene's Origin rule (app.scene.origin): which websocket handshakes may open a session.
+"""The scene's Origin rule (app.scene.common.origin): which websocket handshakes may open a session.
 
 The live handshake against the running server is in tests/test_hostile.py; here the rule itself,
 case by case, and the guard that refuses to start a scene without the check.

@@ -677,7 +677,7 @@ def test_readout_at_t_shows_exact_signs_for_sqrt2_motion(server):
 
 
 def test_wire_setters_match_viser_public_setters(server):
-    """app.scene.wire queues the same messages and stores the same values as viser's setters."""
+    """app.scene.common.wire queues the same messages and stores the same values as viser's setters."""
     import dataclasses
 
     from app.scene.common import wire

@@ -1,4 +1,4 @@
-"""The worker processes start warm: every job (app.jobs, app.api.jobs, the scene's in app.scene.motion)
+"""The worker processes start warm: every job (app.jobs, app.api.jobs, the scene's in app.scene.pair.motion)
 runs on what the fork server preloaded, and none of it loads FastAPI.
 
 multiprocessing has one fork server per process, shared by the API's and the scene's pools; a
@@ -34,7 +34,7 @@ PAIR = {"a": {"center": ["3", "0"], "semi_axes": ["1", "2"]}, "b": {"center": [0
 MOVING = [["1", "0", "-t"], ["0", "1", "0"], ["-t", "0", "t^2 - 1"]]  # the unit circle at (t, 0)
 STILL = [["1", "0", "0"], ["0", "1", "0"], ["0", "0", "-1"]]
 
-CALLS = {  # each job with arguments as its route builds them (app/api/routes, app/scene/analysis.py)
+CALLS = {  # each job with arguments as its route builds them (app/api/routes, app/scene/pair/analysis.py)
     "analyse_job": (MOVING, STILL, "0, 3"),
     "read_motion_job": ({},),
     "classify_job": ([PairItem.model_validate(PAIR)], "exact", 30.0, True),
@@ -68,7 +68,7 @@ print("\\n".join(sorted(set(sys.modules) - before)))
 
 
 def test_every_job_is_called_here():
-    """A new job in app.jobs, app.api.jobs or app.scene.motion must be added to CALLS (so the check below covers it)."""
+    """A new job in app.jobs, app.api.jobs or app.scene.pair.motion must be added to CALLS (so the check below covers it)."""
     names = {n for m in JOB_HOMES for n, f in inspect.getmembers(m, inspect.isfunction)
              if n.endswith("_job") and f.__module__ == m.__name__}
     assert names == set(CALLS)

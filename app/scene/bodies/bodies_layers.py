@@ -9,7 +9,7 @@ their precision far from the origin):
   semi-axes, in classes a factor 2 apart; a point's radius is the middle of its class, within a
   factor 1.42 of the body's mean radius);
 * ``/bodies/solids/fine`` and ``/bodies/solids/coarse``: batched meshes (one instance per body)
-  of the bodies largest on screen for the tab's camera (:func:`app.scene.bodies_lod.choose_detail`),
+  of the bodies largest on screen for the tab's camera (:func:`app.scene.bodies.bodies_lod.choose_detail`),
   replaced when the camera stops;
 * ``/bodies/network``: optionally, one line segment per contact pair (one batched node);
 * ``/bodies/box``: the periodic box, if any.

@@ -8,7 +8,7 @@ ratio)`` levels are simplified by meshoptimizer with a 2 % error cap that an ico
 gets under (measured: 6.4 M triangles drawn for 20,000 spheres of 320 with levels at 25 % and
 6 %); its levels also go by distance, not by size on screen.
 
-So every body is drawn as a point (one vertex; :mod:`app.scene.bodies_layers`), and the bodies
+So every body is drawn as a point (one vertex; :mod:`app.scene.bodies.bodies_layers`), and the bodies
 largest on screen are drawn as solids on top, within a triangle budget: the finest mesh for
 those a few dozen pixels across, a coarse one for those a few pixels across, nothing for the
 rest. :func:`choose_detail` picks them for a camera pose (:class:`ViewPose`); the view calls it

@@ -1,7 +1,7 @@
 """The many-bodies view of one tab: all bodies, their contacts, the way into the two-body view.
 
 * Every body is drawn as a point, and the bodies largest on screen for the tab's camera as
-  solids on top (:mod:`app.scene.bodies_layers`, :mod:`app.scene.bodies_lod`: 100,000 bodies
+  solids on top (:mod:`app.scene.bodies.bodies_layers`, :mod:`app.scene.bodies.bodies_lod`: 100,000 bodies
   stay interactive in software WebGL), each in the colour of its worst certified relation
   (separate green, tangent amber, overlap red, invalid grey). Separate bodies can be shown,
   faded or hidden; the contact network (a line per contact pair) can be shown.
@@ -9,13 +9,13 @@
   relation and by body index; it opens a file (upload, CSV/NPZ) with an optional periodic box.
   Clicking a body selects it (its pairs are listed); clicking a body it touches, or picking a
   pair from the list, opens that pair in the existing two-body view
-  (:class:`~app.scene.session.Session` on a :class:`~app.scene.state.SceneConfig` built from
+  (:class:`~app.scene.pair.session.Session` on a :class:`~app.scene.common.state.SceneConfig` built from
   the two bodies' parameters), with a button back to all bodies.
 
-The maths (contacts, the list, picking, configurations) lives in :mod:`app.scene.bodies`.
+The maths (contacts, the list, picking, configurations) lives in :mod:`app.scene.bodies.model`.
 
-Moving bodies (``serve --bodies START --to END``: a :class:`~app.scene.sweep_model.SweepModel`)
-are the same view with a Timeline folder (:class:`~app.scene.sweep_view.SweepTimeline`): the
+Moving bodies (``serve --bodies START --to END``: a :class:`~app.scene.bodies.sweep_model.SweepModel`)
+are the same view with a Timeline folder (:class:`~app.scene.bodies.sweep_view.SweepTimeline`): the
 bodies at t coloured by their certified relation there, the list holds the contact events in
 time order, and an event opens its pair in the two-body view on the pair's exact motion.
 """
@@ -74,9 +74,9 @@ class BodiesView:
         model: the bodies to show (None: an empty view with the upload button).
         cache: analysis cache handed to the two-body view.
         executor: where the two-body view runs analyses.
-        sphere_subdivisions: of the two-body view's solids (:class:`app.scene.session.Session`).
-        uploads: the server's :class:`~app.scene.wire.UploadGuard`: a file over
-            :data:`~app.scene.bodies.UPLOAD_BYTES` is refused before the server keeps it, and the
+        sphere_subdivisions: of the two-body view's solids (:class:`app.scene.pair.session.Session`).
+        uploads: the server's :class:`~app.scene.common.wire.UploadGuard`: a file over
+            :data:`~app.scene.bodies.model.UPLOAD_BYTES` is refused before the server keeps it, and the
             panel says so (None: checked once received).
     """
 
@@ -95,7 +95,7 @@ class BodiesView:
         self.cache: AnalysisCache | None = cache
         self.executor = executor
         self.session: Any = None
-        """The two-body :class:`~app.scene.session.Session` (built at the first "Open pair", then
+        """The two-body :class:`~app.scene.pair.session.Session` (built at the first "Open pair", then
         kept, hidden, while all bodies are shown: a pair opens like a preset, with no shader to
         compile), or None."""
         self.pair: int | None = None
@@ -127,7 +127,7 @@ class BodiesView:
         self._session_nodes: dict[str, bool] = {}
         self._bodies_camera: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self.timeline: Any = None
-        """The :class:`~app.scene.sweep_view.SweepTimeline` of moving bodies, or None."""
+        """The :class:`~app.scene.bodies.sweep_view.SweepTimeline` of moving bodies, or None."""
         self.scene.on_click()(self._on_scene_click)
         cam = getattr(target, "camera", None)
         if cam is not None:
@@ -471,8 +471,8 @@ class BodiesView:
         """Show the bodies of an uploaded file; returns an error message (also shown) or None.
 
         The file is the tab's: it is read and its contacts found in a worker process, under
-        :data:`~app.scene.bodies.UPLOAD_SECONDS`, :data:`~app.scene.bodies.UPLOAD_PAIRS` and
-        :data:`~app.scene.bodies.UPLOAD_BYTES` (:func:`~app.scene.bodies.tab_bodies_job`).
+        :data:`~app.scene.bodies.model.UPLOAD_SECONDS`, :data:`~app.scene.bodies.model.UPLOAD_PAIRS` and
+        :data:`~app.scene.bodies.model.UPLOAD_BYTES` (:func:`~app.scene.bodies.model.tab_bodies_job`).
         """
         try:
             if len(content) > UPLOAD_BYTES:
@@ -493,7 +493,7 @@ class BodiesView:
         return None
 
     def _tab_bodies(self, source: bytes | BodySet, name: str) -> BodiesModel:
-        """:func:`~app.scene.bodies.tab_bodies_job` with the typed box.
+        """:func:`~app.scene.bodies.model.tab_bodies_job` with the typed box.
 
         In a worker process for a tab's file; here, without limits, for the server's own bodies
         (``--bodies``: a presenter's million, which a worker's memory cap could refuse).
@@ -537,10 +537,10 @@ class BodiesView:
         """Open pair k (index in the contacts) in the two-body view of this tab.
 
         The bodies, their GUI and the two-body view's nodes are hidden or shown, never rebuilt:
-        the first pair builds the two-body :class:`~app.scene.session.Session`, later pairs are
+        the first pair builds the two-body :class:`~app.scene.pair.session.Session`, later pairs are
         loaded into it (no shader to compile in the browser: that was most of a second).
         Moving bodies: the timeline jumps to the pair's first contact t* and the pair opens on
-        its exact motion at t* (:meth:`app.scene.sweep_view.SweepTimeline.open_event`).
+        its exact motion at t* (:meth:`app.scene.bodies.sweep_view.SweepTimeline.open_event`).
         """
         if self.timeline is not None:
             return self.timeline.open_event(k)

@@ -4,7 +4,7 @@ A :class:`BodiesModel` holds the bodies of a file (:mod:`app.bodyfiles`), their 
 contacts (:func:`core.contacts`), each body's worst relation (its colour), float poses for
 drawing, the pages of pairs shown in the GUI (filtered by relation or body), picking by a
 click ray, and the
-:class:`~app.scene.state.SceneConfig` that opens one pair in the two-body view.
+:class:`~app.scene.common.state.SceneConfig` that opens one pair in the two-body view.
 
 What the two-body view certifies: it rebuilds both shapes from their parameters with
 :func:`core.quadric_from_axes`, bit for bit the matrices the search classified, so an open pair
@@ -15,7 +15,7 @@ matrices (NPZ ``Q``) are shown with parameters recovered in floats (approximate)
 
 :class:`PairList` (the paged, filtered list of pairs, a body's partners, the lookup of a pair)
 and :func:`pick_body`, :func:`relation_colours` serve the moving bodies too
-(:class:`app.scene.sweep_model.SweepModel`, whose pairs are the contact events of a step).
+(:class:`app.scene.bodies.sweep_model.SweepModel`, whose pairs are the contact events of a step).
 """
 
 from __future__ import annotations
@@ -140,7 +140,7 @@ def tab_bodies_job(source: bytes | BodySet, name: str, box_text: str, max_pairs:
     """The model of bodies a tab brings: the bytes of an uploaded file, or bodies with a typed box.
 
     Run in a worker process under :data:`UPLOAD_SECONDS` (the scene's
-    :meth:`app.scene.analysis.AnalysisCache.run`), with :data:`UPLOAD_PAIRS`: the file is
+    :meth:`app.scene.pair.analysis.AnalysisCache.run`), with :data:`UPLOAD_PAIRS`: the file is
     the tab's, its work must not be the server's. A file's own box (GSD, LAMMPS, extxyz) wins
     over the typed one. ``max_pairs`` None: the bodies are the server's own (``--bodies``), only
     the box is the tab's.
@@ -303,7 +303,7 @@ class BodiesModel(PairList):
         self.invalid = {**self.result.invalid, **bodies.errors}
         self.worst = self.result.per_body()
         self.undrawn: dict[int, str] = {}
-        """Valid bodies outside the scene's drawing range (:data:`~app.scene.mesh_detail.DRAWABLE`),
+        """Valid bodies outside the scene's drawing range (:data:`~app.scene.common.mesh_detail.DRAWABLE`),
         by index, and why: listed with their contacts, drawn as a grey speck at the origin."""
         self.positions, self.wxyz, self.scales = self._poses()
         res = self.result

@@ -20,7 +20,7 @@ What decides a colour (each body: its worst relation over its pairs at t):
   pencil there (``core.analyse`` on a rational bracket of t*, :mod:`core.moving.signs`).
 
 Until a pair is decided its bodies are "deciding" (a grey of their own), never a guess; the
-view decides them in the background (:mod:`app.scene.sweep_view`). The two-body view opens a
+view decides them in the background (:mod:`app.scene.bodies.sweep_view`). The two-body view opens a
 pair on the same exact motions (:meth:`SweepModel.pair_motion`), so its analysis finds the
 same first event time.
 """
@@ -113,7 +113,7 @@ class SweepModel(PairList):
     """
 
     moving = True
-    """Tells the view (:class:`app.scene.bodies_view.BodiesView`) to show the timeline."""
+    """Tells the view (:class:`app.scene.bodies.bodies_view.BodiesView`) to show the timeline."""
     title = "**Moving bodies** — certified first contacts over one step t ∈ [0, 1]"
 
     def __init__(self, moving: MovingBodies, *, name: str = "") -> None:

@@ -1,10 +1,10 @@
 """The timeline of the moving-bodies view: t, Play, the certified colours at t, opening an event.
 
-Part of :class:`app.scene.bodies_view.BodiesView` when its model is a
-:class:`app.scene.sweep_model.SweepModel` (``serve --bodies START --to END``):
+Part of :class:`app.scene.bodies.bodies_view.BodiesView` when its model is a
+:class:`app.scene.bodies.sweep_model.SweepModel` (``serve --bodies START --to END``):
 
 * **t** (slider over the step [0, 1]) and **Play**, as the two-body timeline
-  (:mod:`app.scene.control_timeline`): a t-step draws the bodies at once at their float poses,
+  (:mod:`app.scene.pair.control_timeline`): a t-step draws the bodies at once at their float poses,
   coloured by what the sweep decides at the exact t (:meth:`SweepModel.moment`: vectorised,
   milliseconds); the pairs it leaves open are decided by exact arithmetic in this view's worker
   thread, their bodies drawn "deciding" meanwhile, and the colours are sent again when they are
@@ -246,7 +246,7 @@ class SweepTimeline:
         (at t = 0 when the pair already overlaps there: no event).
 
         Returns:
-            The two-body :class:`~app.scene.session.Session`.
+            The two-body :class:`~app.scene.pair.session.Session`.
         """
         model, view = self.model, self.view
         self.stop_playing()

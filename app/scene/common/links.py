@@ -3,10 +3,10 @@
 Every tab has an address of its own, ``/s/<tab id>/``: opening the scene's root ``/`` redirects
 to a fresh one, and the server keeps each tab's last configuration (a snapshot taken when the
 tab disconnects), so a reload reopens the tab as it was. A shared link,
-``/c/<configuration>/``, carries a whole :class:`~app.scene.state.SceneConfig` (JSON, zlib,
+``/c/<configuration>/``, carries a whole :class:`~app.scene.common.state.SceneConfig` (JSON, zlib,
 base64url); opening it starts a new tab on that configuration (redirected to its own ``/s/``
 address). The viser client connects its websocket to the page's path, so the handshake names
-the tab; :func:`tab_id_of` reads it back (:mod:`app.scene.wire` holds the one private access).
+the tab; :func:`tab_id_of` reads it back (:mod:`app.scene.common.wire` holds the one private access).
 
 Text from a URL is user input: it is size-checked here and read like an uploaded file
 (a typed motion in it is parsed and analysed in a worker process, as if typed in the editor).
@@ -146,7 +146,7 @@ class Router:
 
     * ``GET /`` (the page, not the websocket) -> 302 to ``/s/<new id>/`` (the query kept);
     * ``GET /c/<token>/`` -> the token is stored for a new tab id, 302 to ``/s/<id>/``;
-    * ``GET /s/<id>/...`` -> viser's page (:mod:`app.scene.page`);
+    * ``GET /s/<id>/...`` -> viser's page (:mod:`app.scene.common.page`);
     * ``GET /_client/<hash>.js`` / ``.css`` -> the client's code and style (cached by browsers).
 
     Args:

@@ -1,6 +1,6 @@
 """The witnesses in the 3D view: contact point and common normal, point inside both, separating plane.
 
-:class:`WitnessMarkers` draws what :mod:`app.scene.contact` computed (certified witnesses for
+:class:`WitnessMarkers` draws what :mod:`app.scene.pair.contact` computed (certified witnesses for
 fixed shapes; at a timeline tangency a float estimate of where they touch) and hides what does
 not apply. Handles are created once per scene (the normal on first use) and updated by
 assignment; every setter sends only changes.

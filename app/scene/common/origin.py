@@ -201,7 +201,7 @@ class OriginPolicy:
 def start_viser(policy: OriginPolicy, router: Any = None, *, max_message: int | None = None, **kwargs: Any) -> Any:
     """``viser.ViserServer(**kwargs)`` whose websocket handshake applies ``policy``.
 
-    ``router`` (an :class:`app.scene.links.Router`) also routes the HTTP requests (tab addresses);
+    ``router`` (an :class:`app.scene.common.links.Router`) also routes the HTTP requests (tab addresses);
     ``max_message`` replaces viser's largest websocket message a client may send (50 MB).
 
     Raises:

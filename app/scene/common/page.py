@@ -4,7 +4,7 @@ viser's text inputs carry a ``<label for=ID>`` whose ID is not the input's id (M
 the input its own), so screen readers and ``get_by_label`` found no label for any field. The
 script here ties each label to the input in its row (``aria-labelledby``, and the input takes
 the label's ``for`` id when no element has it), and keeps doing so as the panel changes (a
-``MutationObserver``). :class:`app.scene.links.Router` serves this page for every tab address.
+``MutationObserver``). :class:`app.scene.common.links.Router` serves this page for every tab address.
 
 viser 1.1 ships its client as one ``index.html`` holding the code (2.5 MB of JavaScript and
 150 KB of CSS) zstd-compressed and base-88 encoded, which the page decodes with a WebAssembly

@@ -152,7 +152,7 @@ class EllipsoidView:
         dim: 2 (flat disc in z = 0, gizmo limited to the plane) or 3.
         opacity: mesh opacity (semi-transparent so the other shape shows through).
         gizmo: show the transform gizmo.
-        subdivisions: of the icosphere a solid is drawn with (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`).
+        subdivisions: of the icosphere a solid is drawn with (:data:`app.scene.common.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`).
     """
 
     OPACITY = 0.6
@@ -257,7 +257,7 @@ class EllipsoidView:
         """Send the pose last set again, explicitly.
 
         After a drag the browser's gizmo holds the pointer's float pose; the certified shape is
-        the rounded one (:meth:`app.scene.state.ShapeState.rationalised`), drawn from here on.
+        the rounded one (:meth:`app.scene.common.state.ShapeState.rationalised`), drawn from here on.
         """
         if self._pose is not None:
             wire.force_pose(self.control, *self._pose)

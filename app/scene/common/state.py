@@ -71,7 +71,7 @@ class ShapeState:
 
         Typed text verbatim; an exact rational as its decimal or "p/q"; a computed float (a pose
         drawn at t, the float decomposition of a typed matrix) rounded to
-        :data:`~app.scene.texts.SHOWN_DIGITS` and marked "≈ " (never a rounded number that looks
+        :data:`~app.scene.common.texts.SHOWN_DIGITS` and marked "≈ " (never a rounded number that looks
         exact); the matrix field: the typed matrix, or empty.
 
         Examples:
@@ -469,4 +469,4 @@ class AppState:
     follow: bool = False
     """The camera follows the moving shapes."""
     plot_scale: str = "asinh"
-    """Scale of the plots' y axis (:data:`app.scene.plots.SCALES`)."""
+    """Scale of the plots' y axis (:data:`app.scene.pair.plots.SCALES`)."""

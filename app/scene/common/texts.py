@@ -156,7 +156,7 @@ SHOWN_DIGITS = 10
 """Significant digits of a computed number shown in a field (a pose drawn at t, a drag).
 
 A drag or leaving a motion makes the shape *exactly* the decimals shown with these digits
-(:meth:`app.scene.state.ShapeState.rationalised`): the fields then hold what is certified."""
+(:meth:`app.scene.common.state.ShapeState.rationalised`): the fields then hold what is certified."""
 
 APPROX = "≈ "
 """Prefix of a field that shows a rounded, computed value (never a number that looks exact)."""

@@ -22,7 +22,7 @@ __all__ = ["later", "soon", "pool", "POOL_THREADS"]
 
 POOL_THREADS = 8
 """Threads running the deferred calls of every tab: their work holds the GIL, but a call may also
-wait (a tab's typed motion read in a worker process, :meth:`app.scene.session.Session.load_untrusted`)."""
+wait (a tab's typed motion read in a worker process, :meth:`app.scene.pair.session.Session.load_untrusted`)."""
 
 _POOL = ThreadPoolExecutor(max_workers=POOL_THREADS, thread_name_prefix="scene-later")
 """Its threads start on first use and live on."""

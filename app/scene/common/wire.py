@@ -145,7 +145,7 @@ MAX_MESSAGE_BYTES = 1 << 20
 """Largest websocket message the scene reads from a client (viser's own server reads 50 MB).
 
 viser's browser client sends a file in parts of 512 KiB and the longest text the scene reads is
-:data:`app.scene.motion.MAX_MOTION_TEXT` characters; a larger message closes the connection (code
+:data:`app.scene.pair.motion.MAX_MOTION_TEXT` characters; a larger message closes the connection (code
 1009) before it is read whole. ``websockets`` reads ahead at most 16 messages of a connection
 (its ``max_queue``), so a client holds at most ~16 MiB of the server in messages not yet handled.
 """

@@ -246,7 +246,7 @@ class AnalysisView:
         return [(k.replace("s10", "s1,0"), self.samples[k]) for k in ("s0", "s1", "s10")]
 
     def sign_rows(self) -> list[dict[str, Any]]:
-        """Rows of the sign table for :func:`app.scene.panels.sign_table_markdown`."""
+        """Rows of the sign table for :func:`app.scene.pair.panels.sign_table_markdown`."""
         by_value = {e.event.value: e for e in self.events}
         rows = []
         for r in self.result.sign_table:

@@ -125,7 +125,7 @@ class MotionControl:
             model: the motion (read in a worker).
             t: time to show once analysed (a number or exact text; None: the default).
             event: event to show instead (1-based), or "touch": the external tangency
-                (:func:`app.scene.touch.touch_event`).
+                (:func:`app.scene.pair.touch.touch_event`).
         """
         s = self.s
         with s.lock:
@@ -280,7 +280,7 @@ class MotionControl:
         """Leave the motion for static shapes: exactly the decimals the Shape fields show.
 
         The shapes drawn at t are floats (from the float matrices at the float t); they are
-        rounded to :data:`~app.scene.texts.SHOWN_DIGITS` significant digits and taken as exact
+        rounded to :data:`~app.scene.common.texts.SHOWN_DIGITS` significant digits and taken as exact
         decimals, so the fields show exactly the numbers whose relation the readout certifies.
         A shape too thin for those digits keeps its floats (the field says "≈").
         """

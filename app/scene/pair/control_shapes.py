@@ -1,6 +1,6 @@
 """What the user does to the shapes and the view: drag a gizmo, type a centre, switch 2D/3D, toggles.
 
-Each callback changes the tab's :class:`~app.scene.state.AppState` and calls the session's one
+Each callback changes the tab's :class:`~app.scene.common.state.AppState` and calls the session's one
 ``refresh()``; a bad value is stored as the error of its field (shown next to it) and changes
 nothing else. A drag or a typed shape during a motion leaves the motion: the shapes stay where
 they were drawn and become static.

@@ -1,11 +1,11 @@
 """Share, keep and export: a link to this view, the configuration as a file, the analysis as files.
 
-* "Link to this view": a ``/c/<configuration>/`` link (:mod:`app.scene.links`) with a copy button;
+* "Link to this view": a ``/c/<configuration>/`` link (:mod:`app.scene.common.links`) with a copy button;
   opening it starts a tab on exactly what this tab shows.
 * "Download configuration (JSON)" / "Open a configuration (JSON)": the :class:`SceneConfig` of
   this view as a file (``--config`` reads the same file), and back; an opened file is user
   input, read like a link (a typed motion in it is read and analysed in worker processes).
-* "Download analysis (JSON)" / "(CSV)": the exact analysis (:mod:`app.scene.export`).
+* "Download analysis (JSON)" / "(CSV)": the exact analysis (:mod:`app.scene.pair.export`).
 
 Files go to the tab that clicked (viser's file download).
 """

@@ -4,8 +4,8 @@ Labels are a contract: tests, screenshots and users find the controls by them.
 
 :func:`build_gui` lays out the panel (readout, timeline, plots, motion editor, shapes, sign table,
 view options) and returns a :class:`Gui` of typed handle groups. No behaviour here: controllers
-(:mod:`app.scene.control_shapes`, :mod:`app.scene.control_motion`,
-:mod:`app.scene.control_timeline`) attach the callbacks, :mod:`app.scene.panel_view` fills in the
+(:mod:`app.scene.pair.control_shapes`, :mod:`app.scene.pair.control_motion`,
+:mod:`app.scene.pair.control_timeline`) attach the callbacks, :mod:`app.scene.pair.panel_view` fills in the
 contents.
 """
 
@@ -74,7 +74,7 @@ class PlotsGui:
     folder: viser.GuiFolderHandle
     live: viser.GuiCheckboxHandle
     scale: viser.GuiDropdownHandle[str]
-    """"asinh" or "linear" (:data:`app.scene.plots.SCALES`)."""
+    """"asinh" or "linear" (:data:`app.scene.pair.plots.SCALES`)."""
     about: viser.GuiMarkdownHandle
     """What the y axis shows."""
 
@@ -95,7 +95,7 @@ class MotionGui:
     progress: GuiProgressBarHandle
     status: viser.GuiMarkdownHandle
     form: dict[str, dict[str, viser.GuiTextHandle]]
-    """The motion form: "A", "B" -> field -> text (:mod:`app.scene.motion_form`)."""
+    """The motion form: "A", "B" -> field -> text (:mod:`app.scene.pair.motion_form`)."""
     form_analyse: viser.GuiButtonHandle
     form_error: viser.GuiMarkdownHandle
 
@@ -158,7 +158,7 @@ class Gui:
     timeline: TimelineGui
     plots: PlotsGui
     roots: RootsView
-    """The roots of P(T): the paper's picture (:mod:`app.scene.roots_view`)."""
+    """The roots of P(T): the paper's picture (:mod:`app.scene.pair.roots_view`)."""
     motion: MotionGui
     shapes: dict[str, ShapeGui]
     sign_table: viser.GuiMarkdownHandle

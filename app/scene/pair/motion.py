@@ -3,7 +3,7 @@
 :func:`load_motion` reads a preset by name or typed text (the JSON form of
 :mod:`core.moving.motions`); :class:`MotionModel` evaluates the float matrices A(t), B(t) for
 drawing only (a float never decides a relation: the analysis does,
-:mod:`app.scene.analysis`). The text is read by core's readers (one grammar for the scene, the
+:mod:`app.scene.pair.analysis`). The text is read by core's readers (one grammar for the scene, the
 API and the library: :func:`core.moving.motions.read_motion`, :func:`core.moving.motions.read_interval`).
 Imports only ``core`` and the scene's state: worker processes load it (:func:`read_motion_job`, the
 scene's job, lives here beside the model it builds).
@@ -80,7 +80,7 @@ class MotionModel:
             hi = lo + 4.0
         self.interval_floats: tuple[float, float] = (float(lo), float(hi))  # type: ignore[arg-type]
         """I as floats (a guess around its finite end when it is unbounded: the analysis gives the
-        window of the slider, :attr:`app.scene.analysis.AnalysisView.window`)."""
+        window of the slider, :attr:`app.scene.pair.analysis.AnalysisView.window`)."""
         self.key: Hashable = (json.dumps([A.source, B.source], sort_keys=True, default=str), str(interval[0]), str(interval[1]))
         """Cache key of the analysis: the motion and the interval."""
         self._last: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None
@@ -187,7 +187,7 @@ def read_interval(text: str, limits: Limits | None = None) -> tuple[str | None, 
         >>> read_interval("1, 1")
         Traceback (most recent call last):
         ...
-        app.scene.motion.MotionError: empty interval: need lo < hi, got [1, 1]
+        app.scene.pair.motion.MotionError: empty interval: need lo < hi, got [1, 1]
     """
     try:
         ends = read_exact_interval(str(text), limits)

@@ -16,7 +16,7 @@ from typing import Any
 __all__ = ["FORM_FIELDS", "form_from_source", "source_from_form", "form_text"]
 
 FORM_FIELDS = ("center", "semi_axes", "orientation", "translation", "rotation", "scale")
-"""Fields of one shape in the form (labels in :mod:`app.scene.gui`)."""
+"""Fields of one shape in the form (labels in :mod:`app.scene.pair.gui`)."""
 
 
 def _join(values: Any) -> str:

@@ -81,7 +81,7 @@ def readout_markdown(
         where: what the numbers refer to (e.g. "at t = 0.7").
         error: message shown instead when the shapes are invalid.
         witness: Markdown of the witness (margin, sentence: ``WitnessView.readout()`` of
-            :mod:`app.scene.contact`), shown under the relation.
+            :mod:`app.scene.pair.contact`), shown under the relation.
         palette: relation -> colour.
 
     Examples:
@@ -294,7 +294,7 @@ def events_html(events: Sequence[Any], palette: Mapping[str, str] = RELATION_HEX
     polynomial with the isolating interval.
 
     Args:
-        events: :class:`app.scene.analysis.EventView` objects.
+        events: :class:`app.scene.pair.analysis.EventView` objects.
         palette: relation -> colour.
     """
     if not events:

@@ -1,7 +1,7 @@
 """The readout of a motion at one instant: exact signs from the analysis, floats only for display.
 
 :func:`explanation_at` gives what :func:`core.explain` gives for fixed shapes (the dict that
-:func:`app.scene.panels.readout_markdown` shows), for a moving pair at a time t:
+:func:`app.scene.pair.panels.readout_markdown` shows), for a moving pair at a time t:
 
 * at a rational t (a slider float is the exact binary rational it is; a typed "2/3"), the
   signs of a_i(t) and of the ŝ_j(t) the decision tree asks for, evaluated exactly

@@ -26,7 +26,7 @@ __all__ = ["replay_html"]
 
 
 class _InitialCamera:
-    """Adapter: :meth:`app.scene.camera.Framing.aim` on viser's initial camera of a server."""
+    """Adapter: :meth:`app.scene.common.camera.Framing.aim` on viser's initial camera of a server."""
 
     fov: float
     aspect: float
@@ -62,7 +62,7 @@ def replay_html(
         event_pause: seconds each event is held.
         timeout: seconds to wait for the analysis.
         sphere_subdivisions: of the icosphere the solids are drawn with
-            (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`): fewer make a smaller file
+            (:data:`app.scene.common.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`): fewer make a smaller file
             that plays faster without a GPU.
 
     Raises:

@@ -5,7 +5,7 @@ panel (never on the drag or t-step hot path):
 
 * **the roots of P(T) at the current t** in the complex plane: the positive real axis T > 0
   highlighted (where two distinct roots mean *separate*), real roots as dots, a double root as
-  a large ring (a tangency), complex pairs; what is drawn comes from :mod:`app.scene.roots`
+  a large ring (a tangency), complex pairs; what is drawn comes from :mod:`app.scene.pair.roots`
   (certified isolation, or the certified relation where P(t) has no exact form);
 * over a motion, **the root locus**: the real roots of P(T) against t, the certified events as
   vertical lines and the double root of each tangency marked, so that "two positive roots merge
@@ -89,7 +89,7 @@ def locus_data(
 
     Args:
         ts: sample times (ascending).
-        real_roots: (len(ts), n) real roots per sample, NaN-padded (:func:`app.scene.roots.locus`).
+        real_roots: (len(ts), n) real roots per sample, NaN-padded (:func:`app.scene.pair.roots.locus`).
         events: (time, double root position or None) of each certified event.
         t: the current time (cursor).
         scale: "asinh" or "linear" (the y axis: T or asinh T).

@@ -1,16 +1,16 @@
 """One browser tab: its state, the controllers that change it and the views that draw it.
 
-A :class:`Session` owns an :class:`~app.scene.state.AppState` (what the tab shows), the views
-(:class:`~app.scene.shapes.EllipsoidView` per shape, :class:`~app.scene.markers.WitnessMarkers`,
-the GUI panel filled by :class:`~app.scene.panel_view.PanelView`) and three controllers
-(:mod:`app.scene.control_shapes`, :mod:`app.scene.control_motion`,
-:mod:`app.scene.control_timeline`). Callbacks change the state and call :meth:`Session.refresh`,
-the one path from state to screen: it derives the :class:`~app.scene.picture.Picture` (the
+A :class:`Session` owns an :class:`~app.scene.common.state.AppState` (what the tab shows), the views
+(:class:`~app.scene.common.shapes.EllipsoidView` per shape, :class:`~app.scene.common.markers.WitnessMarkers`,
+the GUI panel filled by :class:`~app.scene.pair.panel_view.PanelView`) and three controllers
+(:mod:`app.scene.pair.control_shapes`, :mod:`app.scene.pair.control_motion`,
+:mod:`app.scene.pair.control_timeline`). Callbacks change the state and call :meth:`Session.refresh`,
+the one path from state to screen: it derives the :class:`~app.scene.pair.picture.Picture` (the
 shapes and their certified relation, together), draws it, and fills the panel now or, while
 dragging or scrubbing, at most every :attr:`Session.PANEL_PERIOD`.
 
 The two hot paths have entry points that need no browser (the benchmark's): :meth:`apply_drag`
-(a gizmo drag event) and :meth:`set_t` (one t step); :func:`app.scene.costs.measure_update_costs`
+(a gizmo drag event) and :meth:`set_t` (one t step); :func:`app.scene.pair.costs.measure_update_costs`
 times both and counts the websocket messages they queue.
 """
 
@@ -60,8 +60,8 @@ class Session:
             target's own camera, if it has one.
         defer_load: build the scene but load nothing yet (the caller loads, e.g. a link).
         sphere_subdivisions: of the icosphere the solids are drawn with
-            (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`; fewer draw faster in software WebGL).
-        uploads: the server's :class:`~app.scene.wire.UploadGuard` (the configuration upload's
+            (:data:`app.scene.common.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`; fewer draw faster in software WebGL).
+        uploads: the server's :class:`~app.scene.common.wire.UploadGuard` (the configuration upload's
             limit is set on it, and a refused file is shown next to the button), or None.
     """
 

@@ -7,7 +7,7 @@ B is now, t = 0: on A's centre). The direction is the exact rational difference 
 as typed (floats are their binary values). On ``I = [0, T]`` with T beyond the sum of the largest
 semi-axes the relation is overlap near 0 and separate at T; the last event after which the
 shapes are separate is the external tangency, an exact algebraic t that the scene shows with
-its certified relation (:meth:`app.scene.control_motion.MotionControl.analyse_pending`).
+its certified relation (:meth:`app.scene.pair.control_motion.MotionControl.analyse_pending`).
 """
 
 from __future__ import annotations
