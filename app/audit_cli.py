@@ -47,6 +47,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from core.options import ON_INVALID
+
 if TYPE_CHECKING:
     from core import Contacts, SweepContacts
     from core.options import OnInvalid
@@ -94,7 +96,7 @@ def add_parser(sub: Any) -> None:
     a.add_argument("--jobs", type=_jobs_argument, default=None, help="worker processes on this machine (default: every core)")
     a.add_argument("--format", choices=FORMATS, default=None, help="file format (default: from the name, else the first bytes)")
     a.add_argument("--dim", type=int, choices=(2, 3), default=None, help="2: read 3D files of a 2D system (z = 0) as ellipses")
-    a.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bodies that are no ellipsoid and go on")
+    a.add_argument("--on-invalid", choices=ON_INVALID, default="raise", help="mark: report bodies that are no ellipsoid and go on")
     a.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
 
 

@@ -27,6 +27,8 @@ from typing import Any, TextIO
 
 import numpy as np
 
+from core.options import METHODS, ON_INVALID
+
 __all__ = ["add_parsers", "box_argument", "run_contacts", "run_classify", "COMMANDS", "ProgressBar"]
 
 COMMANDS = ("contacts", "classify")
@@ -95,8 +97,8 @@ def add_parsers(sub: Any) -> None:
     )
     c.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz], or a tilted box Lx,Ly,Lz,xy,xz,yz (2D: Lx,Ly,xy) (minimum image); default: the file's box")
     add_body_file_options(c, dim=True)
-    c.add_argument("--method", choices=("adaptive", "float", "exact"), default="adaptive")
-    c.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bad bodies and go on")
+    c.add_argument("--method", choices=METHODS, default="adaptive")
+    c.add_argument("--on-invalid", choices=ON_INVALID, default="raise", help="mark: report bad bodies and go on")
     c.add_argument(
         "--with", dest="extras", action="append", choices=("scale",), default=[],
         help="scale: add a certified contact-scale bracket scale_lo,scale_hi and a containment flag per pair",
@@ -107,8 +109,8 @@ def add_parsers(sub: Any) -> None:
     k = sub.add_parser("classify", help="certified relations of a file of pairs (NPZ with stacks A, B)")
     k.add_argument("pairs", help="NPZ with arrays A and B, stacks (N, n, n) that broadcast; - for stdin")
     k.add_argument("--out", required=True, help="output .npy of int8 codes (0 separate, 1 tangent, 2 overlap, -2 invalid), exactly this path; - for stdout")
-    k.add_argument("--method", choices=("adaptive", "float", "exact"), default="adaptive")
-    k.add_argument("--on-invalid", choices=("raise", "mark"), default="raise")
+    k.add_argument("--method", choices=METHODS, default="adaptive")
+    k.add_argument("--on-invalid", choices=ON_INVALID, default="raise")
     k.add_argument("--quiet", action="store_true", help="no summary (errors only)")
 
 

@@ -6,7 +6,7 @@
   [--allow-origin URL ...]``: the same with options; uvicorn serves the API in the main thread,
   viser serves the scene from its own thread; ``--shared`` is the presenter mode (one scene for
   every tab); ``--allow-origin`` lets pages at another origin open scene sessions
-  (:mod:`app.scene.origin`). SIGTERM/SIGINT stop the running analyses and exit within seconds
+  (:mod:`app.scene.common.origin`). SIGTERM/SIGINT stop the running analyses and exit within seconds
   (:mod:`app.lifecycle`).
 * ``python -m app screenshot --preset example-29 --t 0.7 --out shot.png [--config file.json]
   [--width W --height H] [--dim 2|3] [--event K]``: render a configuration to PNG headlessly;
@@ -18,7 +18,7 @@
   classify PAIRS.npz --out LABELS.npy``: many bodies and files of pairs (:mod:`app.bodies_cli`);
   ``serve --bodies FILE`` / ``screenshot --bodies FILE`` show many bodies in the scene, and
   ``serve --bodies START --to END`` / ``screenshot --bodies START --to END [--t T] [--event K]``
-  moving bodies over one step (the timeline, the contact events: :mod:`app.scene.sweep_view`).
+  moving bodies over one step (the timeline, the contact events: :mod:`app.scene.bodies.sweep_view`).
 * ``python -m app sweep START.csv END.csv --out EVENTS.csv``: first contact times of moving
   bodies (:mod:`app.sweep_cli`).
 * ``python -m app audit TRAJECTORY --out REPORT.csv [--between]``: a certified check of a
@@ -45,10 +45,10 @@ import sys
 from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
-from .scene.mesh_detail import SPHERE_SUBDIVISIONS, SPHERE_SUBDIVISIONS_RANGE
+from .scene.common.mesh_detail import SPHERE_SUBDIVISIONS, SPHERE_SUBDIVISIONS_RANGE
 
 if TYPE_CHECKING:  # imported where used: the command line starts without viser
-    from .scene.state import SceneConfig
+    from .scene.common.state import SceneConfig
 
 __all__ = ["main", "run", "build_parser", "config_from_args", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
 
@@ -93,7 +93,7 @@ def _port(text: str) -> int:
 
 
 def _origin(text: str) -> str:
-    from .scene.origin import normalise_origin
+    from .scene.common.origin import normalise_origin
 
     try:
         return normalise_origin(text)
@@ -158,7 +158,7 @@ def _time(text: str) -> float:
 
 
 def _add_sphere_subdivisions(parser: argparse.ArgumentParser, why: str) -> None:
-    """``--sphere-subdivisions K`` (app.scene.mesh_detail): how finely the ellipsoids are drawn."""
+    """``--sphere-subdivisions K`` (app.scene.common.mesh_detail): how finely the ellipsoids are drawn."""
     lo, hi = SPHERE_SUBDIVISIONS_RANGE[0], SPHERE_SUBDIVISIONS_RANGE[-1]
     parser.add_argument(
         "--sphere-subdivisions", type=int, choices=SPHERE_SUBDIVISIONS_RANGE, default=SPHERE_SUBDIVISIONS, metavar="K",
@@ -287,7 +287,7 @@ def config_from_args(args: argparse.Namespace, path: str | None = None) -> Scene
     Raises:
         ValueError: unreadable config file or bad values.
     """
-    from .scene.state import SceneConfig
+    from .scene.common.state import SceneConfig
 
     configs = _listed(getattr(args, "config", None))
     path = path or (configs[0] if configs else None)
@@ -317,7 +317,7 @@ def config_from_args(args: argparse.Namespace, path: str | None = None) -> Scene
     return cfg
 
 
-def _listed(value: object) -> list:
+def _listed(value: object) -> list[Any]:
     """A repeatable option as a list (None: empty; a single value from older callers: [value])."""
     if value is None:
         return []
@@ -339,7 +339,7 @@ def _serve(args: argparse.Namespace) -> int:
         )
         scene_url = scene.url
         if lesson is not None:
-            from .scene.lesson import step_link
+            from .scene.common.lesson import step_link
 
             scene.lesson = lesson.name
             print(f"Lesson: {lesson.title} ({len(lesson.steps)} steps): {scene_url}{step_link(lesson, 1)}", flush=True)
@@ -388,13 +388,13 @@ def _wait_forever() -> None:
 def _bodies_model(args: argparse.Namespace) -> object:
     """The bodies of ``--bodies FILE`` with their contacts (``--box``), or None.
 
-    With ``--to END``: the moving bodies of a step (:class:`app.scene.sweep_model.SweepModel`,
+    With ``--to END``: the moving bodies of a step (:class:`app.scene.bodies.sweep_model.SweepModel`,
     START and END read as ``python -m app sweep`` reads them).
     """
     if getattr(args, "to", None) is not None:
         if getattr(args, "bodies", None) is None:
             raise ValueError("--to END needs --bodies START (the bodies at t = 0)")
-        from .scene.sweep_model import SweepModel
+        from .scene.bodies.sweep_model import SweepModel
         from .sweep_cli import read_moving_bodies
 
         moving = read_moving_bodies(
@@ -406,7 +406,7 @@ def _bodies_model(args: argparse.Namespace) -> object:
         return sweep
     if getattr(args, "bodies", None) is None:
         return None
-    from .scene.bodies_view import load_model
+    from .scene.bodies.bodies_view import load_model
 
     model = load_model(args.bodies, args.box, frame=getattr(args, "frame", None), format=getattr(args, "format", None))
     print(f"Bodies: {model.result.summary()}", file=sys.stderr, flush=True)
@@ -419,7 +419,7 @@ def _lesson(args: argparse.Namespace) -> Any:
         return None
     if getattr(args, "shared", False) or getattr(args, "bodies", None) is not None:
         raise ValueError("--lesson shows one tab's scene: not with --shared or --bodies")
-    from .scene.lesson import load_lesson, register
+    from .scene.common.lesson import load_lesson, register
 
     lesson = load_lesson(args.lesson)
     register(lesson)
@@ -430,7 +430,7 @@ def _lesson_screenshots(args: argparse.Namespace, lesson: Any) -> int:
     """``screenshot --lesson L [--step K ...]``: one PNG per step (a folder for several)."""
     from pathlib import Path
 
-    from .scene.lesson_export import step_pictures
+    from .lesson_export import step_pictures
 
     steps = _listed(args.step) or list(range(1, len(lesson.steps) + 1))
     for k in steps:
@@ -494,7 +494,7 @@ def _screenshot(args: argparse.Namespace) -> int:
 def _export(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from .scene.replay import replay_html
+    from .scene.pair.replay import replay_html
 
     if not 0 < args.seconds <= 600 or not 2 <= args.frames <= 5000:
         raise ValueError("--seconds must be in (0, 600] and --frames in 2..5000")
@@ -503,7 +503,7 @@ def _export(args: argparse.Namespace) -> int:
     out = Path(args.out)
     lesson = _lesson(args)
     if lesson is not None:  # every step's picture and words in one offline page
-        from .scene.lesson_export import lesson_html, step_pictures
+        from .lesson_export import lesson_html, step_pictures
 
         target = Output(out, make_folders=True)
         with target as f:

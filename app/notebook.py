@@ -4,7 +4,7 @@
 kernel (a free port on the kernel's machine, analyses in worker processes) and shows it in the
 cell as an iframe; the object returned is the running scene (``.stop()`` ends it, ``.session`` is
 the tab's state once the cell has been displayed). ``show(..., static=True)`` shows a
-self-contained replay instead (:mod:`app.scene.replay`): no server, it stays in the saved notebook.
+self-contained replay instead (:mod:`app.scene.pair.replay`): no server, it stays in the saved notebook.
 
 **Remote Jupyter** (JupyterHub, a server on another machine): the browser cannot reach the
 kernel's ``127.0.0.1``. The cell then goes through the notebook server's own proxy,
@@ -17,9 +17,9 @@ force the choice. The iframe's address is ``<base_url>proxy/<port>/s/<tab>/``; b
 ``JUPYTERHUB_SERVICE_PREFIX`` when set, else read in the page from Jupyter's own page config
 (JupyterLab / Notebook 7: ``#jupyter-config-data``; classic: ``body[data-base-url]``), "/" by
 default. The scene's redirects and links are relative, so they stay under that path. The
-page's Origin is the notebook server's, which the scene cannot vouch for (:mod:`app.scene.origin`):
+page's Origin is the notebook server's, which the scene cannot vouch for (:mod:`app.scene.common.origin`):
 the tab id in the address is a random secret that only this cell holds, and the scene trusts
-handshakes to that tab (:meth:`app.scene.origin.OriginPolicy.trust_tab`).
+handshakes to that tab (:meth:`app.scene.common.origin.OriginPolicy.trust_tab`).
 
 Jupyter displays the returned object through ``_repr_html_``: no IPython import is needed.
 """
@@ -31,7 +31,7 @@ import importlib.util
 import os
 from typing import Any
 
-from .scene.state import SceneConfig
+from .scene.common.state import SceneConfig
 
 __all__ = ["show", "NotebookScene", "NotebookReplay"]
 
@@ -120,7 +120,7 @@ class NotebookReplay:
     """A self-contained replay shown in a notebook cell (kept in the saved notebook)."""
 
     def __init__(self, config: SceneConfig, *, height: int = 500, seconds: float = 12.0) -> None:
-        from .scene.replay import replay_html
+        from .scene.pair.replay import replay_html
 
         self.height = height
         self.html = replay_html(config, seconds=seconds)

@@ -23,10 +23,10 @@ from pathlib import Path
 from typing import Any
 
 from .output import Output
-from .scene.mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
-from .scene.page import SETTLE_FLAG, SETTLE_MAX_MS
-from .scene.shapes import PALETTES, RELATION_HEX
-from .scene.state import SceneConfig
+from .scene.common.mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
+from .scene.common.page import SETTLE_FLAG, SETTLE_MAX_MS
+from .scene.common.shapes import PALETTES, RELATION_HEX
+from .scene.common.state import SceneConfig
 
 __all__ = ["CHROMIUM", "CHROMIUM_FLAGS", "HeadlessScene", "Shot", "screenshot", "screenshots", "SCREENSHOT_EXTRA"]
 
@@ -144,13 +144,13 @@ class HeadlessScene:
             every other tab opened since, while the browser keeps running. None: launch one (a
             browser start costs ~1.5 CPU-s more than a connection; the test suite shares one).
         settle_ms: how long the client keeps drawing after each change (the page's
-            ``renderSettleMs``, :data:`app.scene.page.SETTLE_FLAG`); None: viser's 250 ms, right
+            ``renderSettleMs``, :data:`app.scene.common.page.SETTLE_FLAG`); None: viser's 250 ms, right
             for pictures (a change's asynchronous tails, such as a label's glyphs, are drawn
             before the picture is taken). The browser tests, which read three.js state and the
             panel, take 0: one frame per change (in software WebGL the window is 3 frames), 14 %
             less CPU in tests/test_browser_scene.py.
         sphere_subdivisions: of the icosphere the solids are drawn with
-            (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`): the default for pictures; the
+            (:data:`app.scene.common.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`): the default for pictures; the
             browser tests, which read colours, poses and the panel, take 3 (a frame in software
             WebGL ~23 instead of ~60 ms of CPU).
         start_path: the page the tab opens first: ``/`` (``config``), or a lesson step's link.
@@ -184,7 +184,7 @@ class HeadlessScene:
         self.dpr = dpr
         self.prefetch = prefetch
         self.bodies = bodies
-        """Many bodies to show instead of ``config`` (:mod:`app.scene.bodies_view`), or None."""
+        """Many bodies to show instead of ``config`` (:mod:`app.scene.bodies.bodies_view`), or None."""
         self.width = width
         self.height = height
         self.timeout = timeout
@@ -369,11 +369,13 @@ class HeadlessScene:
 
     def mesh_color(self, name: str) -> str | None:
         """Material colour "#rrggbb" of a mesh node as three.js has it, or None if absent."""
-        return self.page.evaluate(_MESH_COLOR_JS, f"/shapes/{name}/mesh")
+        colour: str | None = self.page.evaluate(_MESH_COLOR_JS, f"/shapes/{name}/mesh")
+        return colour
 
     def drawn_pose(self, name: str) -> list[float] | None:
         """[x, y, z, w, qx, qy, qz] of node ``/shapes/<name>`` as three.js has it (None if absent)."""
-        return self.page.evaluate(_POSE_JS, f"/shapes/{name}")
+        pose: list[float] | None = self.page.evaluate(_POSE_JS, f"/shapes/{name}")
+        return pose
 
     def expected(self, session: Any = None) -> tuple[dict[str, list[float]], dict[str, str], str | None]:
         """What the browser must show for a two-body session (default: the tab's): poses, colours, word."""
@@ -525,7 +527,7 @@ def _check_events(shots: Sequence[Shot]) -> None:
     from core.shapes.limits import SERVER
 
     from .jobs import analyse_job
-    from .scene.motion import MotionError, load_motion
+    from .scene.pair.motion import MotionError, load_motion
 
     counts: dict[int, int | None] = {}
     for shot in shots:
@@ -559,7 +561,7 @@ def screenshot(
         width: viewport width in pixels.
         height: viewport height in pixels.
         timeout: seconds to wait for rendering (the analysis of a preset included).
-        bodies: many bodies to show instead (``--bodies FILE``: :mod:`app.scene.bodies_view`).
+        bodies: many bodies to show instead (``--bodies FILE``: :mod:`app.scene.bodies.bodies_view`).
         cdp: DevTools address of a running Chromium to draw in (a tab of it), or None: launch one.
 
     Returns:

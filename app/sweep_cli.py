@@ -33,6 +33,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from core.options import ON_INVALID
+
 if TYPE_CHECKING:
     from .readers import BodySet
 
@@ -52,7 +54,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz], or a tilted box Lx,Ly,Lz,xy,xz,yz (2D: Lx,Ly,xy) (minimum image over the step); default: START's box")
     add_body_file_options(s, dim=True)
     s.add_argument("--end-frame", type=frame_argument, default=None, help="frame of END when it is a trajectory (default: --frame)")
-    s.add_argument("--on-invalid", choices=("raise", "mark"), default="raise", help="mark: report bad bodies and go on")
+    s.add_argument("--on-invalid", choices=ON_INVALID, default="raise", help="mark: report bad bodies and go on")
     s.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
 
 

@@ -30,10 +30,14 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, TypeVar, cast
+
+from core.errors import InvalidInput
 
 if TYPE_CHECKING:
     from multiprocessing.context import ForkContext, ForkServerContext, SpawnContext
+
+T = TypeVar("T")
 
 __all__ = ["JOB_MODULES", "job_clock", "WorkerPool", "WorkerBusy", "WorkerTimeout", "WorkerStopped", "WorkerDied", "WorkerFailed", "WorkerCancelled"]
 
@@ -42,12 +46,13 @@ JOB_MODULES: tuple[str, ...] = (
     "core.moving.analysis",
     "core.witness",
     "app.jobs",
+    "app.api.jobs",
     "app.api.convert",
     "app.api.witness_out",
     "app.api.contacts_schemas",
     "app.api.sweep_schemas",
     "app.api.limits",
-    "app.scene.motion",
+    "app.scene.pair.motion",
     "core.moving._sweep_filter",
 )
 """What the fork server imports once, for every job of :mod:`app.jobs` and its arguments.
@@ -167,7 +172,7 @@ def job_clock() -> float | None:
 
 
 def _child(
-    conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict, memory_mb: int | None, clock: float | None = None
+    conn: Any, fn: Callable[..., Any], args: tuple[Any, ...], kwargs: dict[str, Any], memory_mb: int | None, clock: float | None = None
 ) -> None:
     if clock is not None:
         _JOB_CLOCK[:] = [clock]
@@ -183,8 +188,8 @@ def _child(
             pass
     try:
         result = ("ok", fn(*args, **kwargs))
-    except ValueError as e:
-        result = ("value_error", str(e))
+    except ValueError as e:  # bad input: its message, and its pair and matrix when core said (InvalidInput)
+        result = ("value_error", (str(e), getattr(e, "pair", None), getattr(e, "matrix", None), getattr(e, "reason", None)))
     except WorkerTimeout as e:  # the job's own budget check: it says where it stopped
         result = ("timeout", str(e))
     except MemoryError:
@@ -218,7 +223,7 @@ class WorkerPool:
         >>> pool.run(math.sqrt, -1.0, timeout=60)
         Traceback (most recent call last):
         ...
-        ValueError: math domain error
+        core.errors.InvalidInput: math domain error
     """
 
     def __init__(
@@ -264,7 +269,7 @@ class WorkerPool:
 
     def run(
         self,
-        fn: Callable[..., Any],
+        fn: Callable[..., T],
         /,
         *args: Any,
         timeout: float,
@@ -272,7 +277,7 @@ class WorkerPool:
         grace: float = 0.0,
         wait_until: float | None = None,
         **kwargs: Any,
-    ) -> Any:
+    ) -> T:
         """Run ``fn(*args, **kwargs)`` in a child process and return its result.
 
         ``fn``, its arguments and its result must be picklable (module-level functions). A
@@ -300,7 +305,8 @@ class WorkerPool:
             WorkerTimeout: ``timeout`` seconds passed; the child was killed (or stopped itself).
             WorkerCancelled: ``cancel`` was set; the child was killed (or the caller left the
                 queue).
-            ValueError: the job raised ValueError (bad input): same message.
+            core.InvalidInput: the job raised ValueError (bad input): same message, and its
+                ``pair``, ``matrix`` and ``reason`` when it was an InvalidInput.
             WorkerDied: the child process died or ran out of memory.
             WorkerFailed: the job raised another exception.
         """
@@ -344,8 +350,9 @@ class WorkerPool:
                 self._turn.notify_all()  # the next in line may now be first
 
     def _run(
-        self, fn: Callable[..., Any], args: tuple, kwargs: dict, timeout: float, grace: float, cancel: threading.Event | None
-    ) -> Any:
+        self, fn: Callable[..., T], args: tuple[Any, ...], kwargs: dict[str, Any], timeout: float, grace: float,
+        cancel: threading.Event | None,
+    ) -> T:
         recv, send = self._ctx.Pipe(duplex=False)
         clock = time.monotonic()  # the job's own budget counts from here (job_clock), the kill from after start
         proc = self._ctx.Process(target=_child, args=(send, fn, args, kwargs, self._memory_mb, clock), daemon=True)
@@ -391,9 +398,10 @@ class WorkerPool:
             if proc.exitcode is not None:
                 proc.close()
         if status == "ok":
-            return payload
+            return cast(T, payload)  # what fn returned, pickled back
         if status == "value_error":
-            raise ValueError(payload)
+            message, pair, matrix, reason = payload
+            raise InvalidInput(message, pair=pair, matrix=matrix, reason=reason)
         if status == "timeout":
             raise WorkerStopped(payload)
         if status == "died":

@@ -1,7 +1,7 @@
 """Many bodies in a real browser: frame time while orbiting, "Open pair", screenshots.
 
 Random ellipsoids (``bench.bodies_data.random_bodies``, packing fraction 0.3, seed 1) are shown
-with ``python -m app serve --bodies`` 's view (:mod:`app.scene.bodies_view`) in headless Debian
+with ``python -m app serve --bodies`` 's view (:mod:`app.scene.bodies.bodies_view`) in headless Debian
 Chromium (software WebGL, SwiftShader), 1200 x 800 pixels:
 
 * **first picture**: server and browser start until every body is drawn (points, and the
@@ -16,7 +16,7 @@ Chromium (software WebGL, SwiftShader), 1200 x 800 pixels:
 * **screenshot --bodies**: the whole command (read the file, search the contacts, browser,
   picture).
 
-Moving bodies (``serve --bodies START --to END``, :mod:`app.scene.sweep_view`; random moving,
+Moving bodies (``serve --bodies START --to END``, :mod:`app.scene.bodies.sweep_view`; random moving,
 turning ellipsoids ``bench.sweep_data.moving_bodies``, seed 1):
 
 * **model**: both files read and swept (forward, and backward for the last contacts);
@@ -83,8 +83,8 @@ def _orbit(page: Any, steps: int) -> list[float]:
 
 def measure(n: int, folder: Path, *, steps: int = 8) -> dict[str, Any]:
     """All the measurements for n random bodies (one server and one browser)."""
-    from app.scene.bodies_view import load_model
-    from app.scene.state import SceneConfig
+    from app.scene.bodies.bodies_view import load_model
+    from app.scene.common.state import SceneConfig
     from app.screenshot import _DRAWN_JS, HeadlessScene
     from core import Relation
 
@@ -180,8 +180,8 @@ def _write_moving(n: int, folder: Path) -> tuple[Path, Path]:
 
 def measure_moving(n: int, folder: Path, *, times: tuple[float, ...] = (0.25, 0.5, 0.75)) -> dict[str, Any]:
     """Moving bodies: a t-step's server time, the frame that shows it, the certified colours."""
-    from app.scene.state import SceneConfig
-    from app.scene.sweep_model import SweepModel
+    from app.scene.bodies.sweep_model import SweepModel
+    from app.scene.common.state import SceneConfig
     from app.screenshot import HeadlessScene
     from app.sweep_cli import read_moving_bodies
 

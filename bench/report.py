@@ -321,8 +321,8 @@ def profile_t_step(n: int = 200) -> str:
 
     import viser
 
-    from app.scene import session as S
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair import session as S
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
@@ -487,7 +487,7 @@ def write_report(st: dict[str, Any], mv: dict[str, Any] | None, sc: dict[str, An
         L.append(moving.format_degree(mv["degree"]) + "\n")
     if sc:
         L.append("## Scene: server cost of one update\n")
-        L.append("Measured without a browser on a private viser server (compute + queueing the websocket messages; `app.scene.session.Session`). "
+        L.append("Measured without a browser on a private viser server (compute + queueing the websocket messages; `app.scene.pair.session.Session`). "
                  "'slider' = `set_t(t, defer_panels=True)` (what the slider and playback run: shapes and colours at once, panels "
                  "coalesced to 20 Hz, their messages counted); 'jump' = `set_t(t)` (what an event button or a typed t runs: the readout, "
                  "intervals bar and t box at once; the plot cursor follows within 50 ms in every mode). 'analyses run' = calls of "

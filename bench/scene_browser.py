@@ -47,7 +47,7 @@ def run_scene_browser(*, quick: bool = False, rounds: int | None = None) -> dict
     Each preset is picked ``rounds`` times (default 3, quick 1), in turns; its row holds the
     worst ("ms", "panel_ms", "server_ms") and the median ("ms_median") of its picks.
     """
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
     from app.screenshot import _DRAWN_JS, HeadlessScene, Shot, screenshots
 
     presets = PRESETS[:4] if quick else PRESETS

@@ -1,11 +1,11 @@
 """Server cost of the scene's hot paths: one drag update and one t-step (no browser).
 
-Uses the scene helper's entry points (``app.scene.session``): :meth:`Session.apply_drag` is what a
+Uses the scene helper's entry points (``app.scene.pair.session``): :meth:`Session.apply_drag` is what a
 gizmo drag event runs, :meth:`Session.set_t` what one slider step runs (``defer_panels=True``:
 panels coalesced to 20 Hz, as the slider and playback do; ``False``: a jump, as an event button or
 a typed t runs it: readout, intervals bar and t box at once, the plot cursor within 50 ms). A private ``viser.ViserServer`` on a free loopback port holds the shared scene; the time is
 the server's compute plus queueing the websocket messages (counted with ``count_messages``). The
-cross-check :func:`app.scene.costs.measure_update_costs` (the scene helper's own timer) runs too.
+cross-check :func:`app.scene.pair.costs.measure_update_costs` (the scene helper's own timer) runs too.
 
 Shows that work is skipped: the number of exact analyses (``core.moving.analysis.analyse``) and static
 explanations (``explain``) run during 200 t-steps (expected: 0 analyses; t only moves shapes and
@@ -90,9 +90,9 @@ def run_scene_cost(
 
     import core.moving.analysis as cp
     from app.scene import measure_update_costs
-    from app.scene import picture as P
-    from app.scene import session as S
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair import picture as P
+    from app.scene.pair import session as S
 
     repeats = repeats or (50 if quick else 300)
     rounds = rounds or (1 if quick else 3)
@@ -182,8 +182,8 @@ def roots_update_ms(presets: tuple[str, ...], repeats: int = 60) -> dict[str, fl
     """
     import viser
 
-    from app.scene import session as S
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair import session as S
 
     out: dict[str, float] = {}
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
@@ -224,8 +224,8 @@ def profile_drag(top: int = 12) -> str:
 
     import viser
 
-    from app.scene import session as S
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair import session as S
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
@@ -263,7 +263,7 @@ def main() -> None:
     out = run_scene_cost(quick=a.quick, roots=True)
     print(format_scene(out))
     print("\nroots of P(T), one coalesced panel update (off the hot path), median ms:", out["roots_update_ms"])
-    print("\ncross-check (app.scene.costs.measure_update_costs):", out["cross_check"])
+    print("\ncross-check (app.scene.pair.costs.measure_update_costs):", out["cross_check"])
     if a.profile:
         print(profile_drag())
 

@@ -29,7 +29,7 @@ SCROLL_TO = """(text) => {
 
 def new_views(hs: object) -> None:
     """The views of issue 22: the roots of P(T) with the root locus, and fields that hold what is certified."""
-    from app.scene.links import link_path
+    from app.scene.common.links import link_path
 
     h: Any = hs
     # the paper's picture: Example 29 at its first tangency, the roots of P(T) and the locus
@@ -60,7 +60,7 @@ def new_views(hs: object) -> None:
 
 def main() -> None:
     """Write every image (README: docs/img/; landing page: static/img/, static/scene/)."""
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
     from app.screenshot import HeadlessScene
 
     t0 = time.perf_counter()
@@ -108,7 +108,7 @@ def main() -> None:
 
 if __name__ == "__main__":
     if sys.argv[1:] == ["--new"]:  # only the views of issue 22
-        from app.scene.state import SceneConfig
+        from app.scene.common.state import SceneConfig
         from app.screenshot import HeadlessScene
 
         with HeadlessScene(SceneConfig(preset=None), width=1400, height=1300) as scene:

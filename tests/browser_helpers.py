@@ -224,7 +224,7 @@ def bodies_page(model: Any) -> Iterator[tuple[Any, Any]]:
     """A scene server on ``model`` (many bodies) and one headless tab on it, for a module fixture."""
     if not os.path.exists("/usr/bin/chromium"):
         pytest.skip("needs Debian chromium at /usr/bin/chromium")
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
     from app.screenshot import HeadlessScene
 
     with HeadlessScene(SceneConfig(), bodies=model, width=1000, height=720, timeout=120, dpr=TEST_DPR, settle_ms=TEST_SETTLE_MS,

@@ -62,7 +62,7 @@ class _SharedScene:
         if self.scene is None:
             from browser_helpers import CHROMIUM_OF_THIS_PROCESS
 
-            from app.scene.state import SceneConfig
+            from app.scene.common.state import SceneConfig
             from app.screenshot import HeadlessScene
 
             scene = HeadlessScene(SceneConfig.from_dict({"preset": "example-29", "t": 0.3}), width=1000, height=720,

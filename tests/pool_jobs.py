@@ -26,7 +26,7 @@ def log(path: str, name: str) -> str:
 def budget_checks_after_a_slow_start(start_s: float, budget_s: float) -> None:
     """A job whose start takes ``start_s`` (as on a loaded machine), then checks a budget of
     ``budget_s`` every 10 ms until it is spent: it stops with the budget's message, saying where."""
-    from app.api.budget import Budget, BudgetExceeded
+    from app.jobs import Budget, BudgetExceeded
     from app.workers import WorkerTimeout
 
     time.sleep(start_s)

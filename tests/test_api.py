@@ -29,6 +29,7 @@ from app.workers import (
     WorkerPool,
     WorkerTimeout,
 )
+from core import InvalidInput
 from core.formulae.decision import RULES
 
 
@@ -131,6 +132,26 @@ def test_classify_batch_error_names_the_pair(client):
     assert r.status_code == 422
     assert r.json()["detail"].startswith("pairs[1]: b is not symmetric: entry (0,2) = 1 but (2,0) = 0, a difference of 1 ")
     assert r.json()["detail"].endswith("pass (A + A.T) / 2")
+    assert (r.json()["pair"], r.json()["matrix"]) == (1, "b")
+
+
+def test_an_invalid_pair_is_validated_once_by_core_and_the_first_in_the_request_is_named(client, monkeypatch):
+    """Core's on_invalid="raise" names the bad matrix; the API renames it to the request's names and
+    does not validate again. Pairs of both sizes: the first bad one in request order is the answer."""
+    import app.api.convert as convert
+
+    calls = []
+    monkeypatch.setattr(convert, "validate_quadric", lambda *a, **k: calls.append(a))
+    not_an_ellipsoid = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 0], [0, 0, 0, -1]]
+    not_an_ellipse = [[1, 0, 0], [0, -1, 0], [0, 0, -1]]
+    pairs = [{"a": circle(0), "b": circle(3)}, {"a": SPHERE, "b": not_an_ellipsoid}, {"a": not_an_ellipse, "b": circle(0)}]
+    r = client.post("/api/classify", json={"pairs": pairs})
+    assert r.status_code == 422 and (r.json()["pair"], r.json()["matrix"]) == (1, "b"), r.json()
+    assert r.json()["detail"].startswith("pairs[1]: b is not an ellipsoid"), r.json()
+    r = client.post("/api/classify", json={"pairs": pairs[:1] + pairs[2:] + pairs[1:2]})
+    assert r.status_code == 422 and (r.json()["pair"], r.json()["matrix"]) == (1, "a"), r.json()
+    assert r.json()["detail"].startswith("pairs[1]: a is not an ellipse"), r.json()
+    assert calls == []  # validated once, by core
 
 
 def test_batch_limit_from_overridden_settings():
@@ -220,7 +241,7 @@ def test_explain_tangent_spheres(client):
 
 def test_explain_rejects_batch_and_bad_matrix(client):
     r = client.post("/api/explain", json={"a": UNIT, "b": [[1, 0, 0], [0, -1, 0], [0, 0, -1]]})
-    assert (r.status_code, r.json()) == (422, {"detail": "b is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)"})
+    assert (r.status_code, r.json()) == (422, {"detail": "b is not an ellipse: its quadratic part is indefinite or semidefinite (a hyperbola, parabola or degenerate conic)", "matrix": "b"})
     r = client.post("/api/explain", json={"pairs": [{"a": UNIT, "b": UNIT_AT_2}]})
     assert r.status_code == 422
     assert [e["loc"] for e in r.json()["detail"]] == [["body", "a"], ["body", "b"], ["body", "pairs"]]
@@ -251,8 +272,10 @@ def test_explain_rejects_batch_and_bad_matrix(client):
     ],
 )
 def test_core_rejections_are_422_with_message(client, b, detail):
+    """core.InvalidInput answered once, 422: the message, and the matrix it names (the request's "b")."""
     r = client.post("/api/classify", json={"a": UNIT, "b": b})
-    assert (r.status_code, r.json()) == (422, {"detail": detail})
+    named = {"matrix": "b"} if detail.startswith("b") else {}  # "a is 3x3 and b is 4x4" is about the pair
+    assert (r.status_code, r.json()) == (422, {"detail": detail, **named})
 
 
 def err(loc, msg, type_="value_error"):
@@ -275,7 +298,7 @@ def err(loc, msg, type_="value_error"):
          [err(["body", "pair", "a", "matrix", 0], "List should have at least 3 items after validation, not 2", "too_short"),
           err(["body", "pair", "a", "matrix", 1], "List should have at least 3 items after validation, not 2", "too_short")]),
         ('{"a": [[1,0,0],[0,1,0],[0,0,-1]], "b": [[1,0,0],[0,1,0],[0,0,-1]], "method": "fast"}',
-         [err(["body", "pair", "method"], "Input should be 'adaptive', 'exact' or 'float'", "literal_error")]),
+         [err(["body", "pair", "method"], "Input should be 'adaptive', 'float' or 'exact'", "literal_error")]),
         ('{"a": [[1,0,0],[0,1,0],[0,0,-1]]}', [err(["body", "pair", "b"], "Field required", "missing")]),
         ('{"pairs": []}', [err(["body", "batch", "pairs"], "List should have at least 1 item after validation, not 0", "too_short")]),
         ('[1, 2]', [err(["body", "pair"], "Input should be a valid dictionary or object to extract fields from", "model_attributes_type")]),
@@ -308,7 +331,7 @@ def test_body_without_json_content_type_is_415(client):
     r = client.post("/api/analyse", content=text)
     assert (r.status_code, r.json()) == (415, {"detail": "send the body as JSON with the header 'content-type: application/json' (no content-type header)"})
     r = client.post("/api/explain", content=text, headers={"content-type": "application/json; charset=utf-8"})
-    assert r.status_code == 200
+    assert (r.status_code, r.json()["relation"]) == (200, "tangent")  # read as JSON: the unit circles 2 apart
 
 
 def test_huge_integer_and_long_string(client):
@@ -784,7 +807,7 @@ def test_only_ascii_digits_are_numbers_at_the_api(client, text):
 
 def test_exponent_limit_at_the_edge_states_the_real_limit(client):
     ok = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, "-1e1000"]]})
-    assert ok.status_code == 200
+    assert (ok.status_code, ok.json()["relation"]) == (200, "overlap")  # a disc of radius 10^500 around the unit circle
     r = client.post("/api/classify", json={"a": UNIT, "b": [[1, 0, 0], [0, 1, 0], [0, 0, "-1e1001"]]})
     assert r.status_code == 422
     assert r.json()["detail"][0]["msg"] == "Value error, exponent out of range in '-1e1001': |e| <= 1000 after 'e'"
@@ -1023,8 +1046,6 @@ def test_pair_batcher_gives_each_request_its_own_answer():
     """Single pairs classified together; a bad pair among them gets its 422, the others their relation."""
     import asyncio
 
-    from fastapi import HTTPException
-
     from app.api.batching import PairBatcher
     from app.api.schemas import PairItem
 
@@ -1042,8 +1063,8 @@ def test_pair_batcher_gives_each_request_its_own_answer():
         batcher.stop()
     for k, answer in enumerate(answers):
         if k % 4 == 1:
-            assert isinstance(answer, HTTPException) and answer.status_code == 422
-            assert answer.detail.startswith("b is not an ellipse: "), answer.detail
+            assert isinstance(answer, InvalidInput) and answer.matrix == "b", answer
+            assert str(answer).startswith("b is not an ellipse: "), answer
         else:
             assert answer.relation == ["tangent", None, "separate", "overlap"][k % 4], answer
 

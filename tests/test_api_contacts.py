@@ -104,7 +104,7 @@ def test_body_count_and_size_limits():
         assert (r.status_code, r.json()) == (413, {"detail": "request body too large: the limit is 2000 bytes"})
         # the other routes keep the general limit
         r = c.post("/api/classify", json={"a": [[1, 0, 0], [0, 1, 0], [0, 0, -1]], "b": [[1, 0, -2], [0, 1, 0], [-2, 0, 3]]})
-        assert r.status_code == 200
+        assert (r.status_code, r.json()["relation"]) == (200, "tangent")
 
 
 def test_the_default_limit_takes_ten_thousand_bodies(client):

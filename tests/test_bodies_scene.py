@@ -26,11 +26,11 @@ from browser_helpers import set_field, text_shown, until  # noqa: E402
 from test_browser_scene import choose  # noqa: E402
 
 from app.bodyfiles import BodySet, read_bodies, write_bodies_csv  # noqa: E402
-from app.scene.bodies import PAGE_SIZE, BodiesModel  # noqa: E402
-from app.scene.bodies_layers import FINE_NODE, NETWORK_NODE, BodyLayers, points_node  # noqa: E402
-from app.scene.bodies_lod import ViewPose, choose_detail  # noqa: E402
-from app.scene.bodies_view import NO_PAIRS, BodiesView, load_model  # noqa: E402
-from app.scene.shapes import NEUTRAL, RELATION_COLORS  # noqa: E402
+from app.scene.bodies.bodies_layers import FINE_NODE, NETWORK_NODE, BodyLayers, points_node  # noqa: E402
+from app.scene.bodies.bodies_lod import ViewPose, choose_detail  # noqa: E402
+from app.scene.bodies.bodies_view import NO_PAIRS, BodiesView, load_model  # noqa: E402
+from app.scene.bodies.model import PAGE_SIZE, BodiesModel  # noqa: E402
+from app.scene.common.shapes import NEUTRAL, RELATION_COLORS  # noqa: E402
 from bench.bodies_data import demo_bodies, random_bodies  # noqa: E402
 from core import Relation, bodies_from_axes, classify, contacts  # noqa: E402
 
@@ -298,8 +298,8 @@ def test_a_tabs_file_is_searched_in_a_budgeted_worker_never_in_the_server(server
     searches it, under a pair limit (refused before any pair is built) and a time budget."""
     import os
 
-    from app.scene import bodies as bodies_mod
-    from app.scene.analysis import AnalysisCache
+    from app.scene.bodies import model as bodies_mod
+    from app.scene.pair.analysis import AnalysisCache
 
     cache = AnalysisCache(processes=True)
     try:
@@ -318,9 +318,9 @@ def test_a_tabs_file_is_searched_in_a_budgeted_worker_never_in_the_server(server
         c = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
         lattice = tmp_path / "lattice.csv"
         write_bodies_csv(lattice, c, np.ones_like(c), np.tile([1.0, 0, 0, 0], (len(c), 1)))
-        monkeypatch.setattr("app.scene.bodies_view.UPLOAD_SECONDS", 0.3)
+        monkeypatch.setattr("app.scene.bodies.bodies_view.UPLOAD_SECONDS", 0.3)
         assert view.load_bytes("lattice.csv", lattice.read_bytes()) == "finding the contacts of lattice.csv took over 0.3 s and was stopped"
-        monkeypatch.setattr("app.scene.bodies_view.UPLOAD_SECONDS", 60.0)
+        monkeypatch.setattr("app.scene.bodies.bodies_view.UPLOAD_SECONDS", 60.0)
         assert view.load_bytes("lattice.csv", lattice.read_bytes()) is None and searched_in == []
         assert len(view.model.result) == 3 * 16 * 16 * 15 and set(view.model.result.relation.tolist()) == {Relation.TANGENT}
     finally:
@@ -332,7 +332,7 @@ def test_a_typed_box_is_budgeted_for_a_tabs_file_not_for_the_servers(server, tmp
     bodies a tab uploaded, in the budgeted worker (AnalysisCache.run)."""
     from types import SimpleNamespace
 
-    from app.scene.analysis import AnalysisCache
+    from app.scene.pair.analysis import AnalysisCache
 
     b = random_bodies(200, dim=2, seed=3)
     path = tmp_path / "up.csv"

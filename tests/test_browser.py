@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from browser_helpers import drawn_faces
 
-from app.scene.links import link_path
-from app.scene.state import SceneConfig
+from app.scene.common.links import link_path
+from app.scene.common.state import SceneConfig
 from conftest import TEST_DPR, TEST_SETTLE_MS, TEST_SPHERE_SUBDIVISIONS
 
 pytestmark = [
@@ -127,7 +127,7 @@ def test_two_tabs_have_their_own_shapes(headless):
 
 
 def _preset_available(name: str) -> bool:
-    from app.scene.motion import list_presets
+    from app.scene.pair.motion import list_presets
 
     return name in list_presets()
 

@@ -22,7 +22,7 @@ UPLOT_TITLES_JS = """() => Object.values(window.__viserTestpoints?.uplots ?? {})
 
 def lesson_session(hs, k: int):
     """The tab's session once it shows step ``k`` (a step starts the tab's session again)."""
-    from app.scene.lesson_view import view_of
+    from app.scene.pair.lesson_view import view_of
 
     found = []
 

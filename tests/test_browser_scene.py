@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import time
 
 import numpy as np
 import pytest
 from browser_helpers import set_field, text_shown, tick, until
 
-from app.scene.links import link_path
+from app.scene.common.links import link_path
 
 pytestmark = [
     pytest.mark.browser,
@@ -125,9 +124,9 @@ def assert_pose(hs, name: str, position, scale=None) -> None:
 
 # ---------------------------------------------------------------------------- defect 1
 def test_a_new_tab_runs_the_client_from_the_browser_cache(hs, monkeypatch):
-    """The client's code and style are files the browser keeps (app/scene/page.py): a new tab in
+    """The client's code and style are files the browser keeps (app/scene/common/page.py): a new tab in
     the same browser asks the server for neither, and runs the code from the file, not inline."""
-    import app.scene.links as links
+    import app.scene.common.links as links
 
     load_link(hs, {"preset": "example-29", "t": 0.3})  # the browser has fetched the files at least once
     asked: list[str] = []
@@ -183,19 +182,20 @@ def test_open_starts_the_tab_as_its_link_does_without_a_page_load(hs, monkeypatc
 
 
 def test_the_settle_window_is_what_the_page_address_says(hs):
-    """``renderSettleMs`` (app/scene/page.py): the test tabs draw one frame per change (0 ms), and
+    """``renderSettleMs`` (app/scene/common/page.py): the test tabs draw one frame per change (0 ms), and
     the client reads the flag as documented: a number in 0..10000, else viser's own 250 ms."""
-    from app.scene.page import SETTLE_FLAG, settle_flag_supported
+    from app.scene.common.page import SETTLE_FLAG, settle_flag_supported, settle_reader_js
     from conftest import TEST_SETTLE_MS
 
     assert settle_flag_supported()
     load_link(hs, {"preset": "example-29", "t": 0.3})
     assert SETTLE_FLAG + "=" in hs.page.url
     assert hs.page.evaluate("() => window.__renderSettleMs") == TEST_SETTLE_MS
-    # the flag's reader as the client runs it, on other addresses (no page load each)
+    # the flag's reader as the client runs it (in the served code, in place of viser's 250 ms), on
+    # other addresses (no page load each): found as the text the app put there, not by viser's minified names
     js = hs.page.evaluate("() => Array.from(document.scripts).map(e => e.src).find(u => u.includes('/_client/'))")
-    reader = re.search(r"\(\(\)=>\{const v=new URLSearchParams\(location\.search\).*?\}\)\(\)", hs.page.evaluate(
-        "async (u) => (await fetch(u)).text()", js)).group(0)
+    reader = settle_reader_js("250")
+    assert hs.page.evaluate("async (u) => (await fetch(u)).text()", js).count(reader) == 1
     for query, want in [("", 250), (f"?{SETTLE_FLAG}=0", 0), (f"?a=1&{SETTLE_FLAG}=40", 40), (f"?{SETTLE_FLAG}=10000", 10000),
                         (f"?{SETTLE_FLAG}=", 250), (f"?{SETTLE_FLAG}=abc", 250), (f"?{SETTLE_FLAG}=-1", 250),
                         (f"?{SETTLE_FLAG}=1e9", 250), (f"?{SETTLE_FLAG}=NaN", 250)]:

@@ -12,8 +12,8 @@ import pytest
 
 viser = pytest.importorskip("viser")
 
-from app.scene.session import Session  # noqa: E402
-from app.scene.state import SceneConfig  # noqa: E402
+from app.scene.common.state import SceneConfig  # noqa: E402
+from app.scene.pair.session import Session  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -174,7 +174,7 @@ def test_undo_touch_and_a_hundred_steps(server):
 def test_touch_then_static_keeps_the_exact_tangency(server):
     """Unit circles at (0, 0) and (3, 0): Touch slides B to (2, 0) exactly (t = 2/3); leaving the motion
     keeps B at exactly (2, 0), so the circles stay tangent (|c_A c_B| = 2 = 1 + 1)."""
-    from app.scene.gui import STATIC
+    from app.scene.pair.gui import STATIC
 
     s = Session(server, unit_circles("3"))
     s.motion_ctl.on_touch()
@@ -208,7 +208,7 @@ def test_event_then_edit_keeps_exact_shapes_with_a_rational_event(server):
 def test_irrational_event_falls_back_to_the_marked_decimals(server):
     """Unit circles at (0, 0) and (t, t): tangent at t = sqrt(2) (|c| = t sqrt 2 = 2), an irrational
     time: leaving the motion gives the 10-digit decimals (the fields read rationals only), marked as such."""
-    from app.scene.gui import STATIC
+    from app.scene.pair.gui import STATIC
 
     s = Session(server, SceneConfig(dim=2, preset=None))
     s.load_untrusted({"dim": 2, "preset": None, "event": 1, "motion": {
@@ -276,7 +276,7 @@ def test_paper_lesson_static_steps_match_hand_computed_p_of_t():
     on matrices written by hand (x²/4 + y² = 1 and unit circles / the unit sphere)."""
     from flint import fmpq
 
-    from app.scene.lesson import load_lesson
+    from app.scene.common.lesson import load_lesson
 
     lesson = load_lesson("paper")
     assert len(lesson.steps) == 11
@@ -309,8 +309,8 @@ def test_paper_lesson_static_steps_match_hand_computed_p_of_t():
 
 @pytest.mark.parametrize("k", sorted(PAPER_RELATIONS))
 def test_paper_lesson_step_shows_the_relation_it_teaches(server, k):
-    from app.scene.lesson import load_lesson
-    from app.scene.texts import read_time
+    from app.scene.common.lesson import load_lesson
+    from app.scene.common.texts import read_time
 
     step = load_lesson("paper").step(k)
     s = Session(server, SceneConfig(), defer_load=True)
@@ -325,7 +325,7 @@ def test_paper_lesson_step_shows_the_relation_it_teaches(server, k):
 
 
 def test_lesson_files_are_checked_with_one_line_errors(tmp_path):
-    from app.scene.lesson import lesson_query, load_lesson
+    from app.scene.common.lesson import lesson_query, load_lesson
 
     bad = tmp_path / "bad.json"
     bad.write_text('{"title": "x", "steps": [{"title": "a", "scene": {"dim": 4}}]}')
@@ -350,8 +350,8 @@ def test_lesson_files_are_checked_with_one_line_errors(tmp_path):
 
 
 def test_lesson_export_page_is_offline_and_has_every_step():
-    from app.scene.lesson import load_lesson
-    from app.scene.lesson_export import lesson_html
+    from app.lesson_export import lesson_html
+    from app.scene.common.lesson import load_lesson
 
     lesson = load_lesson("paper")
     page = lesson_html(lesson, {1: b"\x89PNG fake"})

@@ -256,8 +256,8 @@ def test_serve_hands_its_scene_and_api_options_on(monkeypatch, capsys):
 
 def test_export_hands_its_sphere_subdivisions_on(monkeypatch, tmp_path, capsys):
     """``export --sphere-subdivisions K`` reaches the replay (stubbed here); the default is the scene's."""
-    import app.scene.replay
-    from app.scene.mesh_detail import SPHERE_SUBDIVISIONS
+    import app.scene.pair.replay
+    from app.scene.common.mesh_detail import SPHERE_SUBDIVISIONS
 
     seen: list[int] = []
 
@@ -265,7 +265,7 @@ def test_export_hands_its_sphere_subdivisions_on(monkeypatch, tmp_path, capsys):
         seen.append(kw["sphere_subdivisions"])
         return "<!doctype html>"
 
-    monkeypatch.setattr(app.scene.replay, "replay_html", replay_html)
+    monkeypatch.setattr(app.scene.pair.replay, "replay_html", replay_html)
     assert main(["export", "--preset", "example-29", "--sphere-subdivisions", "2", "--out", str(tmp_path / "a.html")]) == 0
     assert main(["export", "--preset", "example-29", "--out", str(tmp_path / "b.html")]) == 0
     assert seen == [2, SPHERE_SUBDIVISIONS]

@@ -75,10 +75,20 @@ def test_classify_on_dask_names_the_pair_in_the_whole_batch(client):
 
 
 def test_kernels_are_loaded_once_per_worker_by_the_plugin(client):
+    """Each worker has the kernels this process has (the same install): loaded, the same variant.
+
+    Was: "no C compiler" passed too, so the test passed with no kernels anywhere."""
+    from core.fixed import compiled
+
+    here = compiled.status()
+    if compiled.variant() is None:
+        pytest.skip(f"this install has no compiled kernels for the workers to load: {here}")
     client.register_plugin(WarmUp())
     status = client.run(lambda: __import__("core.fixed.compiled", fromlist=["status"]).status())
+    variant = client.run(lambda: __import__("core.fixed.compiled", fromlist=["variant"]).variant())
     assert len(status) == 2
-    assert all(s.startswith(("compiled kernels loaded", "no C compiler")) for s in status.values())
+    assert set(status.values()) == {here} and here.startswith("compiled kernels loaded"), status
+    assert len(set(variant.values())) == 1 and set(variant.values()) <= set(compiled.variants()), variant
 
 
 @pytest.mark.parametrize("periodic", [False, True])

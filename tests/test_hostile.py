@@ -386,9 +386,9 @@ def test_workers_die_with_a_killed_server():
 @pytest.fixture(scope="module")
 def scene_session():
     viser = pytest.importorskip("viser")
-    from app.scene.analysis import AnalysisCache
-    from app.scene.session import Session
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair.analysis import AnalysisCache
+    from app.scene.pair.session import Session
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     cache = AnalysisCache(processes=True)

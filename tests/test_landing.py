@@ -198,7 +198,7 @@ def test_dockerfile_serves_scene_and_api_as_documented():
 def test_preset_cards_open_the_preset_in_the_scene(tmp_path):
     """Issue 22.4: each preset card links to the scene on that preset (a /c/<configuration>/ link
     whose configuration is the preset), when the scene runs; API only: no such link."""
-    from app.scene.links import decode_config
+    from app.scene.common.links import decode_config
 
     static = tmp_path / "static"
     shutil.copytree(STATIC, static, ignore=shutil.ignore_patterns("img"))

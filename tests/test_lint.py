@@ -15,9 +15,12 @@ ROOT = Path(__file__).resolve().parent.parent
 RUFF_PATHS = ["core", "app", "tests", "bench"]
 """Ruff-clean (pyproject's [tool.ruff] config)."""
 MYPY_PATHS = ["core", "app"]
-"""mypy-clean, in one run; core under the flags of ``mypy --strict`` (pyproject's override for
-core.*, plus the global ones on the command line): the library is a typed package (core/py.typed).
-One run analyses core once (two runs, default and --strict, took 25 + 13 s of the suite)."""
+"""mypy-clean, in one run, both under the flags of ``mypy --strict`` (pyproject's override for
+core.* and app.*, plus the global ones on the command line): the library is a typed package
+(core/py.typed), and the app is held to the same bar. One run analyses core once (two runs,
+default and --strict, took 25 + 13 s of the suite)."""
+STRICT_PACKAGES = ("core", "app")
+"""The packages whose override must hold every per-module flag of --strict."""
 MYPY_GLOBAL_STRICT = ["--warn-redundant-casts", "--warn-unused-configs"]
 """The flags of --strict that mypy takes only for a whole run."""
 MYPY_CACHE = ROOT / ".mypy_cache"
@@ -33,7 +36,7 @@ def test_ruff_is_clean():
     assert res.returncode == 0, res.stdout[-4000:] + res.stderr[-2000:]
 
 
-def test_mypy_is_clean_and_core_is_strict():
+def test_mypy_is_clean_and_core_and_app_are_strict():
     pytest.importorskip("mypy", reason="mypy is not installed (pip install -e '.[test]')")
     res = _run([sys.executable, "-m", "mypy", "--cache-dir", MYPY_CACHE, *MYPY_GLOBAL_STRICT, *MYPY_PATHS])
     assert res.returncode == 0, res.stdout[-4000:] + res.stderr[-2000:]
@@ -51,18 +54,20 @@ def _strict_flags() -> list[str]:
     return [f.strip() for f in text.split(",") if f.strip()]
 
 
-def test_core_override_is_every_strict_flag():
-    """pyproject's [[tool.mypy.overrides]] for core holds every per-module flag of --strict (and the
-    suite passes the global ones), so the one run above checks core as ``mypy --strict core`` does."""
+@pytest.mark.parametrize("package", STRICT_PACKAGES)
+def test_override_is_every_strict_flag(package):
+    """pyproject's [[tool.mypy.overrides]] for core and app holds every per-module flag of --strict (and
+    the suite passes the global ones), so the one run above checks them as ``mypy --strict core app`` does."""
     pytest.importorskip("mypy", reason="mypy is not installed (pip install -e '.[test]')")
     import tomllib
 
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["mypy"]
-    core = next(o for o in config["overrides"] if "core.*" in o["module"])
+    override = next((o for o in config["overrides"] if f"{package}.*" in o["module"] and package in o["module"]), None)
+    assert override is not None, f"pyproject.toml: no [[tool.mypy.overrides]] for {package} and {package}.*"
     flags = _strict_flags()
     assert len(flags) >= 10 and "--disallow-untyped-defs" in flags, flags
-    missing = [f for f in flags if f not in MYPY_GLOBAL_STRICT and core.get(f[2:].replace("-", "_")) is not True]
-    assert not missing, f"add to the core override in pyproject.toml: {missing}"
+    missing = [f for f in flags if f not in MYPY_GLOBAL_STRICT and override.get(f[2:].replace("-", "_")) is not True]
+    assert not missing, f"add to the {package} override in pyproject.toml: {missing}"
 
 
 def test_core_is_a_typed_package():

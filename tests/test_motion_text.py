@@ -21,8 +21,8 @@ from flint import fmpq, fmpq_poly
 import core.moving.motions as motions
 from app.api import ApiSettings, create_api
 from app.jobs import analyse_job
-from app.scene.motion import MotionError
-from app.scene.motion import read_interval as scene_read_interval
+from app.scene.pair.motion import MotionError
+from app.scene.pair.motion import read_interval as scene_read_interval
 from core import analyse
 from core.moving.motions import ExpressionError, read_interval, read_motion
 from core.shapes.limits import SERVER

@@ -1,4 +1,4 @@
-"""The scene's Origin rule (app.scene.origin): which websocket handshakes may open a session.
+"""The scene's Origin rule (app.scene.common.origin): which websocket handshakes may open a session.
 
 The live handshake against the running server is in tests/test_hostile.py; here the rule itself,
 case by case, and the guard that refuses to start a scene without the check.
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from app.scene.origin import OriginPolicy, normalise_origin, start_viser
+from app.scene.common.origin import OriginPolicy, normalise_origin, start_viser
 
 
 @pytest.mark.parametrize(
@@ -103,7 +103,7 @@ def test_stop_does_not_wait_for_a_connection_that_never_sent_a_request():
 
     from browser_helpers import until
 
-    from app.scene import origin
+    from app.scene.common import origin
     from app.scene.server import start_scene
 
     scene = start_scene("127.0.0.1", 0, processes=False)

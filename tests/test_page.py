@@ -1,7 +1,7 @@
 """The scene's page over HTTP: a small page, the client's code and style as cacheable files.
 
 viser ships its client inside index.html (compressed, decoded in the browser on every load);
-app.scene.page serves the loader alone and the code and style as files named by their hash.
+app.scene.common.page serves the loader alone and the code and style as files named by their hash.
 What a browser does with them is checked in tests/test_browser_scene.py; here the bytes: the
 files are exactly what viser's page holds, named by their content, cached for good, and the
 page of every mode names them by a path that reaches them.
@@ -18,9 +18,9 @@ import pytest
 import viser
 import zstandard
 
-from app.scene import page
+from app.scene.common import page
+from app.scene.common.state import SceneConfig
 from app.scene.server import start_scene
-from app.scene.state import SceneConfig
 
 VISER_PAGE = (Path(viser.__file__).parent / "client" / "build" / "index.html").read_text(
     encoding="utf-8"

@@ -328,7 +328,7 @@ def test_api_takes_a_tilted_box():
 
 def test_scene_model_in_a_tilted_box_shows_the_image_at_its_lattice_vector():
     from app.readers.bodyset import from_parameters
-    from app.scene.bodies import BodiesModel
+    from app.scene.bodies.model import BodiesModel
 
     box = (8.0, 8.0, 8.0, 0.5, -0.25, 0.375)
     v = lattice_shifts(read_box(box, 3), np.array([[1, 1, 1]]))[0]
@@ -344,8 +344,8 @@ def test_scene_model_in_a_tilted_box_shows_the_image_at_its_lattice_vector():
 def test_scene_draws_the_tilted_cell_and_takes_a_typed_tilted_box(tmp_path):
     viser = pytest.importorskip("viser")
     from app.readers.bodyset import from_parameters
-    from app.scene.bodies import BodiesModel, parse_box
-    from app.scene.bodies_view import BodiesView
+    from app.scene.bodies.bodies_view import BodiesView
+    from app.scene.bodies.model import BodiesModel, parse_box
 
     box = (8.0, 8.0, 8.0, 0.5, -0.25, 0.375)
     c = np.array([[0.0, 0.0, 0.0], [2.0, 1.0, 0.5]])

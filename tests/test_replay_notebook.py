@@ -45,8 +45,8 @@ def recorded_messages(html: str) -> list[dict]:
 
 
 def test_replay_records_every_relation_and_each_event_exactly():
-    from app.scene.replay import replay_html
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair.replay import replay_html
 
     msgs = recorded_messages(replay_html(SceneConfig(preset="example-29"), seconds=4, frames=80))
     texts = [str(m) for _, m in msgs]
@@ -65,8 +65,8 @@ def test_replay_plays_in_a_browser_without_a_server(tmp_path):
     """Opened from disk: the shapes take every relation's colour in turn (tangent at the events)."""
     from browser_helpers import connected, drawn_faces
 
-    from app.scene.replay import replay_html
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair.replay import replay_html
     from conftest import TEST_SPHERE_SUBDIVISIONS
 
     path = tmp_path / "ex29.html"

@@ -6,6 +6,7 @@ Golden relations are hand-checkable: unit spheres/circles whose centres are 2 ap
 
 from __future__ import annotations
 
+import gc
 import time
 from fractions import Fraction
 
@@ -15,13 +16,13 @@ from oracle import oracle_relation
 
 viser = pytest.importorskip("viser")
 
-from app.scene.costs import measure_update_costs  # noqa: E402
-from app.scene.panels import intervals_bar_html, readout_markdown, sign_table_markdown  # noqa: E402
-from app.scene.plots import compress  # noqa: E402
-from app.scene.session import Session  # noqa: E402
-from app.scene.shapes import DISC_SEGMENTS, RELATION_HEX, rgb, unit_disc, unit_sphere  # noqa: E402
-from app.scene.state import SceneConfig, ShapeState  # noqa: E402
-from app.scene.texts import parse_vector  # noqa: E402
+from app.scene.common.shapes import DISC_SEGMENTS, RELATION_HEX, rgb, unit_disc, unit_sphere  # noqa: E402
+from app.scene.common.state import SceneConfig, ShapeState  # noqa: E402
+from app.scene.common.texts import parse_vector  # noqa: E402
+from app.scene.pair.costs import measure_update_costs  # noqa: E402
+from app.scene.pair.panels import intervals_bar_html, readout_markdown, sign_table_markdown  # noqa: E402
+from app.scene.pair.plots import compress  # noqa: E402
+from app.scene.pair.session import Session  # noqa: E402
 
 GREEN, AMBER, RED = (0x2C, 0xA0, 0x2C), (0xFF, 0xBF, 0x00), (0xD6, 0x27, 0x28)
 
@@ -136,20 +137,18 @@ def test_drag_recolours_and_sends_nothing_when_unchanged(server):
 
 
 def test_drag_recolours_from_classify_and_the_readout_follows(server, monkeypatch):
-    import app.scene.picture as picture
+    import app.scene.pair.picture as picture
 
     s = Session(server, unit_spheres(3, "3"))
-    time.sleep(0.15)  # sessions of earlier tests on this server finish their coalesced refreshes
+    for other in [o for o in gc.get_objects() if isinstance(o, Session) and o.target is server and not o.closed]:
+        quiet(other)  # sessions of earlier tests on this server finish their coalesced refreshes
     calls = []
     full = picture.explain  # explain, readout, contact point, plane
     monkeypatch.setattr(picture, "explain", lambda A, B: calls.append(1) or full(A, B))
     assert s.apply_drag("B", (1.5, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) == "overlap"
     assert colours(s) == {RED} and calls == []  # recoloured by classify, no explain yet
     assert "SEPARATE" in s.ui.readout.content  # the readout follows, not yet there
-    for _ in range(100):  # the full readout follows within the panel period (50 ms)
-        if calls and "OVERLAP" in s.ui.readout.content:
-            break
-        time.sleep(0.02)
+    quiet(s)  # the full readout follows within the panel period (50 ms)
     assert "OVERLAP" in s.ui.readout.content and calls == [1]
     assert "overlapping by 25 %" in s.ui.readout.content  # unit spheres 1.5 apart: mu = 3/4
 
@@ -276,7 +275,7 @@ def test_a_motion_not_analysed_is_said_in_words_in_the_readout_and_in_red_in_the
     """Was: with no analysis to show, the readout printed the panel's red status as text
     ("⚠ <span style=...>⚠ the motion was not analysed ...</span>"). The status is plain words; each
     view renders the failure its own way."""
-    from app.scene.motion import MotionError
+    from app.scene.pair.motion import MotionError
 
     s = motion_session(server)
     s.state.analysis = None  # the motion's analysis failed (a worker died, a budget ran out)
@@ -322,7 +321,7 @@ def test_drag_leaves_the_motion(server):
     # centres 3.4 apart along x with half-lengths 2 + 2 along x, 0.5 apart in y: overlap
     assert rel == oracle_relation(a.quadric(), b.quadric()) == "overlap"
     assert colours(s) == {RED}
-    time.sleep(0.2)  # the panel follows: timeline hidden, fields show the static shapes
+    quiet(s)  # the panel follows: timeline hidden, fields show the static shapes
     assert not s.ui.timeline.folder.visible and not s.ui.plots.folder.visible
     assert s.ui.motion.preset.value == "(static shapes)"
     assert s.ui.shapes["B"].fields["center"].value == "4, 0.5, 0"
@@ -332,8 +331,8 @@ def test_drag_leaves_the_motion(server):
 
 
 def test_analysis_in_a_child_process_matches_threads():
-    from app.scene.analysis import AnalysisCache
-    from app.scene.motion import load_motion
+    from app.scene.pair.analysis import AnalysisCache
+    from app.scene.pair.motion import load_motion
 
     model = load_motion(preset="example-30", motion=None)
     cache = AnalysisCache(processes=True)
@@ -351,8 +350,8 @@ def test_analysis_in_a_child_process_matches_threads():
 
 def test_presets_are_prefetched_and_kept():
     """A server analyses every preset once at start; a flood of other motions does not evict them."""
-    from app.scene.analysis import AnalysisCache
-    from app.scene.motion import list_presets, load_motion
+    from app.scene.pair.analysis import AnalysisCache
+    from app.scene.pair.motion import list_presets, load_motion
 
     models = [load_motion(preset=name, motion=None) for name in list_presets()]
     cache = AnalysisCache(processes=False)
@@ -375,8 +374,8 @@ def test_presets_are_prefetched_and_kept():
 def test_preset_pick_sends_one_grid_and_the_panel_after_the_picture(server):
     """A pick of an analysed preset: the picture first, one grid (not one per framing), and the
     readout only PICTURE_FIRST later, so the browser draws the shapes before the panel's work."""
-    from app.scene.analysis import AnalysisCache
-    from app.scene.motion import load_motion
+    from app.scene.pair.analysis import AnalysisCache
+    from app.scene.pair.motion import load_motion
 
     cache = AnalysisCache(processes=False)
     cache.submit(load_motion(preset="example-31", motion=None)).result(timeout=120)
@@ -513,18 +512,22 @@ def test_separating_plane_separates(server):
 
 
 def test_play_advances_t_and_stops(server):
-    import time
-
     s = motion_session(server, t=0.1)
-    s.ui.timeline.speed.value = 5.0  # half of I per second
+    s.ui.timeline.speed.value = 5.0  # half of I per second: 1/40 of I per step
     s.ui.timeline.play.value = True  # runs the GUI callback: starts the playback thread
-    time.sleep(0.5)
+    player = s.timeline_ctl._thread
+    assert player is not None
+    deadline = time.monotonic() + 60
+    while s.state.t <= 0.1:  # playback moves t forward, step by step (40 steps before it wraps)
+        assert time.monotonic() < deadline and player.is_alive(), "playback did not move t"
+        time.sleep(0.01)
     s.ui.timeline.play.value = False
-    time.sleep(0.15)
+    player.join(60)  # the thread ends at its next step
+    assert not player.is_alive(), "unchecking Play did not stop the playback thread"
     t_stopped = s.state.t
-    assert 0.15 < t_stopped < 0.6
-    time.sleep(0.2)
-    assert s.state.t == t_stopped
+    assert t_stopped != 0.1 and s.state.analysis is not None
+    lo, hi = s.state.analysis.window
+    assert lo <= t_stopped <= hi
     s.close()
 
 
@@ -553,7 +556,7 @@ def test_a_sessions_sphere_subdivisions_draw_its_solids_and_survive_a_dimension_
     """``Session(sphere_subdivisions=k)`` (``serve --sphere-subdivisions``): the solids are the
     icosphere of k subdivisions (20 * 4^k faces), before and after a switch to 2D and back; a
     value outside 1..6 is refused, naming the range."""
-    from app.scene.mesh_detail import SPHERE_SUBDIVISIONS
+    from app.scene.common.mesh_detail import SPHERE_SUBDIVISIONS
 
     for k in (1, 3):
         s = Session(server, unit_spheres(3, "3"), sphere_subdivisions=k)
@@ -674,10 +677,10 @@ def test_readout_at_t_shows_exact_signs_for_sqrt2_motion(server):
 
 
 def test_wire_setters_match_viser_public_setters(server):
-    """app.scene.wire queues the same messages and stores the same values as viser's setters."""
+    """app.scene.common.wire queues the same messages and stores the same values as viser's setters."""
     import dataclasses
 
-    from app.scene import wire
+    from app.scene.common import wire
 
     iface = server.scene._websock_interface
     sent: list = []
@@ -816,10 +819,7 @@ def test_touch_slides_b_to_the_exact_contact(server, dim, dx, want):
     # B's centre is t * (dx, 0...): tangent where t * dx = 2, an exact rational
     assert str(ev.event.time.value) == ev.exact == str(Fraction(2) / Fraction(dx))
     assert abs(float(s.state.shapes["B"].center[0]) - want) < 1e-12
-    for _ in range(200):  # the panel follows the picture within the panel period
-        if not s.pending():
-            break
-        time.sleep(0.01)
+    quiet(s)  # the panel follows the picture within the panel period
     assert "TANGENT" in s.ui.readout.content
 
 
@@ -874,7 +874,7 @@ def test_shape_meshes_are_inscribed_and_within_a_pixel_of_the_surface():
     drawn interpenetrating) and every face plane lies within MESH_GAP of the surface (the drawing
     contains the shape shrunk by 1 - MESH_GAP: the gap at the contact is under a pixel for a
     shape up to 3,000 pixels across). Checked in float64 on the float32 vertices that are sent."""
-    from app.scene.shapes import DISC_SEGMENTS, MESH_GAP, _geometry
+    from app.scene.common.shapes import DISC_SEGMENTS, MESH_GAP, _geometry
 
     for dim in (2, 3):
         V, F = _geometry(dim)
@@ -903,7 +903,7 @@ def test_leaving_a_motion_certifies_exactly_what_the_fields_show(server):
 
     from oracle import oracle_relation
 
-    from app.scene.gui import STATIC
+    from app.scene.pair.gui import STATIC
     from core import quadric_from_axes
 
     s = Session(server, SceneConfig.from_dict({"preset": "circles-sqrt2", "event": 1}))

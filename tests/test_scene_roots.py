@@ -12,9 +12,9 @@ import pytest
 from oracle import pencil_oracle, positive_roots
 
 from app.jobs import analyse_job
-from app.scene.motion import load_motion
-from app.scene.roots import locus, roots_at, roots_of_pencil
-from app.scene.roots_view import locus_data, plane_data, roots_words
+from app.scene.pair.motion import load_motion
+from app.scene.pair.roots import locus, roots_at, roots_of_pencil
+from app.scene.pair.roots_view import locus_data, plane_data, roots_words
 from core import quadric_from_axes
 from core.formulae.pencil import pencil_coefficients
 
@@ -102,8 +102,8 @@ def test_roots_panel_in_a_session_only_when_switched_on():
     (the locus only during a motion)."""
     import viser
 
-    from app.scene.session import Session
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair.session import Session
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
@@ -133,8 +133,8 @@ def test_rounded_fields_give_the_exact_matrix_one_click_away():
 
     import viser
 
-    from app.scene.session import Session
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair.session import Session
     from core.moving.motions import matrix_at_exact
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
@@ -162,9 +162,9 @@ def test_touch_then_static_shapes_the_controls_say_the_state():
     import viser
     from oracle import oracle_relation
 
-    from app.scene.gui import STATIC, TOUCH
-    from app.scene.session import Session
-    from app.scene.state import SceneConfig
+    from app.scene.common.state import SceneConfig
+    from app.scene.pair.gui import STATIC, TOUCH
+    from app.scene.pair.session import Session
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:

@@ -11,8 +11,8 @@ from browser_helpers import until
 from viser import _messages
 from websockets.sync.client import connect
 
+from app.scene.pair.session import Session
 from app.scene.server import SceneServer, start_scene
-from app.scene.session import Session
 
 CAMERA = msgspec.msgpack.encode(_messages.ViewerCameraMessage(
     wxyz=(1.0, 0.0, 0.0, 0.0), position=(0.0, 0.0, 5.0), fov=1.0, near=0.01, far=100.0, image_height=600, image_width=800,

@@ -22,14 +22,14 @@ import pytest
 from browser_helpers import text_shown, until
 from viser import _messages
 
-from app.scene.bodies import UPLOAD_BYTES
-from app.scene.bodies_view import load_model
-from app.scene.control_share import MAX_UPLOAD_BYTES
+from app.scene.bodies.bodies_view import load_model
+from app.scene.bodies.model import UPLOAD_BYTES
+from app.scene.common.state import SceneConfig
+from app.scene.common.threads import POOL_THREADS, later, pool, soon
+from app.scene.common.wire import MAX_MESSAGE_BYTES
+from app.scene.pair.control_share import MAX_UPLOAD_BYTES
+from app.scene.pair.session import Session
 from app.scene.server import SceneServer, start_scene
-from app.scene.session import Session
-from app.scene.state import SceneConfig
-from app.scene.threads import POOL_THREADS, later, pool, soon
-from app.scene.wire import MAX_MESSAGE_BYTES
 from bench import scene_memory as M
 from bench.scene_memory import RawTab, SceneProcess, rss_mb
 

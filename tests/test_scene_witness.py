@@ -14,9 +14,9 @@ import pytest
 
 viser = pytest.importorskip("viser")
 
-from app.scene.contact import witness_view  # noqa: E402
-from app.scene.session import Session  # noqa: E402
-from app.scene.state import SceneConfig, ShapeState  # noqa: E402
+from app.scene.common.state import SceneConfig, ShapeState  # noqa: E402
+from app.scene.pair.contact import witness_view  # noqa: E402
+from app.scene.pair.session import Session  # noqa: E402
 
 
 def spheres(dim: int, dx: str, plane: bool = False) -> SceneConfig:

@@ -27,10 +27,10 @@ from browser_helpers import field_input, text_shown, until  # noqa: E402
 from oracle import oracle_relation  # noqa: E402
 
 from app.bodyfiles import write_bodies_csv  # noqa: E402
-from app.scene.analysis import AnalysisView  # noqa: E402
-from app.scene.bodies_lod import ViewPose  # noqa: E402
-from app.scene.bodies_view import BodiesView  # noqa: E402
-from app.scene.sweep_model import PENDING_COLOUR, SweepModel, compare_times, same_time  # noqa: E402
+from app.scene.bodies.bodies_lod import ViewPose  # noqa: E402
+from app.scene.bodies.bodies_view import BodiesView  # noqa: E402
+from app.scene.bodies.sweep_model import PENDING_COLOUR, SweepModel, compare_times, same_time  # noqa: E402
+from app.scene.pair.analysis import AnalysisView  # noqa: E402
 from app.sweep_cli import read_moving_bodies  # noqa: E402
 from bench.sweep_data import moving_bodies  # noqa: E402
 from core import Relation, analyse  # noqa: E402
@@ -287,7 +287,7 @@ def test_opened_pair_analysis_finds_the_sweeps_first_time(model):
 
 def test_the_two_body_motion_reads_back_from_its_text(model):
     """A pair opened from the bodies keeps a shareable text: it reads back to the same exact A(t)."""
-    from app.scene.motion import load_motion
+    from app.scene.pair.motion import load_motion
 
     mm = model.pair_motion(model.pair_between(9, 10))
     back = load_motion(preset=None, motion=mm.texts())
@@ -441,7 +441,7 @@ def rgb(colour) -> str:
 @needs_chromium
 def test_browser_scrub_the_timeline(sweep_page):
     """Moving t in the page moves the bodies and recolours them with their certified relation."""
-    from app.scene.shapes import RELATION_COLORS
+    from app.scene.common.shapes import RELATION_COLORS
 
     hs, _ = sweep_page
     view = hs.goto("/")

@@ -1,4 +1,5 @@
-"""The worker processes start warm: every job of app.jobs runs on what the fork server preloaded.
+"""The worker processes start warm: every job (app.jobs, app.api.jobs, the scene's in app.scene.pair.motion)
+runs on what the fork server preloaded, and none of it loads FastAPI.
 
 multiprocessing has one fork server per process, shared by the API's and the scene's pools; a
 job that needs a module the fork server did not import pays the import in every child (the API's
@@ -19,7 +20,9 @@ from pathlib import Path
 import pool_jobs
 import pytest
 
-import app.jobs as jobs
+import app.api.jobs
+import app.jobs
+import app.scene.pair.motion
 from app.api.contacts_schemas import ContactsIn
 from app.api.schemas import PairItem
 from app.api.sweep_schemas import SweepIn
@@ -31,7 +34,7 @@ PAIR = {"a": {"center": ["3", "0"], "semi_axes": ["1", "2"]}, "b": {"center": [0
 MOVING = [["1", "0", "-t"], ["0", "1", "0"], ["-t", "0", "t^2 - 1"]]  # the unit circle at (t, 0)
 STILL = [["1", "0", "0"], ["0", "1", "0"], ["0", "0", "-1"]]
 
-CALLS = {  # each job with arguments as its route builds them (app/api/routes, app/scene/analysis.py)
+CALLS = {  # each job with arguments as its route builds them (app/api/routes, app/scene/pair/analysis.py)
     "analyse_job": (MOVING, STILL, "0, 3"),
     "read_motion_job": ({},),
     "classify_job": ([PairItem.model_validate(PAIR)], "exact", 30.0, True),
@@ -45,6 +48,9 @@ CALLS = {  # each job with arguments as its route builds them (app/api/routes, a
                                           "exact_times": True}), 30.0, 1000, 1000, 10),
 }
 
+JOB_HOMES = (app.jobs, app.api.jobs, app.scene.pair.motion)
+"""Where the jobs live: the shared one at the bottom, the API's and the scene's beside their models."""
+
 CHILD = """
 import pickle, sys
 for m in {modules!r}:
@@ -52,6 +58,7 @@ for m in {modules!r}:
         __import__(m)
     except ImportError:
         pass
+assert "fastapi" not in sys.modules and "starlette" not in sys.modules, "the worker side loaded FastAPI"
 before = set(sys.modules)
 for name, fn, args in pickle.loads(sys.stdin.buffer.read()):
     out = fn(*args)
@@ -61,13 +68,15 @@ print("\\n".join(sorted(set(sys.modules) - before)))
 
 
 def test_every_job_is_called_here():
-    """A new job in app.jobs must be added to CALLS (so the check below covers it)."""
-    names = {n for n, f in inspect.getmembers(jobs, inspect.isfunction) if n.endswith("_job") and f.__module__ == jobs.__name__}
+    """A new job in app.jobs, app.api.jobs or app.scene.pair.motion must be added to CALLS (so the check below covers it)."""
+    names = {n for m in JOB_HOMES for n, f in inspect.getmembers(m, inspect.isfunction)
+             if n.endswith("_job") and f.__module__ == m.__name__}
     assert names == set(CALLS)
 
 
 def test_jobs_import_nothing_the_fork_server_did_not_preload():
-    payload = pickle.dumps([(name, getattr(jobs, name), args) for name, args in CALLS.items()])
+    job = {n: getattr(m, n) for m in JOB_HOMES for n in dir(m) if n.endswith("_job")}
+    payload = pickle.dumps([(name, job[name], args) for name, args in CALLS.items()])
     r = subprocess.run([sys.executable, "-c", CHILD.format(modules=JOB_MODULES)], input=payload, capture_output=True,
                        cwd=ROOT, timeout=300, check=False)
     assert r.returncode == 0, r.stderr.decode()[-3000:]

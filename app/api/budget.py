@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import asyncio
 import threading
-import time
 from collections.abc import Callable
 from typing import Any, TypeVar
 
 import anyio
 from fastapi import HTTPException, Request
 
+from ..jobs import STOPPING, Budget, BudgetExceeded, Cancelled
 from ..workers import (
     WorkerBusy,
     WorkerCancelled,
@@ -31,7 +31,6 @@ from ..workers import (
     WorkerPool,
     WorkerStopped,
     WorkerTimeout,
-    job_clock,
 )
 
 __all__ = [
@@ -56,9 +55,6 @@ before its process is killed."""
 
 T = TypeVar("T")
 
-STOPPING = threading.Event()
-"""Set when the server process is stopping (SIGTERM): every budget check then fails at once."""
-
 _WATCH_S = 0.1
 """How often the event loop checks whether the client has gone."""
 
@@ -67,46 +63,6 @@ WAIT_UNTIL = "app.wait_until"
 start, set when its body is whole (:class:`app.api.line.RequestLine`). One wait for the whole
 line: the reader of large bodies and then a worker (:func:`run_job`) share it, so a request never
 waits longer than ``ApiSettings.queue_wait_s`` in all."""
-
-
-class BudgetExceeded(RuntimeError):
-    """The request's work went over its time budget (or the server is stopping)."""
-
-
-class Cancelled(RuntimeError):
-    """The client disconnected: nobody will read the answer."""
-
-
-class Budget:
-    """Deadline plus cancel event of one request; call :meth:`check` between steps.
-
-    In a worker process the deadline counts from when the pool started the job's clock
-    (:func:`app.workers.job_clock`), not from when the job got here: the pool kills the job
-    :data:`JOB_GRACE_S` after its own deadline, which counts from then, so the job's last check
-    comes first and says where it stopped. Was: on a loaded machine the child's start (fork,
-    reading its arguments) took long enough that the kill came first, with a message that says less.
-    """
-
-    def __init__(self, seconds: float, cancel: threading.Event | None = None) -> None:
-        self.seconds = seconds
-        now = time.monotonic()
-        clock = job_clock()
-        self.deadline = (clock if clock is not None and clock <= now else now) + seconds
-        self.cancel = cancel or threading.Event()
-
-    def check(self, progress: str = "") -> None:
-        """Raise if the time is spent, the client left or the server is stopping.
-
-        Args:
-            progress: where the work is, for the message (e.g. "after 12 of 1000 pairs").
-        """
-        where = f" {progress}" if progress else ""
-        if STOPPING.is_set():
-            raise BudgetExceeded(f"stopped{where}: the server is shutting down")
-        if self.cancel.is_set():
-            raise Cancelled(f"stopped{where}: the client disconnected")
-        if time.monotonic() > self.deadline:
-            raise BudgetExceeded(f"stopped{where}: over the time budget of {self.seconds:g} s per request")
 
 
 def unavailable(detail: str) -> HTTPException:
@@ -146,7 +102,9 @@ async def run_job(
         memory_mb: the workers' memory cap, named when a job runs out of memory.
 
     Raises:
-        HTTPException: 422 for bad input (the job's ValueError, message kept), 503 with
+        core.InvalidInput: bad input (the job's ValueError, message, pair and matrix kept; the
+            app answers 422).
+        HTTPException: 503 with
             Retry-After when busy, over the budget, cancelled, out of memory or shutting down,
             500 for a bug in the job.
     """
@@ -157,10 +115,8 @@ async def run_job(
                            wait_until=wait_until)
 
     tail = f"; {hint}" if hint else ""
-    try:
+    try:  # bad input (core.InvalidInput, carried back by the pool) goes up to the app's one handler: 422
         return await run_off_loop(request, work)
-    except ValueError as e:
-        raise HTTPException(422, str(e)) from None
     except WorkerBusy as e:
         raise unavailable(f"{e}; retry in a moment") from None
     except WorkerStopped as e:  # the job's own budget check: the message says where
@@ -182,7 +138,7 @@ async def run_off_loop(request: Request, fn: Callable[[threading.Event], T]) -> 
     The event loop stays free for other requests (and /healthz) while ``fn`` runs.
     """
     cancel = threading.Event()
-    work: asyncio.Future[Any] = asyncio.ensure_future(anyio.to_thread.run_sync(fn, cancel))
+    work: asyncio.Future[T] = asyncio.ensure_future(anyio.to_thread.run_sync(fn, cancel))
     try:
         while True:
             done, _ = await asyncio.wait({work}, timeout=_WATCH_S)

@@ -14,10 +14,10 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, WithJsonSchema
 
+from core.options import OnInvalid
 from core.shapes.numbers import binary64
 
-from .json_body import OutOfRange
-from .schemas import CertifiedBy, MethodName
+from .schemas import CertifiedBy, MethodName, OutOfRange
 
 __all__ = ["ContactsIn", "ContactsOut", "PairOut", "FloatNumber"]
 
@@ -77,7 +77,7 @@ class ContactsIn(BaseModel):
         "(2D: [Lx, Ly, xy]): minimum image convention",
     )
     method: MethodName = "adaptive"
-    on_invalid: Literal["raise", "mark"] = Field(
+    on_invalid: OnInvalid = Field(
         default="raise", description="raise: 422 naming the first bad body; mark: list bad bodies in 'invalid'"
     )
     ids: list[Annotated[int, Field(ge=-(2**63), lt=2**63)]] | None = Field(

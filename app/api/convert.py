@@ -3,8 +3,9 @@
 No mathematics here: shapes go to :func:`core.quadric_from_axes`, matrices to
 :func:`core.validate_quadric` (so every bad matrix is named "a" or "b", as in the JSON), and the
 relation comes from :func:`core.classify` (:func:`classify_items`: one vectorised call for a whole
-batch). A core ``ValueError`` becomes a 422 whose detail is the core message, prefixed with where
-in the request the culprit is.
+batch). Bad input is one error, :class:`core.InvalidInput`: core's message prefixed with where in the
+request the culprit is, its pair index and matrix name ("a" or "b") attached; the app's one
+exception handler answers it 422. No FastAPI here: this runs in the worker processes too.
 """
 
 from __future__ import annotations
@@ -14,10 +15,10 @@ from contextlib import contextmanager
 from typing import Any, cast
 
 import numpy as np
-from fastapi import HTTPException
 
 from core import (
     Certifier,
+    InvalidInput,
     Relation,
     bodies_from_axes,
     classify_detailed,
@@ -26,7 +27,7 @@ from core import (
 )
 from core.shapes.numbers import binary64, binary64_array, to_fmpq
 
-from .budget import Budget
+from ..jobs import Budget
 from .contacts_schemas import ContactsIn
 from .schemas import ClassifyOut, PairItem, RelationName, ShapeIn
 
@@ -34,12 +35,34 @@ __all__ = ["bad_input", "quadric_input", "checked_pair", "classify_items", "is_p
 
 
 @contextmanager
-def bad_input(where: str = "") -> Iterator[None]:
-    """Turn a core ``ValueError`` into HTTP 422 with its message (prefixed by ``where``)."""
+def bad_input(where: str = "", *, pair: int | None = None, matrix: str | None = None) -> Iterator[None]:
+    """A core ``ValueError`` as :class:`core.InvalidInput`, its message prefixed by ``where``.
+
+    Args:
+        where: where in the request the culprit is ("pairs[3]: b: ").
+        pair: its index in the request's batch (None: not a batch).
+        matrix: the request's name of the culprit ("a", "b"), when one shape is.
+    """
     try:
         yield
     except (ValueError, ArithmeticError) as e:  # ArithmeticError: e.g. a number too big for a float
-        raise HTTPException(status_code=422, detail=f"{where}{e}") from None
+        inner = e if isinstance(e, InvalidInput) else None
+        raise InvalidInput(
+            f"{where}{e}", pair=pair, matrix=matrix or (inner.matrix if inner else None), reason=str(e)
+        ) from None
+
+
+_API_NAMES = {"A": "a", "B": "b"}
+"""Core's names of the two matrices of a pair -> the request's fields."""
+
+
+def _in_api_names(e: InvalidInput, where: str, pair: int | None) -> InvalidInput:
+    """Core's error about matrix "A" or "B" of a pair, in the request's names ("a", "b") and place."""
+    name = _API_NAMES.get(e.matrix or "", e.matrix)
+    reason = e.reason
+    if e.matrix and name and reason.startswith(e.matrix + " "):
+        reason = name + reason[len(e.matrix):]
+    return InvalidInput(f"{where}{reason}", pair=pair, matrix=name, reason=reason)
 
 
 def _is_exact(v: Any) -> bool:
@@ -101,25 +124,23 @@ def _size(m: Any) -> int | None:
         return None
 
 
-def _converted(pair: PairItem, where: str) -> tuple[Any, Any]:
+def _converted(pair: PairItem, where: str, index: int | None = None) -> tuple[Any, Any]:
     """Both shapes as core input (float64 arrays where exact), not validated yet."""
     out = []
     for name, q in (("a", pair.a), ("b", pair.b)):
-        with bad_input(f"{where}{name}: "):
+        with bad_input(f"{where}{name}: ", pair=index, matrix=name):
             out.append(_as_float64_if_exact(quadric_input(q)))
     return out[0], out[1]
 
 
-def _validated(a: Any, b: Any, where: str) -> None:
-    """422 naming "a" or "b" for an invalid matrix, or for an ellipse paired with an ellipsoid."""
+def _validated(a: Any, b: Any, where: str, index: int | None = None) -> None:
+    """InvalidInput naming "a" or "b" for an invalid matrix, or for an ellipse paired with an ellipsoid."""
     for name, m in (("a", a), ("b", b)):
-        with bad_input(where):
+        with bad_input(where, pair=index, matrix=name):
             validate_quadric(m, name=name)
     if len(a) != len(b):
-        raise HTTPException(
-            status_code=422,
-            detail=f"{where}a is {len(a)}x{len(a)} and b is {len(b)}x{len(b)}: both must be ellipses (3x3) or both ellipsoids (4x4)",
-        )
+        reason = f"a is {len(a)}x{len(a)} and b is {len(b)}x{len(b)}: both must be ellipses (3x3) or both ellipsoids (4x4)"
+        raise InvalidInput(f"{where}{reason}", pair=index, reason=reason)
 
 
 def is_plain_pair(pair: PairItem) -> bool:
@@ -141,7 +162,7 @@ def is_plain_pair(pair: PairItem) -> bool:
 
 
 def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
-    """Both shapes as core input, validated (422 naming "a" or "b" otherwise)."""
+    """Both shapes as core input, validated (:class:`core.InvalidInput` naming "a" or "b" otherwise)."""
     a, b = _converted(pair, where)
     _validated(a, b, where)
     return a, b
@@ -153,23 +174,25 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
     One :func:`core.classify_detailed` call per matrix size and input kind (float matrices
     vectorised through the float filter; exact-valued ones read exactly), which reports per pair
     which arithmetic certified it; ``budget`` is checked before every pair that needs exact
-    arithmetic. The first invalid pair in request order gets a 422 naming it
-    (``pairs[i]: b: ...``).
+    arithmetic. The first invalid pair in request order is named (``pairs[i]: b: ...``): a shape
+    that cannot be built, or core's own reason (each group is classified with
+    ``on_invalid="raise"``: core validates once, its error is renamed to the request's names).
 
     Raises:
-        HTTPException: 422 for bad input.
+        InvalidInput: bad input (``pair``: its index in the request, ``matrix``: "a" or "b").
         BudgetExceeded, Cancelled: from ``budget`` (the route answers 503).
     """
     n = len(pairs)
     where = [f"pairs[{i}]: " if batch else "" for i in range(n)]
     mats: list[tuple[Any, Any] | None] = [None] * n
-    errors: dict[int, HTTPException] = {}
+    index = [i if batch else None for i in range(n)]
+    errors: dict[int, InvalidInput] = {}
     for i, pair in enumerate(pairs):
         if i % 64 == 0:
             budget.check(f"while reading pair {i} of {n}")
         try:
-            mats[i] = _converted(pair, where[i])
-        except HTTPException as e:
+            mats[i] = _converted(pair, where[i], index[i])
+        except InvalidInput as e:
             errors[i] = e
     codes = np.full(n, int(Relation.INVALID), dtype=np.int8)
     by: list[str | None] = [None] * n
@@ -178,11 +201,17 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
         if m is None:
             continue
         na, nb = _size(m[0]), _size(m[1])
-        if na is None or na != nb:  # not square, or an ellipse with an ellipsoid: named below
+        if na is None or na != nb:  # not square, or an ellipse with an ellipsoid: core cannot pair them
+            try:
+                _validated(m[0], m[1], where[i], index[i])
+            except InvalidInput as e:
+                errors[i] = e
             continue
         floats = isinstance(m[0], np.ndarray) and isinstance(m[1], np.ndarray)
         groups.setdefault((na, floats), []).append(i)
     for (size, floats), idx in groups.items():
+        if errors and min(errors) < idx[0]:
+            continue  # an earlier pair is already the answer
         if floats:
             A = np.stack([mats[i][0] for i in idx])  # type: ignore[index]
             B = np.stack([mats[i][1] for i in idx])  # type: ignore[index]
@@ -191,24 +220,24 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
             for k, i in enumerate(idx):
                 A[k], B[k] = mats[i]  # type: ignore[misc]
         budget.check(f"before the {len(idx)} pairs of {size}x{size} matrices")
-        res = classify_detailed(
-            A, B, method=method, on_invalid="mark",  # type: ignore[arg-type]
-            progress=lambda k, m: budget.check(f"after {k} of the {m} pairs needing exact arithmetic ({n} pairs in the request)"),
-        )
+        try:
+            res = classify_detailed(
+                A, B, method=method, on_invalid="raise",  # type: ignore[arg-type]
+                progress=lambda k, m: budget.check(f"after {k} of the {m} pairs needing exact arithmetic ({n} pairs in the request)"),
+            )
+        except InvalidInput as e:  # the group's first invalid pair, validated once (by core)
+            i = idx[e.pair or 0]
+            errors[i] = _in_api_names(e, where[i], index[i])
+            continue
         codes[idx] = res.relation
         for k, i in enumerate(idx):
             c = Certifier(int(res.certified_by[k]))
             by[i] = None if c == Certifier.NONE else str(c)
-    for i in range(n):  # the first bad pair, in request order, is named with the API's names
-        if i in errors:
-            raise errors[i]
-        if codes[i] == Relation.INVALID:
-            a, b = mats[i]  # type: ignore[misc]
-            _validated(a, b, where[i])
-            raise HTTPException(status_code=422, detail=f"{where[i]}not an ellipse/ellipsoid pair")  # not reached
+    if errors:  # the first bad pair, in request order, named with the API's names
+        raise errors[min(errors)]
     return [
         ClassifyOut(
-            relation=cast(RelationName, str(Relation(int(codes[i])))),  # INVALID was raised above
+            relation=cast(RelationName, str(Relation(int(codes[i])))),  # no INVALID: raised above
             certified_by=by[i],  # type: ignore[arg-type]
             kind="ellipse" if len(mats[i][0]) == 3 else "ellipsoid",  # type: ignore[index]
             method=method,  # type: ignore[arg-type]
@@ -218,24 +247,24 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
 
 
 def contacts_matrices(body: ContactsIn) -> np.ndarray:
-    """The bodies of a contacts request as float matrices (422 for mixed forms or bad rows).
+    """The bodies of a contacts request as float matrices (InvalidInput for mixed forms or bad rows).
 
     The count limit is the route's (checked before this runs in a worker).
     """
     if (body.bodies is None) == (body.matrices is None):
-        raise HTTPException(422, "send either 'bodies' (rows of parameters) or 'matrices', not both or neither")
+        raise InvalidInput("send either 'bodies' (rows of parameters) or 'matrices', not both or neither")
     if body.matrices is not None:
         sizes = {len(m) for m in body.matrices} | {len(r) for m in body.matrices for r in m}
         if len(sizes) > 1:
-            raise HTTPException(422, "matrices: every matrix must be 3x3 (ellipses) or every one 4x4 (ellipsoids)")
+            raise InvalidInput("matrices: every matrix must be 3x3 (ellipses) or every one 4x4 (ellipsoids)")
         return np.array(body.matrices, dtype=np.float64).reshape(len(body.matrices), *(2 * (sizes.pop() if sizes else 4,)))
     widths = {len(r) for r in body.bodies or []}
     if not widths:
         return np.zeros((0, 4, 4))
     if widths not in ({10}, {5}):
-        raise HTTPException(422, "bodies: every row must be [x, y, z, a, b, c, qw, qx, qy, qz] (3D) or every row [x, y, a, b, angle] (2D)")
+        raise InvalidInput("bodies: every row must be [x, y, z, a, b, c, qw, qx, qy, qz] (3D) or every row [x, y, a, b, angle] (2D)")
     if body.box is not None and len(body.box) not in ((3, 6) if 10 in widths else (2, 3, 6)):
-        raise HTTPException(422, f"box: {len(body.box)} numbers for {'3D' if 10 in widths else '2D'} bodies")
+        raise InvalidInput(f"box: {len(body.box)} numbers for {'3D' if 10 in widths else '2D'} bodies")
     t = np.array(body.bodies, dtype=np.float64)
     d = 3 if t.shape[1] == 10 else 2
     with bad_input("bodies: "):

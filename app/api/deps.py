@@ -25,22 +25,26 @@ __all__ = ["get_settings", "get_workers", "get_batcher", "get_line", "SettingsDe
 
 async def get_settings(request: Request) -> ApiSettings:
     """Settings of the app serving this request."""
-    return request.app.state.settings
+    settings: ApiSettings = request.app.state.settings
+    return settings
 
 
 async def get_workers(request: Request) -> WorkerPool:
     """Process pool for motion analyses of the app serving this request."""
-    return request.app.state.workers
+    workers: WorkerPool = request.app.state.workers
+    return workers
 
 
 async def get_batcher(request: Request) -> PairBatcher:
     """The thread that classifies single pairs of JSON numbers together, off the event loop."""
-    return request.app.state.batcher
+    batcher: PairBatcher = request.app.state.batcher
+    return batcher
 
 
 async def get_line(request: Request) -> Line:
     """The places of large request bodies and their reader (:mod:`app.api.line`)."""
-    return request.app.state.line
+    line: Line = request.app.state.line
+    return line
 
 
 SettingsDep = Annotated[ApiSettings, Depends(get_settings)]

@@ -14,11 +14,11 @@ from fastapi.staticfiles import StaticFiles
 from starlette.responses import PlainTextResponse
 from starlette.types import Receive, Scope, Send
 
-from core import warm_up
+from core import InvalidInput, warm_up
 
 from ..workers import WorkerPool
 from .batching import PairBatcher
-from .limits import validation_error_handler
+from .errors import invalid_input_handler, validation_error_handler
 from .line import Line, RequestLine
 from .routes import classify, contacts, health, landing, motion, presets, sweep, witness
 from .settings import ApiSettings
@@ -91,6 +91,7 @@ def create_api(settings: ApiSettings | None = None, *, guide_dir: Path | None = 
     app.state.line = line
     # ignored: starlette types every handler as taking any Exception; this one is registered for its class only
     app.add_exception_handler(RequestValidationError, validation_error_handler)  # type: ignore[arg-type]
+    app.add_exception_handler(InvalidInput, invalid_input_handler)  # type: ignore[arg-type]  # bad input: 422, once
     app.add_middleware(
         RequestLine,
         line=line,
@@ -156,7 +157,8 @@ def _redoc_js(path: Any) -> bytes:
     text = path.read_text(encoding="utf-8")
     if REDOC_LOGO_URL not in text:
         raise RuntimeError(f"{path} does not load {REDOC_LOGO_URL} any more: check /redoc for other CDN requests")
-    return text.replace(REDOC_LOGO_URL, REDOC_LOGO).encode("utf-8")
+    script: bytes = text.replace(REDOC_LOGO_URL, REDOC_LOGO).encode("utf-8")
+    return script
 
 
 def _offline_docs(app: FastAPI) -> None:

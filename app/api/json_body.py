@@ -24,23 +24,11 @@ from pydantic import BaseModel, ValidationError
 from core.shapes.limits import SERVER
 
 from .line import INLINE_BYTES, Line
+from .schemas import OutOfRange
 
 __all__ = ["INLINE_BYTES", "JsonRoute", "OutOfRange", "read_json"]
 
 _NONZERO = frozenset("123456789")
-
-
-class OutOfRange:
-    """A JSON number that cannot be read as given: ``message`` says why and what to send instead."""
-
-    __slots__ = ("text", "message")
-
-    def __init__(self, text: str, message: str) -> None:
-        self.text = text
-        self.message = message
-
-    def __repr__(self) -> str:
-        return f"OutOfRange({self.text[:40]!r})"
 
 
 def _shown(text: str) -> str:

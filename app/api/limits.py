@@ -1,4 +1,4 @@
-"""Request-level guards: the contact search's per-request limits, validation errors.
+"""Request-level guards: the messages of the contact search's per-request limits.
 
 Body sizes are limited where bodies arrive (:mod:`app.api.line`).
 
@@ -10,21 +10,13 @@ before any is built: :class:`core.bodies.broadphase.TooManyPairs`) and
 the same for ``/api/sweep`` (:func:`sweep_limit_message`, :func:`sweep_answer_message`) and its
 exact times (:func:`sweep_times_message`).
 
-FastAPI's default 422 handler echoes each offending input; a NaN there (Python's JSON reader
-accepts the ``NaN`` token) cannot be written back as JSON and would turn the 422 into a 500,
-and echoing a megabyte of input is waste. Our handler reports location, message and type only.
+No FastAPI here: the jobs that raise these run in the worker processes. The answers to errors are
+:mod:`app.api.errors`.
 """
 
 from __future__ import annotations
 
-from typing import Any
-
-from fastapi import Request
-from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
-
 __all__ = [
-    "validation_error_handler",
     "contacts_limit_message",
     "contacts_answer_message",
     "sweep_limit_message",
@@ -85,40 +77,3 @@ def sweep_times_message(pairs: int, limit: int) -> str:
         "arithmetic per pair): ask without exact_times (t_lo, t_hi are certified brackets), send fewer bodies, or ask "
         "/api/analyse about one pair; `core.sweep_contacts(...).time(k)` has no such limit"
     )
-
-
-def _clean(error: dict[str, Any]) -> dict[str, Any]:
-    msg = str(error.get("msg", ""))
-    ctx = error.get("ctx") or {}
-    if error.get("type") == "json_invalid" and "error" in ctx:
-        msg = f"{msg}: {ctx['error']}"
-    return {"loc": [p if isinstance(p, int) else str(p) for p in error.get("loc", ())], "msg": msg,
-            "type": str(error.get("type", ""))}
-
-
-def _is_json(content_type: str) -> bool:
-    media = content_type.split(";", 1)[0].strip().lower()
-    return media == "application/json" or (media.startswith("application/") and media.endswith("+json"))
-
-
-async def validation_error_handler(request: Request, exc: RequestValidationError) -> JSONResponse:
-    """422 with ``{"detail": [{"loc", "msg", "type"}, ...]}`` (no echo of the input).
-
-    As the OpenAPI schema declares: 400 when there is no JSON to validate (malformed JSON, or
-    an empty body), 422 when the JSON does not fit the schema or a value is invalid.
-
-    A body sent without a JSON content type (``curl -d`` sends a form type) is not read as JSON
-    by FastAPI; say so (415) instead of reporting a missing object.
-    """
-    errors = exc.errors()
-    content_type = request.headers.get("content-type", "")
-    if any(tuple(e.get("loc", ()))[:1] == ("body",) for e in errors) and not _is_json(content_type):
-        got = f"got {content_type!r}" if content_type else "no content-type header"
-        return JSONResponse(
-            status_code=415,
-            content={"detail": f"send the body as JSON with the header 'content-type: application/json' ({got})"},
-        )
-    unreadable = [e for e in errors if e.get("type") == "json_invalid" or (tuple(e.get("loc", ())) == ("body",) and e.get("type") == "missing")]
-    if unreadable:  # the schema's 400: no JSON to validate (malformed, or no body at all)
-        return JSONResponse(status_code=400, content={"detail": [_clean(e) for e in unreadable]})
-    return JSONResponse(status_code=422, content={"detail": [_clean(e) for e in errors]})

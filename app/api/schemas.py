@@ -22,10 +22,9 @@ from pydantic import (
     WithJsonSchema,
 )
 
+from core.options import Method
 from core.shapes.limits import SERVER
 from core.shapes.numbers import parse_number
-
-from .json_body import OutOfRange
 
 __all__ = [
     "Number",
@@ -45,6 +44,20 @@ __all__ = [
     "ErrorOut",
     "ERROR_RESPONSES",
 ]
+
+
+class OutOfRange:
+    """A JSON number that cannot be read as given: ``message`` says why and what to send instead."""
+
+    __slots__ = ("text", "message")
+
+    def __init__(self, text: str, message: str) -> None:
+        self.text = text
+        self.message = message
+
+    def __repr__(self) -> str:
+        return f"OutOfRange({self.text[:40]!r})"
+
 
 assert SERVER.number_chars is not None  # the server caps number strings (core.shapes.limits.SERVER)
 MAX_NUMBER_CHARS: int = SERVER.number_chars
@@ -130,7 +143,8 @@ Quadric = Annotated[
 ]
 """A matrix (nested lists) or a shape object."""
 
-MethodName = Literal["adaptive", "exact", "float"]
+MethodName = Method
+"""core's methods (:data:`core.options.Method`): one list for the library, the CLI and the API."""
 
 
 class PairItem(BaseModel):

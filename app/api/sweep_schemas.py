@@ -18,6 +18,8 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from core.options import OnInvalid
+
 from .contacts_schemas import FloatNumber
 from .schemas import AlgebraicOut, CertifiedBy
 
@@ -65,7 +67,7 @@ class SweepIn(BaseModel):
         description="adaptive: the certified float filter, exact arithmetic where it abstains; exact: every candidate "
         "pair exactly (slow)",
     )
-    on_invalid: Literal["raise", "mark"] = Field(
+    on_invalid: OnInvalid = Field(
         default="raise", description="raise: 422 naming the first bad row; mark: list bad rows in 'invalid' and sweep the rest"
     )
     ids: list[Annotated[int, Field(ge=-(2**63), lt=2**63)]] | None = Field(

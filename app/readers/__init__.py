@@ -207,7 +207,7 @@ def _read_stream(stream: IO[bytes], name: str, frame: int | None, format: str | 
     """A stream (stdin, an upload): CSV is parsed as it comes, other formats via a temporary file."""
     head = stream.peek(512)[:512] if hasattr(stream, "peek") else b""
     if not head and hasattr(stream, "getvalue"):
-        head = stream.getvalue()[:512]  # type: ignore[attr-defined]
+        head = stream.getvalue()[:512]
     fmt = _checked_format(format, name, head, frame)
     if fmt == "csv":
         from .table import read_csv

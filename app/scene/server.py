@@ -1,16 +1,16 @@
-"""The viser scene server: one :class:`~app.scene.session.Session` per browser tab.
+"""The viser scene server: one :class:`~app.scene.pair.session.Session` per browser tab.
 
 ``start_scene(host, port)`` returns a running :class:`SceneServer` (viser serves from its own
 thread). Every tab that connects gets a private scene and GUI (``client.scene``/``client.gui``),
 so a classroom of students never fights over one scene; analyses are shared through one cache
 and run in warm worker processes, so a slow analysis never blocks other tabs. Each tab has its
-own address (``/s/<tab id>/``, :mod:`app.scene.links`): a reload reopens it as it was, and a
+own address (``/s/<tab id>/``, :mod:`app.scene.common.links`): a reload reopens it as it was, and a
 link ``/c/<configuration>/`` opens a new tab on a shared configuration. ``shared=True``
 (``python -m app serve --shared``) is the presenter mode: one scene for all tabs, every tab's
 camera framed. Only the scene's own pages (and clients without an Origin header) may connect
-(:mod:`app.scene.origin`). What a client sends is budgeted: one websocket message at most
-:data:`app.scene.wire.MAX_MESSAGE_BYTES`, uploads counted before they are kept
-(:class:`app.scene.wire.UploadGuard`: :data:`app.scene.bodies.UPLOAD_BYTES` per client under way,
+(:mod:`app.scene.common.origin`). What a client sends is budgeted: one websocket message at most
+:data:`app.scene.common.wire.MAX_MESSAGE_BYTES`, uploads counted before they are kept
+(:class:`app.scene.common.wire.UploadGuard`: :data:`app.scene.bodies.model.UPLOAD_BYTES` per client under way,
 :data:`UPLOADS_TOTAL_BYTES` for all).
 """
 
@@ -27,13 +27,13 @@ from typing import Any
 
 import viser
 
-from . import page, wire
-from .analysis import AnalysisCache
-from .bodies import UPLOAD_BYTES
-from .links import Router, TabStore, tab_id_of
-from .mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
-from .session import Session
-from .state import SceneConfig
+from .bodies.model import UPLOAD_BYTES
+from .common import page, wire
+from .common.links import Router, TabStore, tab_id_of
+from .common.mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
+from .common.state import SceneConfig
+from .pair.analysis import AnalysisCache
+from .pair.session import Session
 
 __all__ = ["SceneServer", "start_scene", "PortBusy", "UPLOADS_TOTAL_BYTES"]
 
@@ -58,12 +58,12 @@ class SceneServer:
         processes: run analyses in worker processes (else threads).
         shared: presenter mode (one scene for every tab).
         store: the tabs' configurations (reloads, links).
-        bodies: many bodies (an :class:`app.scene.bodies.BodiesModel`, ``--bodies FILE``): each
-            tab opens on them (:mod:`app.scene.bodies_view`) instead of ``config``.
+        bodies: many bodies (an :class:`app.scene.bodies.model.BodiesModel`, ``--bodies FILE``): each
+            tab opens on them (:mod:`app.scene.bodies.bodies_view`) instead of ``config``.
         prefetch: analyse every preset at start, so a pick in the dropdown shows at once (an
             interactive server); off for one-shot uses (screenshots) that show one motion.
         sphere_subdivisions: of the icosphere every tab draws the solids with
-            (:data:`app.scene.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`).
+            (:data:`app.scene.common.mesh_detail.SPHERE_SUBDIVISIONS_RANGE`).
     """
 
     def __init__(
@@ -83,7 +83,7 @@ class SceneServer:
         self.sphere_subdivisions = check_sphere_subdivisions(sphere_subdivisions)
         """Icosphere subdivisions of the solids of every session."""
         self.policy = policy
-        """The :class:`~app.scene.origin.OriginPolicy` of the handshakes (None: not checked here)."""
+        """The :class:`~app.scene.common.origin.OriginPolicy` of the handshakes (None: not checked here)."""
         self.config = config
         """Configuration new tabs open on (change it to change what the next tab sees)."""
         self.bodies = bodies
@@ -110,7 +110,7 @@ class SceneServer:
         self.shared: Session | None = None
         """The one session every tab sees (presenter mode), or None (one session per tab)."""
         self.lesson: str | None = None
-        """The lesson a new tab opens on (``serve --lesson``; :mod:`app.scene.lesson`), or None."""
+        """The lesson a new tab opens on (``serve --lesson``; :mod:`app.scene.common.lesson`), or None."""
         self.cache.warm()
         self.prefetched = self.cache.prefetch(_preset_models) if prefetch else None
         """The thread analysing the presets at start (joined: every preset is in the cache), or None."""
@@ -134,7 +134,7 @@ class SceneServer:
 
     def _open(self, client: viser.ClientHandle) -> None:
         if self.bodies is not None and self.shared is None:  # many bodies (issue 14): one view per tab
-            from .bodies_view import BodiesView
+            from .bodies.bodies_view import BodiesView
 
             view = BodiesView(client, self.bodies, cache=self.cache, executor=self.executor,
                               sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads)
@@ -145,7 +145,7 @@ class SceneServer:
             session = self.shared  # the scene is shared; every tab's camera is framed
         else:
             tab = tab_id_of(wire.handshake_path(self.server, client))
-            from .lesson_view import lesson_session
+            from .pair.lesson_view import lesson_session
 
             session = lesson_session(self, client, tab) or self._session(client, self.store.get(tab) if tab is not None else None)
         session.frame_camera()
@@ -286,7 +286,7 @@ class SceneServer:
         """Sizes of every record the server keeps per connected tab: all 0 once every tab has left.
 
         The sessions and tab addresses, tabs being built or left meanwhile, the upload guard's
-        records and viser's own (:func:`app.scene.wire.client_records`). The tabs' stored
+        records and viser's own (:func:`app.scene.common.wire.client_records`). The tabs' stored
         configurations (a reload reopens them) are not per connection: :class:`TabStore` keeps
         the newest ``size``.
         """
@@ -322,7 +322,7 @@ class SceneServer:
 
     def stop(self) -> None:
         """Stop the server and the analysis workers."""
-        from .origin import stop_viser
+        from .common.origin import stop_viser
 
         for s in list(self.sessions.values()):
             s.close()
@@ -426,9 +426,9 @@ def start_scene(
         shared: presenter mode: every tab sees and drives one scene (default: each tab has
             its own).
         allow_origins: web origins (``https://host:port``) besides the scene's own whose pages
-            may open sessions (:mod:`app.scene.origin`; ``--allow-origin`` on the command line).
-        bodies: many bodies (:class:`app.scene.bodies.BodiesModel`, ``--bodies FILE``): each tab
-            opens on them (:mod:`app.scene.bodies_view`) instead of ``config``.
+            may open sessions (:mod:`app.scene.common.origin`; ``--allow-origin`` on the command line).
+        bodies: many bodies (:class:`app.scene.bodies.model.BodiesModel`, ``--bodies FILE``): each tab
+            opens on them (:mod:`app.scene.bodies.bodies_view`) instead of ``config``.
         prefetch: analyse every preset at start (see :class:`SceneServer`).
         sphere_subdivisions: of the icosphere the solids are drawn with (see :class:`SceneServer`;
             ``--sphere-subdivisions`` on the command line).
@@ -438,7 +438,7 @@ def start_scene(
     """
     from core import warm_up
 
-    from .origin import OriginPolicy, start_viser, stop_viser
+    from .common.origin import OriginPolicy, start_viser, stop_viser
 
     check_sphere_subdivisions(sphere_subdivisions)  # before a port is taken
     if port and not _port_free(host, port):
@@ -462,6 +462,6 @@ def start_scene(
 
 def _preset_models() -> list[Any]:
     """The motions of the presets (fixed inputs): analysed once at start, so a pick shows at once."""
-    from .motion import list_presets, load_motion
+    from .pair.motion import list_presets, load_motion
 
     return [load_motion(preset=name, motion=None) for name in list_presets()]

@@ -16,10 +16,10 @@ import threading
 
 from fastapi import APIRouter, HTTPException, Request
 
-from ...jobs import classify_job, explain_job
 from ..budget import Budget, BudgetExceeded, Cancelled, budget_error, run_job, run_off_loop
 from ..convert import classify_items, is_plain_pair
 from ..deps import BatcherDep, SettingsDep, WorkersDep
+from ..jobs import classify_job, explain_job
 from ..json_body import JsonRoute
 from ..schemas import (
     ERROR_RESPONSES,

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from fastapi import APIRouter, HTTPException, Request, Response
 
-from ...jobs import contacts_job
 from ..budget import run_job
 from ..contacts_schemas import ContactsIn, ContactsOut
 from ..deps import SettingsDep, WorkersDep
+from ..jobs import contacts_job
 from ..json_body import JsonRoute
 from ..schemas import ERROR_RESPONSES, ErrorOut
 

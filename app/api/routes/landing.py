@@ -24,7 +24,7 @@ router = APIRouter(include_in_schema=False)
 def _scene_link(scene_url: str | None) -> str:
     if scene_url:
         url = html.escape(scene_url, quote=True)
-        lesson = html.escape(scene_url.rstrip("/") + "/?lesson=paper&step=1", quote=True)  # app.scene.lesson
+        lesson = html.escape(scene_url.rstrip("/") + "/?lesson=paper&step=1", quote=True)  # app.scene.common.lesson
         return (f'<p><a id="scene-link" class="button" href="{url}">Open the 3D scene</a> '
                 f'<a id="lesson-link" class="button" href="{lesson}">A lesson: the paper, step by step</a></p>')
     return '<p id="scene-link" class="muted">The 3D scene is not running on this server (API only).</p>'
@@ -37,7 +37,7 @@ def scene_link(scene_url: str, preset: str) -> str:
         >>> scene_link("http://127.0.0.1:8080", "example-29").startswith("http://127.0.0.1:8080/c/")
         True
     """
-    from app.scene.links import link_path
+    from app.scene.common.links import link_path
 
     return scene_url.rstrip("/") + link_path({"preset": preset})
 

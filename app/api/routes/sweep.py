@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from fastapi import APIRouter, HTTPException, Request, Response
 
-from ...jobs import sweep_job
 from ..budget import run_job
 from ..deps import SettingsDep, WorkersDep
+from ..jobs import sweep_job
 from ..json_body import JsonRoute
 from ..schemas import ERROR_RESPONSES, ErrorOut
 from ..sweep_schemas import SweepIn, SweepOut

@@ -15,9 +15,9 @@ from typing import Any
 
 from fastapi import APIRouter, HTTPException, Request
 
-from ...jobs import contact_point_job, contact_scale_job, separating_plane_job, witness_job
 from ..budget import run_job
 from ..deps import SettingsDep, WorkersDep
+from ..jobs import contact_point_job, contact_scale_job, separating_plane_job, witness_job
 from ..json_body import JsonRoute
 from ..schemas import ERROR_RESPONSES, ErrorOut
 from ..witness_schemas import (

@@ -1,0 +1,1 @@
+"""What both scenes share: tab state, exact texts, drawing, the page, links, origins, the wire."""

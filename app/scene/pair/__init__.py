@@ -1,0 +1,1 @@
+"""The two-shape scene: a pair of ellipses/ellipsoids, their motion, timeline, panel and witnesses."""
