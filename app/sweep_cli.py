@@ -1,7 +1,7 @@
 """The ``sweep`` sub-command of ``python -m app``: first contact times among moving bodies.
 
 ``python -m app sweep START END --out EVENTS.csv [--box Lx,Ly,Lz[,xy,xz,yz]] [--frame K] [--end-frame K]
-[--format F] [--on-invalid mark] [--quiet]``
+[--format F] [--method exact] [--on-invalid mark] [--quiet]``
 
 START and END are files of bodies as for ``contacts`` (any format of :mod:`app.readers`: CSV
 with the columns ``x,y,z,a,b,c,qw,qx,qy,qz`` or ``x,y,a,b,angle``, Parquet, NPZ, HOOMD GSD,
@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from core.options import ON_INVALID
+from core.options import ON_INVALID, SWEEP_METHODS
 
 if TYPE_CHECKING:
     from .readers import BodySet
@@ -54,6 +54,10 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz], or a tilted box Lx,Ly,Lz,xy,xz,yz (2D: Lx,Ly,xy) (minimum image over the step); default: START's box")
     add_body_file_options(s, dim=True)
     s.add_argument("--end-frame", type=frame_argument, default=None, help="frame of END when it is a trajectory (default: --frame)")
+    s.add_argument(
+        "--method", choices=SWEEP_METHODS, default="adaptive",
+        help="adaptive: the certified float filter, exact arithmetic where it abstains; exact: every candidate pair exactly (slow)",
+    )
     s.add_argument("--on-invalid", choices=ON_INVALID, default="raise", help="mark: report bad bodies and go on")
     s.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
 
@@ -181,7 +185,9 @@ def run_sweep(args: argparse.Namespace) -> int:
         if moving.moved:
             say(args, f"{moving.moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
         progress = None if args.quiet else ProgressBar(sys.stderr, "first contacts", min_total=50_000)
-        res = sweep_contacts(*moving.arguments(), box=box, on_invalid=args.on_invalid, progress=progress)
+        res = sweep_contacts(
+            *moving.arguments(), box=box, on_invalid=args.on_invalid, method=args.method, progress=progress,
+        )
         res.ids = moving.start.ids
         t2 = time.perf_counter()
         res.to_csv(f)

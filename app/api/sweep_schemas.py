@@ -18,7 +18,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from core.options import OnInvalid
+from core.options import OnInvalid, SweepMethod
 
 from .contacts_schemas import FloatNumber
 from .schemas import AlgebraicOut, CertifiedBy
@@ -62,7 +62,7 @@ class SweepIn(BaseModel):
         description="periodic box: sides [Lx, Ly(, Lz)], or a tilted box in HOOMD's convention [Lx, Ly, Lz, xy, xz, yz] "
         "(2D: [Lx, Ly, xy]): minimum image over the whole step",
     )
-    method: Literal["adaptive", "exact"] = Field(
+    method: SweepMethod = Field(
         default="adaptive",
         description="adaptive: the certified float filter, exact arithmetic where it abstains; exact: every candidate "
         "pair exactly (slow)",
