@@ -184,5 +184,6 @@ def test_sweep_command_method_exact(tmp_path, capsys):
     assert len(rows) == 3 and {r[5] for r in rows} == {"exact"}
     for r, t in zip(rows, m.t_exact, strict=True):
         assert Fraction(float(r[2])) <= t <= Fraction(float(r[3]))
-    assert main(["sweep", str(start), str(end), "--out", str(out), "--method", "float"]) == 2  # no float-only sweep
-    assert "invalid choice: 'float'" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:  # no float-only sweep
+        main(["sweep", str(start), str(end), "--out", str(out), "--method", "float"])
+    assert e.value.code == 2 and "invalid choice: 'float'" in capsys.readouterr().err
