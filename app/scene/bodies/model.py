@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from core import Box, Certifier, Contacts, Relation, axes_from_quadric, contacts
+from core import Box, Certifier, Contacts, PairTable, Relation, axes_from_quadric, contacts
 from core.bodies.broadphase import TooManyPairs
 from core.shapes.quadrics import rotations_from_orientations
 
@@ -172,7 +172,7 @@ class PairList(ABC):
     :class:`~app.readers.BodySet`), ``dim`` and ``pair_label``.
     """
 
-    result: Any
+    result: PairTable
     order: np.ndarray
     bodies: BodySet
     dim: int
@@ -200,7 +200,7 @@ class PairList(ABC):
         if body is not None:
             if not 0 <= body < len(self.bodies):
                 raise ValueError(f"no body {body}: the bodies are numbered 0 to {len(self.bodies) - 1:,}")
-            idx = idx[(res.i[idx] == body) | (res.j[idx] == body)]
+            idx = idx[np.isin(idx, res.pairs_of(body), assume_unique=True)]
         if relation != "all":
             code = Relation.parse(relation)
             idx = idx[res.relation[idx] == code]
