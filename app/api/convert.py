@@ -17,6 +17,7 @@ from typing import Any, cast
 import numpy as np
 
 from core import (
+    Box,
     Certifier,
     InvalidInput,
     Relation,
@@ -286,10 +287,10 @@ def contacts_matrices(body: ContactsIn) -> np.ndarray:
         return np.zeros((0, 4, 4))
     if widths not in ({10}, {5}):
         raise InvalidInput("bodies: every row must be [x, y, z, a, b, c, qw, qx, qy, qz] (3D) or every row [x, y, a, b, angle] (2D)")
-    if body.box is not None and len(body.box) not in ((3, 6) if 10 in widths else (2, 3, 6)):
-        raise InvalidInput(f"box: {len(body.box)} numbers for {'3D' if 10 in widths else '2D'} bodies")
     t = np.array(body.bodies, dtype=np.float64)
     d = 3 if t.shape[1] == 10 else 2
+    with bad_input():
+        Box.from_any(body.box, d)  # before any matrix is built: what a box is, core's to say
     with bad_input("bodies: "):
         if body.on_invalid == "mark":
             return bodies_from_axes(t[:, :d], t[:, d : 2 * d], t[:, 2 * d :] if d == 3 else t[:, 4], on_invalid="mark")
