@@ -36,6 +36,8 @@ import numpy as np
 from core.options import ON_INVALID, SWEEP_METHODS
 
 if TYPE_CHECKING:
+    from core import Box
+
     from .readers import BodySet
 
 __all__ = ["add_parser", "run_sweep", "MovingBodies", "read_moving_bodies", "unwrapped", "read_events_csv", "EVENTS_HEADER"]
@@ -72,7 +74,7 @@ class MovingBodies:
     """The same bodies at t = 1."""
     centers1: np.ndarray
     """END's centres, in a box taken at the nearest image of START's (:func:`unwrapped`)."""
-    box: Any
+    box: Box | None
     """The periodic :class:`core.Box` (``--box``, else START's), or None."""
     errors: dict[int, str]
     """Row -> why START or END describes no body there (the files' reasons)."""
@@ -202,7 +204,7 @@ def run_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
-def unwrapped(c0: np.ndarray, c1: np.ndarray, box: Any) -> tuple[np.ndarray, int]:
+def unwrapped(c0: np.ndarray, c1: np.ndarray, box: Box) -> tuple[np.ndarray, int]:
     """END's centres moved by whole lattice vectors so that each body moves by its minimum image.
 
     Trajectories in a periodic box store wrapped positions: a body that crosses a face between
