@@ -1,7 +1,7 @@
 """The ``sweep`` sub-command of ``python -m app``: first contact times among moving bodies.
 
 ``python -m app sweep START END --out EVENTS.csv [--box Lx,Ly,Lz[,xy,xz,yz]] [--frame K] [--end-frame K]
-[--format F] [--on-invalid mark] [--quiet]``
+[--format F] [--method exact] [--on-invalid mark] [--quiet]``
 
 START and END are files of bodies as for ``contacts`` (any format of :mod:`app.readers`: CSV
 with the columns ``x,y,z,a,b,c,qw,qx,qy,qz`` or ``x,y,a,b,angle``, Parquet, NPZ, HOOMD GSD,
@@ -33,9 +33,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from core.options import ON_INVALID
+from core.options import ON_INVALID, SWEEP_METHODS
 
 if TYPE_CHECKING:
+    from core import Box
+
     from .readers import BodySet
 
 __all__ = ["add_parser", "run_sweep", "MovingBodies", "read_moving_bodies", "unwrapped", "read_events_csv", "EVENTS_HEADER"]
@@ -54,6 +56,10 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--box", type=box_argument, default=None, help="periodic box sides Lx,Ly[,Lz], or a tilted box Lx,Ly,Lz,xy,xz,yz (2D: Lx,Ly,xy) (minimum image over the step); default: START's box")
     add_body_file_options(s, dim=True)
     s.add_argument("--end-frame", type=frame_argument, default=None, help="frame of END when it is a trajectory (default: --frame)")
+    s.add_argument(
+        "--method", choices=SWEEP_METHODS, default="adaptive",
+        help="adaptive: the certified float filter, exact arithmetic where it abstains; exact: every candidate pair exactly (slow)",
+    )
     s.add_argument("--on-invalid", choices=ON_INVALID, default="raise", help="mark: report bad bodies and go on")
     s.add_argument("--quiet", action="store_true", help="no progress bar and no summary (errors only)")
 
@@ -68,7 +74,7 @@ class MovingBodies:
     """The same bodies at t = 1."""
     centers1: np.ndarray
     """END's centres, in a box taken at the nearest image of START's (:func:`unwrapped`)."""
-    box: Any
+    box: Box | None
     """The periodic :class:`core.Box` (``--box``, else START's), or None."""
     errors: dict[int, str]
     """Row -> why START or END describes no body there (the files' reasons)."""
@@ -181,7 +187,9 @@ def run_sweep(args: argparse.Namespace) -> int:
         if moving.moved:
             say(args, f"{moving.moved:,} bodies crossed a face of the box between START and END: END taken at the nearest image")
         progress = None if args.quiet else ProgressBar(sys.stderr, "first contacts", min_total=50_000)
-        res = sweep_contacts(*moving.arguments(), box=box, on_invalid=args.on_invalid, progress=progress)
+        res = sweep_contacts(
+            *moving.arguments(), box=box, on_invalid=args.on_invalid, method=args.method, progress=progress,
+        )
         res.ids = moving.start.ids
         t2 = time.perf_counter()
         res.to_csv(f)
@@ -196,7 +204,7 @@ def run_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
-def unwrapped(c0: np.ndarray, c1: np.ndarray, box: Any) -> tuple[np.ndarray, int]:
+def unwrapped(c0: np.ndarray, c1: np.ndarray, box: Box) -> tuple[np.ndarray, int]:
     """END's centres moved by whole lattice vectors so that each body moves by its minimum image.
 
     Trajectories in a periodic box store wrapped positions: a body that crosses a face between

@@ -8,11 +8,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Literal
 
-__all__ = ["Method", "METHODS", "OnInvalid", "ON_INVALID", "check_choice", "check_options"]
+__all__ = ["Method", "METHODS", "SweepMethod", "SWEEP_METHODS", "OnInvalid", "ON_INVALID", "check_choice", "check_options"]
 
 Method = Literal["adaptive", "float", "exact"]
 METHODS: tuple[str, ...] = ("adaptive", "float", "exact")
 """Arithmetic of a certified answer: float filter then exact, float filter only, exact only."""
+SweepMethod = Literal["adaptive", "exact"]
+SWEEP_METHODS: tuple[str, ...] = ("adaptive", "exact")
+"""Arithmetic of a sweep's first contacts (:func:`core.sweep_contacts`): no float-only answer, a time is certified or absent."""
 OnInvalid = Literal["raise", "mark"]
 ON_INVALID: tuple[str, ...] = ("raise", "mark")
 """What a batch does with an input that is not a shape: raise ValueError, or mark the row."""

@@ -1047,6 +1047,7 @@ def test_pair_batcher_gives_each_request_its_own_answer():
     import asyncio
 
     from app.api.batching import PairBatcher
+    from app.api.convert import plain_shapes
     from app.api.schemas import PairItem
 
     sep = [[1, 0, -3], [0, 1, 0], [-3, 0, 8]]
@@ -1055,7 +1056,7 @@ def test_pair_batcher_gives_each_request_its_own_answer():
     batcher = PairBatcher(5.0)
 
     async def burst():
-        return await asyncio.gather(*(batcher.classify(p, "adaptive") for p in pairs * 5), return_exceptions=True)
+        return await asyncio.gather(*(batcher.classify(p, "adaptive", plain_shapes(p)) for p in pairs * 5), return_exceptions=True)
 
     try:
         answers = asyncio.run(burst())
@@ -1067,6 +1068,68 @@ def test_pair_batcher_gives_each_request_its_own_answer():
             assert str(answer).startswith("b is not an ellipse: "), answer
         else:
             assert answer.relation == ["tangent", None, "separate", "overlap"][k % 4], answer
+
+
+class InlinePool(WorkerPool):
+    """The pool's interface, every job run in the calling thread (so a monkeypatch reaches it)."""
+
+    def run(self, fn, /, *args, timeout, cancel=None, grace=0.0, wait_until=None, **kwargs):
+        return fn(*args, **kwargs)
+
+
+def count_binary64_tests(monkeypatch):
+    """Count the calls of core's binary64 tests by calling module, wherever they were imported by name.
+
+    Returns {"binary64": {module: calls}, "binary64_array": {module: calls}}; the scalar test's
+    calls from inside binary64_array are counted as core.shapes.numbers'.
+    """
+    import sys as _sys
+
+    import core.shapes.numbers as numbers
+
+    calls = {"binary64": {}, "binary64_array": {}}
+    for name in calls:
+        real = getattr(numbers, name)
+
+        def counted(*args, _name=name, _real=real, **kwargs):
+            caller = _sys._getframe(1).f_globals.get("__name__", "?")
+            calls[_name][caller] = calls[_name].get(caller, 0) + 1
+            return _real(*args, **kwargs)
+
+        for module in list(_sys.modules.values()):
+            if getattr(module, name, None) is real and (getattr(module, "__name__", "").startswith(("core", "app"))):
+                monkeypatch.setattr(module, name, counted)
+    return calls
+
+
+def test_binary64_is_decided_once_per_classify_request(monkeypatch):
+    """Issue 53: each number of a /api/classify request is tested once (the route's plain_shapes), then passed down.
+
+    Was: the route tested every number (is_plain_pair), classify_items tested each matrix again
+    (binary64_array), and a pair with number strings was tested twice by the route.
+    """
+    app = create_api()
+    app.dependency_overrides[get_workers] = lambda: InlinePool(1)
+    floats = {"center": [0.0, 0.5], "semi_axes": [1.0, 1.5], "orientation": 0.25}  # 5 numbers, built in floats
+    with TestClient(app) as c:
+        for body, numbers in (
+            ({"a": UNIT, "b": UNIT_AT_2}, 18),  # integers: no all-floats shortcut could hide a second test
+            ({"a": [[1.0, 0, 0.0], [0, 1.0, 0], [0.0, 0, -1.0]], "b": floats}, 14),
+            ({"pairs": [{"a": UNIT, "b": UNIT_AT_2}] * 3}, 54),
+        ):
+            calls = count_binary64_tests(monkeypatch)
+            r = c.post("/api/classify", json=body)
+            assert r.status_code == 200, r.text
+            assert calls == {"binary64": {"app.api.convert": numbers}, "binary64_array": {}}, (body, calls)
+            monkeypatch.undo()
+        # number strings: the route stops testing a shape at its first string; classify_items tests nothing
+        # again; core.classify reads its two object stacks (A, B) of the exact group once each, as it reads any object input
+        calls = count_binary64_tests(monkeypatch)
+        r = c.post("/api/classify", json={"a": UNIT, "b": circle(2)})
+        assert (r.status_code, r.json()["relation"]) == (200, "tangent"), r.text
+        assert calls["binary64"].get("app.api.convert", 0) == 9 + 3  # UNIT's 9, then circle(2)'s 1, 0 and its string "-2"
+        assert set(calls["binary64_array"]) == {"core.fixed.classify"} and calls["binary64_array"]["core.fixed.classify"] == 2  # A, B
+        assert set(calls["binary64"]) <= {"app.api.convert", "core.shapes.numbers"}
 
 
 # --- HTTP conventions (issue 26, item 7): HEAD /healthz, opt-in CORS ------------------------------

@@ -64,7 +64,7 @@ def test_matrices_and_marked_invalid_bodies(client):
         ({"bodies": [[0, 0, 0.5, 0.5, 0], [0, 0, 0, 1, 1, 1, 1, 0, 0, 0]]}, "bodies: every row must be"),
         ({}, "send either 'bodies' (rows of parameters) or 'matrices'"),
         ({"bodies": [[0, 0, 2, 2, 0], [1, 0, 0.5, 0.5, 0]], "box": [5, 5]}, "body 0 is too large for the periodic box"),
-        ({"bodies": [[0, 0, 0.5, 0.5, 0]], "box": [5, 5, 5, 5]}, "box: 4 numbers for 2D bodies"),
+        ({"bodies": [[0, 0, 0.5, 0.5, 0]], "box": [5, 5, 5, 5]}, "box: expected 2 positive finite sides (Lx, Ly) or (Lx, Ly, xy)"),
         ({"bodies": [[0, 0, 0, 0.5, 0.5, 0.5, 1, 0, 0, 0]], "box": [5, 5, 5, 0.5, 0, 7e307]}, "box: the tilt factors"),
     ],
 )

@@ -219,7 +219,7 @@ def test_a_rotating_body_against_the_exact_motion_analysis(client):
          "end row 0: expected [x, y, z, a, b, c, qw, qx, qy, qz] or [x, y, z, a, b, c] (the start rows are 3D), got 5 numbers"),
         ({"start": [sphere(0), sphere(3)], "end": [sphere(0), [3, 0, 0, 1, 1, 2]]},
          "end row 1: semi-axes [1.0, 1.0, 2.0] differ from start's [1.0, 1.0, 1.0]: a body keeps its shape during the step"),
-        ({"start": [[0, 0, 1, 1, 0]], "end": [[0, 0, 1, 1, 0]], "box": [5, 5, 5, 5]}, "box: 4 numbers for 2D bodies"),
+        ({"start": [[0, 0, 1, 1, 0]], "end": [[0, 0, 1, 1, 0]], "box": [5, 5, 5, 5]}, "box: expected 2 positive finite sides (Lx, Ly) or (Lx, Ly, xy)"),
         ({"start": [[0, 0, 1, -1, 0]], "end": [[0, 0, 1, -1, 0]]}, "row 0: semi-axes must be positive, got [1.0, -1.0]"),
         ({"start": [[0, 0, 0, 1, 1, 1, 0, 0, 0, 0]], "end": [[0, 0, 0, 1, 1, 1]]},
          "row 0: start's orientation: the quaternion is zero"),

@@ -368,6 +368,34 @@ def test_a_file_with_its_own_box_is_searched_in_it(server, tmp_path):
     assert tuple(float(v) for v in view.box_text.value.split(",")) == (side, side, side)  # the field holds the box exactly
 
 
+def test_a_typed_box_is_a_core_box(server, tmp_path):
+    """The field's text is read by core.Box.from_any: a tilted 2D box (Lx, Ly, xy) is taken as one and
+    searched as core.contacts searches it; a box of the wrong size is core's message, the model kept."""
+    from types import SimpleNamespace
+
+    from core import Box
+
+    b = random_bodies(50, dim=2, seed=5)
+    box = Box(b.side, b.side, xy=0.25)
+    centers = box.wrap(b.centers)  # into the tilted cell: the bodies must lie in one box
+    path = tmp_path / "tilted.csv"
+    write_bodies_csv(path, centers, b.semi_axes, b.orientations)
+    want = contacts(bodies_from_axes(centers, b.semi_axes, b.orientations), box=(b.side, b.side, 0.25))
+    view = BodiesView(server, load_model(str(path)))
+    view.box_text.value = f"{b.side!r}, {b.side!r}, 0.25"
+    view._on_box(SimpleNamespace(client=object()))  # as a tab's edit arrives
+    m = view.model
+    assert m.box == box and m.box.tilted and "in a periodic box" in m.summary() and "tilted (xy) = (0.25)" in m.summary()
+    assert (m.result.i.tolist(), m.result.j.tolist(), m.result.image.tolist()) == (want.i.tolist(), want.j.tolist(), want.image.tolist())
+    assert any("[" in m.pair_label(k) and "a" in m.pair_label(k).split("[")[1] for k in range(len(m.result)) if m.result.image[k].any())
+    view.box_text.value = f"{b.side}"  # one number for 2D bodies
+    view._on_box(SimpleNamespace(client=object()))
+    assert view.model is m and "periodic box: expected 2 positive finite sides" in view.file_md.content
+    view.box_text.value = f"{b.side}, ten"
+    view._on_box(SimpleNamespace(client=object()))
+    assert view.model is m and "periodic box: expected 2 numbers" in view.file_md.content
+
+
 needs_chromium = pytest.mark.skipif(not os.path.exists("/usr/bin/chromium"), reason="needs Debian chromium at /usr/bin/chromium")
 
 @pytest.mark.browser

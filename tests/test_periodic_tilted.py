@@ -370,8 +370,10 @@ def test_scene_draws_the_tilted_cell_and_takes_a_typed_tilted_box(tmp_path):
         assert len(ends) == 8 and got == {tuple(x) for x in (corners - corners.mean(axis=0)).round(4)}
     finally:
         server.stop()
-    assert parse_box("8, 8, 8, 0.5, -0.25, 0.375", 3) == box and parse_box("5 5 0.5", 2) == (5.0, 5.0, 0.5)
-    with pytest.raises(ValueError, match="expected 3 sides for 3D bodies"):
+    from core import Box
+
+    assert parse_box("8, 8, 8, 0.5, -0.25, 0.375", 3) == box and parse_box("5 5 0.5", 2) == Box(5.0, 5.0, xy=0.5)
+    with pytest.raises(ValueError, match=r"^periodic box: expected 3 positive finite sides"):
         parse_box("8, 8, 8, 1", 3)
 
 

@@ -172,3 +172,18 @@ def test_sweep_command_progress_on_stderr(tmp_path):
     )
     assert res.returncode == 0, res.stderr
     assert "read 8 moving ellipsoids" in res.stderr and "wrote" in res.stderr and res.stdout == ""
+
+
+def test_sweep_command_method_exact(tmp_path, capsys):
+    # --method exact: every pair certified by exact arithmetic, the same brackets' t* as adaptive
+    m = grazing_pairs(3, seed=5)
+    start, end = write_pair(tmp_path, m)
+    out = tmp_path / "events.csv"
+    assert main(["sweep", str(start), str(end), "--out", str(out), "--method", "exact", "--quiet"]) == 0
+    rows = [line.split(",") for line in out.read_text().splitlines()[1:]]
+    assert len(rows) == 3 and {r[5] for r in rows} == {"exact"}
+    for r, t in zip(rows, m.t_exact, strict=True):
+        assert Fraction(float(r[2])) <= t <= Fraction(float(r[3]))
+    with pytest.raises(SystemExit) as e:  # no float-only sweep
+        main(["sweep", str(start), str(end), "--out", str(out), "--method", "float"])
+    assert e.value.code == 2 and "invalid choice: 'float'" in capsys.readouterr().err

@@ -19,7 +19,7 @@ import threading
 from dataclasses import dataclass
 
 from .budget import Budget
-from .convert import classify_items
+from .convert import Plain, classify_items
 from .schemas import ClassifyOut, PairItem
 
 __all__ = ["PairBatcher"]
@@ -32,6 +32,8 @@ _MOST = 512
 class _Item:
     pair: PairItem
     method: str
+    plain: Plain
+    """The route's :func:`app.api.convert.plain_shapes` of the pair (not decided again)."""
     future: asyncio.Future[ClassifyOut]
     loop: asyncio.AbstractEventLoop
 
@@ -49,12 +51,15 @@ class PairBatcher:
         self._thread: threading.Thread | None = None
         self._lock = threading.Lock()
 
-    async def classify(self, pair: PairItem, method: str) -> ClassifyOut:
-        """The relation of one pair of JSON numbers (raises what :func:`classify_items` raises)."""
+    async def classify(self, pair: PairItem, method: str, plain: Plain) -> ClassifyOut:
+        """The relation of one pair of JSON numbers (raises what :func:`classify_items` raises).
+
+        ``plain``: the route's :func:`app.api.convert.plain_shapes` of the pair, passed on.
+        """
         self._start()
         loop = asyncio.get_running_loop()
         future: asyncio.Future[ClassifyOut] = loop.create_future()
-        self._queue.put(_Item(pair, method, future, loop))
+        self._queue.put(_Item(pair, method, plain, future, loop))
         return await future
 
     def stop(self) -> None:
@@ -90,11 +95,11 @@ class PairBatcher:
 
     def _answer(self, items: list[_Item], method: str) -> None:
         try:
-            outs = classify_items([it.pair for it in items], method, Budget(self.budget_s), batch=False)
+            outs = classify_items([it.pair for it in items], method, Budget(self.budget_s), batch=False, plain=[it.plain for it in items])
         except BaseException:  # noqa: BLE001 - a bad pair (422) or a stop: each request gets its own answer
             for it in items:
                 try:
-                    _settle(it, classify_items([it.pair], method, Budget(self.budget_s), batch=False)[0], None)
+                    _settle(it, classify_items([it.pair], method, Budget(self.budget_s), batch=False, plain=[it.plain])[0], None)
                 except BaseException as e:  # noqa: BLE001 - delivered to the request, which raises it
                     _settle(it, None, e)
             return

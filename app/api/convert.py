@@ -17,6 +17,7 @@ from typing import Any, cast
 import numpy as np
 
 from core import (
+    Box,
     Certifier,
     InvalidInput,
     Relation,
@@ -25,13 +26,13 @@ from core import (
     quadric_from_axes,
     validate_quadric,
 )
-from core.shapes.numbers import binary64, binary64_array, to_fmpq
+from core.shapes.numbers import binary64, to_fmpq
 
 from ..jobs import Budget
 from .contacts_schemas import ContactsIn
 from .schemas import ClassifyOut, PairItem, RelationName, ShapeIn
 
-__all__ = ["bad_input", "quadric_input", "checked_pair", "classify_items", "is_plain_pair", "contacts_matrices"]
+__all__ = ["bad_input", "quadric_input", "checked_pair", "classify_items", "Plain", "plain_shapes", "is_plain_pair", "contacts_matrices"]
 
 
 @contextmanager
@@ -102,17 +103,16 @@ def quadric_input(q: list[list[Any]] | ShapeIn) -> Any:
     return quadric_from_axes([fl(v) for v in q.center], [fl(v) for v in q.semi_axes], orientation)
 
 
-def _as_float64_if_exact(m: Any) -> Any:
-    """A float64 array when every entry is a JSON float or a float-exact integer, else unchanged.
+def _float_matrix(m: Any) -> Any:
+    """A square matrix of JSON numbers as a float64 array (the same values: the float filter can run), else unchanged.
 
-    The same values, so the float filter can run on e.g. ``[[1, 0, -3.5], ...]``.
+    Only for matrices :func:`plain_shapes` found plain: every entry is a binary64 value, so the
+    conversion is exact and not tested again. A matrix that is not square stays as it is: the
+    validation names the problem.
     """
-    if isinstance(m, np.ndarray):
+    if isinstance(m, np.ndarray) or _size(m) is None:
         return m
-    if len(m) not in (3, 4) or any(len(row) != len(m) for row in m):
-        return m  # not square: validation names the problem
-    floats = binary64_array(m, typed=True)  # JSON floats and float-exact integers; strings stay exact
-    return m if floats is None else floats
+    return np.array(m, dtype=np.float64)
 
 
 def _size(m: Any) -> int | None:
@@ -124,12 +124,17 @@ def _size(m: Any) -> int | None:
         return None
 
 
-def _converted(pair: PairItem, where: str, index: int | None = None) -> tuple[Any, Any]:
-    """Both shapes as core input (float64 arrays where exact), not validated yet."""
+def _converted(pair: PairItem, where: str, index: int | None = None, plain: Plain | None = None) -> tuple[Any, Any]:
+    """Both shapes as core input (float64 arrays for plain matrices), not validated yet.
+
+    ``plain``: the request's decision (:func:`plain_shapes`), made once by its route; None: made here.
+    """
+    flags = plain_shapes(pair) if plain is None else plain
     out = []
-    for name, q in (("a", pair.a), ("b", pair.b)):
+    for name, q, flat in (("a", pair.a, flags[0]), ("b", pair.b, flags[1])):
         with bad_input(f"{where}{name}: ", pair=index, matrix=name):
-            out.append(_as_float64_if_exact(quadric_input(q)))
+            m = quadric_input(q)
+            out.append(_float_matrix(m) if flat and not isinstance(q, ShapeIn) else m)  # a shape builds its own
     return out[0], out[1]
 
 
@@ -143,22 +148,36 @@ def _validated(a: Any, b: Any, where: str, index: int | None = None) -> None:
         raise InvalidInput(f"{where}{reason}", pair=index, reason=reason)
 
 
-def is_plain_pair(pair: PairItem) -> bool:
-    """True when every number of the pair is a JSON number (a binary64 value).
+Plain = tuple[bool, bool]
+"""Whether each shape of a pair (a, b) holds only JSON numbers that are binary64 values (:func:`plain_shapes`)."""
 
-    Matrices or shapes: classifying such a pair is bounded work (the float filter, at worst one
-    exact classification of doubles), so it runs in a server thread; number strings (exact
-    values of up to 400 characters and exponents up to 1000) go to the worker processes.
+
+def plain_shapes(pair: PairItem) -> Plain:
+    """Whether each shape of the pair holds only JSON numbers that are binary64 values: the request's one test.
+
+    Matrices or shapes: classifying a pair of such shapes is bounded work (the float filter, at
+    worst one exact classification of doubles), so it runs in a server thread; number strings
+    (exact values of up to 400 characters and exponents up to 1000) go to the worker processes.
+    The route decides this once per request (:func:`core.shapes.numbers.binary64`, once per
+    number) and passes it down (:func:`classify_items`), which then builds the float matrices
+    without testing the numbers again.
     """
-    for q in (pair.a, pair.b):
-        if isinstance(q, ShapeIn):
-            o = q.orientation
-            values = [*q.center, *q.semi_axes, *(o if isinstance(o, list) else [] if o is None else [o])]
-        else:
-            values = [v for row in q for v in row]
-        if not all(binary64(v, typed=True) is not None for v in values):  # JSON floats, float-exact ints
-            return False
-    return True
+    return _plain(pair.a), _plain(pair.b)
+
+
+def _plain(q: list[list[Any]] | ShapeIn) -> bool:
+    """Whether every number of one shape is a JSON float or a float-exact integer (strings are exact input)."""
+    if isinstance(q, ShapeIn):
+        o = q.orientation
+        values = [*q.center, *q.semi_axes, *(o if isinstance(o, list) else [] if o is None else [o])]
+    else:
+        values = [v for row in q for v in row]
+    return all(binary64(v, typed=True) is not None for v in values)
+
+
+def is_plain_pair(pair: PairItem) -> bool:
+    """True when every number of the pair is a JSON number (a binary64 value): :func:`plain_shapes` of both."""
+    return all(plain_shapes(pair))
 
 
 def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
@@ -168,7 +187,9 @@ def checked_pair(pair: PairItem, where: str = "") -> tuple[Any, Any]:
     return a, b
 
 
-def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, batch: bool = True) -> list[ClassifyOut]:
+def classify_items(
+    pairs: Sequence[PairItem], method: str, budget: Budget, *, batch: bool = True, plain: Sequence[Plain] | None = None
+) -> list[ClassifyOut]:
     """Certified relation of each pair, with the arithmetic that certified it.
 
     One :func:`core.classify_detailed` call per matrix size and input kind (float matrices
@@ -177,12 +198,15 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
     arithmetic. The first invalid pair in request order is named (``pairs[i]: b: ...``): a shape
     that cannot be built, or core's own reason (each group is classified with
     ``on_invalid="raise"``: core validates once, its error is renamed to the request's names).
+    ``plain``: the route's :func:`plain_shapes` of each pair (None: decided here), not made again.
 
     Raises:
         InvalidInput: bad input (``pair``: its index in the request, ``matrix``: "a" or "b").
         BudgetExceeded, Cancelled: from ``budget`` (the route answers 503).
     """
     n = len(pairs)
+    if plain is not None and len(plain) != n:
+        raise ValueError(f"plain: {len(plain)} decisions for {n} pairs")
     where = [f"pairs[{i}]: " if batch else "" for i in range(n)]
     mats: list[tuple[Any, Any] | None] = [None] * n
     index = [i if batch else None for i in range(n)]
@@ -191,7 +215,7 @@ def classify_items(pairs: Sequence[PairItem], method: str, budget: Budget, *, ba
         if i % 64 == 0:
             budget.check(f"while reading pair {i} of {n}")
         try:
-            mats[i] = _converted(pair, where[i], index[i])
+            mats[i] = _converted(pair, where[i], index[i], None if plain is None else plain[i])
         except InvalidInput as e:
             errors[i] = e
     codes = np.full(n, int(Relation.INVALID), dtype=np.int8)
@@ -263,10 +287,10 @@ def contacts_matrices(body: ContactsIn) -> np.ndarray:
         return np.zeros((0, 4, 4))
     if widths not in ({10}, {5}):
         raise InvalidInput("bodies: every row must be [x, y, z, a, b, c, qw, qx, qy, qz] (3D) or every row [x, y, a, b, angle] (2D)")
-    if body.box is not None and len(body.box) not in ((3, 6) if 10 in widths else (2, 3, 6)):
-        raise InvalidInput(f"box: {len(body.box)} numbers for {'3D' if 10 in widths else '2D'} bodies")
     t = np.array(body.bodies, dtype=np.float64)
     d = 3 if t.shape[1] == 10 else 2
+    with bad_input():
+        Box.from_any(body.box, d)  # before any matrix is built: what a box is, core's to say
     with bad_input("bodies: "):
         if body.on_invalid == "mark":
             return bodies_from_axes(t[:, :d], t[:, d : 2 * d], t[:, 2 * d :] if d == 3 else t[:, 4], on_invalid="mark")

@@ -21,7 +21,7 @@ from core.witness import contact_point, contact_scale, separating_plane, witness
 
 from ..jobs import Budget, budgeted
 from .contacts_schemas import ContactsIn, ContactsOut, PairOut
-from .convert import bad_input, checked_pair, classify_items, contacts_matrices
+from .convert import Plain, bad_input, checked_pair, classify_items, contacts_matrices
 from .limits import (
     contacts_answer_message,
     contacts_limit_message,
@@ -53,10 +53,15 @@ __all__ = [
 ]
 
 
-def classify_job(pairs: Sequence[PairItem], method: str, seconds: float, batch: bool) -> list[ClassifyOut]:
-    """:func:`app.api.convert.classify_items` under a budget of ``seconds`` (pairs with number strings)."""
+def classify_job(
+    pairs: Sequence[PairItem], method: str, seconds: float, batch: bool, plain: Sequence[Plain] | None = None
+) -> list[ClassifyOut]:
+    """:func:`app.api.convert.classify_items` under a budget of ``seconds`` (pairs with number strings).
+
+    ``plain``: the route's :func:`app.api.convert.plain_shapes` of each pair (not decided again here).
+    """
     with budgeted():
-        return classify_items(pairs, method, Budget(seconds), batch=batch)
+        return classify_items(pairs, method, Budget(seconds), batch=batch, plain=plain)
 
 
 def explain_job(pair: PairItem, seconds: float) -> ExplainOut:

@@ -18,7 +18,8 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from core.options import OnInvalid
+from core import Box
+from core.options import OnInvalid, SweepMethod
 
 from .contacts_schemas import FloatNumber
 from .schemas import AlgebraicOut, CertifiedBy
@@ -62,7 +63,7 @@ class SweepIn(BaseModel):
         description="periodic box: sides [Lx, Ly(, Lz)], or a tilted box in HOOMD's convention [Lx, Ly, Lz, xy, xz, yz] "
         "(2D: [Lx, Ly, xy]): minimum image over the whole step",
     )
-    method: Literal["adaptive", "exact"] = Field(
+    method: SweepMethod = Field(
         default="adaptive",
         description="adaptive: the certified float filter, exact arithmetic where it abstains; exact: every candidate "
         "pair exactly (slow)",
@@ -129,7 +130,7 @@ class SweepOut(BaseModel):
     summary: str
 
 
-SweepArguments = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, tuple[float, ...] | None]
+SweepArguments = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, Box | None]
 """(centers0, centers1, semi_axes, orientations0, orientations1, box) for :func:`core.sweep_contacts`."""
 
 
@@ -155,8 +156,7 @@ def sweep_arguments(body: SweepIn) -> SweepArguments:
         if len(row) not in (full, bare):
             want = f"{_ROW_3D} or [x, y, z, a, b, c]" if d == 3 else f"{_ROW_2D} or [x, y, a, b]"
             raise ValueError(f"end row {k}: expected {want} (the start rows are {d}D), got {len(row)} numbers")
-    if body.box is not None and len(body.box) not in ((3, 6) if d == 3 else (2, 3, 6)):  # as /api/contacts
-        raise ValueError(f"box: {len(body.box)} numbers for {d}D bodies")
+    box = Box.from_any(body.box, d)  # what a box is, core's to say (as /api/contacts)
     s = np.array(body.start, dtype=np.float64).reshape(n, full)
     c0, r = s[:, :d], s[:, d : 2 * d]
     o0 = s[:, 2 * d :] if d == 3 else s[:, 2 * d]
@@ -173,7 +173,7 @@ def sweep_arguments(body: SweepIn) -> SweepArguments:
     if turning:
         o1 = o0.copy()
         o1[turning] = np.array([body.end[k][2 * d :] if d == 3 else body.end[k][2 * d] for k in turning], dtype=np.float64)
-    return c0, c1, r, o0, o1, None if body.box is None else tuple(body.box)
+    return c0, c1, r, o0, o1, box
 
 
 _WORDS = (

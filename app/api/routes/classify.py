@@ -17,7 +17,7 @@ import threading
 from fastapi import APIRouter, HTTPException, Request
 
 from ..budget import Budget, BudgetExceeded, Cancelled, budget_error, run_job, run_off_loop
-from ..convert import classify_items, is_plain_pair
+from ..convert import classify_items, plain_shapes
 from ..deps import BatcherDep, SettingsDep, WorkersDep
 from ..jobs import classify_job, explain_job
 from ..json_body import JsonRoute
@@ -49,15 +49,16 @@ async def classify(
     if len(pairs) > settings.max_batch:
         raise HTTPException(422, f"batch of {len(pairs)} pairs is over the limit of {settings.max_batch}")
     hint = "send fewer pairs per request" if batch else ""
-    if not batch and is_plain_pair(pairs[0]):
+    plain = [plain_shapes(p) for p in pairs]  # the request's one binary64 test, passed down
+    if not batch and all(plain[0]):
         try:
-            return await batcher.classify(pairs[0], body.method)
+            return await batcher.classify(pairs[0], body.method, plain[0])
         except (BudgetExceeded, Cancelled) as e:
             raise budget_error(e) from None
-    if all(is_plain_pair(p) for p in pairs):
+    if all(a and b for a, b in plain):
 
         def work(cancel: threading.Event) -> list[ClassifyOut]:
-            return classify_items(pairs, body.method, Budget(settings.request_budget_s, cancel), batch=batch)
+            return classify_items(pairs, body.method, Budget(settings.request_budget_s, cancel), batch=batch, plain=plain)
 
         try:
             out = await run_off_loop(request, work)
@@ -65,7 +66,7 @@ async def classify(
             raise budget_error(e, hint) from None
     else:
         out = await run_job(
-            request, workers, classify_job, pairs, body.method, settings.request_budget_s, batch,
+            request, workers, classify_job, pairs, body.method, settings.request_budget_s, batch, plain,
             seconds=settings.request_budget_s, checks_budget=True, hint=hint, memory_mb=settings.memory_limit_mb,
         )
     return out if batch else out[0]

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from core import Relation
+from core import Box, Relation
 
 from ..common.shapes import RELATION_COLORS, unit_disc
 from .bodies_lod import TRIANGLE_BUDGET, ViewPose, choose_detail
@@ -251,15 +251,11 @@ class BodyLayers:
             elif self.network is not None:
                 self.network.visible = shown
 
-    def add_box(self, lo: np.ndarray, sides: tuple[float, ...]) -> None:
+    def add_box(self, lo: np.ndarray, box: Box) -> None:
         """Draw the periodic box with its lower corner at ``lo`` (world); a tilted box as its parallelepiped."""
-        from core.bodies.periodic import box_vectors, read_box
-
-        d = self.dim
-        L = read_box(sides, d)
-        assert L is not None
+        d = box.dimensions
         vectors = np.zeros((3, 3))
-        vectors[:d, :d] = box_vectors(L, d)  # columns a1, a2[, a3]
+        vectors[:d, :d] = box.vectors  # columns a1, a2[, a3]
         corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in ((0, 1) if d == 3 else (0,))], dtype=float)
         pts = lo + corners @ vectors.T - self.origin
         segs = [(a, b) for a in range(len(pts)) for b in range(a + 1, len(pts)) if np.count_nonzero(corners[a] != corners[b]) == 1]

@@ -31,7 +31,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ...bodyfiles import BodySet, read_bodies
-from ...readers import usable_box
 from ..common.camera import Framing
 from ..common.lighting import light_scene
 from ..common.mesh_detail import SPHERE_SUBDIVISIONS
@@ -42,6 +41,8 @@ from .bodies_lod import ViewPose
 from .model import UPLOAD_BYTES, UPLOAD_SECONDS, BodiesModel, PairPage, tab_bodies_job
 
 if TYPE_CHECKING:
+    from core import Box
+
     from ..pair.analysis import AnalysisCache
 
 __all__ = ["BodiesView", "load_model", "NO_PAIRS"]
@@ -58,11 +59,12 @@ def load_model(path: str, box: Any = None, *, frame: int | None = None, format: 
     """Read a bodies file and search its contacts (``python -m app serve --bodies FILE``).
 
     ``box`` (``--box``) overrides the file's own periodic box (a GSD/LAMMPS/extxyz box is used
-    when none is given).
+    when none is given; any form of :meth:`core.Box.from_any`: :func:`app.bodies_cli.command_box`).
     """
+    from ...bodies_cli import command_box
+
     bodies = read_bodies(path, frame=frame, format=format)
-    box = box if box is not None else bodies.box
-    return BodiesModel(bodies, usable_box(box, bodies.dim, str(path)), name=str(path).rsplit("/", 1)[-1])
+    return BodiesModel(bodies, command_box(box, bodies), name=str(path).rsplit("/", 1)[-1])
 
 
 class BodiesView:
@@ -670,9 +672,9 @@ def _camera_of(cam: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         return None
 
 
-def _box_text(box: Any) -> str:
-    """The box as the field shows it: every side in its shortest exact decimal (read back the same)."""
-    return "" if box is None else ", ".join(repr(float(v)) for v in box)
+def _box_text(box: Box | None) -> str:
+    """The box as the field shows it: every number in its shortest exact decimal (:func:`parse_box` reads it back the same)."""
+    return "" if box is None else ", ".join(repr(v) for v in box.to_tuple())
 
 
 def _legend(moving: bool = False) -> str:

@@ -27,9 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from core import Certifier, Contacts, Relation, axes_from_quadric, contacts
+from core import Box, Certifier, Contacts, PairTable, Relation, axes_from_quadric, contacts
 from core.bodies.broadphase import TooManyPairs
-from core.bodies.periodic import is_tilted
 from core.shapes.quadrics import rotations_from_orientations
 
 from ...bodyfiles import BodySet
@@ -87,53 +86,60 @@ UPLOAD_SECONDS = 60.0
 """Time budget of reading a tab's file and finding its contacts (a worker process, killed then)."""
 
 
-def parse_box(text: str, dim: int) -> tuple[float, ...] | None:
-    """The periodic box typed in the GUI ("10, 10, 10"), or None when empty."""
+def parse_box(text: str, dim: int) -> Box | None:
+    """The periodic box typed in the GUI ("10, 10, 10", or a tilted "10, 10, 10, 0.5, 0, 0"), or None when empty.
+
+    The numbers are read here; what makes them a box for ``dim``-D bodies is
+    :meth:`core.Box.from_any`'s to say (its message, as the field's).
+
+    Examples:
+        >>> parse_box("8, 8, 0.5", 2)
+        Box(Lx=8.0, Ly=8.0, Lz=None, xy=0.5, xz=0.0, yz=0.0)
+        >>> parse_box("10 10", 3)
+        Traceback (most recent call last):
+        ...
+        ValueError: periodic box: expected 3 positive finite sides (Lx, Ly, Lz) or (Lx, Ly, Lz, xy, xz, yz) (a tilted box, HOOMD's tilt factors), got [10.0, 10.0]
+    """
     parts = [p for p in str(text).replace(",", " ").split() if p]
     if not parts:
         return None
     try:
-        sides = tuple(float(p) for p in parts)
+        numbers = [float(p) for p in parts]
     except ValueError:
         raise ValueError(f"periodic box: expected {dim} numbers, got {text!r}") from None
-    if len(sides) not in (dim, 6) and not (dim == 2 and len(sides) == 3):
-        raise ValueError(f"periodic box: expected {dim} sides for {dim}D bodies (or a tilted box: Lx, Ly, Lz, xy, xz, yz), got {len(sides)}")
-    return sides
+    try:
+        return Box.from_any(numbers, dim)
+    except ValueError as e:
+        raise ValueError(f"periodic box: {str(e).removeprefix('box: ')}") from None
 
 
-def image_text(image: np.ndarray | None, k: int, box: Any) -> str:
+def image_text(image: np.ndarray | None, k: int, box: Box | None) -> str:
     """" [+x -y]": the image of pair k's second body ("" if none), by box vectors in a tilted box.
 
     In a tilted box the image counts box vectors, not axes: " [+a1 -a2]" (j moved by a1 - a2).
 
     Examples:
-        >>> image_text(np.array([[1, -1, 0]]), 0, np.array([8.0, 8.0, 8.0]))
+        >>> image_text(np.array([[1, -1, 0]]), 0, Box(8, 8, 8))
         ' [+x -y]'
-        >>> image_text(np.array([[0, -1, 0]]), 0, np.array([8.0, 8.0, 8.0, 0.5, 0.0, 0.0]))
+        >>> image_text(np.array([[0, -1, 0]]), 0, Box(8, 8, 8, xy=0.5))
         ' [-a2]'
         >>> image_text(np.array([[2, 0, -1]]), 0, None)
         ' [+2x -z]'
     """
     if image is None or not image[k].any():
         return ""
-    names = ("a1", "a2", "a3") if is_tilted(box) else ("x", "y", "z")
+    names = ("a1", "a2", "a3") if box is not None and box.tilted else ("x", "y", "z")
     return " [" + " ".join(f"{'+' if v > 0 else '-'}{abs(int(v)) if abs(v) > 1 else ''}{names[a]}" for a, v in enumerate(image[k]) if v) + "]"
 
 
-def box_phrase(box: tuple[float, ...] | None, dim: int) -> str:
+def box_phrase(box: Box | None) -> str:
     """" in a periodic box 10 × 10 × 10" (tilted: "... tilted (xy, xz, yz) = (0.5, 0, 0)"); "" in open space.
 
     Examples:
-        >>> box_phrase((8.0, 8.0, 0.0, 0.5, 0.0, 0.0), 2)
+        >>> box_phrase(Box(8.0, 8.0, xy=0.5))
         ' in a periodic box 8 × 8 tilted (xy) = (0.5)'
     """
-    if box is None:
-        return ""
-    text = " in a periodic box " + " × ".join(f"{v:g}" for v in box[:dim])
-    if len(box) == 6:
-        names, tilts = ("xy", box[3:4]) if dim == 2 else ("xy, xz, yz", box[3:])
-        text += f" tilted ({names}) = (" + ", ".join(f"{v:g}" for v in tilts) + ")"
-    return text
+    return "" if box is None else " in a periodic box " + box.describe().replace(" x ", " × ")
 
 
 def tab_bodies_job(source: bytes | BodySet, name: str, box_text: str, max_pairs: int | None = UPLOAD_PAIRS) -> BodiesModel:
@@ -149,11 +155,10 @@ def tab_bodies_job(source: bytes | BodySet, name: str, box_text: str, max_pairs:
         ValueError: an unreadable file, a bad box, or too many pairs to examine.
     """
     from ...bodyfiles import read_bodies_bytes
-    from ...readers import usable_box
 
     if isinstance(source, bytes | bytearray):
         bodies = read_bodies_bytes(bytes(source), name)
-        box = usable_box(bodies.box, bodies.dim, name) if bodies.box is not None else parse_box(box_text, bodies.dim)
+        box = bodies.box if bodies.box is not None else parse_box(box_text, bodies.dim)
     else:
         bodies, box = source, parse_box(box_text, source.dim)
     return BodiesModel(bodies, box, name=name, max_pairs=max_pairs)
@@ -167,7 +172,7 @@ class PairList(ABC):
     :class:`~app.readers.BodySet`), ``dim`` and ``pair_label``.
     """
 
-    result: Any
+    result: PairTable
     order: np.ndarray
     bodies: BodySet
     dim: int
@@ -195,7 +200,7 @@ class PairList(ABC):
         if body is not None:
             if not 0 <= body < len(self.bodies):
                 raise ValueError(f"no body {body}: the bodies are numbered 0 to {len(self.bodies) - 1:,}")
-            idx = idx[(res.i[idx] == body) | (res.j[idx] == body)]
+            idx = idx[np.isin(idx, res.pairs_of(body), assume_unique=True)]
         if relation != "all":
             code = Relation.parse(relation)
             idx = idx[res.relation[idx] == code]
@@ -278,7 +283,7 @@ class BodiesModel(PairList):
 
     Args:
         bodies: the bodies read from a file.
-        box: periodic box sides, or None.
+        box: the periodic box (any form of :meth:`core.Box.from_any`), or None.
         name: what to call the set in the GUI (the file name).
         max_pairs: most pairs the broad phase may examine (None: no limit); the scene's limit
             for a file a tab uploads (:data:`UPLOAD_PAIRS`).
@@ -292,7 +297,7 @@ class BodiesModel(PairList):
         self.bodies = bodies
         self.name = name or bodies.source
         self.dim = bodies.dim
-        self.box = None if box is None else tuple(float(v) for v in box)
+        self.box: Box | None = Box.from_any(box, bodies.dim)
         try:
             self.result: Contacts = contacts(bodies.Q, box=self.box, on_invalid="mark", max_pairs=max_pairs)
         except TooManyPairs as e:
@@ -365,7 +370,7 @@ class BodiesModel(PairList):
         """Markdown: the set, its contacts by relation and how they were certified."""
         res, c = self.result, self.result.counts
         kind = "ellipsoids" if self.dim == 3 else "ellipses"
-        box = box_phrase(self.box, self.dim)
+        box = box_phrase(self.box)
         lines = [
             f"**{len(self.bodies):,} {kind}**{box}" + (f" from `{self.name}`" if self.name else ""),
             f"{len(res):,} contacts: **{c.get('tangent', 0):,} tangent**, **{c.get('overlap', 0):,} overlap** "

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from flint import fmpq
 
-from core import Certifier, Relation, analyse, classify, sweep_contacts
+from core import Box, Certifier, Relation, analyse, classify, sweep_contacts
 from core.algebra.algebraic import RealAlgebraic
 from core.algebra.closedform import closed_form
 from core.bodies.sweep_result import SweepContacts
@@ -121,7 +121,7 @@ class SweepModel(PairList):
         self.bodies = moving.start
         self.dim = moving.dim
         self.name = name or f"{_base(moving.names[0])} → {_base(moving.names[1])}"
-        self.box = moving.box
+        self.box: Box | None = moving.box
         c0, c1, r, o0, o1 = moving.arguments()
         self.result: SweepContacts = sweep_contacts(c0, c1, r, o0, o1, box=self.box, on_invalid="mark")
         back = sweep_contacts(c1, c0, r, o1 if o1 is not None else o0, None if o1 is None else o0, box=self.box, on_invalid="mark")
@@ -228,7 +228,7 @@ class SweepModel(PairList):
         """Markdown: the set, its contact events and how they were certified."""
         res, c = self.result, self.result.counts
         kind = "ellipsoids" if self.dim == 3 else "ellipses"
-        box = box_phrase(self.box, self.dim)
+        box = box_phrase(self.box)
         at0 = int(np.count_nonzero(res.t_hi == 0.0))
         lines = [
             f"**{len(self.bodies):,} moving {kind}**{box}" + (f" from `{self.name}`" if self.name else ""),
