@@ -176,7 +176,8 @@ def unrepresentable(c: Any, r: Any) -> str:
 
 
 def quadrics_from_axes(
-    centers: Any, semi_axes: Any, orientations: Any = None, *, unrepresentable_rows: Literal["raise", "nan"] = "raise"
+    centers: Any, semi_axes: Any, orientations: Any = None, *, unrepresentable_rows: Literal["raise", "nan"] = "raise",
+    checked: bool = False,
 ) -> np.ndarray:
     """Float matrices of N shapes: :func:`quadric_from_axes` vectorised, bit for bit.
 
@@ -192,6 +193,8 @@ def quadrics_from_axes(
             in radians, or (N, 4) quaternions (w, 0, 0, z); None = axis-aligned.
         unrepresentable_rows: "raise" a ValueError for a row no float64 matrix holds, or "nan":
             such a row is NaN (:func:`core.bodies.bodies_from_axes` marks it invalid).
+        checked: the caller already found every row a shape (:func:`axes_row_errors` empty):
+            the check is not run twice (:func:`core.bodies.build.matrices_and_errors`).
 
     Returns:
         float64 array (N, d + 1, d + 1).
@@ -212,7 +215,7 @@ def quadrics_from_axes(
         ValueError: row 1: semi-axes must be positive, got [1.0, -1.0]
     """
     c, r, o = _axes_arrays(centers, semi_axes, orientations)
-    errors = axes_row_errors(c, r, o, first=True)
+    errors = {} if checked else axes_row_errors(c, r, o, first=True)
     if errors:
         k, reason = next(iter(errors.items()))
         raise ValueError(f"row {k}: {reason}")
