@@ -500,8 +500,9 @@ class BodyIndex:
         (:func:`core.fixed.compiled.query_many`, the GIL released), its pairs appended in order of
         the new bodies (sorted by (i, j)); the outputs grow when full. What the filter leaves
         (images, undecided pairs, a method other than "adaptive") is classified as
-        :meth:`_classify` does. None where the compiled loop cannot answer (out of memory in it):
-        the numpy path then does.
+        :meth:`_classify` does, in the thread of its range of new bodies (a periodic box's image
+        pairs then go through the numpy filter while the other range is still in C). None where
+        the compiled loop cannot answer (out of memory in it): the numpy path then does.
 
         The new bodies are asked in the order of the grid cells their centres fall in (the
         answers do not depend on it): neighbouring new bodies then read the same cells and
@@ -519,10 +520,15 @@ class BodyIndex:
         Qc = np.ascontiguousarray(Qn[order], dtype=np.float64)
         Q = self._Q if adaptive else _NONE
 
-        def run(lo: int, hi: int) -> tuple[list[tuple[np.ndarray, ...]], int, int, int]:
-            """Bodies [lo, hi): their parts of the outputs, candidates, pairs left, status (0 or a code)."""
+        def run(lo: int, hi: int) -> tuple[tuple[np.ndarray, ...], list[int]]:
+            """Bodies [lo, hi): their pairs (rows in cell order), and [candidates, left, float, exact, undecided, status].
+
+            The pairs the compiled loop leaves (images, undecided) are classified here, in the
+            range's own thread: while one range is in Python the other's compiled loop runs on.
+            """
             size, start, candidates, left = max(4096, 8 * (hi - lo)), lo, 0, 0
             parts: list[tuple[np.ndarray, ...]] = []
+            status = 0
             while start < hi:
                 qout, out = np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64)
                 kout = _NO_IMAGES if self._L is None else np.empty((size, d), dtype=np.int8)
@@ -533,12 +539,22 @@ class BodyIndex:
                 )
                 parts.append((qout[:kept], out[:kept], kout[:kept], codes[:kept], by[:kept]))
                 candidates, left, start = candidates + found, left + open_, done
-                if status == 0:
+                if status == 0 or status > compiled.QUERY_SPACE:
                     break
-                if status > compiled.QUERY_SPACE:
-                    return parts, candidates, left, status
                 size = max(2 * size, compiled.QUERY_SPACE - status)  # full: more room, from the body that did not fit
-            return parts, candidates, left, 0
+            qi, bj, image, rel, cert = (np.concatenate(x) if len(parts) > 1 else x[0] for x in zip(*parts, strict=True))
+            tally = [candidates, left, candidates - left, 0, 0, status]
+            if left and not status:
+                first = rel if adaptive else None
+                rel, cert = self._classify_found(Qc, bj, None if self._L is None else image, first, qi)
+                tally[2] += int(np.count_nonzero((cert if first is None else cert[first < 0]) == Certifier.FLOAT))
+                tally[3] = int(np.count_nonzero(cert == Certifier.EXACT))
+                tally[4] = int(np.count_nonzero(rel == Relation.UNDECIDED)) if self.method == "float" else 0
+                keep = np.flatnonzero(rel)
+                if keep.size != rel.size:
+                    qi, bj, rel, cert = qi[keep], bj[keep], rel[keep], cert[keep]
+                    image = image if self._L is None else image[keep]
+            return (qi, bj, image, rel, cert), tally
 
         k = min(get_threads(), max(1, M // _BODIES_PER_THREAD))
         bounds = np.linspace(0, M, k + 1).astype(np.int64).tolist()
@@ -547,31 +563,21 @@ class BodyIndex:
         else:  # ranges of new bodies side by side (the compiled loop releases the GIL), in order
             futures = [compiled.pool(k - 1).submit(run, lo, hi) for lo, hi in zip(bounds[1:-1], bounds[2:], strict=True)]
             results = [run(bounds[0], bounds[1])] + [f.result() for f in futures]
-        parts = [p for r in results for p in r[0]]
-        candidates, left = sum(r[1] for r in results), sum(r[2] for r in results)
-        status = next((r[3] for r in results if r[3]), 0)
+        status = next((r[1][5] for r in results if r[1][5]), 0)
         if status == compiled.QUERY_GENERAL:
             return None
         if status:
             raise ValueError(_FAR_MESSAGE if status == compiled.QUERY_FAR_BOX else _IMAGES_MESSAGE)
+        candidates, left, n_float, n_exact, n_undecided = (sum(r[1][t] for r in results) for t in range(5))
+        parts = [r[0] for r in results]
         qi, bj, image, rel, cert = (np.concatenate(x) if len(parts) > 1 else x[0] for x in zip(*parts, strict=True))
         qi = order[qi]  # back to the rows of Qnew; each body's pairs are sorted by j, so a stable sort by i sorts by (i, j)
         by_row = np.argsort(qi, kind="stable")
         qi, bj, rel, cert = qi[by_row], bj[by_row], rel[by_row], cert[by_row]
         image = None if self._L is None else image[by_row]
-        counts = {"queries": M, "candidates": candidates, "float": candidates - left, "exact": 0, "undecided": 0}
+        counts = {"queries": M, "candidates": candidates, "float": n_float, "exact": n_exact, "undecided": n_undecided}
         if candidates > left:
             _CLASSIFY.count(candidates - left, 0, 0)
-        if left:
-            first = rel if adaptive else None
-            rel, cert = self._classify_found(Qn, bj, image, first, qi)
-            counts["float"] += int(np.count_nonzero((cert if first is None else cert[first < 0]) == Certifier.FLOAT))
-            counts["exact"] = int(np.count_nonzero(cert == Certifier.EXACT))
-            counts["undecided"] = int(np.count_nonzero(rel == Relation.UNDECIDED)) if self.method == "float" else 0
-            keep = np.flatnonzero(rel)
-            if keep.size != rel.size:
-                qi, bj, rel, cert = qi[keep], bj[keep], rel[keep], cert[keep]
-                image = None if image is None else image[keep]
         return IndexPairs(qi, bj, rel, cert, image, self.box, {}, counts)
 
     def _classify_found(
