@@ -561,7 +561,8 @@ class BodyIndex:
         if k == 1:
             results = [run(0, M)]
         else:  # ranges of new bodies side by side (the compiled loop releases the GIL), in order
-            futures = [compiled.pool(k - 1).submit(run, lo, hi) for lo, hi in zip(bounds[1:-1], bounds[2:], strict=True)]
+            # pool(k): a worker stays free for what a range's classification hands to the pool (leaf tasks)
+            futures = [compiled.pool(k).submit(run, lo, hi) for lo, hi in zip(bounds[1:-1], bounds[2:], strict=True)]
             results = [run(bounds[0], bounds[1])] + [f.result() for f in futures]
         status = next((r[1][5] for r in results if r[1][5]), 0)
         if status == compiled.QUERY_GENERAL:
