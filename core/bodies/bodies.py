@@ -5,8 +5,9 @@ What the file readers return and what :func:`core.contacts`, :class:`core.BodyIn
 ellipsoids (d = 3), the bodies' own ids when the source has them (a LAMMPS ``id`` column, a CSV
 ``id`` column) so that answers can name them, and the periodic :class:`~core.Box` they live in.
 The matrices are built from the parameters once, when first asked for, by
-:func:`core.bodies_from_axes` (bit for bit what one shape gives); a row whose parameters are no
-shape becomes a NaN matrix with the reason in :attr:`Bodies.errors`. Sources that store matrices
+:func:`core.bodies_from_axes` (bit for bit what one shape gives), and the parameters checked once
+with them (:func:`core.bodies.build.matrices_and_errors`); a row whose parameters are no shape
+becomes a NaN matrix with the reason in :attr:`Bodies.errors`. Sources that store matrices
 rather than parameters use :meth:`Bodies.from_matrices`.
 """
 
