@@ -343,3 +343,74 @@ def test_an_index_at_any_float_scale_finds_the_contacts_without_warnings(scale):
     want = answers(1.0)
     assert want == ([0], [2], [int(Relation.OVERLAP)], [0], [2], [int(Relation.OVERLAP)])
     assert got == want
+
+
+BAD_ROWS_3D = [  # (centre, semi-axes, quaternion, what the reason says)
+    ([np.nan, 0, 0], [1, 1, 1], [1, 0, 0, 0], "finite"),
+    ([0, 0, 0], [1, np.inf, 1], [1, 0, 0, 0], "finite"),
+    ([0, 0, 0], [1, -1, 1], [1, 0, 0, 0], "positive"),
+    ([0, 0, 0], [1, 0.0, 1], [1, 0, 0, 0], "positive"),
+    ([1e9, 0, 0], [1, 1e-2, 1], [1, 0, 0, 0], "2^26"),
+    ([0, 0, 0], [1, 1, 1], [0, 0, 0, 0], "zero"),
+    ([0, 0, 0], [1, 1, 1], [1, np.nan, 0, 0], "finite"),
+]
+
+
+@pytest.mark.parametrize("bad", BAD_ROWS_3D)
+def test_parameters_checked_once_and_every_bad_row_named(bad, monkeypatch):
+    """A batch of trial moves' parameters is checked once (core.Bodies keeps the matrices and the
+    reasons), and the whole-array shortcut of the check never lets a bad row through."""
+    import core.bodies.build as build
+    from core.shapes.quadrics import axes_row_errors, quadric_from_axes
+
+    b = random_bodies(200, dim=3, fraction=0.2, seed=5)
+    c, r, o = b.centers.copy(), b.semi_axes.copy(), b.orientations.copy()
+    assert axes_row_errors(c, r, o) == {}
+    c[77], r[77], o[77] = bad[0], bad[1], bad[2]
+    calls = []
+    monkeypatch.setattr(build, "axes_row_errors", lambda *a, **k: calls.append(1) or axes_row_errors(*a, **k))
+    trial = Bodies(c, r, o)
+    Q, errors = trial.matrices, trial.errors
+    assert len(calls) == 1 and list(errors) == [77] and bad[3] in errors[77]
+    assert np.isnan(Q[77]).all() and np.array_equal(Q[76], quadric_from_axes(c[76], r[76], o[76]))
+    assert axes_row_errors(c, r, o) == errors
+
+
+def test_tiny_quaternions_and_2d_rotations_pass_the_check():
+    """Quaternions whose squares underflow are still rotations; a 2D quaternion must turn about z."""
+    from core.shapes.quadrics import axes_row_errors
+
+    c, r = np.zeros((3, 3)), np.ones((3, 3))
+    assert axes_row_errors(c, r, np.array([[1e-170, 0, 0, 0], [0, 0, 0, 1e-200], [1, 0, 0, 0]])) == {}
+    errors = axes_row_errors(np.zeros((2, 2)), np.ones((2, 2)), np.array([[1.0, 0, 0, 0], [1.0, 0, 0.5, 0]]))
+    assert list(errors) == [1] and "about z" in errors[1]
+
+
+def test_new_bodies_spheres_are_bounding_spheres():
+    """The index's short way to new bodies' spheres gives bounding_spheres' spheres bit for bit,
+    and names an invalid body by its row (the general stages answer for it)."""
+    from core.bodies.bounds import bounding_spheres
+    from core.bodies.index import _certified_spheres
+
+    Q = bodies(300, 3, None, seed=8)
+    Q[5] = np.diag([1.0, 1.0, 1.0, 1.0])  # empty interior: no shape
+    Q[9, 0, 1] = np.nextafter(Q[9, 0, 1], 1.0)  # not exactly symmetric: the general stages
+    c, rad, invalid = _certified_spheres(Q.copy())
+    want = bounding_spheres(Q.copy())
+    assert list(invalid) == [5] and invalid == want.invalid and invalid[5].startswith("body 5 ")
+    assert np.array_equal(rad, want.radii, equal_nan=True) and np.array_equal(c[rad == rad], want.centers[rad == rad])
+
+
+@pytest.mark.parametrize("d, box", CASES)
+def test_accepted_moves_one_at_a_time(d, box):
+    """update of one row (an accepted move: its centre placed in Python floats) leaves the index
+    answering like a fresh one and like contacts on the union."""
+    rng = np.random.default_rng(12)
+    Q = bodies(200, d, box, seed=13)
+    index = BodyIndex(Q, box=box)
+    moved = bodies(30, d, box, seed=14)
+    for k, row in enumerate(rng.choice(len(Q), size=30, replace=False).tolist()):
+        index.update([row], moved[k])
+        Q[row] = moved[k]
+    Qnew = bodies(60, d, box, seed=15)
+    assert as_dict(index.query(Qnew)) == as_dict(BodyIndex(Q, box=box).query(Qnew)) == expected(Q, Qnew, box) != {}

@@ -5,8 +5,9 @@ What the file readers return and what :func:`core.contacts`, :class:`core.BodyIn
 ellipsoids (d = 3), the bodies' own ids when the source has them (a LAMMPS ``id`` column, a CSV
 ``id`` column) so that answers can name them, and the periodic :class:`~core.Box` they live in.
 The matrices are built from the parameters once, when first asked for, by
-:func:`core.bodies_from_axes` (bit for bit what one shape gives); a row whose parameters are no
-shape becomes a NaN matrix with the reason in :attr:`Bodies.errors`. Sources that store matrices
+:func:`core.bodies_from_axes` (bit for bit what one shape gives), and the parameters checked once
+with them (:func:`core.bodies.build.matrices_and_errors`); a row whose parameters are no shape
+becomes a NaN matrix with the reason in :attr:`Bodies.errors`. Sources that store matrices
 rather than parameters use :meth:`Bodies.from_matrices`.
 """
 
@@ -20,7 +21,7 @@ import numpy as np
 
 from ..shapes.quadrics import axes_row_errors
 from .box import Box
-from .build import bodies_from_axes
+from .build import matrices_and_errors
 
 __all__ = ["Bodies"]
 
@@ -111,15 +112,15 @@ class Bodies:
     def matrices(self) -> np.ndarray:
         """(N, d+1, d+1) float64 matrices (NaN rows: parameters that are no shape, see :attr:`errors`)."""
         if self._matrices is None:
-            self._errors = axes_row_errors(self.centers, self.semi_axes, self.orientations)
-            self._matrices = bodies_from_axes(self.centers, self.semi_axes, self.orientations, on_invalid="mark")
+            self._matrices, self._errors = matrices_and_errors(self.centers, self.semi_axes, self.orientations)
         return self._matrices
 
     @property
     def errors(self) -> dict[int, str]:
         """Row -> why its parameters are no ellipse/ellipsoid (those matrices are NaN)."""
         if self._errors is None:
-            self._errors = axes_row_errors(self.centers, self.semi_axes, self.orientations)
+            _ = self.matrices  # checked once, with the matrices (matrices_and_errors)
+        assert self._errors is not None
         return self._errors
 
     @property

@@ -87,6 +87,10 @@ _FAR_MESSAGE = "a body lies too far from the periodic box for float64 fractional
 _IMAGES_MESSAGE = "a body lies more than 127 boxes from another: wrap the centres into the box"
 _MARGIN = 1.0 - 2.0**-20
 _C_ONE = compiled.query_one_available()
+_C_SPHERES = compiled.spheres_available()
+"""New bodies' spheres from the compiled float proof where it certifies them (:func:`_certified_spheres`)."""
+_SPHERES_PER_THREAD = 8192
+"""A batch of new bodies' spheres is split over the filter's threads in ranges of at least this many."""
 """One new body takes the extension's spheres and grid lookup (else the general path in numpy)."""
 _NO_IMAGES = np.zeros((0, 3), dtype=np.int8)
 _BODIES_PER_THREAD = 2048
@@ -95,6 +99,35 @@ _NONE = np.zeros(0)
 """An empty buffer: no matrices for the compiled lookup (it then classifies nothing)."""
 _CLASSIFY = predicate("classify")
 """The counters of classify (:func:`core.filter_stats`), which the one-body path's filter calls feed too."""
+
+
+def _certified_spheres(Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
+    """(centres, radii, body k -> why it is no shape) of new bodies: :func:`bounding_spheres`, short where it can be.
+
+    The compiled float proof (:func:`core.fixed.compiled.spheres`) first: where it proves a tight
+    sphere that is the very sphere :func:`bounding_spheres` gives (its first, fast stage), without
+    that function's stages and threads (~40 us for one body, against 2 us here; an accepted move
+    updates one). The other bodies (none proven, a loose sphere, a matrix not exactly symmetric,
+    no shape) go to :func:`bounding_spheres`, which names the invalid ones ("body k", k the row here).
+    """
+    if not _C_SPHERES or not Q.shape[0]:
+        s = bounding_spheres(Q)
+        return s.centers, s.radii, s.invalid
+    if Q.shape[0] < _SPHERES_PER_THREAD or get_threads() == 1:
+        centers, radii, status = compiled.spheres(Q)
+    else:  # ranges side by side (the compiled proof releases the GIL)
+        k = min(get_threads(), Q.shape[0] // _SPHERES_PER_THREAD)
+        bounds = np.linspace(0, Q.shape[0], k + 1).astype(np.int64).tolist()
+        futures = [compiled.pool(k - 1).submit(compiled.spheres, Q[lo:hi]) for lo, hi in zip(bounds[1:-1], bounds[2:], strict=True)]
+        parts = [compiled.spheres(Q[: bounds[1]])] + [f.result() for f in futures]
+        centers, radii, status = (np.concatenate(x) for x in zip(*parts, strict=True))
+    rest = np.flatnonzero((status != compiled.SPHERE_TIGHT) | ~np.isfinite(radii))
+    invalid: dict[int, str] = {}
+    if rest.size:
+        s = bounding_spheres(Q[rest])
+        centers[rest], radii[rest] = s.centers, s.radii
+        invalid = {int(rest[k]): why.replace(f"body {k}", f"body {int(rest[k])}", 1) for k, why in s.invalid.items()}
+    return centers, radii, invalid
 
 
 @dataclass
@@ -467,8 +500,9 @@ class BodyIndex:
         (:func:`core.fixed.compiled.query_many`, the GIL released), its pairs appended in order of
         the new bodies (sorted by (i, j)); the outputs grow when full. What the filter leaves
         (images, undecided pairs, a method other than "adaptive") is classified as
-        :meth:`_classify` does. None where the compiled loop cannot answer (out of memory in it):
-        the numpy path then does.
+        :meth:`_classify` does, in the thread of its range of new bodies (a periodic box's image
+        pairs then go through the numpy filter while the other range is still in C). None where
+        the compiled loop cannot answer (out of memory in it): the numpy path then does.
 
         The new bodies are asked in the order of the grid cells their centres fall in (the
         answers do not depend on it): neighbouring new bodies then read the same cells and
@@ -486,10 +520,15 @@ class BodyIndex:
         Qc = np.ascontiguousarray(Qn[order], dtype=np.float64)
         Q = self._Q if adaptive else _NONE
 
-        def run(lo: int, hi: int) -> tuple[list[tuple[np.ndarray, ...]], int, int, int]:
-            """Bodies [lo, hi): their parts of the outputs, candidates, pairs left, status (0 or a code)."""
+        def run(lo: int, hi: int) -> tuple[tuple[np.ndarray, ...], list[int]]:
+            """Bodies [lo, hi): their pairs (rows in cell order), and [candidates, left, float, exact, undecided, status].
+
+            The pairs the compiled loop leaves (images, undecided) are classified here, in the
+            range's own thread: while one range is in Python the other's compiled loop runs on.
+            """
             size, start, candidates, left = max(4096, 8 * (hi - lo)), lo, 0, 0
             parts: list[tuple[np.ndarray, ...]] = []
+            status = 0
             while start < hi:
                 qout, out = np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64)
                 kout = _NO_IMAGES if self._L is None else np.empty((size, d), dtype=np.int8)
@@ -500,45 +539,46 @@ class BodyIndex:
                 )
                 parts.append((qout[:kept], out[:kept], kout[:kept], codes[:kept], by[:kept]))
                 candidates, left, start = candidates + found, left + open_, done
-                if status == 0:
+                if status == 0 or status > compiled.QUERY_SPACE:
                     break
-                if status > compiled.QUERY_SPACE:
-                    return parts, candidates, left, status
                 size = max(2 * size, compiled.QUERY_SPACE - status)  # full: more room, from the body that did not fit
-            return parts, candidates, left, 0
+            qi, bj, image, rel, cert = (np.concatenate(x) if len(parts) > 1 else x[0] for x in zip(*parts, strict=True))
+            tally = [candidates, left, candidates - left, 0, 0, status]
+            if left and not status:
+                first = rel if adaptive else None
+                rel, cert = self._classify_found(Qc, bj, None if self._L is None else image, first, qi)
+                tally[2] += int(np.count_nonzero((cert if first is None else cert[first < 0]) == Certifier.FLOAT))
+                tally[3] = int(np.count_nonzero(cert == Certifier.EXACT))
+                tally[4] = int(np.count_nonzero(rel == Relation.UNDECIDED)) if self.method == "float" else 0
+                keep = np.flatnonzero(rel)
+                if keep.size != rel.size:
+                    qi, bj, rel, cert = qi[keep], bj[keep], rel[keep], cert[keep]
+                    image = image if self._L is None else image[keep]
+            return (qi, bj, image, rel, cert), tally
 
         k = min(get_threads(), max(1, M // _BODIES_PER_THREAD))
         bounds = np.linspace(0, M, k + 1).astype(np.int64).tolist()
         if k == 1:
             results = [run(0, M)]
         else:  # ranges of new bodies side by side (the compiled loop releases the GIL), in order
-            futures = [compiled.pool(k - 1).submit(run, lo, hi) for lo, hi in zip(bounds[1:-1], bounds[2:], strict=True)]
+            # pool(k): a worker stays free for what a range's classification hands to the pool (leaf tasks)
+            futures = [compiled.pool(k).submit(run, lo, hi) for lo, hi in zip(bounds[1:-1], bounds[2:], strict=True)]
             results = [run(bounds[0], bounds[1])] + [f.result() for f in futures]
-        parts = [p for r in results for p in r[0]]
-        candidates, left = sum(r[1] for r in results), sum(r[2] for r in results)
-        status = next((r[3] for r in results if r[3]), 0)
+        status = next((r[1][5] for r in results if r[1][5]), 0)
         if status == compiled.QUERY_GENERAL:
             return None
         if status:
             raise ValueError(_FAR_MESSAGE if status == compiled.QUERY_FAR_BOX else _IMAGES_MESSAGE)
+        candidates, left, n_float, n_exact, n_undecided = (sum(r[1][t] for r in results) for t in range(5))
+        parts = [r[0] for r in results]
         qi, bj, image, rel, cert = (np.concatenate(x) if len(parts) > 1 else x[0] for x in zip(*parts, strict=True))
         qi = order[qi]  # back to the rows of Qnew; each body's pairs are sorted by j, so a stable sort by i sorts by (i, j)
         by_row = np.argsort(qi, kind="stable")
         qi, bj, rel, cert = qi[by_row], bj[by_row], rel[by_row], cert[by_row]
         image = None if self._L is None else image[by_row]
-        counts = {"queries": M, "candidates": candidates, "float": candidates - left, "exact": 0, "undecided": 0}
+        counts = {"queries": M, "candidates": candidates, "float": n_float, "exact": n_exact, "undecided": n_undecided}
         if candidates > left:
             _CLASSIFY.count(candidates - left, 0, 0)
-        if left:
-            first = rel if adaptive else None
-            rel, cert = self._classify_found(Qn, bj, image, first, qi)
-            counts["float"] += int(np.count_nonzero((cert if first is None else cert[first < 0]) == Certifier.FLOAT))
-            counts["exact"] = int(np.count_nonzero(cert == Certifier.EXACT))
-            counts["undecided"] = int(np.count_nonzero(rel == Relation.UNDECIDED)) if self.method == "float" else 0
-            keep = np.flatnonzero(rel)
-            if keep.size != rel.size:
-                qi, bj, rel, cert = qi[keep], bj[keep], rel[keep], cert[keep]
-                image = None if image is None else image[keep]
         return IndexPairs(qi, bj, rel, cert, image, self.box, {}, counts)
 
     def _classify_found(
@@ -587,24 +627,30 @@ class BodyIndex:
             raise ValueError(f"update: {r.size} rows but Qrows has shape {Qr.shape} (expected ({r.size}, {self.n}, {self.n}))")
         if r.size and (r.min() < 0 or r.max() >= len(self)):
             raise ValueError(f"update: rows must be in [0, {len(self)}), got {r.tolist()}")
-        if np.unique(r).size != r.size:
+        if r.size > 1 and np.unique(r).size != r.size:
             raise ValueError("update: rows must be distinct")
         if errors and self.on_invalid == "raise":
             raise ValueError(next(iter(errors.values())))
         centers, radii, invalid = self._spheres(Qr, "body", names=r, errors=errors)
         ok = np.isfinite(radii)
-        coords, frac = self._place(np.where(ok[:, None], centers, 0.0))
-        flat = coords @ self._strides
+        placed = np.where(ok[:, None], centers, 0.0)
+        if r.size == 1:  # an accepted move: its centre placed in Python floats (the same operations)
+            u, f = self._place_one(placed[0].tolist())
+            flat_l = [sum(x * s for x, s in zip(u, self._strides_l, strict=True))]
+            frac = None if f is None else np.array([f])
+        else:
+            coords, frac = self._place(placed)
+            flat_l = (coords @ self._strides).tolist()
         for k, b in enumerate(r.tolist()):
             self._remove(b)
             self._Q[b] = Qr[k]
-            self._centers[b] = centers[k]
-            self._radii[b] = radii[k]
+            self._cr[b, : self.d] = centers[k]
+            self._cr[b, self.d] = radii[k]
             if frac is not None and self._frac is not None:
                 self._frac[b] = frac[k]
             self.invalid.pop(b, None)
             if ok[k]:
-                self._insert(b, int(flat[k]))
+                self._insert(b, flat_l[k])
             else:
                 self.invalid[b] = invalid[k]
         if ok.any():
@@ -667,10 +713,9 @@ class BodyIndex:
         ``errors``: rows already known to be no shape (:attr:`core.Bodies.errors`, named), marked
         with that reason (the caller raised for them under "raise").
         """
-        s = bounding_spheres(Qn)
-        centers, radii = s.centers, s.radii
+        centers, radii, found = _certified_spheres(Qn)
         invalid: dict[int, str] = {}
-        for k, why in s.invalid.items():
+        for k, why in found.items():
             msg = why.replace(f"body {k}", f"{what} {k if names is None else int(names[k])}", 1)
             if self.on_invalid == "raise" and not (errors and k in errors):
                 raise ValueError(msg)

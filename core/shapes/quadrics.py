@@ -176,7 +176,8 @@ def unrepresentable(c: Any, r: Any) -> str:
 
 
 def quadrics_from_axes(
-    centers: Any, semi_axes: Any, orientations: Any = None, *, unrepresentable_rows: Literal["raise", "nan"] = "raise"
+    centers: Any, semi_axes: Any, orientations: Any = None, *, unrepresentable_rows: Literal["raise", "nan"] = "raise",
+    checked: bool = False,
 ) -> np.ndarray:
     """Float matrices of N shapes: :func:`quadric_from_axes` vectorised, bit for bit.
 
@@ -192,6 +193,8 @@ def quadrics_from_axes(
             in radians, or (N, 4) quaternions (w, 0, 0, z); None = axis-aligned.
         unrepresentable_rows: "raise" a ValueError for a row no float64 matrix holds, or "nan":
             such a row is NaN (:func:`core.bodies.bodies_from_axes` marks it invalid).
+        checked: the caller already found every row a shape (:func:`axes_row_errors` empty):
+            the check is not run twice (:func:`core.bodies.build.matrices_and_errors`).
 
     Returns:
         float64 array (N, d + 1, d + 1).
@@ -212,7 +215,7 @@ def quadrics_from_axes(
         ValueError: row 1: semi-axes must be positive, got [1.0, -1.0]
     """
     c, r, o = _axes_arrays(centers, semi_axes, orientations)
-    errors = axes_row_errors(c, r, o, first=True)
+    errors = {} if checked else axes_row_errors(c, r, o, first=True)
     if errors:
         k, reason = next(iter(errors.items()))
         raise ValueError(f"row {k}: {reason}")
@@ -283,6 +286,8 @@ def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, f
     """
     c, r, o = _axes_arrays(centers, semi_axes, orientations)
     N, d = c.shape
+    if _all_shapes(c, r, o, matrices):
+        return {}
     checks: list[tuple[Any, Any]] = [
         (~(np.isfinite(c).all(axis=1) & np.isfinite(r).all(axis=1)),
          lambda k: f"centre and semi-axes must be finite numbers, got {c[k].tolist()} and {r[k].tolist()}"),
@@ -310,6 +315,29 @@ def axes_row_errors(centers: Any, semi_axes: Any, orientations: Any = None, *, f
         if first and errors:
             break
     return dict(sorted(errors.items()))
+
+
+def _all_shapes(c: np.ndarray, r: np.ndarray, o: np.ndarray | None, matrices: bool) -> bool:
+    """True when whole-array tests show every row passes :func:`axes_row_errors`' checks (most batches).
+
+    Sufficient, not necessary (then the row-by-row checks decide): every number finite, every
+    semi-axis positive, no centre beyond the limit of the smallest semi-axis of all, every
+    quaternion of positive squared norm (2D: about z).
+    """
+    with np.errstate(over="ignore", under="ignore"):
+        if not (np.isfinite(c).all() and np.isfinite(r).all() and (r > 0).all()):
+            return False
+        if matrices and c.size and not float(np.abs(c).max()) <= float(_far_limit(r.reshape(1, -1))[0]):
+            return False
+        if o is None:
+            return True
+        if not np.isfinite(o).all():
+            return False
+        if o.ndim == 1:
+            return True
+        if c.shape[1] == 2 and not ((o[:, 1] == 0).all() and (o[:, 2] == 0).all()):
+            return False
+        return bool((np.einsum("ij,ij->i", o, o) > 0).all())
 
 
 def rotations_from_orientations(o: np.ndarray | None, N: int, d: int) -> np.ndarray:
