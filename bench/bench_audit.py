@@ -109,8 +109,8 @@ def pw_overlap(centers: np.ndarray, axes: np.ndarray, quats: np.ndarray, box: tu
     return i, j, pw_function(d, Ainv[i], Ainv[j])
 
 
-def speed(cells: tuple[int, int, int], frames: int, folder: Path, jobs: int | None) -> dict[str, object]:
-    """Audit the GSD trajectory with the command and with the float anchor; timings and answers."""
+def speed(cells: tuple[int, int, int], frames: int, folder: Path, jobs: int | None, *, anchor: bool = True) -> dict[str, object]:
+    """Audit the GSD trajectory with the command and (``anchor``) with the float anchor; timings and answers."""
     traj = fcc_trajectory(cells, frames, seed=1)
     path = folder / "run.gsd"
     write_gsd(str(path), traj)
@@ -124,6 +124,10 @@ def speed(cells: tuple[int, int, int], frames: int, folder: Path, jobs: int | No
     certified = time.perf_counter() - t
     if done.returncode not in (0, 3):
         raise RuntimeError(done.stderr)
+    rows = sum(1 for _ in open(folder / "report.csv")) - 1
+    if not anchor:
+        return {"bodies": n, "frames": frames, "fraction": 0.5, "certified_s": certified, "certified_overlaps": rows,
+                "certified_exit": done.returncode, "jobs": jobs or cores()}
     import gsd.hoomd
 
     t = time.perf_counter()
@@ -137,10 +141,9 @@ def speed(cells: tuple[int, int, int], frames: int, folder: Path, jobs: int | No
             i, _, F = pw_overlap(c, axes, q, tuple(frame.configuration.box[:3]))
             candidates += len(i)
             flagged += int(np.count_nonzero(F < 1))
-    anchor = time.perf_counter() - t
-    rows = sum(1 for _ in open(folder / "report.csv")) - 1
+    anchor_s = time.perf_counter() - t
     return {"bodies": n, "frames": frames, "fraction": 0.5, "certified_s": certified, "certified_overlaps": rows,
-            "certified_exit": done.returncode, "anchor_s": anchor, "anchor_candidates": candidates, "anchor_overlaps": flagged,
+            "certified_exit": done.returncode, "anchor_s": anchor_s, "anchor_candidates": candidates, "anchor_overlaps": flagged,
             "jobs": jobs or cores()}
 
 
@@ -189,11 +192,24 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="10 frames of 20,000 bodies, a 12^3 lattice")
     ap.add_argument("--jobs", type=int, default=None, help="the command's worker processes (default: every core)")
+    ap.add_argument("--command-only", action="store_true",
+                    help="time only the command on the trajectory (no float anchor, no accuracy): bench/results/audit-command.json")
     args = ap.parse_args(argv)
     load_before = os.getloadavg()[0]  # a shared machine: the figures depend on what else runs
     cells, frames, m = ((10, 20, 25), 10, 20_000) if args.quick else ((25, 40, 25), 100, 100_000)
     with tempfile.TemporaryDirectory(prefix="audit-bench-") as d:
-        sp = speed(cells, frames, Path(d), args.jobs)
+        sp = speed(cells, frames, Path(d), args.jobs, anchor=not args.command_only)
+    if args.command_only:
+        name = "audit-command-quick" if args.quick else "audit-command"
+        result = {"command": "python -m bench.bench_audit --command-only" + (" --quick" if args.quick else ""),
+                  "cpu": cpu_model(), "cores": cores(),
+                  "load_average": f"{load_before:.1f} at the start, {os.getloadavg()[0]:.1f} at the end", "speed": sp}
+        RESULTS.mkdir(exist_ok=True)
+        (RESULTS / f"{name}.json").write_text(json.dumps(result, indent=2) + "\n")
+        write_report()
+        print(f"python -m app audit of {sp['frames']} frames x {sp['bodies']:,} ellipsoids: {sp['certified_s']:.1f} s "
+              f"({sp['jobs']} processes), {sp['certified_overlaps']} rows; load {result['load_average']}")
+        return 0
     acc = accuracy(m)
     command = "python -m bench.bench_audit" + (" --quick" if args.quick else "")
     result = {"command": command, "cpu": cpu_model(), "cores": cores(),

@@ -58,6 +58,8 @@ QUESTIONS: dict[str, tuple[str, str]] = {
               "core.contacts on the union (differences must be 0)"),
     "audit": ("Auditing a trajectory: how long, and how many labels are right, against the uncertified pipeline?",
               "scipy cKDTree on bounding spheres + Perram-Wertheim in numpy (float tolerances 0 and 1e-10)"),
+    "audit-command": ("Auditing a trajectory: the command alone (100 frames of 100,000 ellipsoids; target 60 s)",
+                      "python -m bench.bench_audit's full run (the float pipeline beside it)"),
     "scales": ("Bodies at any float scale: which arithmetic certifies them, how long?", "the same pairs at scale 1"),
     "witness": ("Witnesses: contact scale, planes, points, distance", "the relation alone (classify) on the same pairs"),
     "stages": ("Where the filter's time goes: cycles per pair in each stage", "random 3D pairs (the ratio column)"),
