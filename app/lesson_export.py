@@ -70,13 +70,14 @@ def step_shots(
             if not view.ready.wait(timeout):
                 raise TimeoutError(f"step {k} of lesson {lesson.name} did not finish drawing")
             hs.wait_settled()
-            first = hs.page.screenshot() if before or not view.session.state.answer_hidden else None
-            second = first
-            if after and view.session.state.answer_hidden:
+            hidden = view.session.state.answer_hidden
+            seen: bytes | None = hs.page.screenshot() if before or not hidden else None
+            revealed = seen
+            if after and hidden:
                 view.show_answer()
                 hs.wait_settled()
-                second = hs.page.screenshot()
-            yield k, first if before else None, second if after else None
+                revealed = hs.page.screenshot()
+            yield k, seen if before else None, revealed if after else None
 
 
 _BOLD = re.compile(r"\*\*(.+?)\*\*")

@@ -131,8 +131,9 @@ class LessonView:
         with s.lock:
             if not s.closed:
                 s.hold_question()
-                for cam in s.cameras() if camera is not None else []:
-                    cam.position, cam.look_at = camera
+                if camera is not None:
+                    for cam in s.cameras():
+                        cam.position, cam.look_at = camera
         self.ready.set()
 
     def go(self, k: int) -> Session | None:
