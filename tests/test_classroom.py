@@ -473,3 +473,11 @@ def test_lesson_export_folds_the_picture_after_reveal():
     assert "YmVmb3Jl" in before and "YWZ0ZXI=" in details  # base64 of b"before" / b"after": the answer's picture in the fold
     fold = page.split('<section id="step-5">')[1].split("</section>")[0]
     assert fold.count("<img") == 1  # the same picture after Reveal (no question hid anything): shown once
+
+
+def test_screenshot_reveal_needs_a_lesson(tmp_path, capsys):
+    from app.cli import main
+
+    assert main(["screenshot", "--reveal", "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert "--reveal draws a lesson's step after Reveal: give --lesson too" in err and "Traceback" not in err
