@@ -226,6 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
     sh.add_argument("--lesson", default=None, metavar="NAME|FILE", help="draw a lesson's steps: 'paper' or a lesson JSON file")
     sh.add_argument("--step", type=int, action="append", default=None,
                     help="the lesson's step K (1-based; repeatable; default every step, --out a folder)")
+    sh.add_argument("--reveal", action="store_true",
+                    help="--lesson: draw each step after 'Reveal the answer' (default: before, as the class sees it first)")
     sh.add_argument(
         "--browser", type=_devtools_address, default=None, metavar="URL",
         help="DevTools address of a Chromium that already runs (chromium --headless --remote-debugging-port=PORT: "
@@ -367,6 +369,8 @@ def _serve(args: argparse.Namespace) -> int:
             scene.cache.shutdown()
 
     shown = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
+    if scene is not None:  # the panel's "What am I seeing?" and a lesson's tutorial link to the guide the API serves
+        scene.guide = f"http://{shown}:{args.api_port}/guide/"
     print(f"API: http://{shown}:{args.api_port}/  (docs: http://{shown}:{args.api_port}/docs)", flush=True)
     try:
         serve(api, args.host, args.api_port, stop_work)
@@ -437,7 +441,8 @@ def _lesson_screenshots(args: argparse.Namespace, lesson: Any) -> int:
         lesson.step(k)  # ValueError: no such step
     one = len(steps) == 1 and not args.out.endswith(("/", os.sep))
     written = []
-    for k, png in step_pictures(lesson, steps, width=args.width, height=args.height, timeout=args.timeout, cdp=args.browser):
+    for k, png in step_pictures(lesson, steps, width=args.width, height=args.height, timeout=args.timeout, cdp=args.browser,
+                                reveal=args.reveal):
         path = Path(args.out) if one else Path(args.out) / f"step-{k:02d}.png"
         target = _output_file(path)
         with target as f:
@@ -464,6 +469,8 @@ def _screenshot(args: argparse.Namespace) -> int:
         return _lesson_screenshots(args, lesson)
     if getattr(args, "step", None):
         raise ValueError("--step is a lesson's step: give --lesson too")
+    if getattr(args, "reveal", False):
+        raise ValueError("--reveal draws a lesson's step after Reveal: give --lesson too")
     configs = _listed(args.config)
     ts, events = _listed(args.t), _listed(args.event)
     if getattr(args, "to", None) is not None:  # moving bodies: --t in the step, --event K the K-th contact event
@@ -503,12 +510,13 @@ def _export(args: argparse.Namespace) -> int:
     out = Path(args.out)
     lesson = _lesson(args)
     if lesson is not None:  # every step's picture and words in one offline page
-        from .lesson_export import lesson_html, step_pictures
+        from .lesson_export import lesson_html, step_shots
 
         target = Output(out, make_folders=True)
         with target as f:
             steps = list(range(1, len(lesson.steps) + 1))
-            page = lesson_html(lesson, dict(step_pictures(lesson, steps, width=args.width, height=args.height)))
+            shots = list(step_shots(lesson, steps, width=args.width, height=args.height, after=True))
+            page = lesson_html(lesson, {k: a for k, a, _ in shots if a is not None}, {k: b for k, _, b in shots if b is not None})
             f.write(page)
         print(f"wrote {out} ({len(page) // 1024} kB, {len(lesson.steps)} steps; open it in a browser, no server needed)",
               file=sys.stderr)

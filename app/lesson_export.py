@@ -1,10 +1,12 @@
 """A lesson drawn headless: one step's picture, or the whole lesson as one offline HTML page.
 
 ``python -m app screenshot --lesson paper --step 3 --out step3.png`` draws step 3 as a tab opened
-on its link shows it; ``python -m app export --lesson paper --out lesson.html`` writes every step
-(picture, words, question, and the answer behind a "Reveal" fold) into one HTML file with the
-pictures inline: it opens without a server and makes no network request. One headless Chromium
-(:class:`app.screenshot.HeadlessScene`) draws all the steps.
+on its link shows it: as the class sees it before "Reveal the answer" (a step with a question
+keeps the relation back: grey shapes, no relation words); ``--reveal`` draws it after Reveal.
+``python -m app export --lesson paper --out lesson.html`` writes every step (the picture as the
+class sees it, words, question, and behind a "Reveal" fold the answer with the picture after
+Reveal) into one HTML file with the pictures inline: it opens without a server and makes no
+network request. One headless Chromium (:class:`app.screenshot.HeadlessScene`) draws all the steps.
 """
 
 from __future__ import annotations
@@ -16,14 +18,35 @@ from collections.abc import Iterator, Sequence
 
 from .scene.common.lesson import Lesson, register, step_link
 
-__all__ = ["step_pictures", "lesson_html", "markdown_html"]
+__all__ = ["step_pictures", "step_shots", "lesson_html", "markdown_html"]
 
 
 def step_pictures(
     lesson: Lesson, steps: Sequence[int], *, width: int = 1280, height: int = 720, timeout: float = 120.0,
-    cdp: str | None = None,
+    cdp: str | None = None, reveal: bool = False,
 ) -> Iterator[tuple[int, bytes]]:
     """(step, PNG of the page) for each step, as a tab opened on the step's link shows it.
+
+    ``reveal``: after "Reveal the answer" is pressed (default: before, as the class sees it first).
+
+    Raises:
+        ValueError: a step the lesson does not have.
+        RuntimeError: no Chromium or Playwright (:data:`app.screenshot.SCREENSHOT_EXTRA`).
+    """
+    for k, before, after in step_shots(lesson, steps, width=width, height=height, timeout=timeout, cdp=cdp,
+                                       before=not reveal, after=reveal):
+        png = after if reveal else before
+        if png is not None:  # always: the picture asked for
+            yield k, png
+
+
+def step_shots(
+    lesson: Lesson, steps: Sequence[int], *, width: int = 1280, height: int = 720, timeout: float = 120.0,
+    cdp: str | None = None, before: bool = True, after: bool = False,
+) -> Iterator[tuple[int, bytes | None, bytes | None]]:
+    """(step, PNG before Reveal, PNG after Reveal) for each step; a picture not asked for is None.
+
+    A step without a question looks the same before and after: its one picture is both.
 
     Raises:
         ValueError: a step the lesson does not have.
@@ -47,7 +70,14 @@ def step_pictures(
             if not view.ready.wait(timeout):
                 raise TimeoutError(f"step {k} of lesson {lesson.name} did not finish drawing")
             hs.wait_settled()
-            yield k, hs.page.screenshot()
+            hidden = view.session.state.answer_hidden
+            seen: bytes | None = hs.page.screenshot() if before or not hidden else None
+            revealed = seen
+            if after and hidden:
+                view.show_answer()
+                hs.wait_settled()
+                revealed = hs.page.screenshot()
+            yield k, seen if before else None, revealed if after else None
 
 
 _BOLD = re.compile(r"\*\*(.+?)\*\*")
@@ -79,8 +109,17 @@ details{margin:.5em 0 1em} summary{cursor:pointer;color:#1f4e9c;font-weight:600}
 """
 
 
-def lesson_html(lesson: Lesson, pictures: dict[int, bytes]) -> str:
-    """The whole lesson as one offline HTML page: every step's picture, words, question and answer."""
+def _img(png: bytes, alt: str) -> str:
+    return f'<img alt="{html.escape(alt, quote=True)}" src="data:image/png;base64,{base64.b64encode(png).decode()}">'
+
+
+def lesson_html(lesson: Lesson, pictures: dict[int, bytes], answers: dict[int, bytes] | None = None) -> str:
+    """The whole lesson as one offline HTML page: every step's picture, words, question and answer.
+
+    ``pictures``: each step as the class sees it first; ``answers``: after "Reveal the answer"
+    (shown in the step's fold when it differs from the first picture).
+    """
+    answers = answers or {}
     n = len(lesson.steps)
     parts = [
         "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\">",
@@ -91,13 +130,16 @@ def lesson_html(lesson: Lesson, pictures: dict[int, bytes]) -> str:
     for k, step in enumerate(lesson.steps, start=1):
         parts.append(f'<section id="step-{k}"><h2>step {k} of {n}: {html.escape(step.title)}</h2>')
         if k in pictures:
-            data = base64.b64encode(pictures[k]).decode()
-            parts.append(f'<img alt="step {k}: {html.escape(step.title, quote=True)}" src="data:image/png;base64,{data}">')
+            parts.append(_img(pictures[k], f"step {k}: {step.title}"))
         parts.append(markdown_html(step.words))
         if step.question:
             parts.append(f'<div class="q"><b>Question for the class.</b> {markdown_html(step.question)}</div>')
-        if step.answer:
-            parts.append(f"<details><summary>Reveal the answer</summary>{markdown_html(step.answer)}</details>")
+        shown = answers.get(k)
+        if shown is not None and shown == pictures.get(k):
+            shown = None
+        if step.answer or shown is not None:
+            picture = "" if shown is None else _img(shown, f"step {k} after Reveal: {step.title}")
+            parts.append(f"<details><summary>Reveal the answer</summary>{markdown_html(step.answer)}{picture}</details>")
         parts.append("</section>")
     parts.append("</body></html>")
     return "\n".join(parts)

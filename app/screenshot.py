@@ -25,7 +25,7 @@ from typing import Any
 from .output import Output
 from .scene.common.mesh_detail import SPHERE_SUBDIVISIONS, check_sphere_subdivisions
 from .scene.common.page import SETTLE_FLAG, SETTLE_MAX_MS
-from .scene.common.shapes import PALETTES, RELATION_HEX
+from .scene.common.shapes import NEUTRAL, PALETTES, RELATION_HEX
 from .scene.common.state import SceneConfig
 
 __all__ = ["CHROMIUM", "CHROMIUM_FLAGS", "HeadlessScene", "Shot", "screenshot", "screenshots", "SCREENSHOT_EXTRA"]
@@ -388,6 +388,10 @@ class HeadlessScene:
                 poses[f"/shapes/{name}"] = [float(v) for v in (*p, *q)]
             relation = s.state.relation
             palette = PALETTES.get(s.state.palette, RELATION_HEX)
+            hidden = s.state.answer_hidden
+        if hidden:  # a lesson's open question: grey shapes, "press Reveal" for the relation
+            grey = "#{:02x}{:02x}{:02x}".format(*NEUTRAL)
+            return poses, {f"/shapes/{n}/mesh": grey for n in ("A", "B")}, "press Reveal"
         colours = {f"/shapes/{n}/mesh": palette[relation] for n in ("A", "B")} if relation else {}
         return poses, colours, relation.upper() if relation else None
 

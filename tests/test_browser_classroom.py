@@ -133,3 +133,71 @@ def test_t_box_in_the_page_widens_the_slider_and_keeps_the_text(headless_scene):
     assert s.state.relation == "tangent" and s.state.analysis.window[1] >= 2.5
     text_shown(hs.page, "at t = 5/2")
     until(lambda: field_input(hs.page, "t (exact)").input_value() == "5/2", what="the box keeps 5/2")
+
+
+MESH_COLOUR_JS = """(n) => { const r = window.__viserMutable?.nodeRefFromName?.[n]; if (!r) return null; let h = null;
+  r.traverse(o => { if (h === null && o.material) h = '#' + o.material.color.getHexString(); }); return h; }"""
+
+RELATION_WORDS = ("separate", "tangent", "overlap")
+
+
+def test_predict_first_the_page_keeps_the_relation_until_reveal(headless_scene):
+    """Issue 55: at a question step the shapes are grey and unlabelled; Reveal shows the paper's answer.
+
+    Step 8 of the paper lesson is Example 29 at α1 = (12 − 2√2)/17: externally tangent (the paper's
+    Theorem 24(1), P(α1, T) = −¼(T + 1)²(T − 1)²).
+    """
+    grey, amber = "#969696", "#ffbf00"  # the neutral grey and the tangent colour of the default palette
+    hs = headless_scene
+    page = hs.page
+    hs.goto("/?lesson=paper&step=8")
+    s = lesson_session(hs, 8)
+    text_shown(page, "step 8 of 11: Example 29 at the event")
+    text_shown(page, "press Reveal")
+    for name in ("A", "B"):
+        page.wait_for_function(f"() => ({MESH_COLOUR_JS})('/shapes/{name}/mesh') === '{grey}'")
+    body = page.locator("body").inner_text()
+    assert not any(word.upper() in body for word in RELATION_WORDS) and "Certified by" not in body
+    assert [v.label.text for v in s.views.values()] == ["A", "B"]  # the labels drawn in the 3D view (no DOM text)
+    page.get_by_role("button", name="Reveal the answer").click()
+    text_shown(page, "Tangent (externally), exactly at α1")
+    for name in ("A", "B"):
+        page.wait_for_function(f"() => ({MESH_COLOUR_JS})('/shapes/{name}/mesh') === '{amber}'")
+    text_shown(page, "TANGENT")
+    assert [v.label.text for v in s.views.values()] == ["A · tangent", "B · tangent"]
+    assert s.state.relation == "tangent" and not s.state.answer_hidden
+
+
+def test_an_edit_at_a_question_step_reveals(headless_scene):
+    """The student explores instead of predicting: moving t reveals (step 9: Example 29 at t = 3/4, overlap)."""
+    hs = headless_scene
+    page = hs.page
+    hs.goto("/?lesson=paper&step=9")
+    s = lesson_session(hs, 9)
+    until(lambda: s.question is not None, what="the question held")
+    text_shown(page, "press Reveal")
+    assert s.set_t(0.7) == "overlap"  # inside (α1, α2): the paper's overlap interval
+    until(lambda: not s.state.answer_hidden, what="revealed by the edit")
+    text_shown(page, "OVERLAP")
+    page.get_by_text("Overlap: s1(3/4)").wait_for(state="visible")  # the answer shown, the Reveal button gone
+    assert page.get_by_role("button", name="Reveal the answer").count() == 0
+
+
+def test_panel_links_to_the_guide(headless_scene):
+    """Issue 56.5: "What am I seeing?" opens the guide's concepts page; the Lesson folder its tutorial."""
+    from pathlib import Path
+
+    hs = headless_scene
+    hs.scene.guide = "http://127.0.0.1:8000/guide/"
+    try:
+        hs.goto("/?lesson=paper&step=2")
+        lesson_session(hs, 2)
+        page = hs.page
+        concepts = page.get_by_role("link", name="What am I seeing?").get_attribute("href")
+        tutorial = page.get_by_role("link", name="Teaching with lessons: the tutorial").get_attribute("href")
+    finally:
+        hs.scene.guide = None
+    assert concepts == "http://127.0.0.1:8000/guide/concepts.html"
+    assert tutorial == "http://127.0.0.1:8000/guide/tutorials/paper-class.html"
+    docs = Path(__file__).resolve().parents[1] / "docs"  # the pages Sphinx builds them from
+    assert (docs / "concepts.md").is_file() and (docs / "tutorials" / "paper-class.md").is_file()

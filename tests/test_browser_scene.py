@@ -159,9 +159,9 @@ def test_open_starts_the_tab_as_its_link_does_without_a_page_load(hs, monkeypatc
 
     build = server.SceneServer._session
 
-    def slow_build(self, client, saved, *more):
+    def slow_build(self, client, saved, *more, **options):
         time.sleep(0.3)
-        return build(self, client, saved, *more)
+        return build(self, client, saved, *more, **options)
 
     link = {"preset": "example-30", "t": 0.5}
     old = load_link(hs, {"preset": "example-29", "t": 0.3})

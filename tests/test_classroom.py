@@ -377,3 +377,107 @@ def test_gizmos_hidden_until_move_is_ticked(server):
     assert s.state.gizmos and all(v.control.opacity == 1.0 and not v.control.disable_axes for v in s.views.values())
     assert s.ui.view.gizmos.label == "Move the shapes (gizmos)"
     s.close()
+
+
+# ---------------------------------------------------------------------------------------- predict first
+GREY, AMBER, GREEN = (150, 150, 150), (255, 191, 0), (44, 160, 44)
+"""The neutral grey and the default palette's tangent and separate colours."""
+
+
+def shown_relation(s: Session) -> list[str]:
+    """The relation words the tab shows: the shapes' labels, the readout's badge, the rule."""
+    texts = [v.label.text for v in s.views.values()] + [s.ui.readout.content, s.ui.words.content, s.ui.sign_table.content]
+    return [w for w in ("separate", "tangent", "overlap", "SEPARATE", "TANGENT", "OVERLAP", "Certified by", "Decided")
+            if any(w in t for t in texts)]
+
+
+def test_an_open_question_keeps_the_relation_until_reveal(server):
+    """Unit circles 2 apart touch (2 = 1 + 1): hidden, the tab knows it but shows grey shapes and no relation."""
+    s = Session(server, unit_circles("2"), answer_hidden=True)
+    wait_ready(s)
+    s.hold_question()
+    revealed = []
+    s.on_reveal = lambda: revealed.append(True)
+    assert s.state.relation == "tangent"  # certified all the same
+    assert shown_relation(s) == [] and "press Reveal" in s.ui.readout.content
+    assert [tuple(v.mesh.color) for v in s.views.values()] == [GREY, GREY]
+    assert [v.label.text for v in s.views.values()] == ["A", "B"]
+    s.refresh()  # drawn again, nothing changed: still a question
+    assert s.state.answer_hidden and not revealed
+    s.reveal()
+    wait_ready(s)
+    assert revealed == [True] and not s.state.answer_hidden
+    assert [tuple(v.mesh.color) for v in s.views.values()] == [AMBER, AMBER]
+    assert [v.label.text for v in s.views.values()] == ["A · tangent", "B · tangent"]
+    assert "TANGENT" in s.ui.readout.content and "Certified by" in s.ui.readout.content
+    s.close()
+
+
+def test_an_edit_reveals_and_undo_keeps_it_revealed(server):
+    """The student moves B to 3 apart instead of predicting: separate (3 > 1 + 1), shown at once."""
+    s = Session(server, unit_circles("2"), answer_hidden=True)
+    wait_ready(s)
+    s.hold_question()
+    s.history.note()
+    assert s.set_shape("B", center="3, 0") == "separate"
+    assert not s.state.answer_hidden
+    assert [tuple(v.mesh.color) for v in s.views.values()] == [GREEN, GREEN]
+    wait_steps(s, 1)
+    assert s.history.undo()
+    wait_ready(s)
+    assert s.state.relation == "tangent" and not s.state.answer_hidden and "A · tangent" == s.views["A"].label.text
+    s.close()
+
+
+def test_an_open_question_on_a_motion_hides_the_sign_table_and_events(server):
+    """Example 29 at t = 3/4 overlaps (the paper's δ2); the sign table and event list say so only after Reveal."""
+    s = Session(server, SceneConfig.from_dict({"preset": "example-29", "t": "3/4"}), answer_hidden=True)
+    wait_ready(s, 300)
+    s.hold_question()
+    assert s.state.relation == "overlap"
+    assert shown_relation(s) == [] and s.ui.timeline.events_md.content == ""
+    assert "#d62728" not in s.ui.timeline.bar.content  # the intervals bar in grey
+    s.reveal()
+    wait_ready(s)
+    assert "overlap" in s.ui.sign_table.content and "OVERLAP" in s.ui.readout.content
+    assert "#d62728" in s.ui.timeline.bar.content and "tangent" in s.ui.timeline.events_md.content  # α1, α2 touch
+    s.close()
+
+
+def test_guide_link_beside_the_legend():
+    """Issue 56.5: with the guide's address, "What am I seeing?" links to its concepts page; without, no link."""
+    from app.scene.pair.panels import GUIDE_CLASS, GUIDE_CONCEPTS, guide_link_html
+
+    link = guide_link_html("http://10.0.0.5:8000/guide/", GUIDE_CONCEPTS, "What am I seeing?")
+    assert 'href="http://10.0.0.5:8000/guide/concepts.html"' in link and ">What am I seeing?</a>" in link
+    assert 'href="http://h:1/guide/tutorials/paper-class.html"' in guide_link_html("http://h:1/guide", GUIDE_CLASS, "x")
+
+
+def test_session_with_a_guide_shows_the_link(server):
+    s = Session(server, unit_circles("3"), guide="http://127.0.0.1:8000/guide/")
+    assert s.ui.guide is not None and 'href="http://127.0.0.1:8000/guide/concepts.html"' in s.ui.guide.content
+    s.close()
+    s = Session(server, unit_circles("3"))
+    assert s.ui.guide is None
+    s.close()
+
+
+def test_lesson_export_folds_the_picture_after_reveal():
+    from app.lesson_export import lesson_html
+    from app.scene.common.lesson import load_lesson
+
+    lesson = load_lesson("paper")
+    page = lesson_html(lesson, {4: b"before", 5: b"same"}, {4: b"after", 5: b"same"})
+    fold = page.split('<section id="step-4">')[1].split("</section>")[0]
+    before, details = fold.split("<details>")
+    assert "YmVmb3Jl" in before and "YWZ0ZXI=" in details  # base64 of b"before" / b"after": the answer's picture in the fold
+    fold = page.split('<section id="step-5">')[1].split("</section>")[0]
+    assert fold.count("<img") == 1  # the same picture after Reveal (no question hid anything): shown once
+
+
+def test_screenshot_reveal_needs_a_lesson(tmp_path, capsys):
+    from app.cli import main
+
+    assert main(["screenshot", "--reveal", "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert "--reveal draws a lesson's step after Reveal: give --lesson too" in err and "Traceback" not in err

@@ -111,6 +111,9 @@ class SceneServer:
         """The one session every tab sees (presenter mode), or None (one session per tab)."""
         self.lesson: str | None = None
         """The lesson a new tab opens on (``serve --lesson``; :mod:`app.scene.common.lesson`), or None."""
+        self.guide: str | None = None
+        """The documentation site's address (``http://host:port/guide/``, served by the API) that a tab's
+        panel links to ("What am I seeing?", a lesson's tutorial), or None: no link (no API beside the scene)."""
         self.cache.warm()
         self.prefetched = self.cache.prefetch(_preset_models) if prefetch else None
         """The thread analysing the presets at start (joined: every preset is in the cache), or None."""
@@ -189,21 +192,24 @@ class SceneServer:
 
     def _session(
         self, client: viser.ClientHandle, saved: SceneConfig | dict[str, Any] | None, open_folders: Collection[str] | None = None,
+        *, answer_hidden: bool = False,
     ) -> Session:
         """A new session of ``client`` on a tab's stored configuration, a link's (a dict) or the default (None).
 
         ``open_folders``: the panel's folders shown open (a lesson step's); None: the usual ones.
+        ``answer_hidden``: the relation kept back from the first picture on (a lesson step's open question).
         """
         session = Session(client, self.config if isinstance(saved, dict) or saved is None else saved,
                           cache=self.cache, executor=self.executor, defer_load=isinstance(saved, dict),
-                          sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads, open_folders=open_folders)
+                          sphere_subdivisions=self.sphere_subdivisions, uploads=self.uploads, open_folders=open_folders,
+                          answer_hidden=answer_hidden, guide=self.guide)
         if isinstance(saved, dict):  # a link: user input, read like an uploaded file
             session.load_untrusted(saved)
         return session
 
     def renew(
         self, client_id: int, link: dict[str, Any], *, open_folders: Collection[str] | None = None,
-        then: Callable[[Session], object] | None = None,
+        then: Callable[[Session], object] | None = None, answer_hidden: bool = False,
     ) -> Session:
         """Start the tab ``client_id`` again on ``link`` (a link's configuration), without a page load.
 
@@ -213,7 +219,8 @@ class SceneServer:
         built on ``link``, read as user input. The page keeps its loaded client and WebGL context:
         a renewal costs the browser ~0.4 CPU-s, a page load ~1.5 (software WebGL). The tab keeps
         its address, and a reload then reopens the new state. ``open_folders``: the new panel's
-        open folders (a lesson step's); ``then(session)`` runs in the same batch (a lesson's folder).
+        open folders (a lesson step's); ``then(session)`` runs in the same batch (a lesson's folder);
+        ``answer_hidden``: the new scene keeps the relation back (a lesson step's open question).
 
         Raises:
             KeyError: no tab ``client_id`` has a session (closed, or still being built).
@@ -237,7 +244,7 @@ class SceneServer:
             with client.atomic():
                 client.scene.reset()  # before the panel: a page that shows the old panel gone has no old scene
                 client.gui.reset()
-                session = self._session(client, link, open_folders)
+                session = self._session(client, link, open_folders, answer_hidden=answer_hidden)
                 if then is not None:
                     then(session)
                 session.frame_camera()

@@ -470,3 +470,6 @@ class AppState:
     """The camera follows the moving shapes."""
     plot_scale: str = "asinh"
     """Scale of the plots' y axis (:data:`app.scene.pair.plots.SCALES`)."""
+    answer_hidden: bool = False
+    """A lesson step's question is open: the picture and the panel keep the relation to themselves
+    (neutral colours, no relation words) until "Reveal the answer" or an edit (:mod:`app.scene.pair.lesson_view`)."""

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import viser
 
 from ..common.shapes import PALETTES
+from .panels import GUIDE_CONCEPTS, guide_link_html
 from .plots import SCALES
 from .roots_view import RootsView
 
@@ -165,6 +166,8 @@ class Gui:
     sign_table: viser.GuiMarkdownHandle
     view: ViewGui
     share: ShareGui
+    guide: viser.GuiHtmlHandle | None = None
+    """"What am I seeing?": the link beside the legend to the guide's concepts page (None: no guide served)."""
 
 
 def ignoring_event(fn: Callable[[], object]) -> Callable[[object], None]:
@@ -182,13 +185,15 @@ def ignoring_event(fn: Callable[[], object]) -> Callable[[object], None]:
 
 def build_gui(
     gui: viser.GuiApi, *, dim: int, presets: list[str], show_plots: bool, gizmos: bool, plane: bool,
-    open_folders: Collection[str] | None = None,
+    open_folders: Collection[str] | None = None, guide: str | None = None,
 ) -> Gui:
     """Lay out the panel of one tab (or of the shared scene) and return its handles.
 
     ``open_folders``: the folders shown open (names of :data:`app.scene.common.lesson.FOLDERS`, a lesson
     step's); None: the usual ones (Timeline, Plots, Motion). A browser opens a folder as the
-    panel is built only: a lesson step builds the panel anew.
+    panel is built only: a lesson step builds the panel anew. ``guide``: the documentation site's
+    address (``http://host:port/guide/``): a "What am I seeing?" link beside the legend opens its
+    concepts page.
     """
 
     def is_open(name: str, default: bool) -> bool:
@@ -197,6 +202,7 @@ def build_gui(
     gui.configure_theme(control_width="large", show_share_button=False)
     title = gui.add_markdown("**Ellipse / ellipsoid interference** (certified)")
     legend = gui.add_html("")
+    guide_link = None if guide is None else gui.add_html(guide_link_html(guide, GUIDE_CONCEPTS, "What am I seeing?"))
     readout = gui.add_markdown("")
     touch = gui.add_button("Touch: slide B to A", hint="B slides along the line of centres to the exact contact (certified)")
     touch_error = gui.add_markdown("", visible=False)
@@ -304,4 +310,5 @@ def build_gui(
             analysis_json=gui.add_button("Download analysis (JSON)", visible=False),
             analysis_csv=gui.add_button("Download analysis (CSV)", visible=False),
         )
-    return Gui(title, legend, readout, touch, touch_error, words, timeline, plots, roots, motion, shapes, sign_table, view, share)
+    return Gui(title, legend, readout, touch, touch_error, words, timeline, plots, roots, motion, shapes, sign_table, view, share,
+               guide_link)

@@ -7,6 +7,13 @@ the step's configuration (:meth:`SceneServer.renew <app.scene.server.SceneServer
 load) with the step's folders open, the roots drawn if the step says so and its camera. A reload
 reopens the tab as the student left it, the lesson at the same step. The model and the JSON
 format: :mod:`app.scene.common.lesson`.
+
+Predict first: while a step's question is open the scene keeps the relation back
+(:attr:`AppState.answer_hidden <app.scene.common.state.AppState.answer_hidden>`: shapes in neutral
+grey, labels "A" and "B", no relation, certification or rule in the readout, the sign table and
+the events' relations replaced by "press Reveal"). "Reveal the answer" shows all of it; so does
+any change of the scene (an edit, a drag, t, Play: the student is exploring). Previous / Next
+open the other step with its own question open; a reload opens the step's question again.
 """
 
 from __future__ import annotations
@@ -21,7 +28,7 @@ import viser
 from ..common.lesson import Lesson, Step, builtin_lessons, find_lesson, step_link
 from ..common.state import SceneConfig
 from ..common.threads import soon
-from .panels import copy_button
+from .panels import GUIDE_CLASS, copy_button, guide_link_html
 
 if TYPE_CHECKING:
     from ..server import SceneServer
@@ -77,15 +84,19 @@ class LessonView:
             self.nav = gui.add_button_group("Step", [PREVIOUS, NEXT], hint="the lesson's previous / next step")
             self.words = gui.add_markdown(step.words, visible=bool(step.words))
             self.question = gui.add_markdown(f"**Question for the class.** {step.question}", visible=bool(step.question))
-            self.reveal = gui.add_button(REVEAL, visible=bool(step.answer))
+            self.reveal = gui.add_button(REVEAL, visible=bool(step.answer) or session.state.answer_hidden)
             self.answer = gui.add_markdown(f"**Answer.** {step.answer}", visible=False)
             path = "../.." + "/" + step_link(lesson, k)  # relative to the tab's page /s/<id>/
             self.link = gui.add_html(
                 f'<div style="font-size:12px"><a href="{html.escape(path, quote=True)}" target="_blank">'
                 f"Link to this step</a>{copy_button(path, 'copy link', url=True)}</div>"
             )
+            self.tutorial = None if server.guide is None else gui.add_html(
+                guide_link_html(server.guide, GUIDE_CLASS, "Teaching with lessons: the tutorial")
+            )
         self.nav.on_click(lambda ev: self.on_nav(str(ev.target.value)))
         self.reveal.on_click(lambda _ev: self.show_answer())
+        session.on_reveal = self._answer_shown  # an edit reveals too
         _VIEWS[id(session)] = self
 
     def on_nav(self, which: str) -> None:
@@ -93,27 +104,36 @@ class LessonView:
         self.go(self.k - 1 if which == PREVIOUS else self.k + 1)
 
     def show_answer(self) -> None:
-        """"Reveal": the answer under the question."""
-        self.answer.visible = True
+        """"Reveal": the answer under the question, and the relation in the scene and the panel."""
+        self._answer_shown()
+        self.session.reveal()
+
+    def _answer_shown(self) -> None:
+        """The answer shown, the Reveal button gone (Reveal pressed, or the scene changed)."""
+        self.answer.visible = bool(self.lesson.step(self.k).answer)
         self.reveal.visible = False
 
     def apply(self, step: Step) -> None:
-        """What a step sets besides the configuration: the roots drawn, then its camera."""
+        """What a step sets besides the configuration: the roots drawn, then its camera; the question held."""
         s = self.session
         if step.roots:
             s.ui.roots.show_roots.value = True  # type: ignore[misc]  # runs its callback: the roots drawn
-        if step.camera is None:
+        if step.camera is None and s.ready.is_set():
+            s.hold_question()
             self.ready.set()
             return
-        soon(self._camera, step.camera)
+        soon(self.settle, step.camera)
 
-    def _camera(self, camera: tuple[tuple[float, float, float], tuple[float, float, float]]) -> None:
+    def settle(self, camera: tuple[tuple[float, float, float], tuple[float, float, float]] | None) -> None:
+        """Once the step is drawn: its question is about what it shows, and its camera is set."""
         s = self.session
         s.ready.wait(120)  # the analysis frames the camera when it arrives: the step's camera after it
         with s.lock:
             if not s.closed:
-                for cam in s.cameras():
-                    cam.position, cam.look_at = camera
+                s.hold_question()
+                if camera is not None:
+                    for cam in s.cameras():
+                        cam.position, cam.look_at = camera
         self.ready.set()
 
     def go(self, k: int) -> Session | None:
@@ -128,7 +148,8 @@ class LessonView:
             LessonView(self.server, self.client_id, self.tab, session, self.lesson, k).apply(step)
 
         try:
-            return self.server.renew(self.client_id, dict(step.scene), open_folders=step.open, then=attach)
+            return self.server.renew(self.client_id, dict(step.scene), open_folders=step.open, then=attach,
+                                     answer_hidden=bool(step.question))
         except (KeyError, ValueError):  # the tab left meanwhile
             return None
 
@@ -163,13 +184,14 @@ def lesson_session(server: SceneServer, client: viser.ClientHandle, tab: str | N
         error = f"lesson {lesson.name}: there is no step {k} (steps 1..{n})"
         k = min(max(k, 1), n)
         marks.set(tab, lesson.name, k)
+    step = lesson.step(k)
+    hidden = bool(step.question)  # predict first: the relation waits for Reveal
     if isinstance(saved, SceneConfig):  # a reload: the scene as the tab left it, the lesson at its step
-        session = server._session(client, saved)
+        session = server._session(client, saved, answer_hidden=hidden)
         view = LessonView(server, client.client_id, tab, session, lesson, k)
-        view.ready.set()
+        soon(view.settle, None)
     else:
-        step = lesson.step(k)
-        session = server._session(client, dict(step.scene), step.open)
+        session = server._session(client, dict(step.scene), step.open, answer_hidden=hidden)
         LessonView(server, client.client_id, tab, session, lesson, k).apply(step)
     if error is not None:
         session.field_error("config", error)

@@ -25,6 +25,7 @@ from .analysis import AnalysisView
 from .gui import DIM_LABELS, STATIC, TOUCH, TYPED, Gui, ignoring_event
 from .motion_form import form_from_source
 from .panels import (
+    HIDDEN,
     copy_button,
     events_html,
     intervals_bar_html,
@@ -90,6 +91,8 @@ class PanelView:
         self._motion_shown: object = None
         self._analysis_shown: object = None
         self._palette_shown: str | None = None
+        self._hidden = False
+        """A lesson's question is open (the state's ``answer_hidden`` as last shown)."""
         self.palette: dict[str, str] = next(iter(PALETTES.values()))
         self.expl: dict[str, Any] | None = None
         """The readout's data last shown (the roots panel names the same Var, signs and rule)."""
@@ -159,6 +162,9 @@ class PanelView:
             self._palette_shown = state.palette
             self._analysis_shown = None
             self.set_text(g.legend, legend_html(self.palette))
+        if self._hidden != state.answer_hidden:  # the sign table and event list say the relation
+            self._hidden = state.answer_hidden
+            self._analysis_shown = None
         self._show_readout(state)
         self.set_error(g.share.error, state.errors.get("config"))
         self.set_error(g.touch_error, state.errors.get("touch"))
@@ -180,7 +186,8 @@ class PanelView:
             else:
                 w = state.witness
                 expl = state.explanation
-                text = readout_markdown(expl, where="(static shapes)", witness=None if w is None else w.readout(), palette=self.palette)
+                text = readout_markdown(expl, where="(static shapes)", witness=None if w is None else w.readout(), palette=self.palette,
+                                        hidden=state.answer_hidden)
         elif an is None:
             text = readout_markdown(None, error="analysing the motion…" if state.analysing else state.status or "no analysis")
         else:
@@ -195,9 +202,12 @@ class PanelView:
             expl = an.readout_at(model, at, state.t, event)
             if expl is None:
                 expl = {"n": an.n, "relation": state.relation, "certified_by": "exact", "coefficients": [], "var": 0, "rule_text": ""}
-            text = readout_markdown(expl, where=where, palette=self.palette)
+            text = readout_markdown(expl, where=where, palette=self.palette, hidden=state.answer_hidden)
         self.set_text(g.readout, text)
-        self.set_text(g.words, plain_words(expl))
+        words = plain_words(expl)
+        if state.answer_hidden and words:  # the signs in words, not the decision
+            words = words.split("\n\n**Decided**", 1)[0] + f"\n\n{HIDDEN}"
+        self.set_text(g.words, words)
         self.expl = expl
 
     def _show_shapes(self, state: AppState) -> None:
@@ -294,7 +304,8 @@ class PanelView:
         else:
             self.set_value(tg.t_box, repr(t) if len(repr(t)) < 12 else f"{t:.6g}")
         self.set_error(tg.t_error, state.errors.get("t"))
-        self.set_text(tg.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t, palette=self.palette))
+        palette = {} if self._hidden else self.palette  # an open question: grey intervals
+        self.set_text(tg.bar, intervals_bar_html(lo, hi, an.segments, [(e.t, e.relation) for e in an.events], t, palette=palette))
 
     def _rebuild_analysis(self, an: AnalysisView | None) -> None:
         """What belongs to one analysis: slider range, event list and buttons, sign table."""
@@ -317,6 +328,10 @@ class PanelView:
                 btn = self._api.add_button(f"Jump to α{ev.k} ≈ {ev.t:.6f}")
             btn.on_click(ignoring_event(partial(self._on_event, ev.k)))
             tg.event_buttons.append(btn)
+        if self._hidden:  # an open question: the relations of the events and intervals wait for Reveal
+            self.set_text(tg.events_md, "")
+            self.set_text(self.gui.sign_table, HIDDEN)
+            return
         self.set_text(tg.events_md, events_html(an.events, self.palette))
         self.set_text(self.gui.sign_table, sign_table_markdown(an.sign_rows(), an.n, self.palette))
 

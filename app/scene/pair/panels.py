@@ -24,6 +24,11 @@ __all__ = [
     "legend_html",
     "copy_button",
     "events_html",
+    "guide_link_html",
+    "GUIDE_CONCEPTS",
+    "GUIDE_CLASS",
+    "HIDDEN",
+    "hidden_badge",
 ]
 
 _SUB = {"s0": "s<sub>0</sub>", "s1": "s<sub>1</sub>", "s10": "s<sub>1,0</sub>"}
@@ -42,7 +47,7 @@ def sign_char(s: int | None) -> str:
 def relation_badge(relation: str | None, palette: Mapping[str, str] = RELATION_HEX) -> str:
     """HTML badge of a relation in its colour (grey "unknown" for None)."""
     if relation is None:
-        return '<span style="background:#999;color:#fff;padding:1px 6px;border-radius:4px">unknown</span>'
+        return _grey_badge("unknown")
     color = palette[relation]
     fg = "#000" if relation == "tangent" else "#fff"
     return (
@@ -66,6 +71,19 @@ def _fmt(q: dict[str, Any] | None) -> str:
     return f"{val} ({sign_char(q.get('sign'))})"
 
 
+HIDDEN = "Predict first: press *Reveal the answer* (Lesson folder) to see the relation, or change the scene."
+"""What stands for the relation while a lesson step's question is open (:attr:`AppState.answer_hidden`)."""
+
+
+def _grey_badge(text: str) -> str:
+    return f'<span style="background:#999;color:#fff;padding:1px 6px;border-radius:4px">{text}</span>'
+
+
+def hidden_badge() -> str:
+    """The grey badge shown instead of the relation while a lesson's question is open."""
+    return _grey_badge("press Reveal")
+
+
 def readout_markdown(
     expl: dict[str, Any] | None,
     *,
@@ -73,6 +91,7 @@ def readout_markdown(
     error: str | None = None,
     witness: str | None = None,
     palette: Mapping[str, str] = RELATION_HEX,
+    hidden: bool = False,
 ) -> str:
     """Markdown readout: relation, certification, P(T) coefficients, signs, Var, rule.
 
@@ -83,6 +102,8 @@ def readout_markdown(
         witness: Markdown of the witness (margin, sentence: ``WitnessView.readout()`` of
             :mod:`app.scene.pair.contact`), shown under the relation.
         palette: relation -> colour.
+        hidden: a lesson's question is open: the coefficients and Var only (what to predict
+            from); relation, witness, certification and rule give way to :data:`HIDDEN`.
 
     Examples:
         >>> print(readout_markdown(None, error="A.semi_axes: must be positive"))
@@ -93,12 +114,15 @@ def readout_markdown(
     if expl is None:
         return f"**Relation** {relation_badge(None)}\n\n⚠ {html.escape(error or 'no shapes')}"
     n = expl["n"]
-    lines = [f"**Relation** {relation_badge(expl['relation'], palette)} {where}".rstrip()]
-    if witness:
-        lines += ["", html.escape(witness, quote=False)]
-    cert = "float filter (proven error bound)" if expl["certified_by"] == "float" else "exact arithmetic"
-    lines.append("")
-    lines.append(f"Certified by: {cert}")
+    if hidden:
+        lines = [f"**Relation** {hidden_badge()} {where}".rstrip(), "", HIDDEN]
+    else:
+        lines = [f"**Relation** {relation_badge(expl['relation'], palette)} {where}".rstrip()]
+        if witness:
+            lines += ["", html.escape(witness, quote=False)]
+        cert = "float filter (proven error bound)" if expl["certified_by"] == "float" else "exact arithmetic"
+        lines.append("")
+        lines.append(f"Certified by: {cert}")
     coeffs = expl["coefficients"]
     lines.append("")
     lines.append(f"P(T) = det(T A + B), degree {n}:")
@@ -118,8 +142,9 @@ def readout_markdown(
     signs = "".join(sign_char(q.get("sign")) for q in reversed(coeffs))
     lines.append("")
     lines.append(f"Var({', '.join(signs)}) = **{expl['var']}**")
-    lines.append("")
-    lines.append(f"Rule: {html.escape(expl['rule_text'])}")
+    if not hidden:
+        lines.append("")
+        lines.append(f"Rule: {html.escape(expl['rule_text'])}")
     return "\n".join(lines)
 
 
@@ -268,6 +293,32 @@ _COPY_JS = (
     "else{const a=document.createElement('textarea');a.value=t;document.body.appendChild(a);a.select();"
     "document.execCommand('copy');a.remove();done()}})(this)"
 )
+
+
+GUIDE_CONCEPTS = "concepts.html"
+"""The guide's page that says what the scene shows (docs/concepts.md), relative to the guide's address."""
+
+GUIDE_CLASS = "tutorials/paper-class.html"
+"""The guide's page on teaching with lessons (docs/tutorials/paper-class.md)."""
+
+
+_SAME_HOST_JS = "const u=new URL(this.href);u.hostname=location.hostname;this.href=u.href"
+"""On click: the guide on the host the page came from (the API listens where the scene does; the
+address the server printed may be 127.0.0.1 for a wildcard host, wrong for a student's browser)."""
+
+
+def guide_link_html(guide: str, page: str, label: str) -> str:
+    """A small link to ``page`` of the documentation site at ``guide`` (opens in a new tab).
+
+    Examples:
+        >>> link = guide_link_html("http://127.0.0.1:8000/guide/", GUIDE_CONCEPTS, "What am I seeing?")
+        >>> 'href="http://127.0.0.1:8000/guide/concepts.html"' in link
+        True
+    """
+    href = html.escape(guide.rstrip("/") + "/" + page, quote=True)
+    return (f'<div style="font-size:12px"><a href="{href}" target="_blank" rel="noopener" onclick="{_SAME_HOST_JS}">'
+            f'{html.escape(label)}</a> '
+            '<span style="color:#666">(the guide)</span></div>')
 
 
 def copy_button(text: str, label: str = "copy", *, url: bool = False) -> str:

@@ -153,8 +153,12 @@ def _sign_word(sign: int | None) -> str:
     return {1: "> 0", -1: "< 0", 0: "= 0"}.get(sign, "not needed") if sign is not None else "not needed"
 
 
-def roots_words(pic: RootsPicture, expl: dict[str, Any] | None, where: str) -> str:
-    """The picture in the paper's words: the roots, Var, s0, s1, s1,0, the rule, the relation."""
+def roots_words(pic: RootsPicture, expl: dict[str, Any] | None, where: str, *, hidden: bool = False) -> str:
+    """The picture in the paper's words: the roots, Var, s0, s1, s1,0, the rule, the relation.
+
+    ``hidden``: a lesson's question is open: the roots and signs (what the class predicts from)
+    without the rule and the relation.
+    """
     lines = [f"**P(T) = det(T A + B)** {html.escape(where)}: {pic.summary()}."]
     reals = [r for r in pic.roots if r.real]
     if reals:
@@ -176,12 +180,17 @@ def roots_words(pic: RootsPicture, expl: dict[str, Any] | None, where: str) -> s
             f"Var({', '.join(signs)}) = **{expl['var']}** (Descartes: at most {expl['var']} positive roots) · "
             f"s0 {_sign_word(s['s0'])} · s1 {_sign_word(s['s1'])} · s1,0 {_sign_word(s['s10'])}"
         )
-        lines.append(f"Rule: {html.escape(expl.get('rule_text', ''))} ⇒ **{str(expl.get('relation', '')).upper()}**.")
+        if hidden:
+            lines.append("Rule ⇒ relation: press *Reveal the answer* (Lesson folder).")
+        else:
+            lines.append(f"Rule: {html.escape(expl.get('rule_text', ''))} ⇒ **{str(expl.get('relation', '')).upper()}**.")
     lines.append(
         "The paper: two distinct positive roots ⇔ separate; a positive double root ⇔ tangent (Th. 7/19); "
         "otherwise (complex or negative roots) overlap."
     )
     for note in pic.notes:
+        if hidden and "(certified)" in note:  # the certified relation, said in the note
+            continue
         lines.append(f"*{html.escape(note)}.*")
     lines.append(f"<span style='color:#666;font-size:11px'>How: {html.escape(pic.how)}.</span>")
     return "\n\n".join(lines)
@@ -300,7 +309,7 @@ class RootsView:
         if pic is None:
             self._set_words("No certified pair to show (invalid shapes, or the motion is being analysed).")
             return
-        self._set_words(roots_words(pic, expl, where))
+        self._set_words(roots_words(pic, expl, where, hidden=bool(getattr(state, "answer_hidden", False))))
         data, xr, yr = plane_data(pic, scale)
         if self.plane is None or self._plane_key != (len(data[0]), scale):
             if self.plane is not None:

@@ -65,6 +65,9 @@ class Session:
         uploads: the server's :class:`~app.scene.common.wire.UploadGuard` (the configuration upload's
             limit is set on it, and a refused file is shown next to the button), or None.
         open_folders: the panel's folders shown open (a lesson step's); None: the usual ones.
+        answer_hidden: open with the relation kept back (a lesson step's open question; see
+            :meth:`hold_question`, :meth:`reveal`).
+        guide: address of the documentation site (``http://host:port/guide/``) the panel links to, or None.
     """
 
     PANEL_PERIOD = 0.05
@@ -92,6 +95,8 @@ class Session:
         sphere_subdivisions: int = SPHERE_SUBDIVISIONS,
         uploads: wire.UploadGuard | None = None,
         open_folders: Collection[str] | None = None,
+        answer_hidden: bool = False,
+        guide: str | None = None,
     ) -> None:
         self.sphere_subdivisions = check_sphere_subdivisions(sphere_subdivisions)
         self.uploads = uploads
@@ -110,7 +115,11 @@ class Session:
         self.ready = threading.Event()
         """Set when the configuration is loaded and (for a motion) analysed and drawn."""
         a, b = self.config.shapes()
-        self.state = AppState(dim=self.config.dim, shapes={"A": a, "B": b})
+        self.state = AppState(dim=self.config.dim, shapes={"A": a, "B": b}, answer_hidden=answer_hidden)
+        self.question: dict[str, Any] | None = None
+        """The configuration the open question is about (:meth:`hold_question`): showing another one reveals."""
+        self.on_reveal: Callable[[], object] | None = None
+        """Called (lock held) when the relation is shown again (the lesson's Reveal button goes)."""
         light_scene(self.scene)
         self.ui = build_gui(
             self.gui_api,
@@ -120,6 +129,7 @@ class Session:
             gizmos=self.config.gizmos,
             plane=self.config.separating_plane,
             open_folders=open_folders,
+            guide=guide,
         )
         self.timeline_ctl = TimelineControl(self)
         self.panel = PanelView(self.ui, self.gui_api, self.syncing, on_event=self.timeline_ctl.jump_to_event)
@@ -284,6 +294,33 @@ class Session:
             self.state.errors[field] = message
             self.refresh()
 
+    # ------------------------------------------------------------------ a lesson's question
+    def hold_question(self) -> None:
+        """The configuration shown now is the one the open question is about (once it is drawn).
+
+        Until :meth:`reveal`, the relation stays hidden while the tab shows this configuration; a
+        different one (an edit, a drag, t moved, Play, a preset) reveals: the student is exploring.
+        """
+        with self.lock:
+            if self.state.answer_hidden:
+                self.question = self.snapshot().to_dict()
+
+    def reveal(self) -> None:
+        """Show the relation again: colours, labels, readout, sign table ("Reveal the answer")."""
+        with self.lock:
+            if not self.state.answer_hidden:
+                return
+            self.state.answer_hidden = False
+            self.question = None
+            if self.on_reveal is not None:
+                self.on_reveal()
+            if not self.closed:
+                self.refresh()
+
+    def _edited(self) -> bool:
+        """The tab shows another configuration than the open question's (lock held)."""
+        return self.question is not None and self.ready.is_set() and self.snapshot().to_dict() != self.question
+
     # ------------------------------------------------------------------ the one refresh
     def refresh(self, *, dragged: str | None = None, defer: bool = False, panel_delay: float | None = None) -> str | None:
         """Draw the state: the picture now, the panel now or (``defer``, drags) within PANEL_PERIOD.
@@ -303,6 +340,10 @@ class Session:
             if self.closed:  # the tab went away: messages to it would never be delivered
                 return st.relation
             self.history.changed()
+            if st.answer_hidden and self._edited():
+                st.answer_hidden, self.question = False, None
+                if self.on_reveal is not None:
+                    self.on_reveal()
             if st.motion is None:
                 pic = static_picture(st.shapes, quick=dragged is not None, plane=st.separating_plane)
             else:
@@ -328,8 +369,9 @@ class Session:
                 self.views[name].set_pose(*pose, from_drag=name == dragged)
         st.relation = pic.relation
         palette = PALETTES.get(st.palette, next(iter(PALETTES.values())))
+        shown = None if st.answer_hidden else pic.relation  # an open question: neutral grey, labels "A", "B"
         for v in self.views.values():
-            v.set_relation(pic.relation, palette)
+            v.set_relation(shown, palette)
             v.set_gizmo(st.gizmos and st.motion is None)
         if st.follow and st.motion is not None and pic.poses is not None:
             self.keys_ctl.follow()
@@ -343,8 +385,12 @@ class Session:
                 st.errors["shapes"] = pic.error
         else:
             st.explanation = st.witness = None
-        self.markers.show_point(pic.point, pic.point_label, pic.normal)
-        self.markers.show_plane(pic.plane, *(pic.matrices or (None, None)))
+        if st.answer_hidden:  # a contact point or a separating plane would answer the question
+            self.markers.show_point(None)
+            self.markers.show_plane(None)
+        else:
+            self.markers.show_point(pic.point, pic.point_label, pic.normal)
+            self.markers.show_plane(pic.plane, *(pic.matrices or (None, None)))
 
     def pending(self) -> bool:
         """True while a coalesced refresh (panel, witnesses, plot cursor) is due."""
