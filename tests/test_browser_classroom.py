@@ -201,3 +201,28 @@ def test_panel_links_to_the_guide(headless_scene):
     assert tutorial == "http://127.0.0.1:8000/guide/tutorials/paper-class.html"
     docs = Path(__file__).resolve().parents[1] / "docs"  # the pages Sphinx builds them from
     assert (docs / "concepts.md").is_file() and (docs / "tutorials" / "paper-class.md").is_file()
+
+
+def test_a_steps_camera_is_the_view_drawn(tmp_path):
+    """A step's ``camera`` is where the tab looks, also after the page first reports its view's shape
+    (that report frames the shapes again, unless a camera was given): a top-down camera draws another
+    picture than the default framing of the same step."""
+    import json
+
+    import browser_helpers
+    import numpy as np
+    from PIL import Image
+
+    from app.cli import main
+
+    step = {"title": "two ellipsoids", "scene": {"dim": 3, "preset": None, "B": {"center": ["3", "0", "0"], "semi_axes": ["1", "1", "1"]}}}
+    shots = {}
+    for name, camera in (("default", None), ("top", {"position": [0, 0.01, 25], "look_at": [0, 0, 0]})):
+        lesson = tmp_path / f"{name}.json"
+        lesson.write_text(json.dumps({"title": "camera", "steps": [{**step, **({"camera": camera} if camera else {})}]}))
+        out = tmp_path / f"{name}.png"
+        assert main(["screenshot", "--lesson", str(lesson), "--step", "1", "--width", "800", "--height", "500", "--out", str(out),
+                     "--browser", browser_helpers.CHROMIUM_OF_THIS_PROCESS.get()]) == 0
+        shots[name] = np.asarray(Image.open(out).convert("RGB"), dtype=np.int16)[:, :480]  # the scene, left of the panel
+    changed = np.any(np.abs(shots["default"] - shots["top"]) > 24, axis=-1).mean()
+    assert changed > 0.05, changed

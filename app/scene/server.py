@@ -182,7 +182,7 @@ class SceneServer:
                     return
                 old, until = record
                 record[0] = aspect
-            if session is None or time.monotonic() > until or (old is not None and abs(aspect - old) <= 1e-3):
+            if session is None or session.camera_chosen or time.monotonic() > until or (old is not None and abs(aspect - old) <= 1e-3):
                 return
             session.frame_camera(grid=False)
 

@@ -132,6 +132,7 @@ class LessonView:
             if not s.closed:
                 s.hold_question()
                 if camera is not None:
+                    s.camera_chosen = True
                     for cam in s.cameras():
                         cam.position, cam.look_at = camera
         self.ready.set()

@@ -114,6 +114,8 @@ class Session:
         self.closed = False
         self.ready = threading.Event()
         """Set when the configuration is loaded and (for a motion) analysed and drawn."""
+        self.camera_chosen = False
+        """A camera was given (a lesson step's): the tab's first view report does not frame the shapes again."""
         a, b = self.config.shapes()
         self.state = AppState(dim=self.config.dim, shapes={"A": a, "B": b}, answer_hidden=answer_hidden)
         self.question: dict[str, Any] | None = None
