@@ -40,6 +40,8 @@ from typing import Any
 
 import numpy as np
 
+from bench.machine import tree_rss_mb
+
 __all__ = ["run_api_load", "format_api", "TARGET_P99_MS", "serve_api", "run_line_load", "format_line"]
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -287,29 +289,6 @@ def large_body(path: str, n: int, seed: int = 1) -> bytes:
     end = start.copy()
     end[:, 0] += 1.0
     return json.dumps({"start": start.tolist(), "end": end.tolist()}).encode()
-
-
-def tree_rss_mb(pid: int) -> float:
-    """Resident memory of ``pid`` and every process below it (its workers, the fork server), MB."""
-    children: dict[int, list[int]] = {}
-    for d in Path("/proc").iterdir():
-        if d.name.isdigit():
-            try:
-                ppid = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
-            except (OSError, IndexError, ValueError):
-                continue
-            children.setdefault(ppid, []).append(int(d.name))
-    total, todo = 0.0, [pid]
-    while todo:
-        p = todo.pop()
-        todo.extend(children.get(p, ()))
-        try:
-            for line in (Path("/proc") / str(p) / "status").read_text().splitlines():
-                if line.startswith("VmRSS:"):
-                    total += int(line.split()[1]) / 1024
-        except OSError:  # ended meanwhile
-            pass
-    return total
 
 
 class _Watch:

@@ -37,7 +37,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from bench.machine import RESULTS, cores, cpu_model
+from bench.machine import RESULTS, cores, cpu_model, rss_mb
 from bench.render import write_report
 
 __all__ = ["RawTab", "SceneProcess", "camera_message", "free_port", "rss_mb", "hostile_upload", "budget_upload", "tab_cycles",
@@ -53,17 +53,6 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
-
-
-def rss_mb(pid: int) -> float:
-    """Resident memory of process ``pid`` in MB (0 once it is gone)."""
-    try:
-        for line in (Path("/proc") / str(pid) / "status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    except OSError:
-        pass
-    return 0.0
 
 
 def camera_message() -> bytes:

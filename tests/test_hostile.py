@@ -27,6 +27,8 @@ from pathlib import Path
 import httpx
 import pytest
 
+from bench.machine import rss_mb
+
 ROOT = Path(__file__).resolve().parents[1]
 SEMIPRIME_100 = (10**50 + 151) * (10**50 + 447)
 ANSWER_S = 8.0
@@ -81,13 +83,6 @@ def job_processes(server_pid: int) -> set[int]:
     ppid = _ppid_map()
     forkservers = {p for p in descendants(server_pid) if "forkserver" in cmdline(p) and ppid.get(p) == server_pid}
     return {p for p, pp in ppid.items() if pp in forkservers}
-
-
-def rss_mb(pid: int) -> float:
-    for line in (Path("/proc") / str(pid) / "status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024
-    return 0.0
 
 
 def wait_gone(pids: set[int], seconds: float) -> set[int]:

@@ -30,7 +30,6 @@ import json
 import signal
 import threading
 import time
-from pathlib import Path
 
 import httpx
 import numpy as np
@@ -44,6 +43,8 @@ from test_hostile import (
     slow_motion,
     wait_gone,
 )
+
+from bench.machine import tree_rss_mb
 
 HEALTH_S = 1.5
 """Longest /healthz latency tolerated during an attack (the issue's bound)."""
@@ -61,19 +62,6 @@ EXIT_S = 5.0
 UNIT_AXES = {"center": [0, 0], "semi_axes": [1, 2]}
 HUGE_WORK = {"a": {"center": ["3", "0"], "semi_axes": ["1e-999", "1"]}, "b": UNIT_AXES, "exact": True}
 """A valid pair whose exact contact scale takes far longer than the 5 s budget (numbers of 3,300 bits)."""
-
-
-def total_rss_mb(pid: int) -> float:
-    """Resident memory of ``pid`` and every process below it, in MB."""
-    total = 0.0
-    for p in {pid} | descendants(pid):
-        try:
-            for line in (Path("/proc") / str(p) / "status").read_text().splitlines():
-                if line.startswith("VmRSS:"):
-                    total += int(line.split()[1]) / 1024
-        except OSError:  # ended meanwhile
-            pass
-    return total
 
 
 class Probes:
@@ -104,7 +92,7 @@ class Probes:
 
     def _rss(self) -> None:
         while not self._stop.is_set():
-            self.memory.append(total_rss_mb(self.server.proc.pid))
+            self.memory.append(tree_rss_mb(self.server.proc.pid))
             self._stop.wait(0.05)
 
     def __enter__(self) -> Probes:

@@ -31,7 +31,8 @@ from app.scene.pair.control_share import MAX_UPLOAD_BYTES
 from app.scene.pair.session import Session
 from app.scene.server import SceneServer, start_scene
 from bench import scene_memory as M
-from bench.scene_memory import RawTab, SceneProcess, rss_mb
+from bench.machine import rss_mb
+from bench.scene_memory import RawTab, SceneProcess
 
 BODIES_BUTTON = "Open a file of bodies"
 CONFIG_BUTTON = "Open a configuration (JSON)"
