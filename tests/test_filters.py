@@ -362,6 +362,51 @@ def test_a_pair_answers_alike_whatever_its_neighbours_in_the_block(n):
         assert (got == want[:count]).all() and undecided == int(np.count_nonzero(want[:count] < 0))
 
 
+def _tangent_spheres(n, count):
+    """Externally tangent spheres (circles) with dyadic radii along the axes: exactly tangent, so
+    every float test abstains and the pair reaches the last stage of the filter, undecided."""
+    d = n - 1
+    A, B = [], []
+    for k in range(count):
+        r = 2.0 ** (k % 5 - 2)
+        axis = np.zeros(d)
+        axis[k % d] = (-1) ** k * 2 * r
+        A.append(quadric_from_axes(np.zeros(d), [r] * d))
+        B.append(quadric_from_axes(axis, [r] * d))
+    return np.array(A), np.array(B)
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_pairs_left_to_the_full_certificates_answer_from_the_queue(n):
+    """The pairs stage 3a leaves open wait in a queue that runs the full certificates and the
+    running-error s0 test a block at a time, and once more at the end of a batch: in runs
+    longer than a block, one per block among pairs decided earlier, cut at every length around
+    the queue's size, through the table, each gets the rule of the numpy description and the
+    undecided among them are counted."""
+    from core.fixed.driver import RULE_POINT
+
+    rng = np.random.default_rng(7 + n)
+    SA, SB = _structured(rng, n, 900)
+    TA, TB = _tangent_spheres(n, 40)
+    A, B = np.concatenate([SA, TA]), np.concatenate([SB, TB])
+    expected = rules_numpy(A, B)
+    late = np.flatnonzero(expected == RULE_POINT)  # common-point: only the full certificates give it
+    tangent = np.arange(len(SA), len(A))
+    assert (expected[tangent] == -1).all()  # the running-error s0 test too could not tell
+    early = np.flatnonzero((expected >= 0) & (expected != RULE_POINT))
+    assert (late.size >= 20 or n == 3) and early.size >= 200, (late.size, early.size)  # 2D: s0 decides copies
+    run = np.concatenate([late, tangent])  # more than two blocks (8 or 16 pairs) of queued pairs in a row
+    scattered = np.concatenate([np.concatenate([[q], early[7 * i:7 * i + 7]]) for i, q in enumerate(run[:25])])
+    order = np.concatenate([run, scattered, rng.permutation(run), early[:5]])
+    A2, B2, want = np.ascontiguousarray(A[order]), np.ascontiguousarray(B[order]), expected[order]
+    for v, got in _every_variant(A2, B2).items():
+        assert (got == want).all(), (v, np.flatnonzero(got != want)[:10])
+    table = np.arange(256, dtype=np.int64).astype(np.int8)
+    for count in (1, 7, 8, 9, 15, 16, 17, 33, len(run), len(run) + 1, len(run) + 9, len(A2)):
+        got, undecided = compiled.mapped(A2[:count], B2[:count], table, threads=1)
+        assert (got == want[:count]).all() and undecided == int(np.count_nonzero(want[:count] < 0)), count
+
+
 @pytest.mark.parametrize("n", [3, 4])
 def test_kernel_writes_relation_codes_and_counts_the_undecided(n):
     # classify_float's path: the C maps each rule id through a 256-byte table as it finishes a
