@@ -265,6 +265,47 @@ def test_kernel_tables_are_consistent():
     assert K.PENCIL4_OUTPUTS[:2] == ("c0", "c0_M")
 
 
+def test_copies_skip_the_semi_static_s0_test_and_stay_right():
+    """Ellipsoids whose quadratic blocks are proportional (spheres, translated and homothetic
+    copies: s0 vanishes) skip stage 2 (driver.skips_s0), whatever the sign or power-of-two scale
+    of their matrices, random pairs keep it, and a pair whose diagonals alone are proportional (s0
+    not zero) skips it too and still gets the exact answer, in numpy and in C alike."""
+    from core.fixed.driver import skips_s0
+    from core.fixed.lanes import NumpyLanes
+    from oracle import oracle_relation
+
+    X = NumpyLanes()
+
+    def skip(A, B):
+        return np.asarray(skips_s0(X, 4, lambda i, j: A[:, i, j], lambda i, j: B[:, i, j]))
+
+    rng = np.random.default_rng(5)
+    SA, SB = _structured(rng, 4, 90)
+    assert skip(SA, SB).all()
+    assert skip(-SA, SB * 2.0**-30).all() and skip(SA * 2.0**40, -SB).all()
+    RA, RB = _random_matrices(rng, 4, 200), _random_matrices(rng, 4, 200)
+    assert not skip(RA, RB).any()
+    assert skips_s0(X, 3, None, None) is False  # 2D: s0 of copies does not vanish
+    # same diagonals, different off-diagonal entries: not copies, s0 generic
+    def quadric(Q, c):  # [[Q, -Q c], [-c^T Q, c^T Q c - 1]]
+        M = np.empty((4, 4))
+        M[:3, :3], M[:3, 3] = Q, -Q @ c
+        M[3, :3], M[3, 3] = M[:3, 3], c @ Q @ c - 1.0
+        return M
+
+    Q = np.diag([1.0, 0.5, 0.25])
+    Qb = Q + 0.125 * (np.eye(3)[0][:, None] * np.eye(3)[1] + np.eye(3)[1][:, None] * np.eye(3)[0])
+    A = np.array([quadric(Q, rng.uniform(-3, 3, 3)) for _ in range(80)])
+    B = np.array([quadric(Qb, rng.uniform(-3, 3, 3)) for _ in range(80)])
+    assert skip(A, B).all()
+    want = rules_numpy(A, B)
+    assert (compiled.rules(A, B, threads=1) == want).all()
+    got = [str(Relation(int(g))) for g in classify(A, B)]
+    assert got == [oracle_relation(A[i], B[i]) for i in range(len(A))]
+    assert {"overlap", "separate"} <= set(got)
+    assert (want >= 0).mean() > 0.9  # still decided by the float filter
+
+
 def _structured(rng, n, count):
     """Spheres, translated copies and homothetic copies: s0 vanishes identically for all of them."""
     d = n - 1

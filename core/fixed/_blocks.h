@@ -4,6 +4,7 @@
  *   N          3 (ellipses) or 4 (ellipsoids)
  *   T          double or float (float is widened exactly: certified for the float values given)
  *   FIRST_NOSCALE, FIRST, FULL, SECOND, THIRD_SEP_NOSCALE, THIRD_SEP_FAST, THIRD_SEP, THIRD_FAST, THIRD, FOURTH   the lane functions of _kernels.h for this N and T
+ *   SKIP_S0    (N 4 only) the lane function of driver.skips_s0
  *   CHUNK      pairs per block (CHUNK3 or CHUNK4 of _variant.h)
  *   TP, TRANSPOSE_T   pairs per transpose for T (4 for doubles, 8 for floats, or 0: element by element) and the TP x TP transpose
  *   CLASSIFY   the name of the function defined here: CLASSIFY(A, B, out, count, table) writes the
@@ -242,6 +243,14 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
             AGAIN(FULL, NEEDS_FULL)
         }
         PREFETCH(4)
+#ifdef SKIP_S0
+        /* ellipsoids whose quadratic blocks look proportional (spheres, copies: s0 vanishes) go
+         * past stage 2 as if it had failed (driver.skips_s0; every lane, then selected) */
+        for (int64_t p = 0; p < m; p++) {
+            const int64_t skip = SKIP_S0(a + p, b + p, CHUNK);
+            code[p] = code[p] == NEEDS_S0 && skip ? NEEDS_S0_RADIUS : code[p];
+        }
+#endif
         /* stage 2, where the tree asks for s0: the semi-static test */
         S0_STAGE(SECOND, NEEDS_S0)
         PREFETCH(5)
@@ -252,10 +261,17 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
         CERT_STAGE(THIRD_SEP_FAST, route[p] == 1, 1, SEP_PACK)
         CERT_STAGE(THIRD_SEP, route[p] == 2, 1, SEP_PACK)
         PREFETCH(6)
-        /* the pairs still open to the queue (3b, then stage 4: s0 still needed, the running-error
-         * test), which runs when it holds a block of them */
-        for (int64_t p = 0; p < m; p++)
-            if (code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS) {
+        /* the pairs still open: 3b, then stage 4 (s0 still needed, the running-error test); in
+         * the block when most of its pairs need them (near-contact data: copying would only add
+         * to the cost), else to the queue, which runs when it holds a block of them */
+        SUBSET((code[p] == NEEDS_CERT || code[p] == NEEDS_S0_RADIUS))
+        if (2 * k > m) {
+            CERT_STAGE(THIRD_FAST, route[p] != 2, 0, 2)
+            CERT_STAGE(THIRD, route[p] == 2, 0, 2)
+            S0_STAGE(FOURTH, NEEDS_S0_RADIUS)
+        } else {
+            for (int64_t q = 0; q < k; q++) { /* open[] from SUBSET */
+                const int64_t p = open[q];
                 for (int r = 0; r < N * N; r++) {
                     qa[r * CHUNK + qn] = a[r * CHUNK + p];
                     qb[r * CHUNK + qn] = b[r * CHUNK + p];
@@ -271,6 +287,7 @@ int64_t CLASSIFY(const T *restrict A, const T *restrict B, signed char *restrict
                     qn = 0;
                 }
             }
+        }
         for (int64_t p = 0; p < m; p++) {
             if (code[p] == DEFERRED) continue;
             const int64_t rule = code[p] >= 0 ? code[p] : -1; /* NEEDS_CERT: undecided */

@@ -359,17 +359,16 @@ static inline __attribute__((always_inline)) void pencil_at3(const double *restr
     const double v3 = c[3];
     const double r3 = cr[3];
     const double v4 = T;
-    const double r4 = 0.0;
     const double v5 = v3 * v4;
-    const double r5 = fabs(v3) * r4 + r3 * (fabs(v4) + r4) + 2.220446049250313e-16 * fabs(v5);
+    const double r5 = r3 * fabs(v4) + 2.220446049250313e-16 * fabs(v5);
     const double v6 = v5 + v2;
     const double r6 = r5 + r2 + 2.220446049250313e-16 * fabs(v6);
     const double v7 = v6 * v4;
-    const double r7 = fabs(v6) * r4 + r6 * (fabs(v4) + r4) + 2.220446049250313e-16 * fabs(v7);
+    const double r7 = r6 * fabs(v4) + 2.220446049250313e-16 * fabs(v7);
     const double v8 = v7 + v1;
     const double r8 = r7 + r1 + 2.220446049250313e-16 * fabs(v8);
     const double v9 = v8 * v4;
-    const double r9 = fabs(v8) * r4 + r8 * (fabs(v4) + r4) + 2.220446049250313e-16 * fabs(v9);
+    const double r9 = r8 * fabs(v4) + 2.220446049250313e-16 * fabs(v9);
     const double v10 = v9 + v0;
     const double r10 = r9 + r0 + 2.220446049250313e-16 * fabs(v10);
     out[0] = v10;
@@ -2452,21 +2451,20 @@ static inline __attribute__((always_inline)) void pencil_at4(const double *restr
     const double v4 = c[4];
     const double r4 = cr[4];
     const double v5 = T;
-    const double r5 = 0.0;
     const double v6 = v4 * v5;
-    const double r6 = fabs(v4) * r5 + r4 * (fabs(v5) + r5) + 2.220446049250313e-16 * fabs(v6);
+    const double r6 = r4 * fabs(v5) + 2.220446049250313e-16 * fabs(v6);
     const double v7 = v6 + v3;
     const double r7 = r6 + r3 + 2.220446049250313e-16 * fabs(v7);
     const double v8 = v7 * v5;
-    const double r8 = fabs(v7) * r5 + r7 * (fabs(v5) + r5) + 2.220446049250313e-16 * fabs(v8);
+    const double r8 = r7 * fabs(v5) + 2.220446049250313e-16 * fabs(v8);
     const double v9 = v8 + v2;
     const double r9 = r8 + r2 + 2.220446049250313e-16 * fabs(v9);
     const double v10 = v9 * v5;
-    const double r10 = fabs(v9) * r5 + r9 * (fabs(v5) + r5) + 2.220446049250313e-16 * fabs(v10);
+    const double r10 = r9 * fabs(v5) + 2.220446049250313e-16 * fabs(v10);
     const double v11 = v10 + v1;
     const double r11 = r10 + r1 + 2.220446049250313e-16 * fabs(v11);
     const double v12 = v11 * v5;
-    const double r12 = fabs(v11) * r5 + r11 * (fabs(v5) + r5) + 2.220446049250313e-16 * fabs(v12);
+    const double r12 = r11 * fabs(v5) + 2.220446049250313e-16 * fabs(v12);
     const double v13 = v12 + v0;
     const double r13 = r12 + r0 + 2.220446049250313e-16 * fabs(v13);
     out[0] = v13;
@@ -2610,6 +2608,21 @@ static const int64_t TAB4[625] = {
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
+
+/* Before stage 2 (driver.skips_s0): 1 where the diagonals of the quadratic blocks are proportional (s0 of spheres and copies vanishes: stage 2 is skipped), else 0. */
+static inline __attribute__((always_inline)) int64_t skip_s04_f64(const double *restrict a, const double *restrict b, const int64_t s) {
+    const double pa0 = (double)a[0 * s];
+    const double pa1 = (double)a[5 * s];
+    const double pa2 = (double)a[10 * s];
+    const double pb0 = (double)b[0 * s];
+    const double pb1 = (double)b[5 * s];
+    const double pb2 = (double)b[10 * s];
+    const double pta = ((pa0 + pa1) + pa2);
+    const double ptb = ((pb0 + pb1) + pb2);
+    const double pbound = (fabs((pta * ptb)) * 9.094947017729282e-13);
+    const int64_t skip = (((fabs(((pb0 * pta) - (pa0 * ptb))) <= pbound) & (fabs(((pb1 * pta) - (pa1 * ptb))) <= pbound)) & (fabs(((pb2 * pta) - (pa2 * ptb))) <= pbound));
+    return skip;
+}
 
 /* Stage 1, fast pass (driver.prepare for exactly symmetric matrices, pencil_bounds, decide): a rule id, NEEDS_S0, NEEDS_CERT, NEEDS_FULL or -1; writes a_0..a_4 to c[i * s] and their radii to c[(5 + i) * s], the table index to *idx_out. */
 static inline __attribute__((always_inline)) int64_t first4_f64(const double *restrict a, const double *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out) {
@@ -3593,6 +3606,21 @@ static inline __attribute__((always_inline)) int64_t third4_fast_f64(const doubl
     form4(fwb, frb, pt, 6.661338147750944e-16, r_form4_1);
     const int64_t cert = (sep ? 10 : (((ok & xin) & ((r_form4[0] < (-((r_form4[1] * 1.0000000000000013) + 1.7201919192269955e-297))) & (r_form4_1[0] < (-((r_form4_1[1] * 1.0000000000000013) + 1.7201919192269955e-297))))) ? 11 : -1));
     return cert;
+}
+
+/* Before stage 2 (driver.skips_s0): 1 where the diagonals of the quadratic blocks are proportional (s0 of spheres and copies vanishes: stage 2 is skipped), else 0. */
+static inline __attribute__((always_inline)) int64_t skip_s04_f32(const float *restrict a, const float *restrict b, const int64_t s) {
+    const double pa0 = (double)a[0 * s];
+    const double pa1 = (double)a[5 * s];
+    const double pa2 = (double)a[10 * s];
+    const double pb0 = (double)b[0 * s];
+    const double pb1 = (double)b[5 * s];
+    const double pb2 = (double)b[10 * s];
+    const double pta = ((pa0 + pa1) + pa2);
+    const double ptb = ((pb0 + pb1) + pb2);
+    const double pbound = (fabs((pta * ptb)) * 9.094947017729282e-13);
+    const int64_t skip = (((fabs(((pb0 * pta) - (pa0 * ptb))) <= pbound) & (fabs(((pb1 * pta) - (pa1 * ptb))) <= pbound)) & (fabs(((pb2 * pta) - (pa2 * ptb))) <= pbound));
+    return skip;
 }
 
 /* Stage 1, fast pass (driver.prepare for exactly symmetric matrices, pencil_bounds, decide): a rule id, NEEDS_S0, NEEDS_CERT, NEEDS_FULL or -1; writes a_0..a_4 to c[i * s] and their radii to c[(5 + i) * s], the table index to *idx_out. */

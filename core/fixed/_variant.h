@@ -178,6 +178,7 @@ F64_END
 #define THIRD_SEP third_sep4_f64
 #define THIRD_SEP_FAST third_sep4_fast_f64
 #define THIRD_SEP_NOSCALE third_sep4_noscale_f64
+#define SKIP_S0 skip_s04_f64
 #define CLASSIFY GLUE(classify4_f64, VARIANT)
 F64_BEGIN
 #include "_blocks.h"
@@ -193,6 +194,7 @@ F64_END
 #undef THIRD_SEP
 #undef THIRD_SEP_FAST
 #undef THIRD_SEP_NOSCALE
+#undef SKIP_S0
 #undef CLASSIFY
 #define T float
 #define FIRST first4_f32
@@ -205,6 +207,7 @@ F64_END
 #define THIRD_SEP third_sep4_f32
 #define THIRD_SEP_FAST third_sep4_fast_f32
 #define THIRD_SEP_NOSCALE third_sep4_noscale_f32
+#define SKIP_S0 skip_s04_f32
 #define CLASSIFY GLUE(classify4_f32, VARIANT)
 #include "_blocks.h"
 #undef N
@@ -222,4 +225,5 @@ F64_END
 #undef THIRD_SEP
 #undef THIRD_SEP_FAST
 #undef THIRD_SEP_NOSCALE
+#undef SKIP_S0
 #undef CLASSIFY

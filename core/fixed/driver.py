@@ -17,7 +17,9 @@ the earlier ones left open):
    proven bounds), :func:`decide` (validity, and the paper's tree looked up in
    :data:`core.formulae.decision.TABLE3` / ``TABLE4`` with s0 pending);
 2. where the tree asks for s0: :func:`decide_s0`, the semi-static test (one evaluation of hs0
-   and one of its permanent, for a_i known to relative accuracy 2^-20: random pairs);
+   and one of its permanent, for a_i known to relative accuracy 2^-20: random pairs); not for
+   ellipsoids whose quadratic blocks look proportional (:func:`skips_s0`: spheres, translated
+   and homothetic copies, whose s0 vanishes), which go on as if it had failed;
 3. where a valid pair is still open (s0 vanishes identically for spheres and translated or
    homothetic copies): :func:`certify_sep` (a T* > 0 with P(T*) > 0 guessed from the a_i and
    the traces: one division), then on the pairs still open :func:`certify` (a T* from the
@@ -54,6 +56,7 @@ __all__ = [
     "radii",
     "pencil_bounds",
     "decide",
+    "skips_s0",
     "decide_s0",
     "decide_s0_radius",
     "centre",
@@ -97,6 +100,9 @@ LEAF_ROUNDING = 2.0**-52
 LEAF_UNDERFLOW = 1.0e-323
 """>= 2^-1073: a scaled entry rounded in the subnormal range."""
 _TOL2 = float(SYMMETRY_TOLERANCE) ** 2
+PROPORTIONAL = 2.0**-40
+"""Relative tolerance of :func:`skips_s0`: far above the rounding of copies built in floats (a
+few units of 2^-53), far below the difference of two shapes that are not copies."""
 _DBL_MAX = 1.7976931348623157e308
 
 
@@ -263,6 +269,33 @@ def decide(x: Any, n: int, c: list[Any], cr: list[Any], minors: list[tuple[Any, 
     code = x.let("code", x.table(TABLES[n], f"TAB{n}", (idx * 5) + 4))
     open_ = x.where(code == NEED_S0, NEEDS_S0, NEEDS_CERT)
     return x.let("first", x.where(valid, x.where(code >= 0, code, open_), -1)), valid, idx
+
+
+def skips_s0(x: Any, n: int, entry_a: Any, entry_b: Any) -> Any:
+    """Mask (3D; False in 2D): stage 2 is skipped, the diagonals of the quadratic blocks of A and B,
+    as given, being proportional within :data:`PROPORTIONAL` (|b_ii tA - a_ii tB| <= 2^-40 |tA tB|,
+    tA and tB the traces).
+
+    Where Q_B = rho Q_A (spheres, translated and homothetic copies), P(T) = (T + rho)^2 q(T) in
+    3D: s0 vanishes and no bound can tell its sign, so the semi-static test would only fail. Such
+    a pair goes on as if it had (its code NEEDS_S0_RADIUS): the certificates, then the
+    running-error test of s0. A routing choice from the pair's own entries (the same for every
+    prepare: a flip of sign or a power-of-two scale changes no comparison), not a proof: every
+    stage is certified, and a pair whose diagonals alone are proportional only loses the cheaper
+    test of s0. In 2D P is (T + rho) q(T) and s0 is generic: stage 2 is kept.
+    """
+    if n != 4:
+        return False
+    d = n - 1
+    da = [x.let(f"pa{i}", entry_a(i, i)) for i in range(d)]
+    db = [x.let(f"pb{i}", entry_b(i, i)) for i in range(d)]
+    ta = x.let("pta", (da[0] + da[1]) + da[2])
+    tb = x.let("ptb", (db[0] + db[1]) + db[2])
+    bound = x.let("pbound", x.abs(ta * tb) * PROPORTIONAL)
+    out = x.abs((db[0] * ta) - (da[0] * tb)) <= bound
+    for i in range(1, d):
+        out = out & (x.abs((db[i] * ta) - (da[i] * tb)) <= bound)
+    return x.let("skip", out)
 
 
 def decide_s0(x: Any, n: int, c: list[Any], cr: list[Any], idx: Any) -> Any:

@@ -377,6 +377,11 @@ def build_kernel(
     radius = style == "radius"
     U = "2.220446049250313e-16"  # 2^-52 >= u / (1 - u)
     body = [f"def {name}({', '.join(params)}):"]
+    # leaves whose radius is the constant 0 (an exact input, e.g. T of pencil_at): the terms of
+    # their radius are left out (each is +0 for a finite value, and adding +0 to a radius >= 0
+    # changes no bit; a non-finite value makes the kernel's value non-finite, which the callers'
+    # comparisons already refuse)
+    exact: set[int] = set()
     for j, nd in enumerate(nodes):
         x = nd.args[0] if nd.args else -1
         y = nd.args[1] if len(nd.args) > 1 else -1
@@ -385,14 +390,22 @@ def build_kernel(
             body.append(f"    v{j} = {vexpr}")
             if radius:
                 body.append(f"    r{j} = {rexpr}")
+                if rexpr == "0.0":
+                    exact.add(j)
         elif nd.op in "+-":
             body.append(f"    v{j} = v{x} {nd.op} v{y}")
             if radius:
-                body.append(f"    r{j} = r{x} + r{y} + {U} * abs(v{j})")
+                terms = [f"r{i}" for i in (x, y) if i not in exact]
+                body.append(f"    r{j} = {' + '.join([*terms, f'{U} * abs(v{j})'])}")
         elif nd.op == "*":
             body.append(f"    v{j} = v{x} * v{y}")
             if radius:
-                body.append(f"    r{j} = abs(v{x}) * r{y} + r{x} * (abs(v{y}) + r{y}) + {U} * abs(v{j})")
+                terms = []
+                if y not in exact:
+                    terms.append(f"abs(v{x}) * r{y}")
+                if x not in exact:
+                    terms.append(f"r{x} * abs(v{y})" if y in exact else f"r{x} * (abs(v{y}) + r{y})")
+                body.append(f"    r{j} = {' + '.join([*terms, f'{U} * abs(v{j})'])}")
         elif nd.op == "c*":
             body.append(f"    v{j} = v{x} * {nd.const}.0")
             if radius:

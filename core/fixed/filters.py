@@ -40,6 +40,7 @@ from .driver import (
     pencil_bounds,
     prepare,
     radii,
+    skips_s0,
 )
 from .driver import centre as _centre
 from .errorbound import RADIUS_FACTOR, TRANSLATE_MAX
@@ -122,18 +123,22 @@ def first_stage(a: np.ndarray, b: np.ndarray) -> FirstStage:
         code, _, idx = decide(_X, n, c, cr, minors, Pa.ok & Pb.ok)
         code = np.asarray(code, dtype=np.int64).copy()
         asked = code == NEEDS_S0
-        code = _later_stages(n, code, idx, c, cr, lambda rows: (
+        code = _later_stages(n, code, idx, c, cr, skips_s0(_X, n, _entries(a), _entries(b)), lambda rows: (
             _take(Pa.W, rows), radii(_X, _take(Pa.W, rows), Pa.rounded[rows], "a"),
             _take(Pb.W, rows), radii(_X, _take(Pb.W, rows), Pb.rounded[rows], "b"),
         ))
     return FirstStage(Pa, Pb, c, cr, code.astype(np.int8), asked)
 
 
-def _later_stages(n: int, code: np.ndarray, idx: np.ndarray, c: list[np.ndarray], cr: list[np.ndarray], matrices: Any) -> np.ndarray:
+def _later_stages(
+    n: int, code: np.ndarray, idx: np.ndarray, c: list[np.ndarray], cr: list[np.ndarray], skip: Any, matrices: Any,
+) -> np.ndarray:
     """Stages 2-4 of :mod:`core.fixed.driver` on the pairs each one needs (C: the same order).
 
+    ``skip``: :func:`~core.fixed.driver.skips_s0` of the pairs (stage 2 not run where it holds);
     ``matrices(rows)`` gives (WA, RA, WB, RB) of those pairs for the certificates.
     """
+    code[(code == NEEDS_S0) & skip] = NEEDS_S0_RADIUS
     need = np.flatnonzero(code == NEEDS_S0)
     if need.size:  # s0, semi-static, only where the tree asks for it
         code[need] = decide_s0(_X, n, _take(c, need), _take(cr, need), idx[need])
@@ -371,7 +376,7 @@ def classify_translated(a: np.ndarray, b: np.ndarray, shift_b: np.ndarray | None
     with np.errstate(all="ignore"):
         c, cr, minors, ok, VA, RA, VB, RB = _translated_pencil(a, b, shift_b)
         code, _, idx = decide(_X, n, c, cr, minors, ok)
-        code = _later_stages(n, np.asarray(code, dtype=np.int64).copy(), idx, c, cr,
+        code = _later_stages(n, np.asarray(code, dtype=np.int64).copy(), idx, c, cr, skips_s0(_X, n, _entries(a), _entries(b)),
                              lambda rows: (_take(VA, rows), _take(RA, rows), _take(VB, rows), _take(RB, rows)))
     return code.astype(np.int8)
 

@@ -509,6 +509,7 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
         pencil_bounds,
         prepare,
         radii,
+        skips_s0,
     )
 
     out = []
@@ -554,6 +555,13 @@ def _lane_functions(n: int, infos: dict[str, KernelInfo]) -> list[str]:
             code: CExpr = certify_sep(x, n, Pa.W, Pb.W, c, cr, (Pa.sign, Pb.sign) if unscaled else None)
             return code
 
+        if n == 4:
+            out.append(_lane_c(
+                f"skip_s0{n}_{suffix}", f"const {T} *restrict a, const {T} *restrict b, const int64_t s",
+                lambda x, entry=entry: skips_s0(x, n, entry("a"), entry("b")), infos,
+                "Before stage 2 (driver.skips_s0): 1 where the diagonals of the quadratic blocks are proportional "
+                "(s0 of spheres and copies vanishes: stage 2 is skipped), else 0.",
+            ))
         params = f"const {T} *restrict a, const {T} *restrict b, double *restrict c, const int64_t s, int64_t *restrict idx_out"
         out.append(_lane_c(
             f"first{n}_{suffix}", params, first, infos,
