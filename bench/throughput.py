@@ -211,8 +211,9 @@ def structured_outcomes(size: int, rounds: int) -> list[dict[str, Any]]:
     the same pairs sorted into one set per deciding rule (``var``: the tree, stage 1;
     ``3d-s0<0`` / ``3d-s0>0``: the semi-static s0 test, stage 2; ``sep-witness``: the
     certificates of stage 3; ``common-point``: the full certificate). The filter runs blocks of
-    8 pairs, each later stage in place on every lane of a block when most of its pairs need it:
-    a mixed block pays for the most expensive outcome it holds.
+    8 pairs, each later stage in place on every lane of a block when most of its pairs need it,
+    and queues the few pairs that need the full certificates until they fill a block: ``all``
+    against the shares of the outcomes is what a mixed block still costs.
     """
     import core
     from core.fixed import compiled
