@@ -270,9 +270,10 @@ def test_copies_skip_the_semi_static_s0_test_and_stay_right():
     copies: s0 vanishes) skip stage 2 (driver.skips_s0), whatever the sign or power-of-two scale
     of their matrices, random pairs keep it, and a pair whose diagonals alone are proportional (s0
     not zero) skips it too and still gets the exact answer, in numpy and in C alike."""
+    from oracle import oracle_relation
+
     from core.fixed.driver import skips_s0
     from core.fixed.lanes import NumpyLanes
-    from oracle import oracle_relation
 
     X = NumpyLanes()
 

@@ -272,11 +272,10 @@ def decide(x: Any, n: int, c: list[Any], cr: list[Any], minors: list[tuple[Any, 
 
 
 def skips_s0(x: Any, n: int, entry_a: Any, entry_b: Any) -> Any:
-    """Mask (3D; False in 2D): stage 2 is skipped, the diagonals of the quadratic blocks of A and B,
-    as given, being proportional within :data:`PROPORTIONAL` (|b_ii tA - a_ii tB| <= 2^-40 |tA tB|,
-    tA and tB the traces).
+    """Mask (3D; False in 2D): stage 2 is skipped, the blocks' diagonals being proportional.
 
-    Where Q_B = rho Q_A (spheres, translated and homothetic copies), P(T) = (T + rho)^2 q(T) in
+    The diagonals of the quadratic blocks of A and B as given, within :data:`PROPORTIONAL`:
+    |b_ii tA - a_ii tB| <= 2^-40 |tA tB|, tA and tB the traces. Where Q_B = rho Q_A (spheres, translated and homothetic copies), P(T) = (T + rho)^2 q(T) in
     3D: s0 vanishes and no bound can tell its sign, so the semi-static test would only fail. Such
     a pair goes on as if it had (its code NEEDS_S0_RADIUS): the certificates, then the
     running-error test of s0. A routing choice from the pair's own entries (the same for every
