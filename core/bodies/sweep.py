@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +26,7 @@ from ..algebra.algebraic import RealAlgebraic
 from ..fixed.classify import Certifier
 from ..moving.first_contact import FirstContacts, first_contacts
 from ..moving.linear import LinearMotions, read_linear_motions
-from ..options import check_options
+from ..options import SWEEP_METHODS, OnInvalid, SweepMethod, check_options
 from ..relation import Relation
 from .bodies import Bodies
 from .box import Box
@@ -51,8 +51,8 @@ def sweep_contacts(
     orientations1: Any = None,
     *,
     box: Any = None,
-    on_invalid: Literal["raise", "mark"] = "raise",
-    method: Literal["adaptive", "exact"] = "adaptive",
+    on_invalid: OnInvalid = "raise",
+    method: SweepMethod = "adaptive",
     progress: Progress | None = None,
     max_pairs: int | None = None,
 ) -> SweepContacts:
@@ -127,7 +127,7 @@ def sweep_contacts(
         >>> bool(res.t_lo[0] <= 0.5 <= res.t_hi[0] <= res.t_lo[0] + 1e-9), res.time(0).decimal(5)
         (True, '0.5')
     """
-    check_options(method, on_invalid, ("adaptive", "exact"))
+    check_options(method, on_invalid, SWEEP_METHODS)
     t0 = time.perf_counter()
     ids = None
     if isinstance(centers0, Bodies) or isinstance(centers1, Bodies):
@@ -222,7 +222,7 @@ def sweep_contacts(
 class _Found:
     """Batches of candidates through the narrow phase; keeps the pairs that meet, counts them all."""
 
-    def __init__(self, bodies: LinearMotions, box: np.ndarray | None, method: str) -> None:
+    def __init__(self, bodies: LinearMotions, box: np.ndarray | None, method: SweepMethod) -> None:
         self.bodies = bodies
         self.box = box
         self.method = method

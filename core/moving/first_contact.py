@@ -32,7 +32,7 @@ from ..algebra.qsqrt import QSqrtPoly
 from ..algebra.realroots import roots_in_order
 from ..filtered import predicate
 from ..fixed.exact import classify_exact
-from ..options import check_choice
+from ..options import SWEEP_METHODS, SweepMethod, check_choice
 from ..relation import Relation
 from .analysis import (
     _Case,
@@ -219,7 +219,7 @@ def first_contacts(
     j: np.ndarray,
     shift: np.ndarray | None = None,
     *,
-    method: str = "adaptive",
+    method: SweepMethod = "adaptive",
     chunk: int = 1 << 16,
     progress: Callable[[int, int], None] | None = None,
 ) -> FirstContacts:
@@ -243,7 +243,7 @@ def first_contacts(
     Returns:
         :class:`FirstContacts`.
     """
-    check_choice(method, ("adaptive", "exact"), "method")
+    check_choice(method, SWEEP_METHODS, "method")
     M = int(np.asarray(i).size)
     done = 0
 
