@@ -20,14 +20,18 @@ UPLOT_TITLES_JS = """() => Object.values(window.__viserTestpoints?.uplots ?? {})
   .filter(u => document.body.contains(u.chart.root)).map(u => u.chart.root.querySelector('.u-title')?.textContent ?? '')"""
 
 
-def lesson_session(hs, k: int):
-    """The tab's session once it shows step ``k`` (a step starts the tab's session again)."""
+def lesson_session(hs, k: int, *, after: int | None = None):
+    """The tab's session once it shows step ``k`` (a step starts the tab's session again).
+
+    ``after``: only a tab opened after the client with this id (a reload opens a new tab while
+    the old one, on the same step, may not be closed yet)."""
     from app.scene.pair.lesson_view import view_of
 
     found = []
 
     def shown() -> bool:
-        found[:] = [s for s in list(hs.scene.sessions.values()) if (v := view_of(s)) is not None and v.k == k]
+        found[:] = [s for c, s in list(hs.scene.sessions.items())
+                    if (after is None or c > after) and (v := view_of(s)) is not None and v.k == k]
         return bool(found)
 
     until(shown, what=f"a session on step {k}")
@@ -53,8 +57,9 @@ def test_lesson_link_steps_reveal_and_reload(headless_scene):
     text_shown(page, "Tangent at (2, 0)")
     href = page.get_by_role("link", name="Link to this step").get_attribute("href")
     assert href is not None and href.endswith("?lesson=paper&step=4")
+    before = max(hs.scene.sessions)
     page.reload()  # the tab reopens where the student was: step 4, not the link's step 3
-    s = lesson_session(hs, 4)
+    s = lesson_session(hs, 4, after=before)
     text_shown(page, "step 4 of 11")
     page.get_by_role("button", name="◀ Previous").click()
     lesson_session(hs, 3)
