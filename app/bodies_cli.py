@@ -29,6 +29,8 @@ import numpy as np
 
 from core.options import METHODS, ON_INVALID
 
+from .interrupt import check as check_stop
+
 __all__ = ["add_parsers", "box_argument", "run_contacts", "run_classify", "COMMANDS", "ProgressBar"]
 
 COMMANDS = ("contacts", "classify")
@@ -138,7 +140,8 @@ class ProgressBar:
         self.last = -100
 
     def __call__(self, done: int, total: int) -> None:
-        """Show ``done`` of ``total``."""
+        """Show ``done`` of ``total``; a stop signal that was swallowed on its way is raised here again."""
+        check_stop()
         elapsed = time.perf_counter() - self.start
         if total < self.min_total and elapsed < self.delay:
             return

@@ -40,11 +40,11 @@ import contextlib
 import math
 import os
 import re
-import signal
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
+from .interrupt import Terminated, unwinding
 from .scene.common.mesh_detail import SPHERE_SUBDIVISIONS, SPHERE_SUBDIVISIONS_RANGE
 
 if TYPE_CHECKING:  # imported where used: the command line starts without viser
@@ -72,14 +72,6 @@ class _Parser(argparse.ArgumentParser):
         """Print one line to stderr and exit with status 2."""
         sys.stderr.write(f"{self.prog}: error: {message} (see {self.prog} --help)\n")
         raise SystemExit(EXIT_USAGE)
-
-
-class Terminated(BaseException):
-    """SIGTERM during a command: unwinds like Ctrl+C (temporary files removed), exit 143."""
-
-
-def _terminate(signum: int, frame: object) -> None:
-    raise Terminated()
 
 
 def _port(text: str) -> int:
@@ -488,7 +480,6 @@ def _screenshot(args: argparse.Namespace) -> int:
     else:
         cfg = config_from_args(args)
         shots = shots_for(cfg, args.out, ts if len(ts) + len(events) > 1 else [], events if len(ts) + len(events) > 1 else [])
-    import contextlib
 
     with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # the scene server's banner: not for a screenshot
         written = screenshots(shots, width=args.width, height=args.height, timeout=args.timeout, bodies=_bodies_model(args),
@@ -542,10 +533,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "serve" or args.command is None:
         return _run(args)  # serve has its own shutdown (app.lifecycle)
     try:
-        with _sigterm_unwinds():
+        with unwinding():
             return _run(args)
-    except Terminated:  # between the command's end and the handler's restoring
+    except Terminated:  # between the command's end and the handlers' restoring
         return _fail("terminated (SIGTERM): no output written", EXIT_TERMINATED)
+    except KeyboardInterrupt:
+        return _fail("interrupted (Ctrl+C): no output written", EXIT_INTERRUPTED)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -605,21 +598,3 @@ def _fail(message: str, status: int) -> int:
         line = f"{line[: _MESSAGE_CHARS // 2]} ... {line[-_MESSAGE_CHARS // 2 :]}"
     print(line, file=sys.stderr, flush=True)
     return status
-
-
-@contextlib.contextmanager
-def _sigterm_unwinds() -> Iterator[None]:
-    """SIGTERM unwinds a command like Ctrl+C does, while the command runs; the caller's handler after.
-
-    Only the main thread can set handlers (main() called from a test's thread leaves them alone). The
-    previous handler comes back so that a program calling :func:`main` (a test runner) keeps its own.
-    """
-    try:
-        previous = signal.signal(signal.SIGTERM, _terminate)
-    except ValueError:  # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)

@@ -54,6 +54,8 @@ from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
 
+from .interrupt import check
+
 __all__ = ["Output", "STDIO", "check_output_path", "remove_stale_temporaries", "special_kind", "uninterrupted"]
 
 STDIO = "-"
@@ -218,6 +220,11 @@ class Output:
             file.close()  # flushes; a reader gone raises BrokenPipeError (exit 141)
             return
         assert self._tmp is not None
+        try:
+            check()  # a stop that a C caller swallowed (app.interrupt): no file, the old one kept
+        except BaseException:
+            self.discard()
+            raise
         with uninterrupted():
             try:
                 self._file.flush()
